@@ -1,0 +1,10 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// Umbrella header of the simulator core.
+#ifndef FASCIA_FASCIA_H
+#define FASCIA_FASCIA_H
+
+#include "fascia/base.h"
+#include "fascia/model.h"
+
+#endif

@@ -1,0 +1,192 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// The model: frames (6 DOF), samples (integration points), the two neighbour
+// tables, materials, boundary conditions, probes, organs and coupling. This is
+// what the model file holds (schema in docs/model-format.md) and what prep
+// builds. DESIGN.md "The mechanics" gives the notation.
+//
+// Unlike most fascia objects the model is a plain structure of arrays: prep,
+// scene generators and the file reader fill it directly, and every backend
+// reads it. fascia_model_alloc sizes every array; fascia_model_validate is the
+// one gate every model passes before a solver sees it.
+#ifndef FASCIA_MODEL_H
+#define FASCIA_MODEL_H
+
+#include "fascia/base.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define FASCIA_NAME_SIZE 64
+
+/// Constitutive laws. Values are stored in model files: never renumber.
+typedef enum fascia_law {
+  FASCIA_LAW_STVK = 0,       ///< Saint-Venant-Kirchhoff (the paper's)
+  FASCIA_LAW_NEOHOOKEAN = 1, ///< stable Neo-Hookean, defined under inversion
+  FASCIA_LAW_COUNT_
+} fascia_law;
+
+/// How a frame moves. Values are stored in model files: never renumber.
+typedef enum fascia_frame_kind {
+  FASCIA_FRAME_FREE = 0,       ///< a degree of freedom of the solver
+  FASCIA_FRAME_FIXED = 1,      ///< stays at its rest position and rotation
+  FASCIA_FRAME_PRESCRIBED = 2, ///< follows a rigid motion (frame_motion)
+  FASCIA_FRAME_KIND_COUNT_
+} fascia_frame_kind;
+
+/// How an organ is simulated. Values are stored in model files.
+typedef enum fascia_organ_kind {
+  FASCIA_ORGAN_FIXED = 0,
+  FASCIA_ORGAN_PRESCRIBED = 1,
+  FASCIA_ORGAN_RIGID = 2,
+  FASCIA_ORGAN_DEFORMABLE = 3,
+  FASCIA_ORGAN_KIND_COUNT_
+} fascia_organ_kind;
+
+/// A material. The solver derives Lame parameters per sample from it.
+typedef struct fascia_material {
+  char name[FASCIA_NAME_SIZE];
+  int32_t law;                ///< fascia_law
+  fascia_real youngs_modulus; ///< E, Pa, > 0
+  fascia_real poisson_ratio;  ///< nu, in [0, 0.5)
+  fascia_real density;        ///< kg/m^3, > 0
+  /// Cosserat coupling modulus as a fraction of mu: ties each frame's rotation
+  /// to the material rotation around it (cures the zero-energy rotation modes
+  /// of the frame scheme, see docs/mechanics.md). 0 gives the paper's scheme.
+  fascia_real rotation_coupling;
+} fascia_material;
+
+/// A rigid motion given by keyframes, linear in translation and spherical
+/// linear in rotation, held constant after the last key. A frame following it
+/// is at  pivot + T(t) + Q(t) (x_rest - pivot)  with rotation  Q(t) R_rest.
+typedef struct fascia_motion {
+  char name[FASCIA_NAME_SIZE];
+  fascia_real pivot[3];         ///< m, world
+  int32_t key_count;            ///< >= 1
+  fascia_real *key_time;        ///< [key_count] s, strictly increasing
+  fascia_real *key_translation; ///< [3 key_count] m
+  fascia_real *key_rotation;    ///< [4 key_count] unit quaternions (w, x, y, z)
+} fascia_motion;
+
+/// An organ: its surface (for coupling and pictures) and how it is simulated.
+typedef struct fascia_organ {
+  char name[FASCIA_NAME_SIZE];
+  int32_t kind;           ///< fascia_organ_kind
+  int32_t motion;         ///< motion index for PRESCRIBED, else -1
+  int32_t vertex_count;   ///< surface vertices
+  int32_t triangle_count; ///< surface triangles
+  fascia_real *vertices;  ///< [3 vertex_count] m, rest
+  int32_t *triangles;     ///< [3 triangle_count] vertex indices
+} fascia_organ;
+
+/// Array sizes of a model, for fascia_model_alloc.
+typedef struct fascia_model_sizes {
+  int32_t frames, samples, pairs, materials, motions, probes, probe_pairs, organs, couplings;
+} fascia_model_sizes;
+
+/// The model. Indices are int32_t; every array is allocated by
+/// fascia_model_alloc with the sizes given there and owned by the model.
+/// N frames, S samples, P sample-frame pairs, Q probes.
+typedef struct fascia_model {
+  int32_t frame_count, sample_count, pair_count;
+  int32_t material_count, motion_count, probe_count, probe_pair_count;
+  int32_t organ_count, coupling_count;
+
+  // Frames (rest state).
+  fascia_real *frame_position; ///< [3N] x_rest, m, world
+  fascia_real *frame_rotation; ///< [4N] R_rest as unit quaternion (w, x, y, z)
+  int32_t *frame_kind;         ///< [N] fascia_frame_kind
+  int32_t *frame_motion;       ///< [N] motion index for PRESCRIBED frames, else -1
+  fascia_real *frame_load;     ///< [6N] constant external force (N) then torque (N m), world
+
+  // Samples (integration points).
+  fascia_real *sample_position; ///< [3S] p_rest, m, world
+  fascia_real *sample_volume;   ///< [S] m^3, > 0
+  int32_t *sample_material;     ///< [S] material index
+
+  // Sample -> frames (CSR): pairs of sample s are sample_offsets[s] ..
+  // sample_offsets[s+1]-1, frames ascending within a sample.
+  int32_t *sample_offsets;    ///< [S+1]
+  int32_t *pair_frame;        ///< [P] frame index
+  fascia_real *pair_weight;   ///< [P] w_is, sum over a sample = 1
+  fascia_real *pair_gradient; ///< [3P] rest-space gradient of w_is, 1/m; sum = 0
+
+  // Frame -> samples (CSR reverse table): the pairs of frame i, ascending.
+  // Every per-frame sum goes through it, in this order (determinism).
+  int32_t *frame_offsets; ///< [N+1]
+  int32_t *frame_pairs;   ///< [P] pair indices
+
+  fascia_material *materials; ///< [material_count]
+  fascia_motion *motions;     ///< [motion_count]; keys via fascia_motion_alloc
+
+  // Probes: named points carried by the frames like samples (no volume).
+  char (*probe_name)[FASCIA_NAME_SIZE]; ///< [Q]
+  fascia_real *probe_position;          ///< [3Q] rest, m
+  int32_t *probe_offsets;               ///< [Q+1] CSR into probe_frame/probe_weight
+  int32_t *probe_frame;                 ///< [probe_pair_count]
+  fascia_real *probe_weight;            ///< [probe_pair_count], sum over a probe = 1
+
+  // Organs and coupling: coupling frame c is tissue frame coupling_frame[c],
+  // shared with organ coupling_organ[c], sitting on its surface triangle
+  // coupling_triangle[c] at barycentric coordinates coupling_barycentric[3c..].
+  fascia_organ *organs;              ///< [organ_count]; meshes via fascia_organ_alloc
+  int32_t *coupling_organ;           ///< [couplings]
+  int32_t *coupling_frame;           ///< [couplings]
+  int32_t *coupling_triangle;        ///< [couplings]
+  fascia_real *coupling_barycentric; ///< [3 couplings]
+
+  fascia_real gravity[3]; ///< m/s^2, world
+  char *provenance;       ///< JSON text: what made this model, from what (may be NULL)
+} fascia_model;
+
+/// Allocates a model with every array sized and zeroed (frame rotations set to
+/// identity, frame_motion to -1, sample_offsets/frame_offsets to 0). On error
+/// *out is NULL.
+FASCIA_API fascia_status fascia_model_alloc(fascia_ctx *ctx, const fascia_model_sizes *sizes, fascia_model **out);
+/// Frees a model and everything it owns; accepts NULL, sets *model to NULL.
+FASCIA_API void fascia_model_destroy(fascia_model **model);
+/// Allocates the key arrays of a motion (key_count >= 1).
+FASCIA_API fascia_status fascia_motion_alloc(fascia_ctx *ctx, fascia_motion *motion, int32_t key_count);
+/// Allocates the surface arrays of an organ.
+FASCIA_API fascia_status fascia_organ_alloc(fascia_ctx *ctx, fascia_organ *organ, int32_t vertex_count,
+                                            int32_t triangle_count);
+/// Sets provenance to a copy of text (JSON).
+FASCIA_API fascia_status fascia_model_set_provenance(fascia_ctx *ctx, fascia_model *model, const char *text);
+
+/// Fills frame_offsets/frame_pairs from the sample -> frame table.
+FASCIA_API fascia_status fascia_model_build_reverse(fascia_ctx *ctx, fascia_model *model);
+
+/// Checks every size, index and value: indices in range, CSR offsets
+/// monotone, finite numbers, positive volumes and densities, weights summing
+/// to 1 and gradients to 0, unit quaternions, the reverse table matching the
+/// forward one, materials in range. `origin` names the model in messages
+/// (file path, or "beam generator"). Nothing is changed.
+FASCIA_API fascia_status fascia_model_validate(fascia_ctx *ctx, const fascia_model *model, const char *origin);
+
+/// Total sample volume (m^3) and mass (kg).
+FASCIA_API fascia_real fascia_model_volume(const fascia_model *model);
+FASCIA_API fascia_real fascia_model_mass(const fascia_model *model);
+
+/// Lame parameters of a material: lambda, mu (Pa).
+FASCIA_API void fascia_material_lame(const fascia_material *material, fascia_real *lambda, fascia_real *mu);
+/// Young's modulus and Poisson ratio from Lame parameters (lambda >= 0, mu > 0).
+FASCIA_API void fascia_lame_to_young(fascia_real lambda, fascia_real mu, fascia_real *youngs_modulus,
+                                     fascia_real *poisson_ratio);
+/// Law from its name ("stvk", "neohookean"); -1 if unknown.
+FASCIA_API int fascia_law_from_name(const char *name);
+FASCIA_API const char *fascia_law_name(int law);
+
+/// Reads a model file, validates it. Errors name the file and the dataset.
+FASCIA_API fascia_status fascia_model_load(fascia_ctx *ctx, const char *path, fascia_model **out);
+/// Writes a model file (validated first) to path.tmp, then renames it to path.
+/// On error no file is left at path (an older one there is untouched).
+FASCIA_API fascia_status fascia_model_save(fascia_ctx *ctx, const fascia_model *model, const char *path);
+
+/// Probe index by name, -1 if absent.
+FASCIA_API int32_t fascia_model_find_probe(const fascia_model *model, const char *name);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

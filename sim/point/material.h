@@ -1,0 +1,86 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// Hyperelastic laws as functions of the deformation gradient F: energy
+// density psi(F), first Piola stress P = dpsi/dF, and its directional
+// derivative dP = (dP/dF)[dF]. Per-point, compiled by cc and nvcc.
+//
+//   StVK (paper eq. 19):  E = (F^T F - I)/2,  S = lambda tr(E) I + 2 mu E,
+//                         P = F S,  psi = lambda/2 tr(E)^2 + mu E:E
+//   stable Neo-Hookean (Smith, de Goes, Kim 2018, without the origin term):
+//                         psi = mu/2 (tr(F^T F) - 3) + l/2 (J - a)^2,
+//                         l = lambda + mu, a = 1 + mu/l,
+//                         P = mu F + l (J - a) cof(F).
+//   The shift l = lambda + mu makes its small-strain limit the same Hooke law
+//   as StVK's; a makes the rest state stress free. It stays smooth through
+//   J = 0, so inverted samples get a restoring force instead of a NaN.
+#ifndef FASCIA_POINT_MATERIAL_H
+#define FASCIA_POINT_MATERIAL_H
+
+#include "linalg.h"
+
+enum { FASCIA_PT_LAW_STVK = 0, FASCIA_PT_LAW_NEOHOOKEAN = 1 };
+
+/// Per-sample values the stress derivative reuses: S (StVK) or cof(F) and J
+/// (Neo-Hookean).
+#define FASCIA_PT_AUX_SIZE 10
+
+/// Energy density (J/m^3); writes P[9] and aux[FASCIA_PT_AUX_SIZE].
+static inline FASCIA_HD fascia_real fascia_pt_stress(int law, fascia_real lambda, fascia_real mu,
+                                                     const fascia_real *F, fascia_real *P, fascia_real *aux) {
+  if (law == FASCIA_PT_LAW_NEOHOOKEAN) {
+    fascia_real l = lambda + mu, a = 1 + mu / l;
+    fascia_pt_cofactor(F, aux);
+    fascia_real J = fascia_pt_det(F);
+    aux[9] = J;
+    for (int k = 0; k < 9; ++k) P[k] = mu * F[k] + l * (J - a) * aux[k];
+    return FASCIA_R(0.5) * mu * (fascia_pt_ddot(F, F) - 3) + FASCIA_R(0.5) * l * (J - a) * (J - a);
+  }
+  fascia_real C[9], E[9];
+  fascia_pt_mat_tmul(F, F, C);
+  for (int k = 0; k < 9; ++k) E[k] = FASCIA_R(0.5) * C[k];
+  E[0] -= FASCIA_R(0.5);
+  E[4] -= FASCIA_R(0.5);
+  E[8] -= FASCIA_R(0.5);
+  fascia_real trE = fascia_pt_trace(E);
+  for (int k = 0; k < 9; ++k) aux[k] = 2 * mu * E[k];
+  aux[0] += lambda * trE;
+  aux[4] += lambda * trE;
+  aux[8] += lambda * trE;
+  aux[9] = 0;
+  fascia_pt_mat_mul(F, aux, P);
+  return FASCIA_R(0.5) * lambda * trE * trE + mu * fascia_pt_ddot(E, E);
+}
+
+/// dP = (dP/dF)[dF], with aux from fascia_pt_stress at the same F.
+static inline FASCIA_HD void fascia_pt_stress_diff(int law, fascia_real lambda, fascia_real mu, const fascia_real *F,
+                                                   const fascia_real *aux, const fascia_real *dF, fascia_real *dP) {
+  if (law == FASCIA_PT_LAW_NEOHOOKEAN) {
+    fascia_real l = lambda + mu, a = 1 + mu / l;
+    fascia_real dJ = fascia_pt_ddot(aux, dF), s = l * (aux[9] - a);
+    // d cof: column c of cof is f_{c+1} x f_{c+2}; differentiate each product
+    for (int c = 0; c < 3; ++c) {
+      int c1 = (c + 1) % 3, c2 = (c + 2) % 3;
+      fascia_real f1[3] = {F[c1], F[3 + c1], F[6 + c1]}, f2[3] = {F[c2], F[3 + c2], F[6 + c2]};
+      fascia_real d1[3] = {dF[c1], dF[3 + c1], dF[6 + c1]}, d2[3] = {dF[c2], dF[3 + c2], dF[6 + c2]};
+      fascia_real dc[3];
+      fascia_pt_cross(d1, f2, dc);
+      fascia_pt_cross_add(f1, d2, dc);
+      for (int r = 0; r < 3; ++r) dP[3 * r + c] = mu * dF[3 * r + c] + l * dJ * aux[3 * r + c] + s * dc[r];
+    }
+    return;
+  }
+  fascia_real FtdF[9], dS[9];
+  fascia_pt_mat_tmul(F, dF, FtdF);
+  fascia_real trdE = fascia_pt_trace(FtdF);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) dS[3 * r + c] = mu * (FtdF[3 * r + c] + FtdF[3 * c + r]);
+  dS[0] += lambda * trdE;
+  dS[4] += lambda * trdE;
+  dS[8] += lambda * trdE;
+  fascia_real t1[9], t2[9];
+  fascia_pt_mat_mul(dF, aux, t1);
+  fascia_pt_mat_mul(F, dS, t2);
+  for (int k = 0; k < 9; ++k) dP[k] = t1[k] + t2[k];
+}
+
+#endif

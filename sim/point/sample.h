@@ -1,0 +1,278 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// Per-sample mechanics of the frame scheme (paper sec. 2.1-2.2, DESIGN.md
+// "The mechanics"): deformation gradient, energy, partial forces on each
+// neighbour frame, and partial stiffness products. One call handles one
+// sample and writes one 6-vector per sample-frame pair; the per-frame sums go
+// through the reverse table elsewhere (no atomics, deterministic).
+//
+// Notation, per pair (i, s): d = p_rest_s - x_rest_i (rest world offset),
+// A_i = R_i R_rest_i^T, a = A_i d (= R_i l_is), g = grad w_is, w = w_is,
+// C_i = a g^T + w A_i. Then
+//   F       = sum_i (x_i + a) g^T + w A_i                       (paper eq. 8)
+//   dF      = sum_i dx_i g^T + [dtheta_i]x C_i                  (eq. 10-11)
+// for a world-space rotation variation dR_i = [dtheta_i]x R_i.
+//
+// Energy of a sample: v (psi(F) + sum_i w mu_c |skew(A_i^T F)|^2). The second
+// term (Cosserat coupling, mu_c = rotation_coupling * mu) ties each frame's
+// rotation to the material rotation around it; mu_c = 0 is the paper's scheme.
+// With Pt = dpsi/dF + sum_i 2 mu_c w A_i K_i, K_i = skew(A_i^T F), the energy
+// gradient on frame i is
+//   g_x     = v Pt g
+//   g_theta = v (axial(C_i Pt^T) + 2 mu_c w axial(F K_i A_i^T))
+// and the force is its negative (paper eq. 18 in this notation). The stiffness
+// product is the exact directional derivative of that gradient under the
+// update x += dx, R <- exp([dtheta]x) R: it includes the geometric part
+// (paper eq. 25-30), here axial([dtheta_i]x C_i Pt^T).
+#ifndef FASCIA_POINT_SAMPLE_H
+#define FASCIA_POINT_SAMPLE_H
+
+#include "material.h"
+
+/// Read-only arrays of a model, as a backend holds them (host or device).
+/// N frames, S samples, P pairs.
+typedef struct fascia_pt_model {
+  const int32_t *sample_offsets;   ///< [S+1] CSR of pairs
+  const int32_t *pair_frame;       ///< [P]
+  const fascia_real *pair_weight;  ///< [P] w
+  const fascia_real *pair_gradient; ///< [3P] g
+  const fascia_real *pair_offset;  ///< [3P] d = p_rest_s - x_rest_i
+  const fascia_real *sample_volume; ///< [S] v
+  const fascia_real *sample_lambda; ///< [S] Pa
+  const fascia_real *sample_mu;     ///< [S] Pa
+  const fascia_real *sample_coupling; ///< [S] mu_c, Pa
+  const int32_t *sample_law;        ///< [S] FASCIA_PT_LAW_*
+} fascia_pt_model;
+
+/// Current frame state: positions [3N] and A_i = R_i R_rest_i^T [9N].
+typedef struct fascia_pt_state {
+  const fascia_real *frame_x;
+  const fascia_real *frame_A;
+} fascia_pt_state;
+
+/// What the stiffness product reuses per sample: F, Pt, the law's aux.
+#define FASCIA_PT_CACHE_SIZE (18 + FASCIA_PT_AUX_SIZE)
+
+/// Flag bits a sample can raise (host reports the lowest flagged sample).
+enum { FASCIA_PT_FLAG_INVERTED = 1, FASCIA_PT_FLAG_NONFINITE = 2 };
+
+static inline FASCIA_HD void fascia_pt_pair_C(const fascia_real *A, const fascia_real *d, const fascia_real *g,
+                                              fascia_real w, fascia_real *a, fascia_real *C) {
+  fascia_pt_mat_vec(A, d, a);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) C[3 * r + c] = a[r] * g[c] + w * A[3 * r + c];
+}
+
+/// Deformed position p_s (paper eq. 3) of sample s.
+static inline FASCIA_HD void fascia_pt_sample_position(const fascia_pt_model *m, const fascia_pt_state *st, int32_t s,
+                                                       fascia_real *p) {
+  p[0] = p[1] = p[2] = 0;
+  for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k) {
+    const int32_t i = m->pair_frame[k];
+    fascia_real a[3];
+    fascia_pt_mat_vec(st->frame_A + 9 * i, m->pair_offset + 3 * k, a);
+    for (int r = 0; r < 3; ++r) p[r] += m->pair_weight[k] * (st->frame_x[3 * i + r] + a[r]);
+  }
+}
+
+/// Deformation gradient F_s (paper eq. 8), row-major.
+static inline FASCIA_HD void fascia_pt_sample_F(const fascia_pt_model *m, const fascia_pt_state *st, int32_t s,
+                                                fascia_real *F) {
+  for (int k = 0; k < 9; ++k) F[k] = 0;
+  for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k) {
+    const int32_t i = m->pair_frame[k];
+    const fascia_real *A = st->frame_A + 9 * i, *g = m->pair_gradient + 3 * k, w = m->pair_weight[k];
+    fascia_real a[3];
+    fascia_pt_mat_vec(A, m->pair_offset + 3 * k, a);
+    for (int r = 0; r < 3; ++r) {
+      const fascia_real y = st->frame_x[3 * i + r] + a[r];
+      for (int c = 0; c < 3; ++c) F[3 * r + c] += y * g[c] + w * A[3 * r + c];
+    }
+  }
+}
+
+/// Energy, partial energy gradients and cache of sample s.
+/// pair_out: [6P] array; writes entries of the pairs of s: (g_x, g_theta),
+/// the gradient of this sample's energy with respect to frame i (the force is
+/// its negative). cache: [FASCIA_PT_CACHE_SIZE] for this sample, or NULL.
+/// Returns the sample's energy (J); *flags gets FASCIA_PT_FLAG_* bits.
+static inline FASCIA_HD fascia_real fascia_pt_sample_gradient(const fascia_pt_model *m, const fascia_pt_state *st,
+                                                              int32_t s, fascia_real *pair_out, fascia_real *cache,
+                                                              int *flags) {
+  fascia_real F[9], P[9], aux[FASCIA_PT_AUX_SIZE];
+  fascia_pt_sample_F(m, st, s, F);
+  const fascia_real v = m->sample_volume[s], muc = m->sample_coupling[s];
+  fascia_real psi = fascia_pt_stress(m->sample_law[s], m->sample_lambda[s], m->sample_mu[s], F, P, aux);
+  const int32_t begin = m->sample_offsets[s], end = m->sample_offsets[s + 1];
+  if (muc > 0) {
+    for (int32_t k = begin; k < end; ++k) {
+      const fascia_real *A = st->frame_A + 9 * m->pair_frame[k], w = m->pair_weight[k];
+      fascia_real G[9], K[9], AK[9];
+      fascia_pt_mat_tmul(A, F, G);
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) K[3 * r + c] = FASCIA_R(0.5) * (G[3 * r + c] - G[3 * c + r]);
+      psi += w * muc * fascia_pt_ddot(K, K);
+      fascia_pt_mat_mul(A, K, AK);
+      for (int q = 0; q < 9; ++q) P[q] += 2 * muc * w * AK[q];
+    }
+  }
+  const fascia_real J = fascia_pt_det(F);
+  int bad = 0;
+  if (!(J > 0)) bad |= FASCIA_PT_FLAG_INVERTED;
+  if (!isfinite(psi)) bad |= FASCIA_PT_FLAG_NONFINITE;
+  *flags = bad;
+  for (int32_t k = begin; k < end; ++k) {
+    const fascia_real *A = st->frame_A + 9 * m->pair_frame[k], *g = m->pair_gradient + 3 * k, w = m->pair_weight[k];
+    fascia_real a[3], C[9], M[9], t[3], *out = pair_out + 6 * k;
+    fascia_pt_pair_C(A, m->pair_offset + 3 * k, g, w, a, C);
+    fascia_pt_mat_vec(P, g, out);
+    fascia_pt_mat_mult(C, P, M);
+    fascia_pt_axial(M, t);
+    if (muc > 0) {
+      fascia_real G[9], K[9], FK[9], FKA[9], u[3];
+      fascia_pt_mat_tmul(A, F, G);
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) K[3 * r + c] = FASCIA_R(0.5) * (G[3 * r + c] - G[3 * c + r]);
+      fascia_pt_mat_mul(F, K, FK);
+      fascia_pt_mat_mult(FK, A, FKA);
+      fascia_pt_axial(FKA, u);
+      for (int r = 0; r < 3; ++r) t[r] += 2 * muc * w * u[r];
+    }
+    for (int r = 0; r < 3; ++r) {
+      out[r] *= v;
+      out[3 + r] = v * t[r];
+    }
+  }
+  if (cache) {
+    for (int q = 0; q < 9; ++q) {
+      cache[q] = F[q];
+      cache[9 + q] = P[q];
+    }
+    for (int q = 0; q < FASCIA_PT_AUX_SIZE; ++q) cache[18 + q] = aux[q];
+  }
+  return v * psi;
+}
+
+/// Partial stiffness product of sample s: for each pair (i, s) writes
+/// (K_exact dq)_i restricted to this sample's energy, where dq is the [6N]
+/// direction (dx_i, dtheta_i per frame) and K_exact the directional derivative
+/// of the gradient above. cache: from fascia_pt_sample_gradient at this state.
+static inline FASCIA_HD void fascia_pt_sample_stiffness(const fascia_pt_model *m, const fascia_pt_state *st,
+                                                        int32_t s, const fascia_real *cache, const fascia_real *dq,
+                                                        fascia_real *pair_out) {
+  const fascia_real *F = cache, *P = cache + 9, *aux = cache + 18;
+  const fascia_real v = m->sample_volume[s], muc = m->sample_coupling[s];
+  const int32_t begin = m->sample_offsets[s], end = m->sample_offsets[s + 1];
+  // dF = sum_i dx_i g^T + [dtheta_i]x C_i
+  fascia_real dF[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+  for (int32_t k = begin; k < end; ++k) {
+    const int32_t i = m->pair_frame[k];
+    const fascia_real *A = st->frame_A + 9 * i, *g = m->pair_gradient + 3 * k, *dx = dq + 6 * i, *dt = dx + 3;
+    fascia_real a[3], C[9], tC[9];
+    fascia_pt_pair_C(A, m->pair_offset + 3 * k, g, m->pair_weight[k], a, C);
+    fascia_pt_skew_mul(dt, C, tC);
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) dF[3 * r + c] += dx[r] * g[c] + tC[3 * r + c];
+  }
+  fascia_real dP[9];
+  fascia_pt_stress_diff(m->sample_law[s], m->sample_lambda[s], m->sample_mu[s], F, aux, dF, dP);
+  if (muc > 0) {
+    // dPt += sum_j 2 mu_c w_j (dA_j K_j + A_j dK_j), dA_j = [dtheta_j]x A_j,
+    // dK_j = skew(A_j^T dF - A_j^T [dtheta_j]x F)
+    for (int32_t k = begin; k < end; ++k) {
+      const int32_t j = m->pair_frame[k];
+      const fascia_real *A = st->frame_A + 9 * j, *dt = dq + 6 * j + 3, w = m->pair_weight[k];
+      fascia_real G[9], K[9], tF[9], H[9], dK[9], dA[9], t1[9], t2[9];
+      fascia_pt_mat_tmul(A, F, G);
+      fascia_pt_skew_mul(dt, F, tF);
+      for (int q = 0; q < 9; ++q) tF[q] = dF[q] - tF[q];
+      fascia_pt_mat_tmul(A, tF, H);
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) {
+          K[3 * r + c] = FASCIA_R(0.5) * (G[3 * r + c] - G[3 * c + r]);
+          dK[3 * r + c] = FASCIA_R(0.5) * (H[3 * r + c] - H[3 * c + r]);
+        }
+      fascia_pt_skew_mul(dt, A, dA);
+      fascia_pt_mat_mul(dA, K, t1);
+      fascia_pt_mat_mul(A, dK, t2);
+      for (int q = 0; q < 9; ++q) dP[q] += 2 * muc * w * (t1[q] + t2[q]);
+    }
+  }
+  for (int32_t k = begin; k < end; ++k) {
+    const int32_t i = m->pair_frame[k];
+    const fascia_real *A = st->frame_A + 9 * i, *g = m->pair_gradient + 3 * k, *dt = dq + 6 * i + 3;
+    const fascia_real w = m->pair_weight[k];
+    fascia_real a[3], C[9], M[9], t[3], *out = pair_out + 6 * k;
+    fascia_pt_pair_C(A, m->pair_offset + 3 * k, g, w, a, C);
+    fascia_pt_mat_vec(dP, g, out);
+    // material part axial(C dPt^T) plus geometric part axial([dtheta]x C Pt^T)
+    fascia_pt_mat_mult(C, dP, M);
+    fascia_pt_axial(M, t);
+    fascia_pt_mat_mult(C, P, M);
+    const fascia_real trM = fascia_pt_trace(M);
+    for (int r = 0; r < 3; ++r) t[r] += M[3 * r] * dt[0] + M[3 * r + 1] * dt[1] + M[3 * r + 2] * dt[2] - trM * dt[r];
+    if (muc > 0) {
+      // d axial(F K A^T) = axial(dF K A^T + F dK A^T + F K dA^T), dA^T = -A^T [dtheta]x
+      fascia_real G[9], K[9], tF[9], H[9], dK[9], X[9], Y[9], u[3], tA[9];
+      fascia_pt_mat_tmul(A, F, G);
+      fascia_pt_skew_mul(dt, F, tF);
+      for (int q = 0; q < 9; ++q) tF[q] = dF[q] - tF[q];
+      fascia_pt_mat_tmul(A, tF, H);
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) {
+          K[3 * r + c] = FASCIA_R(0.5) * (G[3 * r + c] - G[3 * c + r]);
+          dK[3 * r + c] = FASCIA_R(0.5) * (H[3 * r + c] - H[3 * c + r]);
+        }
+      for (int q = 0; q < 9; ++q) X[q] = 0;
+      fascia_pt_mat_mul(dF, K, Y); // dF K
+      for (int q = 0; q < 9; ++q) X[q] += Y[q];
+      fascia_pt_mat_mul(F, dK, Y); // F dK
+      for (int q = 0; q < 9; ++q) X[q] += Y[q];
+      fascia_real XA[9];
+      fascia_pt_mat_mult(X, A, XA); // (dF K + F dK) A^T
+      // F K dA^T = -F K A^T [dtheta]x = ([dtheta]x A K^T F^T)^T ... computed directly:
+      fascia_pt_skew_mul(dt, A, tA); // dA = [dtheta]x A
+      fascia_pt_mat_mul(F, K, Y);
+      fascia_real Z[9];
+      fascia_pt_mat_mult(Y, tA, Z); // F K dA^T
+      for (int q = 0; q < 9; ++q) XA[q] += Z[q];
+      fascia_pt_axial(XA, u);
+      for (int r = 0; r < 3; ++r) t[r] += 2 * muc * w * u[r];
+    }
+    for (int r = 0; r < 3; ++r) {
+      out[r] *= v;
+      out[3 + r] = v * t[r];
+    }
+  }
+}
+
+/// Partial consistent-mass product of sample s with mass ms: velocity of the
+/// sample dp = sum_i w (dx_i + dtheta_i x a), then per pair ms w (dp, a x dp).
+static inline FASCIA_HD void fascia_pt_sample_mass(const fascia_pt_model *m, const fascia_pt_state *st, int32_t s,
+                                                   fascia_real ms, const fascia_real *dq, fascia_real *pair_out) {
+  const int32_t begin = m->sample_offsets[s], end = m->sample_offsets[s + 1];
+  fascia_real dp[3] = {0, 0, 0};
+  for (int32_t k = begin; k < end; ++k) {
+    const int32_t i = m->pair_frame[k];
+    fascia_real a[3];
+    fascia_pt_mat_vec(st->frame_A + 9 * i, m->pair_offset + 3 * k, a);
+    const fascia_real *dx = dq + 6 * i, *dt = dx + 3, w = m->pair_weight[k];
+    fascia_real ta[3];
+    fascia_pt_cross(dt, a, ta);
+    for (int r = 0; r < 3; ++r) dp[r] += w * (dx[r] + ta[r]);
+  }
+  for (int32_t k = begin; k < end; ++k) {
+    const int32_t i = m->pair_frame[k];
+    fascia_real a[3], *out = pair_out + 6 * k;
+    fascia_pt_mat_vec(st->frame_A + 9 * i, m->pair_offset + 3 * k, a);
+    const fascia_real mw = ms * m->pair_weight[k];
+    fascia_real ad[3];
+    fascia_pt_cross(a, dp, ad);
+    for (int r = 0; r < 3; ++r) {
+      out[r] = mw * dp[r];
+      out[3 + r] = mw * ad[r];
+    }
+  }
+}
+
+#endif

@@ -1,0 +1,480 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// The model structure: allocation, the reverse (frame -> samples) table, and
+// validation, the one gate every model passes before a solver sees it.
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fascia/model.h"
+#include "status.h"
+
+// Tolerances of the validation: weights are computed in double from rest
+// geometry, so a partition of unity holds to ~1e-12; 1e-9 leaves room for
+// files written by other tools in double.
+#define WEIGHT_SUM_TOLERANCE 1e-9
+#define QUAT_NORM_TOLERANCE 1e-9
+
+fascia_status fascia_model_alloc(fascia_ctx *ctx, const fascia_model_sizes *z, fascia_model **out) {
+  FASCIA_CHECK(out && z, ctx, FASCIA_ERR_ARGUMENT, "fascia_model_alloc: NULL argument");
+  *out = NULL;
+  const int32_t counts[] = {z->frames, z->samples, z->pairs, z->materials, z->motions,
+                            z->probes, z->probe_pairs, z->organs, z->couplings};
+  for (size_t k = 0; k < sizeof counts / sizeof counts[0]; ++k)
+    FASCIA_CHECK(counts[k] >= 0 && counts[k] <= FASCIA_MAX_COUNT, ctx, FASCIA_ERR_MEMORY,
+                 "model: size %d is out of range (0 .. %lld)", (int)counts[k], (long long)FASCIA_MAX_COUNT);
+  FASCIA_CHECK(z->pairs <= (int64_t)z->samples * 1024, ctx, FASCIA_ERR_ARGUMENT,
+               "model: %d pairs for %d samples is more than 1024 neighbours per sample", (int)z->pairs,
+               (int)z->samples);
+  fascia_model *m = calloc(1, sizeof *m);
+  FASCIA_CHECK(m, ctx, FASCIA_ERR_MEMORY, "model: out of memory");
+  m->frame_count = z->frames;
+  m->sample_count = z->samples;
+  m->pair_count = z->pairs;
+  m->material_count = z->materials;
+  m->motion_count = z->motions;
+  m->probe_count = z->probes;
+  m->probe_pair_count = z->probe_pairs;
+  m->organ_count = z->organs;
+  m->coupling_count = z->couplings;
+  const int64_t N = z->frames, S = z->samples, P = z->pairs, Q = z->probes, C = z->couplings;
+  m->frame_position = fascia_calloc(3 * N, sizeof(fascia_real));
+  m->frame_rotation = fascia_calloc(4 * N, sizeof(fascia_real));
+  m->frame_kind = fascia_calloc(N, sizeof(int32_t));
+  m->frame_motion = fascia_calloc(N, sizeof(int32_t));
+  m->frame_load = fascia_calloc(6 * N, sizeof(fascia_real));
+  m->sample_position = fascia_calloc(3 * S, sizeof(fascia_real));
+  m->sample_volume = fascia_calloc(S, sizeof(fascia_real));
+  m->sample_material = fascia_calloc(S, sizeof(int32_t));
+  m->sample_offsets = fascia_calloc(S + 1, sizeof(int32_t));
+  m->pair_frame = fascia_calloc(P, sizeof(int32_t));
+  m->pair_weight = fascia_calloc(P, sizeof(fascia_real));
+  m->pair_gradient = fascia_calloc(3 * P, sizeof(fascia_real));
+  m->frame_offsets = fascia_calloc(N + 1, sizeof(int32_t));
+  m->frame_pairs = fascia_calloc(P, sizeof(int32_t));
+  m->materials = fascia_calloc(z->materials, sizeof(fascia_material));
+  m->motions = fascia_calloc(z->motions, sizeof(fascia_motion));
+  m->probe_name = fascia_calloc(Q, FASCIA_NAME_SIZE);
+  m->probe_position = fascia_calloc(3 * Q, sizeof(fascia_real));
+  m->probe_offsets = fascia_calloc(Q + 1, sizeof(int32_t));
+  m->probe_frame = fascia_calloc(z->probe_pairs, sizeof(int32_t));
+  m->probe_weight = fascia_calloc(z->probe_pairs, sizeof(fascia_real));
+  m->organs = fascia_calloc(z->organs, sizeof(fascia_organ));
+  m->coupling_organ = fascia_calloc(C, sizeof(int32_t));
+  m->coupling_frame = fascia_calloc(C, sizeof(int32_t));
+  m->coupling_triangle = fascia_calloc(C, sizeof(int32_t));
+  m->coupling_barycentric = fascia_calloc(3 * C, sizeof(fascia_real));
+  if (!m->frame_position || !m->frame_rotation || !m->frame_kind || !m->frame_motion || !m->frame_load ||
+      !m->sample_position || !m->sample_volume || !m->sample_material || !m->sample_offsets || !m->pair_frame ||
+      !m->pair_weight || !m->pair_gradient || !m->frame_offsets || !m->frame_pairs || !m->materials || !m->motions ||
+      !m->probe_name || !m->probe_position || !m->probe_offsets || !m->probe_frame || !m->probe_weight ||
+      !m->organs || !m->coupling_organ || !m->coupling_frame || !m->coupling_triangle || !m->coupling_barycentric) {
+    fascia_model_destroy(&m);
+    return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "model: out of memory for %lld frames, %lld samples, %lld pairs",
+                       (long long)N, (long long)S, (long long)P);
+  }
+  for (int64_t i = 0; i < N; ++i) {
+    m->frame_rotation[4 * i] = 1;
+    m->frame_motion[i] = -1;
+  }
+  for (int32_t k = 0; k < z->organs; ++k) m->organs[k].motion = -1;
+  *out = m;
+  return FASCIA_OK;
+}
+
+void fascia_model_destroy(fascia_model **model) {
+  if (!model || !*model) return;
+  fascia_model *m = *model;
+  free(m->frame_position);
+  free(m->frame_rotation);
+  free(m->frame_kind);
+  free(m->frame_motion);
+  free(m->frame_load);
+  free(m->sample_position);
+  free(m->sample_volume);
+  free(m->sample_material);
+  free(m->sample_offsets);
+  free(m->pair_frame);
+  free(m->pair_weight);
+  free(m->pair_gradient);
+  free(m->frame_offsets);
+  free(m->frame_pairs);
+  free(m->materials);
+  for (int32_t k = 0; m->motions && k < m->motion_count; ++k) {
+    free(m->motions[k].key_time);
+    free(m->motions[k].key_translation);
+    free(m->motions[k].key_rotation);
+  }
+  free(m->motions);
+  free(m->probe_name);
+  free(m->probe_position);
+  free(m->probe_offsets);
+  free(m->probe_frame);
+  free(m->probe_weight);
+  for (int32_t k = 0; m->organs && k < m->organ_count; ++k) {
+    free(m->organs[k].vertices);
+    free(m->organs[k].triangles);
+  }
+  free(m->organs);
+  free(m->coupling_organ);
+  free(m->coupling_frame);
+  free(m->coupling_triangle);
+  free(m->coupling_barycentric);
+  free(m->provenance);
+  free(m);
+  *model = NULL;
+}
+
+fascia_status fascia_motion_alloc(fascia_ctx *ctx, fascia_motion *motion, int32_t key_count) {
+  FASCIA_CHECK(motion && key_count >= 1 && key_count <= FASCIA_MAX_COUNT, ctx, FASCIA_ERR_ARGUMENT,
+               "motion: key count %d must be at least 1", (int)key_count);
+  free(motion->key_time);
+  free(motion->key_translation);
+  free(motion->key_rotation);
+  motion->key_count = key_count;
+  motion->key_time = fascia_calloc(key_count, sizeof(fascia_real));
+  motion->key_translation = fascia_calloc(3 * (int64_t)key_count, sizeof(fascia_real));
+  motion->key_rotation = fascia_calloc(4 * (int64_t)key_count, sizeof(fascia_real));
+  FASCIA_CHECK(motion->key_time && motion->key_translation && motion->key_rotation, ctx, FASCIA_ERR_MEMORY,
+               "motion '%s': out of memory for %d keys", motion->name, (int)key_count);
+  for (int32_t k = 0; k < key_count; ++k) motion->key_rotation[4 * k] = 1;
+  return FASCIA_OK;
+}
+
+fascia_status fascia_organ_alloc(fascia_ctx *ctx, fascia_organ *organ, int32_t vertex_count, int32_t triangle_count) {
+  FASCIA_CHECK(organ && vertex_count >= 0 && triangle_count >= 0 && vertex_count <= FASCIA_MAX_COUNT &&
+                   triangle_count <= FASCIA_MAX_COUNT,
+               ctx, FASCIA_ERR_ARGUMENT, "organ: bad surface size (%d vertices, %d triangles)", (int)vertex_count,
+               (int)triangle_count);
+  free(organ->vertices);
+  free(organ->triangles);
+  organ->vertex_count = vertex_count;
+  organ->triangle_count = triangle_count;
+  organ->vertices = fascia_calloc(3 * (int64_t)vertex_count, sizeof(fascia_real));
+  organ->triangles = fascia_calloc(3 * (int64_t)triangle_count, sizeof(int32_t));
+  FASCIA_CHECK(organ->vertices && organ->triangles, ctx, FASCIA_ERR_MEMORY, "organ '%s': out of memory",
+               organ->name);
+  return FASCIA_OK;
+}
+
+fascia_status fascia_model_set_provenance(fascia_ctx *ctx, fascia_model *model, const char *text) {
+  FASCIA_CHECK(model, ctx, FASCIA_ERR_ARGUMENT, "fascia_model_set_provenance: NULL model");
+  char *copy = NULL;
+  if (text) {
+    copy = malloc(strlen(text) + 1);
+    FASCIA_CHECK(copy, ctx, FASCIA_ERR_MEMORY, "model: out of memory for provenance");
+    strcpy(copy, text);
+  }
+  free(model->provenance);
+  model->provenance = copy;
+  return FASCIA_OK;
+}
+
+fascia_status fascia_model_build_reverse(fascia_ctx *ctx, fascia_model *m) {
+  FASCIA_CHECK(m, ctx, FASCIA_ERR_ARGUMENT, "fascia_model_build_reverse: NULL model");
+  const int32_t N = m->frame_count, P = m->pair_count;
+  FASCIA_CHECK(m->sample_offsets[m->sample_count] == P, ctx, FASCIA_ERR_ARGUMENT,
+               "model: sample_offsets ends at %d, expected the pair count %d", (int)m->sample_offsets[m->sample_count],
+               (int)P);
+  for (int32_t i = 0; i <= N; ++i) m->frame_offsets[i] = 0;
+  for (int32_t k = 0; k < P; ++k) {
+    const int32_t i = m->pair_frame[k];
+    FASCIA_CHECK(i >= 0 && i < N, ctx, FASCIA_ERR_ARGUMENT, "model: pair %d names frame %d of %d", (int)k, (int)i,
+                 (int)N);
+    m->frame_offsets[i + 1]++;
+  }
+  for (int32_t i = 0; i < N; ++i) m->frame_offsets[i + 1] += m->frame_offsets[i];
+  int32_t *fill = fascia_calloc(N, sizeof(int32_t));
+  FASCIA_CHECK(fill, ctx, FASCIA_ERR_MEMORY, "model: out of memory for the reverse table");
+  // pairs are visited in ascending order, so each frame's list is ascending
+  for (int32_t k = 0; k < P; ++k) {
+    const int32_t i = m->pair_frame[k];
+    m->frame_pairs[m->frame_offsets[i] + fill[i]++] = k;
+  }
+  free(fill);
+  return FASCIA_OK;
+}
+
+static int finite_all(const fascia_real *x, int64_t n, int64_t *bad) {
+  for (int64_t k = 0; k < n; ++k)
+    if (!isfinite(x[k])) {
+      *bad = k;
+      return 0;
+    }
+  return 1;
+}
+
+// CSR check: offsets[0] == 0, monotone, offsets[rows] == total.
+static fascia_status check_csr(fascia_ctx *ctx, const char *origin, const char *name, const int32_t *offsets,
+                               int32_t rows, int32_t total) {
+  FASCIA_CHECK(offsets[0] == 0, ctx, FASCIA_ERR_FORMAT, "model '%s' %s: first offset is %d, expected 0", origin, name,
+               (int)offsets[0]);
+  for (int32_t r = 0; r < rows; ++r)
+    FASCIA_CHECK(offsets[r + 1] >= offsets[r], ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' %s: offsets decrease at row %d (%d then %d)", origin, name, (int)r, (int)offsets[r],
+                 (int)offsets[r + 1]);
+  FASCIA_CHECK(offsets[rows] == total, ctx, FASCIA_ERR_FORMAT, "model '%s' %s: last offset is %d, expected %d", origin,
+               name, (int)offsets[rows], (int)total);
+  return FASCIA_OK;
+}
+
+static fascia_status validate_frames(fascia_ctx *ctx, const fascia_model *m, const char *origin) {
+  int64_t bad;
+  const int32_t N = m->frame_count;
+  FASCIA_CHECK(finite_all(m->frame_position, 3 * (int64_t)N, &bad), ctx, FASCIA_ERR_FORMAT,
+               "model '%s' /frames/position: frame %lld has a non-finite coordinate", origin, (long long)(bad / 3));
+  FASCIA_CHECK(finite_all(m->frame_rotation, 4 * (int64_t)N, &bad), ctx, FASCIA_ERR_FORMAT,
+               "model '%s' /frames/rotation: frame %lld has a non-finite quaternion", origin, (long long)(bad / 4));
+  FASCIA_CHECK(finite_all(m->frame_load, 6 * (int64_t)N, &bad), ctx, FASCIA_ERR_FORMAT,
+               "model '%s' /frames/load: frame %lld has a non-finite load", origin, (long long)(bad / 6));
+  for (int32_t i = 0; i < N; ++i) {
+    const fascia_real *q = m->frame_rotation + 4 * i;
+    const double norm = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    FASCIA_CHECK(fabs(norm - 1) < QUAT_NORM_TOLERANCE, ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' /frames/rotation: frame %d quaternion has norm %.12g, expected 1", origin, (int)i, norm);
+    const int32_t kind = m->frame_kind[i];
+    FASCIA_CHECK(kind >= 0 && kind < FASCIA_FRAME_KIND_COUNT_, ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' /frames/kind: frame %d has kind %d, expected 0 (free), 1 (fixed) or 2 (prescribed)",
+                 origin, (int)i, (int)kind);
+    const int32_t motion = m->frame_motion[i];
+    if (kind == FASCIA_FRAME_PRESCRIBED)
+      FASCIA_CHECK(motion >= 0 && motion < m->motion_count, ctx, FASCIA_ERR_FORMAT,
+                   "model '%s' /frames/motion: prescribed frame %d names motion %d, but the model has %d", origin,
+                   (int)i, (int)motion, (int)m->motion_count);
+    else
+      FASCIA_CHECK(motion == -1, ctx, FASCIA_ERR_FORMAT,
+                   "model '%s' /frames/motion: frame %d is not prescribed but names motion %d (expected -1)", origin,
+                   (int)i, (int)motion);
+  }
+  return FASCIA_OK;
+}
+
+static fascia_status validate_samples(fascia_ctx *ctx, const fascia_model *m, const char *origin) {
+  int64_t bad;
+  const int32_t S = m->sample_count, N = m->frame_count;
+  FASCIA_CHECK(finite_all(m->sample_position, 3 * (int64_t)S, &bad), ctx, FASCIA_ERR_FORMAT,
+               "model '%s' /samples/position: sample %lld has a non-finite coordinate", origin, (long long)(bad / 3));
+  for (int32_t s = 0; s < S; ++s) {
+    FASCIA_CHECK(isfinite(m->sample_volume[s]) && m->sample_volume[s] > 0, ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' /samples/volume: sample %d has volume %g, expected a positive number", origin, (int)s,
+                 m->sample_volume[s]);
+    FASCIA_CHECK(m->sample_material[s] >= 0 && m->sample_material[s] < m->material_count, ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' /samples/material: sample %d names material %d, but the model has %d", origin, (int)s,
+                 (int)m->sample_material[s], (int)m->material_count);
+  }
+  FASCIA_TRY(check_csr(ctx, origin, "/samples/offsets", m->sample_offsets, S, m->pair_count));
+  FASCIA_CHECK(finite_all(m->pair_weight, m->pair_count, &bad), ctx, FASCIA_ERR_FORMAT,
+               "model '%s' /pairs/weight: pair %lld is not finite", origin, (long long)bad);
+  FASCIA_CHECK(finite_all(m->pair_gradient, 3 * (int64_t)m->pair_count, &bad), ctx, FASCIA_ERR_FORMAT,
+               "model '%s' /pairs/gradient: pair %lld is not finite", origin, (long long)(bad / 3));
+  for (int32_t s = 0; s < S; ++s) {
+    const int32_t begin = m->sample_offsets[s], end = m->sample_offsets[s + 1];
+    FASCIA_CHECK(end > begin, ctx, FASCIA_ERR_FORMAT, "model '%s' /samples/offsets: sample %d has no neighbour frame",
+                 origin, (int)s);
+    double sum = 0, grad[3] = {0, 0, 0}, scale = 0;
+    for (int32_t k = begin; k < end; ++k) {
+      const int32_t i = m->pair_frame[k];
+      FASCIA_CHECK(i >= 0 && i < N, ctx, FASCIA_ERR_FORMAT,
+                   "model '%s' /pairs/frame: pair %d of sample %d names frame %d, but the model has %d frames", origin,
+                   (int)k, (int)s, (int)i, (int)N);
+      FASCIA_CHECK(k == begin || m->pair_frame[k - 1] < i, ctx, FASCIA_ERR_FORMAT,
+                   "model '%s' /pairs/frame: frames of sample %d are not strictly ascending at pair %d", origin, (int)s,
+                   (int)k);
+      sum += m->pair_weight[k];
+      for (int r = 0; r < 3; ++r) {
+        grad[r] += m->pair_gradient[3 * k + r];
+        scale += fabs(m->pair_gradient[3 * k + r]);
+      }
+    }
+    FASCIA_CHECK(fabs(sum - 1) < WEIGHT_SUM_TOLERANCE, ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' /pairs/weight: weights of sample %d sum to %.12g, expected 1 (partition of unity)",
+                 origin, (int)s, sum);
+    for (int r = 0; r < 3; ++r)
+      FASCIA_CHECK(fabs(grad[r]) <= WEIGHT_SUM_TOLERANCE * (1 + scale), ctx, FASCIA_ERR_FORMAT,
+                   "model '%s' /pairs/gradient: gradients of sample %d sum to %.3g in component %d, expected 0",
+                   origin, (int)s, grad[r], r);
+  }
+  return FASCIA_OK;
+}
+
+static fascia_status validate_reverse(fascia_ctx *ctx, const fascia_model *m, const char *origin) {
+  FASCIA_TRY(check_csr(ctx, origin, "/frames/offsets", m->frame_offsets, m->frame_count, m->pair_count));
+  for (int32_t i = 0; i < m->frame_count; ++i)
+    for (int32_t r = m->frame_offsets[i]; r < m->frame_offsets[i + 1]; ++r) {
+      const int32_t k = m->frame_pairs[r];
+      FASCIA_CHECK(k >= 0 && k < m->pair_count && m->pair_frame[k] == i, ctx, FASCIA_ERR_FORMAT,
+                   "model '%s' /frames/pairs: entry %d of frame %d is pair %d, which does not belong to that frame",
+                   origin, (int)r, (int)i, (int)k);
+      FASCIA_CHECK(r == m->frame_offsets[i] || m->frame_pairs[r - 1] < k, ctx, FASCIA_ERR_FORMAT,
+                   "model '%s' /frames/pairs: pairs of frame %d are not strictly ascending", origin, (int)i);
+    }
+  return FASCIA_OK;
+}
+
+static fascia_status validate_materials(fascia_ctx *ctx, const fascia_model *m, const char *origin) {
+  FASCIA_CHECK(m->material_count >= 1 || m->sample_count == 0, ctx, FASCIA_ERR_FORMAT,
+               "model '%s' /materials: no material, but %d samples", origin, (int)m->sample_count);
+  for (int32_t k = 0; k < m->material_count; ++k) {
+    const fascia_material *mat = m->materials + k;
+    FASCIA_CHECK(mat->law >= 0 && mat->law < FASCIA_LAW_COUNT_, ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' /materials: material %d ('%s') has law %d, expected 0 (stvk) or 1 (neohookean)", origin,
+                 (int)k, mat->name, (int)mat->law);
+    FASCIA_CHECK(isfinite(mat->youngs_modulus) && mat->youngs_modulus > 0, ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' /materials: material %d ('%s') has Young's modulus %g Pa, expected > 0", origin, (int)k,
+                 mat->name, mat->youngs_modulus);
+    FASCIA_CHECK(isfinite(mat->poisson_ratio) && mat->poisson_ratio >= 0 && mat->poisson_ratio < 0.5, ctx,
+                 FASCIA_ERR_FORMAT, "model '%s' /materials: material %d ('%s') has Poisson ratio %g, expected [0, 0.5)",
+                 origin, (int)k, mat->name, mat->poisson_ratio);
+    FASCIA_CHECK(isfinite(mat->density) && mat->density > 0, ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' /materials: material %d ('%s') has density %g kg/m^3, expected > 0", origin, (int)k,
+                 mat->name, mat->density);
+    FASCIA_CHECK(isfinite(mat->rotation_coupling) && mat->rotation_coupling >= 0, ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' /materials: material %d ('%s') has rotation coupling %g, expected >= 0", origin, (int)k,
+                 mat->name, mat->rotation_coupling);
+  }
+  return FASCIA_OK;
+}
+
+static fascia_status validate_motions(fascia_ctx *ctx, const fascia_model *m, const char *origin) {
+  for (int32_t k = 0; k < m->motion_count; ++k) {
+    const fascia_motion *mo = m->motions + k;
+    int64_t bad;
+    FASCIA_CHECK(mo->key_count >= 1 && mo->key_time, ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' /motions/%s: no keyframe", origin, mo->name);
+    FASCIA_CHECK(finite_all(mo->pivot, 3, &bad) && finite_all(mo->key_time, mo->key_count, &bad) &&
+                     finite_all(mo->key_translation, 3 * (int64_t)mo->key_count, &bad) &&
+                     finite_all(mo->key_rotation, 4 * (int64_t)mo->key_count, &bad),
+                 ctx, FASCIA_ERR_FORMAT, "model '%s' /motions/%s: a non-finite value", origin, mo->name);
+    for (int32_t j = 0; j < mo->key_count; ++j) {
+      const fascia_real *q = mo->key_rotation + 4 * j;
+      const double norm = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+      FASCIA_CHECK(fabs(norm - 1) < QUAT_NORM_TOLERANCE, ctx, FASCIA_ERR_FORMAT,
+                   "model '%s' /motions/%s/rotation: key %d has norm %.12g, expected 1", origin, mo->name, (int)j,
+                   norm);
+      FASCIA_CHECK(j == 0 || mo->key_time[j] > mo->key_time[j - 1], ctx, FASCIA_ERR_FORMAT,
+                   "model '%s' /motions/%s/time: key times are not strictly increasing at key %d", origin, mo->name,
+                   (int)j);
+    }
+  }
+  return FASCIA_OK;
+}
+
+static fascia_status validate_probes(fascia_ctx *ctx, const fascia_model *m, const char *origin) {
+  int64_t bad;
+  FASCIA_TRY(check_csr(ctx, origin, "/probes/offsets", m->probe_offsets, m->probe_count, m->probe_pair_count));
+  FASCIA_CHECK(finite_all(m->probe_position, 3 * (int64_t)m->probe_count, &bad), ctx, FASCIA_ERR_FORMAT,
+               "model '%s' /probes/position: probe %lld is not finite", origin, (long long)(bad / 3));
+  for (int32_t p = 0; p < m->probe_count; ++p) {
+    FASCIA_CHECK(memchr(m->probe_name[p], 0, FASCIA_NAME_SIZE) && m->probe_name[p][0], ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' /probes/name: probe %d has an empty or unterminated name", origin, (int)p);
+    double sum = 0;
+    for (int32_t k = m->probe_offsets[p]; k < m->probe_offsets[p + 1]; ++k) {
+      FASCIA_CHECK(m->probe_frame[k] >= 0 && m->probe_frame[k] < m->frame_count, ctx, FASCIA_ERR_FORMAT,
+                   "model '%s' /probes/frame: probe '%s' names frame %d of %d", origin, m->probe_name[p],
+                   (int)m->probe_frame[k], (int)m->frame_count);
+      FASCIA_CHECK(isfinite(m->probe_weight[k]), ctx, FASCIA_ERR_FORMAT,
+                   "model '%s' /probes/weight: probe '%s' has a non-finite weight", origin, m->probe_name[p]);
+      sum += m->probe_weight[k];
+    }
+    FASCIA_CHECK(fabs(sum - 1) < WEIGHT_SUM_TOLERANCE, ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' /probes/weight: weights of probe '%s' sum to %.12g, expected 1", origin, m->probe_name[p],
+                 sum);
+  }
+  return FASCIA_OK;
+}
+
+static fascia_status validate_organs(fascia_ctx *ctx, const fascia_model *m, const char *origin) {
+  for (int32_t k = 0; k < m->organ_count; ++k) {
+    const fascia_organ *o = m->organs + k;
+    int64_t bad;
+    FASCIA_CHECK(o->kind >= 0 && o->kind < FASCIA_ORGAN_KIND_COUNT_, ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' /organs/%s: kind %d is not 0..3", origin, o->name, (int)o->kind);
+    FASCIA_CHECK(o->kind != FASCIA_ORGAN_PRESCRIBED || (o->motion >= 0 && o->motion < m->motion_count), ctx,
+                 FASCIA_ERR_FORMAT, "model '%s' /organs/%s: prescribed organ names motion %d of %d", origin, o->name,
+                 (int)o->motion, (int)m->motion_count);
+    FASCIA_CHECK(finite_all(o->vertices, 3 * (int64_t)o->vertex_count, &bad), ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' /organs/%s/vertices: vertex %lld is not finite", origin, o->name, (long long)(bad / 3));
+    for (int64_t t = 0; t < 3 * (int64_t)o->triangle_count; ++t)
+      FASCIA_CHECK(o->triangles[t] >= 0 && o->triangles[t] < o->vertex_count, ctx, FASCIA_ERR_FORMAT,
+                   "model '%s' /organs/%s/triangles: triangle %lld names vertex %d of %d", origin, o->name,
+                   (long long)(t / 3), (int)o->triangles[t], (int)o->vertex_count);
+  }
+  for (int32_t c = 0; c < m->coupling_count; ++c) {
+    const int32_t o = m->coupling_organ[c];
+    FASCIA_CHECK(o >= 0 && o < m->organ_count, ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' /coupling/organ: entry %d names organ %d of %d", origin, (int)c, (int)o,
+                 (int)m->organ_count);
+    FASCIA_CHECK(m->coupling_frame[c] >= 0 && m->coupling_frame[c] < m->frame_count, ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' /coupling/frame: entry %d names frame %d of %d", origin, (int)c,
+                 (int)m->coupling_frame[c], (int)m->frame_count);
+    FASCIA_CHECK(m->coupling_triangle[c] >= 0 && m->coupling_triangle[c] < m->organs[o].triangle_count, ctx,
+                 FASCIA_ERR_FORMAT, "model '%s' /coupling/triangle: entry %d names triangle %d of organ '%s' (%d)",
+                 origin, (int)c, (int)m->coupling_triangle[c], m->organs[o].name, (int)m->organs[o].triangle_count);
+    const fascia_real *b = m->coupling_barycentric + 3 * c;
+    FASCIA_CHECK(isfinite(b[0]) && isfinite(b[1]) && isfinite(b[2]) && fabs(b[0] + b[1] + b[2] - 1) < 1e-6, ctx,
+                 FASCIA_ERR_FORMAT, "model '%s' /coupling/barycentric: entry %d does not sum to 1", origin, (int)c);
+  }
+  return FASCIA_OK;
+}
+
+fascia_status fascia_model_validate(fascia_ctx *ctx, const fascia_model *m, const char *origin) {
+  FASCIA_CHECK(m, ctx, FASCIA_ERR_ARGUMENT, "fascia_model_validate: NULL model");
+  if (!origin) origin = "(memory)";
+  FASCIA_CHECK(m->frame_count >= 1, ctx, FASCIA_ERR_FORMAT, "model '%s' /frames: no frame", origin);
+  FASCIA_CHECK(m->sample_count >= 1, ctx, FASCIA_ERR_FORMAT, "model '%s' /samples: no sample", origin);
+  int64_t bad;
+  FASCIA_CHECK(finite_all(m->gravity, 3, &bad), ctx, FASCIA_ERR_FORMAT, "model '%s' /gravity: not finite", origin);
+  FASCIA_TRY(validate_materials(ctx, m, origin));
+  FASCIA_TRY(validate_motions(ctx, m, origin));
+  FASCIA_TRY(validate_frames(ctx, m, origin));
+  FASCIA_TRY(validate_samples(ctx, m, origin));
+  FASCIA_TRY(validate_reverse(ctx, m, origin));
+  FASCIA_TRY(validate_probes(ctx, m, origin));
+  FASCIA_TRY(validate_organs(ctx, m, origin));
+  return FASCIA_OK;
+}
+
+fascia_real fascia_model_volume(const fascia_model *m) {
+  fascia_real v = 0;
+  for (int32_t s = 0; s < m->sample_count; ++s) v += m->sample_volume[s];
+  return v;
+}
+
+fascia_real fascia_model_mass(const fascia_model *m) {
+  fascia_real mass = 0;
+  for (int32_t s = 0; s < m->sample_count; ++s)
+    mass += m->sample_volume[s] * m->materials[m->sample_material[s]].density;
+  return mass;
+}
+
+void fascia_material_lame(const fascia_material *mat, fascia_real *lambda, fascia_real *mu) {
+  const fascia_real E = mat->youngs_modulus, nu = mat->poisson_ratio;
+  *lambda = E * nu / ((1 + nu) * (1 - 2 * nu));
+  *mu = E / (2 * (1 + nu));
+}
+
+void fascia_lame_to_young(fascia_real lambda, fascia_real mu, fascia_real *E, fascia_real *nu) {
+  *E = mu * (3 * lambda + 2 * mu) / (lambda + mu);
+  *nu = lambda / (2 * (lambda + mu));
+}
+
+int fascia_law_from_name(const char *name) {
+  if (!name) return -1;
+  if (!strcmp(name, "stvk")) return FASCIA_LAW_STVK;
+  if (!strcmp(name, "neohookean")) return FASCIA_LAW_NEOHOOKEAN;
+  return -1;
+}
+
+const char *fascia_law_name(int law) {
+  switch (law) {
+  case FASCIA_LAW_STVK: return "stvk";
+  case FASCIA_LAW_NEOHOOKEAN: return "neohookean";
+  default: return "unknown";
+  }
+}
+
+int32_t fascia_model_find_probe(const fascia_model *m, const char *name) {
+  for (int32_t p = 0; m && name && p < m->probe_count; ++p)
+    if (!strncmp(m->probe_name[p], name, FASCIA_NAME_SIZE)) return p;
+  return -1;
+}

@@ -1,0 +1,44 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// Internal error helpers: record a status and a readable message on the
+// context, check a condition, propagate a failure.
+#ifndef FASCIA_SRC_STATUS_H
+#define FASCIA_SRC_STATUS_H
+
+#include "fascia/base.h"
+
+#define FASCIA_INTERN __attribute__((visibility("hidden")))
+
+/// Records status and message on ctx, evaluates to status.
+#define FASCIA_FAIL(ctx, st, ...) fascia_ctx_fail((ctx), (st), __FILE__, __LINE__, __VA_ARGS__)
+
+/// Returns the recorded status from the enclosing function when cond is false.
+#define FASCIA_CHECK(cond, ctx, st, ...)                                                                              \
+  do {                                                                                                                \
+    if (!(cond)) return FASCIA_FAIL(ctx, st, __VA_ARGS__);                                                           \
+  } while (0)
+
+/// Propagates a failing status.
+#define FASCIA_TRY(expr)                                                                                              \
+  do {                                                                                                                \
+    fascia_status fascia_try_st_ = (expr);                                                                            \
+    if (fascia_try_st_ != FASCIA_OK) return fascia_try_st_;                                                          \
+  } while (0)
+
+/// Inside a function with `fascia_status status` and a `cleanup:` label.
+#define FASCIA_TRY_GOTO(expr)                                                                                         \
+  do {                                                                                                                \
+    status = (expr);                                                                                                  \
+    if (status != FASCIA_OK) goto cleanup;                                                                            \
+  } while (0)
+
+/// Largest element count fascia allocates for one array: refuses absurd sizes
+/// up front with a message instead of failing deep inside.
+#define FASCIA_MAX_COUNT ((int64_t)1 << 30)
+
+/// calloc of count elements of size bytes, NULL on overflow or failure.
+FASCIA_INTERN void *fascia_calloc(int64_t count, size_t size);
+
+#define FASCIA_DEF_COOKIE 0x5fa5c1a
+
+#endif

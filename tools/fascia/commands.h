@@ -1,0 +1,29 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// The subcommands of the fascia CLI. Each returns the process exit status:
+// 0 success, 1 failure (one-line reason on stderr), 2 usage error.
+#ifndef FASCIA_TOOLS_COMMANDS_H
+#define FASCIA_TOOLS_COMMANDS_H
+
+#include "fascia/base.h"
+
+typedef int (*fascia_command_fn)(int argc, char **argv);
+
+typedef struct fascia_command {
+  const char *name;
+  fascia_command_fn run;
+  const char *help; ///< one line
+} fascia_command;
+
+int cmd_info(int argc, char **argv);
+
+/// Prints "fascia NAME: <ctx message>" on stderr (and where, with --verbose)
+/// and returns 1.
+int cli_fail(const char *command, fascia_ctx *ctx, fascia_status status);
+/// A context with a progress printer on stderr when progress is nonzero
+/// (and stderr is a terminal or FASCIA_PROGRESS=1), threads as given.
+fascia_ctx *cli_ctx(int threads, int progress);
+/// 1 when --verbose was given anywhere on the command line.
+extern int cli_verbose;
+
+#endif

@@ -1,0 +1,73 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// The fascia command-line program: dispatches to one subcommand per file
+// (cmd_<name>.c) through the table below. Only the CLI prints or exits.
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "commands.h"
+#include "fascia/fascia.h"
+
+int cli_verbose = 0;
+
+static const fascia_command commands[] = {
+    {"info", cmd_info, "print the version, build options and backends"},
+};
+static const int command_count = (int)(sizeof commands / sizeof commands[0]);
+
+static void usage(FILE *out) {
+  fprintf(out, "usage: fascia COMMAND [OPTIONS]   (fascia COMMAND --help for its options)\n\ncommands:\n");
+  for (int k = 0; k < command_count; ++k) fprintf(out, "  %-10s %s\n", commands[k].name, commands[k].help);
+}
+
+int cli_fail(const char *command, fascia_ctx *ctx, fascia_status status) {
+  const char *message = fascia_ctx_message(ctx);
+  fprintf(stderr, "fascia %s: %s\n", command, message && message[0] ? message : fascia_status_name(status));
+  if (cli_verbose) fprintf(stderr, "  (%s at %s)\n", fascia_status_name(status), fascia_ctx_where(ctx));
+  return 1;
+}
+
+static void print_progress(void *user, const char *stage, double fraction, const char *detail) {
+  (void)user;
+  if (fraction >= 0)
+    fprintf(stderr, "\r%-24s %5.1f%%  %s\033[K", stage, 100 * fraction, detail ? detail : "");
+  else
+    fprintf(stderr, "\r%-24s %s\033[K", stage, detail ? detail : "");
+  if (fraction >= 1) fputc('\n', stderr);
+  fflush(stderr);
+}
+
+fascia_ctx *cli_ctx(int threads, int progress) {
+  fascia_ctx_def def = fascia_ctx_def_default();
+  def.threads = threads;
+  const char *env = getenv("FASCIA_PROGRESS");
+  int show = progress && (isatty(2) || (env && !strcmp(env, "1")));
+  if (env && !strcmp(env, "0")) show = 0;
+  if (show) def.progress = print_progress;
+  fascia_ctx *ctx = NULL;
+  if (fascia_ctx_create(&def, &ctx) != FASCIA_OK) {
+    fprintf(stderr, "fascia: out of memory\n");
+    exit(1);
+  }
+  return ctx;
+}
+
+int main(int argc, char **argv) {
+  for (int k = 1; k < argc; ++k)
+    if (!strcmp(argv[k], "--verbose")) cli_verbose = 1;
+  if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h") || !strcmp(argv[1], "help")) {
+    usage(argc < 2 ? stderr : stdout);
+    return argc < 2 ? 2 : 0;
+  }
+  if (!strcmp(argv[1], "--version")) {
+    printf("fascia %s\n", fascia_version());
+    return 0;
+  }
+  for (int k = 0; k < command_count; ++k)
+    if (!strcmp(argv[1], commands[k].name)) return commands[k].run(argc - 1, argv + 1);
+  fprintf(stderr, "fascia: unknown command '%s'\n", argv[1]);
+  usage(stderr);
+  return 2;
+}
