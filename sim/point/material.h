@@ -7,7 +7,7 @@
 //   StVK (paper eq. 19):  E = (F^T F - I)/2,  S = lambda tr(E) I + 2 mu E,
 //                         P = F S,  psi = lambda/2 tr(E)^2 + mu E:E
 //   stable Neo-Hookean (Smith, de Goes, Kim 2018, without the origin term):
-//                         psi = mu/2 (tr(F^T F) - 3) + l/2 (J - a)^2,
+//                         psi = mu/2 (tr(F^T F) - 3) + l/2 (J - a)^2 - mu^2/(2 l),
 //                         l = lambda + mu, a = 1 + mu/l,
 //                         P = mu F + l (J - a) cof(F).
 //   The shift l = lambda + mu makes its small-strain limit the same Hooke law
@@ -33,7 +33,9 @@ static inline FASCIA_HD fascia_real fascia_pt_stress(int law, fascia_real lambda
     fascia_real J = fascia_pt_det(F);
     aux[9] = J;
     for (int k = 0; k < 9; ++k) P[k] = mu * F[k] + l * (J - a) * aux[k];
-    return FASCIA_R(0.5) * mu * (fascia_pt_ddot(F, F) - 3) + FASCIA_R(0.5) * l * (J - a) * (J - a);
+    // minus the rest value l/2 (1 - a)^2 = mu^2 / (2 l), so psi(I) = 0
+    return FASCIA_R(0.5) * mu * (fascia_pt_ddot(F, F) - 3) + FASCIA_R(0.5) * l * (J - a) * (J - a) -
+           FASCIA_R(0.5) * mu * mu / l;
   }
   fascia_real C[9], E[9];
   fascia_pt_mat_tmul(F, F, C);

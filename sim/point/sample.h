@@ -92,12 +92,13 @@ static inline FASCIA_HD void fascia_pt_sample_F(const fascia_pt_model *m, const 
 }
 
 /// Energy, partial energy gradients and cache of sample s.
-/// pair_out: [6P] array; writes entries of the pairs of s: (g_x, g_theta),
-/// the gradient of this sample's energy with respect to frame i (the force is
-/// its negative). cache: [FASCIA_PT_CACHE_SIZE] for this sample, or NULL.
+/// out: [6n] for the n pairs of s in order: (g_x, g_theta), the gradient of
+/// this sample's energy with respect to that pair's frame (the force is its
+/// negative); the CPU backend passes pair_buffer + 6 sample_offsets[s].
+/// cache: [FASCIA_PT_CACHE_SIZE] for this sample, or NULL.
 /// Returns the sample's energy (J); *flags gets FASCIA_PT_FLAG_* bits.
 static inline FASCIA_HD fascia_real fascia_pt_sample_gradient(const fascia_pt_model *m, const fascia_pt_state *st,
-                                                              int32_t s, fascia_real *pair_out, fascia_real *cache,
+                                                              int32_t s, fascia_real *out6, fascia_real *cache,
                                                               int *flags) {
   fascia_real F[9], P[9], aux[FASCIA_PT_AUX_SIZE];
   fascia_pt_sample_F(m, st, s, F);
@@ -123,7 +124,7 @@ static inline FASCIA_HD fascia_real fascia_pt_sample_gradient(const fascia_pt_mo
   *flags = bad;
   for (int32_t k = begin; k < end; ++k) {
     const fascia_real *A = st->frame_A + 9 * m->pair_frame[k], *g = m->pair_gradient + 3 * k, w = m->pair_weight[k];
-    fascia_real a[3], C[9], M[9], t[3], *out = pair_out + 6 * k;
+    fascia_real a[3], C[9], M[9], t[3], *out = out6 + 6 * (k - begin);
     fascia_pt_pair_C(A, m->pair_offset + 3 * k, g, w, a, C);
     fascia_pt_mat_vec(P, g, out);
     fascia_pt_mat_mult(C, P, M);
@@ -153,13 +154,16 @@ static inline FASCIA_HD fascia_real fascia_pt_sample_gradient(const fascia_pt_mo
   return v * psi;
 }
 
-/// Partial stiffness product of sample s: for each pair (i, s) writes
-/// (K_exact dq)_i restricted to this sample's energy, where dq is the [6N]
-/// direction (dx_i, dtheta_i per frame) and K_exact the directional derivative
-/// of the gradient above. cache: from fascia_pt_sample_gradient at this state.
+/// Partial stiffness product of sample s: for the j-th pair (i, s) writes
+/// out[6j..6j+5] = (K_exact dq)_i restricted to this sample's energy, K_exact
+/// being the directional derivative of the gradient above. The direction of
+/// the j-th pair's frame is dq + 6 slot[j] (dx then dtheta): the global
+/// product passes the [6N] vector and slot = pair_frame + sample_offsets[s];
+/// a per-sample block passes a local [6n] vector and slot = 0, 1, .., n-1.
+/// cache: from fascia_pt_sample_gradient at this state.
 static inline FASCIA_HD void fascia_pt_sample_stiffness(const fascia_pt_model *m, const fascia_pt_state *st,
                                                         int32_t s, const fascia_real *cache, const fascia_real *dq,
-                                                        fascia_real *pair_out) {
+                                                        const int32_t *slot, fascia_real *out6) {
   const fascia_real *F = cache, *P = cache + 9, *aux = cache + 18;
   const fascia_real v = m->sample_volume[s], muc = m->sample_coupling[s];
   const int32_t begin = m->sample_offsets[s], end = m->sample_offsets[s + 1];
@@ -167,7 +171,8 @@ static inline FASCIA_HD void fascia_pt_sample_stiffness(const fascia_pt_model *m
   fascia_real dF[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
   for (int32_t k = begin; k < end; ++k) {
     const int32_t i = m->pair_frame[k];
-    const fascia_real *A = st->frame_A + 9 * i, *g = m->pair_gradient + 3 * k, *dx = dq + 6 * i, *dt = dx + 3;
+    const fascia_real *A = st->frame_A + 9 * i, *g = m->pair_gradient + 3 * k, *dx = dq + 6 * slot[k - begin];
+    const fascia_real *dt = dx + 3;
     fascia_real a[3], C[9], tC[9];
     fascia_pt_pair_C(A, m->pair_offset + 3 * k, g, m->pair_weight[k], a, C);
     fascia_pt_skew_mul(dt, C, tC);
@@ -181,7 +186,7 @@ static inline FASCIA_HD void fascia_pt_sample_stiffness(const fascia_pt_model *m
     // dK_j = skew(A_j^T dF - A_j^T [dtheta_j]x F)
     for (int32_t k = begin; k < end; ++k) {
       const int32_t j = m->pair_frame[k];
-      const fascia_real *A = st->frame_A + 9 * j, *dt = dq + 6 * j + 3, w = m->pair_weight[k];
+      const fascia_real *A = st->frame_A + 9 * j, *dt = dq + 6 * slot[k - begin] + 3, w = m->pair_weight[k];
       fascia_real G[9], K[9], tF[9], H[9], dK[9], dA[9], t1[9], t2[9];
       fascia_pt_mat_tmul(A, F, G);
       fascia_pt_skew_mul(dt, F, tF);
@@ -200,9 +205,9 @@ static inline FASCIA_HD void fascia_pt_sample_stiffness(const fascia_pt_model *m
   }
   for (int32_t k = begin; k < end; ++k) {
     const int32_t i = m->pair_frame[k];
-    const fascia_real *A = st->frame_A + 9 * i, *g = m->pair_gradient + 3 * k, *dt = dq + 6 * i + 3;
+    const fascia_real *A = st->frame_A + 9 * i, *g = m->pair_gradient + 3 * k, *dt = dq + 6 * slot[k - begin] + 3;
     const fascia_real w = m->pair_weight[k];
-    fascia_real a[3], C[9], M[9], t[3], *out = pair_out + 6 * k;
+    fascia_real a[3], C[9], M[9], t[3], *out = out6 + 6 * (k - begin);
     fascia_pt_pair_C(A, m->pair_offset + 3 * k, g, w, a, C);
     fascia_pt_mat_vec(dP, g, out);
     // material part axial(C dPt^T) plus geometric part axial([dtheta]x C Pt^T)
@@ -248,22 +253,24 @@ static inline FASCIA_HD void fascia_pt_sample_stiffness(const fascia_pt_model *m
 
 /// Partial consistent-mass product of sample s with mass ms: velocity of the
 /// sample dp = sum_i w (dx_i + dtheta_i x a), then per pair ms w (dp, a x dp).
+/// dq, slot and out as in fascia_pt_sample_stiffness.
 static inline FASCIA_HD void fascia_pt_sample_mass(const fascia_pt_model *m, const fascia_pt_state *st, int32_t s,
-                                                   fascia_real ms, const fascia_real *dq, fascia_real *pair_out) {
+                                                   fascia_real ms, const fascia_real *dq, const int32_t *slot,
+                                                   fascia_real *out6) {
   const int32_t begin = m->sample_offsets[s], end = m->sample_offsets[s + 1];
   fascia_real dp[3] = {0, 0, 0};
   for (int32_t k = begin; k < end; ++k) {
     const int32_t i = m->pair_frame[k];
     fascia_real a[3];
     fascia_pt_mat_vec(st->frame_A + 9 * i, m->pair_offset + 3 * k, a);
-    const fascia_real *dx = dq + 6 * i, *dt = dx + 3, w = m->pair_weight[k];
+    const fascia_real *dx = dq + 6 * slot[k - begin], *dt = dx + 3, w = m->pair_weight[k];
     fascia_real ta[3];
     fascia_pt_cross(dt, a, ta);
     for (int r = 0; r < 3; ++r) dp[r] += w * (dx[r] + ta[r]);
   }
   for (int32_t k = begin; k < end; ++k) {
     const int32_t i = m->pair_frame[k];
-    fascia_real a[3], *out = pair_out + 6 * k;
+    fascia_real a[3], *out = out6 + 6 * (k - begin);
     fascia_pt_mat_vec(st->frame_A + 9 * i, m->pair_offset + 3 * k, a);
     const fascia_real mw = ms * m->pair_weight[k];
     fascia_real ad[3];

@@ -1,0 +1,120 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// HDF5 plumbing shared by io_model.c and io_results.c: quiet error handling,
+// HDF5 error text for our messages, and write-to-temporary-then-rename so a
+// reader never sees a half-written file at the final path.
+#define _POSIX_C_SOURCE 200809L
+#include <errno.h>
+#include <stdio.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "h5io.h"
+
+void fascia_h5_quiet_begin(fascia_h5_quiet *quiet) {
+  quiet->func = NULL;
+  quiet->data = NULL;
+  H5Eget_auto2(H5E_DEFAULT, &quiet->func, &quiet->data);
+  H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
+}
+
+void fascia_h5_quiet_end(const fascia_h5_quiet *quiet) { H5Eset_auto2(H5E_DEFAULT, quiet->func, quiet->data); }
+
+typedef struct error_walk {
+  char outer[256], inner[256];
+} error_walk;
+
+static herr_t walk_error(unsigned n, const H5E_error2_t *err, void *data) {
+  error_walk *w = data;
+  const char *desc = err->desc && err->desc[0] ? err->desc : "";
+  if (n == 0) snprintf(w->outer, sizeof w->outer, "%s", desc);
+  snprintf(w->inner, sizeof w->inner, "%s", desc);
+  return 0;
+}
+
+const char *fascia_h5_error(char *buf, size_t size) {
+  // The outermost entry says what failed ("unable to open file"), the
+  // innermost why ("file signature not found"); both help a user.
+  error_walk w = {{0}, {0}};
+  H5Ewalk2(H5E_DEFAULT, H5E_WALK_DOWNWARD, walk_error, &w);
+  if (!w.outer[0] && !w.inner[0])
+    snprintf(buf, size, "no detail");
+  else if (!strcmp(w.outer, w.inner) || !w.inner[0])
+    snprintf(buf, size, "%s", w.outer);
+  else
+    snprintf(buf, size, "%s (%s)", w.outer, w.inner);
+  return buf;
+}
+
+// Temporary names are PATH.tmp-PID-K: the pid separates processes, K the
+// writers of one process; creation is exclusive so two writers never share.
+#define TEMP_ATTEMPTS 1000
+
+static int temp_candidate(const char *path, int attempt, char *tmp, size_t tmp_size) {
+  const int n = snprintf(tmp, tmp_size, "%s.tmp-%ld-%d", path, (long)getpid(), attempt);
+  return n > 0 && (size_t)n < tmp_size;
+}
+
+fascia_status fascia_temp_name(fascia_ctx *ctx, const char *what, const char *path, char *tmp, size_t tmp_size) {
+  for (int attempt = 0; attempt < TEMP_ATTEMPTS; ++attempt) {
+    FASCIA_CHECK(temp_candidate(path, attempt, tmp, tmp_size), ctx, FASCIA_ERR_ARGUMENT,
+                 "%s '%s': the path is too long", what, path);
+    if (access(tmp, F_OK) != 0) return FASCIA_OK;
+  }
+  return FASCIA_FAIL(ctx, FASCIA_ERR_IO, "%s '%s': no free temporary name next to it (%s exists); remove stale '*.tmp-*' files",
+                     what, path, tmp);
+}
+
+fascia_status fascia_h5_create_temp(fascia_ctx *ctx, const char *what, const char *path, char *tmp, size_t tmp_size,
+                                    hid_t *file) {
+  *file = H5I_INVALID_HID;
+  for (int attempt = 0; attempt < TEMP_ATTEMPTS; ++attempt) {
+    FASCIA_CHECK(temp_candidate(path, attempt, tmp, tmp_size), ctx, FASCIA_ERR_ARGUMENT,
+                 "%s '%s': the path is too long", what, path);
+    if (access(tmp, F_OK) == 0) continue;
+    *file = H5Fcreate(tmp, H5F_ACC_EXCL, H5P_DEFAULT, H5P_DEFAULT);
+    if (*file >= 0) return FASCIA_OK;
+    char detail[600];
+    fascia_h5_error(detail, sizeof detail);
+    if (access(tmp, F_OK) == 0) continue; // lost a race for this name: try the next one
+    return FASCIA_FAIL(ctx, FASCIA_ERR_IO,
+                       "%s '%s': cannot create '%s' (HDF5: %s); check that the folder exists and is writable", what,
+                       path, tmp, detail);
+  }
+  return FASCIA_FAIL(ctx, FASCIA_ERR_IO, "%s '%s': no free temporary name next to it (%s exists); remove stale '*.tmp-*' files",
+                     what, path, tmp);
+}
+
+fascia_status fascia_commit_temp(fascia_ctx *ctx, const char *what, const char *tmp, const char *path) {
+  if (rename(tmp, path) == 0) return FASCIA_OK;
+  const int err = errno;
+  remove(tmp);
+  return FASCIA_FAIL(ctx, FASCIA_ERR_IO, "%s '%s': cannot move the finished file into place: %s", what, path,
+                     strerror(err));
+}
+
+herr_t fascia_h5_attr_string(hid_t loc, const char *name, const char *value) {
+  herr_t status = -1;
+  hid_t type = H5Tcopy(H5T_C_S1), space = H5Screate(H5S_SCALAR), attr = H5I_INVALID_HID;
+  if (type < 0 || space < 0) goto cleanup;
+  if (H5Tset_size(type, strlen(value) + 1) < 0 || H5Tset_strpad(type, H5T_STR_NULLTERM) < 0) goto cleanup;
+  attr = H5Acreate2(loc, name, type, space, H5P_DEFAULT, H5P_DEFAULT);
+  if (attr < 0) goto cleanup;
+  status = H5Awrite(attr, type, value);
+cleanup:
+  if (attr >= 0) H5Aclose(attr);
+  if (space >= 0) H5Sclose(space);
+  if (type >= 0) H5Tclose(type);
+  return status;
+}
+
+herr_t fascia_h5_attr_int(hid_t loc, const char *name, int32_t value) {
+  herr_t status = -1;
+  hid_t space = H5Screate(H5S_SCALAR), attr = H5I_INVALID_HID;
+  if (space < 0) return -1;
+  attr = H5Acreate2(loc, name, H5T_STD_I32LE, space, H5P_DEFAULT, H5P_DEFAULT);
+  if (attr >= 0) status = H5Awrite(attr, H5T_NATIVE_INT32, &value);
+  if (attr >= 0) H5Aclose(attr);
+  H5Sclose(space);
+  return status;
+}

@@ -1,0 +1,53 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// HDF5 plumbing shared by the model and results files (io_model.c,
+// io_results.c): silencing HDF5's own error printing, turning its error stack
+// into one readable phrase, and writing a file under a temporary name that is
+// renamed into place only once it is complete (STYLE.md sec. 10).
+#ifndef FASCIA_SRC_H5IO_H
+#define FASCIA_SRC_H5IO_H
+
+#include <hdf5.h>
+
+#include "status.h"
+
+/// HDF5's automatic error printer, saved while fascia has it switched off.
+typedef struct fascia_h5_quiet {
+  H5E_auto2_t func;
+  void *data;
+} fascia_h5_quiet;
+
+/// Switches HDF5's automatic error printing off (libraries never print) and
+/// remembers the previous printer; pair with fascia_h5_quiet_end.
+FASCIA_INTERN void fascia_h5_quiet_begin(fascia_h5_quiet *quiet);
+FASCIA_INTERN void fascia_h5_quiet_end(const fascia_h5_quiet *quiet);
+
+/// Writes a short description of HDF5's current error stack into buf, e.g.
+/// "unable to open file (file signature not found)", or "no detail" when
+/// the stack is empty. Call it right after the failing HDF5 call: the next
+/// HDF5 call clears the stack. Returns buf.
+FASCIA_INTERN const char *fascia_h5_error(char *buf, size_t size);
+
+/// Creates an empty HDF5 file next to `path` under a name no other file has
+/// (`path.tmp-PID-K`), exclusively, and writes that name into tmp. `what`
+/// names the kind of file in messages ("model", "results"). On error nothing
+/// is created and the status is FASCIA_ERR_IO (or _ARGUMENT for a path too
+/// long).
+FASCIA_INTERN fascia_status fascia_h5_create_temp(fascia_ctx *ctx, const char *what, const char *path, char *tmp,
+                                                  size_t tmp_size, hid_t *file);
+
+/// Finds a free temporary name next to path, as fascia_h5_create_temp does,
+/// for files not written through HDF5 (the XDMF sidecar).
+FASCIA_INTERN fascia_status fascia_temp_name(fascia_ctx *ctx, const char *what, const char *path, char *tmp,
+                                             size_t tmp_size);
+
+/// Renames tmp to path (replacing any file there). On error tmp is removed
+/// and the file at path is untouched.
+FASCIA_INTERN fascia_status fascia_commit_temp(fascia_ctx *ctx, const char *what, const char *tmp, const char *path);
+
+/// Small attribute writers; each returns a negative value on failure (the
+/// HDF5 error stack tells why).
+FASCIA_INTERN herr_t fascia_h5_attr_string(hid_t loc, const char *name, const char *value);
+FASCIA_INTERN herr_t fascia_h5_attr_int(hid_t loc, const char *name, int32_t value);
+
+#endif

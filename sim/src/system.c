@@ -1,0 +1,410 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// CPU operators of the frame scheme (paper sec. 2 and 3.2, DESIGN.md "The
+// mechanics"): per-sample work in parallel into a pair buffer, then one
+// per-frame gather through the reverse table, as the paper's two GPU kernels
+// do. See system.h for the contract.
+#include <stdlib.h>
+#include <string.h>
+
+#include "system.h"
+
+#define DOT_BLOCK 2048 // entries per partial sum of fascia_dot (fixed: determinism)
+
+static void rest_rotation(const fascia_model *m, int32_t i, fascia_real *R) {
+  fascia_pt_quat_to_mat(m->frame_rotation + 4 * i, R);
+}
+
+fascia_status fascia_system_create(fascia_ctx *ctx, const fascia_model *m, int threads, fascia_system **out) {
+  FASCIA_CHECK(m && out, ctx, FASCIA_ERR_ARGUMENT, "system: NULL argument");
+  *out = NULL;
+  fascia_system *sys = calloc(1, sizeof *sys);
+  FASCIA_CHECK(sys, ctx, FASCIA_ERR_MEMORY, "system: out of memory");
+  const int64_t N = m->frame_count, S = m->sample_count, P = m->pair_count;
+  sys->ctx = ctx;
+  sys->model = m;
+  sys->frame_count = m->frame_count;
+  sys->sample_count = m->sample_count;
+  sys->pair_count = m->pair_count;
+  sys->threads = threads > 0 ? threads : 1;
+  sys->gravity_scale = 1;
+  for (int32_t s = 0; s < m->sample_count; ++s) {
+    const int32_t n = m->sample_offsets[s + 1] - m->sample_offsets[s];
+    if (n > sys->max_neighbours) sys->max_neighbours = n;
+  }
+  sys->pair_offset = fascia_calloc(3 * P, sizeof(fascia_real));
+  sys->sample_lambda = fascia_calloc(S, sizeof(fascia_real));
+  sys->sample_mu = fascia_calloc(S, sizeof(fascia_real));
+  sys->sample_coupling = fascia_calloc(S, sizeof(fascia_real));
+  sys->sample_mass = fascia_calloc(S, sizeof(fascia_real));
+  sys->sample_law = fascia_calloc(S, sizeof(int32_t));
+  sys->local_slot = fascia_calloc(sys->max_neighbours, sizeof(int32_t));
+  sys->frame_mass = fascia_calloc(N, sizeof(fascia_real));
+  sys->frame_moment = fascia_calloc(3 * N, sizeof(fascia_real));
+  sys->x = fascia_calloc(3 * N, sizeof(fascia_real));
+  sys->q = fascia_calloc(4 * N, sizeof(fascia_real));
+  sys->A = fascia_calloc(9 * N, sizeof(fascia_real));
+  sys->A_mass = fascia_calloc(9 * N, sizeof(fascia_real));
+  sys->pair_buffer = fascia_calloc(6 * P, sizeof(fascia_real));
+  sys->cache = fascia_calloc(S * FASCIA_PT_CACHE_SIZE, sizeof(fascia_real));
+  sys->sample_flags = fascia_calloc(S, sizeof(int));
+  sys->conservative_torque = fascia_calloc(3 * N, sizeof(fascia_real));
+  if (!sys->pair_offset || !sys->sample_lambda || !sys->sample_mu || !sys->sample_coupling || !sys->sample_mass ||
+      !sys->sample_law || !sys->local_slot || !sys->frame_mass || !sys->frame_moment || !sys->x || !sys->q ||
+      !sys->A || !sys->A_mass || !sys->pair_buffer || !sys->cache || !sys->sample_flags ||
+      !sys->conservative_torque) {
+    fascia_system_destroy(&sys);
+    return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "system: out of memory for %lld samples, %lld pairs", (long long)S,
+                       (long long)P);
+  }
+  for (int32_t j = 0; j < sys->max_neighbours; ++j) sys->local_slot[j] = j;
+  for (int32_t s = 0; s < m->sample_count; ++s) {
+    const fascia_material *mat = m->materials + m->sample_material[s];
+    fascia_real lambda, mu;
+    fascia_material_lame(mat, &lambda, &mu);
+    sys->sample_lambda[s] = lambda;
+    sys->sample_mu[s] = mu;
+    sys->sample_coupling[s] = mat->rotation_coupling * mu;
+    sys->sample_law[s] = mat->law;
+    sys->sample_mass[s] = mat->density * m->sample_volume[s];
+    for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k)
+      for (int r = 0; r < 3; ++r)
+        sys->pair_offset[3 * k + r] = m->sample_position[3 * s + r] - m->frame_position[3 * m->pair_frame[k] + r];
+  }
+  // gravity moments through the reverse table (fixed order); sample of a pair
+  // is found by bisection in sample_offsets
+  for (int32_t i = 0; i < m->frame_count; ++i)
+    for (int32_t r = m->frame_offsets[i]; r < m->frame_offsets[i + 1]; ++r) {
+      const int32_t k = m->frame_pairs[r];
+      int32_t lo = 0, hi = m->sample_count - 1;
+      while (lo < hi) {
+        const int32_t mid = (lo + hi + 1) / 2;
+        if (m->sample_offsets[mid] <= k) lo = mid;
+        else hi = mid - 1;
+      }
+      const fascia_real mw = sys->sample_mass[lo] * m->pair_weight[k];
+      sys->frame_mass[i] += mw;
+      for (int c = 0; c < 3; ++c) sys->frame_moment[3 * i + c] += mw * sys->pair_offset[3 * k + c];
+    }
+  for (int c = 0; c < 3; ++c) sys->gravity[c] = m->gravity[c];
+  fascia_pt_model *pm = &sys->pm;
+  pm->sample_offsets = m->sample_offsets;
+  pm->pair_frame = m->pair_frame;
+  pm->pair_weight = m->pair_weight;
+  pm->pair_gradient = m->pair_gradient;
+  pm->pair_offset = sys->pair_offset;
+  pm->sample_volume = m->sample_volume;
+  pm->sample_lambda = sys->sample_lambda;
+  pm->sample_mu = sys->sample_mu;
+  pm->sample_coupling = sys->sample_coupling;
+  pm->sample_law = sys->sample_law;
+  fascia_system_set_rest(sys);
+  fascia_system_mass_snapshot(sys);
+  *out = sys;
+  return FASCIA_OK;
+}
+
+void fascia_system_destroy(fascia_system **sys) {
+  if (!sys || !*sys) return;
+  fascia_system *s = *sys;
+  free(s->pair_offset);
+  free(s->sample_lambda);
+  free(s->sample_mu);
+  free(s->sample_coupling);
+  free(s->sample_mass);
+  free(s->sample_law);
+  free(s->local_slot);
+  free(s->frame_mass);
+  free(s->frame_moment);
+  free(s->x);
+  free(s->q);
+  free(s->A);
+  free(s->A_mass);
+  free(s->pair_buffer);
+  free(s->cache);
+  free(s->sample_flags);
+  free(s->conservative_torque);
+  free(s);
+  *sys = NULL;
+}
+
+void fascia_system_set_state(fascia_system *sys, const fascia_real *x, const fascia_real *q) {
+  const int32_t N = sys->frame_count;
+  if (x != sys->x) memcpy(sys->x, x, 3 * (size_t)N * sizeof(fascia_real));
+  if (q != sys->q) memcpy(sys->q, q, 4 * (size_t)N * sizeof(fascia_real));
+#pragma omp parallel for num_threads(sys->threads) schedule(static)
+  for (int32_t i = 0; i < N; ++i) {
+    fascia_real R[9], Rr[9];
+    fascia_pt_quat_to_mat(sys->q + 4 * i, R);
+    rest_rotation(sys->model, i, Rr);
+    fascia_pt_mat_mult(R, Rr, sys->A + 9 * i);
+  }
+}
+
+void fascia_system_set_rest(fascia_system *sys) {
+  fascia_system_set_state(sys, sys->model->frame_position, sys->model->frame_rotation);
+}
+
+// out_i = sum of the pair buffer over the reverse table of frame i
+static void gather(const fascia_system *sys, fascia_real *out) {
+  const fascia_model *m = sys->model;
+  const fascia_real *buffer = sys->pair_buffer;
+#pragma omp parallel for num_threads(sys->threads) schedule(static)
+  for (int32_t i = 0; i < sys->frame_count; ++i) {
+    fascia_real sum[6] = {0, 0, 0, 0, 0, 0};
+    for (int32_t r = m->frame_offsets[i]; r < m->frame_offsets[i + 1]; ++r) {
+      const fascia_real *b = buffer + 6 * m->frame_pairs[r];
+      for (int c = 0; c < 6; ++c) sum[c] += b[c];
+    }
+    for (int c = 0; c < 6; ++c) out[6 * i + c] = sum[c];
+  }
+}
+
+fascia_real fascia_dot(const fascia_real *a, const fascia_real *b, int64_t n) {
+  const int64_t blocks = (n + DOT_BLOCK - 1) / DOT_BLOCK;
+  fascia_real partial_stack[64], *partial = blocks <= 64 ? partial_stack : malloc((size_t)blocks * sizeof *partial);
+  if (!partial) { // cannot happen in practice; fall back to a serial sum
+    fascia_real s = 0;
+    for (int64_t k = 0; k < n; ++k) s += a[k] * b[k];
+    return s;
+  }
+#pragma omp parallel for schedule(static) if (n > 8 * DOT_BLOCK)
+  for (int64_t blk = 0; blk < blocks; ++blk) {
+    fascia_real s = 0;
+    const int64_t end = (blk + 1) * DOT_BLOCK < n ? (blk + 1) * DOT_BLOCK : n;
+    for (int64_t k = blk * DOT_BLOCK; k < end; ++k) s += a[k] * b[k];
+    partial[blk] = s;
+  }
+  fascia_real sum = 0;
+  for (int64_t blk = 0; blk < blocks; ++blk) sum += partial[blk];
+  if (partial != partial_stack) free(partial);
+  return sum;
+}
+
+fascia_status fascia_system_evaluate(fascia_system *sys, fascia_real *gradient, fascia_real *energy) {
+  const fascia_model *m = sys->model;
+  const fascia_pt_state st = {sys->x, sys->A};
+  const int32_t S = sys->sample_count;
+  // sample energies are summed in fixed blocks of samples (determinism)
+  fascia_real internal = 0;
+  int32_t inverted = 0, first_inverted = -1, first_nonfinite = -1;
+  const int64_t blocks = ((int64_t)S + DOT_BLOCK - 1) / DOT_BLOCK;
+  fascia_real partial_stack[64], *partial = blocks <= 64 ? partial_stack : malloc((size_t)blocks * sizeof *partial);
+  FASCIA_CHECK(partial, sys->ctx, FASCIA_ERR_MEMORY, "system: out of memory");
+#pragma omp parallel for num_threads(sys->threads) schedule(static)
+  for (int64_t blk = 0; blk < blocks; ++blk) {
+    fascia_real e = 0;
+    const int32_t end = (int32_t)((blk + 1) * DOT_BLOCK < S ? (blk + 1) * DOT_BLOCK : S);
+    for (int32_t s = (int32_t)(blk * DOT_BLOCK); s < end; ++s)
+      e += fascia_pt_sample_gradient(&sys->pm, &st, s, sys->pair_buffer + 6 * (int64_t)m->sample_offsets[s],
+                                     sys->cache + (int64_t)s * FASCIA_PT_CACHE_SIZE, sys->sample_flags + s);
+    partial[blk] = e;
+  }
+  for (int64_t blk = 0; blk < blocks; ++blk) internal += partial[blk];
+  if (partial != partial_stack) free(partial);
+  for (int32_t s = 0; s < S; ++s) {
+    const int f = sys->sample_flags[s];
+    if (f & FASCIA_PT_FLAG_INVERTED) {
+      if (first_inverted < 0) first_inverted = s;
+      ++inverted;
+    }
+    if ((f & FASCIA_PT_FLAG_NONFINITE) && first_nonfinite < 0) first_nonfinite = s;
+  }
+  sys->inverted_count = inverted;
+  sys->first_inverted = first_inverted;
+  sys->first_nonfinite = first_nonfinite;
+  sys->energy_internal = internal;
+  if (gradient) gather(sys, gradient);
+  // gravity and frame loads, scaled by the load factor
+  const fascia_real gs = sys->gravity_scale, *g = sys->gravity;
+  fascia_real external = 0;
+  for (int32_t i = 0; i < sys->frame_count; ++i) {
+    fascia_real b[3], bg[3];
+    fascia_pt_mat_vec(sys->A + 9 * i, sys->frame_moment + 3 * i, b);
+    external -= gs * (sys->frame_mass[i] * fascia_pt_dot3(g, sys->x + 3 * i) + fascia_pt_dot3(g, b));
+    const fascia_real *load = m->frame_load + 6 * i;
+    external -= gs * fascia_pt_dot3(load, sys->x + 3 * i);
+    if (!gradient) continue;
+    fascia_pt_cross(b, g, bg);
+    for (int c = 0; c < 3; ++c) {
+      gradient[6 * i + c] -= gs * (sys->frame_mass[i] * g[c] + load[c]);
+      gradient[6 * i + 3 + c] -= gs * bg[c];
+      sys->conservative_torque[3 * i + c] = gradient[6 * i + 3 + c];
+      gradient[6 * i + 3 + c] -= gs * load[3 + c];
+    }
+  }
+  sys->energy_external = external;
+  if (energy) *energy = internal + external;
+  if (first_nonfinite >= 0 || !isfinite(internal + external))
+    return FASCIA_FAIL(sys->ctx, FASCIA_ERR_NUMERIC,
+                       "sample %d: energy is not finite (deformation gradient blew up); the step is too large or the "
+                       "model is unstable",
+                       (int)(first_nonfinite >= 0 ? first_nonfinite : 0));
+  return FASCIA_OK;
+}
+
+// K_exact v for the external (gravity) energy, frame-local: -s ((v x b) x g)
+static void gravity_derivative(const fascia_system *sys, const fascia_real *v, fascia_real *out) {
+  const fascia_real gs = sys->gravity_scale, *g = sys->gravity;
+  for (int32_t i = 0; i < sys->frame_count; ++i) {
+    fascia_real b[3], vb[3], vbg[3];
+    fascia_pt_mat_vec(sys->A + 9 * i, sys->frame_moment + 3 * i, b);
+    fascia_pt_cross(v + 6 * i + 3, b, vb);
+    fascia_pt_cross(vb, g, vbg);
+    for (int c = 0; c < 3; ++c) out[6 * i + 3 + c] -= gs * vbg[c];
+  }
+}
+
+void fascia_system_gradient_derivative(fascia_system *sys, const fascia_real *v, fascia_real *out) {
+  const fascia_model *m = sys->model;
+  const fascia_pt_state st = {sys->x, sys->A};
+#pragma omp parallel for num_threads(sys->threads) schedule(static)
+  for (int32_t s = 0; s < sys->sample_count; ++s) {
+    const int32_t begin = m->sample_offsets[s];
+    fascia_pt_sample_stiffness(&sys->pm, &st, s, sys->cache + (int64_t)s * FASCIA_PT_CACHE_SIZE, v,
+                               m->pair_frame + begin, sys->pair_buffer + 6 * (int64_t)begin);
+  }
+  gather(sys, out);
+  gravity_derivative(sys, v, out);
+}
+
+void fascia_system_hessian_apply(fascia_system *sys, const fascia_real *v, fascia_real *out) {
+  fascia_system_gradient_derivative(sys, v, out);
+  // symmetrizing term of the rotation update: + 1/2 g_theta x v_theta
+  for (int32_t i = 0; i < sys->frame_count; ++i) {
+    fascia_real t[3];
+    fascia_pt_cross(sys->conservative_torque + 3 * i, v + 6 * i + 3, t);
+    for (int c = 0; c < 3; ++c) out[6 * i + 3 + c] += FASCIA_R(0.5) * t[c];
+  }
+}
+
+// find the sample owning pair k (bisection in sample_offsets)
+static int32_t pair_sample(const fascia_model *m, int32_t k) {
+  int32_t lo = 0, hi = m->sample_count - 1;
+  while (lo < hi) {
+    const int32_t mid = (lo + hi + 1) / 2;
+    if (m->sample_offsets[mid] <= k) lo = mid;
+    else hi = mid - 1;
+  }
+  return lo;
+}
+
+void fascia_system_hessian_diagonal(fascia_system *sys, fascia_real *blocks) {
+  const fascia_model *m = sys->model;
+  const fascia_pt_state st = {sys->x, sys->A};
+  const int32_t maxn = sys->max_neighbours;
+#pragma omp parallel num_threads(sys->threads)
+  {
+    fascia_real *dq = calloc(6 * (size_t)maxn, sizeof(fascia_real));
+    fascia_real *col = calloc(6 * (size_t)maxn, sizeof(fascia_real));
+#pragma omp for schedule(static)
+    for (int32_t i = 0; i < sys->frame_count; ++i) {
+      fascia_real *B = blocks + 36 * (int64_t)i;
+      for (int c = 0; c < 36; ++c) B[c] = 0;
+      if (!dq || !col) continue; // out of memory: leaves a zero block; the preconditioner guards zeros
+      for (int32_t r = m->frame_offsets[i]; r < m->frame_offsets[i + 1]; ++r) {
+        const int32_t k = m->frame_pairs[r], s = pair_sample(m, k), j = k - m->sample_offsets[s];
+        for (int c = 0; c < 6; ++c) {
+          dq[6 * j + c] = 1;
+          fascia_pt_sample_stiffness(&sys->pm, &st, s, sys->cache + (int64_t)s * FASCIA_PT_CACHE_SIZE, dq,
+                                     sys->local_slot, col);
+          dq[6 * j + c] = 0;
+          for (int row = 0; row < 6; ++row) B[6 * row + c] += col[6 * j + row];
+        }
+      }
+      // gravity block (theta-theta): -s (b g^T - (b.g) I), plus 1/2 [g_theta]x
+      fascia_real b[3];
+      fascia_pt_mat_vec(sys->A + 9 * i, sys->frame_moment + 3 * i, b);
+      const fascia_real gs = sys->gravity_scale, *g = sys->gravity, bg = fascia_pt_dot3(b, g);
+      const fascia_real *t = sys->conservative_torque + 3 * i;
+      const fascia_real half_skew[9] = {0, -t[2], t[1], t[2], 0, -t[0], -t[1], t[0], 0};
+      for (int a = 0; a < 3; ++a)
+        for (int c = 0; c < 3; ++c)
+          B[6 * (3 + a) + 3 + c] += -gs * (b[a] * g[c] - (a == c ? bg : 0)) + FASCIA_R(0.5) * half_skew[3 * a + c];
+      // the exact H is symmetric; average away rounding
+      for (int a = 0; a < 6; ++a)
+        for (int c = a + 1; c < 6; ++c) {
+          const fascia_real avg = FASCIA_R(0.5) * (B[6 * a + c] + B[6 * c + a]);
+          B[6 * a + c] = B[6 * c + a] = avg;
+        }
+    }
+    free(dq);
+    free(col);
+  }
+}
+
+void fascia_system_mass_snapshot(fascia_system *sys) {
+  memcpy(sys->A_mass, sys->A, 9 * (size_t)sys->frame_count * sizeof(fascia_real));
+}
+
+void fascia_system_mass_apply(fascia_system *sys, const fascia_real *v, fascia_real *out) {
+  const fascia_model *m = sys->model;
+  const fascia_pt_state st = {sys->x, sys->A_mass};
+#pragma omp parallel for num_threads(sys->threads) schedule(static)
+  for (int32_t s = 0; s < sys->sample_count; ++s) {
+    const int32_t begin = m->sample_offsets[s];
+    fascia_pt_sample_mass(&sys->pm, &st, s, sys->sample_mass[s], v, m->pair_frame + begin,
+                          sys->pair_buffer + 6 * (int64_t)begin);
+  }
+  gather(sys, out);
+}
+
+void fascia_system_mass_lumped(fascia_system *sys, fascia_real *blocks) {
+  const fascia_model *m = sys->model;
+#pragma omp parallel for num_threads(sys->threads) schedule(static)
+  for (int32_t i = 0; i < sys->frame_count; ++i) {
+    fascia_real *B = blocks + 36 * (int64_t)i;
+    for (int c = 0; c < 36; ++c) B[c] = 0;
+    for (int32_t r = m->frame_offsets[i]; r < m->frame_offsets[i + 1]; ++r) {
+      const int32_t k = m->frame_pairs[r], s = pair_sample(m, k);
+      const fascia_real mw = sys->sample_mass[s] * m->pair_weight[k];
+      fascia_real a[3];
+      fascia_pt_mat_vec(sys->A_mass + 9 * i, sys->pair_offset + 3 * k, a);
+      const fascia_real aa = fascia_pt_dot3(a, a);
+      const fascia_real skew[9] = {0, -a[2], a[1], a[2], 0, -a[0], -a[1], a[0], 0};
+      for (int r3 = 0; r3 < 3; ++r3)
+        for (int c = 0; c < 3; ++c) {
+          B[6 * r3 + c] += mw * (r3 == c);
+          B[6 * r3 + 3 + c] -= mw * skew[3 * r3 + c];
+          B[6 * (3 + r3) + c] += mw * skew[3 * r3 + c];
+          B[6 * (3 + r3) + 3 + c] += mw * ((r3 == c) * aa - a[r3] * a[c]);
+        }
+    }
+  }
+}
+
+void fascia_system_sample_positions(const fascia_system *sys, fascia_real *out) {
+  const fascia_pt_state st = {sys->x, sys->A};
+#pragma omp parallel for num_threads(sys->threads) schedule(static)
+  for (int32_t s = 0; s < sys->sample_count; ++s) fascia_pt_sample_position(&sys->pm, &st, s, out + 3 * (int64_t)s);
+}
+
+void fascia_system_probe_position(const fascia_system *sys, int32_t p, fascia_real *out) {
+  const fascia_model *m = sys->model;
+  out[0] = out[1] = out[2] = 0;
+  for (int32_t k = m->probe_offsets[p]; k < m->probe_offsets[p + 1]; ++k) {
+    const int32_t i = m->probe_frame[k];
+    fascia_real d[3], a[3];
+    for (int c = 0; c < 3; ++c) d[c] = m->probe_position[3 * p + c] - m->frame_position[3 * i + c];
+    fascia_pt_mat_vec(sys->A + 9 * i, d, a);
+    for (int c = 0; c < 3; ++c) out[c] += m->probe_weight[k] * (sys->x[3 * i + c] + a[c]);
+  }
+}
+
+void fascia_system_sample_strain(const fascia_system *sys, fascia_real *strain, fascia_real *stress) {
+  const fascia_pt_state st = {sys->x, sys->A};
+#pragma omp parallel for num_threads(sys->threads) schedule(static)
+  for (int32_t s = 0; s < sys->sample_count; ++s) {
+    fascia_real F[9], C[9], P[9], aux[FASCIA_PT_AUX_SIZE];
+    fascia_pt_sample_F(&sys->pm, &st, s, F);
+    fascia_pt_mat_tmul(F, F, C);
+    C[0] -= 1;
+    C[4] -= 1;
+    C[8] -= 1;
+    strain[s] = FASCIA_R(0.5) * sqrt(fascia_pt_ddot(C, C));
+    if (stress) {
+      fascia_pt_stress(sys->sample_law[s], sys->sample_lambda[s], sys->sample_mu[s], F, P, aux);
+      stress[s] = sqrt(fascia_pt_ddot(P, P));
+    }
+  }
+}

@@ -1,0 +1,103 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// The discrete mechanical system on the CPU: the model's arrays as the
+// per-sample math reads them, the current frame state, and the operators the
+// solvers need: potential energy and its gradient, the symmetric tangent
+// (Hessian) product, mass products, diagonal blocks. Every per-frame sum goes
+// through the reverse table in a fixed order, so results are bit-identical
+// for any thread count.
+//
+// Generalized coordinates: per frame 6 entries (x, theta), where a variation
+// theta rotates the frame in world space, R <- exp([theta]x) R.
+#ifndef FASCIA_SRC_SYSTEM_H
+#define FASCIA_SRC_SYSTEM_H
+
+#include "fascia/model.h"
+#include "point/sample.h"
+#include "status.h"
+
+typedef struct fascia_system {
+  fascia_ctx *ctx;
+  const fascia_model *model; ///< borrowed, outlives the system
+  int32_t frame_count, sample_count, pair_count;
+  int threads;
+
+  fascia_pt_model pm; ///< views into the arrays below and the model's
+  fascia_real *pair_offset;     ///< [3P] p_rest_s - x_rest_i
+  fascia_real *sample_lambda;   ///< [S]
+  fascia_real *sample_mu;       ///< [S]
+  fascia_real *sample_coupling; ///< [S]
+  fascia_real *sample_mass;     ///< [S] kg
+  int32_t *sample_law;          ///< [S]
+  int32_t *local_slot;          ///< [max neighbours] 0, 1, 2, ..
+
+  // gravity as frame moments: E_g = -sum_i g.(M_i x_i + A_i D_i)
+  fascia_real *frame_mass;   ///< [N] M_i = sum_s m_s w_is
+  fascia_real *frame_moment; ///< [3N] D_i = sum_s m_s w_is d_is
+  fascia_real gravity[3];
+  fascia_real gravity_scale; ///< load factor on gravity and loads (continuation)
+
+  // state
+  fascia_real *x; ///< [3N]
+  fascia_real *q; ///< [4N]
+  fascia_real *A; ///< [9N] R_i R_rest_i^T
+  fascia_real *A_mass; ///< [9N] A at the mass snapshot
+
+  // per evaluation
+  fascia_real *pair_buffer;  ///< [6P]
+  fascia_real *cache;        ///< [S * FASCIA_PT_CACHE_SIZE]
+  int *sample_flags;         ///< [S]
+  fascia_real *conservative_torque; ///< [3N] theta-gradient of internal+gravity energy
+  fascia_real energy_internal, energy_external;
+  int32_t max_neighbours;
+  int32_t inverted_count;
+  int32_t first_inverted, first_nonfinite;
+} fascia_system;
+
+FASCIA_INTERN fascia_status fascia_system_create(fascia_ctx *ctx, const fascia_model *model, int threads,
+                                                 fascia_system **out);
+FASCIA_INTERN void fascia_system_destroy(fascia_system **sys);
+
+/// Sets the frame state (x [3N], q [4N] unit quaternions) and A.
+FASCIA_INTERN void fascia_system_set_state(fascia_system *sys, const fascia_real *x, const fascia_real *q);
+/// Sets the state to the rest state.
+FASCIA_INTERN void fascia_system_set_rest(fascia_system *sys);
+
+/// Potential energy (internal + gravity + frame loads, all times
+/// gravity_scale for the external part) at the current state, its gradient
+/// [6N] (may be NULL), and the per-sample cache the Hessian product reuses.
+/// Returns FASCIA_ERR_NUMERIC (with the lowest offending sample in the
+/// message) when a value is not finite.
+FASCIA_INTERN fascia_status fascia_system_evaluate(fascia_system *sys, fascia_real *gradient, fascia_real *energy);
+
+/// out = H v: the symmetric Hessian of the potential at the state of the
+/// last evaluate (exact derivative of the gradient plus the symmetrizing
+/// term 1/2 [g_theta]x of the rotation update, see docs/mechanics.md).
+FASCIA_INTERN void fascia_system_hessian_apply(fascia_system *sys, const fascia_real *v, fascia_real *out);
+/// Same without the symmetrizing term: the exact directional derivative of
+/// the gradient (what a finite difference of the force measures).
+FASCIA_INTERN void fascia_system_gradient_derivative(fascia_system *sys, const fascia_real *v, fascia_real *out);
+
+/// 6x6 diagonal blocks of H [36N], row-major per frame.
+FASCIA_INTERN void fascia_system_hessian_diagonal(fascia_system *sys, fascia_real *blocks);
+
+/// Remembers the current A for the mass operators below.
+FASCIA_INTERN void fascia_system_mass_snapshot(fascia_system *sys);
+/// out = M v, consistent mass at the snapshot.
+FASCIA_INTERN void fascia_system_mass_apply(fascia_system *sys, const fascia_real *v, fascia_real *out);
+/// Lumped (row-sum) 6x6 mass blocks at the snapshot [36N].
+FASCIA_INTERN void fascia_system_mass_lumped(fascia_system *sys, fascia_real *blocks);
+
+/// Deformed sample positions [3S], probe positions [3Q].
+FASCIA_INTERN void fascia_system_sample_positions(const fascia_system *sys, fascia_real *out);
+FASCIA_INTERN void fascia_system_probe_position(const fascia_system *sys, int32_t probe, fascia_real *out);
+
+/// Green-Lagrange strain magnitude |E| (Frobenius) per sample [S] at the
+/// current state, and von Mises-like stress magnitude |P| (Pa) if stress
+/// is not NULL.
+FASCIA_INTERN void fascia_system_sample_strain(const fascia_system *sys, fascia_real *strain, fascia_real *stress);
+
+/// Deterministic dot product (fixed blocking, independent of thread count).
+FASCIA_INTERN fascia_real fascia_dot(const fascia_real *a, const fascia_real *b, int64_t n);
+
+#endif
