@@ -39,7 +39,7 @@ static inline void rnd_rotation(unsigned long long *state, double max_angle, dou
 }
 
 static inline fascia_model *random_model(fascia_ctx *ctx, unsigned long long seed, int frames, int samples, int law,
-                                         double coupling) {
+                                         double coupling, double curvature) {
   unsigned long long st = seed;
   int *counts = malloc((size_t)samples * sizeof(int)), pairs = 0;
   for (int s = 0; s < samples; ++s) {
@@ -58,6 +58,7 @@ static inline fascia_model *random_model(fascia_ctx *ctx, unsigned long long see
   m->materials[0].poisson_ratio = 0.3;
   m->materials[0].density = 1000;
   m->materials[0].rotation_coupling = coupling;
+  m->materials[0].rotation_smoothing = curvature;
   m->gravity[0] = 1.0;
   m->gravity[2] = -9.81;
   for (int i = 0; i < frames; ++i) {

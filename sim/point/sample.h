@@ -20,7 +20,16 @@
 // gradient on frame i is
 //   g_x     = v Pt g
 //   g_theta = v (axial(C_i Pt^T) + 2 mu_c w axial(F K_i A_i^T))
-// and the force is its negative (paper eq. 18 in this notation). The stiffness
+// and the force is its negative (paper eq. 18 in this notation).
+//
+// A second, independent term smooths the frame rotations (a Cosserat
+// curvature energy): v k_c/2 sum_c |M_c|^2 with M_c = sum_i g_c A_i, the
+// gradient of the interpolated rotation field along axis c; k_c = mu l^2 with
+// an internal length l. It vanishes for any uniform rotation, so rigid
+// motions stay free, and it penalizes the zero-energy rotation modes of the
+// scheme (planes of frames twisting against each other: large rotation
+// jumps) far more than the smooth rotation field of a bent body. Its
+// gradient on frame i is v k_c axial(A_i N_i^T), N_i = sum_c g_c M_c. The stiffness
 // product is the exact directional derivative of that gradient under the
 // update x += dx, R <- exp([dtheta]x) R: it includes the geometric part
 // (paper eq. 25-30), here axial([dtheta_i]x C_i Pt^T).
@@ -41,6 +50,7 @@ typedef struct fascia_pt_model {
   const fascia_real *sample_lambda; ///< [S] Pa
   const fascia_real *sample_mu;     ///< [S] Pa
   const fascia_real *sample_coupling; ///< [S] mu_c, Pa
+  const fascia_real *sample_curvature; ///< [S] k_c = mu l^2, Pa m^2 (rotation smoothness)
   const int32_t *sample_law;        ///< [S] FASCIA_PT_LAW_*
 } fascia_pt_model;
 
@@ -117,6 +127,17 @@ static inline FASCIA_HD fascia_real fascia_pt_sample_gradient(const fascia_pt_mo
       for (int q = 0; q < 9; ++q) P[q] += 2 * muc * w * AK[q];
     }
   }
+  const fascia_real kc = m->sample_curvature[s];
+  fascia_real Mc[27]; // M_c = sum_i g_c A_i, c = 0..2, each row-major 3x3
+  if (kc > 0) {
+    for (int q = 0; q < 27; ++q) Mc[q] = 0;
+    for (int32_t k = begin; k < end; ++k) {
+      const fascia_real *A = st->frame_A + 9 * m->pair_frame[k], *g = m->pair_gradient + 3 * k;
+      for (int c = 0; c < 3; ++c)
+        for (int q = 0; q < 9; ++q) Mc[9 * c + q] += g[c] * A[q];
+    }
+    psi += FASCIA_R(0.5) * kc * (fascia_pt_ddot(Mc, Mc) + fascia_pt_ddot(Mc + 9, Mc + 9) + fascia_pt_ddot(Mc + 18, Mc + 18));
+  }
   const fascia_real J = fascia_pt_det(F);
   int bad = 0;
   if (!(J > 0)) bad |= FASCIA_PT_FLAG_INVERTED;
@@ -138,6 +159,13 @@ static inline FASCIA_HD fascia_real fascia_pt_sample_gradient(const fascia_pt_mo
       fascia_pt_mat_mult(FK, A, FKA);
       fascia_pt_axial(FKA, u);
       for (int r = 0; r < 3; ++r) t[r] += 2 * muc * w * u[r];
+    }
+    if (kc > 0) {
+      fascia_real Nm[9], AN[9], u[3];
+      for (int q = 0; q < 9; ++q) Nm[q] = g[0] * Mc[q] + g[1] * Mc[9 + q] + g[2] * Mc[18 + q];
+      fascia_pt_mat_mult(A, Nm, AN);
+      fascia_pt_axial(AN, u);
+      for (int r = 0; r < 3; ++r) t[r] += kc * u[r];
     }
     for (int r = 0; r < 3; ++r) {
       out[r] *= v;
@@ -203,6 +231,22 @@ static inline FASCIA_HD void fascia_pt_sample_stiffness(const fascia_pt_model *m
       for (int q = 0; q < 9; ++q) dP[q] += 2 * muc * w * (t1[q] + t2[q]);
     }
   }
+  // curvature term: M_c and dM_c = sum_i g_c [dtheta_i]x A_i
+  const fascia_real kc = m->sample_curvature[s];
+  fascia_real Mc[27], dMc[27];
+  if (kc > 0) {
+    for (int q = 0; q < 27; ++q) Mc[q] = dMc[q] = 0;
+    for (int32_t k = begin; k < end; ++k) {
+      const fascia_real *A = st->frame_A + 9 * m->pair_frame[k], *g = m->pair_gradient + 3 * k;
+      fascia_real tA[9];
+      fascia_pt_skew_mul(dq + 6 * slot[k - begin] + 3, A, tA);
+      for (int c = 0; c < 3; ++c)
+        for (int q = 0; q < 9; ++q) {
+          Mc[9 * c + q] += g[c] * A[q];
+          dMc[9 * c + q] += g[c] * tA[q];
+        }
+    }
+  }
   for (int32_t k = begin; k < end; ++k) {
     const int32_t i = m->pair_frame[k];
     const fascia_real *A = st->frame_A + 9 * i, *g = m->pair_gradient + 3 * k, *dt = dq + 6 * slot[k - begin] + 3;
@@ -243,6 +287,20 @@ static inline FASCIA_HD void fascia_pt_sample_stiffness(const fascia_pt_model *m
       for (int q = 0; q < 9; ++q) XA[q] += Z[q];
       fascia_pt_axial(XA, u);
       for (int r = 0; r < 3; ++r) t[r] += 2 * muc * w * u[r];
+    }
+    if (kc > 0) {
+      // d axial(A N^T) = axial([dtheta]x A N^T + A dN^T)
+      fascia_real Nm[9], dN[9], tA[9], X1[9], X2[9], u[3];
+      for (int q = 0; q < 9; ++q) {
+        Nm[q] = g[0] * Mc[q] + g[1] * Mc[9 + q] + g[2] * Mc[18 + q];
+        dN[q] = g[0] * dMc[q] + g[1] * dMc[9 + q] + g[2] * dMc[18 + q];
+      }
+      fascia_pt_skew_mul(dt, A, tA);
+      fascia_pt_mat_mult(tA, Nm, X1);
+      fascia_pt_mat_mult(A, dN, X2);
+      for (int q = 0; q < 9; ++q) X1[q] += X2[q];
+      fascia_pt_axial(X1, u);
+      for (int r = 0; r < 3; ++r) t[r] += kc * u[r];
     }
     for (int r = 0; r < 3; ++r) {
       out[r] *= v;

@@ -97,7 +97,9 @@ herr_t fascia_h5_attr_string(hid_t loc, const char *name, const char *value) {
   herr_t status = -1;
   hid_t type = H5Tcopy(H5T_C_S1), space = H5Screate(H5S_SCALAR), attr = H5I_INVALID_HID;
   if (type < 0 || space < 0) goto cleanup;
-  if (H5Tset_size(type, strlen(value) + 1) < 0 || H5Tset_strpad(type, H5T_STR_NULLTERM) < 0) goto cleanup;
+  if (H5Tset_size(type, strlen(value) + 1) < 0 || H5Tset_strpad(type, H5T_STR_NULLTERM) < 0 ||
+      H5Tset_cset(type, H5T_CSET_UTF8) < 0)
+    goto cleanup;
   attr = H5Acreate2(loc, name, type, space, H5P_DEFAULT, H5P_DEFAULT);
   if (attr < 0) goto cleanup;
   status = H5Awrite(attr, type, value);

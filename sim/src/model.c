@@ -328,6 +328,9 @@ static fascia_status validate_materials(fascia_ctx *ctx, const fascia_model *m, 
     FASCIA_CHECK(isfinite(mat->density) && mat->density > 0, ctx, FASCIA_ERR_FORMAT,
                  "model '%s' /materials: material %d ('%s') has density %g kg/m^3, expected > 0", origin, (int)k,
                  mat->name, mat->density);
+    FASCIA_CHECK(isfinite(mat->rotation_smoothing) && mat->rotation_smoothing >= 0, ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' /materials: material %d ('%s') has rotation smoothing %g, expected >= 0",
+                 origin, (int)k, mat->name, mat->rotation_smoothing);
     FASCIA_CHECK(isfinite(mat->rotation_coupling) && mat->rotation_coupling >= 0, ctx, FASCIA_ERR_FORMAT,
                  "model '%s' /materials: material %d ('%s') has rotation coupling %g, expected >= 0", origin, (int)k,
                  mat->name, mat->rotation_coupling);

@@ -36,6 +36,7 @@ fascia_status fascia_system_create(fascia_ctx *ctx, const fascia_model *m, int t
   sys->sample_lambda = fascia_calloc(S, sizeof(fascia_real));
   sys->sample_mu = fascia_calloc(S, sizeof(fascia_real));
   sys->sample_coupling = fascia_calloc(S, sizeof(fascia_real));
+  sys->sample_curvature = fascia_calloc(S, sizeof(fascia_real));
   sys->sample_mass = fascia_calloc(S, sizeof(fascia_real));
   sys->sample_law = fascia_calloc(S, sizeof(int32_t));
   sys->local_slot = fascia_calloc(sys->max_neighbours, sizeof(int32_t));
@@ -49,7 +50,7 @@ fascia_status fascia_system_create(fascia_ctx *ctx, const fascia_model *m, int t
   sys->cache = fascia_calloc(S * FASCIA_PT_CACHE_SIZE, sizeof(fascia_real));
   sys->sample_flags = fascia_calloc(S, sizeof(int));
   sys->conservative_torque = fascia_calloc(3 * N, sizeof(fascia_real));
-  if (!sys->pair_offset || !sys->sample_lambda || !sys->sample_mu || !sys->sample_coupling || !sys->sample_mass ||
+  if (!sys->pair_offset || !sys->sample_lambda || !sys->sample_mu || !sys->sample_coupling || !sys->sample_curvature || !sys->sample_mass ||
       !sys->sample_law || !sys->local_slot || !sys->frame_mass || !sys->frame_moment || !sys->x || !sys->q ||
       !sys->A || !sys->A_mass || !sys->pair_buffer || !sys->cache || !sys->sample_flags ||
       !sys->conservative_torque) {
@@ -67,9 +68,15 @@ fascia_status fascia_system_create(fascia_ctx *ctx, const fascia_model *m, int t
     sys->sample_coupling[s] = mat->rotation_coupling * mu;
     sys->sample_law[s] = mat->law;
     sys->sample_mass[s] = mat->density * m->sample_volume[s];
+    // smoothing length l = r h, h the weighted RMS distance to the frames
+    fascia_real h2 = 0;
     for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k)
-      for (int r = 0; r < 3; ++r)
-        sys->pair_offset[3 * k + r] = m->sample_position[3 * s + r] - m->frame_position[3 * m->pair_frame[k] + r];
+      for (int r = 0; r < 3; ++r) {
+        const fascia_real d = m->sample_position[3 * s + r] - m->frame_position[3 * m->pair_frame[k] + r];
+        sys->pair_offset[3 * k + r] = d;
+        h2 += fabs(m->pair_weight[k]) * d * d;
+      }
+    sys->sample_curvature[s] = mu * mat->rotation_smoothing * mat->rotation_smoothing * h2;
   }
   // gravity moments through the reverse table (fixed order); sample of a pair
   // is found by bisection in sample_offsets
@@ -97,6 +104,7 @@ fascia_status fascia_system_create(fascia_ctx *ctx, const fascia_model *m, int t
   pm->sample_lambda = sys->sample_lambda;
   pm->sample_mu = sys->sample_mu;
   pm->sample_coupling = sys->sample_coupling;
+  pm->sample_curvature = sys->sample_curvature;
   pm->sample_law = sys->sample_law;
   fascia_system_set_rest(sys);
   fascia_system_mass_snapshot(sys);
@@ -111,6 +119,7 @@ void fascia_system_destroy(fascia_system **sys) {
   free(s->sample_lambda);
   free(s->sample_mu);
   free(s->sample_coupling);
+  free(s->sample_curvature);
   free(s->sample_mass);
   free(s->sample_law);
   free(s->local_slot);

@@ -27,6 +27,7 @@ typedef struct fascia_system {
   fascia_real *sample_lambda;   ///< [S]
   fascia_real *sample_mu;       ///< [S]
   fascia_real *sample_coupling; ///< [S]
+  fascia_real *sample_curvature; ///< [S]
   fascia_real *sample_mass;     ///< [S] kg
   int32_t *sample_law;          ///< [S]
   int32_t *local_slot;          ///< [max neighbours] 0, 1, 2, ..

@@ -14,6 +14,9 @@ int cli_verbose = 0;
 
 static const fascia_command commands[] = {
     {"info", cmd_info, "print the version, build options and backends"},
+    {"beam", cmd_beam, "write the paper's cantilever beam as a model file"},
+    {"prep", cmd_prep, "build a tissue model from organ meshes and a scene file"},
+    {"inspect", cmd_inspect, "check a model file and print a summary (--json for one JSON object)"},
 };
 static const int command_count = (int)(sizeof commands / sizeof commands[0]);
 

@@ -6,5 +6,8 @@
 
 #include "fascia/base.h"
 #include "fascia/model.h"
+#include "fascia/shape.h"
+#include "fascia/results.h"
+#include "fascia/solver.h"
 
 #endif

@@ -55,6 +55,12 @@ typedef struct fascia_material {
   /// to the material rotation around it (cures the zero-energy rotation modes
   /// of the frame scheme, see docs/mechanics.md). 0 gives the paper's scheme.
   fascia_real rotation_coupling;
+  /// Rotation smoothing r (dimensionless): a Cosserat curvature energy
+  /// mu (r h)^2 |grad R|^2, h the sample's distance to its frames, that removes
+  /// the zero-energy twist modes of the frame scheme while leaving smooth
+  /// rotation fields nearly free; its effect on smooth fields vanishes as h^2
+  /// under refinement (see docs/mechanics.md). 0 gives the paper's scheme.
+  fascia_real rotation_smoothing;
 } fascia_material;
 
 /// A rigid motion given by keyframes, linear in translation and spherical
@@ -177,10 +183,14 @@ FASCIA_API void fascia_lame_to_young(fascia_real lambda, fascia_real mu, fascia_
 FASCIA_API int fascia_law_from_name(const char *name);
 FASCIA_API const char *fascia_law_name(int law);
 
-/// Reads a model file, validates it. Errors name the file and the dataset.
+/// Reads a model file (docs/model-format.md), validates it. Errors name the
+/// file and the dataset: FASCIA_ERR_IO for a missing, unreadable or non-HDF5
+/// file, FASCIA_ERR_FORMAT for wrong content. On error *out is NULL.
 FASCIA_API fascia_status fascia_model_load(fascia_ctx *ctx, const char *path, fascia_model **out);
-/// Writes a model file (validated first) to path.tmp, then renames it to path.
-/// On error no file is left at path (an older one there is untouched).
+/// Writes a model file (validated first; motion and organ names must be
+/// unique, non-empty and without '/') under a temporary name next to path
+/// (path.tmp-PID-K), then renames it to path. On error no file is left
+/// behind and an older file at path is untouched.
 FASCIA_API fascia_status fascia_model_save(fascia_ctx *ctx, const fascia_model *model, const char *path);
 
 /// Probe index by name, -1 if absent.

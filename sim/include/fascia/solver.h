@@ -1,0 +1,113 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// Solvers: static equilibrium and implicit (backward) Euler steps, both as
+// minimizations solved by Newton iterations with a line search and
+// Levenberg damping, each linear system by preconditioned conjugate
+// gradients. Every knob that trades time for accuracy is a field of
+// fascia_solver_def. See docs/mechanics.md.
+#ifndef FASCIA_SOLVER_H
+#define FASCIA_SOLVER_H
+
+#include "fascia/model.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum fascia_precond {
+  FASCIA_PRECOND_NONE = 0,
+  FASCIA_PRECOND_JACOBI = 1,       ///< inverse of the diagonal
+  FASCIA_PRECOND_BLOCK_JACOBI = 2, ///< inverse of each frame's 6x6 diagonal block
+} fascia_precond;
+
+typedef enum fascia_mass_kind {
+  FASCIA_MASS_CONSISTENT = 0, ///< M = sum_s m_s J_s^T J_s, samples follow frames exactly
+  FASCIA_MASS_LUMPED = 1,     ///< row-sum lumped 6x6 blocks per frame
+} fascia_mass_kind;
+
+/// Solver options; start from fascia_solver_def_default().
+typedef struct fascia_solver_def {
+  const char *backend;           ///< "cpu", "cuda" or "auto" (default "auto")
+  int threads;                   ///< 0: the context's
+  fascia_real time_step;         ///< s, dynamic steps (default 0.01)
+  int newton_iterations;         ///< most Newton iterations per solve (default 20; static 100)
+  fascia_real newton_tolerance;  ///< stop when |gradient| <= tol * |external load| (default 1e-6)
+  int cg_iterations;             ///< most CG iterations per linear solve (default 200)
+  int cg_fixed;                  ///< 1: always exactly cg_iterations (the paper's benchmark mode)
+  fascia_real cg_tolerance;      ///< relative residual of each linear solve (default 1e-3)
+  fascia_precond precond;        ///< default block Jacobi
+  fascia_mass_kind mass;         ///< default consistent
+  fascia_real mass_damping;      ///< Rayleigh mass damping alpha, 1/s (default 0)
+  int line_search;               ///< 1: backtracking line search on the energy (default 1)
+  int load_steps;                ///< static solve: external load applied in this many increments (default 1)
+  int cookie_;                   ///< private
+} fascia_solver_def;
+
+FASCIA_API fascia_solver_def fascia_solver_def_default(void);
+
+/// Milliseconds spent per stage in the last solve (wall clock).
+typedef struct fascia_profile {
+  double evaluate_ms; ///< energy, forces (and the per-sample cache)
+  double precond_ms;  ///< diagonal blocks and their inverses
+  double cg_ms;       ///< conjugate gradients, stiffness products included
+  double total_ms;
+} fascia_profile;
+
+/// What a solve did.
+typedef struct fascia_solve_report {
+  int converged;               ///< 1 when the Newton tolerance was met
+  int newton_iterations;
+  int cg_iterations;           ///< summed over Newton iterations
+  int line_search_cuts;        ///< step halvings summed over iterations
+  int negative_curvature;      ///< CG solves that met negative curvature
+  fascia_real gradient_norm;   ///< final |gradient| over free DOFs
+  fascia_real reference_norm;  ///< |external load|, the tolerance's scale
+  fascia_real energy;          ///< final potential energy, J
+  int32_t inverted_samples;    ///< samples with det F <= 0 at the end
+  fascia_profile profile;
+} fascia_solve_report;
+
+typedef struct fascia_solver fascia_solver;
+
+/// Creates a solver for a validated model (borrowed: it must outlive the
+/// solver). The state starts at rest, at rest velocity, time 0. On error *out
+/// is NULL and the message says which setting is impossible.
+FASCIA_API fascia_status fascia_solver_create(fascia_ctx *ctx, const fascia_model *model,
+                                              const fascia_solver_def *def, fascia_solver **out);
+FASCIA_API void fascia_solver_destroy(fascia_solver **solver);
+
+/// One implicit Euler step of def.time_step. On FASCIA_ERR_NUMERIC the state
+/// is left as it was before the step.
+FASCIA_API fascia_status fascia_solver_step(fascia_solver *solver, fascia_solve_report *report);
+/// Static equilibrium under gravity and loads at the current time, starting
+/// from the current state; velocities are set to zero. Not converging within
+/// newton_iterations returns FASCIA_ERR_NUMERIC with the state reached kept.
+FASCIA_API fascia_status fascia_solver_solve_static(fascia_solver *solver, fascia_solve_report *report);
+
+FASCIA_API fascia_real fascia_solver_time(const fascia_solver *solver);
+FASCIA_API const char *fascia_solver_backend(const fascia_solver *solver);
+/// Current frame positions [3N] (m) and rotations [4N] (unit quaternions).
+FASCIA_API const fascia_real *fascia_solver_frame_positions(const fascia_solver *solver);
+FASCIA_API const fascia_real *fascia_solver_frame_rotations(const fascia_solver *solver);
+/// Current generalized velocities [6N]: linear (m/s), angular (rad/s, world).
+FASCIA_API const fascia_real *fascia_solver_frame_velocities(const fascia_solver *solver);
+/// Sets the state (positions [3N], rotations [4N], velocities [6N] or NULL
+/// for zero). Rotations are normalized; a non-finite value is refused.
+FASCIA_API fascia_status fascia_solver_set_state(fascia_solver *solver, const fascia_real *positions,
+                                                 const fascia_real *rotations, const fascia_real *velocities);
+/// Deformed position of a probe (m).
+FASCIA_API void fascia_solver_probe_position(const fascia_solver *solver, int32_t probe, fascia_real *out);
+/// Deformed sample positions [3S].
+FASCIA_API void fascia_solver_sample_positions(const fascia_solver *solver, fascia_real *out);
+/// Per-sample Green-Lagrange strain norm [S] and first Piola stress norm
+/// [S] (Pa, may be NULL) at the current state.
+FASCIA_API void fascia_solver_sample_strain(const fascia_solver *solver, fascia_real *strain, fascia_real *stress);
+/// Kinetic energy (consistent or lumped mass, as configured), J.
+FASCIA_API fascia_real fascia_solver_kinetic_energy(fascia_solver *solver);
+/// Potential energy (internal + gravity + loads), J.
+FASCIA_API fascia_status fascia_solver_potential_energy(fascia_solver *solver, fascia_real *energy);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,876 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// The model file: fascia_model_save and fascia_model_load over HDF5. The full
+// specification, with units and meanings, is docs/model-format.md; this
+// summary must stay in step with it. Bump MODEL_VERSION (and the reader's
+// range) whenever a reader of the previous version would misread a new file.
+//
+// Schema, version 1. N frames, S samples, P sample-frame pairs, M materials,
+// Q probes, R probe-frame pairs, C coupling entries, K keys of a motion,
+// V vertices and T triangles of an organ. Reals are IEEE f64 little endian,
+// indices int32 (-1 = none), names fixed strings of 64 bytes (NUL-terminated,
+// variable-length strings are accepted on reading). Every dataset is
+// present, also when it has 0 rows.
+//
+//   /                     attributes: fascia_model_version (int32, = 1),
+//                         units ("SI: m, kg, s, Pa"), creator ("fascia X.Y.Z")
+//   /frames/position      [N,3]  f64  m     rest position x_i, world
+//   /frames/rotation      [N,4]  f64  1     rest rotation, unit quaternion w,x,y,z
+//   /frames/kind          [N]    i32        0 free, 1 fixed, 2 prescribed
+//   /frames/motion        [N]    i32        motion index (prescribed), else -1
+//   /frames/load          [N,6]  f64  N, N m  constant force then torque, world
+//   /frames/offsets       [N+1]  i32        reverse table (CSR) into /frames/pairs
+//   /frames/pairs         [P]    i32        pair indices of each frame, ascending
+//   /samples/position     [S,3]  f64  m     rest position, world
+//   /samples/volume       [S]    f64  m^3   > 0
+//   /samples/material     [S]    i32        material index
+//   /samples/offsets      [S+1]  i32        CSR into /pairs
+//   /pairs/frame          [P]    i32        frame index, ascending per sample
+//   /pairs/weight         [P]    f64  1     w_is, sum per sample = 1
+//   /pairs/gradient       [P,3]  f64  1/m   rest-space gradient of w_is, sum = 0
+//   /materials/name       [M]    str64
+//   /materials/law        [M]    i32        0 stvk, 1 neohookean
+//   /materials/youngs_modulus [M] f64 Pa;  poisson_ratio [M] f64 1;
+//   /materials/density    [M]    f64  kg/m^3;  rotation_coupling, rotation_smoothing [M] f64 1
+//   /motions/NAME/        group per motion; attribute index (int32, order)
+//       pivot [3] f64 m; time [K] f64 s; translation [K,3] f64 m;
+//       rotation [K,4] f64 (unit quaternions w,x,y,z)
+//   /probes/name          [Q]    str64
+//   /probes/position      [Q,3]  f64  m     rest position
+//   /probes/offsets       [Q+1]  i32        CSR into /probes/frame, /probes/weight
+//   /probes/frame         [R]    i32;   /probes/weight [R] f64 (sum per probe = 1)
+//   /organs/NAME/         group per organ; attributes index, kind (0 fixed,
+//                         1 prescribed, 2 rigid, 3 deformable), motion (int32)
+//       vertices [V,3] f64 m (rest); triangles [T,3] i32 (vertex indices)
+//   /coupling/organ       [C]    i32;  frame [C] i32;  triangle [C] i32
+//   /coupling/barycentric [C,3]  f64  1
+//   /gravity              [3]    f64  m/s^2, world
+//   /provenance           scalar string, JSON text (absent when unknown)
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fascia/model.h"
+#include "h5io.h"
+
+#define MODEL_VERSION 1
+// Versions this reader understands.
+#define MODEL_VERSION_MIN 1
+#define MODEL_VERSION_MAX 1
+#define MODEL_UNITS "SI: m, kg, s, Pa"
+#define REMEDY "re-run 'fascia prep' or 'fascia beam' with this version"
+#define PATH_SIZE 256
+
+_Static_assert(sizeof(fascia_real) == sizeof(double), "model files store fascia_real as f64");
+
+/// Element type of a dataset.
+typedef enum elem { ELEM_REAL, ELEM_INT, ELEM_NAME } elem;
+
+// ---------------------------------------------------------------------------
+// Writing
+
+typedef struct writer {
+  fascia_ctx *ctx;
+  const char *path; // final path, for messages
+  hid_t file;
+} writer;
+
+static fascia_status write_failed(writer *w, const char *name) {
+  char detail[600];
+  fascia_h5_error(detail, sizeof detail);
+  return FASCIA_FAIL(w->ctx, FASCIA_ERR_IO, "model '%s' %s: cannot write (HDF5: %s); check the disk space", w->path,
+                     name, detail);
+}
+
+static hid_t name_type(void) {
+  hid_t type = H5Tcopy(H5T_C_S1);
+  // names and provenance are UTF-8 text (organ names come from mesh files)
+  if (type >= 0 && (H5Tset_size(type, FASCIA_NAME_SIZE) < 0 || H5Tset_strpad(type, H5T_STR_NULLTERM) < 0 ||
+                    H5Tset_cset(type, H5T_CSET_UTF8) < 0)) {
+    H5Tclose(type);
+    return H5I_INVALID_HID;
+  }
+  return type;
+}
+
+// Writes dataset `name` (absolute) of rank 1 [d0] or 2 [d0,d1] from data,
+// with an optional `unit` attribute.
+static fascia_status write_dataset(writer *w, const char *name, elem kind, int rank, int64_t d0, int64_t d1,
+                                   const void *data, const char *unit) {
+  const hsize_t dims[2] = {(hsize_t)d0, (hsize_t)d1};
+  hid_t space = H5Screate_simple(rank, dims, NULL), dset = H5I_INVALID_HID, type = H5I_INVALID_HID;
+  hid_t file_type = kind == ELEM_REAL ? H5T_IEEE_F64LE : H5T_STD_I32LE;
+  hid_t mem_type = kind == ELEM_REAL ? H5T_NATIVE_DOUBLE : H5T_NATIVE_INT32;
+  if (kind == ELEM_NAME) file_type = mem_type = type = name_type();
+  int ok = space >= 0 && file_type >= 0;
+  if (ok) dset = H5Dcreate2(w->file, name, file_type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  ok = ok && dset >= 0;
+  if (ok && d0 * (rank == 2 ? d1 : 1) > 0) ok = H5Dwrite(dset, mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) >= 0;
+  if (ok && unit) ok = fascia_h5_attr_string(dset, "unit", unit) >= 0;
+  fascia_status status = ok ? FASCIA_OK : write_failed(w, name);
+  if (dset >= 0) H5Dclose(dset);
+  if (type >= 0) H5Tclose(type);
+  if (space >= 0) H5Sclose(space);
+  return status;
+}
+
+#define WRITE1(w, name, kind, n, data, unit) FASCIA_TRY(write_dataset(w, name, kind, 1, n, 0, data, unit))
+#define WRITE2(w, name, kind, n, m, data, unit) FASCIA_TRY(write_dataset(w, name, kind, 2, n, m, data, unit))
+
+static fascia_status write_text(writer *w, const char *name, const char *text) {
+  hid_t type = H5Tcopy(H5T_C_S1), space = H5Screate(H5S_SCALAR), dset = H5I_INVALID_HID;
+  int ok = type >= 0 && space >= 0 && H5Tset_size(type, strlen(text) + 1) >= 0 &&
+           H5Tset_strpad(type, H5T_STR_NULLTERM) >= 0 && H5Tset_cset(type, H5T_CSET_UTF8) >= 0;
+  if (ok) dset = H5Dcreate2(w->file, name, type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  ok = ok && dset >= 0 && H5Dwrite(dset, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, text) >= 0;
+  fascia_status status = ok ? FASCIA_OK : write_failed(w, name);
+  if (dset >= 0) H5Dclose(dset);
+  if (space >= 0) H5Sclose(space);
+  if (type >= 0) H5Tclose(type);
+  return status;
+}
+
+// Creates group `name`; with index >= 0 also its attributes index, and for
+// organs kind and motion (kind >= 0).
+static fascia_status write_group(writer *w, const char *name, int32_t index, int32_t kind, int32_t motion) {
+  hid_t group = H5Gcreate2(w->file, name, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  int ok = group >= 0;
+  if (ok && index >= 0) ok = fascia_h5_attr_int(group, "index", index) >= 0;
+  if (ok && kind >= 0)
+    ok = fascia_h5_attr_int(group, "kind", kind) >= 0 && fascia_h5_attr_int(group, "motion", motion) >= 0;
+  fascia_status status = ok ? FASCIA_OK : write_failed(w, name);
+  if (group >= 0) H5Gclose(group);
+  return status;
+}
+
+static fascia_status write_frames(writer *w, const fascia_model *m) {
+  const int64_t N = m->frame_count;
+  FASCIA_TRY(write_group(w, "/frames", -1, -1, -1));
+  WRITE2(w, "/frames/position", ELEM_REAL, N, 3, m->frame_position, "m");
+  WRITE2(w, "/frames/rotation", ELEM_REAL, N, 4, m->frame_rotation, "1");
+  WRITE1(w, "/frames/kind", ELEM_INT, N, m->frame_kind, NULL);
+  WRITE1(w, "/frames/motion", ELEM_INT, N, m->frame_motion, NULL);
+  WRITE2(w, "/frames/load", ELEM_REAL, N, 6, m->frame_load, "N, N m");
+  WRITE1(w, "/frames/offsets", ELEM_INT, N + 1, m->frame_offsets, NULL);
+  WRITE1(w, "/frames/pairs", ELEM_INT, m->pair_count, m->frame_pairs, NULL);
+  return FASCIA_OK;
+}
+
+static fascia_status write_samples_pairs(writer *w, const fascia_model *m) {
+  const int64_t S = m->sample_count, P = m->pair_count;
+  FASCIA_TRY(write_group(w, "/samples", -1, -1, -1));
+  WRITE2(w, "/samples/position", ELEM_REAL, S, 3, m->sample_position, "m");
+  WRITE1(w, "/samples/volume", ELEM_REAL, S, m->sample_volume, "m^3");
+  WRITE1(w, "/samples/material", ELEM_INT, S, m->sample_material, NULL);
+  WRITE1(w, "/samples/offsets", ELEM_INT, S + 1, m->sample_offsets, NULL);
+  FASCIA_TRY(write_group(w, "/pairs", -1, -1, -1));
+  WRITE1(w, "/pairs/frame", ELEM_INT, P, m->pair_frame, NULL);
+  WRITE1(w, "/pairs/weight", ELEM_REAL, P, m->pair_weight, "1");
+  WRITE2(w, "/pairs/gradient", ELEM_REAL, P, 3, m->pair_gradient, "1/m");
+  return FASCIA_OK;
+}
+
+// Materials as parallel datasets (one per field): simpler to check on
+// reading than a compound, and each carries its own unit.
+static fascia_status write_materials(writer *w, const fascia_model *m) {
+  const int64_t M = m->material_count;
+  fascia_status status = FASCIA_ERR_MEMORY;
+  char(*names)[FASCIA_NAME_SIZE] = fascia_calloc(M, FASCIA_NAME_SIZE);
+  int32_t *law = fascia_calloc(M, sizeof *law);
+  fascia_real *values = fascia_calloc(5 * M, sizeof *values);
+  if (!names || !law || !values) {
+    status = FASCIA_FAIL(w->ctx, FASCIA_ERR_MEMORY, "model '%s' /materials: out of memory", w->path);
+    goto cleanup;
+  }
+  for (int64_t k = 0; k < M; ++k) {
+    const fascia_material *mat = m->materials + k;
+    memcpy(names[k], mat->name, FASCIA_NAME_SIZE);
+    law[k] = mat->law;
+    values[k] = mat->youngs_modulus;
+    values[M + k] = mat->poisson_ratio;
+    values[2 * M + k] = mat->density;
+    values[3 * M + k] = mat->rotation_coupling;
+    values[4 * M + k] = mat->rotation_smoothing;
+  }
+  FASCIA_TRY_GOTO(write_group(w, "/materials", -1, -1, -1));
+  FASCIA_TRY_GOTO(write_dataset(w, "/materials/name", ELEM_NAME, 1, M, 0, names, NULL));
+  FASCIA_TRY_GOTO(write_dataset(w, "/materials/law", ELEM_INT, 1, M, 0, law, NULL));
+  FASCIA_TRY_GOTO(write_dataset(w, "/materials/youngs_modulus", ELEM_REAL, 1, M, 0, values, "Pa"));
+  FASCIA_TRY_GOTO(write_dataset(w, "/materials/poisson_ratio", ELEM_REAL, 1, M, 0, values + M, "1"));
+  FASCIA_TRY_GOTO(write_dataset(w, "/materials/density", ELEM_REAL, 1, M, 0, values + 2 * M, "kg/m^3"));
+  FASCIA_TRY_GOTO(write_dataset(w, "/materials/rotation_coupling", ELEM_REAL, 1, M, 0, values + 3 * M, "1"));
+  FASCIA_TRY_GOTO(write_dataset(w, "/materials/rotation_smoothing", ELEM_REAL, 1, M, 0, values + 4 * M, "1"));
+cleanup:
+  free(names);
+  free(law);
+  free(values);
+  return status;
+}
+
+static fascia_status write_motions(writer *w, const fascia_model *m) {
+  char name[PATH_SIZE];
+  FASCIA_TRY(write_group(w, "/motions", -1, -1, -1));
+  for (int32_t k = 0; k < m->motion_count; ++k) {
+    const fascia_motion *mo = m->motions + k;
+    const int64_t K = mo->key_count;
+    snprintf(name, sizeof name, "/motions/%s", mo->name);
+    FASCIA_TRY(write_group(w, name, k, -1, -1));
+    snprintf(name, sizeof name, "/motions/%s/pivot", mo->name);
+    WRITE1(w, name, ELEM_REAL, 3, mo->pivot, "m");
+    snprintf(name, sizeof name, "/motions/%s/time", mo->name);
+    WRITE1(w, name, ELEM_REAL, K, mo->key_time, "s");
+    snprintf(name, sizeof name, "/motions/%s/translation", mo->name);
+    WRITE2(w, name, ELEM_REAL, K, 3, mo->key_translation, "m");
+    snprintf(name, sizeof name, "/motions/%s/rotation", mo->name);
+    WRITE2(w, name, ELEM_REAL, K, 4, mo->key_rotation, "1");
+  }
+  return FASCIA_OK;
+}
+
+static fascia_status write_probes(writer *w, const fascia_model *m) {
+  const int64_t Q = m->probe_count, R = m->probe_pair_count;
+  FASCIA_TRY(write_group(w, "/probes", -1, -1, -1));
+  WRITE1(w, "/probes/name", ELEM_NAME, Q, m->probe_name, NULL);
+  WRITE2(w, "/probes/position", ELEM_REAL, Q, 3, m->probe_position, "m");
+  WRITE1(w, "/probes/offsets", ELEM_INT, Q + 1, m->probe_offsets, NULL);
+  WRITE1(w, "/probes/frame", ELEM_INT, R, m->probe_frame, NULL);
+  WRITE1(w, "/probes/weight", ELEM_REAL, R, m->probe_weight, "1");
+  return FASCIA_OK;
+}
+
+static fascia_status write_organs_coupling(writer *w, const fascia_model *m) {
+  char name[PATH_SIZE];
+  FASCIA_TRY(write_group(w, "/organs", -1, -1, -1));
+  for (int32_t k = 0; k < m->organ_count; ++k) {
+    const fascia_organ *o = m->organs + k;
+    snprintf(name, sizeof name, "/organs/%s", o->name);
+    FASCIA_TRY(write_group(w, name, k, o->kind, o->motion));
+    snprintf(name, sizeof name, "/organs/%s/vertices", o->name);
+    WRITE2(w, name, ELEM_REAL, o->vertex_count, 3, o->vertices, "m");
+    snprintf(name, sizeof name, "/organs/%s/triangles", o->name);
+    WRITE2(w, name, ELEM_INT, o->triangle_count, 3, o->triangles, NULL);
+  }
+  const int64_t C = m->coupling_count;
+  FASCIA_TRY(write_group(w, "/coupling", -1, -1, -1));
+  WRITE1(w, "/coupling/organ", ELEM_INT, C, m->coupling_organ, NULL);
+  WRITE1(w, "/coupling/frame", ELEM_INT, C, m->coupling_frame, NULL);
+  WRITE1(w, "/coupling/triangle", ELEM_INT, C, m->coupling_triangle, NULL);
+  WRITE2(w, "/coupling/barycentric", ELEM_REAL, C, 3, m->coupling_barycentric, "1");
+  return FASCIA_OK;
+}
+
+static fascia_status write_model(writer *w, const fascia_model *m) {
+  char creator[64];
+  snprintf(creator, sizeof creator, "fascia %s", fascia_version());
+  hid_t root = H5Gopen2(w->file, "/", H5P_DEFAULT);
+  const int ok = root >= 0 && fascia_h5_attr_int(root, "fascia_model_version", MODEL_VERSION) >= 0 &&
+                 fascia_h5_attr_string(root, "units", MODEL_UNITS) >= 0 &&
+                 fascia_h5_attr_string(root, "creator", creator) >= 0;
+  if (root >= 0) H5Gclose(root);
+  if (!ok) return write_failed(w, "/");
+  FASCIA_TRY(write_frames(w, m));
+  FASCIA_TRY(write_samples_pairs(w, m));
+  FASCIA_TRY(write_materials(w, m));
+  FASCIA_TRY(write_motions(w, m));
+  FASCIA_TRY(write_probes(w, m));
+  FASCIA_TRY(write_organs_coupling(w, m));
+  WRITE1(w, "/gravity", ELEM_REAL, 3, m->gravity, "m/s^2");
+  if (m->provenance) FASCIA_TRY(write_text(w, "/provenance", m->provenance));
+  return FASCIA_OK;
+}
+
+// Motion and organ names become HDF5 group names: they must be unique within
+// their kind, non-empty, without '/', and not ".". Material names only need
+// to be terminated. Validation does not cover these, so save checks them.
+static fascia_status check_names(fascia_ctx *ctx, const fascia_model *m, const char *path) {
+  for (int32_t k = 0; k < m->material_count; ++k)
+    FASCIA_CHECK(memchr(m->materials[k].name, 0, FASCIA_NAME_SIZE), ctx, FASCIA_ERR_ARGUMENT,
+                 "cannot save model '%s': material %d has an unterminated name", path, (int)k);
+  for (int pass = 0; pass < 2; ++pass) {
+    const int32_t count = pass ? m->organ_count : m->motion_count;
+    const char *kind = pass ? "organ" : "motion";
+    for (int32_t k = 0; k < count; ++k) {
+      const char *name = pass ? m->organs[k].name : m->motions[k].name;
+      FASCIA_CHECK(memchr(name, 0, FASCIA_NAME_SIZE) && name[0] && !strchr(name, '/') && strcmp(name, "."), ctx,
+                   FASCIA_ERR_ARGUMENT,
+                   "cannot save model '%s': %s %d has name '%.*s'; names must be non-empty, without '/', at most %d "
+                   "characters",
+                   path, kind, (int)k, FASCIA_NAME_SIZE - 1, name, FASCIA_NAME_SIZE - 1);
+      for (int32_t j = 0; j < k; ++j) {
+        const char *other = pass ? m->organs[j].name : m->motions[j].name;
+        FASCIA_CHECK(strcmp(name, other), ctx, FASCIA_ERR_ARGUMENT,
+                     "cannot save model '%s': %ss %d and %d are both named '%s'; names must be unique", path, kind,
+                     (int)j, (int)k, name);
+      }
+    }
+  }
+  return FASCIA_OK;
+}
+
+fascia_status fascia_model_save(fascia_ctx *ctx, const fascia_model *model, const char *path) {
+  FASCIA_CHECK(model && path && path[0], ctx, FASCIA_ERR_ARGUMENT, "fascia_model_save: NULL model or empty path");
+  fascia_status status = fascia_model_validate(ctx, model, path);
+  if (status != FASCIA_OK) {
+    char reason[2048];
+    snprintf(reason, sizeof reason, "%s", fascia_ctx_message(ctx));
+    return FASCIA_FAIL(ctx, status, "cannot save: %s", reason);
+  }
+  FASCIA_TRY(check_names(ctx, model, path));
+  char tmp[4096];
+  fascia_h5_quiet quiet;
+  fascia_h5_quiet_begin(&quiet);
+  writer w = {ctx, path, H5I_INVALID_HID};
+  status = fascia_h5_create_temp(ctx, "model", path, tmp, sizeof tmp, &w.file);
+  if (status == FASCIA_OK) {
+    status = write_model(&w, model);
+    // Closing flushes: its failure (disk full) is a failed save too.
+    if (H5Fclose(w.file) < 0 && status == FASCIA_OK) status = write_failed(&w, "/");
+    if (status == FASCIA_OK)
+      status = fascia_commit_temp(ctx, "model", tmp, path);
+    else
+      remove(tmp);
+  }
+  fascia_h5_quiet_end(&quiet);
+  return status;
+}
+
+// ---------------------------------------------------------------------------
+// Reading
+
+typedef struct reader {
+  fascia_ctx *ctx;
+  const char *path;
+  hid_t file;
+} reader;
+
+// 1 when every link along the absolute path `name` exists (H5Lexists fails
+// on a missing intermediate group, so each prefix is tested in turn).
+static int link_exists(hid_t file, const char *name) {
+  char prefix[PATH_SIZE];
+  const size_t length = strlen(name);
+  if (length >= sizeof prefix) return 0;
+  for (size_t k = 1; k <= length; ++k)
+    if (k == length || name[k] == '/') {
+      memcpy(prefix, name, k);
+      prefix[k] = 0;
+      if (H5Lexists(file, prefix, H5P_DEFAULT) <= 0) return 0;
+    }
+  return 1;
+}
+
+static const char *class_phrase(H5T_class_t cls) {
+  switch (cls) {
+  case H5T_INTEGER: return "integers";
+  case H5T_FLOAT: return "floating-point numbers";
+  case H5T_STRING: return "strings";
+  case H5T_COMPOUND: return "a compound type";
+  case H5T_ENUM: return "an enumeration";
+  case H5T_ARRAY: return "an array type";
+  default: return "an unsupported type";
+  }
+}
+
+// "5x4", "?x3" (unknown count), "" for a scalar.
+static void dims_phrase(char *buf, size_t size, int rank, const int64_t *dims) {
+  int n = 0;
+  buf[0] = 0;
+  for (int k = 0; k < rank && n >= 0 && (size_t)n < size; ++k)
+    n += dims[k] < 0 ? snprintf(buf + n, size - (size_t)n, "%s?", k ? "x" : "")
+                     : snprintf(buf + n, size - (size_t)n, "%s%lld", k ? "x" : "", (long long)dims[k]);
+}
+
+static fascia_status read_failed(reader *r, const char *name, const char *action) {
+  char detail[600];
+  fascia_h5_error(detail, sizeof detail);
+  return FASCIA_FAIL(r->ctx, FASCIA_ERR_IO, "model '%s' %s: cannot %s (HDF5: %s); the file may be damaged", r->path,
+                     name, action, detail);
+}
+
+// Opens dataset `name` and checks it: present, of `kind`, of rank `rank`
+// (0..2) with dims[k] rows in axis k, where dims[k] < 0 accepts any count
+// and is filled in. Counts over FASCIA_MAX_COUNT are refused before anyone
+// allocates for them. On success *out is an open dataset.
+static fascia_status open_checked(reader *r, const char *name, elem kind, int rank, int64_t *dims, hid_t *out) {
+  *out = H5I_INVALID_HID;
+  FASCIA_CHECK(link_exists(r->file, name), r->ctx, FASCIA_ERR_FORMAT, "model '%s' %s: dataset missing; %s", r->path,
+               name, REMEDY);
+  hid_t dset = H5Dopen2(r->file, name, H5P_DEFAULT);
+  if (dset < 0) return read_failed(r, name, "open it as a dataset");
+  hid_t type = H5Dget_type(dset), space = H5Dget_space(dset);
+  fascia_status status = FASCIA_OK;
+  if (type < 0 || space < 0) {
+    status = read_failed(r, name, "read its type and shape");
+    goto cleanup;
+  }
+  const H5T_class_t cls = H5Tget_class(type);
+  const H5T_class_t want = kind == ELEM_REAL ? H5T_FLOAT : kind == ELEM_INT ? H5T_INTEGER : H5T_STRING;
+  if (cls != want) {
+    status = FASCIA_FAIL(r->ctx, FASCIA_ERR_FORMAT, "model '%s' %s: expected %s, found %s; %s", r->path, name,
+                         class_phrase(want), class_phrase(cls), REMEDY);
+    goto cleanup;
+  }
+  hsize_t found[H5S_MAX_RANK];
+  const int found_rank = H5Sget_simple_extent_type(space) == H5S_NULL ? -1 : H5Sget_simple_extent_dims(space, found, NULL);
+  int64_t found64[H5S_MAX_RANK];
+  int match = found_rank == rank;
+  int64_t total = 1;
+  for (int k = 0; k < found_rank; ++k) {
+    found64[k] = found[k] > (hsize_t)INT64_MAX ? INT64_MAX : (int64_t)found[k];
+    if (match && dims[k] >= 0 && dims[k] != found64[k]) match = 0;
+    total = found64[k] > FASCIA_MAX_COUNT || total > FASCIA_MAX_COUNT ? FASCIA_MAX_COUNT + 1 : total * found64[k];
+  }
+  if (!match) {
+    char want_text[96], found_text[96], dims_text[64];
+    dims_phrase(dims_text, sizeof dims_text, rank, dims);
+    if (rank == 0)
+      snprintf(want_text, sizeof want_text, "a scalar");
+    else
+      snprintf(want_text, sizeof want_text, "%d-D array of %s values", rank, dims_text);
+    dims_phrase(dims_text, sizeof dims_text, found_rank, found64);
+    if (found_rank < 0)
+      snprintf(found_text, sizeof found_text, "an empty (null) dataspace");
+    else if (found_rank == 0)
+      snprintf(found_text, sizeof found_text, "a scalar");
+    else
+      snprintf(found_text, sizeof found_text, "%d-D %s", found_rank, dims_text);
+    status = FASCIA_FAIL(r->ctx, FASCIA_ERR_FORMAT, "model '%s' %s: expected %s, found %s; %s", r->path, name,
+                         want_text, found_text, REMEDY);
+    goto cleanup;
+  }
+  if (total > FASCIA_MAX_COUNT) {
+    char dims_text[64];
+    dims_phrase(dims_text, sizeof dims_text, found_rank, found64);
+    status = FASCIA_FAIL(r->ctx, FASCIA_ERR_FORMAT,
+                         "model '%s' %s: %s values is more than fascia's limit of %lld per array; the file is damaged "
+                         "or not a model",
+                         r->path, name, dims_text, (long long)FASCIA_MAX_COUNT);
+    goto cleanup;
+  }
+  for (int k = 0; k < rank; ++k) dims[k] = found64[k];
+  *out = dset;
+  dset = H5I_INVALID_HID;
+cleanup:
+  if (space >= 0) H5Sclose(space);
+  if (type >= 0) H5Tclose(type);
+  if (dset >= 0) H5Dclose(dset);
+  return status;
+}
+
+// Row count (axis 0) of dataset `name`, checked as open_checked does, with
+// `cols` columns (0 for a 1-D dataset).
+static fascia_status count_rows(reader *r, const char *name, elem kind, int64_t cols, int64_t *rows) {
+  int64_t dims[2] = {-1, cols};
+  hid_t dset;
+  FASCIA_TRY(open_checked(r, name, kind, cols ? 2 : 1, dims, &dset));
+  H5Dclose(dset);
+  *rows = dims[0];
+  return FASCIA_OK;
+}
+
+// Reads numeric dataset `name` of exactly [rows] (cols == 0) or [rows,cols]
+// into buf, converting to double or int32.
+static fascia_status read_numbers(reader *r, const char *name, elem kind, int64_t rows, int64_t cols, void *buf) {
+  int64_t dims[2] = {rows, cols};
+  hid_t dset;
+  FASCIA_TRY(open_checked(r, name, kind, cols ? 2 : 1, dims, &dset));
+  fascia_status status = FASCIA_OK;
+  if (rows * (cols ? cols : 1) > 0 &&
+      H5Dread(dset, kind == ELEM_REAL ? H5T_NATIVE_DOUBLE : H5T_NATIVE_INT32, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) < 0)
+    status = read_failed(r, name, "read it");
+  H5Dclose(dset);
+  return status;
+}
+
+#define READ(r, name, kind, rows, cols, buf) FASCIA_TRY(read_numbers(r, name, kind, rows, cols, buf))
+
+// Reads the strings of an open string dataset of `count` elements (rank 0 or
+// 1) into one buffer: entry k at out + k * stride, each NUL-terminated,
+// max_length characters at most (longer is a format error). Fixed-length and
+// variable-length strings are both accepted.
+static fascia_status read_strings(reader *r, const char *name, hid_t dset, int64_t count, char *out, size_t stride,
+                                  size_t max_length) {
+  fascia_status status = FASCIA_OK;
+  hid_t file_type = H5Dget_type(dset), mem_type = H5Tcopy(H5T_C_S1), space = H5Dget_space(dset);
+  char *fixed = NULL, **variable = NULL;
+  if (file_type < 0 || mem_type < 0 || space < 0) goto failed;
+  const htri_t is_variable = H5Tis_variable_str(file_type);
+  const size_t file_size = H5Tget_size(file_type);
+  // HDF5 converts no character set into another: read in the file's (ASCII or UTF-8)
+  if (is_variable < 0 || file_size == 0 || H5Tset_cset(mem_type, H5Tget_cset(file_type)) < 0) goto failed;
+  if (is_variable) {
+    variable = fascia_calloc(count, sizeof *variable);
+    if (!variable) goto memory;
+    if (H5Tset_size(mem_type, H5T_VARIABLE) < 0 ||
+        H5Dread(dset, mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, variable) < 0)
+      goto failed;
+  } else {
+    // one extra byte per string so that the converted value always ends in NUL
+    if (file_size > (size_t)FASCIA_MAX_COUNT || count * (int64_t)(file_size + 1) > FASCIA_MAX_COUNT) goto too_long;
+    fixed = fascia_calloc(count, file_size + 1);
+    if (!fixed) goto memory;
+    if (H5Tset_size(mem_type, file_size + 1) < 0 || H5Tset_strpad(mem_type, H5T_STR_NULLTERM) < 0 ||
+        H5Dread(dset, mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, fixed) < 0)
+      goto failed;
+  }
+  for (int64_t k = 0; k < count; ++k) {
+    const char *text = variable ? (variable[k] ? variable[k] : "") : fixed + k * (int64_t)(file_size + 1);
+    const size_t length = strlen(text);
+    if (length > max_length) {
+      status = FASCIA_FAIL(r->ctx, FASCIA_ERR_FORMAT, "model '%s' %s: entry %lld has %zu characters, at most %zu allowed",
+                           r->path, name, (long long)k, length, max_length);
+      goto cleanup;
+    }
+    memcpy(out + k * (int64_t)stride, text, length + 1);
+  }
+  goto cleanup;
+too_long:
+  status = FASCIA_FAIL(r->ctx, FASCIA_ERR_FORMAT, "model '%s' %s: strings of %zu bytes are too long", r->path, name,
+                       file_size);
+  goto cleanup;
+memory:
+  status = FASCIA_FAIL(r->ctx, FASCIA_ERR_MEMORY, "model '%s' %s: out of memory", r->path, name);
+  goto cleanup;
+failed:
+  status = read_failed(r, name, "read its strings");
+cleanup:
+  if (variable) H5Dvlen_reclaim(mem_type, space, H5P_DEFAULT, variable);
+  free(variable);
+  free(fixed);
+  if (space >= 0) H5Sclose(space);
+  if (mem_type >= 0) H5Tclose(mem_type);
+  if (file_type >= 0) H5Tclose(file_type);
+  return status;
+}
+
+static fascia_status read_names(reader *r, const char *name, int64_t count, char (*out)[FASCIA_NAME_SIZE]) {
+  int64_t dims[1] = {count};
+  hid_t dset;
+  FASCIA_TRY(open_checked(r, name, ELEM_NAME, 1, dims, &dset));
+  fascia_status status = FASCIA_OK;
+  if (count > 0) status = read_strings(r, name, dset, count, out[0], FASCIA_NAME_SIZE, FASCIA_NAME_SIZE - 1);
+  H5Dclose(dset);
+  return status;
+}
+
+// Reads the optional scalar string /provenance into *out (NULL if absent).
+static fascia_status read_provenance(reader *r, char **out) {
+  *out = NULL;
+  if (!link_exists(r->file, "/provenance")) return FASCIA_OK;
+  int64_t dims[1];
+  hid_t dset;
+  FASCIA_TRY(open_checked(r, "/provenance", ELEM_NAME, 0, dims, &dset));
+  fascia_status status = FASCIA_OK;
+  hid_t type = H5Dget_type(dset), mem_type = H5Tcopy(H5T_C_S1), space = H5Dget_space(dset);
+  char *variable = NULL;
+  const htri_t is_variable = type >= 0 ? H5Tis_variable_str(type) : -1;
+  if (type < 0 || mem_type < 0 || space < 0 || is_variable < 0 || H5Tset_cset(mem_type, H5Tget_cset(type)) < 0)
+    goto failed;
+  // a variable-length string is measured after reading, a fixed one by its type
+  size_t size = 0;
+  if (is_variable) {
+    if (H5Tset_size(mem_type, H5T_VARIABLE) < 0 || H5Dread(dset, mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, &variable) < 0)
+      goto failed;
+    size = variable ? strlen(variable) : 0;
+  } else {
+    size = H5Tget_size(type);
+  }
+  if (size >= (size_t)FASCIA_MAX_COUNT || !(*out = malloc(size + 1))) {
+    status = FASCIA_FAIL(r->ctx, FASCIA_ERR_MEMORY, "model '%s' /provenance: out of memory for %zu bytes", r->path,
+                         size);
+    goto cleanup;
+  }
+  if (is_variable) {
+    memcpy(*out, variable ? variable : "", size + 1);
+  } else if (H5Tset_size(mem_type, size + 1) < 0 || H5Tset_strpad(mem_type, H5T_STR_NULLTERM) < 0 ||
+             H5Dread(dset, mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, *out) < 0) {
+    goto failed;
+  }
+  goto cleanup;
+failed:
+  status = read_failed(r, "/provenance", "read it");
+cleanup:
+  if (variable) H5Dvlen_reclaim(mem_type, space, H5P_DEFAULT, &variable);
+  if (space >= 0) H5Sclose(space);
+  if (mem_type >= 0) H5Tclose(mem_type);
+  if (type >= 0) H5Tclose(type);
+  H5Dclose(dset);
+  if (status != FASCIA_OK) {
+    free(*out);
+    *out = NULL;
+  }
+  return status;
+}
+
+// Reads integer attribute `attr` of the object at `name` (scalar or one value).
+static fascia_status read_int_attr(reader *r, const char *name, const char *attr_name, int32_t *value) {
+  const htri_t exists = H5Aexists_by_name(r->file, name, attr_name, H5P_DEFAULT);
+  FASCIA_CHECK(exists > 0, r->ctx, FASCIA_ERR_FORMAT, "model '%s' %s: attribute '%s' missing; %s", r->path, name,
+               attr_name, REMEDY);
+  hid_t attr = H5Aopen_by_name(r->file, name, attr_name, H5P_DEFAULT, H5P_DEFAULT);
+  if (attr < 0) return read_failed(r, name, "open an attribute");
+  hid_t type = H5Aget_type(attr), space = H5Aget_space(attr);
+  fascia_status status = FASCIA_OK;
+  if (type < 0 || space < 0)
+    status = read_failed(r, name, "read an attribute");
+  else if (H5Tget_class(type) != H5T_INTEGER || H5Sget_simple_extent_npoints(space) != 1)
+    status = FASCIA_FAIL(r->ctx, FASCIA_ERR_FORMAT, "model '%s' %s: attribute '%s' is not one integer (found %s); %s",
+                         r->path, name, attr_name, class_phrase(H5Tget_class(type)), REMEDY);
+  else if (H5Aread(attr, H5T_NATIVE_INT32, value) < 0)
+    status = read_failed(r, name, "read an attribute");
+  if (space >= 0) H5Sclose(space);
+  if (type >= 0) H5Tclose(type);
+  H5Aclose(attr);
+  return status;
+}
+
+static fascia_status read_version(reader *r) {
+  const htri_t exists = H5Aexists_by_name(r->file, "/", "fascia_model_version", H5P_DEFAULT);
+  FASCIA_CHECK(exists > 0, r->ctx, FASCIA_ERR_FORMAT,
+               "model '%s' /: not a fascia model file (no root attribute 'fascia_model_version'); %s", r->path, REMEDY);
+  int32_t version = 0;
+  FASCIA_TRY(read_int_attr(r, "/", "fascia_model_version", &version));
+  FASCIA_CHECK(version >= MODEL_VERSION_MIN && version <= MODEL_VERSION_MAX, r->ctx, FASCIA_ERR_FORMAT,
+               "model '%s' /: format version %d is not supported, this fascia (%s) reads versions %d to %d; %s",
+               r->path, (int)version, fascia_version(), MODEL_VERSION_MIN, MODEL_VERSION_MAX,
+               version > MODEL_VERSION_MAX ? "use a newer fascia" : REMEDY);
+  return FASCIA_OK;
+}
+
+// Number of members of group `name` (each a motion or organ).
+static fascia_status count_members(reader *r, const char *name, int64_t *count) {
+  FASCIA_CHECK(link_exists(r->file, name), r->ctx, FASCIA_ERR_FORMAT, "model '%s' %s: group missing; %s", r->path,
+               name, REMEDY);
+  hid_t group = H5Gopen2(r->file, name, H5P_DEFAULT);
+  if (group < 0) return read_failed(r, name, "open it as a group");
+  H5G_info_t info;
+  const herr_t ok = H5Gget_info(group, &info);
+  H5Gclose(group);
+  if (ok < 0) return read_failed(r, name, "list it");
+  FASCIA_CHECK(info.nlinks <= (hsize_t)FASCIA_MAX_COUNT, r->ctx, FASCIA_ERR_FORMAT,
+               "model '%s' %s: %llu members is beyond fascia's limit; the file is damaged", r->path, name,
+               (unsigned long long)info.nlinks);
+  *count = (int64_t)info.nlinks;
+  return FASCIA_OK;
+}
+
+// Name of member k of group `group` (in name order) and, from its attribute
+// `index`, its place in the model (checked to be in range; the caller checks
+// that no two members share a place).
+static fascia_status member(reader *r, const char *group, int64_t k, int32_t count, char *name, char *member_path,
+                            int32_t *index) {
+  char link[FASCIA_NAME_SIZE + 1];
+  const ssize_t length =
+      H5Lget_name_by_idx(r->file, group, H5_INDEX_NAME, H5_ITER_INC, (hsize_t)k, link, sizeof link, H5P_DEFAULT);
+  if (length < 0) return read_failed(r, group, "list it");
+  FASCIA_CHECK(length < FASCIA_NAME_SIZE, r->ctx, FASCIA_ERR_FORMAT,
+               "model '%s' %s: member %lld has a name longer than %d characters", r->path, group, (long long)k,
+               FASCIA_NAME_SIZE - 1);
+  snprintf(member_path, PATH_SIZE, "%s/%s", group, link);
+  FASCIA_TRY(read_int_attr(r, member_path, "index", index));
+  FASCIA_CHECK(*index >= 0 && *index < count, r->ctx, FASCIA_ERR_FORMAT,
+               "model '%s' %s: index %d is out of range 0..%d", r->path, member_path, (int)*index, (int)count - 1);
+  memcpy(name, link, (size_t)length + 1);
+  return FASCIA_OK;
+}
+
+static fascia_status read_sizes(reader *r, fascia_model_sizes *z) {
+  int64_t n[9];
+  FASCIA_TRY(count_rows(r, "/frames/position", ELEM_REAL, 3, &n[0]));
+  FASCIA_TRY(count_rows(r, "/samples/position", ELEM_REAL, 3, &n[1]));
+  FASCIA_TRY(count_rows(r, "/pairs/frame", ELEM_INT, 0, &n[2]));
+  FASCIA_TRY(count_rows(r, "/materials/name", ELEM_NAME, 0, &n[3]));
+  FASCIA_TRY(count_members(r, "/motions", &n[4]));
+  FASCIA_TRY(count_rows(r, "/probes/name", ELEM_NAME, 0, &n[5]));
+  FASCIA_TRY(count_rows(r, "/probes/frame", ELEM_INT, 0, &n[6]));
+  FASCIA_TRY(count_members(r, "/organs", &n[7]));
+  FASCIA_TRY(count_rows(r, "/coupling/organ", ELEM_INT, 0, &n[8]));
+  FASCIA_CHECK(n[2] <= n[1] * 1024, r->ctx, FASCIA_ERR_FORMAT,
+               "model '%s' /pairs/frame: %lld pairs for %lld samples is more than 1024 neighbours per sample; %s",
+               r->path, (long long)n[2], (long long)n[1], REMEDY);
+  // open_checked bounded every count by FASCIA_MAX_COUNT (< INT32_MAX)
+  z->frames = (int32_t)n[0];
+  z->samples = (int32_t)n[1];
+  z->pairs = (int32_t)n[2];
+  z->materials = (int32_t)n[3];
+  z->motions = (int32_t)n[4];
+  z->probes = (int32_t)n[5];
+  z->probe_pairs = (int32_t)n[6];
+  z->organs = (int32_t)n[7];
+  z->couplings = (int32_t)n[8];
+  return FASCIA_OK;
+}
+
+static fascia_status read_frames_samples(reader *r, fascia_model *m) {
+  const int64_t N = m->frame_count, S = m->sample_count, P = m->pair_count;
+  READ(r, "/frames/position", ELEM_REAL, N, 3, m->frame_position);
+  READ(r, "/frames/rotation", ELEM_REAL, N, 4, m->frame_rotation);
+  READ(r, "/frames/kind", ELEM_INT, N, 0, m->frame_kind);
+  READ(r, "/frames/motion", ELEM_INT, N, 0, m->frame_motion);
+  READ(r, "/frames/load", ELEM_REAL, N, 6, m->frame_load);
+  READ(r, "/frames/offsets", ELEM_INT, N + 1, 0, m->frame_offsets);
+  READ(r, "/frames/pairs", ELEM_INT, P, 0, m->frame_pairs);
+  READ(r, "/samples/position", ELEM_REAL, S, 3, m->sample_position);
+  READ(r, "/samples/volume", ELEM_REAL, S, 0, m->sample_volume);
+  READ(r, "/samples/material", ELEM_INT, S, 0, m->sample_material);
+  READ(r, "/samples/offsets", ELEM_INT, S + 1, 0, m->sample_offsets);
+  READ(r, "/pairs/frame", ELEM_INT, P, 0, m->pair_frame);
+  READ(r, "/pairs/weight", ELEM_REAL, P, 0, m->pair_weight);
+  READ(r, "/pairs/gradient", ELEM_REAL, P, 3, m->pair_gradient);
+  return FASCIA_OK;
+}
+
+static fascia_status read_materials(reader *r, fascia_model *m) {
+  const int64_t M = m->material_count;
+  fascia_status status = FASCIA_OK;
+  char(*names)[FASCIA_NAME_SIZE] = fascia_calloc(M, FASCIA_NAME_SIZE);
+  int32_t *law = fascia_calloc(M, sizeof *law);
+  fascia_real *values = fascia_calloc(5 * M, sizeof *values);
+  if (!names || !law || !values) {
+    status = FASCIA_FAIL(r->ctx, FASCIA_ERR_MEMORY, "model '%s' /materials: out of memory", r->path);
+    goto cleanup;
+  }
+  FASCIA_TRY_GOTO(read_names(r, "/materials/name", M, names));
+  FASCIA_TRY_GOTO(read_numbers(r, "/materials/law", ELEM_INT, M, 0, law));
+  FASCIA_TRY_GOTO(read_numbers(r, "/materials/youngs_modulus", ELEM_REAL, M, 0, values));
+  FASCIA_TRY_GOTO(read_numbers(r, "/materials/poisson_ratio", ELEM_REAL, M, 0, values + M));
+  FASCIA_TRY_GOTO(read_numbers(r, "/materials/density", ELEM_REAL, M, 0, values + 2 * M));
+  FASCIA_TRY_GOTO(read_numbers(r, "/materials/rotation_coupling", ELEM_REAL, M, 0, values + 3 * M));
+  FASCIA_TRY_GOTO(read_numbers(r, "/materials/rotation_smoothing", ELEM_REAL, M, 0, values + 4 * M));
+  for (int64_t k = 0; k < M; ++k) {
+    fascia_material *mat = m->materials + k;
+    memcpy(mat->name, names[k], FASCIA_NAME_SIZE);
+    mat->law = law[k];
+    mat->youngs_modulus = values[k];
+    mat->poisson_ratio = values[M + k];
+    mat->density = values[2 * M + k];
+    mat->rotation_coupling = values[3 * M + k];
+    mat->rotation_smoothing = values[4 * M + k];
+  }
+cleanup:
+  free(names);
+  free(law);
+  free(values);
+  return status;
+}
+
+static fascia_status read_motions(reader *r, fascia_model *m) {
+  char group[PATH_SIZE], name[PATH_SIZE + 16];
+  for (int64_t k = 0; k < m->motion_count; ++k) {
+    int32_t index;
+    char scratch[FASCIA_NAME_SIZE] = {0};
+    FASCIA_TRY(member(r, "/motions", k, m->motion_count, scratch, group, &index));
+    fascia_motion *mo = m->motions + index;
+    FASCIA_CHECK(!mo->name[0], r->ctx, FASCIA_ERR_FORMAT, "model '%s' %s: index %d is also used by '%s'", r->path,
+                 group, (int)index, mo->name);
+    memcpy(mo->name, scratch, FASCIA_NAME_SIZE);
+    int64_t K;
+    snprintf(name, sizeof name, "%s/time", group);
+    FASCIA_TRY(count_rows(r, name, ELEM_REAL, 0, &K));
+    FASCIA_CHECK(K >= 1, r->ctx, FASCIA_ERR_FORMAT, "model '%s' %s: no keyframe, expected at least one; %s", r->path,
+                 name, REMEDY);
+    FASCIA_TRY(fascia_motion_alloc(r->ctx, mo, (int32_t)K));
+    READ(r, name, ELEM_REAL, K, 0, mo->key_time);
+    snprintf(name, sizeof name, "%s/pivot", group);
+    READ(r, name, ELEM_REAL, 3, 0, mo->pivot);
+    snprintf(name, sizeof name, "%s/translation", group);
+    READ(r, name, ELEM_REAL, K, 3, mo->key_translation);
+    snprintf(name, sizeof name, "%s/rotation", group);
+    READ(r, name, ELEM_REAL, K, 4, mo->key_rotation);
+  }
+  return FASCIA_OK;
+}
+
+static fascia_status read_organs(reader *r, fascia_model *m) {
+  char group[PATH_SIZE], name[PATH_SIZE + 16];
+  for (int64_t k = 0; k < m->organ_count; ++k) {
+    int32_t index;
+    char scratch[FASCIA_NAME_SIZE] = {0};
+    FASCIA_TRY(member(r, "/organs", k, m->organ_count, scratch, group, &index));
+    fascia_organ *o = m->organs + index;
+    FASCIA_CHECK(!o->name[0], r->ctx, FASCIA_ERR_FORMAT, "model '%s' %s: index %d is also used by '%s'", r->path,
+                 group, (int)index, o->name);
+    memcpy(o->name, scratch, FASCIA_NAME_SIZE);
+    FASCIA_TRY(read_int_attr(r, group, "kind", &o->kind));
+    FASCIA_TRY(read_int_attr(r, group, "motion", &o->motion));
+    int64_t V, T;
+    char triangles[PATH_SIZE + 16];
+    snprintf(name, sizeof name, "%s/vertices", group);
+    snprintf(triangles, sizeof triangles, "%s/triangles", group);
+    FASCIA_TRY(count_rows(r, name, ELEM_REAL, 3, &V));
+    FASCIA_TRY(count_rows(r, triangles, ELEM_INT, 3, &T));
+    FASCIA_TRY(fascia_organ_alloc(r->ctx, o, (int32_t)V, (int32_t)T));
+    READ(r, name, ELEM_REAL, V, 3, o->vertices);
+    READ(r, triangles, ELEM_INT, T, 3, o->triangles);
+  }
+  return FASCIA_OK;
+}
+
+static fascia_status read_rest(reader *r, fascia_model *m) {
+  const int64_t Q = m->probe_count, R = m->probe_pair_count, C = m->coupling_count;
+  FASCIA_TRY(read_names(r, "/probes/name", Q, m->probe_name));
+  READ(r, "/probes/position", ELEM_REAL, Q, 3, m->probe_position);
+  READ(r, "/probes/offsets", ELEM_INT, Q + 1, 0, m->probe_offsets);
+  READ(r, "/probes/frame", ELEM_INT, R, 0, m->probe_frame);
+  READ(r, "/probes/weight", ELEM_REAL, R, 0, m->probe_weight);
+  READ(r, "/coupling/organ", ELEM_INT, C, 0, m->coupling_organ);
+  READ(r, "/coupling/frame", ELEM_INT, C, 0, m->coupling_frame);
+  READ(r, "/coupling/triangle", ELEM_INT, C, 0, m->coupling_triangle);
+  READ(r, "/coupling/barycentric", ELEM_REAL, C, 3, m->coupling_barycentric);
+  READ(r, "/gravity", ELEM_REAL, 3, 0, m->gravity);
+  return read_provenance(r, &m->provenance);
+}
+
+// Opens path read-only; a missing, unreadable or non-HDF5 file is FASCIA_ERR_IO.
+static fascia_status open_file(reader *r) {
+  FILE *probe = fopen(r->path, "rb");
+  if (!probe) {
+    const int err = errno;
+    return FASCIA_FAIL(r->ctx, FASCIA_ERR_IO, "model '%s': cannot open: %s", r->path, strerror(err));
+  }
+  fclose(probe);
+  char detail[600];
+  const htri_t is_hdf5 = H5Fis_hdf5(r->path);
+  FASCIA_CHECK(is_hdf5 > 0, r->ctx, FASCIA_ERR_IO,
+               "model '%s': not an HDF5 file (%s); expected a model written by 'fascia prep' or 'fascia beam'",
+               r->path, is_hdf5 < 0 ? fascia_h5_error(detail, sizeof detail) : "no HDF5 signature");
+  // strong close: closing the file also closes anything an error path left open
+  hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+  if (fapl >= 0) H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG);
+  r->file = H5Fopen(r->path, H5F_ACC_RDONLY, fapl >= 0 ? fapl : H5P_DEFAULT);
+  if (r->file < 0) fascia_h5_error(detail, sizeof detail);
+  if (fapl >= 0) H5Pclose(fapl);
+  FASCIA_CHECK(r->file >= 0, r->ctx, FASCIA_ERR_IO, "model '%s': cannot open as HDF5 (%s); the file is damaged or truncated",
+               r->path, detail);
+  return FASCIA_OK;
+}
+
+fascia_status fascia_model_load(fascia_ctx *ctx, const char *path, fascia_model **out) {
+  FASCIA_CHECK(out && path, ctx, FASCIA_ERR_ARGUMENT, "fascia_model_load: NULL argument");
+  *out = NULL;
+  fascia_h5_quiet quiet;
+  fascia_h5_quiet_begin(&quiet);
+  reader r = {ctx, path, H5I_INVALID_HID};
+  fascia_model *m = NULL;
+  fascia_model_sizes sizes;
+  fascia_status status = FASCIA_OK;
+  FASCIA_TRY_GOTO(open_file(&r));
+  FASCIA_TRY_GOTO(read_version(&r));
+  FASCIA_TRY_GOTO(read_sizes(&r, &sizes));
+  FASCIA_TRY_GOTO(fascia_model_alloc(ctx, &sizes, &m));
+  FASCIA_TRY_GOTO(read_frames_samples(&r, m));
+  FASCIA_TRY_GOTO(read_materials(&r, m));
+  FASCIA_TRY_GOTO(read_motions(&r, m));
+  FASCIA_TRY_GOTO(read_organs(&r, m));
+  FASCIA_TRY_GOTO(read_rest(&r, m));
+cleanup:
+  if (r.file >= 0) H5Fclose(r.file);
+  fascia_h5_quiet_end(&quiet);
+  // index and value checks name the file through `path`
+  if (status == FASCIA_OK) status = fascia_model_validate(ctx, m, path);
+  if (status == FASCIA_OK)
+    *out = m;
+  else
+    fascia_model_destroy(&m);
+  return status;
+}

@@ -1,0 +1,250 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// Newton minimization of a step's objective over the free DOFs, the solver's
+// one nonlinear loop (DESIGN.md "implicit (backward) Euler with Newton
+// iterations"; the static solve is the same loop without inertia).
+//
+//   static:  Phi(d) = E(q (+) d), re-anchored at every accepted iterate, so
+//            the Hessian used is exact.
+//   dynamic: Phi(d) = c1/2 |d - h u|_M^2 + c2/2 |d|_M^2 + E(q_n (+) d),
+//            c1 = 1/h^2, c2 = alpha/h (Rayleigh mass damping): its minimizer
+//            is the backward Euler step; d is anchored at q_n and the
+//            gradient carries the exact left Jacobian of the rotation map.
+//
+// Globalization: each direction comes from projected PCG that stops at
+// negative curvature; a backtracking (Armijo) line search on Phi accepts it,
+// and when even tiny steps fail, a Levenberg shift of the tangent grows
+// (damped Newton). This is what lets the solver cross the singular or
+// indefinite tangents of the frame scheme (zero-energy rotation modes,
+// buckling, compressed StVK).
+#include <string.h>
+#include <time.h>
+
+#include "solver_internal.h"
+
+#define ARMIJO 1e-4        // sufficient decrease of the line search
+#define MAX_CUTS 30        // step halvings before the Levenberg shift grows
+#define MAX_SHIFT 1e12     // relative Levenberg shift beyond which we give up
+
+double fascia_now_ms(void) {
+  struct timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return 1e3 * (double)t.tv_sec + 1e-6 * (double)t.tv_nsec;
+}
+
+// J_l(phi)^T g: left Jacobian of the exponential map, transposed.
+static void left_jacobian_t(const fascia_real *phi, const fascia_real *g, fascia_real *out) {
+  const fascia_real t2 = fascia_pt_dot3(phi, phi), t = sqrt(t2);
+  fascia_real a, b;
+  if (t < 1e-4) { // series: exact to rounding for small angles
+    a = FASCIA_R(0.5) - t2 / 24;
+    b = FASCIA_R(1.0) / 6 - t2 / 120;
+  } else {
+    a = (1 - cos(t)) / t2;
+    b = (t - sin(t)) / (t2 * t);
+  }
+  fascia_real pg[3], ppg[3];
+  fascia_pt_cross(phi, g, pg);
+  fascia_pt_cross(phi, pg, ppg);
+  for (int c = 0; c < 3; ++c) out[c] = g[c] - a * pg[c] + b * ppg[c];
+}
+
+static void mass_apply(fascia_solver *S, const fascia_real *v, fascia_real *out) {
+  if (S->def.mass == FASCIA_MASS_LUMPED) {
+    for (int32_t i = 0; i < S->frame_count; ++i) {
+      const fascia_real *B = S->mass_blocks + 36 * (int64_t)i, *vi = v + 6 * (int64_t)i;
+      for (int r = 0; r < 6; ++r) {
+        fascia_real s = 0;
+        for (int c = 0; c < 6; ++c) s += B[6 * r + c] * vi[c];
+        out[6 * (int64_t)i + r] = s;
+      }
+    }
+  } else {
+    fascia_system_mass_apply(S->sys, v, out);
+  }
+}
+
+typedef struct step_terms {
+  fascia_real c1, c2;      // inertia and damping coefficients
+  fascia_real *target_M;   // M (h u) [6N]
+  fascia_real target_norm; // (h u).M(h u)
+  int jacobian;            // 1: gradient with respect to d (anchored); 0: local (static, re-anchored)
+} step_terms;
+
+// Phi and its projected gradient (may be NULL) at increments d.
+static fascia_status objective(fascia_solver *S, const step_terms *terms, const fascia_real *d, fascia_real *phi,
+                               fascia_real *gradient) {
+  const int32_t N = S->frame_count;
+  const int64_t n = 6 * (int64_t)N;
+  for (int32_t i = 0; i < N; ++i) {
+    for (int c = 0; c < 3; ++c) S->x[3 * i + c] = S->x_base[3 * i + c] + d[6 * i + c];
+    memcpy(S->q + 4 * i, S->q_base + 4 * i, 4 * sizeof(fascia_real));
+    fascia_pt_quat_rotate_by(d + 6 * i + 3, S->q + 4 * i);
+  }
+  fascia_system_set_state(S->sys, S->x, S->q);
+  fascia_real energy;
+  FASCIA_TRY(fascia_system_evaluate(S->sys, gradient, &energy));
+  if (gradient && terms->jacobian)
+    for (int32_t i = 0; i < N; ++i) {
+      fascia_real g[3] = {gradient[6 * i + 3], gradient[6 * i + 4], gradient[6 * i + 5]};
+      left_jacobian_t(d + 6 * i + 3, g, gradient + 6 * i + 3);
+    }
+  if (terms->c1 != 0 || terms->c2 != 0) {
+    // c1/2 (d - hu).M(d - hu) + c2/2 d.M d with M(hu) precomputed
+    mass_apply(S, d, S->scratch);
+    const fascia_real dMd = fascia_dot(d, S->scratch, n), dz = fascia_dot(d, terms->target_M, n);
+    energy += FASCIA_R(0.5) * terms->c1 * (dMd - 2 * dz + terms->target_norm) + FASCIA_R(0.5) * terms->c2 * dMd;
+    if (gradient)
+      for (int64_t k = 0; k < n; ++k)
+        gradient[k] += (terms->c1 + terms->c2) * S->scratch[k] - terms->c1 * terms->target_M[k];
+  }
+  if (gradient)
+    for (int64_t k = 0; k < n; ++k)
+      if (!S->mask[k]) gradient[k] = 0;
+  *phi = energy;
+  return isfinite(energy) ? FASCIA_OK
+                          : FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC, "solver: the energy is not finite");
+}
+
+// |external load| over free DOFs: the scale of the Newton tolerance
+static fascia_real load_norm(const fascia_solver *S) {
+  const fascia_system *sys = S->sys;
+  fascia_real sum = 0;
+  for (int32_t i = 0; i < S->frame_count; ++i)
+    for (int c = 0; c < 3; ++c) {
+      const fascia_real f = sys->gravity_scale * (sys->frame_mass[i] * sys->gravity[c] + S->model->frame_load[6 * i + c]);
+      if (S->mask[6 * i + c]) sum += f * f;
+      const fascia_real t = sys->gravity_scale * S->model->frame_load[6 * i + 3 + c];
+      if (S->mask[6 * i + 3 + c]) sum += t * t;
+    }
+  return sqrt(sum);
+}
+
+fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iterations, fascia_solve_report *rep) {
+  const int32_t N = S->frame_count;
+  const int64_t n = 6 * (int64_t)N;
+  const fascia_solver_def *def = &S->def;
+  step_terms terms = {0, 0, S->work, 0, dynamic};
+  double t0 = fascia_now_ms(), t;
+  if (dynamic) {
+    const fascia_real h = def->time_step;
+    terms.c1 = 1 / (h * h);
+    terms.c2 = def->mass_damping / h;
+    terms.target_M = S->inertia_target + n; // second half of the buffer holds M(hu)
+    mass_apply(S, S->inertia_target, terms.target_M);
+    terms.target_norm = fascia_dot(S->inertia_target, terms.target_M, n);
+  }
+  fascia_operator op = {S->sys, terms.c1 + terms.c2, def->mass, S->mass_blocks, S->damping_diagonal, 0, 1,
+                        S->mask, S->scratch + n};
+  fascia_real phi, *g = S->gradient, *p = S->direction, *g_trial = S->rhs;
+  t = fascia_now_ms();
+  FASCIA_TRY(objective(S, &terms, S->d, &phi, g));
+  rep->profile.evaluate_ms += fascia_now_ms() - t;
+  const fascia_real g0 = sqrt(fascia_dot(g, g, n));
+  fascia_real reference = load_norm(S);
+  if (dynamic || reference == 0) reference = reference > g0 ? reference : g0;
+  if (reference == 0) reference = 1;
+  rep->reference_norm = reference;
+  int iteration = 0, converged = 0;
+  fascia_real gnorm = g0;
+  for (; iteration <= max_iterations; ++iteration) {
+    gnorm = sqrt(fascia_dot(g, g, n));
+    if (gnorm <= def->newton_tolerance * reference) {
+      converged = 1;
+      break;
+    }
+    if (iteration == max_iterations) break;
+    // preconditioner and Levenberg scale from the diagonal blocks
+    t = fascia_now_ms();
+    if (def->mass == FASCIA_MASS_LUMPED || dynamic) fascia_system_mass_lumped(S->sys, S->mass_blocks);
+    fascia_precond_build(&S->pc, &op, S->blocks);
+    fascia_real scale = 0;
+    for (int32_t i = 0; i < N; ++i)
+      for (int c = 0; c < 6; ++c) {
+        const fascia_real diag = fabs(S->blocks[36 * (int64_t)i + 7 * c]);
+        S->damping_diagonal[6 * (int64_t)i + c] = diag;
+        scale += diag;
+      }
+    op.scale = scale > 0 ? scale / (fascia_real)n : 1;
+    for (int64_t k = 0; k < n; ++k)
+      if (S->damping_diagonal[k] < 1e-8 * op.scale) S->damping_diagonal[k] = 1e-8 * op.scale;
+    rep->profile.precond_ms += fascia_now_ms() - t;
+    int accepted = 0;
+    fascia_real phi_trial = phi;
+    while (!accepted) {
+      // direction: A p = -g
+      t = fascia_now_ms();
+      for (int64_t k = 0; k < n; ++k) g_trial[k] = -g[k];
+      const fascia_cg_result cg = fascia_cg_solve(&op, &S->pc, g_trial, p, def->cg_iterations, def->cg_fixed,
+                                                  def->cg_tolerance, S->work + 2 * n);
+      rep->profile.cg_ms += fascia_now_ms() - t;
+      rep->cg_iterations += cg.iterations;
+      rep->negative_curvature += cg.negative_curvature;
+      fascia_real slope = fascia_dot(p, g, n);
+      if (!(slope < 0)) { // not a descent direction: preconditioned gradient
+        fascia_precond_apply(&S->pc, S->mask, g, p);
+        for (int64_t k = 0; k < n; ++k) p[k] = -p[k];
+        slope = fascia_dot(p, g, n);
+      }
+      // backtracking line search on Phi
+      fascia_real alpha = 1;
+      for (int cut = 0; cut <= (def->line_search ? MAX_CUTS : 0); ++cut) {
+        for (int64_t k = 0; k < n; ++k) S->d_trial[k] = S->d[k] + alpha * p[k];
+        t = fascia_now_ms();
+        fascia_status st = objective(S, &terms, S->d_trial, &phi_trial, g_trial);
+        rep->profile.evaluate_ms += fascia_now_ms() - t;
+        // near the minimum the energy decrease drowns in round-off: there a
+        // step that lowers the gradient is accepted instead
+        const fascia_real roundoff = 1e-13 * (fabs(phi) + fabs(S->sys->energy_internal) + fabs(S->sys->energy_external));
+        if (st == FASCIA_OK &&
+            (!def->line_search || phi_trial <= phi + ARMIJO * alpha * slope ||
+             (phi_trial <= phi + roundoff && fascia_dot(g_trial, g_trial, n) < gnorm * gnorm))) {
+          accepted = 1;
+          break;
+        }
+        if (st != FASCIA_OK && st != FASCIA_ERR_NUMERIC) return st;
+        ++rep->line_search_cuts;
+        alpha *= FASCIA_R(0.5);
+      }
+      if (!accepted) {
+        // even tiny steps fail: damp the tangent (Levenberg) and try again
+        op.shift = op.shift == 0 ? FASCIA_R(1e-4) : 10 * op.shift;
+        if (op.shift > MAX_SHIFT) {
+          fascia_real restore;
+          (void)objective(S, &terms, S->d, &restore, NULL);
+          rep->newton_iterations = iteration;
+          rep->gradient_norm = gnorm;
+          rep->energy = phi;
+          return FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
+                             "solver: Newton iteration %d found no decrease of the energy (|gradient| %.3g, "
+                             "tolerance %.3g); the model may be unstable or the time step too large",
+                             iteration, gnorm, def->newton_tolerance * reference);
+        }
+        t = fascia_now_ms();
+        FASCIA_TRY(objective(S, &terms, S->d, &phi, g)); // restores the cache of the current iterate
+        rep->profile.evaluate_ms += fascia_now_ms() - t;
+        fascia_precond_build(&S->pc, &op, S->blocks);
+        continue;
+      }
+      if (alpha == 1 && op.shift > 0) op.shift = op.shift < FASCIA_R(1e-3) ? 0 : op.shift / 10;
+    }
+    memcpy(g, g_trial, (size_t)n * sizeof(fascia_real));
+    phi = phi_trial;
+    if (dynamic) {
+      memcpy(S->d, S->d_trial, (size_t)n * sizeof(fascia_real));
+    } else {
+      // static: re-anchor at the accepted state, so d = 0 and the Hessian
+      // of the next iteration is exact (no Jacobian of the rotation map)
+      memcpy(S->x_base, S->x, 3 * (size_t)N * sizeof(fascia_real));
+      memcpy(S->q_base, S->q, 4 * (size_t)N * sizeof(fascia_real));
+      memset(S->d, 0, (size_t)n * sizeof(fascia_real));
+    }
+  }
+  rep->converged = converged;
+  rep->newton_iterations += iteration;
+  rep->gradient_norm = gnorm;
+  rep->energy = phi;
+  rep->inverted_samples = S->sys->inverted_count;
+  rep->profile.total_ms += fascia_now_ms() - t0;
+  return FASCIA_OK;
+}

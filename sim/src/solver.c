@@ -1,0 +1,301 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// The public solver: checks settings, holds the state (positions, rotations,
+// velocities, time), sets prescribed and fixed frames, and runs the static
+// solve and implicit Euler steps through newton.c.
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "solver_internal.h"
+
+fascia_solver_def fascia_solver_def_default(void) {
+  fascia_solver_def d;
+  memset(&d, 0, sizeof d);
+  d.backend = "auto";
+  d.time_step = FASCIA_R(0.01);
+  d.newton_iterations = 20;
+  d.newton_tolerance = FASCIA_R(1e-6);
+  d.cg_iterations = 200;
+  d.cg_tolerance = FASCIA_R(1e-3);
+  d.precond = FASCIA_PRECOND_BLOCK_JACOBI;
+  d.mass = FASCIA_MASS_CONSISTENT;
+  d.line_search = 1;
+  d.load_steps = 1;
+  d.cookie_ = FASCIA_DEF_COOKIE;
+  return d;
+}
+
+static fascia_status check_def(fascia_ctx *ctx, const fascia_solver_def *d) {
+  FASCIA_CHECK(d->cookie_ == FASCIA_DEF_COOKIE, ctx, FASCIA_ERR_ARGUMENT,
+               "solver: the settings were not made by fascia_solver_def_default()");
+  FASCIA_CHECK(isfinite(d->time_step) && d->time_step > 0, ctx, FASCIA_ERR_ARGUMENT,
+               "solver: time step %g s is impossible; give a positive number of seconds", d->time_step);
+  FASCIA_CHECK(d->newton_iterations >= 1 && d->newton_iterations <= 100000, ctx, FASCIA_ERR_ARGUMENT,
+               "solver: %d Newton iterations; give 1 to 100000", d->newton_iterations);
+  FASCIA_CHECK(isfinite(d->newton_tolerance) && d->newton_tolerance >= 0, ctx, FASCIA_ERR_ARGUMENT,
+               "solver: Newton tolerance %g must be >= 0", d->newton_tolerance);
+  FASCIA_CHECK(d->cg_iterations >= 1 && d->cg_iterations <= 10000000, ctx, FASCIA_ERR_ARGUMENT,
+               "solver: %d CG iterations; give at least 1", d->cg_iterations);
+  FASCIA_CHECK(isfinite(d->cg_tolerance) && d->cg_tolerance >= 0 && d->cg_tolerance < 1, ctx, FASCIA_ERR_ARGUMENT,
+               "solver: CG tolerance %g must be in [0, 1)", d->cg_tolerance);
+  FASCIA_CHECK(d->precond >= FASCIA_PRECOND_NONE && d->precond <= FASCIA_PRECOND_BLOCK_JACOBI, ctx,
+               FASCIA_ERR_ARGUMENT, "solver: unknown preconditioner %d", (int)d->precond);
+  FASCIA_CHECK(d->mass == FASCIA_MASS_CONSISTENT || d->mass == FASCIA_MASS_LUMPED, ctx, FASCIA_ERR_ARGUMENT,
+               "solver: unknown mass kind %d", (int)d->mass);
+  FASCIA_CHECK(isfinite(d->mass_damping) && d->mass_damping >= 0, ctx, FASCIA_ERR_ARGUMENT,
+               "solver: mass damping %g 1/s must be >= 0", d->mass_damping);
+  FASCIA_CHECK(d->load_steps >= 1 && d->load_steps <= 100000, ctx, FASCIA_ERR_ARGUMENT,
+               "solver: %d load steps; give at least 1", d->load_steps);
+  FASCIA_CHECK(d->threads >= 0, ctx, FASCIA_ERR_ARGUMENT, "solver: %d threads", d->threads);
+  return FASCIA_OK;
+}
+
+// The backends this build has, fastest first. The CUDA backend registers
+// itself here when it is built (cuda/).
+static fascia_status pick_backend(fascia_ctx *ctx, const char *name, char *chosen) {
+  if (!name || !strcmp(name, "auto") || !strcmp(name, "cpu")) {
+    strcpy(chosen, "cpu");
+    return FASCIA_OK;
+  }
+  if (!strcmp(name, "cuda"))
+    return FASCIA_FAIL(ctx, FASCIA_ERR_UNSUPPORTED,
+                       "backend 'cuda' is not available in this build; use --backend cpu (or auto)");
+  return FASCIA_FAIL(ctx, FASCIA_ERR_ARGUMENT, "unknown backend '%s'; valid: auto, cpu, cuda", name);
+}
+
+fascia_status fascia_solver_create(fascia_ctx *ctx, const fascia_model *model, const fascia_solver_def *def,
+                                   fascia_solver **out) {
+  FASCIA_CHECK(out && model && def, ctx, FASCIA_ERR_ARGUMENT, "fascia_solver_create: NULL argument");
+  *out = NULL;
+  FASCIA_TRY(check_def(ctx, def));
+  fascia_solver *S = calloc(1, sizeof *S);
+  FASCIA_CHECK(S, ctx, FASCIA_ERR_MEMORY, "solver: out of memory");
+  fascia_status status = FASCIA_OK;
+  S->ctx = ctx;
+  S->model = model;
+  S->def = *def;
+  S->frame_count = model->frame_count;
+  FASCIA_TRY_GOTO(pick_backend(ctx, def->backend, S->backend_name));
+  FASCIA_TRY_GOTO(fascia_system_create(ctx, model, def->threads > 0 ? def->threads : fascia_ctx_threads(ctx), &S->sys));
+  const int64_t N = model->frame_count, n = 6 * N;
+  S->x = fascia_calloc(3 * N, sizeof(fascia_real));
+  S->q = fascia_calloc(4 * N, sizeof(fascia_real));
+  S->u = fascia_calloc(n, sizeof(fascia_real));
+  S->mask = fascia_calloc(n, 1);
+  S->x_base = fascia_calloc(3 * N, sizeof(fascia_real));
+  S->q_base = fascia_calloc(4 * N, sizeof(fascia_real));
+  S->d = fascia_calloc(n, sizeof(fascia_real));
+  S->d_trial = fascia_calloc(n, sizeof(fascia_real));
+  S->inertia_target = fascia_calloc(2 * n, sizeof(fascia_real));
+  S->gradient = fascia_calloc(n, sizeof(fascia_real));
+  S->direction = fascia_calloc(n, sizeof(fascia_real));
+  S->rhs = fascia_calloc(n, sizeof(fascia_real));
+  S->work = fascia_calloc(6 * n, sizeof(fascia_real));
+  S->blocks = fascia_calloc(36 * N, sizeof(fascia_real));
+  S->mass_blocks = fascia_calloc(36 * N, sizeof(fascia_real));
+  S->damping_diagonal = fascia_calloc(n, sizeof(fascia_real));
+  S->scratch = fascia_calloc(2 * n, sizeof(fascia_real));
+  S->pc.kind = def->precond;
+  S->pc.frame_count = model->frame_count;
+  S->pc.inverse = fascia_calloc(36 * N, sizeof(fascia_real));
+  if (!S->x || !S->q || !S->u || !S->mask || !S->x_base || !S->q_base || !S->d || !S->d_trial ||
+      !S->inertia_target || !S->gradient || !S->direction || !S->rhs || !S->work || !S->blocks || !S->mass_blocks ||
+      !S->damping_diagonal || !S->scratch || !S->pc.inverse) {
+    status = FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "solver: out of memory for %lld frames", (long long)N);
+    goto cleanup;
+  }
+  memcpy(S->x, model->frame_position, 3 * (size_t)N * sizeof(fascia_real));
+  memcpy(S->q, model->frame_rotation, 4 * (size_t)N * sizeof(fascia_real));
+  for (int64_t i = 0; i < N; ++i)
+    for (int c = 0; c < 6; ++c) S->mask[6 * i + c] = model->frame_kind[i] == FASCIA_FRAME_FREE;
+  *out = S;
+  return FASCIA_OK;
+cleanup:
+  fascia_solver_destroy(&S);
+  return status;
+}
+
+void fascia_solver_destroy(fascia_solver **solver) {
+  if (!solver || !*solver) return;
+  fascia_solver *S = *solver;
+  fascia_system_destroy(&S->sys);
+  free(S->x), free(S->q), free(S->u), free(S->mask), free(S->x_base), free(S->q_base), free(S->d);
+  free(S->d_trial), free(S->inertia_target), free(S->gradient), free(S->direction), free(S->rhs), free(S->work);
+  free(S->blocks), free(S->mass_blocks), free(S->damping_diagonal), free(S->scratch), free(S->pc.inverse);
+  free(S);
+  *solver = NULL;
+}
+
+// Puts prescribed frames where their motion says at time t (fixed frames
+// never move: their DOFs are masked).
+static void place_prescribed(fascia_solver *S, fascia_real t) {
+  const fascia_model *m = S->model;
+  for (int32_t i = 0; i < S->frame_count; ++i)
+    if (m->frame_kind[i] == FASCIA_FRAME_PRESCRIBED) fascia_motion_frame(m, i, t, S->x + 3 * i, S->q + 4 * i);
+}
+
+static fascia_status save_state(fascia_solver *S, fascia_real **backup) {
+  const size_t N = (size_t)S->frame_count;
+  *backup = malloc((3 + 4 + 6) * N * sizeof(fascia_real));
+  FASCIA_CHECK(*backup, S->ctx, FASCIA_ERR_MEMORY, "solver: out of memory");
+  memcpy(*backup, S->x, 3 * N * sizeof(fascia_real));
+  memcpy(*backup + 3 * N, S->q, 4 * N * sizeof(fascia_real));
+  memcpy(*backup + 7 * N, S->u, 6 * N * sizeof(fascia_real));
+  return FASCIA_OK;
+}
+
+static void restore_state(fascia_solver *S, fascia_real *backup) {
+  const size_t N = (size_t)S->frame_count;
+  memcpy(S->x, backup, 3 * N * sizeof(fascia_real));
+  memcpy(S->q, backup + 3 * N, 4 * N * sizeof(fascia_real));
+  memcpy(S->u, backup + 7 * N, 6 * N * sizeof(fascia_real));
+  fascia_system_set_state(S->sys, S->x, S->q);
+}
+
+fascia_status fascia_solver_solve_static(fascia_solver *S, fascia_solve_report *report) {
+  FASCIA_CHECK(S, NULL, FASCIA_ERR_ARGUMENT, "NULL solver");
+  fascia_solve_report local;
+  if (!report) report = &local;
+  memset(report, 0, sizeof *report);
+  const int32_t N = S->frame_count;
+  place_prescribed(S, S->time);
+  fascia_status status = FASCIA_OK;
+  const int steps = S->def.load_steps;
+  for (int l = 1; l <= steps && status == FASCIA_OK; ++l) {
+    S->sys->gravity_scale = (fascia_real)l / steps;
+    memcpy(S->x_base, S->x, 3 * (size_t)N * sizeof(fascia_real));
+    memcpy(S->q_base, S->q, 4 * (size_t)N * sizeof(fascia_real));
+    memset(S->d, 0, 6 * (size_t)N * sizeof(fascia_real));
+    char detail[96];
+    snprintf(detail, sizeof detail, "load step %d of %d", l, steps);
+    fascia_ctx_progress(S->ctx, "static solve", (double)(l - 1) / steps, detail);
+    status = fascia_newton_minimize(S, 0, S->def.newton_iterations, report);
+  }
+  S->sys->gravity_scale = 1;
+  memset(S->u, 0, 6 * (size_t)N * sizeof(fascia_real));
+  if (status != FASCIA_OK) return status;
+  fascia_ctx_progress(S->ctx, "static solve", 1.0, report->converged ? "converged" : "not converged");
+  if (!report->converged)
+    return FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
+                       "static solve: not converged after %d Newton iterations (|gradient| %.3g, load %.3g, "
+                       "tolerance %.3g relative); raise the iteration limit or use more load steps",
+                       report->newton_iterations, report->gradient_norm, report->reference_norm,
+                       S->def.newton_tolerance);
+  return FASCIA_OK;
+}
+
+fascia_status fascia_solver_step(fascia_solver *S, fascia_solve_report *report) {
+  FASCIA_CHECK(S, NULL, FASCIA_ERR_ARGUMENT, "NULL solver");
+  fascia_solve_report local;
+  if (!report) report = &local;
+  memset(report, 0, sizeof *report);
+  const int32_t N = S->frame_count;
+  const int64_t n = 6 * (int64_t)N;
+  const fascia_real h = S->def.time_step, t1 = S->time + h;
+  fascia_real *backup = NULL;
+  FASCIA_TRY(save_state(S, &backup));
+  // anchor at q_n, mass at q_n
+  memcpy(S->x_base, S->x, 3 * (size_t)N * sizeof(fascia_real));
+  memcpy(S->q_base, S->q, 4 * (size_t)N * sizeof(fascia_real));
+  fascia_system_set_state(S->sys, S->x, S->q);
+  fascia_system_mass_snapshot(S->sys);
+  fascia_system_mass_lumped(S->sys, S->mass_blocks);
+  // initial increments: the explicit prediction h u for free frames, the
+  // motion for prescribed ones, nothing for fixed ones
+  const fascia_model *m = S->model;
+  for (int32_t i = 0; i < N; ++i) {
+    fascia_real *d = S->d + 6 * i, *target = S->inertia_target + 6 * i;
+    for (int c = 0; c < 6; ++c) target[c] = d[c] = m->frame_kind[i] == FASCIA_FRAME_FREE ? h * S->u[6 * i + c] : 0;
+    if (m->frame_kind[i] == FASCIA_FRAME_PRESCRIBED) {
+      fascia_real x1[3], q1[4], qc[4], rel[4];
+      fascia_motion_frame(m, i, t1, x1, q1);
+      for (int c = 0; c < 3; ++c) d[c] = x1[c] - S->x_base[3 * i + c];
+      const fascia_real *qb = S->q_base + 4 * i;
+      qc[0] = qb[0], qc[1] = -qb[1], qc[2] = -qb[2], qc[3] = -qb[3];
+      fascia_pt_quat_mul(q1, qc, rel);
+      fascia_pt_quat_log(rel, d + 3);
+    }
+  }
+  fascia_status status = fascia_newton_minimize(S, 1, S->def.newton_iterations, report);
+  if (status != FASCIA_OK) {
+    restore_state(S, backup);
+    free(backup);
+    return status;
+  }
+  free(backup);
+  for (int64_t k = 0; k < n; ++k) S->u[k] = S->d[k] / h;
+  S->time = t1;
+  return FASCIA_OK;
+}
+
+fascia_real fascia_solver_time(const fascia_solver *S) { return S->time; }
+const char *fascia_solver_backend(const fascia_solver *S) { return S->backend_name; }
+const fascia_real *fascia_solver_frame_positions(const fascia_solver *S) { return S->x; }
+const fascia_real *fascia_solver_frame_rotations(const fascia_solver *S) { return S->q; }
+const fascia_real *fascia_solver_frame_velocities(const fascia_solver *S) { return S->u; }
+
+fascia_status fascia_solver_set_state(fascia_solver *S, const fascia_real *x, const fascia_real *q,
+                                      const fascia_real *u) {
+  FASCIA_CHECK(S && x && q, S ? S->ctx : NULL, FASCIA_ERR_ARGUMENT, "fascia_solver_set_state: NULL argument");
+  const int64_t N = S->frame_count;
+  for (int64_t k = 0; k < 3 * N; ++k)
+    FASCIA_CHECK(isfinite(x[k]), S->ctx, FASCIA_ERR_ARGUMENT, "set state: frame %lld position is not finite",
+                 (long long)(k / 3));
+  for (int64_t k = 0; k < 4 * N; ++k)
+    FASCIA_CHECK(isfinite(q[k]), S->ctx, FASCIA_ERR_ARGUMENT, "set state: frame %lld rotation is not finite",
+                 (long long)(k / 4));
+  for (int64_t k = 0; u && k < 6 * N; ++k)
+    FASCIA_CHECK(isfinite(u[k]), S->ctx, FASCIA_ERR_ARGUMENT, "set state: frame %lld velocity is not finite",
+                 (long long)(k / 6));
+  memcpy(S->x, x, 3 * (size_t)N * sizeof(fascia_real));
+  memcpy(S->q, q, 4 * (size_t)N * sizeof(fascia_real));
+  for (int64_t i = 0; i < N; ++i) {
+    fascia_real *qi = S->q + 4 * i;
+    const fascia_real norm = sqrt(qi[0] * qi[0] + qi[1] * qi[1] + qi[2] * qi[2] + qi[3] * qi[3]);
+    FASCIA_CHECK(norm > 1e-12, S->ctx, FASCIA_ERR_ARGUMENT, "set state: frame %lld rotation is zero",
+                 (long long)i);
+    for (int c = 0; c < 4; ++c) qi[c] /= norm;
+  }
+  if (u) memcpy(S->u, u, 6 * (size_t)N * sizeof(fascia_real));
+  else memset(S->u, 0, 6 * (size_t)N * sizeof(fascia_real));
+  fascia_system_set_state(S->sys, S->x, S->q);
+  return FASCIA_OK;
+}
+
+void fascia_solver_probe_position(const fascia_solver *S, int32_t probe, fascia_real *out) {
+  fascia_system_set_state(S->sys, S->x, S->q);
+  fascia_system_probe_position(S->sys, probe, out);
+}
+
+void fascia_solver_sample_positions(const fascia_solver *S, fascia_real *out) {
+  fascia_system_set_state(S->sys, S->x, S->q);
+  fascia_system_sample_positions(S->sys, out);
+}
+
+void fascia_solver_sample_strain(const fascia_solver *S, fascia_real *strain, fascia_real *stress) {
+  fascia_system_set_state(S->sys, S->x, S->q);
+  fascia_system_sample_strain(S->sys, strain, stress);
+}
+
+fascia_real fascia_solver_kinetic_energy(fascia_solver *S) {
+  const int64_t n = 6 * (int64_t)S->frame_count;
+  fascia_system_set_state(S->sys, S->x, S->q);
+  fascia_system_mass_snapshot(S->sys);
+  if (S->def.mass == FASCIA_MASS_LUMPED) {
+    fascia_system_mass_lumped(S->sys, S->mass_blocks);
+    fascia_real e = 0;
+    for (int32_t i = 0; i < S->frame_count; ++i)
+      for (int r = 0; r < 6; ++r)
+        for (int c = 0; c < 6; ++c)
+          e += S->u[6 * i + r] * S->mass_blocks[36 * (int64_t)i + 6 * r + c] * S->u[6 * i + c];
+    return FASCIA_R(0.5) * e;
+  }
+  fascia_system_mass_apply(S->sys, S->u, S->scratch);
+  return FASCIA_R(0.5) * fascia_dot(S->u, S->scratch, n);
+}
+
+fascia_status fascia_solver_potential_energy(fascia_solver *S, fascia_real *energy) {
+  fascia_system_set_state(S->sys, S->x, S->q);
+  return fascia_system_evaluate(S->sys, NULL, energy);
+}

@@ -1,0 +1,92 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// Private layout of the solver and the stages solver.c orchestrates:
+// newton.c (minimization with line search and damping), cg.c (projected
+// preconditioned CG), precond.c (Jacobi, block Jacobi), motion.c
+// (prescribed rigid motions).
+#ifndef FASCIA_SRC_SOLVER_INTERNAL_H
+#define FASCIA_SRC_SOLVER_INTERNAL_H
+
+#include "fascia/solver.h"
+#include "system.h"
+
+/// The linear operator of one Newton iteration:
+///   A v = mass_coefficient M v + H v + shift * (D v)
+/// restricted to the free DOFs (mask), D the diagonal of |H| + M used for
+/// Levenberg damping.
+typedef struct fascia_operator {
+  fascia_system *sys;
+  fascia_real mass_coefficient;
+  fascia_mass_kind mass;
+  const fascia_real *mass_blocks; ///< [36N] lumped blocks when mass == LUMPED
+  const fascia_real *damping_diagonal; ///< [6N]
+  fascia_real shift;
+  fascia_real scale; ///< mean absolute diagonal: curvature below 1e-12 scale counts as none
+  const unsigned char *mask; ///< [6N] 1 free, 0 constrained
+  fascia_real *scratch;      ///< [6N]
+} fascia_operator;
+
+FASCIA_INTERN void fascia_operator_apply(const fascia_operator *op, const fascia_real *v, fascia_real *out);
+
+/// Preconditioner: inverse blocks [36N] (block Jacobi) or inverse diagonal
+/// [6N] (Jacobi) or nothing.
+typedef struct fascia_preconditioner {
+  fascia_precond kind;
+  int32_t frame_count;
+  fascia_real *inverse; ///< [36N]
+} fascia_preconditioner;
+
+/// Builds the preconditioner of op at the state of the last evaluate.
+FASCIA_INTERN void fascia_precond_build(fascia_preconditioner *pc, const fascia_operator *op, fascia_real *blocks);
+FASCIA_INTERN void fascia_precond_apply(const fascia_preconditioner *pc, const unsigned char *mask,
+                                        const fascia_real *r, fascia_real *z);
+
+typedef struct fascia_cg_result {
+  int iterations;
+  int negative_curvature; ///< stopped on a direction of non-positive curvature
+  fascia_real residual;   ///< final |r| / |b|
+} fascia_cg_result;
+
+/// Solves A p = b on the free DOFs by preconditioned CG from p = 0; stops at
+/// tolerance (or after exactly max_iterations when fixed), or at the first
+/// direction of non-positive curvature, keeping the iterate so far (or the
+/// preconditioned residual when that happens at once) so that p stays a
+/// descent direction. work: [4 * 6N].
+FASCIA_INTERN fascia_cg_result fascia_cg_solve(const fascia_operator *op, const fascia_preconditioner *pc,
+                                               const fascia_real *b, fascia_real *p, int max_iterations, int fixed,
+                                               fascia_real tolerance, fascia_real *work);
+
+/// Pose of a prescribed motion at time t: translation [3], rotation [4].
+FASCIA_INTERN void fascia_motion_pose(const fascia_motion *motion, fascia_real t, fascia_real *translation,
+                                      fascia_real *rotation);
+/// Position and rotation of frame i following its motion at time t.
+FASCIA_INTERN void fascia_motion_frame(const fascia_model *model, int32_t i, fascia_real t, fascia_real *x,
+                                       fascia_real *q);
+
+struct fascia_solver {
+  fascia_ctx *ctx;
+  const fascia_model *model;
+  fascia_solver_def def;
+  fascia_system *sys;
+  int32_t frame_count;
+  fascia_real time;
+  fascia_real *x, *q, *u;           ///< state [3N], [4N], velocity [6N]
+  unsigned char *mask;              ///< [6N]
+  // Newton work
+  fascia_real *x_base, *q_base;     ///< anchor of the increments d
+  fascia_real *d, *d_trial, *inertia_target, *gradient, *direction, *rhs, *work, *blocks, *mass_blocks;
+  fascia_real *damping_diagonal, *scratch;
+  fascia_preconditioner pc;
+  char backend_name[16];
+};
+
+/// Minimizes the step objective (static: potential energy, re-anchored at
+/// every iteration; dynamic: inertia + potential with increments d anchored
+/// at the start state) over the free DOFs. Leaves the result in solver->x/q
+/// (and d).
+FASCIA_INTERN fascia_status fascia_newton_minimize(fascia_solver *solver, int dynamic, int max_iterations,
+                                                   fascia_solve_report *report);
+
+FASCIA_INTERN double fascia_now_ms(void);
+
+#endif

@@ -1,0 +1,178 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// A small hand-built model that uses every part of fascia_model (for the I/O
+// tests t2xx_io_*), and file helpers for tests that write into a scratch folder.
+#ifndef FASCIA_TESTS_IO_FIXTURE_H
+#define FASCIA_TESTS_IO_FIXTURE_H
+
+#include <dirent.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "fascia/fascia.h"
+
+// One sample's neighbours: frames ascending, weights summing to 1 and
+// gradients summing to 0 (linear barycentric functions of the unit
+// tetrahedron 0..3 restricted to an edge, a face or the whole tetrahedron).
+typedef struct fixture_sample {
+  int n;
+  int32_t frame[4];
+  double weight[4], gradient[4][3];
+} fixture_sample;
+
+/// Builds the fixture: 5 frames (tetrahedron corners plus one prescribed
+/// frame, rotated rest frames, loads), 3 samples with 2, 3 and 4
+/// neighbours, 2 materials, 1 motion with 2 keys, 1 probe, 1 organ with 2
+/// triangles, 2 coupling entries, gravity and provenance. With minimal != 0
+/// instead: no motion, probe, organ, coupling or provenance (empty arrays).
+static inline fascia_status fixture_model(fascia_ctx *ctx, int minimal, fascia_model **out) {
+  const fixture_sample samples[3] = {
+      {2, {0, 1, 0, 0}, {0.75, 0.25, 0, 0}, {{-1, 0, 0}, {1, 0, 0}}},
+      {3, {0, 1, 2, 0}, {0.5, 0.25, 0.25, 0}, {{-1, -1, 0}, {1, 0, 0}, {0, 1, 0}}},
+      {4, {0, 1, 2, 3}, {0.25, 0.25, 0.25, 0.25}, {{-1, -1, -1}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}}},
+  };
+  fascia_model_sizes z = {5, 3, 9, 2, 1, 1, 2, 1, 2};
+  if (minimal) z.motions = z.probes = z.probe_pairs = z.organs = z.couplings = 0;
+  fascia_model *m = NULL;
+  fascia_status st = fascia_model_alloc(ctx, &z, &m);
+  if (st != FASCIA_OK) return st;
+  const double corner[5][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1.5, 1.5, 1.5}};
+  for (int i = 0; i < 5; ++i) {
+    for (int r = 0; r < 3; ++r) m->frame_position[3 * i + r] = 0.1 * corner[i][r] + 1e-17 * i;
+    const double angle = 0.1 * i; // rotated rest frames exercise all 4 quaternion components
+    m->frame_rotation[4 * i + 0] = cos(angle);
+    m->frame_rotation[4 * i + 1 + i % 3] = sin(angle);
+    for (int r = 0; r < 6; ++r) m->frame_load[6 * i + r] = (i == 3) ? 0.01 * (r + 1) : 0;
+  }
+  m->frame_kind[0] = FASCIA_FRAME_FIXED;
+  if (!minimal) {
+    m->frame_kind[4] = FASCIA_FRAME_PRESCRIBED;
+    m->frame_motion[4] = 0;
+  }
+  int32_t k = 0;
+  for (int s = 0; s < 3; ++s) {
+    m->sample_offsets[s] = k;
+    double p[3] = {0, 0, 0};
+    for (int j = 0; j < samples[s].n; ++j, ++k) {
+      m->pair_frame[k] = samples[s].frame[j];
+      m->pair_weight[k] = samples[s].weight[j];
+      for (int r = 0; r < 3; ++r) {
+        m->pair_gradient[3 * k + r] = samples[s].gradient[j][r] / 0.1; // 1/m at 0.1 m edge
+        p[r] += samples[s].weight[j] * m->frame_position[3 * samples[s].frame[j] + r];
+      }
+    }
+    for (int r = 0; r < 3; ++r) m->sample_position[3 * s + r] = p[r];
+    m->sample_volume[s] = 1e-4 * (s + 1) / 3.0;
+    m->sample_material[s] = s % 2;
+  }
+  m->sample_offsets[3] = k;
+  const char *names[2] = {"fat", "fascia"};
+  for (int j = 0; j < 2; ++j) {
+    snprintf(m->materials[j].name, FASCIA_NAME_SIZE, "%s", names[j]);
+    m->materials[j].law = j;
+    m->materials[j].youngs_modulus = j ? 2e5 : 3000.0 / 7.0;
+    m->materials[j].poisson_ratio = j ? 0.3 : 0.45;
+    m->materials[j].density = j ? 1100 : 950.5;
+    m->materials[j].rotation_coupling = j ? 0.1 : 0;
+    m->materials[j].rotation_smoothing = j ? 0 : 0.25;
+  }
+  m->gravity[2] = -9.81;
+  if (!minimal) {
+    fascia_motion *mo = m->motions;
+    snprintf(mo->name, FASCIA_NAME_SIZE, "breathing");
+    mo->pivot[0] = 0.1, mo->pivot[1] = 0.2, mo->pivot[2] = 0.3;
+    if ((st = fascia_motion_alloc(ctx, mo, 2)) != FASCIA_OK) goto fail;
+    mo->key_time[1] = 1.25;
+    mo->key_translation[3 + 2] = 0.02;
+    mo->key_rotation[4] = cos(0.05), mo->key_rotation[5] = sin(0.05);
+    snprintf(m->probe_name[0], FASCIA_NAME_SIZE, "tip");
+    for (int r = 0; r < 3; ++r) m->probe_position[r] = 0.25 * corner[3][r] + 0.75 * corner[4][r];
+    m->probe_offsets[1] = 2;
+    m->probe_frame[0] = 3, m->probe_frame[1] = 4;
+    m->probe_weight[0] = 0.25, m->probe_weight[1] = 0.75;
+    fascia_organ *o = m->organs;
+    snprintf(o->name, FASCIA_NAME_SIZE, "liver");
+    o->kind = FASCIA_ORGAN_PRESCRIBED;
+    o->motion = 0;
+    if ((st = fascia_organ_alloc(ctx, o, 4, 2)) != FASCIA_OK) goto fail;
+    for (int v = 0; v < 4; ++v)
+      for (int r = 0; r < 3; ++r) o->vertices[3 * v + r] = 0.1 * corner[v][r] + 0.001;
+    const int32_t tri[6] = {0, 1, 2, 1, 2, 3};
+    memcpy(o->triangles, tri, sizeof tri);
+    m->coupling_organ[0] = m->coupling_organ[1] = 0;
+    m->coupling_frame[0] = 1, m->coupling_frame[1] = 2;
+    m->coupling_triangle[0] = 0, m->coupling_triangle[1] = 1;
+    const double bary[6] = {0.2, 0.3, 0.5, 1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0};
+    memcpy(m->coupling_barycentric, bary, sizeof bary);
+    if ((st = fascia_model_set_provenance(ctx, m, "{\"tool\": \"fixture\", \"seed\": 7, \"note\": \"caf\xc3\xa9\"}")) !=
+        FASCIA_OK)
+      goto fail;
+  }
+  if ((st = fascia_model_build_reverse(ctx, m)) != FASCIA_OK) goto fail;
+  *out = m;
+  return FASCIA_OK;
+fail:
+  fascia_model_destroy(&m);
+  return st;
+}
+
+/// Copies file from -> to (first `limit` bytes when limit >= 0). 0 on success.
+static inline int fixture_copy(const char *from, const char *to, long limit) {
+  FILE *in = fopen(from, "rb"), *out = fopen(to, "wb");
+  int ok = in && out;
+  char buf[4096];
+  long done = 0;
+  while (ok) {
+    size_t want = sizeof buf;
+    if (limit >= 0 && (long)want > limit - done) want = (size_t)(limit - done);
+    const size_t n = want ? fread(buf, 1, want, in) : 0;
+    if (!n) break;
+    ok = fwrite(buf, 1, n, out) == n;
+    done += (long)n;
+  }
+  if (in) fclose(in);
+  if (out && fclose(out) != 0) ok = 0;
+  return ok ? 0 : 1;
+}
+
+/// 1 if two files have identical bytes.
+static inline int fixture_same_bytes(const char *a, const char *b) {
+  FILE *fa = fopen(a, "rb"), *fb = fopen(b, "rb");
+  int same = fa && fb;
+  while (same) {
+    const int ca = fgetc(fa), cb = fgetc(fb);
+    if (ca != cb) same = 0;
+    if (ca == EOF || cb == EOF) break;
+  }
+  if (fa) fclose(fa);
+  if (fb) fclose(fb);
+  return same;
+}
+
+/// Number of entries in folder dir whose name contains `part`.
+static inline int fixture_count_files(const char *dir, const char *part) {
+  DIR *d = opendir(dir);
+  int count = 0;
+  for (struct dirent *e; d && (e = readdir(d));)
+    if (strcmp(e->d_name, ".") && strcmp(e->d_name, "..") && strstr(e->d_name, part)) ++count;
+  if (d) closedir(d);
+  return count;
+}
+
+/// Removes every file in dir, then dir.
+static inline void fixture_remove_dir(const char *dir) {
+  DIR *d = opendir(dir);
+  char path[1024];
+  for (struct dirent *e; d && (e = readdir(d));)
+    if (strcmp(e->d_name, ".") && strcmp(e->d_name, "..")) {
+      snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+      remove(path);
+    }
+  if (d) closedir(d);
+  rmdir(dir);
+}
+
+#endif

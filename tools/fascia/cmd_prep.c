@@ -1,0 +1,349 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// `fascia prep SCENE.json -o MODEL.h5`: runs the preprocessing stages of
+// prep/ (issue 3) one by one with progress on stderr, times each step and its
+// peak memory, writes the model (atomically: no partial file on error) and
+// an optional ParaView preview, and ends with a summary, as text on stderr or
+// (--json) as one JSON object on stdout.
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "commands.h"
+#include "fascia/fascia.h"
+
+static const char prep_usage[] =
+    "usage: fascia prep SCENE.json [-o MODEL.h5] [--json] [--preview DIR] [--threads N]\n"
+    "  builds the connective-tissue model of a scene file (data/scenes/README.md)\n"
+    "  -o MODEL.h5     output model file (default: the scene's \"output\" key)\n"
+    "  --preview DIR   also write ParaView files (organs, region, frames, samples, coupling) into DIR\n"
+    "  --json          print one JSON summary object on stdout\n"
+    "  --threads N     worker threads (default: all)\n"
+    "  --verbose       on failure, also print where the error was found\n";
+
+#ifndef FASCIA_HAVE_PREP
+
+int cmd_prep(int argc, char **argv) {
+  for (int k = 1; k < argc; ++k)
+    if (!strcmp(argv[k], "--help")) {
+      printf("%s", prep_usage);
+      break;
+    }
+  fprintf(stderr,
+          "fascia prep: the preprocessing stage was not built (%s); install libassimp-dev, libcgal-dev, "
+          "libopenvdb-dev and libcjson-dev, then reconfigure with -DFASCIA_PREP=ON\n",
+#ifdef FASCIA_PREP_WHY
+          FASCIA_PREP_WHY
+#else
+          "unknown reason"
+#endif
+  );
+  return 1;
+}
+
+#else
+
+#include <cjson/cJSON.h>
+#include <sys/resource.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "fascia/prep.h"
+
+enum { STEP_MAX = 12 };
+
+typedef struct step_clock {
+  int count;
+  const char *name[STEP_MAX];
+  double seconds[STEP_MAX];
+  double peak_bytes[STEP_MAX];
+  double started;
+  int resettable; ///< /proc/self/clear_refs resets the peak: peaks are per step
+} step_clock;
+
+static double now(void) {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+// Peak resident memory (bytes) since the last reset (VmHWM), else since start.
+static double peak_bytes(void) {
+  FILE *f = fopen("/proc/self/status", "r");
+  if (f) {
+    char line[256];
+    while (fgets(line, sizeof line, f))
+      if (!strncmp(line, "VmHWM:", 6)) {
+        fclose(f);
+        return 1024.0 * atof(line + 6);
+      }
+    fclose(f);
+  }
+  struct rusage ru;
+  getrusage(RUSAGE_SELF, &ru);
+  return 1024.0 * (double)ru.ru_maxrss;
+}
+
+static int reset_peak(void) {
+  FILE *f = fopen("/proc/self/clear_refs", "w");
+  if (!f) return 0;
+  const int ok = fputs("5", f) >= 0;
+  return fclose(f) == 0 && ok;
+}
+
+static void step_begin(step_clock *c) {
+  c->resettable = reset_peak();
+  c->started = now();
+}
+
+static void step_end(step_clock *c, const char *name) {
+  if (c->count >= STEP_MAX) return;
+  c->name[c->count] = name;
+  c->seconds[c->count] = now() - c->started;
+  c->peak_bytes[c->count] = peak_bytes();
+  c->count++;
+}
+
+typedef struct prep_run {
+  fascia_prep_scene *scene;
+  fascia_prep_meshes *meshes;
+  fascia_prep_volume *volume;
+  fascia_prep_points *points;
+  fascia_prep_weights *weights;
+  fascia_prep_coupling *coupling;
+  fascia_model *model;
+} prep_run;
+
+static void run_free(prep_run *r) {
+  fascia_model_destroy(&r->model);
+  fascia_prep_coupling_destroy(&r->coupling);
+  fascia_prep_weights_destroy(&r->weights);
+  fascia_prep_points_destroy(&r->points);
+  fascia_prep_volume_destroy(&r->volume);
+  fascia_prep_meshes_destroy(&r->meshes);
+  fascia_prep_scene_destroy(&r->scene);
+}
+
+static void print_summary(const prep_run *r, const step_clock *c, const char *output, const char *preview) {
+  const fascia_prep_scene *sc = r->scene;
+  const fascia_prep_volume *v = r->volume;
+  const double h = v->voxel_size;
+  fprintf(stderr, "\nfascia prep: %s -> %s\n", sc->path, output);
+  fprintf(stderr, "organs\n");
+  for (int32_t o = 0; o < r->meshes->count; ++o) {
+    const fascia_prep_mesh *m = r->meshes->organs + o;
+    const fascia_prep_mesh_report *p = &m->report;
+    fprintf(stderr, "  %-16s %d parts, %d vertices, %d triangles; %d shared frames\n", m->name, (int)p->parts_used,
+            (int)m->vertex_count, (int)m->triangle_count, (int)r->coupling->per_organ[o]);
+    fprintf(stderr,
+            "    repair: %d duplicate vertices merged, %d degenerate and %d duplicate faces removed, %d pinched "
+            "vertices split, %d of %d components reoriented, %d holes filled, %d left (%d border edges), %d "
+            "self-intersecting face pairs\n",
+            (int)p->duplicate_vertices_merged, (int)p->degenerate_faces_removed, (int)p->duplicate_faces_removed,
+            (int)p->nonmanifold_vertices_split, (int)p->components_reoriented, (int)p->components,
+            (int)p->holes_filled, (int)p->holes_left, (int)p->border_edges, (int)p->self_intersections);
+    if (p->inside_rule[0])
+      fprintf(stderr, "    inside: %s; %.4g cm^3\n", p->inside_rule, 1e6 * p->enclosed_volume);
+  }
+  for (int32_t k = 0; k < v->overlap_count; ++k)
+    fprintf(stderr, "overlap: '%s' and '%s' share %.4g cm^3, up to %.3g mm deep (rule: tissue outside both)\n",
+            r->meshes->organs[v->overlaps[k].a].name, r->meshes->organs[v->overlaps[k].b].name,
+            1e6 * v->overlaps[k].volume, 1e3 * v->overlaps[k].depth);
+  for (int32_t a = 0; a < v->organ_count; ++a)
+    for (int32_t b = a + 1; b < v->organ_count; ++b)
+      if (v->closest[a * v->organ_count + b] >= 0)
+        fprintf(stderr, "gap: '%s' to '%s' about %.3g mm at the closest (voxel estimate, +- %.2g mm)\n",
+                r->meshes->organs[a].name, r->meshes->organs[b].name, 1e3 * v->closest[a * v->organ_count + b],
+                1e3 * h);
+  int64_t voxels = 0;
+  for (int32_t t = 0; t < sc->tissue_count; ++t) {
+    const fascia_prep_tissue_report *tr = v->tissues + t;
+    int32_t frames = 0, samples = 0;
+    for (int32_t i = 0; i < r->points->frame_count; ++i) frames += r->points->frame_tissue[i] == t;
+    for (int32_t s = 0; s < r->points->sample_count; ++s) samples += r->points->sample_tissue[s] == t;
+    voxels += tr->voxels;
+    fprintf(stderr,
+            "tissue '%s': %lld voxels of %.3g mm, %.4g cm^3 in %d piece(s) (%d smaller pieces, %.3g cm^3, dropped); "
+            "%d frames, %d samples\n",
+            sc->tissues[t].name, (long long)tr->voxels, 1e3 * h, 1e6 * tr->volume, (int)tr->components,
+            (int)tr->dropped_components, 1e6 * tr->dropped_volume, (int)frames, (int)samples);
+  }
+  fprintf(stderr, "model: %d frames (%d shared), %d samples, %d pairs, tissue volume %.6g m^3, linear reproduction "
+                  "error %.2g m\n",
+          (int)r->model->frame_count, (int)r->coupling->count, (int)r->model->sample_count,
+          (int)r->model->pair_count, fascia_model_volume(r->model), r->weights->max_linear_error);
+  if (preview) fprintf(stderr, "preview: %s/{organs,region,frames,samples,coupling}.vtk\n", preview);
+  double total = 0;
+  fprintf(stderr, "steps (peak resident memory %s)\n", c->resettable ? "per step" : "since start");
+  for (int k = 0; k < c->count; ++k) {
+    fprintf(stderr, "  %-16s %8.2f s  %8.1f MB\n", c->name[k], c->seconds[k], c->peak_bytes[k] / 1048576.0);
+    total += c->seconds[k];
+  }
+  fprintf(stderr, "  %-16s %8.2f s\n", "total", total);
+}
+
+static void print_json(const prep_run *r, const step_clock *c, const char *output, const char *preview) {
+  cJSON *root = cJSON_CreateObject();
+  const fascia_prep_volume *v = r->volume;
+  cJSON_AddStringToObject(root, "scene", r->scene->path);
+  cJSON_AddStringToObject(root, "output", output);
+  if (preview) cJSON_AddStringToObject(root, "preview", preview);
+  cJSON_AddNumberToObject(root, "frames", r->model->frame_count);
+  cJSON_AddNumberToObject(root, "samples", r->model->sample_count);
+  cJSON_AddNumberToObject(root, "pairs", r->model->pair_count);
+  cJSON_AddNumberToObject(root, "tissue_volume", fascia_model_volume(r->model));
+  cJSON_AddNumberToObject(root, "voxel_size", v->voxel_size);
+  int64_t voxels = 0;
+  for (int32_t t = 0; t < v->tissue_count; ++t) voxels += v->tissues[t].voxels;
+  cJSON_AddNumberToObject(root, "voxels", (double)voxels);
+  cJSON_AddNumberToObject(root, "coupling_frames", r->coupling->count);
+  cJSON *coupling = cJSON_AddObjectToObject(root, "coupling");
+  for (int32_t o = 0; o < r->meshes->count; ++o)
+    cJSON_AddNumberToObject(coupling, r->meshes->organs[o].name, r->coupling->per_organ[o]);
+  cJSON_AddNumberToObject(root, "max_linear_reproduction_error", r->weights->max_linear_error);
+  cJSON *tissues = cJSON_AddArrayToObject(root, "tissues");
+  for (int32_t t = 0; t < v->tissue_count; ++t) {
+    cJSON *e = cJSON_CreateObject();
+    cJSON_AddStringToObject(e, "name", r->scene->tissues[t].name);
+    cJSON_AddNumberToObject(e, "voxels", (double)v->tissues[t].voxels);
+    cJSON_AddNumberToObject(e, "volume", v->tissues[t].volume);
+    cJSON_AddNumberToObject(e, "components", v->tissues[t].components);
+    cJSON_AddNumberToObject(e, "dropped_volume", v->tissues[t].dropped_volume);
+    cJSON_AddItemToArray(tissues, e);
+  }
+  cJSON *organs = cJSON_AddArrayToObject(root, "organs");
+  for (int32_t o = 0; o < r->meshes->count; ++o) {
+    const fascia_prep_mesh *m = r->meshes->organs + o;
+    cJSON *e = cJSON_CreateObject();
+    cJSON_AddStringToObject(e, "name", m->name);
+    cJSON_AddNumberToObject(e, "triangles", m->triangle_count);
+    cJSON_AddNumberToObject(e, "border_edges", m->report.border_edges);
+    cJSON_AddNumberToObject(e, "self_intersecting_face_pairs", m->report.self_intersections);
+    cJSON_AddNumberToObject(e, "enclosed_volume", m->report.enclosed_volume);
+    cJSON_AddStringToObject(e, "inside_rule", m->report.inside_rule);
+    cJSON_AddItemToArray(organs, e);
+  }
+  cJSON *overlaps = cJSON_AddArrayToObject(root, "overlaps");
+  for (int32_t k = 0; k < v->overlap_count; ++k) {
+    cJSON *e = cJSON_CreateObject();
+    cJSON_AddStringToObject(e, "a", r->meshes->organs[v->overlaps[k].a].name);
+    cJSON_AddStringToObject(e, "b", r->meshes->organs[v->overlaps[k].b].name);
+    cJSON_AddNumberToObject(e, "volume", v->overlaps[k].volume);
+    cJSON_AddNumberToObject(e, "depth", v->overlaps[k].depth);
+    cJSON_AddItemToArray(overlaps, e);
+  }
+  cJSON *steps = cJSON_AddArrayToObject(root, "steps");
+  double total = 0;
+  for (int k = 0; k < c->count; ++k) {
+    cJSON *e = cJSON_CreateObject();
+    cJSON_AddStringToObject(e, "name", c->name[k]);
+    cJSON_AddNumberToObject(e, "seconds", c->seconds[k]);
+    cJSON_AddNumberToObject(e, "peak_bytes", c->peak_bytes[k]);
+    cJSON_AddItemToArray(steps, e);
+    total += c->seconds[k];
+  }
+  cJSON_AddNumberToObject(root, "seconds", total);
+  char *text = cJSON_PrintUnformatted(root);
+  if (text) printf("%s\n", text);
+  free(text);
+  cJSON_Delete(root);
+}
+
+int cmd_prep(int argc, char **argv) {
+  const char *scene_path = NULL, *output = NULL, *preview = NULL;
+  int json = 0, threads = 0;
+  for (int k = 1; k < argc; ++k) {
+    if (!strcmp(argv[k], "--help") || !strcmp(argv[k], "-h")) {
+      printf("%s", prep_usage);
+      return 0;
+    } else if (!strcmp(argv[k], "--json")) {
+      json = 1;
+    } else if (!strcmp(argv[k], "--verbose")) {
+    } else if ((!strcmp(argv[k], "-o") || !strcmp(argv[k], "--output")) && k + 1 < argc) {
+      output = argv[++k];
+    } else if (!strcmp(argv[k], "--preview") && k + 1 < argc) {
+      preview = argv[++k];
+    } else if (!strcmp(argv[k], "--threads") && k + 1 < argc) {
+      char *end = NULL;
+      threads = (int)strtol(argv[++k], &end, 10);
+      if (!end || *end || threads < 1) {
+        fprintf(stderr, "fascia prep: --threads expects a positive integer, found '%s'\n", argv[k]);
+        return 2;
+      }
+    } else if (argv[k][0] == '-') {
+      fprintf(stderr, "fascia prep: unknown option '%s' (or its value is missing)\n%s", argv[k], prep_usage);
+      return 2;
+    } else if (!scene_path) {
+      scene_path = argv[k];
+    } else {
+      fprintf(stderr, "fascia prep: one scene file only, found '%s' after '%s'\n", argv[k], scene_path);
+      return 2;
+    }
+  }
+  if (!scene_path) {
+    fprintf(stderr, "fascia prep: no scene file given\n%s", prep_usage);
+    return 2;
+  }
+  fascia_ctx *ctx = cli_ctx(threads, 1);
+  prep_run r;
+  memset(&r, 0, sizeof r);
+  step_clock clock;
+  memset(&clock, 0, sizeof clock);
+  fascia_status st;
+  int rc = 1;
+#define STEP(name, call)                                                                                              \
+  do {                                                                                                                \
+    step_begin(&clock);                                                                                               \
+    st = (call);                                                                                                      \
+    step_end(&clock, name);                                                                                           \
+    if (st != FASCIA_OK) goto fail;                                                                                   \
+  } while (0)
+  STEP("scene", fascia_prep_scene_load(ctx, scene_path, &r.scene));
+  if (!output) output = r.scene->output;
+  if (!output) {
+    fprintf(stderr, "fascia prep: no output file: give -o MODEL.h5 or an \"output\" key in '%s'\n", scene_path);
+    rc = 2;
+    goto done;
+  }
+  STEP("import", fascia_prep_import(ctx, r.scene, &r.meshes));
+  STEP("check/repair", fascia_prep_repair(ctx, r.scene, r.meshes));
+  STEP("voxelize", fascia_prep_voxelize(ctx, r.scene, r.meshes, &r.volume));
+  STEP("sample", fascia_prep_sample(ctx, r.scene, r.meshes, r.volume, &r.points));
+  STEP("shape functions", fascia_prep_shape_functions(ctx, r.scene, r.volume, r.points, &r.weights));
+  STEP("coupling", fascia_prep_couple(ctx, r.scene, r.meshes, r.points, &r.coupling));
+  {
+    char command_line[2048] = "fascia";
+    for (int k = 0; k < argc; ++k) {
+      strncat(command_line, " ", sizeof command_line - strlen(command_line) - 1);
+      strncat(command_line, argv[k], sizeof command_line - strlen(command_line) - 1);
+    }
+    char tool[64];
+    snprintf(tool, sizeof tool, "fascia prep %s", fascia_version());
+    fascia_prep_run_info info = {tool, command_line, clock.count, clock.name, clock.seconds, clock.peak_bytes};
+    STEP("package", fascia_prep_package(ctx, r.scene, r.meshes, r.volume, r.points, r.weights, r.coupling, &info,
+                                        &r.model));
+  }
+  STEP("write", fascia_model_save(ctx, r.model, output));
+  if (preview) {
+    step_begin(&clock);
+    st = fascia_prep_preview(ctx, preview, r.meshes, r.volume, r.points, r.coupling);
+    step_end(&clock, "preview");
+    if (st != FASCIA_OK) {
+      remove(output); // all or nothing: the model goes with its preview
+      goto fail;
+    }
+  }
+#undef STEP
+  print_summary(&r, &clock, output, preview);
+  if (json) print_json(&r, &clock, output, preview);
+  rc = 0;
+  goto done;
+fail:
+  rc = cli_fail("prep", ctx, st);
+done:
+  run_free(&r);
+  fascia_ctx_destroy(&ctx);
+  return rc;
+}
+
+#endif

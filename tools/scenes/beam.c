@@ -1,0 +1,287 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// The paper's cantilever (Bosman et al. 2013 sec. 4.1; DESIGN.md "Reference
+// figures"): a 16 x 1 x 1 m beam along x, clamped at x = 0, 5 kg,
+// E = 40000 Pa, nu = 0.3, under its own weight, with frames on a regular grid
+// and hexahedral, tetrahedral or meshless shape functions.
+//
+//   z                       frames (ix, iy, iz), index (ix ny + iy) nz + iz
+//   |  y                    +---+---+---  ...  ---+  x = 16: probe "tip"
+//   | /                     |   |   |             |  at (16, 0, 0)
+//   |/____ x                +---+---+---  ...  ---+
+//   x = 0 face: FIXED       each cell: 8 Gauss samples (HEX, MESHLESS)
+//                           or 6 Kuhn tetrahedra x 1 or 4 samples (TET)
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "scene_util.h"
+
+#define SCENE_FAIL(ctx, st, ...) fascia_ctx_fail((ctx), (st), __FILE__, __LINE__, __VA_ARGS__)
+#define SCENE_CHECK(cond, ctx, st, ...)                                                                               \
+  do {                                                                                                                \
+    if (!(cond)) return SCENE_FAIL(ctx, st, __VA_ARGS__);                                                            \
+  } while (0)
+#define SCENE_TRY_GOTO(expr)                                                                                          \
+  do {                                                                                                                \
+    status = (expr);                                                                                                  \
+    if (status != FASCIA_OK) goto cleanup;                                                                            \
+  } while (0)
+
+// Largest model the generator agrees to build (pairs), far above any use.
+#define BEAM_MAX_PAIRS ((int64_t)1 << 28)
+#define PROVENANCE_SIZE 4096
+
+const char *fascia_scene_shape_name(int shape) {
+  switch (shape) {
+  case FASCIA_SCENE_HEX: return "hex";
+  case FASCIA_SCENE_TET: return "tet";
+  case FASCIA_SCENE_MESHLESS: return "meshless";
+  default: return "unknown";
+  }
+}
+
+int fascia_scene_shape_from_name(const char *name) {
+  for (int k = 0; name && k < FASCIA_SCENE_SHAPE_COUNT_; ++k)
+    if (!strcmp(name, fascia_scene_shape_name(k))) return k;
+  return -1;
+}
+
+fascia_scene_beam_def fascia_scene_beam_def_default(void) {
+  fascia_scene_beam_def def;
+  memset(&def, 0, sizeof def);
+  def.length = 16;
+  def.width = 1;
+  def.height = 1;
+  def.frames[0] = 20;
+  def.frames[1] = 3;
+  def.frames[2] = 3;
+  def.shape = FASCIA_SCENE_HEX;
+  def.samples_per_cell_dir = 2;
+  def.samples_per_tet = 4;
+  def.neighbours = 8;
+  def.law = FASCIA_LAW_STVK;
+  def.youngs_modulus = 40000;
+  def.poisson_ratio = 0.3;
+  def.mass = 5;
+  def.density = 0;
+  def.rotation_coupling = 0;
+  def.rotation_smoothing = 0.1;
+  def.gravity[2] = -9.81;
+  def.cookie_ = FASCIA_SCENE_BEAM_COOKIE_;
+  return def;
+}
+
+// Checks the grid and shape fields; on success *samples and *per_sample hold
+// the model's sample count and neighbours per sample.
+static fascia_status check_beam(fascia_ctx *ctx, const fascia_scene_beam_def *def, int32_t *samples,
+                                int32_t *per_sample) {
+  const char *who = "beam generator";
+  fascia_status st = scene_check_body(ctx, def, who);
+  if (st != FASCIA_OK) return st;
+  int64_t frames = 1, cells = 1;
+  for (int d = 0; d < 3; ++d) {
+    SCENE_CHECK(def->frames[d] >= 2 && def->frames[d] <= 100000, ctx, FASCIA_ERR_ARGUMENT,
+                "%s: %d frames along %c, expected 2 .. 100000 (frames sit on both faces)", who, (int)def->frames[d],
+                "xyz"[d]);
+    frames *= def->frames[d];
+    cells *= def->frames[d] - 1;
+  }
+  SCENE_CHECK(def->shape >= 0 && def->shape < FASCIA_SCENE_SHAPE_COUNT_, ctx, FASCIA_ERR_ARGUMENT,
+              "%s: shape %d, expected 0 (hex), 1 (tet) or 2 (meshless)", who, (int)def->shape);
+  int64_t per_cell;
+  if (def->shape == FASCIA_SCENE_TET) {
+    SCENE_CHECK(def->samples_per_tet == 1 || def->samples_per_tet == 4, ctx, FASCIA_ERR_ARGUMENT,
+                "%s: %d samples per tetrahedron, expected 1 (centroid) or 4 (degree-2 rule)", who,
+                (int)def->samples_per_tet);
+    per_cell = 6 * (int64_t)def->samples_per_tet;
+    *per_sample = 4;
+  } else {
+    const int64_t n = def->samples_per_cell_dir;
+    SCENE_CHECK(n >= 1 && n <= 4, ctx, FASCIA_ERR_ARGUMENT,
+                "%s: %d samples per cell direction, expected 1 .. 4 (Gauss-Legendre points)", who, (int)n);
+    per_cell = n * n * n;
+    *per_sample = 8;
+    if (def->shape == FASCIA_SCENE_MESHLESS) {
+      SCENE_CHECK(def->neighbours >= 4 && def->neighbours <= FASCIA_SHAPE_MAX_NEIGHBOURS &&
+                      def->neighbours <= frames,
+                  ctx, FASCIA_ERR_ARGUMENT,
+                  "%s: %d neighbours per sample, expected 4 .. %d and at most the frame count (%lld)", who,
+                  (int)def->neighbours, FASCIA_SHAPE_MAX_NEIGHBOURS, (long long)frames);
+      *per_sample = def->neighbours;
+    }
+  }
+  SCENE_CHECK(frames <= BEAM_MAX_PAIRS && cells * per_cell * *per_sample <= BEAM_MAX_PAIRS, ctx, FASCIA_ERR_MEMORY,
+              "%s: %lld frames and %lld sample-frame pairs is too large (at most %lld)", who, (long long)frames,
+              (long long)(cells * per_cell * *per_sample), (long long)BEAM_MAX_PAIRS);
+  *samples = (int32_t)(cells * per_cell);
+  return FASCIA_OK;
+}
+
+// Probe "tip" at (length, 0, 0) with the beam's own shape function. MLS
+// grows k past the samples' neighbour count if the k nearest frames are
+// coplanar (at an end face of a 3 x 3 section the 9 nearest all are).
+static fascia_status tip_probe(fascia_ctx *ctx, const fascia_scene_beam_def *def, const scene_grid *g,
+                               const fascia_frame_grid *grid, scene_probe *probe) {
+  const fascia_real tip[3] = {def->length, 0, 0};
+  int32_t frame[SCENE_PROBE_MAX];
+  fascia_real w[SCENE_PROBE_MAX], grad[3 * SCENE_PROBE_MAX];
+  fascia_status st = FASCIA_OK;
+  int32_t n = 0;
+  if (def->shape == FASCIA_SCENE_HEX) {
+    st = scene_hex_at(ctx, g, tip, frame, w, grad);
+    n = 8;
+  } else if (def->shape == FASCIA_SCENE_TET) {
+    st = scene_tet_at(ctx, g, tip, frame, w, grad);
+    n = 4;
+  } else {
+    const int32_t most = fascia_frame_grid_count(grid) < SCENE_PROBE_MAX ? fascia_frame_grid_count(grid)
+                                                                         : SCENE_PROBE_MAX;
+    for (n = def->neighbours; n <= most; ++n) {
+      st = scene_mls_at(ctx, grid, tip, n, frame, w, grad);
+      if (st != FASCIA_ERR_NUMERIC) break;
+    }
+    if (st == FASCIA_OK) fascia_ctx_clear(ctx);
+  }
+  if (st != FASCIA_OK) return st;
+  scene_probe_set(probe, tip, n, frame, w);
+  return FASCIA_OK;
+}
+
+// Samples on the n^3 Gauss points of every cell, trilinear or MLS weights.
+static fascia_status fill_gauss_samples(fascia_ctx *ctx, const fascia_scene_beam_def *def, const scene_grid *g,
+                                        const fascia_frame_grid *grid, fascia_model *m) {
+  const int n = def->samples_per_cell_dir;
+  fascia_real gp[4], gw[4];
+  fascia_status st = fascia_shape_gauss_legendre(ctx, n, gp, gw);
+  if (st != FASCIA_OK) return st;
+  const int32_t k = def->shape == FASCIA_SCENE_MESHLESS ? def->neighbours : 8;
+  int32_t frame[FASCIA_SHAPE_MAX_NEIGHBOURS];
+  fascia_real w[FASCIA_SHAPE_MAX_NEIGHBOURS], grad[3 * FASCIA_SHAPE_MAX_NEIGHBOURS];
+  int32_t s = 0;
+  for (int32_t c = 0; c < scene_grid_cell_count(g); ++c) {
+    int32_t cell[3], corner[8];
+    fascia_real lo[3], hi[3];
+    scene_grid_cell_unflatten(g, c, cell);
+    scene_grid_cell_corners(g, cell, corner, lo, hi);
+    const fascia_real cell_volume = (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
+    for (int a = 0; a < n; ++a)
+      for (int b = 0; b < n; ++b)
+        for (int q = 0; q < n; ++q, ++s) {
+          const int idx[3] = {a, b, q};
+          fascia_real *p = m->sample_position + 3 * (int64_t)s;
+          for (int d = 0; d < 3; ++d) p[d] = lo[d] + (hi[d] - lo[d]) * gp[idx[d]];
+          m->sample_volume[s] = gw[a] * gw[b] * gw[q] * cell_volume;
+          if (def->shape == FASCIA_SCENE_HEX) {
+            st = fascia_shape_hex(ctx, lo, hi, p, w, grad);
+            memcpy(frame, corner, sizeof corner);
+          } else {
+            st = scene_mls_at(ctx, grid, p, k, frame, w, grad);
+          }
+          if (st != FASCIA_OK) return st;
+          scene_set_pairs(m, s, k, frame, w, grad);
+        }
+  }
+  return FASCIA_OK;
+}
+
+// Samples at the quadrature points of the 6 Kuhn tetrahedra of every cell.
+static fascia_status fill_tet_samples(fascia_ctx *ctx, const fascia_scene_beam_def *def, const scene_grid *g,
+                                      fascia_model *m) {
+  const int n = def->samples_per_tet;
+  fascia_real bary[16], qw[4];
+  fascia_status st = fascia_shape_tet_quadrature(ctx, n, bary, qw);
+  if (st != FASCIA_OK) return st;
+  int32_t s = 0;
+  for (int32_t c = 0; c < scene_grid_cell_count(g); ++c) {
+    int32_t cell[3], corner[8];
+    fascia_real lo[3], hi[3];
+    scene_grid_cell_unflatten(g, c, cell);
+    scene_grid_cell_corners(g, cell, corner, lo, hi);
+    // every Kuhn tetrahedron has a sixth of the cell's volume
+    const fascia_real tet_volume = (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]) / 6;
+    for (int t = 0; t < 6; ++t) {
+      int32_t frame[4];
+      fascia_real vertex[12];
+      scene_cell_tet(g, cell, t, frame, vertex);
+      for (int q = 0; q < n; ++q, ++s) {
+        fascia_real *p = m->sample_position + 3 * (int64_t)s, w[4], grad[12];
+        for (int d = 0; d < 3; ++d)
+          p[d] = bary[4 * q] * vertex[d] + bary[4 * q + 1] * vertex[3 + d] + bary[4 * q + 2] * vertex[6 + d] +
+                 bary[4 * q + 3] * vertex[9 + d];
+        m->sample_volume[s] = qw[q] * tet_volume;
+        st = fascia_shape_tet(ctx, vertex, p, w, grad);
+        if (st != FASCIA_OK) return st;
+        scene_set_pairs(m, s, 4, frame, w, grad);
+      }
+    }
+  }
+  return FASCIA_OK;
+}
+
+static void beam_provenance(char *buf, size_t size, const fascia_scene_beam_def *def, const fascia_model *m) {
+  buf[0] = 0;
+  scene_append(buf, size,
+               "{\"generator\": \"fascia_scene_beam_build\", \"fascia_version\": \"%s\", \"scene\": \"beam\", "
+               "\"reference\": \"Bosman et al. 2013 sec. 4.1\", \"frames\": [%d, %d, %d], \"shape\": \"%s\", ",
+               fascia_version(), (int)def->frames[0], (int)def->frames[1], (int)def->frames[2],
+               fascia_scene_shape_name(def->shape));
+  if (def->shape == FASCIA_SCENE_TET)
+    scene_append(buf, size, "\"tet_split\": \"kuhn6\", \"samples_per_tet\": %d, ", (int)def->samples_per_tet);
+  else
+    scene_append(buf, size, "\"samples_per_cell_dir\": %d, \"sample_rule\": \"gauss-legendre\", ",
+                 (int)def->samples_per_cell_dir);
+  if (def->shape == FASCIA_SCENE_MESHLESS)
+    scene_append(buf, size, "\"neighbours\": %d, \"kernel\": \"wendland-c2\", \"support_margin\": %g, ",
+                 (int)def->neighbours, FASCIA_SHAPE_SUPPORT_MARGIN);
+  scene_append(buf, size, "\"sample_count\": %d, \"pair_count\": %d, ", (int)m->sample_count, (int)m->pair_count);
+  scene_append_body_json(buf, size, def);
+  scene_append(buf, size, "}");
+}
+
+fascia_status fascia_scene_beam_build(fascia_ctx *ctx, const fascia_scene_beam_def *def, fascia_model **out) {
+  SCENE_CHECK(out, ctx, FASCIA_ERR_ARGUMENT, "fascia_scene_beam_build: NULL out");
+  *out = NULL;
+  int32_t samples = 0, per_sample = 0;
+  fascia_status status = check_beam(ctx, def, &samples, &per_sample);
+  if (status != FASCIA_OK) return status;
+  const scene_grid g = scene_grid_of_beam(def, def->frames);
+  const int32_t frames = scene_grid_frame_count(&g);
+  fascia_real *position = malloc(3 * (size_t)frames * sizeof *position);
+  char *provenance = malloc(PROVENANCE_SIZE);
+  fascia_frame_grid *grid = NULL;
+  fascia_model *m = NULL;
+  scene_probe probe;
+  fascia_model_sizes sizes;
+  memset(&sizes, 0, sizeof sizes);
+  if (!position || !provenance) {
+    status = SCENE_FAIL(ctx, FASCIA_ERR_MEMORY, "beam generator: out of memory for %d frames", (int)frames);
+    goto cleanup;
+  }
+  scene_grid_positions(&g, position);
+  if (def->shape == FASCIA_SCENE_MESHLESS) SCENE_TRY_GOTO(fascia_frame_grid_create(ctx, frames, position, &grid));
+  SCENE_TRY_GOTO(tip_probe(ctx, def, &g, grid, &probe));
+  sizes.frames = frames;
+  sizes.samples = samples;
+  sizes.pairs = samples * per_sample;
+  sizes.materials = 1;
+  sizes.probes = 1;
+  sizes.probe_pairs = probe.count;
+  SCENE_TRY_GOTO(fascia_model_alloc(ctx, &sizes, &m));
+  memcpy(m->frame_position, position, 3 * (size_t)frames * sizeof *position);
+  if (def->shape == FASCIA_SCENE_TET)
+    SCENE_TRY_GOTO(fill_tet_samples(ctx, def, &g, m));
+  else
+    SCENE_TRY_GOTO(fill_gauss_samples(ctx, def, &g, grid, m));
+  beam_provenance(provenance, PROVENANCE_SIZE, def, m);
+  SCENE_TRY_GOTO(scene_finish(ctx, m, def, &probe, provenance, "beam generator"));
+  *out = m;
+  m = NULL;
+cleanup:
+  fascia_model_destroy(&m);
+  fascia_frame_grid_destroy(&grid);
+  free(position);
+  free(provenance);
+  return status;
+}

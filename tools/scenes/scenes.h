@@ -1,0 +1,101 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// Code-built scenes shared by the tests, the benchmarks and the CLI: the
+// paper's cantilever (Bosman et al. 2013 sec. 4.1) with hexahedral,
+// tetrahedral or meshless shape functions, and the models behind the paper's
+// timing tables (sec. 4.3, Tables 2 and 3). Each builder fills a
+// fascia_model, builds its reverse table and validates it before returning.
+#ifndef FASCIA_TOOLS_SCENES_H
+#define FASCIA_TOOLS_SCENES_H
+
+#include "fascia/model.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/// Shape-function kind of a code-built scene.
+typedef enum fascia_scene_shape {
+  FASCIA_SCENE_HEX = 0,      ///< trilinear weights of the grid cell, 8 neighbours
+  FASCIA_SCENE_TET = 1,      ///< barycentric weights of a tetrahedral split of the grid, 4 neighbours
+  FASCIA_SCENE_MESHLESS = 2, ///< moving least squares over the k nearest frames
+  FASCIA_SCENE_SHAPE_COUNT_
+} fascia_scene_shape;
+
+/// "hex", "tet", "meshless"; "unknown" otherwise.
+const char *fascia_scene_shape_name(int shape);
+/// Shape from its name; -1 if unknown.
+int fascia_scene_shape_from_name(const char *name);
+
+/// The cantilever of paper sec. 4.1: a box [0, length] x [-width/2, width/2]
+/// x [-height/2, height/2] (m), frames on a regular nx x ny x nz grid that
+/// includes the faces, frames at x == 0 FIXED (clamped), all others FREE,
+/// loaded by gravity. Start from fascia_scene_beam_def_default().
+typedef struct fascia_scene_beam_def {
+  fascia_real length, width, height; ///< m; defaults 16, 1, 1
+  int32_t frames[3];                 ///< frames along x, y, z, each >= 2; default 20 x 3 x 3
+  int32_t shape;                     ///< fascia_scene_shape; default HEX
+  /// HEX and MESHLESS: samples at the n x n x n Gauss-Legendre points of every
+  /// grid cell (n = 1..4), volume = Gauss weight x cell volume; default 2.
+  int32_t samples_per_cell_dir;
+  /// TET: samples per tetrahedron, 1 (centroid) or 4 (degree-2 rule); default 4.
+  int32_t samples_per_tet;
+  int32_t neighbours;             ///< MESHLESS: k nearest frames per sample (4 .. 128); default 8
+  int32_t law;                    ///< fascia_law; default FASCIA_LAW_STVK
+  fascia_real youngs_modulus;     ///< Pa; default 40000
+  fascia_real poisson_ratio;      ///< default 0.3
+  fascia_real mass;               ///< kg, total; used when density <= 0; default 5
+  fascia_real density;            ///< kg/m^3; > 0 overrides mass; default 0 (from mass)
+  fascia_real rotation_coupling;  ///< fascia_material.rotation_coupling; default 0
+  fascia_real rotation_smoothing; ///< fascia_material.rotation_smoothing; default 0.1 (see docs/mechanics.md)
+  fascia_real gravity[3];         ///< m/s^2; default (0, 0, -9.81)
+  int cookie_;                    ///< private: set by fascia_scene_beam_def_default
+} fascia_scene_beam_def;
+
+fascia_scene_beam_def fascia_scene_beam_def_default(void);
+
+/// Builds the cantilever. Samples: HEX and MESHLESS on the Gauss grid of the
+/// frame cells; TET on the tetrahedra of the 6-tetrahedron (Kuhn) split of
+/// every cell along its main diagonal (conforming: every cell is split the
+/// same way). One material "beam", gravity from the def, one probe "tip" at
+/// (length, 0, 0) carried by the shape function there (trilinear weights of
+/// the end cell, barycentric weights of the containing tetrahedron, or MLS;
+/// zero weights dropped). Provenance names the generator and every
+/// parameter. Errors: FASCIA_ERR_ARGUMENT for a bad def (naming the field),
+/// FASCIA_ERR_NUMERIC if MLS weights cannot be formed at a sample,
+/// FASCIA_ERR_MEMORY; *out is NULL after an error.
+fascia_status fascia_scene_beam_build(fascia_ctx *ctx, const fascia_scene_beam_def *def, fascia_model **out);
+
+/// One row of the paper's timing tables (sec. 4.3).
+typedef struct fascia_scene_paper_row {
+  const char *name;       ///< e.g. "t2-f72-s400-k4", "t3-s12700"
+  int table;              ///< 2 or 3
+  int32_t frames;         ///< requested frame count (the model gets within 10 %)
+  int32_t samples;        ///< exact sample count
+  int32_t neighbours;     ///< frames per sample
+  double paper_cpu_ms;    ///< paper's CPU time per step (Xeon W3520, one thread)
+  double paper_gpu_ms;    ///< paper's GPU time per step (GTX 570); 0 where not given (Table 2)
+} fascia_scene_paper_row;
+
+/// The rows of Tables 2 and 3, in the paper's order; *count gets their number.
+const fascia_scene_paper_row *fascia_scene_paper_rows(int *count);
+/// Row by name, NULL if absent.
+const fascia_scene_paper_row *fascia_scene_paper_find(const char *name);
+
+/// Builds the model of one row: the beam body of `body` (the cantilever box,
+/// material, gravity; NULL for fascia_scene_beam_def_default(); its frames,
+/// shape and sample fields are ignored), frames on a regular grid chosen to
+/// get close to row->frames with cells as close to cubes as possible, exactly
+/// row->samples samples placed by stratified jittered sampling with a fixed
+/// seed (one per stratum, stratum volume as sample volume, so the volumes sum
+/// to the body volume), frames at x == 0 fixed. Weights: for 4 neighbours the
+/// barycentric weights of the containing tetrahedron of the Kuhn split of the
+/// frame grid; for more, MLS over the k nearest frames. Probe "tip" as in the
+/// beam. Errors as fascia_scene_beam_build.
+fascia_status fascia_scene_paper_build(fascia_ctx *ctx, const fascia_scene_paper_row *row,
+                                       const fascia_scene_beam_def *body, fascia_model **out);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
