@@ -13,8 +13,12 @@
 void fascia_operator_apply(const fascia_operator *op, const fascia_real *v, fascia_real *out) {
   fascia_system *sys = op->sys;
   const int64_t n = 6 * (int64_t)sys->frame_count;
-  fascia_system_hessian_apply(sys, v, out);
-  if (op->mass_coefficient != 0) {
+  if (op->assembled) {
+    fascia_bsr_apply(op->assembled, sys->threads, v, out);
+  } else {
+    fascia_system_hessian_apply(sys, v, out);
+  }
+  if (op->mass_coefficient != 0 && !op->assembled) {
     if (op->mass == FASCIA_MASS_LUMPED) {
       for (int32_t i = 0; i < sys->frame_count; ++i) {
         const fascia_real *B = op->mass_blocks + 36 * (int64_t)i, *vi = v + 6 * (int64_t)i;

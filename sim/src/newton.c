@@ -106,6 +106,21 @@ static fascia_status objective(fascia_solver *S, const step_terms *terms, const 
                           : FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC, "solver: the energy is not finite");
 }
 
+// K = H (+ (c1 + c2) M for a dynamic step) at the current iterate
+static void assemble(fascia_solver *S, const step_terms *terms) {
+  fascia_system_hessian_assemble(S->sys, &S->K);
+  const fascia_real c = terms->c1 + terms->c2;
+  if (c == 0) return;
+  if (S->def.mass == FASCIA_MASS_CONSISTENT) {
+    fascia_system_mass_assemble_add(S->sys, c, &S->K);
+    return;
+  }
+  for (int32_t i = 0; i < S->frame_count; ++i) {
+    fascia_real *D = S->K.values + 36 * (int64_t)S->K.diagonal[i];
+    for (int q = 0; q < 36; ++q) D[q] += c * S->mass_blocks[36 * (int64_t)i + q];
+  }
+}
+
 // |external load| over free DOFs: the scale of the Newton tolerance
 static fascia_real load_norm(const fascia_solver *S) {
   const fascia_system *sys = S->sys;
@@ -134,8 +149,9 @@ fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iter
     mass_apply(S, S->inertia_target, terms.target_M);
     terms.target_norm = fascia_dot(S->inertia_target, terms.target_M, n);
   }
-  fascia_operator op = {S->sys, terms.c1 + terms.c2, def->mass, S->mass_blocks, S->damping_diagonal, 0, 1,
-                        S->mask, S->scratch + n};
+  fascia_operator op = {S->sys,  terms.c1 + terms.c2, def->mass, S->mass_blocks, S->damping_diagonal, 0, 1,
+                        S->use_assembled ? &S->K : NULL, S->mask, S->scratch + n};
+  rep->direct = S->use_direct;
   fascia_real phi, *g = S->gradient, *p = S->direction, *g_trial = S->rhs;
   t = fascia_now_ms();
   FASCIA_TRY(objective(S, &terms, S->d, &phi, g));
@@ -154,14 +170,20 @@ fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iter
       break;
     }
     if (iteration == max_iterations) break;
-    // preconditioner and Levenberg scale from the diagonal blocks
+    // the assembled matrix, the preconditioner and the Levenberg scale
     t = fascia_now_ms();
     if (def->mass == FASCIA_MASS_LUMPED || dynamic) fascia_system_mass_lumped(S->sys, S->mass_blocks);
-    fascia_precond_build(&S->pc, &op, S->blocks);
+    if (S->use_assembled) {
+      assemble(S, &terms);
+      rep->profile.assemble_ms += fascia_now_ms() - t;
+      t = fascia_now_ms();
+    }
+    if (!S->use_direct) fascia_precond_build(&S->pc, &op, S->blocks);
     fascia_real scale = 0;
     for (int32_t i = 0; i < N; ++i)
       for (int c = 0; c < 6; ++c) {
-        const fascia_real diag = fabs(S->blocks[36 * (int64_t)i + 7 * c]);
+        const fascia_real diag = S->use_direct ? fabs(S->K.values[36 * (int64_t)S->K.diagonal[i] + 7 * c])
+                                               : fabs(S->blocks[36 * (int64_t)i + 7 * c]);
         S->damping_diagonal[6 * (int64_t)i + c] = diag;
         scale += diag;
       }
@@ -175,11 +197,25 @@ fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iter
       // direction: A p = -g
       t = fascia_now_ms();
       for (int64_t k = 0; k < n; ++k) g_trial[k] = -g[k];
-      const fascia_cg_result cg = fascia_cg_solve(&op, &S->pc, g_trial, p, def->cg_iterations, def->cg_fixed,
-                                                  def->cg_tolerance, S->work + 2 * n);
+      if (S->use_direct) {
+        // not positive definite: raise the Levenberg shift until it is
+        while (!fascia_banded_factor(&S->band, &S->K, S->mask, S->damping_diagonal, op.shift)) {
+          ++rep->negative_curvature;
+          op.shift = op.shift == 0 ? FASCIA_R(1e-8) : 10 * op.shift;
+          if (op.shift > MAX_SHIFT)
+            return FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
+                               "solver: Newton iteration %d: the tangent stays singular under any damping (a NaN, "
+                               "or a frame with no sample?)",
+                               iteration);
+        }
+        fascia_banded_solve(&S->band, g_trial, p, S->work + 2 * n);
+      } else {
+        const fascia_cg_result cg = fascia_cg_solve(&op, &S->pc, g_trial, p, def->cg_iterations, def->cg_fixed,
+                                                    def->cg_tolerance, S->work + 2 * n);
+        rep->cg_iterations += cg.iterations;
+        rep->negative_curvature += cg.negative_curvature;
+      }
       rep->profile.cg_ms += fascia_now_ms() - t;
-      rep->cg_iterations += cg.iterations;
-      rep->negative_curvature += cg.negative_curvature;
       fascia_real slope = fascia_dot(p, g, n);
       if (!(slope < 0)) { // not a descent direction: preconditioned gradient
         fascia_precond_apply(&S->pc, S->mask, g, p);
@@ -223,7 +259,8 @@ fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iter
         t = fascia_now_ms();
         FASCIA_TRY(objective(S, &terms, S->d, &phi, g)); // restores the cache of the current iterate
         rep->profile.evaluate_ms += fascia_now_ms() - t;
-        fascia_precond_build(&S->pc, &op, S->blocks);
+        if (S->use_assembled) assemble(S, &terms);
+        if (!S->use_direct) fascia_precond_build(&S->pc, &op, S->blocks);
         continue;
       }
       if (alpha == 1 && op.shift > 0) op.shift = op.shift < FASCIA_R(1e-3) ? 0 : op.shift / 10;

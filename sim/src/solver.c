@@ -19,6 +19,7 @@ fascia_solver_def fascia_solver_def_default(void) {
   d.cg_iterations = 200;
   d.cg_tolerance = FASCIA_R(1e-3);
   d.precond = FASCIA_PRECOND_BLOCK_JACOBI;
+  d.linear_solver = FASCIA_LINEAR_AUTO;
   d.mass = FASCIA_MASS_CONSISTENT;
   d.line_search = 1;
   d.load_steps = 1;
@@ -41,6 +42,8 @@ static fascia_status check_def(fascia_ctx *ctx, const fascia_solver_def *d) {
                "solver: CG tolerance %g must be in [0, 1)", d->cg_tolerance);
   FASCIA_CHECK(d->precond >= FASCIA_PRECOND_NONE && d->precond <= FASCIA_PRECOND_BLOCK_JACOBI, ctx,
                FASCIA_ERR_ARGUMENT, "solver: unknown preconditioner %d", (int)d->precond);
+  FASCIA_CHECK(d->linear_solver >= FASCIA_LINEAR_AUTO && d->linear_solver <= FASCIA_LINEAR_DIRECT, ctx,
+               FASCIA_ERR_ARGUMENT, "solver: unknown linear solver %d", (int)d->linear_solver);
   FASCIA_CHECK(d->mass == FASCIA_MASS_CONSISTENT || d->mass == FASCIA_MASS_LUMPED, ctx, FASCIA_ERR_ARGUMENT,
                "solver: unknown mass kind %d", (int)d->mass);
   FASCIA_CHECK(isfinite(d->mass_damping) && d->mass_damping >= 0, ctx, FASCIA_ERR_ARGUMENT,
@@ -62,6 +65,36 @@ static fascia_status pick_backend(fascia_ctx *ctx, const char *name, char *chose
     return FASCIA_FAIL(ctx, FASCIA_ERR_UNSUPPORTED,
                        "backend 'cuda' is not available in this build; use --backend cpu (or auto)");
   return FASCIA_FAIL(ctx, FASCIA_ERR_ARGUMENT, "unknown backend '%s'; valid: auto, cpu, cuda", name);
+}
+
+// Largest band the automatic choice accepts, and its factorization cost:
+// beyond about a second per factorization CG is the better deal.
+#define AUTO_MAX_BAND_BYTES ((int64_t)256 << 20)
+#define AUTO_MAX_FLOPS 2e9
+#define DIRECT_MAX_BAND_BYTES ((int64_t)4 << 30)
+
+static fascia_status choose_linear_solver(fascia_solver *S) {
+  const fascia_linear_solver kind = S->def.linear_solver;
+  if (kind == FASCIA_LINEAR_CG && !S->def.assembled) return FASCIA_OK;
+  FASCIA_TRY(fascia_bsr_create(S->ctx, S->model, &S->K));
+  S->use_assembled = 1;
+  if (kind == FASCIA_LINEAR_CG) return FASCIA_OK;
+  const int automatic = kind == FASCIA_LINEAR_AUTO;
+  fascia_status st =
+      fascia_banded_create(S->ctx, &S->K, automatic ? AUTO_MAX_BAND_BYTES : DIRECT_MAX_BAND_BYTES, &S->band);
+  if (st == FASCIA_OK && (!automatic || fascia_banded_cost(&S->band) <= AUTO_MAX_FLOPS)) {
+    S->use_direct = 1;
+    return FASCIA_OK;
+  }
+  if (!automatic) return st;
+  // automatic: CG, matrix-free unless asked otherwise
+  fascia_ctx_clear(S->ctx);
+  fascia_banded_destroy(&S->band);
+  if (!S->def.assembled) {
+    fascia_bsr_destroy(&S->K);
+    S->use_assembled = 0;
+  }
+  return FASCIA_OK;
 }
 
 fascia_status fascia_solver_create(fascia_ctx *ctx, const fascia_model *model, const fascia_solver_def *def,
@@ -105,6 +138,7 @@ fascia_status fascia_solver_create(fascia_ctx *ctx, const fascia_model *model, c
     status = FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "solver: out of memory for %lld frames", (long long)N);
     goto cleanup;
   }
+  FASCIA_TRY_GOTO(choose_linear_solver(S));
   memcpy(S->x, model->frame_position, 3 * (size_t)N * sizeof(fascia_real));
   memcpy(S->q, model->frame_rotation, 4 * (size_t)N * sizeof(fascia_real));
   for (int64_t i = 0; i < N; ++i)
@@ -120,6 +154,8 @@ void fascia_solver_destroy(fascia_solver **solver) {
   if (!solver || !*solver) return;
   fascia_solver *S = *solver;
   fascia_system_destroy(&S->sys);
+  fascia_bsr_destroy(&S->K);
+  fascia_banded_destroy(&S->band);
   free(S->x), free(S->q), free(S->u), free(S->mask), free(S->x_base), free(S->q_base), free(S->d);
   free(S->d_trial), free(S->inertia_target), free(S->gradient), free(S->direction), free(S->rhs), free(S->work);
   free(S->blocks), free(S->mass_blocks), free(S->damping_diagonal), free(S->scratch), free(S->pc.inverse);

@@ -8,6 +8,7 @@
 #define FASCIA_SRC_SOLVER_INTERNAL_H
 
 #include "fascia/solver.h"
+#include "direct.h"
 #include "system.h"
 
 /// The linear operator of one Newton iteration:
@@ -22,6 +23,7 @@ typedef struct fascia_operator {
   const fascia_real *damping_diagonal; ///< [6N]
   fascia_real shift;
   fascia_real scale; ///< mean absolute diagonal: curvature below 1e-12 scale counts as none
+  const fascia_bsr *assembled; ///< when set: H + mass_coefficient M assembled, used instead of products
   const unsigned char *mask; ///< [6N] 1 free, 0 constrained
   fascia_real *scratch;      ///< [6N]
 } fascia_operator;
@@ -77,6 +79,10 @@ struct fascia_solver {
   fascia_real *d, *d_trial, *inertia_target, *gradient, *direction, *rhs, *work, *blocks, *mass_blocks;
   fascia_real *damping_diagonal, *scratch;
   fascia_preconditioner pc;
+  int use_direct;     ///< linear systems by banded Cholesky
+  int use_assembled;  ///< the block matrix K is assembled every Newton iteration
+  fascia_bsr K;
+  fascia_banded band;
   char backend_name[16];
 };
 

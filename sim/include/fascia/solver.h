@@ -20,6 +20,12 @@ typedef enum fascia_precond {
   FASCIA_PRECOND_BLOCK_JACOBI = 2, ///< inverse of each frame's 6x6 diagonal block
 } fascia_precond;
 
+typedef enum fascia_linear_solver {
+  FASCIA_LINEAR_AUTO = 0,   ///< direct where the band is small enough, else CG
+  FASCIA_LINEAR_CG = 1,     ///< preconditioned conjugate gradients
+  FASCIA_LINEAR_DIRECT = 2, ///< banded Cholesky of the assembled tangent (RCM ordering)
+} fascia_linear_solver;
+
 typedef enum fascia_mass_kind {
   FASCIA_MASS_CONSISTENT = 0, ///< M = sum_s m_s J_s^T J_s, samples follow frames exactly
   FASCIA_MASS_LUMPED = 1,     ///< row-sum lumped 6x6 blocks per frame
@@ -36,6 +42,8 @@ typedef struct fascia_solver_def {
   int cg_fixed;                  ///< 1: always exactly cg_iterations (the paper's benchmark mode)
   fascia_real cg_tolerance;      ///< relative residual of each linear solve (default 1e-3)
   fascia_precond precond;        ///< default block Jacobi
+  fascia_linear_solver linear_solver; ///< default auto
+  int assembled;                 ///< CG: 1 multiplies by the assembled 6x6-block matrix, 0 matrix-free (default)
   fascia_mass_kind mass;         ///< default consistent
   fascia_real mass_damping;      ///< Rayleigh mass damping alpha, 1/s (default 0)
   int line_search;               ///< 1: backtracking line search on the energy (default 1)
@@ -49,7 +57,8 @@ FASCIA_API fascia_solver_def fascia_solver_def_default(void);
 typedef struct fascia_profile {
   double evaluate_ms; ///< energy, forces (and the per-sample cache)
   double precond_ms;  ///< diagonal blocks and their inverses
-  double cg_ms;       ///< conjugate gradients, stiffness products included
+  double assemble_ms; ///< assembly of the block matrix (direct solver or assembled CG)
+  double cg_ms;       ///< linear solves: CG (stiffness products included) or factor and solve
   double total_ms;
 } fascia_profile;
 
@@ -59,7 +68,8 @@ typedef struct fascia_solve_report {
   int newton_iterations;
   int cg_iterations;           ///< summed over Newton iterations
   int line_search_cuts;        ///< step halvings summed over iterations
-  int negative_curvature;      ///< CG solves that met negative curvature
+  int negative_curvature;      ///< CG solves that met negative curvature, or failed factorizations
+  int direct;                  ///< 1 when the linear systems were solved directly
   fascia_real gradient_norm;   ///< final |gradient| over free DOFs
   fascia_real reference_norm;  ///< |external load|, the tolerance's scale
   fascia_real energy;          ///< final potential energy, J

@@ -1,0 +1,177 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// Assembly of the block-sparse tangent and mass (see assemble.h). Row i of a
+// symmetric operator equals the transpose of its column i, and column i of
+// one sample's contribution is that sample's product with a unit vector on
+// frame i: so every row is built from the frame's own reverse table.
+#include <stdlib.h>
+#include <string.h>
+
+#include "assemble.h"
+
+static int compare_int32(const void *a, const void *b) {
+  const int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
+  return (x > y) - (x < y);
+}
+
+// sample owning pair k (bisection in sample_offsets)
+static int32_t owner(const fascia_model *m, int32_t k) {
+  int32_t lo = 0, hi = m->sample_count - 1;
+  while (lo < hi) {
+    const int32_t mid = (lo + hi + 1) / 2;
+    if (m->sample_offsets[mid] <= k) lo = mid;
+    else hi = mid - 1;
+  }
+  return lo;
+}
+
+fascia_status fascia_bsr_create(fascia_ctx *ctx, const fascia_model *m, fascia_bsr *out) {
+  memset(out, 0, sizeof *out);
+  const int32_t N = m->frame_count;
+  // count with duplicates, then sort and unique each row
+  int64_t total = 0;
+  for (int32_t i = 0; i < N; ++i)
+    for (int32_t r = m->frame_offsets[i]; r < m->frame_offsets[i + 1]; ++r) {
+      const int32_t s = owner(m, m->frame_pairs[r]);
+      total += m->sample_offsets[s + 1] - m->sample_offsets[s];
+    }
+  int32_t *scratch = fascia_calloc(total + N, sizeof(int32_t));
+  out->row_offsets = fascia_calloc((int64_t)N + 1, sizeof(int32_t));
+  out->diagonal = fascia_calloc(N, sizeof(int32_t));
+  if (!scratch || !out->row_offsets || !out->diagonal) {
+    free(scratch);
+    fascia_bsr_destroy(out);
+    return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "assembly: out of memory for the block pattern (%lld entries)",
+                       (long long)total);
+  }
+  int64_t count = 0;
+  for (int32_t i = 0; i < N; ++i) {
+    int32_t *row = scratch + count, len = 0;
+    row[len++] = i;
+    for (int32_t r = m->frame_offsets[i]; r < m->frame_offsets[i + 1]; ++r) {
+      const int32_t s = owner(m, m->frame_pairs[r]);
+      for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k) row[len++] = m->pair_frame[k];
+    }
+    qsort(row, (size_t)len, sizeof(int32_t), compare_int32);
+    int32_t unique = 0;
+    for (int32_t k = 0; k < len; ++k)
+      if (k == 0 || row[k] != row[k - 1]) row[unique++] = row[k];
+    count += unique;
+    out->row_offsets[i + 1] = (int32_t)count;
+  }
+  out->rows = N;
+  out->blocks = count;
+  out->cols = fascia_calloc(count, sizeof(int32_t));
+  out->values = fascia_calloc(36 * count, sizeof(fascia_real));
+  if (!out->cols || !out->values) {
+    free(scratch);
+    fascia_bsr_destroy(out);
+    return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "assembly: out of memory for %lld 6x6 blocks", (long long)count);
+  }
+  memcpy(out->cols, scratch, (size_t)count * sizeof(int32_t));
+  free(scratch);
+  for (int32_t i = 0; i < N; ++i)
+    for (int32_t b = out->row_offsets[i]; b < out->row_offsets[i + 1]; ++b)
+      if (out->cols[b] == i) out->diagonal[i] = b;
+  return FASCIA_OK;
+}
+
+void fascia_bsr_destroy(fascia_bsr *bsr) {
+  free(bsr->row_offsets);
+  free(bsr->cols);
+  free(bsr->diagonal);
+  free(bsr->values);
+  memset(bsr, 0, sizeof *bsr);
+}
+
+void fascia_bsr_apply(const fascia_bsr *B, int threads, const fascia_real *v, fascia_real *out) {
+#pragma omp parallel for num_threads(threads) schedule(static)
+  for (int32_t i = 0; i < B->rows; ++i) {
+    fascia_real sum[6] = {0, 0, 0, 0, 0, 0};
+    for (int32_t b = B->row_offsets[i]; b < B->row_offsets[i + 1]; ++b) {
+      const fascia_real *blk = B->values + 36 * (int64_t)b, *vj = v + 6 * (int64_t)B->cols[b];
+      for (int r = 0; r < 6; ++r)
+        sum[r] += blk[6 * r] * vj[0] + blk[6 * r + 1] * vj[1] + blk[6 * r + 2] * vj[2] + blk[6 * r + 3] * vj[3] +
+                  blk[6 * r + 4] * vj[4] + blk[6 * r + 5] * vj[5];
+    }
+    for (int r = 0; r < 6; ++r) out[6 * (int64_t)i + r] = sum[r];
+  }
+}
+
+static int32_t find_block(const fascia_bsr *B, int32_t i, int32_t j) {
+  int32_t lo = B->row_offsets[i], hi = B->row_offsets[i + 1] - 1;
+  while (lo < hi) {
+    const int32_t mid = (lo + hi) / 2;
+    if (B->cols[mid] < j) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo;
+}
+
+// Row i of a per-sample operator: for each sample of frame i, the product
+// with unit vectors on frame i's slot gives column i, i.e. row i transposed.
+// kind 0: stiffness (exact derivative of the gradient), 1: consistent mass.
+static void assemble_rows(fascia_system *sys, fascia_bsr *B, int kind, fascia_real coefficient) {
+  const fascia_model *m = sys->model;
+  const fascia_pt_state st = {sys->x, kind ? sys->A_mass : sys->A};
+  const int32_t maxn = sys->max_neighbours;
+#pragma omp parallel num_threads(sys->threads)
+  {
+    fascia_real *dq = calloc(6 * (size_t)maxn, sizeof(fascia_real));
+    fascia_real *col = calloc(6 * (size_t)maxn, sizeof(fascia_real));
+#pragma omp for schedule(static)
+    for (int32_t i = 0; i < sys->frame_count; ++i) {
+      if (!dq || !col) continue; // out of memory in a worker: rows stay as they were
+      for (int32_t r = m->frame_offsets[i]; r < m->frame_offsets[i + 1]; ++r) {
+        const int32_t k = m->frame_pairs[r], s = owner(m, k), begin = m->sample_offsets[s];
+        const int32_t n = m->sample_offsets[s + 1] - begin, j = k - begin;
+        for (int c = 0; c < 6; ++c) {
+          dq[6 * j + c] = 1;
+          if (kind == 0)
+            fascia_pt_sample_stiffness(&sys->pm, &st, s, sys->cache + (int64_t)s * FASCIA_PT_CACHE_SIZE, dq,
+                                       sys->local_slot, col);
+          else
+            fascia_pt_sample_mass(&sys->pm, &st, s, sys->sample_mass[s], dq, sys->local_slot, col);
+          dq[6 * j + c] = 0;
+          for (int32_t l = 0; l < n; ++l) {
+            fascia_real *blk = B->values + 36 * (int64_t)find_block(B, i, m->pair_frame[begin + l]);
+            for (int a = 0; a < 6; ++a) blk[6 * c + a] += coefficient * col[6 * l + a];
+          }
+        }
+      }
+    }
+    free(dq);
+    free(col);
+  }
+}
+
+void fascia_system_hessian_assemble(fascia_system *sys, fascia_bsr *B) {
+  memset(B->values, 0, 36 * (size_t)B->blocks * sizeof(fascia_real));
+  assemble_rows(sys, B, 0, 1);
+  // Off the diagonal the exact derivative is symmetric, so rows built from
+  // columns are right; its diagonal blocks are not (they differ from H by
+  // -1/2 [g_theta]x), so transpose them back, then add the frame-local terms:
+  // gravity (theta-theta) and the symmetrizing 1/2 [g_theta]x.
+  const fascia_real gs = sys->gravity_scale, *g = sys->gravity;
+  for (int32_t i = 0; i < sys->frame_count; ++i) {
+    fascia_real *D = B->values + 36 * (int64_t)B->diagonal[i], b[3];
+    for (int a = 0; a < 6; ++a)
+      for (int c = a + 1; c < 6; ++c) {
+        const fascia_real tmp = D[6 * a + c];
+        D[6 * a + c] = D[6 * c + a];
+        D[6 * c + a] = tmp;
+      }
+    fascia_pt_mat_vec(sys->A + 9 * i, sys->frame_moment + 3 * i, b);
+    const fascia_real bg = fascia_pt_dot3(b, g), *t = sys->conservative_torque + 3 * i;
+    const fascia_real skew[9] = {0, -t[2], t[1], t[2], 0, -t[0], -t[1], t[0], 0};
+    for (int a = 0; a < 3; ++a)
+      for (int c = 0; c < 3; ++c)
+        D[6 * (3 + a) + 3 + c] += -gs * (b[a] * g[c] - (a == c ? bg : 0)) + FASCIA_R(0.5) * skew[3 * a + c];
+    for (int a = 0; a < 6; ++a) // symmetric up to rounding: make it exactly so
+      for (int c = a + 1; c < 6; ++c) D[6 * a + c] = D[6 * c + a] = FASCIA_R(0.5) * (D[6 * a + c] + D[6 * c + a]);
+  }
+}
+
+void fascia_system_mass_assemble_add(fascia_system *sys, fascia_real coefficient, fascia_bsr *B) {
+  assemble_rows(sys, B, 1, coefficient);
+}

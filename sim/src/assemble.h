@@ -1,0 +1,36 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// The tangent and mass as assembled 6x6-block sparse matrices (block CSR over
+// frames). Blocks come from the same per-sample products as the matrix-free
+// operator (sim/point/sample.h applied to unit vectors), so the two can never
+// disagree; each row is filled by one thread from the reverse table, in a
+// fixed order (determinism).
+#ifndef FASCIA_SRC_ASSEMBLE_H
+#define FASCIA_SRC_ASSEMBLE_H
+
+#include "system.h"
+
+/// Block CSR: row i has blocks cols[row_offsets[i] .. row_offsets[i+1]-1]
+/// (ascending frame indices), values 36 per block, row-major.
+typedef struct fascia_bsr {
+  int32_t rows;
+  int32_t *row_offsets; ///< [rows+1]
+  int32_t *cols;        ///< [blocks]
+  int32_t *diagonal;    ///< [rows] position of the diagonal block
+  fascia_real *values;  ///< [36 blocks]
+  int64_t blocks;
+} fascia_bsr;
+
+/// Pattern of frame pairs that share a sample (every frame has its diagonal).
+FASCIA_INTERN fascia_status fascia_bsr_create(fascia_ctx *ctx, const fascia_model *model, fascia_bsr *out);
+FASCIA_INTERN void fascia_bsr_destroy(fascia_bsr *bsr);
+/// out = B v
+FASCIA_INTERN void fascia_bsr_apply(const fascia_bsr *bsr, int threads, const fascia_real *v, fascia_real *out);
+
+/// Fills bsr->values with the symmetric Hessian H at the state of the last
+/// fascia_system_evaluate (what fascia_system_hessian_apply applies).
+FASCIA_INTERN void fascia_system_hessian_assemble(fascia_system *sys, fascia_bsr *bsr);
+/// Adds coefficient * M (consistent mass at the snapshot) to bsr->values.
+FASCIA_INTERN void fascia_system_mass_assemble_add(fascia_system *sys, fascia_real coefficient, fascia_bsr *bsr);
+
+#endif
