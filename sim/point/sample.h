@@ -189,9 +189,20 @@ static inline FASCIA_HD fascia_real fascia_pt_sample_gradient(const fascia_pt_mo
 /// product passes the [6N] vector and slot = pair_frame + sample_offsets[s];
 /// a per-sample block passes a local [6n] vector and slot = 0, 1, .., n-1.
 /// cache: from fascia_pt_sample_gradient at this state.
-static inline FASCIA_HD void fascia_pt_sample_stiffness(const fascia_pt_model *m, const fascia_pt_state *st,
-                                                        int32_t s, const fascia_real *cache, const fascia_real *dq,
-                                                        const int32_t *slot, fascia_real *out6) {
+/// Parts of the stiffness product (bit mask): the paper's terms (material
+/// and geometric), and the added rotation coupling and smoothing terms.
+enum {
+  FASCIA_PT_PART_BASE = 1,      ///< material and geometric (the paper's)
+  FASCIA_PT_PART_COUPLING = 2,  ///< rotation coupling
+  FASCIA_PT_PART_SMOOTHING = 4, ///< rotation smoothing
+  FASCIA_PT_PART_EXTRA = 6,
+  FASCIA_PT_PART_ALL = 7
+};
+
+static inline FASCIA_HD void fascia_pt_sample_stiffness_parts(const fascia_pt_model *m, const fascia_pt_state *st,
+                                                              int32_t s, const fascia_real *cache,
+                                                              const fascia_real *dq, const int32_t *slot,
+                                                              fascia_real *out6, int parts) {
   const fascia_real *F = cache, *P = cache + 9, *aux = cache + 18;
   const fascia_real v = m->sample_volume[s], muc = m->sample_coupling[s];
   const int32_t begin = m->sample_offsets[s], end = m->sample_offsets[s + 1];
@@ -207,9 +218,10 @@ static inline FASCIA_HD void fascia_pt_sample_stiffness(const fascia_pt_model *m
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) dF[3 * r + c] += dx[r] * g[c] + tC[3 * r + c];
   }
-  fascia_real dP[9];
-  fascia_pt_stress_diff(m->sample_law[s], m->sample_lambda[s], m->sample_mu[s], F, aux, dF, dP);
-  if (muc > 0) {
+  fascia_real dP[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+  const int base = parts & FASCIA_PT_PART_BASE, coupling = parts & FASCIA_PT_PART_COUPLING;
+  if (base) fascia_pt_stress_diff(m->sample_law[s], m->sample_lambda[s], m->sample_mu[s], F, aux, dF, dP);
+  if (coupling && muc > 0) {
     // dPt += sum_j 2 mu_c w_j (dA_j K_j + A_j dK_j), dA_j = [dtheta_j]x A_j,
     // dK_j = skew(A_j^T dF - A_j^T [dtheta_j]x F)
     for (int32_t k = begin; k < end; ++k) {
@@ -232,7 +244,7 @@ static inline FASCIA_HD void fascia_pt_sample_stiffness(const fascia_pt_model *m
     }
   }
   // curvature term: M_c and dM_c = sum_i g_c [dtheta_i]x A_i
-  const fascia_real kc = m->sample_curvature[s];
+  const fascia_real kc = (parts & FASCIA_PT_PART_SMOOTHING) ? m->sample_curvature[s] : 0;
   fascia_real Mc[27], dMc[27];
   if (kc > 0) {
     for (int q = 0; q < 27; ++q) Mc[q] = dMc[q] = 0;
@@ -257,10 +269,13 @@ static inline FASCIA_HD void fascia_pt_sample_stiffness(const fascia_pt_model *m
     // material part axial(C dPt^T) plus geometric part axial([dtheta]x C Pt^T)
     fascia_pt_mat_mult(C, dP, M);
     fascia_pt_axial(M, t);
-    fascia_pt_mat_mult(C, P, M);
-    const fascia_real trM = fascia_pt_trace(M);
-    for (int r = 0; r < 3; ++r) t[r] += M[3 * r] * dt[0] + M[3 * r + 1] * dt[1] + M[3 * r + 2] * dt[2] - trM * dt[r];
-    if (muc > 0) {
+    if (base) {
+      fascia_pt_mat_mult(C, P, M);
+      const fascia_real trM = fascia_pt_trace(M);
+      for (int r = 0; r < 3; ++r)
+        t[r] += M[3 * r] * dt[0] + M[3 * r + 1] * dt[1] + M[3 * r + 2] * dt[2] - trM * dt[r];
+    }
+    if (coupling && muc > 0) {
       // d axial(F K A^T) = axial(dF K A^T + F dK A^T + F K dA^T), dA^T = -A^T [dtheta]x
       fascia_real G[9], K[9], tF[9], H[9], dK[9], X[9], Y[9], u[3], tA[9];
       fascia_pt_mat_tmul(A, F, G);
@@ -306,6 +321,119 @@ static inline FASCIA_HD void fascia_pt_sample_stiffness(const fascia_pt_model *m
       out[r] *= v;
       out[3 + r] = v * t[r];
     }
+  }
+}
+
+static inline FASCIA_HD void fascia_pt_sample_stiffness(const fascia_pt_model *m, const fascia_pt_state *st,
+                                                        int32_t s, const fascia_real *cache, const fascia_real *dq,
+                                                        const int32_t *slot, fascia_real *out6) {
+  fascia_pt_sample_stiffness_parts(m, st, s, cache, dq, slot, out6, FASCIA_PT_PART_ALL);
+}
+
+/// The paper's part of the stiffness of sample s as a dense local matrix:
+/// n x n blocks of 6x6, block (a, b) at out + 36 (a n + b), row-major, the
+/// derivative of the gradient on the a-th pair's frame with respect to the
+/// b-th pair's frame: v B_a^T D B_b (material, D = dP/dF, B the 9x6 map of
+/// paper eq. 11) plus, on diagonal blocks, the geometric v (M - tr(M) I) with
+/// M = C Pt^T; and the rotation smoothing's theta-theta blocks in closed form,
+///   v k_c [(g_a.g_b)(tr(A_a A_b^T) I - A_b A_a^T) + [a = b](A_a N_a^T - tr(.) I)].
+/// Equals fascia_pt_sample_stiffness_parts(.., BASE | SMOOTHING) applied to
+/// unit vectors; it is how the assembled matrix is built without 6n products
+/// per sample (the rotation coupling, when on, is added by such products).
+static inline FASCIA_HD void fascia_pt_sample_local_stiffness(const fascia_pt_model *m, const fascia_pt_state *st,
+                                                              int32_t s, const fascia_real *cache, fascia_real *out) {
+  const fascia_real *F = cache, *P = cache + 9, *aux = cache + 18;
+  const fascia_real v = m->sample_volume[s];
+  const int32_t begin = m->sample_offsets[s], n = m->sample_offsets[s + 1] - begin;
+  fascia_real D[81]; // D[9 row + col] = dP_row / dF_col
+  for (int col = 0; col < 9; ++col) {
+    fascia_real e[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, dP[9];
+    e[col] = 1;
+    fascia_pt_stress_diff(m->sample_law[s], m->sample_lambda[s], m->sample_mu[s], F, aux, e, dP);
+    for (int r = 0; r < 9; ++r) D[9 * r + col] = dP[r];
+  }
+  for (int a = 0; a < n; ++a) {
+    // B_a^T D, a 6x9 matrix: rows x_k: sum_c g_c D[(k c), :]; rows theta_k:
+    // sum_c (c_c x D[(. c), :])_k, c_c the columns of C
+    const int32_t ka = begin + a;
+    const fascia_real *Aa = st->frame_A + 9 * m->pair_frame[ka], *ga = m->pair_gradient + 3 * ka;
+    fascia_real aa[3], Ca[9], BtD[54];
+    fascia_pt_pair_C(Aa, m->pair_offset + 3 * ka, ga, m->pair_weight[ka], aa, Ca);
+    for (int j = 0; j < 9; ++j) {
+      for (int k = 0; k < 3; ++k)
+        BtD[9 * k + j] = ga[0] * D[9 * (3 * k) + j] + ga[1] * D[9 * (3 * k + 1) + j] + ga[2] * D[9 * (3 * k + 2) + j];
+      fascia_real th[3] = {0, 0, 0};
+      for (int c = 0; c < 3; ++c) {
+        const fascia_real cc[3] = {Ca[c], Ca[3 + c], Ca[6 + c]};
+        const fascia_real dcol[3] = {D[9 * c + j], D[9 * (3 + c) + j], D[9 * (6 + c) + j]};
+        fascia_pt_cross_add(cc, dcol, th);
+      }
+      for (int k = 0; k < 3; ++k) BtD[9 * (3 + k) + j] = th[k];
+    }
+    for (int b = a; b < n; ++b) { // K_ba = K_ab^T (D is symmetric): mirrored below
+      // (B_a^T D) B_b: column x_k of B_b has g_c at row (k c); column
+      // theta_k maps x to sum_c (c_c x x_c)_k, x_c = (x[c], x[3+c], x[6+c])
+      const int32_t kb = begin + b;
+      const fascia_real *Ab = st->frame_A + 9 * m->pair_frame[kb], *gb = m->pair_gradient + 3 * kb;
+      fascia_real ab[3], Cb[9];
+      fascia_pt_pair_C(Ab, m->pair_offset + 3 * kb, gb, m->pair_weight[kb], ab, Cb);
+      fascia_real *K = out + 36 * (a * n + b);
+      for (int row = 0; row < 6; ++row) {
+        const fascia_real *x = BtD + 9 * row;
+        for (int k = 0; k < 3; ++k) K[6 * row + k] = v * (x[3 * k] * gb[0] + x[3 * k + 1] * gb[1] + x[3 * k + 2] * gb[2]);
+        fascia_real th[3] = {0, 0, 0};
+        for (int c = 0; c < 3; ++c) {
+          const fascia_real cc[3] = {Cb[c], Cb[3 + c], Cb[6 + c]}, xc[3] = {x[c], x[3 + c], x[6 + c]};
+          fascia_pt_cross_add(cc, xc, th);
+        }
+        for (int k = 0; k < 3; ++k) K[6 * row + 3 + k] = v * th[k];
+      }
+      if (b != a) {
+        fascia_real *Kt = out + 36 * (b * n + a);
+        for (int r = 0; r < 6; ++r)
+          for (int c = 0; c < 6; ++c) Kt[6 * c + r] = K[6 * r + c];
+      }
+    }
+    // geometric part on the diagonal block: v (M - tr(M) I), M = C Pt^T
+    fascia_real M[9];
+    fascia_pt_mat_mult(Ca, P, M);
+    const fascia_real trM = fascia_pt_trace(M);
+    fascia_real *K = out + 36 * (a * n + a);
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) K[6 * (3 + r) + 3 + c] += v * (M[3 * r + c] - (r == c ? trM : 0));
+  }
+  const fascia_real kc = m->sample_curvature[s];
+  if (!(kc > 0)) return;
+  fascia_real Mc[27]; // M_c = sum_i g_c A_i
+  for (int q = 0; q < 27; ++q) Mc[q] = 0;
+  for (int a = 0; a < n; ++a) {
+    const fascia_real *A = st->frame_A + 9 * m->pair_frame[begin + a], *g = m->pair_gradient + 3 * (begin + a);
+    for (int c = 0; c < 3; ++c)
+      for (int q = 0; q < 9; ++q) Mc[9 * c + q] += g[c] * A[q];
+  }
+  for (int a = 0; a < n; ++a) {
+    const fascia_real *Aa = st->frame_A + 9 * m->pair_frame[begin + a], *ga = m->pair_gradient + 3 * (begin + a);
+    for (int b = a; b < n; ++b) { // block (b, a) is the transpose
+      const fascia_real *Ab = st->frame_A + 9 * m->pair_frame[begin + b], *gb = m->pair_gradient + 3 * (begin + b);
+      const fascia_real gg = v * kc * fascia_pt_dot3(ga, gb);
+      fascia_real Q[9]; // A_b A_a^T
+      fascia_pt_mat_mult(Ab, Aa, Q);
+      const fascia_real trQ = fascia_pt_trace(Q);
+      fascia_real *K = out + 36 * (a * n + b), *Kt = out + 36 * (b * n + a);
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) {
+          const fascia_real e = gg * ((r == c ? trQ : 0) - Q[3 * r + c]);
+          K[6 * (3 + r) + 3 + c] += e;
+          if (b != a) Kt[6 * (3 + c) + 3 + r] += e;
+        }
+    }
+    fascia_real Nm[9], X[9];
+    for (int q = 0; q < 9; ++q) Nm[q] = ga[0] * Mc[q] + ga[1] * Mc[9 + q] + ga[2] * Mc[18 + q];
+    fascia_pt_mat_mult(Aa, Nm, X);
+    const fascia_real trX = fascia_pt_trace(X);
+    fascia_real *K = out + 36 * (a * n + a);
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) K[6 * (3 + r) + 3 + c] += v * kc * (X[3 * r + c] - (r == c ? trX : 0));
   }
 }
 

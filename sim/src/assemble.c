@@ -25,6 +25,44 @@ static int32_t owner(const fascia_model *m, int32_t k) {
   return lo;
 }
 
+static int32_t find_block(const fascia_bsr *B, int32_t i, int32_t j);
+
+// The assembly plan (see fascia_bsr in assemble.h).
+static fascia_status plan(fascia_ctx *ctx, const fascia_model *m, fascia_bsr *B) {
+  const int32_t S = m->sample_count;
+  B->local_offsets = fascia_calloc((int64_t)S + 1, sizeof(int64_t));
+  FASCIA_CHECK(B->local_offsets, ctx, FASCIA_ERR_MEMORY, "assembly: out of memory");
+  for (int32_t s = 0; s < S; ++s) {
+    const int64_t n = m->sample_offsets[s + 1] - m->sample_offsets[s];
+    B->local_offsets[s + 1] = B->local_offsets[s] + n * n;
+  }
+  const int64_t E = B->local_offsets[S];
+  B->local_block = fascia_calloc(E, sizeof(int32_t));
+  B->contrib_offsets = fascia_calloc(B->blocks + 1, sizeof(int64_t));
+  B->contrib = fascia_calloc(E, sizeof(int64_t));
+  B->cursor = fascia_calloc(B->blocks, sizeof(int64_t));
+  B->chunk_capacity = FASCIA_ASSEMBLY_CHUNK;
+  for (int32_t s = 0; s < S; ++s)
+    if (B->local_offsets[s + 1] - B->local_offsets[s] > B->chunk_capacity)
+      B->chunk_capacity = B->local_offsets[s + 1] - B->local_offsets[s];
+  B->chunk = fascia_calloc(36 * B->chunk_capacity, sizeof(fascia_real));
+  FASCIA_CHECK(B->local_block && B->contrib_offsets && B->contrib && B->cursor && B->chunk, ctx, FASCIA_ERR_MEMORY,
+               "assembly: out of memory for %lld local blocks", (long long)E);
+  for (int32_t s = 0; s < S; ++s) {
+    const int32_t begin = m->sample_offsets[s], n = m->sample_offsets[s + 1] - begin;
+    for (int32_t a = 0; a < n; ++a)
+      for (int32_t b = 0; b < n; ++b) {
+        const int32_t blk = find_block(B, m->pair_frame[begin + a], m->pair_frame[begin + b]);
+        B->local_block[B->local_offsets[s] + a * n + b] = blk;
+        B->contrib_offsets[blk + 1]++;
+      }
+  }
+  for (int64_t b = 0; b < B->blocks; ++b) B->contrib_offsets[b + 1] += B->contrib_offsets[b];
+  memcpy(B->cursor, B->contrib_offsets, (size_t)B->blocks * sizeof(int64_t));
+  for (int64_t e = 0; e < E; ++e) B->contrib[B->cursor[B->local_block[e]]++] = e; // ascending e per block
+  return FASCIA_OK;
+}
+
 fascia_status fascia_bsr_create(fascia_ctx *ctx, const fascia_model *m, fascia_bsr *out) {
   memset(out, 0, sizeof *out);
   const int32_t N = m->frame_count;
@@ -73,10 +111,16 @@ fascia_status fascia_bsr_create(fascia_ctx *ctx, const fascia_model *m, fascia_b
   for (int32_t i = 0; i < N; ++i)
     for (int32_t b = out->row_offsets[i]; b < out->row_offsets[i + 1]; ++b)
       if (out->cols[b] == i) out->diagonal[i] = b;
-  return FASCIA_OK;
+  return plan(ctx, m, out);
 }
 
 void fascia_bsr_destroy(fascia_bsr *bsr) {
+  free(bsr->local_offsets);
+  free(bsr->local_block);
+  free(bsr->contrib_offsets);
+  free(bsr->contrib);
+  free(bsr->cursor);
+  free(bsr->chunk);
   free(bsr->row_offsets);
   free(bsr->cols);
   free(bsr->diagonal);
@@ -108,12 +152,12 @@ static int32_t find_block(const fascia_bsr *B, int32_t i, int32_t j) {
   return lo;
 }
 
-// Row i of a per-sample operator: for each sample of frame i, the product
-// with unit vectors on frame i's slot gives column i, i.e. row i transposed.
-// kind 0: stiffness (exact derivative of the gradient), 1: consistent mass.
-static void assemble_rows(fascia_system *sys, fascia_bsr *B, int kind, fascia_real coefficient) {
+// Rows of the consistent mass: for each sample of frame i, the product with
+// unit vectors on frame i's slot gives column i, which is row i transposed
+// (the mass is symmetric).
+static void mass_rows(fascia_system *sys, fascia_bsr *B, fascia_real coefficient) {
   const fascia_model *m = sys->model;
-  const fascia_pt_state st = {sys->x, kind ? sys->A_mass : sys->A};
+  const fascia_pt_state st = {sys->x, sys->A_mass};
   const int32_t maxn = sys->max_neighbours;
 #pragma omp parallel num_threads(sys->threads)
   {
@@ -127,11 +171,7 @@ static void assemble_rows(fascia_system *sys, fascia_bsr *B, int kind, fascia_re
         const int32_t n = m->sample_offsets[s + 1] - begin, j = k - begin;
         for (int c = 0; c < 6; ++c) {
           dq[6 * j + c] = 1;
-          if (kind == 0)
-            fascia_pt_sample_stiffness(&sys->pm, &st, s, sys->cache + (int64_t)s * FASCIA_PT_CACHE_SIZE, dq,
-                                       sys->local_slot, col);
-          else
-            fascia_pt_sample_mass(&sys->pm, &st, s, sys->sample_mass[s], dq, sys->local_slot, col);
+          fascia_pt_sample_mass(&sys->pm, &st, s, sys->sample_mass[s], dq, sys->local_slot, col);
           dq[6 * j + c] = 0;
           for (int32_t l = 0; l < n; ++l) {
             fascia_real *blk = B->values + 36 * (int64_t)find_block(B, i, m->pair_frame[begin + l]);
@@ -145,22 +185,61 @@ static void assemble_rows(fascia_system *sys, fascia_bsr *B, int kind, fascia_re
   }
 }
 
+// Local stiffness of sample s into out (n x n blocks): the paper's terms and
+// the rotation smoothing in closed form, the rotation coupling, when on, as
+// products with the 6n unit vectors of the sample.
+static void local_stiffness(const fascia_system *sys, const fascia_pt_state *st, int32_t s, fascia_real *out,
+                            fascia_real *dq, fascia_real *col) {
+  const fascia_model *m = sys->model;
+  const fascia_real *cache = sys->cache + (int64_t)s * FASCIA_PT_CACHE_SIZE;
+  fascia_pt_sample_local_stiffness(&sys->pm, st, s, cache, out);
+  if (sys->sample_coupling[s] == 0) return;
+  const int32_t n = m->sample_offsets[s + 1] - m->sample_offsets[s];
+  for (int32_t b = 0; b < n; ++b)
+    for (int c = 0; c < 6; ++c) {
+      dq[6 * b + c] = 1;
+      fascia_pt_sample_stiffness_parts(&sys->pm, st, s, cache, dq, sys->local_slot, col, FASCIA_PT_PART_COUPLING);
+      dq[6 * b + c] = 0;
+      for (int32_t a = 0; a < n; ++a)
+        for (int r = 0; r < 6; ++r) out[36 * (a * n + b) + 6 * r + c] += col[6 * a + r];
+    }
+}
+
 void fascia_system_hessian_assemble(fascia_system *sys, fascia_bsr *B) {
+  const fascia_pt_state st = {sys->x, sys->A};
   memset(B->values, 0, 36 * (size_t)B->blocks * sizeof(fascia_real));
-  assemble_rows(sys, B, 0, 1);
-  // Off the diagonal the exact derivative is symmetric, so rows built from
-  // columns are right; its diagonal blocks are not (they differ from H by
-  // -1/2 [g_theta]x), so transpose them back, then add the frame-local terms:
-  // gravity (theta-theta) and the symmetrizing 1/2 [g_theta]x.
+  memcpy(B->cursor, B->contrib_offsets, (size_t)B->blocks * sizeof(int64_t));
+  for (int32_t s0 = 0; s0 < sys->sample_count;) {
+    // a chunk of whole samples whose local blocks fit the scratch
+    int32_t s1 = s0;
+    while (s1 < sys->sample_count && B->local_offsets[s1 + 1] - B->local_offsets[s0] <= B->chunk_capacity) ++s1;
+    const int64_t e0 = B->local_offsets[s0], e1 = B->local_offsets[s1];
+#pragma omp parallel num_threads(sys->threads)
+    {
+      fascia_real *dq = calloc(6 * (size_t)sys->max_neighbours, sizeof(fascia_real));
+      fascia_real *col = calloc(6 * (size_t)sys->max_neighbours, sizeof(fascia_real));
+#pragma omp for schedule(static)
+      for (int32_t s = s0; s < s1; ++s)
+        if (dq && col) local_stiffness(sys, &st, s, B->chunk + 36 * (B->local_offsets[s] - e0), dq, col);
+      free(dq);
+      free(col);
+#pragma omp for schedule(static)
+      for (int64_t b = 0; b < B->blocks; ++b) {
+        fascia_real *dst = B->values + 36 * b;
+        int64_t c = B->cursor[b];
+        for (; c < B->contrib_offsets[b + 1] && B->contrib[c] < e1; ++c) {
+          const fascia_real *src = B->chunk + 36 * (B->contrib[c] - e0);
+          for (int q = 0; q < 36; ++q) dst[q] += src[q];
+        }
+        B->cursor[b] = c;
+      }
+    }
+    s0 = s1;
+  }
+  // frame-local terms: gravity (theta-theta) and the symmetrizing 1/2 [g_theta]x
   const fascia_real gs = sys->gravity_scale, *g = sys->gravity;
   for (int32_t i = 0; i < sys->frame_count; ++i) {
     fascia_real *D = B->values + 36 * (int64_t)B->diagonal[i], b[3];
-    for (int a = 0; a < 6; ++a)
-      for (int c = a + 1; c < 6; ++c) {
-        const fascia_real tmp = D[6 * a + c];
-        D[6 * a + c] = D[6 * c + a];
-        D[6 * c + a] = tmp;
-      }
     fascia_pt_mat_vec(sys->A + 9 * i, sys->frame_moment + 3 * i, b);
     const fascia_real bg = fascia_pt_dot3(b, g), *t = sys->conservative_torque + 3 * i;
     const fascia_real skew[9] = {0, -t[2], t[1], t[2], 0, -t[0], -t[1], t[0], 0};
@@ -173,5 +252,5 @@ void fascia_system_hessian_assemble(fascia_system *sys, fascia_bsr *B) {
 }
 
 void fascia_system_mass_assemble_add(fascia_system *sys, fascia_real coefficient, fascia_bsr *B) {
-  assemble_rows(sys, B, 1, coefficient);
+  mass_rows(sys, B, coefficient);
 }

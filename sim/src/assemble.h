@@ -19,7 +19,20 @@ typedef struct fascia_bsr {
   int32_t *diagonal;    ///< [rows] position of the diagonal block
   fascia_real *values;  ///< [36 blocks]
   int64_t blocks;
+  // Assembly plan: every sample's n x n local blocks, numbered e =
+  // local_offsets[s] + a n + b (sample order), are summed into their BSR
+  // block in ascending e, so the sums do not depend on the thread count.
+  int64_t *local_offsets;    ///< [S+1]
+  int32_t *local_block;      ///< [E] BSR block of local block e
+  int64_t *contrib_offsets;  ///< [blocks+1]
+  int64_t *contrib;          ///< [E] local blocks of each BSR block, ascending
+  int64_t *cursor;           ///< [blocks] scratch
+  fascia_real *chunk;        ///< [36 chunk_capacity] local blocks of one chunk of samples
+  int64_t chunk_capacity;    ///< FASCIA_ASSEMBLY_CHUNK, or the largest sample's n^2
 } fascia_bsr;
+
+/// Local blocks computed per pass of the assembly (bounds its scratch: 9 MB).
+#define FASCIA_ASSEMBLY_CHUNK 32768
 
 /// Pattern of frame pairs that share a sample (every frame has its diagonal).
 FASCIA_INTERN fascia_status fascia_bsr_create(fascia_ctx *ctx, const fascia_model *model, fascia_bsr *out);

@@ -45,9 +45,15 @@ static void cholesky6_inverse(const fascia_real *L, fascia_real *inv) {
 void fascia_precond_build(fascia_preconditioner *pc, const fascia_operator *op, fascia_real *blocks) {
   fascia_system *sys = op->sys;
   if (pc->kind == FASCIA_PRECOND_NONE) return;
-  fascia_system_hessian_diagonal(sys, blocks);
   const int32_t N = sys->frame_count;
-  if (op->mass_coefficient != 0) {
+  if (op->assembled) { // the assembled matrix has them, mass included
+    for (int32_t i = 0; i < N; ++i)
+      memcpy(blocks + 36 * (int64_t)i, op->assembled->values + 36 * (int64_t)op->assembled->diagonal[i],
+             36 * sizeof(fascia_real));
+  } else {
+    fascia_system_hessian_diagonal(sys, blocks);
+  }
+  if (op->mass_coefficient != 0 && !op->assembled) {
     // consistent mass: its diagonal blocks are bounded by the lumped ones; the
     // lumped blocks are a good, positive stand-in for the preconditioner
     for (int64_t k = 0; k < 36 * (int64_t)N; ++k) blocks[k] += op->mass_coefficient * op->mass_blocks[k];

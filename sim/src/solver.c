@@ -20,7 +20,7 @@ fascia_solver_def fascia_solver_def_default(void) {
   d.cg_tolerance = FASCIA_R(1e-3);
   d.precond = FASCIA_PRECOND_BLOCK_JACOBI;
   d.linear_solver = FASCIA_LINEAR_AUTO;
-  d.mass = FASCIA_MASS_CONSISTENT;
+  d.mass = FASCIA_MASS_LUMPED;
   d.line_search = 1;
   d.load_steps = 1;
   d.cookie_ = FASCIA_DEF_COOKIE;

@@ -50,10 +50,11 @@ fascia_status fascia_system_create(fascia_ctx *ctx, const fascia_model *m, int t
   sys->cache = fascia_calloc(S * FASCIA_PT_CACHE_SIZE, sizeof(fascia_real));
   sys->sample_flags = fascia_calloc(S, sizeof(int));
   sys->conservative_torque = fascia_calloc(3 * N, sizeof(fascia_real));
+  sys->gradient_scratch = fascia_calloc(6 * N, sizeof(fascia_real));
   if (!sys->pair_offset || !sys->sample_lambda || !sys->sample_mu || !sys->sample_coupling || !sys->sample_curvature || !sys->sample_mass ||
       !sys->sample_law || !sys->local_slot || !sys->frame_mass || !sys->frame_moment || !sys->x || !sys->q ||
       !sys->A || !sys->A_mass || !sys->pair_buffer || !sys->cache || !sys->sample_flags ||
-      !sys->conservative_torque) {
+      !sys->conservative_torque || !sys->gradient_scratch) {
     fascia_system_destroy(&sys);
     return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "system: out of memory for %lld samples, %lld pairs", (long long)S,
                        (long long)P);
@@ -133,6 +134,7 @@ void fascia_system_destroy(fascia_system **sys) {
   free(s->cache);
   free(s->sample_flags);
   free(s->conservative_torque);
+  free(s->gradient_scratch);
   free(s);
   *sys = NULL;
 }
@@ -223,7 +225,8 @@ fascia_status fascia_system_evaluate(fascia_system *sys, fascia_real *gradient, 
   sys->first_inverted = first_inverted;
   sys->first_nonfinite = first_nonfinite;
   sys->energy_internal = internal;
-  if (gradient) gather(sys, gradient);
+  if (!gradient) gradient = sys->gradient_scratch;
+  gather(sys, gradient);
   // gravity and frame loads, scaled by the load factor
   const fascia_real gs = sys->gravity_scale, *g = sys->gravity;
   fascia_real external = 0;
@@ -233,7 +236,6 @@ fascia_status fascia_system_evaluate(fascia_system *sys, fascia_real *gradient, 
     external -= gs * (sys->frame_mass[i] * fascia_pt_dot3(g, sys->x + 3 * i) + fascia_pt_dot3(g, b));
     const fascia_real *load = m->frame_load + 6 * i;
     external -= gs * fascia_pt_dot3(load, sys->x + 3 * i);
-    if (!gradient) continue;
     fascia_pt_cross(b, g, bg);
     for (int c = 0; c < 3; ++c) {
       gradient[6 * i + c] -= gs * (sys->frame_mass[i] * g[c] + load[c]);

@@ -49,6 +49,7 @@ typedef struct fascia_system {
   fascia_real *cache;        ///< [S * FASCIA_PT_CACHE_SIZE]
   int *sample_flags;         ///< [S]
   fascia_real *conservative_torque; ///< [3N] theta-gradient of internal+gravity energy
+  fascia_real *gradient_scratch;    ///< [6N] gradient when the caller asks for none (the Hessian needs the torques)
   fascia_real energy_internal, energy_external;
   int32_t max_neighbours;
   int32_t inverted_count;

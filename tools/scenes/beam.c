@@ -66,7 +66,7 @@ fascia_scene_beam_def fascia_scene_beam_def_default(void) {
   def.poisson_ratio = 0.3;
   def.mass = 5;
   def.density = 0;
-  def.rotation_coupling = 1e-6; // removes the free rotation mode of unclamped bodies (docs/mechanics.md)
+  def.rotation_coupling = 0;
   def.rotation_smoothing = 0.1;
   def.gravity[2] = -9.81;
   def.cookie_ = FASCIA_SCENE_BEAM_COOKIE_;

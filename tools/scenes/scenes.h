@@ -46,7 +46,7 @@ typedef struct fascia_scene_beam_def {
   fascia_real poisson_ratio;      ///< default 0.3
   fascia_real mass;               ///< kg, total; used when density <= 0; default 5
   fascia_real density;            ///< kg/m^3; > 0 overrides mass; default 0 (from mass)
-  fascia_real rotation_coupling;  ///< fascia_material.rotation_coupling; default 1e-6
+  fascia_real rotation_coupling;  ///< fascia_material.rotation_coupling; default 0
   fascia_real rotation_smoothing; ///< fascia_material.rotation_smoothing; default 0.1 (see docs/mechanics.md)
   fascia_real gravity[3];         ///< m/s^2; default (0, 0, -9.81)
   int cookie_;                    ///< private: set by fascia_scene_beam_def_default

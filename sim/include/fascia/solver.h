@@ -44,7 +44,7 @@ typedef struct fascia_solver_def {
   fascia_precond precond;        ///< default block Jacobi
   fascia_linear_solver linear_solver; ///< default auto
   int assembled;                 ///< CG: 1 multiplies by the assembled 6x6-block matrix, 0 matrix-free (default)
-  fascia_mass_kind mass;         ///< default consistent
+  fascia_mass_kind mass;         ///< default lumped (frames carry rotational inertia; docs/mechanics.md)
   fascia_real mass_damping;      ///< Rayleigh mass damping alpha, 1/s (default 0)
   int line_search;               ///< 1: backtracking line search on the energy (default 1)
   int load_steps;                ///< static solve: external load applied in this many increments (default 1)
