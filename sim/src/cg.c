@@ -10,6 +10,8 @@
 
 #include "solver_internal.h"
 
+#define ROUNDOFF 1e-14 // relative residual at which CG has converged as far as doubles go
+
 void fascia_operator_apply(const fascia_operator *op, const fascia_real *v, fascia_real *out) {
   fascia_system *sys = op->sys;
   const int64_t n = 6 * (int64_t)sys->frame_count;
@@ -70,7 +72,9 @@ fascia_cg_result fascia_cg_solve(const fascia_operator *op, const fascia_precond
     }
     result.iterations = it + 1;
     rnorm = sqrt(fascia_dot(r, r, n));
-    if (rnorm == 0 || (!fixed && rnorm <= tolerance * bnorm)) break;
+    // A fixed iteration count still ends at round-off: past it the
+    // iterations only churn noise (and underflow into slow subnormals)
+    if (rnorm <= ROUNDOFF * bnorm || (!fixed && rnorm <= tolerance * bnorm)) break;
     fascia_precond_apply(pc, op->mask, r, z);
     const fascia_real rz_next = fascia_dot(r, z, n);
     if (rz_next <= 0) break; // preconditioner not positive: stop with p

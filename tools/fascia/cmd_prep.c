@@ -151,10 +151,15 @@ static void print_summary(const prep_run *r, const step_clock *c, const char *ou
             1e6 * v->overlaps[k].volume, 1e3 * v->overlaps[k].depth);
   for (int32_t a = 0; a < v->organ_count; ++a)
     for (int32_t b = a + 1; b < v->organ_count; ++b)
-      if (v->closest[a * v->organ_count + b] >= 0)
+      if (v->closest[a * v->organ_count + b] >= h)
         fprintf(stderr, "gap: '%s' to '%s' about %.3g mm at the closest (voxel estimate, +- %.2g mm)\n",
                 r->meshes->organs[a].name, r->meshes->organs[b].name, 1e3 * v->closest[a * v->organ_count + b],
                 1e3 * h);
+      else if (v->closest[a * v->organ_count + b] >= 0)
+        fprintf(stderr,
+                "contact: '%s' and '%s' touch (gap below the %.2g mm voxel): the tissue fills the space around the "
+                "contact that lies within max_gap of both; none is built where the surfaces touch\n",
+                r->meshes->organs[a].name, r->meshes->organs[b].name, 1e3 * h);
   int64_t voxels = 0;
   for (int32_t t = 0; t < sc->tissue_count; ++t) {
     const fascia_prep_tissue_report *tr = v->tissues + t;

@@ -19,6 +19,8 @@ int cmd_info(int argc, char **argv);
 int cmd_beam(int argc, char **argv);
 int cmd_inspect(int argc, char **argv);
 int cmd_prep(int argc, char **argv);
+int cmd_run(int argc, char **argv);
+int cmd_bench(int argc, char **argv);
 
 /// Prints "fascia NAME: <ctx message>" on stderr (and where, with --verbose)
 /// and returns 1.

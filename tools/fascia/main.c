@@ -17,6 +17,8 @@ static const fascia_command commands[] = {
     {"beam", cmd_beam, "write the paper's cantilever beam as a model file"},
     {"prep", cmd_prep, "build a tissue model from organ meshes and a scene file"},
     {"inspect", cmd_inspect, "check a model file and print a summary (--json for one JSON object)"},
+    {"run", cmd_run, "solve a model statically or with implicit Euler steps; write results"},
+    {"bench", cmd_bench, "time the paper's tables (paper) and the cantilever accuracy sweep (cantilever)"},
 };
 static const int command_count = (int)(sizeof commands / sizeof commands[0]);
 

@@ -1,0 +1,69 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// The mesh-based shape functions and the user's rules: with kind "tet" every
+// sample has the 4 barycentric weights of one tetrahedron of frames (a
+// partition of unity reproducing linear fields); a sphere region keeps every
+// sample inside it; coupling switched off for organ A shares no frame with A
+// (its surface frames stay free), coupling limited to a box for B shares
+// only frames inside the box.
+#define _POSIX_C_SOURCE 200809L // mkdtemp
+#include <math.h>
+
+#include "check.h"
+#include "prep_fixture.h"
+
+static const char scene[] =
+    "{\"fascia_scene\": 1, \"voxel_size\": 0.0005, \"seed\": 11,\n"
+    " \"materials\": {\"soft\": {\"youngs_modulus\": 3000, \"poisson_ratio\": 0.3}},\n"
+    " \"organs\": [{\"name\": \"A\", \"mesh\": \"a.obj\"}, {\"name\": \"B\", \"mesh\": \"b.obj\"}],\n"
+    " \"tissues\": [{\"name\": \"gap\", \"connects\": [\"A\", \"B\"], \"max_gap\": 0.008,\n"
+    "  \"region\": {\"sphere\": {\"center\": [0, 0, 0], \"radius\": 0.009}},\n"
+    "  \"material\": \"soft\", \"frame_spacing\": 0.003, \"sample_spacing\": 0.001,\n"
+    "  \"shape_functions\": {\"kind\": \"tet\"},\n"
+    "  \"coupling\": {\"organs\": {\"A\": false,\n"
+    "     \"B\": {\"region\": {\"box\": {\"min\": [0, -1, -1], \"max\": [1, 1, 0]}}}}}}]}\n";
+
+int main(void) {
+  char dir[256], path[512];
+  if (!fixture_tmpdir(dir)) return 1;
+  const double a_lo[3] = {-0.02, -0.0102, -0.0102}, a_hi[3] = {-0.0031, 0.0102, 0.0102};
+  const double b_lo[3] = {0.0031, -0.0102, -0.0102}, b_hi[3] = {0.02, 0.0102, 0.0102};
+  CHECK(fixture_box(dir, "a.obj", a_lo, a_hi) && fixture_box(dir, "b.obj", b_lo, b_hi) &&
+        fixture_write(dir, "scene.json", scene));
+  snprintf(path, sizeof path, "%s/scene.json", dir);
+  fascia_ctx *ctx = fixture_ctx();
+  fixture_run r;
+  CHECK_OK(fixture_prep(ctx, path, &r), ctx);
+  const fascia_model *m = r.model;
+  double worst = 0;
+  for (int32_t s = 0; s < m->sample_count; ++s) {
+    const double *p = m->sample_position + 3 * s;
+    CHECK(sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) <= 0.009 + 0.0005); // voxel centres inside, cells around
+    CHECK(m->sample_offsets[s + 1] - m->sample_offsets[s] == 4);
+    double w = 0, x[3] = {0, 0, 0};
+    for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k) {
+      w += m->pair_weight[k];
+      for (int a = 0; a < 3; ++a) x[a] += m->pair_weight[k] * m->frame_position[3 * m->pair_frame[k] + a];
+    }
+    worst = fmax(worst, fabs(w - 1));
+    for (int a = 0; a < 3; ++a) worst = fmax(worst, fabs(x[a] - p[a]) / 0.001); // relative to a millimetre
+  }
+  CHECK(worst < 1e-9);
+  int32_t on_a_surface = 0, shared_b = 0;
+  for (int32_t i = 0; i < r.points->frame_count; ++i)
+    if (r.points->frame_organ[i] == 0) {
+      ++on_a_surface;
+      CHECK(m->frame_kind[i] == FASCIA_FRAME_FREE);
+    }
+  for (int32_t c = 0; c < m->coupling_count; ++c) {
+    CHECK(m->coupling_organ[c] == 1);
+    CHECK(m->frame_position[3 * m->coupling_frame[c] + 2] <= 0);
+    ++shared_b;
+  }
+  CHECK(on_a_surface > 0 && shared_b > 0 && r.coupling->per_organ[0] == 0);
+  fixture_free(&r);
+  fascia_ctx_destroy(&ctx);
+  static const char *const files[] = {"a.obj", "b.obj", "scene.json", NULL};
+  fixture_cleanup(dir, files);
+  return CHECK_RESULT();
+}

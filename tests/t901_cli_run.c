@@ -1,0 +1,123 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// `fascia run` keeps its command-line contract: on a small beam the static
+// --json output is one JSON object whose tip probe sags (finite, negative z)
+// with the documented keys; a missing model exits 1 naming the file; unknown
+// or conflicting options exit 2 naming the option; a dynamic run with -o
+// writes the results file and its XDMF sidecar.
+// Usage: t901_cli_run PATH/TO/fascia WORK_DIR
+#define _POSIX_C_SOURCE 200809L
+#include <cjson/cJSON.h>
+#include <math.h>
+
+#include "check.h"
+#include "cli_exec.h"
+
+static cli_result result;
+
+static int check_static_json(const char *fascia, const char *model, const char *err) {
+  char args[4096];
+  snprintf(args, sizeof args, "run '%s' --static --json --threads 1", model);
+  CHECK(cli_exec(fascia, args, err, &result));
+  CHECK(result.status == 0);
+  cJSON *root = cJSON_Parse(result.out);
+  CHECK(cJSON_IsObject(root));
+  if (!cJSON_IsObject(root)) {
+    fprintf(stderr, "stdout: %.400s\nstderr: %.400s\n", result.out, result.err);
+    cJSON_Delete(root);
+    return 1;
+  }
+  static const char *const keys[] = {"probes", "ms_per_step", "newton_iterations", "cg_iterations",
+                                     "newton_iterations_per_step", "cg_iterations_per_step", "converged",
+                                     "backend", "steps", "time", "energy"};
+  for (size_t k = 0; k < sizeof keys / sizeof keys[0]; ++k)
+    if (!cJSON_GetObjectItemCaseSensitive(root, keys[k])) {
+      fprintf(stderr, "missing key '%s'\n", keys[k]);
+      CHECK(0);
+    }
+  CHECK(cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(root, "converged")));
+  const cJSON *backend = cJSON_GetObjectItemCaseSensitive(root, "backend");
+  CHECK(cJSON_IsString(backend) && !strcmp(backend->valuestring, "cpu"));
+  const cJSON *ms = cJSON_GetObjectItemCaseSensitive(root, "ms_per_step");
+  CHECK(cJSON_IsNumber(ms) && ms->valuedouble > 0);
+  const cJSON *newton = cJSON_GetObjectItemCaseSensitive(root, "newton_iterations");
+  CHECK(cJSON_IsNumber(newton) && newton->valueint >= 1);
+  const cJSON *tip = cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(root, "probes"), "tip");
+  const cJSON *u = cJSON_GetObjectItemCaseSensitive(tip, "displacement");
+  const cJSON *x = cJSON_GetObjectItemCaseSensitive(tip, "position");
+  CHECK(cJSON_IsArray(u) && cJSON_GetArraySize(u) == 3);
+  CHECK(cJSON_IsArray(x) && cJSON_GetArraySize(x) == 3);
+  if (cJSON_GetArraySize(u) == 3 && cJSON_GetArraySize(x) == 3) {
+    const double uz = cJSON_GetArrayItem(u, 2)->valuedouble;
+    // gravity pulls the free end down; the coarse beam is stiff, but a 16 m
+    // beam of E = 40 kPa under its weight sags by metres (reference -6.5 m)
+    CHECK(isfinite(uz) && uz < -1 && uz > -8);
+    // position = rest (16, 0, 0) + displacement
+    CHECK_NEAR(cJSON_GetArrayItem(x, 0)->valuedouble, 16 + cJSON_GetArrayItem(u, 0)->valuedouble, 0, 1e-9);
+    CHECK_NEAR(cJSON_GetArrayItem(x, 2)->valuedouble, uz, 0, 1e-9);
+  }
+  cJSON_Delete(root);
+  return 0;
+}
+
+int main(int argc, char **argv) {
+  if (argc < 3) {
+    fprintf(stderr, "usage: t901_cli_run PATH/TO/fascia WORK_DIR\n");
+    return 1;
+  }
+  const char *fascia = argv[1], *dir = argv[2];
+  char model[2048], err[2048], results[2048], xdmf[2048], missing[2048], args[8192];
+  snprintf(model, sizeof model, "%s/t901_beam.h5", dir);
+  snprintf(err, sizeof err, "%s/t901_stderr.txt", dir);
+  snprintf(results, sizeof results, "%s/t901_r.h5", dir);
+  snprintf(xdmf, sizeof xdmf, "%s/t901_r.xdmf", dir);
+  snprintf(missing, sizeof missing, "%s/t901_no_such_model.h5", dir);
+
+  // a small beam: 6 x 2 x 2 frames solve in well under a second
+  snprintf(args, sizeof args, "beam --frames 6x2x2 -o '%s'", model);
+  CHECK(cli_exec(fascia, args, err, &result) && result.status == 0);
+  if (result.status != 0) {
+    fprintf(stderr, "fascia beam failed: %s\n", result.err);
+    return 1;
+  }
+  if (check_static_json(fascia, model, err)) return 1;
+
+  // a missing model: failure (1), its name in the one-line reason
+  remove(missing);
+  snprintf(args, sizeof args, "run '%s' --json", missing);
+  CHECK(cli_exec(fascia, args, err, &result));
+  CHECK(result.status == 1);
+  CHECK(strstr(result.err, "t901_no_such_model.h5") != NULL);
+  CHECK(result.out[0] == '\0');
+
+  // usage errors (2) name the option
+  snprintf(args, sizeof args, "run '%s' --no-such-option", model);
+  CHECK(cli_exec(fascia, args, err, &result));
+  CHECK(result.status == 2);
+  CHECK(strstr(result.err, "--no-such-option") != NULL);
+  snprintf(args, sizeof args, "run '%s' --static --steps 3", model);
+  CHECK(cli_exec(fascia, args, err, &result) && result.status == 2);
+  snprintf(args, sizeof args, "run '%s' --steps 3 --dt -1", model);
+  CHECK(cli_exec(fascia, args, err, &result) && result.status == 2);
+  CHECK(strstr(result.err, "--dt") != NULL);
+  CHECK(cli_exec(fascia, "run", err, &result) && result.status == 2);
+
+  // a dynamic run writes the results and the XDMF sidecar
+  remove(results);
+  remove(xdmf);
+  snprintf(args, sizeof args, "run '%s' --steps 3 --dt 0.01 -o '%s' --samples --threads 1 --json", model, results);
+  CHECK(cli_exec(fascia, args, err, &result));
+  CHECK(result.status == 0);
+  CHECK(cli_file_exists(results));
+  CHECK(cli_file_exists(xdmf));
+  cJSON *root = cJSON_Parse(result.out);
+  const cJSON *steps = cJSON_GetObjectItemCaseSensitive(root, "steps");
+  const cJSON *saved = cJSON_GetObjectItemCaseSensitive(root, "saved_steps");
+  const cJSON *t = cJSON_GetObjectItemCaseSensitive(root, "time");
+  CHECK(cJSON_IsNumber(steps) && steps->valueint == 3);
+  CHECK(cJSON_IsNumber(saved) && saved->valueint == 4); // the rest state and three steps
+  CHECK(cJSON_IsNumber(t) && fabs(t->valuedouble - 0.03) < 1e-12);
+  cJSON_Delete(root);
+  if (check_failures_) fprintf(stderr, "last stderr: %.600s\n", result.err);
+  return CHECK_RESULT();
+}

@@ -1,0 +1,709 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// `fascia bench`: the benchmarks of issue 2 (STYLE.md sec. 14).
+//   paper       the rows of Tables 2 and 3 of Bosman et al. 2013 (sec. 4.3),
+//               run in the paper's mode (implicit Euler, one Newton iteration,
+//               exactly 60 CG iterations per step): minimum ms per step over
+//               repeats, against the paper's CPU figure, with the per-stage split.
+//   cantilever  accuracy against cost on the paper's cantilever (sec. 4.1):
+//               static tip deflection against the converged FE reference
+//               (CalculiX C3D20R / FEniCS P2: u = (-1.599, 0, -6.511) m) over
+//               shape kinds, frame grids, samples, neighbours, rotation smoothing.
+// Rows are printed as a text table, one JSON array (--json) or CSV (--csv).
+#define _POSIX_C_SOURCE 200809L
+#include <cjson/cJSON.h>
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "commands.h"
+#include "fascia/fascia.h"
+#include "scenes.h"
+
+static const char bench_usage[] =
+    "usage: fascia bench [--list] [paper | cantilever | ROW ...] [--table 2|3] [--backend NAME]\n"
+    "                    [--threads T] [--repeats R] [--steps S] [--json] [--csv FILE]\n"
+    "                    [--assembled] [--linear-solver cg|direct|auto]\n"
+    "                    [--shapes hex,tet,meshless] [--frames 10x2x2,20x3x3,...]\n"
+    "                    [--samples-per-cell N,...] [--neighbours K,...] [--rotation-smoothing R,...]\n"
+    "\n"
+    "  paper                 every row of the paper's Tables 2 and 3 (the default), in the paper's\n"
+    "                        mode: implicit Euler steps of 0.01 s, 1 Newton iteration, exactly 60\n"
+    "                        CG iterations; ROW (or --scene ROW) runs one row (see --list)\n"
+    "  cantilever            static cantilever: tip deflection error against the FE reference\n"
+    "                        u = (-1.599, 0, -6.511) m, Newton and CG iterations, time\n"
+    "  --list                print the benchmarks and rows\n"
+    "  --table 2|3           paper: only the rows of this table\n"
+    "  --backend NAME        cpu (default), cuda or auto\n"
+    "  --threads T           worker threads (default: OpenMP's)\n"
+    "  --repeats R           repeats, the minimum time is reported (default 3 paper, 1 cantilever)\n"
+    "  --steps S             paper: timed steps per repeat, after 2 warm-up steps (default 5)\n"
+    "  --json                one JSON array of row objects on stdout\n"
+    "  --csv FILE            also write the rows as CSV with a header row (one benchmark at a time)\n"
+    "  --assembled           CG multiplies by the assembled block matrix (default matrix-free)\n"
+    "  --linear-solver KIND  cantilever: cg, direct or auto (default: the solver's default)\n"
+    "cantilever sweep (any of these replaces the default rows by the product of the lists):\n"
+    "  --shapes LIST              hex, tet, meshless (default hex)\n"
+    "  --frames LIST              frame grids NXxNYxNZ (default 20x3x3)\n"
+    "  --samples-per-cell LIST    hex, meshless: N^3 per cell; tet: per tetrahedron (default 2; tet 4)\n"
+    "  --neighbours LIST          meshless: frames per sample (default 8)\n"
+    "  --rotation-smoothing LIST  0 is the paper's scheme (default 0.1, the beam's default)\n";
+
+// Converged nonlinear FE reference of the cantilever tip (issue 2).
+#define REFERENCE_UX (-1.599)
+#define REFERENCE_UZ (-6.511)
+#define PAPER_WARMUP_STEPS 2
+#define PAPER_CG_ITERATIONS 60
+#define PAPER_TIME_STEP 0.01
+#define MAX_LIST 16
+#define MAX_ROWS 64
+
+static double now_ms(void) {
+  struct timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return 1e3 * (double)t.tv_sec + 1e-6 * (double)t.tv_nsec;
+}
+
+static int usage_error(const char *format, const char *what) {
+  fprintf(stderr, "fascia bench: ");
+  fprintf(stderr, format, what);
+  fprintf(stderr, " (see fascia bench --help)\n");
+  return 2;
+}
+
+static int parse_count(const char *text, int *out, int minimum) {
+  char *end = NULL;
+  errno = 0;
+  const long x = strtol(text, &end, 10);
+  if (!text[0] || *end || errno || x < minimum || x > 2147483647L) return 0;
+  *out = (int)x;
+  return 1;
+}
+
+static int parse_grid(const char *text, int32_t grid[3]) {
+  char extra;
+  int a, b, c;
+  if (sscanf(text, "%dx%dx%d%c", &a, &b, &c, &extra) != 3 || a < 2 || b < 2 || c < 2) return 0;
+  grid[0] = a, grid[1] = b, grid[2] = c;
+  return 1;
+}
+
+/// A comma-separated list option of the cantilever sweep.
+typedef struct value_list {
+  int count;
+  double real[MAX_LIST];
+  int32_t grid[MAX_LIST][3];
+} value_list;
+
+// kind: 's' shape name, 'g' grid, 'i' integer >= 1, 'r' real >= 0.
+static int parse_list(const char *text, char kind, value_list *out) {
+  char buffer[1024];
+  if (strlen(text) >= sizeof buffer) return 0;
+  strcpy(buffer, text);
+  out->count = 0;
+  for (char *item = buffer, *next; item; item = next) {
+    next = strchr(item, ',');
+    if (next) *next++ = '\0';
+    if (out->count == MAX_LIST) return 0;
+    double *v = out->real + out->count;
+    char *end = NULL;
+    int n = 0;
+    if (kind == 's') {
+      const int shape = fascia_scene_shape_from_name(item);
+      if (shape < 0) return 0;
+      *v = shape;
+    } else if (kind == 'g') {
+      if (!parse_grid(item, out->grid[out->count])) return 0;
+    } else if (kind == 'i') {
+      if (!parse_count(item, &n, 1)) return 0;
+      *v = n;
+    } else {
+      errno = 0;
+      *v = strtod(item, &end);
+      if (!item[0] || *end || errno || !isfinite(*v) || *v < 0) return 0;
+    }
+    out->count++;
+  }
+  return out->count > 0;
+}
+
+/// Everything the command line sets.
+typedef struct bench_options {
+  int list, json, threads, repeats, steps, table, paper_all, cantilever, assembled;
+  int linear_given;
+  fascia_linear_solver linear;
+  const char *backend, *csv;
+  int row_count;
+  const fascia_scene_paper_row *rows[MAX_ROWS];
+  value_list shapes, grids, spc, neighbours, smoothing;
+  int sweep; ///< a cantilever list option was given
+} bench_options;
+
+static int add_row_name(bench_options *opt, const char *name) {
+  if (!strcmp(name, "paper")) opt->paper_all = 1;
+  else if (!strcmp(name, "cantilever")) opt->cantilever = 1;
+  else {
+    const fascia_scene_paper_row *row = fascia_scene_paper_find(name);
+    if (!row) return usage_error("unknown benchmark or row '%s'; fascia bench --list shows them", name);
+    if (opt->row_count == MAX_ROWS) return usage_error("%s", "too many rows");
+    opt->rows[opt->row_count++] = row;
+  }
+  return -1;
+}
+
+// Parses argv. Returns -1 to go on, else the exit status (already reported).
+static int parse_options(int argc, char **argv, bench_options *opt) {
+  memset(opt, 0, sizeof *opt);
+  opt->backend = "cpu";
+  for (int k = 1; k < argc; ++k) {
+    const char *o = argv[k];
+    if (!strcmp(o, "--help") || !strcmp(o, "-h")) {
+      fputs(bench_usage, stdout);
+      return 0;
+    }
+    if (o[0] != '-') {
+      const int rc = add_row_name(opt, o);
+      if (rc >= 0) return rc;
+      continue;
+    }
+    if (!strcmp(o, "--verbose")) continue;
+    if (!strcmp(o, "--list")) opt->list = 1;
+    else if (!strcmp(o, "--json")) opt->json = 1;
+    else if (!strcmp(o, "--assembled")) opt->assembled = 1;
+    else {
+      static const char *const valued[] = {"--table", "--backend", "--threads", "--repeats", "--steps", "--csv",
+                                           "--scene", "--linear-solver", "--shapes", "--frames",
+                                           "--samples-per-cell", "--neighbours", "--rotation-smoothing"};
+      int known = 0;
+      for (size_t j = 0; j < sizeof valued / sizeof valued[0]; ++j) known |= !strcmp(o, valued[j]);
+      if (!known) return usage_error("unknown option '%s'", o);
+      if (k + 1 >= argc) return usage_error("option %s needs a value", o);
+      const char *v = argv[++k];
+      int ok = 1;
+      if (!strcmp(o, "--table")) ok = parse_count(v, &opt->table, 2) && opt->table <= 3;
+      else if (!strcmp(o, "--backend")) ok = !strcmp(v, "cpu") || !strcmp(v, "cuda") || !strcmp(v, "auto"), opt->backend = v;
+      else if (!strcmp(o, "--threads")) ok = parse_count(v, &opt->threads, 1);
+      else if (!strcmp(o, "--repeats")) ok = parse_count(v, &opt->repeats, 1);
+      else if (!strcmp(o, "--steps")) ok = parse_count(v, &opt->steps, 1);
+      else if (!strcmp(o, "--csv")) opt->csv = v;
+      else if (!strcmp(o, "--scene")) {
+        const int rc = add_row_name(opt, v);
+        if (rc >= 0) return rc;
+      } else if (!strcmp(o, "--linear-solver")) {
+        ok = !strcmp(v, "cg") || !strcmp(v, "direct") || !strcmp(v, "auto");
+        opt->linear = !strcmp(v, "cg") ? FASCIA_LINEAR_CG : !strcmp(v, "direct") ? FASCIA_LINEAR_DIRECT : FASCIA_LINEAR_AUTO;
+        opt->linear_given = 1;
+      } else {
+        opt->sweep = 1;
+        if (!strcmp(o, "--shapes")) ok = parse_list(v, 's', &opt->shapes);
+        else if (!strcmp(o, "--frames")) ok = parse_list(v, 'g', &opt->grids);
+        else if (!strcmp(o, "--samples-per-cell")) ok = parse_list(v, 'i', &opt->spc);
+        else if (!strcmp(o, "--neighbours")) ok = parse_list(v, 'i', &opt->neighbours);
+        else ok = parse_list(v, 'r', &opt->smoothing);
+      }
+      if (!ok) {
+        fprintf(stderr, "fascia bench: bad value '%s' for %s (see fascia bench --help)\n", v, o);
+        return 2;
+      }
+    }
+  }
+  if (opt->sweep) opt->cantilever = 1;
+  if (opt->table) opt->paper_all = 1;
+  if (!opt->list && !opt->paper_all && !opt->cantilever && !opt->row_count) opt->paper_all = 1;
+  const int paper = opt->paper_all || opt->row_count;
+  if (opt->csv && paper && opt->cantilever)
+    return usage_error("%s", "--csv writes one benchmark at a time: run paper and cantilever separately");
+  if (!opt->repeats) opt->repeats = paper ? 3 : 1;
+  if (!opt->steps) opt->steps = 5;
+  return -1;
+}
+
+static void print_list(void) {
+  int count = 0;
+  const fascia_scene_paper_row *rows = fascia_scene_paper_rows(&count);
+  printf("benchmarks\n  paper        every row below, in the paper's mode (60 CG iterations per step)\n"
+         "  cantilever   static cantilever accuracy against cost\n\npaper rows\n");
+  printf("  %-26s %5s %6s %7s %10s %12s %12s\n", "name", "table", "frames", "samples", "neighbours", "paper_cpu_ms",
+         "paper_gpu_ms");
+  for (int k = 0; k < count; ++k)
+    printf("  %-26s %5d %6d %7d %10d %12.2f %12.2f\n", rows[k].name, rows[k].table, (int)rows[k].frames,
+           (int)rows[k].samples, (int)rows[k].neighbours, rows[k].paper_cpu_ms, rows[k].paper_gpu_ms);
+}
+
+static int progress_wanted(void) {
+  const char *env = getenv("FASCIA_PROGRESS");
+  if (env && !strcmp(env, "0")) return 0;
+  return isatty(2) || (env && !strcmp(env, "1"));
+}
+
+static void progress_line(const char *bench, int k, int total, const char *what) {
+  fprintf(stderr, "\rbench %s %d/%d: %s\033[K", bench, k, total, what);
+  fflush(stderr);
+}
+
+// Resident memory of the process now, MiB (Linux /proc; 0 where absent).
+static double resident_mb(void) {
+  FILE *f = fopen("/proc/self/statm", "r");
+  long pages = 0, resident = 0;
+  if (!f) return 0;
+  if (fscanf(f, "%ld %ld", &pages, &resident) != 2) resident = 0;
+  fclose(f);
+  return (double)resident * (double)sysconf(_SC_PAGESIZE) / (1024.0 * 1024.0);
+}
+
+// Peak resident memory of the process so far, MiB (ru_maxrss is KiB on Linux).
+static double peak_mb(void) {
+  struct rusage usage;
+  if (getrusage(RUSAGE_SELF, &usage) != 0) return 0;
+  return (double)usage.ru_maxrss / 1024.0;
+}
+
+static int32_t max_neighbours(const fascia_model *m) {
+  int32_t k = 0;
+  for (int32_t s = 0; s < m->sample_count; ++s) {
+    const int32_t n = m->sample_offsets[s + 1] - m->sample_offsets[s];
+    k = n > k ? n : k;
+  }
+  return k;
+}
+
+// ---------------------------------------------------------------- paper --
+
+typedef struct paper_result {
+  const fascia_scene_paper_row *row;
+  int frames, samples, neighbours, threads;
+  double ms, evaluate_ms, precond_ms, assemble_ms, cg_ms; ///< per step, best repeat
+  double cg_per_step, peak_memory_mb, memory_mb;
+} paper_result;
+
+// Times one row: warm-up steps, then `repeats` runs of `steps` steps, each
+// from the rest state; keeps the repeat with the least time per step.
+static fascia_status bench_paper_row(fascia_ctx *ctx, const bench_options *opt, const fascia_scene_paper_row *row,
+                                     paper_result *out) {
+  memset(out, 0, sizeof *out);
+  out->row = row;
+  const double base_mb = resident_mb();
+  fascia_model *model = NULL;
+  fascia_solver *solver = NULL;
+  fascia_status st = fascia_scene_paper_build(ctx, row, NULL, &model);
+  if (st != FASCIA_OK) goto cleanup;
+  fascia_solver_def def = fascia_solver_def_default();
+  def.backend = opt->backend;
+  def.threads = opt->threads;
+  def.time_step = PAPER_TIME_STEP;
+  def.newton_iterations = 1;
+  def.cg_fixed = 1;
+  def.cg_iterations = PAPER_CG_ITERATIONS;
+  def.line_search = 0;
+  def.linear_solver = FASCIA_LINEAR_CG; // the paper's mode, whatever the default
+  def.assembled = opt->assembled;
+  st = fascia_solver_create(ctx, model, &def, &solver);
+  if (st != FASCIA_OK) goto cleanup;
+  out->frames = model->frame_count;
+  out->samples = model->sample_count;
+  out->neighbours = max_neighbours(model);
+  out->threads = opt->threads > 0 ? opt->threads : fascia_ctx_threads(ctx);
+  fascia_solve_report report;
+  for (int w = 0; w < PAPER_WARMUP_STEPS && st == FASCIA_OK; ++w) st = fascia_solver_step(solver, &report);
+  out->ms = INFINITY;
+  for (int r = 0; r < opt->repeats && st == FASCIA_OK; ++r) {
+    st = fascia_solver_set_state(solver, model->frame_position, model->frame_rotation, NULL);
+    fascia_profile sum;
+    memset(&sum, 0, sizeof sum);
+    double ms = 0, cg = 0;
+    for (int n = 0; n < opt->steps && st == FASCIA_OK; ++n) {
+      const double t0 = now_ms();
+      st = fascia_solver_step(solver, &report);
+      ms += now_ms() - t0;
+      sum.evaluate_ms += report.profile.evaluate_ms;
+      sum.precond_ms += report.profile.precond_ms;
+      sum.assemble_ms += report.profile.assemble_ms;
+      sum.cg_ms += report.profile.cg_ms;
+      cg += report.cg_iterations;
+    }
+    if (st == FASCIA_OK && ms / opt->steps < out->ms) {
+      out->ms = ms / opt->steps;
+      out->evaluate_ms = sum.evaluate_ms / opt->steps;
+      out->precond_ms = sum.precond_ms / opt->steps;
+      out->assemble_ms = sum.assemble_ms / opt->steps;
+      out->cg_ms = sum.cg_ms / opt->steps;
+      out->cg_per_step = cg / opt->steps;
+    }
+  }
+  out->memory_mb = resident_mb() - base_mb;
+  out->peak_memory_mb = peak_mb();
+cleanup:
+  fascia_solver_destroy(&solver);
+  fascia_model_destroy(&model);
+  return st;
+}
+
+static void paper_text_header(void) {
+  printf("%-5s %-26s %6s %7s %3s %10s %10s %8s %10s %8s %9s %9s %9s %9s %7s\n", "table", "name", "frames", "samples",
+         "k", "ms/step", "paper_ms", "speedup", "paper_gpu", "peak_MB", "eval_ms", "precnd_ms", "asm_ms", "cg_ms",
+         "cg_iter");
+}
+
+static void paper_text_row(const paper_result *r) {
+  printf("%-5d %-26s %6d %7d %3d %10.3f %10.2f %8.2f %10.2f %8.1f %9.3f %9.3f %9.3f %9.3f %7.1f\n", r->row->table,
+         r->row->name, r->frames, r->samples, r->neighbours, r->ms, r->row->paper_cpu_ms, r->row->paper_cpu_ms / r->ms,
+         r->row->paper_gpu_ms, r->peak_memory_mb, r->evaluate_ms, r->precond_ms, r->assemble_ms, r->cg_ms,
+         r->cg_per_step);
+  fflush(stdout);
+}
+
+static cJSON *paper_json(const paper_result *r, const bench_options *opt) {
+  cJSON *o = cJSON_CreateObject();
+  cJSON_AddStringToObject(o, "bench", "paper");
+  cJSON_AddNumberToObject(o, "table", r->row->table);
+  cJSON_AddStringToObject(o, "name", r->row->name);
+  cJSON_AddNumberToObject(o, "frames", r->frames);
+  cJSON_AddNumberToObject(o, "frames_requested", r->row->frames);
+  cJSON_AddNumberToObject(o, "samples", r->samples);
+  cJSON_AddNumberToObject(o, "neighbours", r->neighbours);
+  cJSON_AddNumberToObject(o, "ms_per_step", r->ms);
+  cJSON_AddNumberToObject(o, "paper_ms", r->row->paper_cpu_ms);
+  if (r->row->paper_gpu_ms > 0) cJSON_AddNumberToObject(o, "paper_gpu_ms", r->row->paper_gpu_ms);
+  cJSON_AddNumberToObject(o, "speedup", r->row->paper_cpu_ms / r->ms);
+  cJSON_AddNumberToObject(o, "peak_memory_mb", r->peak_memory_mb);
+  cJSON_AddNumberToObject(o, "memory_mb", r->memory_mb);
+  cJSON_AddNumberToObject(o, "evaluate_ms", r->evaluate_ms);
+  cJSON_AddNumberToObject(o, "precond_ms", r->precond_ms);
+  cJSON_AddNumberToObject(o, "assemble_ms", r->assemble_ms);
+  cJSON_AddNumberToObject(o, "cg_ms", r->cg_ms);
+  cJSON_AddNumberToObject(o, "cg_iterations_per_step", r->cg_per_step);
+  cJSON_AddStringToObject(o, "backend", opt->backend);
+  cJSON_AddNumberToObject(o, "threads", r->threads);
+  cJSON_AddBoolToObject(o, "assembled", opt->assembled);
+  cJSON_AddNumberToObject(o, "steps", opt->steps);
+  cJSON_AddNumberToObject(o, "repeats", opt->repeats);
+  return o;
+}
+
+static void paper_csv(FILE *f, const paper_result *rows, int count, const bench_options *opt) {
+  fprintf(f, "table,name,frames,frames_requested,samples,neighbours,ms_per_step,paper_ms,paper_gpu_ms,speedup,"
+             "peak_memory_mb,memory_mb,evaluate_ms,precond_ms,assemble_ms,cg_ms,cg_iterations_per_step,backend,"
+             "threads,assembled,steps,repeats\n");
+  for (int k = 0; k < count; ++k) {
+    const paper_result *r = rows + k;
+    fprintf(f, "%d,%s,%d,%d,%d,%d,%.4f,%.2f,", r->row->table, r->row->name, r->frames, (int)r->row->frames,
+            r->samples, r->neighbours, r->ms, r->row->paper_cpu_ms);
+    if (r->row->paper_gpu_ms > 0) fprintf(f, "%.2f", r->row->paper_gpu_ms);
+    fprintf(f, ",%.3f,%.1f,%.2f,%.4f,%.4f,%.4f,%.4f,%.1f,%s,%d,%d,%d,%d\n", r->row->paper_cpu_ms / r->ms,
+            r->peak_memory_mb, r->memory_mb, r->evaluate_ms, r->precond_ms, r->assemble_ms, r->cg_ms, r->cg_per_step,
+            opt->backend, r->threads, opt->assembled, opt->steps, opt->repeats);
+  }
+}
+
+// ----------------------------------------------------------- cantilever --
+
+typedef struct cantilever_case {
+  int shape, spc, neighbours;
+  int32_t grid[3];
+  double smoothing;
+  int linear; ///< fascia_linear_solver for this row, -1: --linear-solver or the solver's default
+} cantilever_case;
+
+typedef struct cantilever_result {
+  cantilever_case c;
+  int frames, samples, neighbours, newton, cg, converged, direct, threads;
+  double tip[3], error_uz_percent, error_ux_percent, twist, ms;
+} cantilever_result;
+
+// The default sweep (about 1 to 2 minutes on 2 cores): grids per shape
+// kind, then one knob at a time on the 20 x 3 x 3 hexahedral beam: samples,
+// the paper's scheme (rotation smoothing 0), CG instead of the default
+// linear solver. The paper's scheme on 40 x 5 x 5 is left out: minutes.
+static int default_cases(cantilever_case *cases) {
+  static const cantilever_case table[] = {
+      {FASCIA_SCENE_HEX, 2, 0, {10, 2, 2}, 0.1, -1},       {FASCIA_SCENE_HEX, 2, 0, {20, 3, 3}, 0.1, -1},
+      {FASCIA_SCENE_HEX, 2, 0, {40, 5, 5}, 0.1, -1},       {FASCIA_SCENE_HEX, 1, 0, {20, 3, 3}, 0.1, -1},
+      {FASCIA_SCENE_HEX, 3, 0, {20, 3, 3}, 0.1, -1},       {FASCIA_SCENE_HEX, 2, 0, {10, 2, 2}, 0, -1},
+      {FASCIA_SCENE_HEX, 2, 0, {20, 3, 3}, 0, -1},         {FASCIA_SCENE_HEX, 2, 0, {20, 3, 3}, 0.1, FASCIA_LINEAR_CG},
+      {FASCIA_SCENE_TET, 4, 0, {10, 2, 2}, 0.1, -1},       {FASCIA_SCENE_TET, 4, 0, {20, 3, 3}, 0.1, -1},
+      {FASCIA_SCENE_TET, 4, 0, {40, 5, 5}, 0.1, -1},       {FASCIA_SCENE_TET, 1, 0, {20, 3, 3}, 0.1, -1},
+      {FASCIA_SCENE_MESHLESS, 2, 8, {10, 2, 2}, 0.1, -1},  {FASCIA_SCENE_MESHLESS, 2, 8, {20, 3, 3}, 0.1, -1},
+      {FASCIA_SCENE_MESHLESS, 2, 16, {20, 3, 3}, 0.1, -1}, {FASCIA_SCENE_MESHLESS, 2, 8, {40, 5, 5}, 0.1, -1},
+  };
+  const int count = (int)(sizeof table / sizeof table[0]);
+  memcpy(cases, table, sizeof table);
+  return count;
+}
+
+// The product of the list options, defaults filling the lists not given.
+static int sweep_cases(const bench_options *opt, cantilever_case *cases, int capacity) {
+  value_list shapes = opt->shapes, grids = opt->grids, spc = opt->spc, kn = opt->neighbours, sm = opt->smoothing;
+  if (!shapes.count) shapes.count = 1, shapes.real[0] = FASCIA_SCENE_HEX;
+  if (!grids.count) grids.count = 1, grids.grid[0][0] = 20, grids.grid[0][1] = 3, grids.grid[0][2] = 3;
+  if (!kn.count) kn.count = 1, kn.real[0] = 8;
+  if (!sm.count) sm.count = 1, sm.real[0] = 0.1;
+  int count = 0;
+  for (int a = 0; a < shapes.count; ++a)
+    for (int b = 0; b < grids.count; ++b)
+      for (int c = 0; c < (spc.count ? spc.count : 1); ++c)
+        for (int d = 0; d < (shapes.real[a] == FASCIA_SCENE_MESHLESS ? kn.count : 1); ++d)
+          for (int e = 0; e < sm.count; ++e) {
+            if (count == capacity) return -1;
+            cantilever_case *x = cases + count++;
+            x->shape = (int)shapes.real[a];
+            memcpy(x->grid, grids.grid[b], sizeof x->grid);
+            x->spc = spc.count ? (int)spc.real[c] : x->shape == FASCIA_SCENE_TET ? 4 : 2;
+            x->neighbours = x->shape == FASCIA_SCENE_MESHLESS ? (int)kn.real[d] : 0;
+            x->smoothing = sm.real[e];
+            x->linear = -1;
+          }
+  return count;
+}
+
+// Largest |rotation about x| over the frames, rad: the x component of each
+// frame's rotation vector (the beam axis is x; bending turns about y).
+static double max_twist(const fascia_real *q, int32_t frame_count) {
+  double twist = 0;
+  for (int32_t i = 0; i < frame_count; ++i) {
+    const fascia_real *qi = q + 4 * i;
+    const double sign = qi[0] < 0 ? -1 : 1, v = sqrt(qi[1] * qi[1] + qi[2] * qi[2] + qi[3] * qi[3]);
+    if (v == 0) continue;
+    const double angle = 2 * atan2(v, sign * qi[0]);
+    const double about_x = fabs(angle * sign * qi[1] / v);
+    twist = about_x > twist ? about_x : twist;
+  }
+  return twist;
+}
+
+// Builds one beam and solves it statically `repeats` times from rest,
+// keeping the least time. A solve that does not converge is reported
+// (converged 0), not an error.
+static fascia_status bench_cantilever_case(fascia_ctx *ctx, const bench_options *opt, const cantilever_case *c,
+                                           cantilever_result *out) {
+  memset(out, 0, sizeof *out);
+  out->c = *c;
+  fascia_scene_beam_def bdef = fascia_scene_beam_def_default();
+  memcpy(bdef.frames, c->grid, sizeof bdef.frames);
+  bdef.shape = c->shape;
+  if (c->shape == FASCIA_SCENE_TET) bdef.samples_per_tet = c->spc;
+  else bdef.samples_per_cell_dir = c->spc;
+  if (c->shape == FASCIA_SCENE_MESHLESS) bdef.neighbours = c->neighbours;
+  bdef.rotation_smoothing = c->smoothing;
+  fascia_model *model = NULL;
+  fascia_solver *solver = NULL;
+  fascia_status st = fascia_scene_beam_build(ctx, &bdef, &model);
+  if (st != FASCIA_OK) goto cleanup;
+  fascia_solver_def def = fascia_solver_def_default();
+  def.backend = opt->backend;
+  def.threads = opt->threads;
+  def.newton_iterations = 100; // the static solve's limit (solver.h)
+  def.assembled = opt->assembled;
+  if (opt->linear_given) def.linear_solver = opt->linear;
+  if (c->linear >= 0) def.linear_solver = (fascia_linear_solver)c->linear;
+  out->frames = model->frame_count;
+  out->samples = model->sample_count;
+  out->neighbours = max_neighbours(model);
+  out->threads = opt->threads > 0 ? opt->threads : fascia_ctx_threads(ctx);
+  const int32_t tip = fascia_model_find_probe(model, "tip");
+  out->ms = INFINITY;
+  for (int r = 0; r < opt->repeats; ++r) {
+    fascia_solver_destroy(&solver);
+    if ((st = fascia_solver_create(ctx, model, &def, &solver)) != FASCIA_OK) goto cleanup;
+    fascia_solve_report report;
+    const double t0 = now_ms();
+    st = fascia_solver_solve_static(solver, &report);
+    const double ms = now_ms() - t0;
+    if (st != FASCIA_OK && st != FASCIA_ERR_NUMERIC) goto cleanup;
+    if (st == FASCIA_ERR_NUMERIC && report.newton_iterations == 0) goto cleanup; // failed, not just unconverged
+    st = FASCIA_OK;
+    if (ms < out->ms) out->ms = ms;
+    out->newton = report.newton_iterations;
+    out->cg = report.cg_iterations;
+    out->converged = report.converged;
+    out->direct = report.direct;
+  }
+  fascia_real position[3] = {0, 0, 0};
+  if (tip >= 0) fascia_solver_probe_position(solver, tip, position);
+  for (int k = 0; k < 3; ++k) out->tip[k] = tip >= 0 ? position[k] - model->probe_position[3 * tip + k] : NAN;
+  out->error_uz_percent = 100 * (out->tip[2] - REFERENCE_UZ) / fabs(REFERENCE_UZ);
+  out->error_ux_percent = 100 * (out->tip[0] - REFERENCE_UX) / fabs(REFERENCE_UX);
+  out->twist = max_twist(fascia_solver_frame_rotations(solver), model->frame_count);
+cleanup:
+  fascia_solver_destroy(&solver);
+  fascia_model_destroy(&model);
+  return st;
+}
+
+static void grid_text(const int32_t grid[3], char *out, size_t size) {
+  snprintf(out, size, "%dx%dx%d", (int)grid[0], (int)grid[1], (int)grid[2]);
+}
+
+static void cantilever_text_header(void) {
+  printf("%-8s %-8s %6s %7s %3s %4s %6s %-6s %9s %9s %9s %8s %9s %6s %6s %4s %10s\n", "shape", "grid", "frames",
+         "samples", "k", "spc", "smooth", "linear", "ux_m", "uy_m", "uz_m", "err_uz%", "twist_rad", "newton", "cg",
+         "conv", "ms");
+}
+
+static void cantilever_text_row(const cantilever_result *r) {
+  char grid[48];
+  grid_text(r->c.grid, grid, sizeof grid);
+  printf("%-8s %-8s %6d %7d %3d %4d %6.3g %-6s %9.4f %9.2e %9.4f %8.2f %9.2e %6d %6d %4s %10.1f\n",
+         fascia_scene_shape_name(r->c.shape), grid, r->frames, r->samples, r->neighbours, r->c.spc, r->c.smoothing,
+         r->direct ? "direct" : "cg", r->tip[0], r->tip[1], r->tip[2], r->error_uz_percent, r->twist, r->newton, r->cg,
+         r->converged ? "yes" : "NO", r->ms);
+  fflush(stdout);
+}
+
+static cJSON *cantilever_json(const cantilever_result *r) {
+  char grid[48];
+  grid_text(r->c.grid, grid, sizeof grid);
+  cJSON *o = cJSON_CreateObject();
+  cJSON_AddStringToObject(o, "bench", "cantilever");
+  cJSON_AddStringToObject(o, "shape", fascia_scene_shape_name(r->c.shape));
+  cJSON_AddStringToObject(o, "grid", grid);
+  cJSON_AddNumberToObject(o, "frames", r->frames);
+  cJSON_AddNumberToObject(o, "samples", r->samples);
+  cJSON_AddNumberToObject(o, "neighbours", r->neighbours);
+  cJSON_AddNumberToObject(o, "samples_per_cell", r->c.spc);
+  cJSON_AddNumberToObject(o, "rotation_smoothing", r->c.smoothing);
+  cJSON_AddStringToObject(o, "linear_solver", r->direct ? "direct" : "cg");
+  cJSON_AddItemToObject(o, "tip_displacement", cJSON_CreateDoubleArray(r->tip, 3));
+  cJSON_AddNumberToObject(o, "tip_ux", r->tip[0]);
+  cJSON_AddNumberToObject(o, "tip_uz", r->tip[2]);
+  cJSON_AddNumberToObject(o, "reference_uz", REFERENCE_UZ);
+  cJSON_AddNumberToObject(o, "error_uz_percent", r->error_uz_percent);
+  cJSON_AddNumberToObject(o, "error_ux_percent", r->error_ux_percent);
+  cJSON_AddNumberToObject(o, "twist_rad", r->twist);
+  cJSON_AddNumberToObject(o, "newton_iterations", r->newton);
+  cJSON_AddNumberToObject(o, "cg_iterations", r->cg);
+  cJSON_AddBoolToObject(o, "converged", r->converged);
+  cJSON_AddNumberToObject(o, "ms", r->ms);
+  cJSON_AddNumberToObject(o, "threads", r->threads);
+  return o;
+}
+
+static void cantilever_csv(FILE *f, const cantilever_result *rows, int count) {
+  fprintf(f, "shape,grid,frames,samples,neighbours,samples_per_cell,rotation_smoothing,linear_solver,tip_ux,tip_uy,"
+             "tip_uz,reference_uz,error_uz_percent,error_ux_percent,twist_rad,newton_iterations,cg_iterations,"
+             "converged,ms,threads\n");
+  for (int k = 0; k < count; ++k) {
+    const cantilever_result *r = rows + k;
+    char grid[48];
+    grid_text(r->c.grid, grid, sizeof grid);
+    fprintf(f, "%s,%s,%d,%d,%d,%d,%g,%s,%.6f,%.3e,%.6f,%.3f,%.3f,%.3f,%.3e,%d,%d,%d,%.1f,%d\n",
+            fascia_scene_shape_name(r->c.shape), grid, r->frames, r->samples, r->neighbours, r->c.spc, r->c.smoothing,
+            r->direct ? "direct" : "cg", r->tip[0], r->tip[1], r->tip[2], REFERENCE_UZ, r->error_uz_percent,
+            r->error_ux_percent, r->twist, r->newton, r->cg, r->converged, r->ms, r->threads);
+  }
+}
+
+// ----------------------------------------------------------------- main --
+
+// The paper rows selected: named ones, or all (filtered by --table).
+static int select_paper_rows(const bench_options *opt, const fascia_scene_paper_row **rows) {
+  int count = 0, total = 0;
+  const fascia_scene_paper_row *all = fascia_scene_paper_rows(&total);
+  if (opt->paper_all)
+    for (int k = 0; k < total && count < MAX_ROWS; ++k)
+      if (!opt->table || all[k].table == opt->table) rows[count++] = all + k;
+  for (int k = 0; k < opt->row_count && count < MAX_ROWS; ++k) rows[count++] = opt->rows[k];
+  return count;
+}
+
+static int write_csv_file(const char *path, const bench_options *opt, const paper_result *paper, int paper_count,
+                          const cantilever_result *cant, int cant_count) {
+  FILE *f = fopen(path, "w");
+  if (!f) {
+    fprintf(stderr, "fascia bench: cannot write '%s': %s\n", path, strerror(errno));
+    return 1;
+  }
+  if (paper_count) paper_csv(f, paper, paper_count, opt);
+  else cantilever_csv(f, cant, cant_count);
+  if (fclose(f) != 0) {
+    fprintf(stderr, "fascia bench: cannot write '%s': %s\n", path, strerror(errno));
+    return 1;
+  }
+  return 0;
+}
+
+int cmd_bench(int argc, char **argv) {
+  bench_options opt;
+  int rc = parse_options(argc, argv, &opt);
+  if (rc >= 0) return rc;
+  if (opt.list) {
+    print_list();
+    if (!opt.paper_all && !opt.row_count && !opt.cantilever) return 0;
+  }
+  const fascia_scene_paper_row *rows[MAX_ROWS];
+  const int paper_count = select_paper_rows(&opt, rows);
+  cantilever_case cases[MAX_ROWS];
+  int case_count = 0;
+  if (opt.cantilever) {
+    case_count = opt.sweep ? sweep_cases(&opt, cases, MAX_ROWS) : default_cases(cases);
+    if (case_count < 0) return usage_error("the sweep has more than %s rows; give shorter lists", "64");
+  }
+  paper_result *paper = calloc((size_t)paper_count + 1, sizeof *paper);
+  cantilever_result *cant = calloc((size_t)case_count + 1, sizeof *cant);
+  cJSON *array = opt.json ? cJSON_CreateArray() : NULL;
+  fascia_ctx *ctx = cli_ctx(opt.threads, 0);
+  const int show = progress_wanted();
+  fascia_status st = FASCIA_OK;
+  if (!paper || !cant || (opt.json && !array)) {
+    fprintf(stderr, "fascia bench: out of memory\n");
+    rc = 1;
+    goto done;
+  }
+  if (paper_count && !opt.json) paper_text_header();
+  for (int k = 0; k < paper_count && st == FASCIA_OK; ++k) {
+    if (show) progress_line("paper", k + 1, paper_count, rows[k]->name);
+    st = bench_paper_row(ctx, &opt, rows[k], paper + k);
+    if (show) fprintf(stderr, "\r\033[K");
+    if (st != FASCIA_OK) break;
+    if (opt.json) cJSON_AddItemToArray(array, paper_json(paper + k, &opt));
+    else paper_text_row(paper + k);
+  }
+  if (st == FASCIA_OK && case_count && !opt.json) {
+    if (paper_count) printf("\n");
+    printf("cantilever 16 x 1 x 1 m, static; reference tip u = (%.3f, 0, %.3f) m (CalculiX C3D20R / FEniCS P2);\n"
+           "err_uz%% > 0: too stiff; twist: largest |rotation about x| over frames\n",
+           REFERENCE_UX, REFERENCE_UZ);
+    cantilever_text_header();
+  }
+  for (int k = 0; k < case_count && st == FASCIA_OK; ++k) {
+    char what[96], grid[48];
+    grid_text(cases[k].grid, grid, sizeof grid);
+    snprintf(what, sizeof what, "%s %s", fascia_scene_shape_name(cases[k].shape), grid);
+    if (show) progress_line("cantilever", k + 1, case_count, what);
+    st = bench_cantilever_case(ctx, &opt, cases + k, cant + k);
+    if (show) fprintf(stderr, "\r\033[K");
+    if (st == FASCIA_ERR_ARGUMENT) { // a beam the options describe cannot be built
+      fprintf(stderr, "fascia bench: %s (see fascia bench --help)\n", fascia_ctx_message(ctx));
+      rc = 2;
+      goto done;
+    }
+    if (st != FASCIA_OK) break;
+    if (opt.json) cJSON_AddItemToArray(array, cantilever_json(cant + k));
+    else cantilever_text_row(cant + k);
+  }
+  if (st != FASCIA_OK) {
+    rc = cli_fail("bench", ctx, st);
+    goto done;
+  }
+  if (opt.json) {
+    char *text = cJSON_PrintUnformatted(array);
+    if (!text) {
+      fprintf(stderr, "fascia bench: out of memory\n");
+      rc = 1;
+      goto done;
+    }
+    printf("%s\n", text);
+    cJSON_free(text);
+  }
+  rc = opt.csv ? write_csv_file(opt.csv, &opt, paper, paper_count, cant, case_count) : 0;
+done:
+  cJSON_Delete(array);
+  free(paper);
+  free(cant);
+  fascia_ctx_destroy(&ctx);
+  return rc;
+}

@@ -1,0 +1,465 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// `fascia run MODEL.h5`: loads a model, solves it statically or with
+// implicit Euler steps (DESIGN.md "The mechanics"), optionally writes the
+// results file (HDF5 + XDMF), and prints a summary: steps, ms per step,
+// Newton and CG iterations, each probe's displacement, the largest strain;
+// as text or as one JSON object on stdout (the CLI contract of issue 2).
+// SIGINT/SIGTERM during a dynamic run stop it after the current step; the
+// results file is then closed cleanly with the steps done.
+#define _POSIX_C_SOURCE 200809L
+#include <cjson/cJSON.h>
+#include <errno.h>
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "commands.h"
+#include "fascia/fascia.h"
+
+static const char run_usage[] =
+    "usage: fascia run MODEL.h5 [--static | --steps N [--dt S]] [-o RESULTS.h5] [--save-every K]\n"
+    "                  [--samples] [--json] [--backend cpu|cuda|auto] [--threads T]\n"
+    "                  [--newton-iterations N] [--newton-tolerance X] [--cg-iterations N]\n"
+    "                  [--cg-tolerance X] [--cg-fixed] [--precond none|jacobi|block]\n"
+    "                  [--mass consistent|lumped] [--damping ALPHA] [--load-steps N]\n"
+    "                  [--linear-solver cg|direct|auto] [--assembled]\n"
+    "\n"
+    "Solves a model file: static equilibrium (default) or N implicit Euler steps.\n"
+    "  --static               static equilibrium under gravity and loads (the default)\n"
+    "  --steps N              N implicit (backward) Euler steps instead\n"
+    "  --dt S                 time step, s (default 0.01; needs --steps)\n"
+    "  -o RESULTS.h5          write frame states (HDF5) and RESULTS.xdmf for ParaView\n"
+    "  --save-every K         dynamic: save the rest state, every K-th step and the last (default 1)\n"
+    "  --samples              also save sample positions and the fields 'strain', 'stress'\n"
+    "  --json                 print one JSON object on stdout instead of text\n"
+    "  --backend NAME         cpu, cuda or auto (default auto)\n"
+    "  --threads T            worker threads (default: OpenMP's)\n"
+    "  --newton-iterations N  most Newton iterations per solve (default 20; static 100)\n"
+    "  --newton-tolerance X   relative gradient tolerance (default 1e-6)\n"
+    "  --cg-iterations N      most CG iterations per linear solve (default 200)\n"
+    "  --cg-tolerance X       relative CG residual (default 1e-3)\n"
+    "  --cg-fixed             always exactly --cg-iterations CG iterations (the paper's mode)\n"
+    "  --precond KIND         none, jacobi or block (6x6 block Jacobi, default)\n"
+    "  --mass KIND            consistent or lumped (default lumped)\n"
+    "  --damping ALPHA        Rayleigh mass damping, 1/s (default 0)\n"
+    "  --load-steps N         static: apply the load in N increments (default 1)\n"
+    "  --linear-solver KIND   cg, direct (banded Cholesky of the assembled tangent) or auto\n"
+    "                         (direct where the band is small enough, else CG; the default)\n"
+    "  --assembled            CG multiplies by the assembled block matrix (default matrix-free)\n"
+    "  --verbose              on failure, also print where the error was found\n"
+    "Progress with the time left goes to stderr when it is a terminal (or FASCIA_PROGRESS=1).\n";
+
+// Set by SIGINT/SIGTERM during a dynamic run; checked after every step.
+static volatile sig_atomic_t run_stop_requested = 0;
+
+static void on_stop_signal(int sig) {
+  (void)sig;
+  run_stop_requested = 1;
+}
+
+static double now_ms(void) {
+  struct timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return 1e3 * (double)t.tv_sec + 1e-6 * (double)t.tv_nsec;
+}
+
+static int usage_error(const char *format, const char *what) {
+  fprintf(stderr, "fascia run: ");
+  fprintf(stderr, format, what);
+  fprintf(stderr, " (see fascia run --help)\n");
+  return 2;
+}
+
+static int parse_real(const char *text, fascia_real *out) {
+  char *end = NULL;
+  errno = 0;
+  const double x = strtod(text, &end);
+  if (!text[0] || *end || errno || !isfinite(x)) return 0;
+  *out = x;
+  return 1;
+}
+
+static int parse_count(const char *text, int *out, int minimum) {
+  char *end = NULL;
+  errno = 0;
+  const long x = strtol(text, &end, 10);
+  if (!text[0] || *end || errno || x < minimum || x > 2147483647L) return 0;
+  *out = (int)x;
+  return 1;
+}
+
+/// Everything the command line sets.
+typedef struct run_options {
+  const char *model_path, *results_path;
+  int dynamic, static_given, steps, save_every, samples, json, threads;
+  int newton_given;
+  fascia_solver_def solver;
+} run_options;
+
+// Parses argv into opt. Returns -1 to go on, else the exit status (0 for
+// --help, 2 for a usage error, already reported).
+static int parse_options(int argc, char **argv, run_options *opt) {
+  memset(opt, 0, sizeof *opt);
+  opt->solver = fascia_solver_def_default();
+  opt->save_every = 1;
+  int dt_given = 0;
+  for (int k = 1; k < argc; ++k) {
+    const char *o = argv[k];
+    if (!strcmp(o, "--help") || !strcmp(o, "-h")) {
+      fputs(run_usage, stdout);
+      return 0;
+    }
+    if (o[0] != '-' || !o[1]) {
+      if (opt->model_path) return usage_error("unexpected argument '%s': one model file only", o);
+      opt->model_path = o;
+      continue;
+    }
+    if (!strcmp(o, "--verbose")) continue;
+    if (!strcmp(o, "--static")) opt->static_given = 1;
+    else if (!strcmp(o, "--samples")) opt->samples = 1;
+    else if (!strcmp(o, "--json")) opt->json = 1;
+    else if (!strcmp(o, "--cg-fixed")) opt->solver.cg_fixed = 1;
+    else if (!strcmp(o, "--assembled")) opt->solver.assembled = 1;
+    else {
+      static const char *const valued[] = {"--steps", "--dt", "-o", "--output", "--save-every", "--backend",
+                                           "--threads", "--newton-iterations", "--newton-tolerance",
+                                           "--cg-iterations", "--cg-tolerance", "--precond", "--mass", "--damping",
+                                           "--load-steps", "--linear-solver"};
+      int known = 0;
+      for (size_t j = 0; j < sizeof valued / sizeof valued[0]; ++j) known |= !strcmp(o, valued[j]);
+      if (!known) return usage_error("unknown option '%s'", o);
+      if (k + 1 >= argc) return usage_error("option %s needs a value", o);
+      const char *v = argv[++k];
+      fascia_solver_def *d = &opt->solver;
+      int ok = 1;
+      if (!strcmp(o, "--steps")) ok = parse_count(v, &opt->steps, 1), opt->dynamic = 1;
+      else if (!strcmp(o, "--dt")) ok = parse_real(v, &d->time_step) && d->time_step > 0, dt_given = 1;
+      else if (!strcmp(o, "-o") || !strcmp(o, "--output")) opt->results_path = v;
+      else if (!strcmp(o, "--save-every")) ok = parse_count(v, &opt->save_every, 1);
+      else if (!strcmp(o, "--backend")) ok = !strcmp(v, "cpu") || !strcmp(v, "cuda") || !strcmp(v, "auto"), d->backend = v;
+      else if (!strcmp(o, "--threads")) ok = parse_count(v, &opt->threads, 1), d->threads = opt->threads;
+      else if (!strcmp(o, "--newton-iterations")) ok = parse_count(v, &d->newton_iterations, 1), opt->newton_given = 1;
+      else if (!strcmp(o, "--newton-tolerance")) ok = parse_real(v, &d->newton_tolerance) && d->newton_tolerance >= 0;
+      else if (!strcmp(o, "--cg-iterations")) ok = parse_count(v, &d->cg_iterations, 1);
+      else if (!strcmp(o, "--cg-tolerance"))
+        ok = parse_real(v, &d->cg_tolerance) && d->cg_tolerance >= 0 && d->cg_tolerance < 1;
+      else if (!strcmp(o, "--precond")) {
+        ok = !strcmp(v, "none") || !strcmp(v, "jacobi") || !strcmp(v, "block");
+        d->precond = !strcmp(v, "none") ? FASCIA_PRECOND_NONE
+                     : !strcmp(v, "jacobi") ? FASCIA_PRECOND_JACOBI
+                                            : FASCIA_PRECOND_BLOCK_JACOBI;
+      } else if (!strcmp(o, "--mass")) {
+        ok = !strcmp(v, "consistent") || !strcmp(v, "lumped");
+        d->mass = !strcmp(v, "lumped") ? FASCIA_MASS_LUMPED : FASCIA_MASS_CONSISTENT;
+      } else if (!strcmp(o, "--linear-solver")) {
+        ok = !strcmp(v, "cg") || !strcmp(v, "direct") || !strcmp(v, "auto");
+        d->linear_solver = !strcmp(v, "cg")       ? FASCIA_LINEAR_CG
+                           : !strcmp(v, "direct") ? FASCIA_LINEAR_DIRECT
+                                                  : FASCIA_LINEAR_AUTO;
+      } else if (!strcmp(o, "--damping")) ok = parse_real(v, &d->mass_damping) && d->mass_damping >= 0;
+      else ok = parse_count(v, &d->load_steps, 1); // --load-steps
+      if (!ok) {
+        fprintf(stderr, "fascia run: bad value '%s' for %s (see fascia run --help)\n", v, o);
+        return 2;
+      }
+    }
+  }
+  if (!opt->model_path) return usage_error("%s", "missing MODEL.h5, the model file to run");
+  if (opt->static_given && opt->dynamic) return usage_error("%s", "--static and --steps exclude each other");
+  if (dt_given && !opt->dynamic) return usage_error("%s", "--dt needs --steps N (a dynamic run)");
+  if (!opt->dynamic && !opt->newton_given) opt->solver.newton_iterations = 100;
+  return -1;
+}
+
+/// What the run did, for the summary.
+typedef struct run_totals {
+  int steps, newton, cg, converged_steps, interrupted, saved, direct_steps;
+  int *newton_per_step, *cg_per_step; ///< [steps requested]
+  double solve_ms;                    ///< wall time inside the solver
+  fascia_profile profile;             ///< summed over steps
+  fascia_real energy;                 ///< potential energy at the end, J
+} run_totals;
+
+static void add_report(run_totals *t, const fascia_solve_report *r) {
+  t->newton_per_step[t->steps] = r->newton_iterations;
+  t->cg_per_step[t->steps] = r->cg_iterations;
+  t->newton += r->newton_iterations;
+  t->cg += r->cg_iterations;
+  t->converged_steps += r->converged != 0;
+  t->direct_steps += r->direct != 0;
+  t->profile.assemble_ms += r->profile.assemble_ms;
+  t->profile.evaluate_ms += r->profile.evaluate_ms;
+  t->profile.precond_ms += r->profile.precond_ms;
+  t->profile.cg_ms += r->profile.cg_ms;
+  t->profile.total_ms += r->profile.total_ms;
+  t->energy = r->energy;
+  t->steps++;
+}
+
+static int progress_wanted(void) {
+  const char *env = getenv("FASCIA_PROGRESS");
+  if (env && !strcmp(env, "0")) return 0;
+  return isatty(2) || (env && !strcmp(env, "1"));
+}
+
+// One progress line on stderr with an estimate of the time left.
+static void print_step_progress(int done, int total, fascia_real t, double elapsed_ms, int final) {
+  const long left_s = done > 0 ? lround(elapsed_ms / done * (total - done) / 1e3) : 0;
+  fprintf(stderr, "\rstep %d/%d  t = %.4g s  %.3g ms/step  time left %ld:%02ld:%02ld\033[K%s", done, total, t,
+          done > 0 ? elapsed_ms / done : 0.0, left_s / 3600, left_s / 60 % 60, left_s % 60, final ? "\n" : "");
+  fflush(stderr);
+}
+
+// Appends the solver's current state (and sample data) to the results.
+static fascia_status save_state(fascia_results *res, const fascia_solver *solver, int samples, fascia_real *sample_buffer, fascia_real *strain, fascia_real *stress) {
+  if (samples) fascia_solver_sample_positions(solver, sample_buffer);
+  fascia_status st = fascia_results_append(res, fascia_solver_time(solver), fascia_solver_frame_positions(solver),
+                                           fascia_solver_frame_rotations(solver), samples ? sample_buffer : NULL);
+  if (st != FASCIA_OK || !samples) return st;
+  fascia_solver_sample_strain(solver, strain, stress);
+  st = fascia_results_append_field(res, "strain", strain);
+  if (st == FASCIA_OK) st = fascia_results_append_field(res, "stress", stress);
+  return st;
+}
+
+// Dynamic run: steps with the results saved every K steps; stops early on
+// a signal or a failed step (its status returned, the state before it kept).
+static fascia_status run_steps(fascia_solver *solver, const run_options *opt,
+                               fascia_results *res, fascia_real *buffers[3], run_totals *tot) {
+  const int show = progress_wanted();
+  fascia_status st = FASCIA_OK;
+  if (res) st = save_state(res, solver, opt->samples, buffers[0], buffers[1], buffers[2]);
+  void (*old_int)(int) = signal(SIGINT, on_stop_signal);
+  void (*old_term)(int) = signal(SIGTERM, on_stop_signal);
+  double last_print = -1e30;
+  int last_saved = 0;
+  for (int n = 1; n <= opt->steps && st == FASCIA_OK; ++n) {
+    fascia_solve_report report;
+    const double t0 = now_ms();
+    st = fascia_solver_step(solver, &report);
+    tot->solve_ms += now_ms() - t0;
+    if (st != FASCIA_OK) break;
+    add_report(tot, &report);
+    const int last = n == opt->steps || run_stop_requested;
+    if (res && (n % opt->save_every == 0 || last)) {
+      st = save_state(res, solver, opt->samples, buffers[0], buffers[1], buffers[2]);
+      last_saved = n;
+    }
+    if (show && (now_ms() - last_print > 200 || last)) {
+      print_step_progress(n, opt->steps, fascia_solver_time(solver), tot->solve_ms, last);
+      last_print = now_ms();
+    }
+    if (run_stop_requested) {
+      tot->interrupted = 1;
+      break;
+    }
+  }
+  // a failed step: keep the last good state in the file
+  if (res && st == FASCIA_ERR_NUMERIC && tot->steps > last_saved)
+    (void)save_state(res, solver, opt->samples, buffers[0], buffers[1], buffers[2]);
+  if (show && tot->steps < opt->steps && !tot->interrupted) fputc('\n', stderr); // a failed step
+  signal(SIGINT, old_int == SIG_ERR ? SIG_DFL : old_int);
+  signal(SIGTERM, old_term == SIG_ERR ? SIG_DFL : old_term);
+  return st;
+}
+
+static fascia_real largest(const fascia_real *values, int32_t count) {
+  fascia_real m = 0;
+  for (int32_t s = 0; s < count; ++s)
+    if (values[s] > m || values[s] != values[s]) m = values[s]; // NaN shows
+  return m;
+}
+
+static void probe_state(const fascia_solver *solver, const fascia_model *m, int32_t p, fascia_real pos[3],
+                        fascia_real disp[3]) {
+  fascia_solver_probe_position(solver, p, pos);
+  for (int c = 0; c < 3; ++c) disp[c] = pos[c] - m->probe_position[3 * p + c];
+}
+
+// Which linear solver the steps used: "direct", "cg" or "mixed".
+static const char *linear_name(const run_totals *t) {
+  return t->direct_steps == 0 ? "cg" : t->direct_steps == t->steps ? "direct" : "mixed";
+}
+
+static void print_text(const run_options *opt, const fascia_model *m, fascia_solver *solver,
+                       const run_totals *t, fascia_real max_strain, fascia_real max_stress) {
+  const int steps = t->steps > 0 ? t->steps : 1;
+  printf("model       %s (%d frames, %d samples)\n", opt->model_path, (int)m->frame_count, (int)m->sample_count);
+  if (opt->dynamic)
+    printf("run         %d of %d implicit Euler steps of %g s%s, t = %g s\n", t->steps, opt->steps,
+           opt->solver.time_step, t->interrupted ? " (interrupted)" : "", fascia_solver_time(solver));
+  else
+    printf("run         static equilibrium, %s\n", t->converged_steps == t->steps ? "converged" : "NOT converged");
+  printf("backend     %s, %d threads\n", fascia_solver_backend(solver), opt->threads);
+  printf("linear      %s\n", linear_name(t));
+  printf("time        %.3f ms per step (evaluate %.3f, preconditioner %.3f, assembly %.3f, linear solves %.3f)\n",
+         t->solve_ms / steps, t->profile.evaluate_ms / steps, t->profile.precond_ms / steps,
+         t->profile.assemble_ms / steps, t->profile.cg_ms / steps);
+  printf("iterations  Newton %d (%.2f per step), CG %d (%.1f per step)", t->newton, (double)t->newton / steps,
+         t->cg, (double)t->cg / steps);
+  if (opt->dynamic) printf(", %d of %d steps converged", t->converged_steps, t->steps);
+  printf("\nenergy      potential %.9g J, kinetic %.9g J\n", t->energy,
+         fascia_solver_kinetic_energy(solver));
+  printf("strain      largest %.6g (Green-Lagrange norm), largest stress %.6g Pa\n", max_strain, max_stress);
+  for (int32_t p = 0; p < m->probe_count; ++p) {
+    fascia_real pos[3], u[3];
+    probe_state(solver, m, p, pos, u);
+    printf("probe %-12s displacement (%.6g, %.6g, %.6g) m, position (%.6g, %.6g, %.6g) m\n", m->probe_name[p],
+           u[0], u[1], u[2], pos[0], pos[1], pos[2]);
+  }
+  if (opt->results_path) printf("results     %s (%d saved steps)\n", opt->results_path, t->saved);
+}
+
+static cJSON *int_array(const int *values, int count) {
+  cJSON *a = cJSON_CreateArray();
+  for (int k = 0; a && k < count; ++k) cJSON_AddItemToArray(a, cJSON_CreateNumber(values[k]));
+  return a;
+}
+
+static int print_json(const run_options *opt, const fascia_model *m, fascia_solver *solver, const run_totals *t,
+                      fascia_real max_strain, fascia_real max_stress) {
+  const int steps = t->steps > 0 ? t->steps : 1;
+  cJSON *root = cJSON_CreateObject();
+  cJSON_AddStringToObject(root, "model", opt->model_path);
+  cJSON_AddStringToObject(root, "mode", opt->dynamic ? "dynamic" : "static");
+  cJSON_AddStringToObject(root, "backend", fascia_solver_backend(solver));
+  cJSON_AddStringToObject(root, "linear_solver", linear_name(t));
+  cJSON_AddNumberToObject(root, "threads", opt->threads);
+  cJSON_AddNumberToObject(root, "frames", m->frame_count);
+  cJSON_AddNumberToObject(root, "samples", m->sample_count);
+  cJSON_AddNumberToObject(root, "steps", t->steps);
+  if (opt->dynamic) cJSON_AddNumberToObject(root, "dt", opt->solver.time_step);
+  cJSON_AddNumberToObject(root, "time", fascia_solver_time(solver));
+  cJSON_AddBoolToObject(root, "converged", t->steps > 0 && t->converged_steps == t->steps);
+  cJSON_AddNumberToObject(root, "converged_steps", t->converged_steps);
+  cJSON_AddBoolToObject(root, "interrupted", t->interrupted);
+  cJSON_AddNumberToObject(root, "ms_per_step", t->solve_ms / steps);
+  cJSON_AddNumberToObject(root, "wall_ms", t->solve_ms);
+  cJSON_AddNumberToObject(root, "newton_iterations", t->newton);
+  cJSON_AddNumberToObject(root, "cg_iterations", t->cg);
+  cJSON_AddItemToObject(root, "newton_iterations_per_step", int_array(t->newton_per_step, t->steps));
+  cJSON_AddItemToObject(root, "cg_iterations_per_step", int_array(t->cg_per_step, t->steps));
+  cJSON *profile = cJSON_AddObjectToObject(root, "profile_ms_per_step");
+  cJSON_AddNumberToObject(profile, "evaluate", t->profile.evaluate_ms / steps);
+  cJSON_AddNumberToObject(profile, "precond", t->profile.precond_ms / steps);
+  cJSON_AddNumberToObject(profile, "assemble", t->profile.assemble_ms / steps);
+  cJSON_AddNumberToObject(profile, "cg", t->profile.cg_ms / steps);
+  cJSON_AddNumberToObject(profile, "total", t->profile.total_ms / steps);
+  cJSON_AddNumberToObject(root, "energy", t->energy);
+  cJSON_AddNumberToObject(root, "kinetic_energy", fascia_solver_kinetic_energy(solver));
+  cJSON_AddNumberToObject(root, "max_strain", max_strain);
+  cJSON_AddNumberToObject(root, "max_stress", max_stress);
+  cJSON *probes = cJSON_AddObjectToObject(root, "probes");
+  for (int32_t p = 0; p < m->probe_count; ++p) {
+    fascia_real pos[3], u[3];
+    probe_state(solver, m, p, pos, u);
+    cJSON *item = cJSON_AddObjectToObject(probes, m->probe_name[p]);
+    cJSON_AddItemToObject(item, "displacement", cJSON_CreateDoubleArray(u, 3));
+    cJSON_AddItemToObject(item, "position", cJSON_CreateDoubleArray(pos, 3));
+    cJSON_AddItemToObject(item, "rest_position", cJSON_CreateDoubleArray(m->probe_position + 3 * p, 3));
+  }
+  if (opt->results_path) {
+    cJSON_AddStringToObject(root, "results", opt->results_path);
+    cJSON_AddNumberToObject(root, "saved_steps", t->saved);
+  } else {
+    cJSON_AddNullToObject(root, "results");
+  }
+  char *text = cJSON_PrintUnformatted(root);
+  cJSON_Delete(root);
+  if (!text) {
+    fprintf(stderr, "fascia run: out of memory\n");
+    return 1;
+  }
+  printf("%s\n", text);
+  cJSON_free(text);
+  return 0;
+}
+
+int cmd_run(int argc, char **argv) {
+  run_options opt;
+  int rc = parse_options(argc, argv, &opt);
+  if (rc >= 0) return rc;
+  fascia_ctx *ctx = cli_ctx(opt.threads, 1);
+  if (opt.threads <= 0) opt.threads = fascia_ctx_threads(ctx); // for the summary
+  fascia_model *model = NULL;
+  fascia_solver *solver = NULL;
+  fascia_results *res = NULL;
+  fascia_real *buffers[3] = {NULL, NULL, NULL}; // sample positions [3S], strain [S], stress [S]
+  run_totals tot;
+  memset(&tot, 0, sizeof tot);
+  fascia_status st = fascia_model_load(ctx, opt.model_path, &model);
+  if (st != FASCIA_OK) goto done;
+  st = fascia_solver_create(ctx, model, &opt.solver, &solver);
+  if (st == FASCIA_ERR_ARGUMENT) { // an impossible setting: the user's option
+    fprintf(stderr, "fascia run: %s (see fascia run --help)\n", fascia_ctx_message(ctx));
+    rc = 2;
+    goto done;
+  }
+  if (st != FASCIA_OK) goto done;
+  const size_t S = (size_t)model->sample_count + 1, steps = (size_t)(opt.dynamic ? opt.steps : 1);
+  buffers[0] = malloc(3 * S * sizeof(fascia_real));
+  buffers[1] = malloc(S * sizeof(fascia_real));
+  buffers[2] = malloc(S * sizeof(fascia_real));
+  tot.newton_per_step = malloc(steps * sizeof(int));
+  tot.cg_per_step = malloc(steps * sizeof(int));
+  if (!buffers[0] || !buffers[1] || !buffers[2] || !tot.newton_per_step || !tot.cg_per_step) {
+    st = fascia_ctx_fail(ctx, FASCIA_ERR_MEMORY, __FILE__, __LINE__, "run: out of memory for %d samples",
+                         (int)model->sample_count);
+    goto done;
+  }
+  fascia_results_def rdef = fascia_results_def_default();
+  rdef.write_samples = opt.samples != 0;
+  rdef.every = opt.dynamic ? opt.save_every : 1;
+  if (opt.dynamic) {
+    if (opt.results_path && (st = fascia_results_open(ctx, opt.results_path, model, &rdef, &res)) != FASCIA_OK)
+      goto done;
+    st = run_steps(solver, &opt, res, buffers, &tot);
+  } else {
+    fascia_solve_report report;
+    const double t0 = now_ms();
+    st = fascia_solver_solve_static(solver, &report);
+    tot.solve_ms = now_ms() - t0;
+    if (st == FASCIA_OK || st == FASCIA_ERR_NUMERIC) add_report(&tot, &report); // not converged: state kept
+    // the equilibrium (or the state reached) is written either way
+    if ((st == FASCIA_OK || st == FASCIA_ERR_NUMERIC) && opt.results_path) {
+      fascia_status wst = fascia_results_open(ctx, opt.results_path, model, &rdef, &res);
+      if (wst == FASCIA_OK) wst = save_state(res, solver, opt.samples, buffers[0], buffers[1], buffers[2]);
+      if (wst != FASCIA_OK) st = wst;
+    }
+  }
+  if (res) {
+    tot.saved = fascia_results_step_count(res);
+    fascia_status cst = fascia_results_close(&res);
+    if (st == FASCIA_OK) st = cst;
+  }
+  if (tot.steps > 0 || !opt.dynamic) {
+    fascia_solver_sample_strain(solver, buffers[1], buffers[2]);
+    const fascia_real max_strain = largest(buffers[1], model->sample_count);
+    const fascia_real max_stress = largest(buffers[2], model->sample_count);
+    if (opt.json)
+      rc = print_json(&opt, model, solver, &tot, max_strain, max_stress);
+    else
+      print_text(&opt, model, solver, &tot, max_strain, max_stress);
+    fflush(stdout);
+  }
+  if (tot.interrupted && st == FASCIA_OK) { // not what was asked: a failure, with the steps done kept
+    fprintf(stderr, "fascia run: interrupted after step %d of %d%s\n", tot.steps, opt.steps,
+            opt.results_path ? "; results file closed with the steps done" : "");
+    rc = 1;
+  }
+done:
+  if (st != FASCIA_OK && rc != 2) rc = cli_fail("run", ctx, st);
+  else if (rc < 0) rc = 0;
+  fascia_results_destroy(&res);
+  free(buffers[0]), free(buffers[1]), free(buffers[2]);
+  free(tot.newton_per_step), free(tot.cg_per_step);
+  fascia_solver_destroy(&solver);
+  fascia_model_destroy(&model);
+  fascia_ctx_destroy(&ctx);
+  return rc;
+}
