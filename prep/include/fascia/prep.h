@@ -1,0 +1,344 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// Preprocessing: from organ surface meshes and a scene file to a packaged
+// connective-tissue model (DESIGN.md "The two stages", issue 3). One function
+// per stage, each taking the context, the scene (the def), its inputs and its
+// outputs:
+//
+//   scene JSON ─ fascia_prep_scene_load
+//        │ fascia_prep_import           assimp: parts, units, transform
+//        │ fascia_prep_repair           CGAL: check, repair what is safe, report
+//        │ fascia_prep_voxelize         inside/outside per organ, OpenVDB distances,
+//        │                              the tissue region (outside every organ,
+//        │                              within max_gap of each connected organ)
+//        │ fascia_prep_sample           Poisson-disk frames (surface + interior)
+//        │                              and samples with Voronoi volumes
+//        │ fascia_prep_shape_functions  MLS weights over neighbours found by
+//        │                              geodesic distance inside the region
+//        │ fascia_prep_couple           surface frames shared with organs
+//        ▼ fascia_prep_package          fascia_model + provenance JSON
+//
+// The intermediate results are plain structures of arrays (like fascia_model)
+// so that tests and tools can look inside; each has a _destroy that accepts
+// NULL. On error a stage leaves its outputs NULL and its inputs unchanged.
+// Lengths are metres, volumes m^3, everything in the scene's world frame.
+#ifndef FASCIA_PREP_H
+#define FASCIA_PREP_H
+
+#include "fascia/base.h"
+#include "fascia/model.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+// ---------------------------------------------------------------- the scene
+
+/// Shape-function kinds of a tissue.
+typedef enum fascia_prep_shape_kind {
+  FASCIA_PREP_SHAPE_MLS = 0, ///< meshless: moving least squares, linear basis
+  FASCIA_PREP_SHAPE_TET = 1  ///< mesh-based: barycentric in a tetrahedral mesh of the frames
+} fascia_prep_shape_kind;
+
+/// A box or a sphere that limits a tissue or its coupling.
+typedef enum fascia_prep_shape_region {
+  FASCIA_PREP_REGION_NONE = 0,
+  FASCIA_PREP_REGION_BOX = 1,
+  FASCIA_PREP_REGION_SPHERE = 2
+} fascia_prep_shape_region;
+
+typedef struct fascia_prep_region {
+  int32_t kind;         ///< fascia_prep_shape_region
+  fascia_real min[3];   ///< box, m
+  fascia_real max[3];   ///< box, m
+  fascia_real center[3]; ///< sphere, m
+  fascia_real radius;   ///< sphere, m
+} fascia_prep_region;
+
+/// A list of part names of one organ (node or mesh names in its file).
+typedef struct fascia_prep_parts {
+  int32_t count; ///< 0: every part
+  char **names;  ///< [count]
+} fascia_prep_parts;
+
+/// One organ of the scene.
+typedef struct fascia_prep_organ_def {
+  char name[FASCIA_NAME_SIZE];
+  char *mesh;              ///< path as written in the scene
+  char *mesh_path;         ///< path resolved against the scene's folder
+  fascia_prep_parts parts; ///< which parts of the file (0: all)
+  fascia_real scale;       ///< file units to metres (1, 0.01, 0.001)
+  char units[8];           ///< "m", "cm", "mm"
+  /// affine map applied after scaling: x' = A x + t, row-major 3x4 [A | t]
+  fascia_real transform[12];
+  int32_t kind;            ///< fascia_organ_kind
+  fascia_motion motion;    ///< PRESCRIBED only (keys owned by the scene)
+  int32_t material;        ///< DEFORMABLE only: index into materials, else -1
+} fascia_prep_organ_def;
+
+/// Coupling rule of a tissue for one organ.
+typedef struct fascia_prep_coupling_def {
+  int32_t organ;             ///< organ index
+  int32_t enabled;           ///< 0: never share frames with this organ
+  fascia_prep_region region; ///< share only inside this region (NONE: anywhere)
+  fascia_prep_parts parts;   ///< share only on these parts (0: all)
+} fascia_prep_coupling_def;
+
+/// One tissue: the connective tissue between two or more organs.
+typedef struct fascia_prep_tissue_def {
+  char name[FASCIA_NAME_SIZE];
+  int32_t organ_count;
+  int32_t *organs;           ///< [organ_count] organs it connects
+  fascia_real max_gap;       ///< largest gap it bridges, m
+  fascia_prep_region region; ///< optional box or sphere
+  int32_t region_organ;      ///< with region_parts: limit to near these parts of this organ (-1: none)
+  fascia_prep_parts region_parts;
+  int32_t material;          ///< index into materials
+  fascia_real frame_spacing; ///< Poisson-disk radius of frames, m
+  fascia_real sample_spacing; ///< Poisson-disk radius of samples, m
+  int32_t shape_kind;        ///< fascia_prep_shape_kind
+  int32_t neighbours;        ///< frames per sample (MLS), >= 4
+  fascia_real coupling_tolerance; ///< frames this close to an organ surface are shared, m
+  int32_t coupling_count;
+  fascia_prep_coupling_def *coupling; ///< [coupling_count] per-organ rules (absent organs: share everywhere)
+  fascia_real min_component;  ///< pieces of region smaller than this are dropped, m^3
+} fascia_prep_tissue_def;
+
+/// A parsed scene file (the def of every stage). Built by
+/// fascia_prep_scene_load or _parse; owned, freed by _destroy.
+typedef struct fascia_prep_scene {
+  char *path;                 ///< scene file ("(memory)" when parsed from text)
+  char *text;                 ///< its text, kept for provenance
+  char *output;               ///< "output" key as given (relative to the working folder), or NULL
+  fascia_real voxel_size;     ///< m
+  uint64_t seed;              ///< random seed of the Poisson sampling
+  fascia_real gravity[3];     ///< m/s^2
+  fascia_real close_holes;    ///< open meshes: holes up to about this wide are closed, m
+  int32_t material_count;
+  fascia_material *materials; ///< [material_count]
+  int32_t organ_count;
+  fascia_prep_organ_def *organs; ///< [organ_count]
+  int32_t tissue_count;
+  fascia_prep_tissue_def *tissues; ///< [tissue_count]
+} fascia_prep_scene;
+
+/// Reads and checks a scene file. Unknown keys, wrong types, missing
+/// required keys and impossible values are errors naming the file and the key
+/// ("scene 'a.json' tissues[0].max_gap: expected a number > 0, found "x"").
+/// Mesh paths are resolved against the scene file's folder. On error *out is NULL.
+FASCIA_API fascia_status fascia_prep_scene_load(fascia_ctx *ctx, const char *path, fascia_prep_scene **out);
+/// The same from text; base_dir resolves relative mesh paths (NULL: ".").
+FASCIA_API fascia_status fascia_prep_scene_parse(fascia_ctx *ctx, const char *text, const char *origin,
+                                                 const char *base_dir, fascia_prep_scene **out);
+FASCIA_API void fascia_prep_scene_destroy(fascia_prep_scene **scene);
+
+// ---------------------------------------------------------------- import, repair
+
+/// What the check found and what the repair did, per organ.
+typedef struct fascia_prep_mesh_report {
+  int32_t parts_used;
+  int32_t duplicate_vertices_merged;
+  int32_t degenerate_faces_removed;
+  int32_t duplicate_faces_removed;
+  int32_t nonmanifold_vertices_split;
+  int32_t components;
+  int32_t closed_components;
+  int32_t border_edges;       ///< after repair
+  int32_t holes_filled;
+  int32_t holes_left;
+  int32_t components_reoriented;
+  int32_t self_intersections; ///< intersecting face pairs (counted up to a limit)
+  fascia_real area;           ///< m^2
+  fascia_real enclosed_volume; ///< m^3, from the inside/outside voxels (after voxelize)
+  char inside_rule[160];      ///< how inside/outside was decided (set by voxelize)
+} fascia_prep_mesh_report;
+
+/// The surface of one organ: triangles of the chosen parts, in metres, world.
+typedef struct fascia_prep_mesh {
+  char name[FASCIA_NAME_SIZE];
+  int32_t vertex_count, triangle_count;
+  fascia_real *vertices;  ///< [3 vertex_count]
+  int32_t *triangles;     ///< [3 triangle_count]
+  int32_t *triangle_part; ///< [triangle_count] index into part_names
+  int32_t part_count;
+  char **part_names;      ///< [part_count] node or mesh names
+  char sha256[65];        ///< of the mesh file
+  fascia_real bounds[6];  ///< min xyz, max xyz
+  fascia_prep_mesh_report report;
+} fascia_prep_mesh;
+
+typedef struct fascia_prep_meshes {
+  int32_t count; ///< = scene organ_count, same order
+  fascia_prep_mesh *organs;
+} fascia_prep_meshes;
+
+/// Reads every organ's mesh file with assimp, keeps the named parts (error
+/// lists the parts the file has), applies units and transform, refuses NaN
+/// coordinates and empty meshes. On error *out is NULL.
+FASCIA_API fascia_status fascia_prep_import(fascia_ctx *ctx, const fascia_prep_scene *scene,
+                                            fascia_prep_meshes **out);
+/// Checks and repairs every mesh in place with CGAL, part by part: merges
+/// duplicate vertices, removes degenerate and duplicate faces, splits
+/// non-manifold vertices, orients each component consistently (closed ones
+/// outward), fills small holes, counts self-intersections; fills the report.
+/// On error the meshes may be partly repaired: destroy them.
+FASCIA_API fascia_status fascia_prep_repair(fascia_ctx *ctx, const fascia_prep_scene *scene,
+                                            fascia_prep_meshes *meshes);
+FASCIA_API void fascia_prep_meshes_destroy(fascia_prep_meshes **meshes);
+
+// ---------------------------------------------------------------- voxelize
+
+/// Two organs that overlap (both claim the same voxels).
+typedef struct fascia_prep_overlap {
+  int32_t a, b;          ///< organ indices, a < b
+  fascia_real volume;    ///< m^3
+  fascia_real depth;     ///< largest penetration depth, m
+} fascia_prep_overlap;
+
+/// Per-tissue figures of the region.
+typedef struct fascia_prep_tissue_report {
+  int64_t voxels;           ///< region voxels kept
+  fascia_real volume;       ///< m^3, kept
+  int32_t components;       ///< pieces kept
+  int32_t dropped_components;
+  fascia_real dropped_volume; ///< m^3 in pieces smaller than min_component
+} fascia_prep_tissue_report;
+
+/// The scene's voxel grid: voxel (i, j, k) is centred at
+/// origin + h (i, j, k), index i + nx (j + ny k). It covers every tissue's
+/// candidate space; organs have signed distances on it (negative inside).
+typedef struct fascia_prep_volume {
+  fascia_real voxel_size;   ///< h, m
+  fascia_real origin[3];    ///< centre of voxel (0,0,0), m
+  int32_t dims[3];          ///< nx, ny, nz
+  int32_t lattice[3];       ///< global lattice index of voxel (0,0,0): origin = h lattice
+  uint8_t *region;          ///< [voxels] 0: not tissue; t + 1: tissue t
+  int32_t organ_count;
+  float **distance;         ///< [organ_count][voxels] signed distance, m (NULL: organ not near)
+  float *band;              ///< [organ_count] distances are exact up to this, m
+  int32_t tissue_count;
+  fascia_prep_tissue_report *tissues; ///< [tissue_count]
+  int32_t overlap_count;
+  fascia_prep_overlap *overlaps;      ///< [overlap_count]
+  fascia_real *closest;     ///< [organ_count^2] closest surface distance between organs near a tissue, m (-1: not measured)
+} fascia_prep_volume;
+
+/// Decides inside/outside for every organ (edge-crossing flood fill from
+/// outside: the outer surface counts, so thin double shells and cavities are
+/// inside; open meshes whose holes leak get a morphological closing), measures
+/// overlaps, and builds each tissue's region. Errors: voxel size too large for
+/// a gap, organs farther apart than the gap, a region that selects nothing.
+FASCIA_API fascia_status fascia_prep_voxelize(fascia_ctx *ctx, const fascia_prep_scene *scene,
+                                              fascia_prep_meshes *meshes, fascia_prep_volume **out);
+FASCIA_API void fascia_prep_volume_destroy(fascia_prep_volume **volume);
+/// Tissue index + 1 of the voxel holding point (m), 0 if none or off the grid.
+FASCIA_API int fascia_prep_volume_region_at(const fascia_prep_volume *volume, const fascia_real *point);
+
+// ---------------------------------------------------------------- sample
+
+/// Frames and samples of every tissue. Frame i sits on an organ surface when
+/// frame_organ[i] >= 0 (then frame_triangle[i] is the closest triangle).
+typedef struct fascia_prep_points {
+  int32_t frame_count, sample_count;
+  fascia_real *frame_position;  ///< [3N] m
+  int32_t *frame_tissue;        ///< [N]
+  int32_t *frame_organ;         ///< [N] organ whose surface it lies on, or -1
+  int32_t *frame_triangle;      ///< [N] triangle of that organ, or -1
+  int64_t *frame_voxel;         ///< [N] region voxel it is attached to
+  fascia_real *sample_position; ///< [3S] m
+  fascia_real *sample_volume;   ///< [S] m^3, sum = region volume
+  int32_t *sample_tissue;       ///< [S]
+  int64_t *sample_voxel;        ///< [S] voxel holding the sample
+} fascia_prep_points;
+
+/// Poisson-disk sampling in each tissue region (fixed seed: same input, same
+/// points): surface frames first (on the organ surfaces the region touches),
+/// then interior frames, then samples; each region voxel goes to the sample
+/// nearest inside the region, so sample volumes add up to the region volume.
+FASCIA_API fascia_status fascia_prep_sample(fascia_ctx *ctx, const fascia_prep_scene *scene,
+                                            const fascia_prep_meshes *meshes, const fascia_prep_volume *volume,
+                                            fascia_prep_points **out);
+FASCIA_API void fascia_prep_points_destroy(fascia_prep_points **points);
+
+// ---------------------------------------------------------------- shape functions
+
+/// Sample -> frame weights in CSR form (the model's layout).
+typedef struct fascia_prep_weights {
+  int32_t sample_count, pair_count;
+  int32_t *sample_offsets;    ///< [S+1]
+  int32_t *pair_frame;        ///< [P] ascending within a sample
+  fascia_real *pair_weight;   ///< [P] sum 1 per sample
+  fascia_real *pair_gradient; ///< [3P] 1/m, sum 0 per sample
+  fascia_real max_linear_error; ///< largest |sum w_i x_i - p_s| over samples, m
+} fascia_prep_weights;
+
+/// Weights of every sample. MLS: the `neighbours` frames nearest by geodesic
+/// distance through the tissue's region voxels (so never across an organ or
+/// a void), more when the moment matrix is ill-conditioned; cubic kernel;
+/// reproduces constant and linear fields exactly. TET: barycentric weights
+/// in a Delaunay tetrahedralisation of the frames whose tets lie inside the
+/// region (CGAL).
+FASCIA_API fascia_status fascia_prep_shape_functions(fascia_ctx *ctx, const fascia_prep_scene *scene,
+                                                     const fascia_prep_volume *volume,
+                                                     const fascia_prep_points *points, fascia_prep_weights **out);
+FASCIA_API void fascia_prep_weights_destroy(fascia_prep_weights **weights);
+
+// ---------------------------------------------------------------- coupling
+
+/// Frames shared with organs: entry c says frame[c] sits on organ[c]'s
+/// triangle[c] at barycentric[3c..3c+2].
+typedef struct fascia_prep_coupling {
+  int32_t count;
+  int32_t *organ, *frame, *triangle; ///< [count]
+  fascia_real *barycentric;          ///< [3 count]
+  int32_t *per_organ;                ///< [organ_count] shared frames per organ
+  int32_t organ_count;
+} fascia_prep_coupling;
+
+/// Chooses the shared frames: surface frames (and any frame within the
+/// tissue's coupling tolerance of an organ it may couple to), filtered by the
+/// tissue's per-organ rules (off, region, parts).
+FASCIA_API fascia_status fascia_prep_couple(fascia_ctx *ctx, const fascia_prep_scene *scene,
+                                            const fascia_prep_meshes *meshes, const fascia_prep_points *points,
+                                            fascia_prep_coupling **out);
+FASCIA_API void fascia_prep_coupling_destroy(fascia_prep_coupling **coupling);
+
+// ---------------------------------------------------------------- package
+
+/// Figures of a run for provenance (all optional).
+typedef struct fascia_prep_run_info {
+  const char *tool;          ///< "fascia prep 0.1.0"
+  const char *command_line;  ///< as typed
+  int32_t step_count;
+  const char *const *step_name;   ///< [step_count]
+  const double *step_seconds;     ///< [step_count]
+  const double *step_peak_bytes;  ///< [step_count]
+} fascia_prep_run_info;
+
+/// Builds the model: organs (repaired surfaces, kinds, motions), materials,
+/// frames (coupling frames of FIXED organs are FASCIA_FRAME_FIXED, of
+/// PRESCRIBED organs FASCIA_FRAME_PRESCRIBED with the organ's motion),
+/// samples, pairs, the reverse table, coupling, gravity and the provenance
+/// JSON (input files and hashes, the scene, the version, every parameter and
+/// every report). The model is validated before it is returned.
+FASCIA_API fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_scene *scene,
+                                             const fascia_prep_meshes *meshes, const fascia_prep_volume *volume,
+                                             const fascia_prep_points *points, const fascia_prep_weights *weights,
+                                             const fascia_prep_coupling *coupling, const fascia_prep_run_info *info,
+                                             fascia_model **out);
+
+/// Writes a ParaView preview into folder dir (created if absent): organs.vtk
+/// (surfaces, organ id), region.vtk (voxel grid: tissue id, distances),
+/// frames.vtk (kind, organ shared with), samples.vtk (volume, tissue),
+/// coupling.vtk (shared frames). Files are written to .tmp and renamed.
+FASCIA_API fascia_status fascia_prep_preview(fascia_ctx *ctx, const char *dir, const fascia_prep_meshes *meshes,
+                                             const fascia_prep_volume *volume, const fascia_prep_points *points,
+                                             const fascia_prep_coupling *coupling);
+
+/// Hex SHA-256 of a file into hex[65].
+FASCIA_API fascia_status fascia_prep_file_sha256(fascia_ctx *ctx, const char *path, char hex[65]);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

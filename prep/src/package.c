@@ -1,0 +1,309 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// Stage 7, package: the fascia_model the simulator loads, with the
+// provenance of every number in it (input files and their SHA-256, the scene
+// text, the version, every parameter used, every report of the stages).
+#include <cjson/cJSON.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fascia/shape.h"
+#include "prep_util.h"
+
+#ifndef FASCIA_PREP_VERSION
+#define FASCIA_PREP_VERSION "unknown"
+#endif
+
+static cJSON *vector(const double *x, int n) {
+  cJSON *a = cJSON_CreateArray();
+  for (int k = 0; a && k < n; ++k) cJSON_AddItemToArray(a, cJSON_CreateNumber(x[k]));
+  return a;
+}
+
+static cJSON *parts_json(const fascia_prep_parts *parts) {
+  if (parts->count == 0) return cJSON_CreateString("all");
+  cJSON *a = cJSON_CreateArray();
+  for (int32_t k = 0; a && k < parts->count; ++k) cJSON_AddItemToArray(a, cJSON_CreateString(parts->names[k]));
+  return a;
+}
+
+static cJSON *region_json(const fascia_prep_region *r) {
+  cJSON *o = cJSON_CreateObject();
+  if (r->kind == FASCIA_PREP_REGION_BOX) {
+    cJSON_AddStringToObject(o, "kind", "box");
+    cJSON_AddItemToObject(o, "min", vector(r->min, 3));
+    cJSON_AddItemToObject(o, "max", vector(r->max, 3));
+  } else if (r->kind == FASCIA_PREP_REGION_SPHERE) {
+    cJSON_AddStringToObject(o, "kind", "sphere");
+    cJSON_AddItemToObject(o, "center", vector(r->center, 3));
+    cJSON_AddNumberToObject(o, "radius", r->radius);
+  } else {
+    cJSON_AddStringToObject(o, "kind", "none");
+  }
+  return o;
+}
+
+static const char *organ_kind_name(int32_t kind) {
+  switch (kind) {
+  case FASCIA_ORGAN_FIXED: return "fixed";
+  case FASCIA_ORGAN_PRESCRIBED: return "prescribed";
+  case FASCIA_ORGAN_RIGID: return "rigid";
+  case FASCIA_ORGAN_DEFORMABLE: return "deformable";
+  default: return "unknown";
+  }
+}
+
+static cJSON *provenance(const fascia_prep_scene *scene, const fascia_prep_meshes *meshes,
+                         const fascia_prep_volume *vol, const fascia_prep_points *pts, const fascia_prep_weights *W,
+                         const fascia_prep_coupling *cpl, const fascia_prep_run_info *info) {
+  cJSON *root = cJSON_CreateObject();
+  cJSON_AddStringToObject(root, "tool", info && info->tool ? info->tool : "fascia_prep");
+  cJSON_AddStringToObject(root, "fascia_version", fascia_version());
+  cJSON_AddStringToObject(root, "prep_version", FASCIA_PREP_VERSION);
+  if (info && info->command_line) cJSON_AddStringToObject(root, "command_line", info->command_line);
+  // the scene: path, hash, and its content as parsed JSON
+  cJSON *sc = cJSON_AddObjectToObject(root, "scene");
+  cJSON_AddStringToObject(sc, "path", scene->path);
+  char hex[65];
+  prep_sha256_buffer(scene->text, strlen(scene->text), hex);
+  cJSON_AddStringToObject(sc, "sha256", hex);
+  cJSON *text = cJSON_Parse(scene->text);
+  if (text) cJSON_AddItemToObject(sc, "content", text);
+  // input meshes
+  cJSON *inputs = cJSON_AddArrayToObject(root, "inputs");
+  for (int32_t o = 0; o < scene->organ_count; ++o) {
+    const fascia_prep_organ_def *d = scene->organs + o;
+    cJSON *e = cJSON_CreateObject();
+    cJSON_AddStringToObject(e, "organ", d->name);
+    cJSON_AddStringToObject(e, "file", d->mesh_path);
+    cJSON_AddStringToObject(e, "sha256", meshes->organs[o].sha256);
+    cJSON_AddItemToObject(e, "parts", parts_json(&d->parts));
+    cJSON_AddStringToObject(e, "units", d->units);
+    cJSON_AddItemToObject(e, "transform_3x4", vector(d->transform, 12));
+    cJSON_AddStringToObject(e, "model", organ_kind_name(d->kind));
+    cJSON_AddItemToArray(inputs, e);
+  }
+  // every parameter actually used, defaults included
+  cJSON *par = cJSON_AddObjectToObject(root, "parameters");
+  cJSON_AddNumberToObject(par, "voxel_size", scene->voxel_size);
+  cJSON_AddNumberToObject(par, "seed", (double)scene->seed);
+  cJSON_AddNumberToObject(par, "close_holes", scene->close_holes);
+  cJSON_AddItemToObject(par, "gravity", vector(scene->gravity, 3));
+  cJSON_AddNumberToObject(par, "max_hole_edges_filled", 64);
+  cJSON_AddNumberToObject(par, "mls_support_margin", FASCIA_SHAPE_SUPPORT_MARGIN);
+  cJSON *mats = cJSON_AddArrayToObject(par, "materials");
+  for (int32_t k = 0; k < scene->material_count; ++k) {
+    const fascia_material *m = scene->materials + k;
+    cJSON *e = cJSON_CreateObject();
+    cJSON_AddStringToObject(e, "name", m->name);
+    cJSON_AddStringToObject(e, "law", fascia_law_name(m->law));
+    cJSON_AddNumberToObject(e, "youngs_modulus", m->youngs_modulus);
+    cJSON_AddNumberToObject(e, "poisson_ratio", m->poisson_ratio);
+    cJSON_AddNumberToObject(e, "density", m->density);
+    cJSON_AddNumberToObject(e, "rotation_coupling", m->rotation_coupling);
+    cJSON_AddItemToArray(mats, e);
+  }
+  cJSON *tis = cJSON_AddArrayToObject(par, "tissues");
+  for (int32_t t = 0; t < scene->tissue_count; ++t) {
+    const fascia_prep_tissue_def *td = scene->tissues + t;
+    cJSON *e = cJSON_CreateObject();
+    cJSON_AddStringToObject(e, "name", td->name);
+    cJSON *con = cJSON_AddArrayToObject(e, "connects");
+    for (int32_t k = 0; k < td->organ_count; ++k)
+      cJSON_AddItemToArray(con, cJSON_CreateString(scene->organs[td->organs[k]].name));
+    cJSON_AddNumberToObject(e, "max_gap", td->max_gap);
+    cJSON_AddItemToObject(e, "region", region_json(&td->region));
+    if (td->region_organ >= 0) {
+      cJSON_AddStringToObject(e, "region_parts_organ", scene->organs[td->region_organ].name);
+      cJSON_AddItemToObject(e, "region_parts", parts_json(&td->region_parts));
+    }
+    cJSON_AddStringToObject(e, "material", scene->materials[td->material].name);
+    cJSON_AddNumberToObject(e, "frame_spacing", td->frame_spacing);
+    cJSON_AddNumberToObject(e, "sample_spacing", td->sample_spacing);
+    cJSON_AddStringToObject(e, "shape_functions", td->shape_kind == FASCIA_PREP_SHAPE_TET ? "tet" : "mls");
+    cJSON_AddNumberToObject(e, "neighbours", td->neighbours);
+    cJSON_AddNumberToObject(e, "coupling_tolerance", td->coupling_tolerance);
+    cJSON_AddNumberToObject(e, "min_component", td->min_component);
+    cJSON *rules = cJSON_AddArrayToObject(e, "coupling_rules");
+    for (int32_t k = 0; k < td->coupling_count; ++k) {
+      const fascia_prep_coupling_def *c = td->coupling + k;
+      cJSON *r = cJSON_CreateObject();
+      cJSON_AddStringToObject(r, "organ", scene->organs[c->organ].name);
+      cJSON_AddBoolToObject(r, "enabled", c->enabled);
+      cJSON_AddItemToObject(r, "region", region_json(&c->region));
+      cJSON_AddItemToObject(r, "parts", parts_json(&c->parts));
+      cJSON_AddItemToArray(rules, r);
+    }
+    cJSON_AddItemToArray(tis, e);
+  }
+  // reports
+  cJSON *rep = cJSON_AddObjectToObject(root, "reports");
+  cJSON *org = cJSON_AddArrayToObject(rep, "organs");
+  for (int32_t o = 0; o < meshes->count; ++o) {
+    const fascia_prep_mesh *m = meshes->organs + o;
+    const fascia_prep_mesh_report *r = &m->report;
+    cJSON *e = cJSON_CreateObject();
+    cJSON_AddStringToObject(e, "name", m->name);
+    cJSON_AddNumberToObject(e, "parts", r->parts_used);
+    cJSON_AddNumberToObject(e, "vertices", m->vertex_count);
+    cJSON_AddNumberToObject(e, "triangles", m->triangle_count);
+    cJSON_AddNumberToObject(e, "duplicate_vertices_merged", r->duplicate_vertices_merged);
+    cJSON_AddNumberToObject(e, "degenerate_faces_removed", r->degenerate_faces_removed);
+    cJSON_AddNumberToObject(e, "duplicate_faces_removed", r->duplicate_faces_removed);
+    cJSON_AddNumberToObject(e, "nonmanifold_vertices_split", r->nonmanifold_vertices_split);
+    cJSON_AddNumberToObject(e, "components", r->components);
+    cJSON_AddNumberToObject(e, "closed_components", r->closed_components);
+    cJSON_AddNumberToObject(e, "components_reoriented", r->components_reoriented);
+    cJSON_AddNumberToObject(e, "border_edges", r->border_edges);
+    cJSON_AddNumberToObject(e, "holes_filled", r->holes_filled);
+    cJSON_AddNumberToObject(e, "holes_left", r->holes_left);
+    cJSON_AddNumberToObject(e, "self_intersecting_face_pairs", r->self_intersections);
+    cJSON_AddNumberToObject(e, "area_m2", r->area);
+    cJSON_AddNumberToObject(e, "enclosed_volume_m3", r->enclosed_volume);
+    cJSON_AddStringToObject(e, "inside_rule", r->inside_rule[0] ? r->inside_rule : "not voxelized (far from every tissue)");
+    cJSON_AddNumberToObject(e, "shared_frames", cpl->per_organ[o]);
+    cJSON_AddItemToArray(org, e);
+  }
+  cJSON *trep = cJSON_AddArrayToObject(rep, "tissues");
+  for (int32_t t = 0; t < vol->tissue_count; ++t) {
+    const fascia_prep_tissue_report *r = vol->tissues + t;
+    cJSON *e = cJSON_CreateObject();
+    cJSON_AddStringToObject(e, "name", scene->tissues[t].name);
+    cJSON_AddNumberToObject(e, "voxels", (double)r->voxels);
+    cJSON_AddNumberToObject(e, "volume_m3", r->volume);
+    cJSON_AddNumberToObject(e, "components", r->components);
+    cJSON_AddNumberToObject(e, "dropped_components", r->dropped_components);
+    cJSON_AddNumberToObject(e, "dropped_volume_m3", r->dropped_volume);
+    int32_t frames = 0, samples = 0;
+    for (int32_t i = 0; i < pts->frame_count; ++i) frames += pts->frame_tissue[i] == t;
+    for (int32_t s = 0; s < pts->sample_count; ++s) samples += pts->sample_tissue[s] == t;
+    cJSON_AddNumberToObject(e, "frames", frames);
+    cJSON_AddNumberToObject(e, "samples", samples);
+    cJSON_AddItemToArray(trep, e);
+  }
+  cJSON *ov = cJSON_AddArrayToObject(rep, "overlaps");
+  for (int32_t k = 0; k < vol->overlap_count; ++k) {
+    const fascia_prep_overlap *o = vol->overlaps + k;
+    cJSON *e = cJSON_CreateObject();
+    cJSON_AddStringToObject(e, "a", meshes->organs[o->a].name);
+    cJSON_AddStringToObject(e, "b", meshes->organs[o->b].name);
+    cJSON_AddNumberToObject(e, "volume_m3", o->volume);
+    cJSON_AddNumberToObject(e, "depth_m", o->depth);
+    cJSON_AddStringToObject(e, "rule", "tissue is built outside both organs; organ surfaces kept as given");
+    cJSON_AddItemToArray(ov, e);
+  }
+  cJSON *gaps = cJSON_AddArrayToObject(rep, "closest_distances");
+  for (int32_t a = 0; a < vol->organ_count; ++a)
+    for (int32_t b = a + 1; b < vol->organ_count; ++b) {
+      const double d = vol->closest[a * vol->organ_count + b];
+      if (d < 0) continue;
+      cJSON *e = cJSON_CreateObject();
+      cJSON_AddStringToObject(e, "a", meshes->organs[a].name);
+      cJSON_AddStringToObject(e, "b", meshes->organs[b].name);
+      cJSON_AddNumberToObject(e, "distance_m", d);
+      cJSON_AddItemToArray(gaps, e);
+    }
+  cJSON_AddNumberToObject(rep, "max_linear_reproduction_error_m", W->max_linear_error);
+  if (info && info->step_count > 0) {
+    cJSON *steps = cJSON_AddArrayToObject(root, "steps");
+    for (int32_t k = 0; k < info->step_count; ++k) {
+      cJSON *e = cJSON_CreateObject();
+      cJSON_AddStringToObject(e, "name", info->step_name[k]);
+      cJSON_AddNumberToObject(e, "seconds", info->step_seconds[k]);
+      if (info->step_peak_bytes) cJSON_AddNumberToObject(e, "peak_bytes", info->step_peak_bytes[k]);
+      cJSON_AddItemToArray(steps, e);
+    }
+  }
+  return root;
+}
+
+fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_meshes *meshes,
+                                  const fascia_prep_volume *volume, const fascia_prep_points *points,
+                                  const fascia_prep_weights *weights, const fascia_prep_coupling *coupling,
+                                  const fascia_prep_run_info *info, fascia_model **out) {
+  PREP_CHECK(ctx && scene && meshes && volume && points && weights && coupling && out, ctx, FASCIA_ERR_ARGUMENT,
+             "fascia_prep_package: NULL argument");
+  *out = NULL;
+  fascia_status status = FASCIA_OK;
+  fascia_model *m = NULL;
+  cJSON *prov = NULL;
+  char *prov_text = NULL;
+  int32_t motions = 0;
+  for (int32_t o = 0; o < scene->organ_count; ++o) motions += scene->organs[o].kind == FASCIA_ORGAN_PRESCRIBED;
+  fascia_model_sizes z;
+  memset(&z, 0, sizeof z);
+  z.frames = points->frame_count;
+  z.samples = points->sample_count;
+  z.pairs = weights->pair_count;
+  z.materials = scene->material_count;
+  z.motions = motions;
+  z.organs = scene->organ_count;
+  z.couplings = coupling->count;
+  PREP_TRY(fascia_model_alloc(ctx, &z, &m));
+  memcpy(m->gravity, scene->gravity, sizeof m->gravity);
+  memcpy(m->materials, scene->materials, (size_t)scene->material_count * sizeof *m->materials);
+  // organs and their motions
+  for (int32_t o = 0, motion = 0; o < scene->organ_count; ++o) {
+    const fascia_prep_organ_def *d = scene->organs + o;
+    const fascia_prep_mesh *mesh = meshes->organs + o;
+    fascia_organ *organ = m->organs + o;
+    snprintf(organ->name, sizeof organ->name, "%s", d->name);
+    organ->kind = d->kind;
+    organ->motion = -1;
+    PREP_TRY_GOTO(fascia_organ_alloc(ctx, organ, mesh->vertex_count, mesh->triangle_count));
+    memcpy(organ->vertices, mesh->vertices, 3 * (size_t)mesh->vertex_count * sizeof(double));
+    memcpy(organ->triangles, mesh->triangles, 3 * (size_t)mesh->triangle_count * sizeof(int32_t));
+    if (d->kind == FASCIA_ORGAN_PRESCRIBED) {
+      fascia_motion *mo = m->motions + motion;
+      snprintf(mo->name, sizeof mo->name, "%s", d->name);
+      memcpy(mo->pivot, d->motion.pivot, sizeof mo->pivot);
+      PREP_TRY_GOTO(fascia_motion_alloc(ctx, mo, d->motion.key_count));
+      memcpy(mo->key_time, d->motion.key_time, (size_t)d->motion.key_count * sizeof(double));
+      memcpy(mo->key_translation, d->motion.key_translation, 3 * (size_t)d->motion.key_count * sizeof(double));
+      memcpy(mo->key_rotation, d->motion.key_rotation, 4 * (size_t)d->motion.key_count * sizeof(double));
+      organ->motion = motion++;
+    }
+  }
+  // frames (rest rotation identity, set by alloc), kinds from the organs they are shared with
+  memcpy(m->frame_position, points->frame_position, 3 * (size_t)points->frame_count * sizeof(double));
+  for (int32_t c = 0; c < coupling->count; ++c) {
+    const int32_t i = coupling->frame[c];
+    const fascia_organ *organ = m->organs + coupling->organ[c];
+    m->coupling_organ[c] = coupling->organ[c];
+    m->coupling_frame[c] = i;
+    m->coupling_triangle[c] = coupling->triangle[c];
+    memcpy(m->coupling_barycentric + 3 * c, coupling->barycentric + 3 * c, 3 * sizeof(double));
+    if (organ->kind == FASCIA_ORGAN_FIXED) {
+      m->frame_kind[i] = FASCIA_FRAME_FIXED;
+      m->frame_motion[i] = -1;
+    } else if (organ->kind == FASCIA_ORGAN_PRESCRIBED && m->frame_kind[i] != FASCIA_FRAME_FIXED) {
+      m->frame_kind[i] = FASCIA_FRAME_PRESCRIBED;
+      m->frame_motion[i] = organ->motion;
+    }
+  }
+  // samples and pairs
+  memcpy(m->sample_position, points->sample_position, 3 * (size_t)points->sample_count * sizeof(double));
+  memcpy(m->sample_volume, points->sample_volume, (size_t)points->sample_count * sizeof(double));
+  for (int32_t s = 0; s < points->sample_count; ++s)
+    m->sample_material[s] = scene->tissues[points->sample_tissue[s]].material;
+  memcpy(m->sample_offsets, weights->sample_offsets, ((size_t)points->sample_count + 1) * sizeof(int32_t));
+  memcpy(m->pair_frame, weights->pair_frame, (size_t)weights->pair_count * sizeof(int32_t));
+  memcpy(m->pair_weight, weights->pair_weight, (size_t)weights->pair_count * sizeof(double));
+  memcpy(m->pair_gradient, weights->pair_gradient, 3 * (size_t)weights->pair_count * sizeof(double));
+  PREP_TRY_GOTO(fascia_model_build_reverse(ctx, m));
+  // provenance
+  prov = provenance(scene, meshes, volume, points, weights, coupling, info);
+  prov_text = prov ? cJSON_PrintUnformatted(prov) : NULL;
+  PREP_CHECK_GOTO(prov_text, ctx, FASCIA_ERR_MEMORY, "package: out of memory for the provenance");
+  PREP_TRY_GOTO(fascia_model_set_provenance(ctx, m, prov_text));
+  PREP_TRY_GOTO(fascia_model_validate(ctx, m, scene->path));
+  *out = m;
+  m = NULL;
+cleanup:
+  cJSON_Delete(prov);
+  free(prov_text);
+  fascia_model_destroy(&m);
+  return status;
+}

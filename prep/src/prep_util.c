@@ -1,0 +1,234 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// Private helpers of the prep stages (see prep_util.h).
+#include "prep_util.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+void *prep_calloc(int64_t count, size_t size) {
+  if (count < 0 || count > ((int64_t)1 << 36)) return NULL;
+  if (count == 0) count = 1;
+  return calloc((size_t)count, size);
+}
+
+char *prep_strdup(const char *s) {
+  if (!s) return NULL;
+  const size_t n = strlen(s) + 1;
+  char *p = malloc(n);
+  if (p) memcpy(p, s, n);
+  return p;
+}
+
+fascia_status prep_read_file(fascia_ctx *ctx, const char *path, const char *what, char **text, size_t *size) {
+  *text = NULL;
+  FILE *f = fopen(path, "rb");
+  PREP_CHECK(f, ctx, FASCIA_ERR_IO, "%s '%s': cannot open (%s)", what, path, strerror(errno));
+  size_t cap = 1 << 16, n = 0;
+  char *buf = malloc(cap);
+  while (buf) {
+    const size_t got = fread(buf + n, 1, cap - n - 1, f);
+    n += got;
+    if (got == 0) break;
+    if (n + 1 == cap) {
+      char *bigger = realloc(buf, cap * 2);
+      if (!bigger) {
+        free(buf);
+        buf = NULL;
+        break;
+      }
+      buf = bigger;
+      cap *= 2;
+    }
+  }
+  const int failed = ferror(f);
+  fclose(f);
+  PREP_CHECK(buf, ctx, FASCIA_ERR_MEMORY, "%s '%s': out of memory while reading", what, path);
+  if (failed) {
+    free(buf);
+    return PREP_FAIL(ctx, FASCIA_ERR_IO, "%s '%s': read error", what, path);
+  }
+  buf[n] = 0;
+  *text = buf;
+  if (size) *size = n;
+  return FASCIA_OK;
+}
+
+uint64_t prep_rng_next(prep_rng *rng) {
+  uint64_t z = (rng->state += 0x9e3779b97f4a7c15ull);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+  return z ^ (z >> 31);
+}
+
+double prep_rng_uniform(prep_rng *rng) { return (double)(prep_rng_next(rng) >> 11) * (1.0 / 9007199254740992.0); }
+
+void prep_shuffle(prep_rng *rng, int64_t *values, int64_t n) {
+  for (int64_t k = n - 1; k > 0; --k) {
+    const int64_t j = (int64_t)(prep_rng_next(rng) % (uint64_t)(k + 1));
+    const int64_t t = values[k];
+    values[k] = values[j];
+    values[j] = t;
+  }
+}
+
+void prep_grid_cover(prep_grid *g, double h, const double *min, const double *max, int32_t pad) {
+  g->h = h;
+  for (int r = 0; r < 3; ++r) {
+    const int32_t a = (int32_t)floor(min[r] / h) - pad, b = (int32_t)ceil(max[r] / h) + pad;
+    g->lo[r] = a;
+    g->dims[r] = b - a + 1;
+  }
+}
+
+int64_t prep_grid_locate(const prep_grid *g, const double *p) {
+  int32_t ijk[3];
+  for (int r = 0; r < 3; ++r) {
+    const double x = floor(p[r] / g->h + 0.5) - g->lo[r];
+    if (!(x >= 0 && x < g->dims[r])) return -1;
+    ijk[r] = (int32_t)x;
+  }
+  return prep_grid_index(g, ijk[0], ijk[1], ijk[2]);
+}
+
+prep_grid prep_volume_grid(const fascia_prep_volume *volume) {
+  prep_grid g;
+  g.h = volume->voxel_size;
+  for (int r = 0; r < 3; ++r) {
+    g.lo[r] = volume->lattice[r];
+    g.dims[r] = volume->dims[r];
+  }
+  return g;
+}
+
+int prep_region_contains(const fascia_prep_region *region, const double *p) {
+  switch (region->kind) {
+  case FASCIA_PREP_REGION_BOX:
+    for (int r = 0; r < 3; ++r)
+      if (p[r] < region->min[r] || p[r] > region->max[r]) return 0;
+    return 1;
+  case FASCIA_PREP_REGION_SPHERE: {
+    double d2 = 0;
+    for (int r = 0; r < 3; ++r) d2 += (p[r] - region->center[r]) * (p[r] - region->center[r]);
+    return d2 <= region->radius * region->radius;
+  }
+  default: return 1;
+  }
+}
+
+int32_t prep_mesh_part(const fascia_prep_mesh *mesh, const char *name) {
+  for (int32_t p = 0; p < mesh->part_count; ++p)
+    if (!strcmp(mesh->part_names[p], name)) return p;
+  return -1;
+}
+
+// Closest point of a triangle to p, as barycentric coordinates (Ericson,
+// Real-Time Collision Detection, sec. 5.1.5).
+void prep_triangle_barycentric(const double *a, const double *b, const double *c, const double *p, double *bary) {
+  double ab[3], ac[3], ap[3], bp[3], cp[3];
+  for (int r = 0; r < 3; ++r) {
+    ab[r] = b[r] - a[r];
+    ac[r] = c[r] - a[r];
+    ap[r] = p[r] - a[r];
+    bp[r] = p[r] - b[r];
+    cp[r] = p[r] - c[r];
+  }
+#define DOT(u, w) ((u)[0] * (w)[0] + (u)[1] * (w)[1] + (u)[2] * (w)[2])
+  const double d1 = DOT(ab, ap), d2 = DOT(ac, ap);
+  const double d3 = DOT(ab, bp), d4 = DOT(ac, bp);
+  const double d5 = DOT(ab, cp), d6 = DOT(ac, cp);
+#undef DOT
+  if (d1 <= 0 && d2 <= 0) {
+    bary[0] = 1, bary[1] = 0, bary[2] = 0;
+    return;
+  }
+  if (d3 >= 0 && d4 <= d3) {
+    bary[0] = 0, bary[1] = 1, bary[2] = 0;
+    return;
+  }
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+    const double v = d1 / (d1 - d3);
+    bary[0] = 1 - v, bary[1] = v, bary[2] = 0;
+    return;
+  }
+  if (d6 >= 0 && d5 <= d6) {
+    bary[0] = 0, bary[1] = 0, bary[2] = 1;
+    return;
+  }
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+    const double w = d2 / (d2 - d6);
+    bary[0] = 1 - w, bary[1] = 0, bary[2] = w;
+    return;
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    bary[0] = 0, bary[1] = 1 - w, bary[2] = w;
+    return;
+  }
+  const double denom = 1 / (va + vb + vc);
+  const double v = vb * denom, w = vc * denom;
+  bary[0] = 1 - v - w, bary[1] = v, bary[2] = w;
+}
+
+int prep_heap_push(prep_heap *heap, double key, int64_t value) {
+  if (heap->count == heap->capacity) {
+    const int64_t cap = heap->capacity ? 2 * heap->capacity : 256;
+    double *k = realloc(heap->key, (size_t)cap * sizeof *k);
+    if (!k) return 0;
+    heap->key = k;
+    int64_t *v = realloc(heap->value, (size_t)cap * sizeof *v);
+    if (!v) return 0;
+    heap->value = v;
+    heap->capacity = cap;
+  }
+  int64_t i = heap->count++;
+  while (i > 0) {
+    const int64_t parent = (i - 1) / 2;
+    // ties broken by value: the order of pops does not depend on push order
+    if (heap->key[parent] < key || (heap->key[parent] == key && heap->value[parent] <= value)) break;
+    heap->key[i] = heap->key[parent];
+    heap->value[i] = heap->value[parent];
+    i = parent;
+  }
+  heap->key[i] = key;
+  heap->value[i] = value;
+  return 1;
+}
+
+int prep_heap_pop(prep_heap *heap, double *key, int64_t *value) {
+  if (heap->count == 0) return 0;
+  *key = heap->key[0];
+  *value = heap->value[0];
+  const double k = heap->key[--heap->count];
+  const int64_t v = heap->value[heap->count];
+  int64_t i = 0;
+  for (;;) {
+    int64_t child = 2 * i + 1;
+    if (child >= heap->count) break;
+    if (child + 1 < heap->count &&
+        (heap->key[child + 1] < heap->key[child] ||
+         (heap->key[child + 1] == heap->key[child] && heap->value[child + 1] < heap->value[child])))
+      ++child;
+    if (k < heap->key[child] || (k == heap->key[child] && v <= heap->value[child])) break;
+    heap->key[i] = heap->key[child];
+    heap->value[i] = heap->value[child];
+    i = child;
+  }
+  heap->key[i] = k;
+  heap->value[i] = v;
+  return 1;
+}
+
+void prep_heap_free(prep_heap *heap) {
+  free(heap->key);
+  free(heap->value);
+  heap->key = NULL;
+  heap->value = NULL;
+  heap->count = heap->capacity = 0;
+}

@@ -1,0 +1,109 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// Private helpers of the prep stages: error macros over fascia_ctx_fail (prep
+// sees only the public sim API), allocation, strings, a seeded random
+// generator, and the voxel lattice shared by every grid.
+#ifndef FASCIA_PREP_UTIL_H
+#define FASCIA_PREP_UTIL_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "adapters.h"
+#include "fascia/prep.h"
+
+#define PREP_FAIL(ctx, st, ...) fascia_ctx_fail((ctx), (st), __FILE__, __LINE__, __VA_ARGS__)
+#define PREP_CHECK(cond, ctx, st, ...)                                                                                \
+  do {                                                                                                                \
+    if (!(cond)) return PREP_FAIL(ctx, st, __VA_ARGS__);                                                             \
+  } while (0)
+#define PREP_TRY(expr)                                                                                                \
+  do {                                                                                                                \
+    fascia_status prep_try_st_ = (expr);                                                                              \
+    if (prep_try_st_ != FASCIA_OK) return prep_try_st_;                                                              \
+  } while (0)
+/// Inside a function with `fascia_status status` and a `cleanup:` label.
+#define PREP_TRY_GOTO(expr)                                                                                           \
+  do {                                                                                                                \
+    status = (expr);                                                                                                  \
+    if (status != FASCIA_OK) goto cleanup;                                                                            \
+  } while (0)
+#define PREP_CHECK_GOTO(cond, ctx, st, ...)                                                                           \
+  do {                                                                                                                \
+    if (!(cond)) {                                                                                                    \
+      status = PREP_FAIL(ctx, st, __VA_ARGS__);                                                                       \
+      goto cleanup;                                                                                                   \
+    }                                                                                                                 \
+  } while (0)
+
+/// calloc of count elements (count 0 gives a valid pointer), NULL on overflow.
+FASCIA_PREP_INTERN void *prep_calloc(int64_t count, size_t size);
+/// strdup into malloc'ed memory, NULL on failure.
+FASCIA_PREP_INTERN char *prep_strdup(const char *s);
+/// Reads a whole file into a malloc'ed, NUL-terminated buffer.
+FASCIA_PREP_INTERN fascia_status prep_read_file(fascia_ctx *ctx, const char *path, const char *what, char **text,
+                                                size_t *size);
+
+/// Hex SHA-256 of a buffer into hex[65].
+FASCIA_PREP_INTERN void prep_sha256_buffer(const void *data, size_t size, char hex[65]);
+
+/// Deterministic random numbers (splitmix64).
+typedef struct prep_rng {
+  uint64_t state;
+} prep_rng;
+FASCIA_PREP_INTERN uint64_t prep_rng_next(prep_rng *rng);
+/// Uniform in [0, 1).
+FASCIA_PREP_INTERN double prep_rng_uniform(prep_rng *rng);
+/// Fisher-Yates shuffle of n int64 values.
+FASCIA_PREP_INTERN void prep_shuffle(prep_rng *rng, int64_t *values, int64_t n);
+
+/// A box of the global voxel lattice: voxel (i,j,k) of the box is lattice
+/// voxel lo + (i,j,k), centred at h (lo + (i,j,k)); index i + nx (j + ny k).
+typedef struct prep_grid {
+  double h;
+  int32_t lo[3];
+  int32_t dims[3];
+} prep_grid;
+
+static inline int64_t prep_grid_count(const prep_grid *g) {
+  return (int64_t)g->dims[0] * g->dims[1] * g->dims[2];
+}
+static inline int64_t prep_grid_index(const prep_grid *g, int32_t i, int32_t j, int32_t k) {
+  return (int64_t)i + (int64_t)g->dims[0] * ((int64_t)j + (int64_t)g->dims[1] * k);
+}
+static inline void prep_grid_ijk(const prep_grid *g, int64_t v, int32_t *ijk) {
+  ijk[0] = (int32_t)(v % g->dims[0]);
+  ijk[1] = (int32_t)((v / g->dims[0]) % g->dims[1]);
+  ijk[2] = (int32_t)(v / ((int64_t)g->dims[0] * g->dims[1]));
+}
+static inline void prep_grid_center(const prep_grid *g, int64_t v, double *p) {
+  int32_t ijk[3];
+  prep_grid_ijk(g, v, ijk);
+  for (int r = 0; r < 3; ++r) p[r] = g->h * (double)(g->lo[r] + ijk[r]);
+}
+/// Grid covering [min, max] (m) with pad extra voxels on every side.
+FASCIA_PREP_INTERN void prep_grid_cover(prep_grid *g, double h, const double *min, const double *max, int32_t pad);
+/// Voxel of point p in g, or -1 outside.
+FASCIA_PREP_INTERN int64_t prep_grid_locate(const prep_grid *g, const double *p);
+/// The grid of a volume.
+FASCIA_PREP_INTERN prep_grid prep_volume_grid(const fascia_prep_volume *volume);
+
+/// 1 when p is inside region (a NONE region contains everything).
+FASCIA_PREP_INTERN int prep_region_contains(const fascia_prep_region *region, const double *p);
+/// Index of name among parts names of mesh, -1 if absent.
+FASCIA_PREP_INTERN int32_t prep_mesh_part(const fascia_prep_mesh *mesh, const char *name);
+/// Closest point on triangle (a, b, c) to p: barycentric coordinates in bary.
+FASCIA_PREP_INTERN void prep_triangle_barycentric(const double *a, const double *b, const double *c, const double *p,
+                                                  double *bary);
+
+/// Heap of (distance, voxel) for Dijkstra over voxels.
+typedef struct prep_heap {
+  int64_t count, capacity;
+  double *key;
+  int64_t *value;
+} prep_heap;
+FASCIA_PREP_INTERN int prep_heap_push(prep_heap *heap, double key, int64_t value);
+FASCIA_PREP_INTERN int prep_heap_pop(prep_heap *heap, double *key, int64_t *value);
+FASCIA_PREP_INTERN void prep_heap_free(prep_heap *heap);
+
+#endif

@@ -1,0 +1,539 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// Stage 4, sample: Poisson-disk frames and samples in each tissue region.
+//
+//   surface frames  candidates are the closest organ-surface points of the
+//                   region voxels that touch an organ (CGAL AABB tree), so
+//                   that frames shared with an organ lie exactly on it;
+//   interior frames candidates are jittered centres of region voxels farther
+//                   than the coupling tolerance from every organ;
+//   samples         candidates are region voxel centres.
+//
+// Candidates are visited in a seeded random order and kept when no kept
+// point of the same kind lies closer than the spacing (dart throwing on a
+// hash grid): the same scene gives the same points. Each region voxel then
+// goes to the nearest sample through the region (multi-source Dijkstra over
+// the 26-neighbourhood), so sample volumes add up to the region volume
+// exactly, and a sample moves to the centroid of its cell when that stays in
+// the region (one Lloyd step: a better quadrature point).
+// A piece of region that receives fewer than 4 frames, or only coplanar ones,
+// gets more frames at its voxels farthest from the frames it has.
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "prep_util.h"
+
+void fascia_prep_points_destroy(fascia_prep_points **points) {
+  if (!points || !*points) return;
+  fascia_prep_points *p = *points;
+  free(p->frame_position);
+  free(p->frame_tissue);
+  free(p->frame_organ);
+  free(p->frame_triangle);
+  free(p->frame_voxel);
+  free(p->sample_position);
+  free(p->sample_volume);
+  free(p->sample_tissue);
+  free(p->sample_voxel);
+  free(p);
+  *points = NULL;
+}
+
+// ------------------------------------------------------------ growable point lists
+
+typedef struct point_list {
+  int64_t count, capacity;
+  double *position; // [3 count]
+  int32_t *organ, *triangle;
+  int64_t *voxel;
+} point_list;
+
+static int list_push(point_list *l, const double *x, int32_t organ, int32_t triangle, int64_t voxel) {
+  if (l->count == l->capacity) {
+    const int64_t cap = l->capacity ? 2 * l->capacity : 1024;
+    double *p = realloc(l->position, (size_t)(3 * cap) * sizeof(double));
+    if (!p) return 0;
+    l->position = p;
+    int32_t *o = realloc(l->organ, (size_t)cap * sizeof(int32_t));
+    if (!o) return 0;
+    l->organ = o;
+    int32_t *t = realloc(l->triangle, (size_t)cap * sizeof(int32_t));
+    if (!t) return 0;
+    l->triangle = t;
+    int64_t *v = realloc(l->voxel, (size_t)cap * sizeof(int64_t));
+    if (!v) return 0;
+    l->voxel = v;
+    l->capacity = cap;
+  }
+  memcpy(l->position + 3 * l->count, x, 3 * sizeof(double));
+  l->organ[l->count] = organ;
+  l->triangle[l->count] = triangle;
+  l->voxel[l->count] = voxel;
+  l->count++;
+  return 1;
+}
+
+static void list_free(point_list *l) {
+  free(l->position);
+  free(l->organ);
+  free(l->triangle);
+  free(l->voxel);
+  memset(l, 0, sizeof *l);
+}
+
+// ------------------------------------------------------------ dart throwing
+
+// Hash grid of accepted points with cell size = radius: a point conflicts
+// only with points in the 27 cells around its own.
+typedef struct dart_grid {
+  double radius;
+  int64_t table_size;
+  int64_t *head; // [table_size] first point in bucket, -1
+  int64_t *next; // [capacity]
+  int64_t capacity;
+  const point_list *points;
+} dart_grid;
+
+static uint64_t cell_hash(int64_t x, int64_t y, int64_t z) {
+  uint64_t h = (uint64_t)x * 73856093ull ^ (uint64_t)y * 19349663ull ^ (uint64_t)z * 83492791ull;
+  return h ^ (h >> 29);
+}
+
+static int dart_init(dart_grid *d, double radius, int64_t expected) {
+  d->radius = radius;
+  d->table_size = 1;
+  while (d->table_size < 2 * expected + 64) d->table_size *= 2;
+  d->head = malloc((size_t)d->table_size * sizeof(int64_t));
+  d->capacity = 0;
+  d->next = NULL;
+  if (!d->head) return 0;
+  for (int64_t k = 0; k < d->table_size; ++k) d->head[k] = -1;
+  return 1;
+}
+
+static void dart_free(dart_grid *d) {
+  free(d->head);
+  free(d->next);
+  d->head = d->next = NULL;
+}
+
+static int dart_conflicts(const dart_grid *d, const double *x) {
+  const int64_t c[3] = {(int64_t)floor(x[0] / d->radius), (int64_t)floor(x[1] / d->radius),
+                        (int64_t)floor(x[2] / d->radius)};
+  const double r2 = d->radius * d->radius;
+  for (int dz = -1; dz <= 1; ++dz)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const uint64_t b = cell_hash(c[0] + dx, c[1] + dy, c[2] + dz) & (uint64_t)(d->table_size - 1);
+        for (int64_t k = d->head[b]; k >= 0; k = d->next[k]) {
+          const double *y = d->points->position + 3 * k;
+          const double e0 = x[0] - y[0], e1 = x[1] - y[1], e2 = x[2] - y[2];
+          if (e0 * e0 + e1 * e1 + e2 * e2 < r2) return 1;
+        }
+      }
+  return 0;
+}
+
+// Registers point index k (already in d->points).
+static int dart_add(dart_grid *d, int64_t k) {
+  if (k >= d->capacity) {
+    const int64_t cap = 2 * (k + 1) + 1024;
+    int64_t *n = realloc(d->next, (size_t)cap * sizeof(int64_t));
+    if (!n) return 0;
+    d->next = n;
+    d->capacity = cap;
+  }
+  const double *x = d->points->position + 3 * k;
+  const uint64_t b = cell_hash((int64_t)floor(x[0] / d->radius), (int64_t)floor(x[1] / d->radius),
+                               (int64_t)floor(x[2] / d->radius)) &
+                     (uint64_t)(d->table_size - 1);
+  d->next[k] = d->head[b];
+  d->head[b] = k;
+  return 1;
+}
+
+// ------------------------------------------------------------ frames
+
+// Surface candidates of tissue t: closest surface points of region voxels
+// within one voxel of an organ.
+static fascia_status surface_candidates(fascia_ctx *ctx, const fascia_prep_meshes *meshes,
+                                        const fascia_prep_volume *vol, const int64_t *voxels, int64_t voxel_count,
+                                        fascia_cgal_tree **trees, point_list *out) {
+  const prep_grid g = prep_volume_grid(vol);
+  const double h = vol->voxel_size;
+  for (int32_t o = 0; o < vol->organ_count; ++o) {
+    if (!vol->distance[o]) continue;
+    const float *d = vol->distance[o];
+    int64_t count = 0;
+    for (int64_t k = 0; k < voxel_count; ++k)
+      if (d[voxels[k]] <= h) ++count;
+    if (count == 0) continue;
+    if (!trees[o]) {
+      const fascia_prep_mesh *m = meshes->organs + o;
+      PREP_TRY(fascia_cgal_tree_create(ctx, m->vertex_count, m->vertices, m->triangle_count, m->triangles, trees + o));
+    }
+    double *query = prep_calloc(3 * count, sizeof(double)), *closest = prep_calloc(3 * count, sizeof(double));
+    int32_t *tri = prep_calloc(count, sizeof(int32_t));
+    int64_t *from = prep_calloc(count, sizeof(int64_t));
+    if (!query || !closest || !tri || !from) {
+      free(query), free(closest), free(tri), free(from);
+      return PREP_FAIL(ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+    }
+    int64_t q = 0;
+    for (int64_t k = 0; k < voxel_count; ++k)
+      if (d[voxels[k]] <= h) {
+        prep_grid_center(&g, voxels[k], query + 3 * q);
+        from[q++] = voxels[k];
+      }
+    const fascia_cgal_tree *tree = trees[o];
+#pragma omp parallel for schedule(static) num_threads(fascia_ctx_threads(ctx))
+    for (int64_t k = 0; k < count; ++k) fascia_cgal_tree_closest(tree, 1, query + 3 * k, closest + 3 * k, tri + k);
+    int ok = 1;
+    for (int64_t k = 0; k < count && ok; ++k) ok = list_push(out, closest + 3 * k, o, tri[k], from[k]);
+    free(query), free(closest), free(tri), free(from);
+    PREP_CHECK(ok, ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  }
+  return FASCIA_OK;
+}
+
+// Keeps candidates in a random order when they do not conflict with kept points.
+static fascia_status throw_darts(fascia_ctx *ctx, prep_rng *rng, const point_list *cand, dart_grid *darts,
+                                 point_list *kept) {
+  int64_t *order = prep_calloc(cand->count, sizeof(int64_t));
+  PREP_CHECK(order, ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  for (int64_t k = 0; k < cand->count; ++k) order[k] = k;
+  prep_shuffle(rng, order, cand->count);
+  for (int64_t r = 0; r < cand->count; ++r) {
+    const int64_t k = order[r];
+    const double *x = cand->position + 3 * k;
+    if (dart_conflicts(darts, x)) continue;
+    if (!list_push(kept, x, cand->organ[k], cand->triangle[k], cand->voxel[k]) || !dart_add(darts, kept->count - 1)) {
+      free(order);
+      return PREP_FAIL(ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+    }
+  }
+  free(order);
+  return FASCIA_OK;
+}
+
+// 26-connected pieces of tissue label; comp[v] = piece index + 1 on the grid.
+static int64_t label_pieces(const prep_grid *g, const uint8_t *region, uint8_t label, int32_t *comp, int64_t *queue) {
+  const int64_t n = prep_grid_count(g);
+  int32_t count = 0;
+  for (int64_t s = 0; s < n; ++s) {
+    if (region[s] != label || comp[s]) continue;
+    ++count;
+    int64_t head = 0, tail = 0;
+    queue[tail++] = s;
+    comp[s] = count;
+    while (head < tail) {
+      const int64_t v = queue[head++];
+      int32_t c[3];
+      prep_grid_ijk(g, v, c);
+      for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const int32_t x = c[0] + dx, y = c[1] + dy, z = c[2] + dz;
+            if (x < 0 || y < 0 || z < 0 || x >= g->dims[0] || y >= g->dims[1] || z >= g->dims[2]) continue;
+            const int64_t nb = prep_grid_index(g, x, y, z);
+            if (region[nb] == label && !comp[nb]) comp[nb] = count, queue[tail++] = nb;
+          }
+    }
+  }
+  return count;
+}
+
+// Smallest eigenvalue proxy of the frames' spread: det of the covariance,
+// relative to the spacing; 0 for coplanar sets.
+static double spread(const double *const *x, int32_t n, double spacing) {
+  if (n < 4) return 0;
+  double mean[3] = {0, 0, 0}, c[9] = {0};
+  for (int32_t k = 0; k < n; ++k)
+    for (int r = 0; r < 3; ++r) mean[r] += x[k][r] / n;
+  for (int32_t k = 0; k < n; ++k)
+    for (int r = 0; r < 3; ++r)
+      for (int s = 0; s < 3; ++s) c[3 * r + s] += (x[k][r] - mean[r]) * (x[k][s] - mean[s]) / n;
+  const double det = c[0] * (c[4] * c[8] - c[5] * c[7]) - c[1] * (c[3] * c[8] - c[5] * c[6]) +
+                     c[2] * (c[3] * c[7] - c[4] * c[6]);
+  const double s2 = spacing * spacing;
+  return det / (s2 * s2 * s2);
+}
+
+// Adds frames to pieces of tissue t with fewer than 4 frames or coplanar ones.
+static fascia_status fill_thin_pieces(fascia_ctx *ctx, const fascia_prep_volume *vol, uint8_t label,
+                                      double spacing, int64_t first, point_list *frames) {
+  const prep_grid g = prep_volume_grid(vol);
+  const int64_t n = prep_grid_count(&g);
+  fascia_status status = FASCIA_OK;
+  int32_t *comp = prep_calloc(n, sizeof(int32_t));
+  int64_t *queue = prep_calloc(n, sizeof(int64_t));
+  const double **members = NULL;
+  PREP_CHECK_GOTO(comp && queue, ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  const int64_t pieces = label_pieces(&g, vol->region, label, comp, queue);
+  for (int32_t piece = 1; piece <= pieces; ++piece) {
+    for (int guard = 0; guard < 64; ++guard) {
+      int32_t count = 0;
+      free(members);
+      members = prep_calloc(frames->count - first + 64, sizeof(double *));
+      PREP_CHECK_GOTO(members, ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+      for (int64_t i = first; i < frames->count; ++i)
+        if (comp[frames->voxel[i]] == piece) members[count++] = frames->position + 3 * i;
+      if (count >= 4 && spread(members, count, spacing) > 1e-6) break;
+      // the piece's voxel farthest from its frames becomes a frame
+      double best = -1, x[3], far[3] = {0, 0, 0};
+      int64_t best_v = -1;
+      for (int64_t v = 0; v < n; ++v) {
+        if (comp[v] != piece) continue;
+        prep_grid_center(&g, v, x);
+        double dmin = INFINITY;
+        for (int32_t k = 0; k < count; ++k) {
+          const double e0 = x[0] - members[k][0], e1 = x[1] - members[k][1], e2 = x[2] - members[k][2];
+          dmin = fmin(dmin, e0 * e0 + e1 * e1 + e2 * e2);
+        }
+        if (dmin > best) best = dmin, best_v = v, memcpy(far, x, sizeof far);
+      }
+      if (best_v < 0 || best <= 0) break; // a piece of fewer than 4 voxels: left to the shape functions to report
+      PREP_CHECK_GOTO(list_push(frames, far, -1, -1, best_v), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+    }
+  }
+cleanup:
+  free(comp);
+  free(queue);
+  free(members);
+  return status;
+}
+
+// ------------------------------------------------------------ samples and volumes
+
+// Assigns every region voxel of label to its nearest sample through the
+// region; volumes and centroids per sample. A piece of region that got no
+// sample (its candidates all conflicted with samples across a thin organ)
+// gets one at its first voxel. *volume_out: [samples->count - first], malloc'ed.
+static fascia_status voronoi_volumes(fascia_ctx *ctx, const fascia_prep_volume *vol, uint8_t label,
+                                     point_list *samples, int64_t first, double **volume_out) {
+  const prep_grid g = prep_volume_grid(vol);
+  const int64_t n = prep_grid_count(&g);
+  const double h = g.h;
+  double *dist = malloc((size_t)n * sizeof(double));
+  int64_t *owner = malloc((size_t)n * sizeof(int64_t));
+  double *centroid = NULL, *volume = NULL;
+  prep_heap heap = {0};
+  fascia_status status = FASCIA_OK;
+  *volume_out = NULL;
+  PREP_CHECK_GOTO(dist && owner, ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  for (int64_t v = 0; v < n; ++v) dist[v] = INFINITY, owner[v] = -1;
+  for (int64_t s = first; s < samples->count; ++s) {
+    const int64_t v = samples->voxel[s];
+    dist[v] = 0;
+    owner[v] = s;
+    PREP_CHECK_GOTO(prep_heap_push(&heap, 0, v), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  }
+  double key;
+  int64_t v, unreached = 0;
+  for (;;) {
+    if (!prep_heap_pop(&heap, &key, &v)) {
+      // every voxel reached, or a piece without a sample: seed it and go on
+      while (unreached < n && (vol->region[unreached] != label || owner[unreached] >= 0)) ++unreached;
+      if (unreached == n) break;
+      double x[3];
+      prep_grid_center(&g, unreached, x);
+      PREP_CHECK_GOTO(list_push(samples, x, -1, -1, unreached), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+      dist[unreached] = 0;
+      owner[unreached] = samples->count - 1;
+      PREP_CHECK_GOTO(prep_heap_push(&heap, 0, unreached), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+      continue;
+    }
+    if (key > dist[v]) continue;
+    int32_t c[3];
+    prep_grid_ijk(&g, v, c);
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int32_t x = c[0] + dx, y = c[1] + dy, z = c[2] + dz;
+          if (x < 0 || y < 0 || z < 0 || x >= g.dims[0] || y >= g.dims[1] || z >= g.dims[2]) continue;
+          const int64_t nb = prep_grid_index(&g, x, y, z);
+          if (vol->region[nb] != label) continue;
+          const double step = h * sqrt((double)(dx * dx + dy * dy + dz * dz));
+          if (key + step < dist[nb]) {
+            dist[nb] = key + step;
+            owner[nb] = owner[v];
+            PREP_CHECK_GOTO(prep_heap_push(&heap, key + step, nb), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+          }
+        }
+  }
+  centroid = prep_calloc(3 * (samples->count - first), sizeof(double));
+  volume = prep_calloc(samples->count - first, sizeof(double));
+  PREP_CHECK_GOTO(centroid && volume, ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  for (int64_t u = 0; u < n; ++u) {
+    if (vol->region[u] != label) continue;
+    PREP_CHECK_GOTO(owner[u] >= 0, ctx, FASCIA_ERR_INTERNAL, "sample: region voxel %lld reached by no sample",
+                    (long long)u);
+    const int64_t s = owner[u] - first;
+    double x[3];
+    prep_grid_center(&g, u, x);
+    volume[s] += h * h * h;
+    for (int r = 0; r < 3; ++r) centroid[3 * s + r] += x[r];
+  }
+  for (int64_t s = 0; s < samples->count - first; ++s) {
+    double c[3];
+    for (int r = 0; r < 3; ++r) c[r] = centroid[3 * s + r] / (volume[s] / (h * h * h));
+    const int64_t cv = prep_grid_locate(&g, c);
+    if (cv >= 0 && vol->region[cv] == label) {
+      memcpy(samples->position + 3 * (first + s), c, sizeof c);
+      samples->voxel[first + s] = cv;
+    }
+  }
+  *volume_out = volume;
+  volume = NULL;
+cleanup:
+  free(dist);
+  free(owner);
+  free(centroid);
+  free(volume);
+  prep_heap_free(&heap);
+  return status;
+}
+
+// ------------------------------------------------------------ the stage
+
+static fascia_status sample_tissue(fascia_ctx *ctx, const fascia_prep_scene *scene,
+                                   const fascia_prep_meshes *meshes, const fascia_prep_volume *vol, int32_t t,
+                                   fascia_cgal_tree **trees, point_list *frames, point_list *samples,
+                                   double **volumes, int64_t *volume_capacity) {
+  const fascia_prep_tissue_def *td = scene->tissues + t;
+  const prep_grid g = prep_volume_grid(vol);
+  const int64_t n = prep_grid_count(&g);
+  const uint8_t label = (uint8_t)(t + 1);
+  const double h = g.h;
+  fascia_status status = FASCIA_OK;
+  point_list cand = {0};
+  dart_grid darts = {0};
+  double *cell_volume = NULL;
+  prep_rng rng = {scene->seed * 0x9e3779b97f4a7c15ull + (uint64_t)t};
+  int64_t voxel_count = 0;
+  for (int64_t v = 0; v < n; ++v) voxel_count += vol->region[v] == label;
+  int64_t *voxels = prep_calloc(voxel_count, sizeof(int64_t));
+  PREP_CHECK_GOTO(voxels, ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  voxel_count = 0;
+  for (int64_t v = 0; v < n; ++v)
+    if (vol->region[v] == label) voxels[voxel_count++] = v;
+
+  // frames: surface first, then interior, one dart grid
+  const int64_t first_frame = frames->count;
+  PREP_CHECK_GOTO(dart_init(&darts, td->frame_spacing, voxel_count), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  darts.points = frames;
+  PREP_TRY_GOTO(surface_candidates(ctx, meshes, vol, voxels, voxel_count, trees, &cand));
+  PREP_TRY_GOTO(throw_darts(ctx, &rng, &cand, &darts, frames));
+  cand.count = 0;
+  for (int64_t k = 0; k < voxel_count; ++k) {
+    const int64_t v = voxels[k];
+    double nearest = INFINITY;
+    for (int32_t o = 0; o < vol->organ_count; ++o)
+      if (vol->distance[o]) nearest = fmin(nearest, vol->distance[o][v]);
+    if (nearest <= td->coupling_tolerance + h) continue; // jitter stays within h: never within tolerance
+    double x[3];
+    prep_grid_center(&g, v, x);
+    for (int r = 0; r < 3; ++r) x[r] += (prep_rng_uniform(&rng) - 0.5) * 0.9 * h; // stays in its voxel
+    PREP_CHECK_GOTO(list_push(&cand, x, -1, -1, v), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  }
+  PREP_TRY_GOTO(throw_darts(ctx, &rng, &cand, &darts, frames));
+  PREP_TRY_GOTO(fill_thin_pieces(ctx, vol, label, td->frame_spacing, first_frame, frames));
+  dart_free(&darts);
+
+  // samples at voxel centres, then Voronoi volumes
+  const int64_t first_sample = samples->count;
+  cand.count = 0;
+  for (int64_t k = 0; k < voxel_count; ++k) {
+    double x[3];
+    prep_grid_center(&g, voxels[k], x);
+    PREP_CHECK_GOTO(list_push(&cand, x, -1, -1, voxels[k]), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  }
+  PREP_CHECK_GOTO(dart_init(&darts, td->sample_spacing, voxel_count), ctx, FASCIA_ERR_MEMORY,
+                  "sample: out of memory");
+  darts.points = samples;
+  PREP_TRY_GOTO(throw_darts(ctx, &rng, &cand, &darts, samples));
+  PREP_TRY_GOTO(voronoi_volumes(ctx, vol, label, samples, first_sample, &cell_volume));
+  if (samples->count > *volume_capacity) {
+    double *grown = realloc(*volumes, (size_t)samples->count * sizeof(double));
+    PREP_CHECK_GOTO(grown, ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+    *volumes = grown;
+    *volume_capacity = samples->count;
+  }
+  memcpy(*volumes + first_sample, cell_volume, (size_t)(samples->count - first_sample) * sizeof(double));
+cleanup:
+  free(voxels);
+  free(cell_volume);
+  list_free(&cand);
+  dart_free(&darts);
+  return status;
+}
+
+fascia_status fascia_prep_sample(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_meshes *meshes,
+                                 const fascia_prep_volume *volume, fascia_prep_points **out) {
+  PREP_CHECK(ctx && scene && meshes && volume && out, ctx, FASCIA_ERR_ARGUMENT, "fascia_prep_sample: NULL argument");
+  *out = NULL;
+  fascia_status status = FASCIA_OK;
+  point_list frames = {0}, samples = {0};
+  double *volumes = NULL;
+  int64_t volume_capacity = 0;
+  int32_t *frame_tissue_end = prep_calloc(scene->tissue_count, sizeof(int32_t));
+  int32_t *sample_tissue_end = prep_calloc(scene->tissue_count, sizeof(int32_t));
+  fascia_cgal_tree **trees = prep_calloc(meshes->count, sizeof *trees);
+  fascia_prep_points *p = calloc(1, sizeof *p);
+  PREP_CHECK_GOTO(p && trees && frame_tissue_end && sample_tissue_end, ctx, FASCIA_ERR_MEMORY,
+                  "sample: out of memory");
+  for (int32_t t = 0; t < scene->tissue_count; ++t) {
+    fascia_ctx_progress(ctx, "sample", (double)t / scene->tissue_count, scene->tissues[t].name);
+    PREP_TRY_GOTO(sample_tissue(ctx, scene, meshes, volume, t, trees, &frames, &samples, &volumes, &volume_capacity));
+    frame_tissue_end[t] = (int32_t)frames.count;
+    sample_tissue_end[t] = (int32_t)samples.count;
+  }
+  PREP_CHECK_GOTO(frames.count < INT32_MAX && samples.count < INT32_MAX, ctx, FASCIA_ERR_MEMORY,
+                  "sample: too many points (%lld frames, %lld samples); raise the spacings", (long long)frames.count,
+                  (long long)samples.count);
+  const int64_t N = frames.count, S = samples.count;
+  p->frame_count = (int32_t)N;
+  p->sample_count = (int32_t)S;
+  p->frame_position = prep_calloc(3 * N, sizeof(double));
+  p->frame_tissue = prep_calloc(N, sizeof(int32_t));
+  p->frame_organ = prep_calloc(N, sizeof(int32_t));
+  p->frame_triangle = prep_calloc(N, sizeof(int32_t));
+  p->frame_voxel = prep_calloc(N, sizeof(int64_t));
+  p->sample_position = prep_calloc(3 * S, sizeof(double));
+  p->sample_volume = prep_calloc(S, sizeof(double));
+  p->sample_tissue = prep_calloc(S, sizeof(int32_t));
+  p->sample_voxel = prep_calloc(S, sizeof(int64_t));
+  PREP_CHECK_GOTO(p->frame_position && p->frame_tissue && p->frame_organ && p->frame_triangle && p->frame_voxel &&
+                      p->sample_position && p->sample_volume && p->sample_tissue && p->sample_voxel,
+                  ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  if (N) {
+    memcpy(p->frame_position, frames.position, (size_t)(3 * N) * sizeof(double));
+    memcpy(p->frame_organ, frames.organ, (size_t)N * sizeof(int32_t));
+    memcpy(p->frame_triangle, frames.triangle, (size_t)N * sizeof(int32_t));
+    memcpy(p->frame_voxel, frames.voxel, (size_t)N * sizeof(int64_t));
+  }
+  if (S) {
+    memcpy(p->sample_position, samples.position, (size_t)(3 * S) * sizeof(double));
+    memcpy(p->sample_voxel, samples.voxel, (size_t)S * sizeof(int64_t));
+    memcpy(p->sample_volume, volumes, (size_t)S * sizeof(double));
+  }
+  for (int32_t t = 0, i = 0, s = 0; t < scene->tissue_count; ++t) {
+    for (; i < frame_tissue_end[t]; ++i) p->frame_tissue[i] = t;
+    for (; s < sample_tissue_end[t]; ++s) p->sample_tissue[s] = t;
+  }
+  fascia_ctx_progress(ctx, "sample", 1, "done");
+  *out = p;
+  p = NULL;
+cleanup:
+  for (int32_t o = 0; trees && o < meshes->count; ++o) fascia_cgal_tree_destroy(trees + o);
+  free(trees);
+  free(frame_tissue_end);
+  free(sample_tissue_end);
+  list_free(&frames);
+  list_free(&samples);
+  free(volumes);
+  fascia_prep_points_destroy(&p);
+  return status;
+}

@@ -1,0 +1,723 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// The scene file: a strict JSON reader. Every key is known (unknown keys and
+// duplicates are errors, so a typo never silently falls back to a default),
+// every value is type- and range-checked, and every message names the file
+// and the key path ("scene 'a.json' tissues[0].max_gap: ..."). The format is
+// documented with examples in data/scenes/README.md.
+#include <cjson/cJSON.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "prep_util.h"
+
+typedef struct reader {
+  fascia_ctx *ctx;
+  const char *file;
+} reader;
+
+#define PATH_SIZE 256
+
+static fascia_status key_fail(const reader *rd, const char *path, const char *format, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+static fascia_status key_fail(const reader *rd, const char *path, const char *format, ...) {
+  char text[1024];
+  va_list args;
+  va_start(args, format);
+  vsnprintf(text, sizeof text, format, args);
+  va_end(args);
+  return PREP_FAIL(rd->ctx, FASCIA_ERR_FORMAT, "scene '%s' %s: %s", rd->file, path[0] ? path : "(top level)", text);
+}
+
+// out = path.key or path[index], truncated to PATH_SIZE - 1 characters.
+static void append(char *out, size_t *n, const char *text) {
+  size_t m = strlen(text);
+  if (m > PATH_SIZE - 1 - *n) m = PATH_SIZE - 1 - *n;
+  memcpy(out + *n, text, m);
+  *n += m;
+  out[*n] = 0;
+}
+static void sub_key(char *out, const char *path, const char *key) {
+  size_t n = 0;
+  out[0] = 0;
+  append(out, &n, path);
+  if (path[0]) append(out, &n, ".");
+  append(out, &n, key);
+}
+static void sub_index(char *out, const char *path, int index) {
+  char text[16];
+  snprintf(text, sizeof text, "[%d]", index);
+  size_t n = 0;
+  out[0] = 0;
+  append(out, &n, path);
+  append(out, &n, text);
+}
+
+static const char *type_name(const cJSON *item) {
+  if (!item) return "nothing";
+  if (cJSON_IsNumber(item)) return "a number";
+  if (cJSON_IsString(item)) return "a string";
+  if (cJSON_IsBool(item)) return "a boolean";
+  if (cJSON_IsNull(item)) return "null";
+  if (cJSON_IsArray(item)) return "an array";
+  if (cJSON_IsObject(item)) return "an object";
+  return "an invalid value";
+}
+
+// Every key of obj must be in known (NULL-terminated), and appear once.
+static fascia_status check_keys(const reader *rd, const cJSON *obj, const char *path, const char *const *known) {
+  if (!cJSON_IsObject(obj)) return key_fail(rd, path, "expected an object, found %s", type_name(obj));
+  const cJSON *item;
+  cJSON_ArrayForEach(item, obj) {
+    int found = 0;
+    for (int k = 0; known[k]; ++k)
+      if (!strcmp(item->string, known[k])) found = 1;
+    if (!found) {
+      char list[512] = "";
+      for (int k = 0; known[k]; ++k) {
+        strncat(list, known[k], sizeof list - strlen(list) - 1);
+        if (known[k + 1]) strncat(list, ", ", sizeof list - strlen(list) - 1);
+      }
+      char at[PATH_SIZE];
+      sub_key(at, path, item->string);
+      return key_fail(rd, at, "unknown key (known keys here: %s)", list);
+    }
+    for (const cJSON *other = item->next; other; other = other->next)
+      if (!strcmp(other->string, item->string)) {
+        char at[PATH_SIZE];
+        sub_key(at, path, item->string);
+        return key_fail(rd, at, "the key appears twice");
+      }
+  }
+  return FASCIA_OK;
+}
+
+// A number > lo (or >= lo when inclusive), < hi; default when absent and not required.
+static fascia_status get_number(const reader *rd, const cJSON *obj, const char *path, const char *key, int required,
+                                double fallback, double lo, int inclusive, double hi, double *out) {
+  char at[PATH_SIZE];
+  sub_key(at, path, key);
+  const cJSON *item = cJSON_GetObjectItemCaseSensitive(obj, key);
+  if (!item) {
+    if (required) return key_fail(rd, at, "missing (a number is required)");
+    *out = fallback;
+    return FASCIA_OK;
+  }
+  if (!cJSON_IsNumber(item)) return key_fail(rd, at, "expected a number, found %s", type_name(item));
+  const double v = item->valuedouble;
+  if (!isfinite(v) || (inclusive ? v < lo : v <= lo) || v >= hi)
+    return key_fail(rd, at, "%g is out of range (expected %s %g%s%s)", v, inclusive ? ">=" : ">", lo,
+                    isfinite(hi) ? " and below " : "", isfinite(hi) ? "the limit" : "");
+  *out = v;
+  return FASCIA_OK;
+}
+
+static fascia_status get_int(const reader *rd, const cJSON *obj, const char *path, const char *key, int required,
+                             int fallback, int lo, int hi, int *out) {
+  char at[PATH_SIZE];
+  sub_key(at, path, key);
+  const cJSON *item = cJSON_GetObjectItemCaseSensitive(obj, key);
+  if (!item) {
+    if (required) return key_fail(rd, at, "missing (an integer is required)");
+    *out = fallback;
+    return FASCIA_OK;
+  }
+  if (!cJSON_IsNumber(item) || item->valuedouble != floor(item->valuedouble))
+    return key_fail(rd, at, "expected an integer, found %s", type_name(item));
+  if (item->valuedouble < lo || item->valuedouble > hi)
+    return key_fail(rd, at, "%g is out of range (expected %d .. %d)", item->valuedouble, lo, hi);
+  *out = (int)item->valuedouble;
+  return FASCIA_OK;
+}
+
+// A string; *out points into the JSON tree (NULL when absent and optional).
+static fascia_status get_string(const reader *rd, const cJSON *obj, const char *path, const char *key, int required,
+                                const char **out) {
+  char at[PATH_SIZE];
+  sub_key(at, path, key);
+  const cJSON *item = cJSON_GetObjectItemCaseSensitive(obj, key);
+  *out = NULL;
+  if (!item) {
+    if (required) return key_fail(rd, at, "missing (a string is required)");
+    return FASCIA_OK;
+  }
+  if (!cJSON_IsString(item) || !item->valuestring)
+    return key_fail(rd, at, "expected a string, found %s", type_name(item));
+  if (!item->valuestring[0]) return key_fail(rd, at, "is empty");
+  *out = item->valuestring;
+  return FASCIA_OK;
+}
+
+static fascia_status get_name(const reader *rd, const cJSON *obj, const char *path, const char *key, char *out) {
+  const char *s;
+  PREP_TRY(get_string(rd, obj, path, key, 1, &s));
+  char at[PATH_SIZE];
+  sub_key(at, path, key);
+  if (strlen(s) >= FASCIA_NAME_SIZE)
+    return key_fail(rd, at, "'%s' is longer than %d characters", s, FASCIA_NAME_SIZE - 1);
+  strcpy(out, s);
+  return FASCIA_OK;
+}
+
+// An array of n finite numbers.
+static fascia_status get_vector(const reader *rd, const cJSON *obj, const char *path, const char *key, int required,
+                                int n, double *out) {
+  char at[PATH_SIZE];
+  sub_key(at, path, key);
+  const cJSON *item = cJSON_GetObjectItemCaseSensitive(obj, key);
+  if (!item) {
+    if (required) return key_fail(rd, at, "missing (an array of %d numbers is required)", n);
+    return FASCIA_OK;
+  }
+  if (!cJSON_IsArray(item) || cJSON_GetArraySize(item) != n)
+    return key_fail(rd, at, "expected an array of %d numbers, found %s%s", n, type_name(item),
+                    cJSON_IsArray(item) ? " of another length" : "");
+  int k = 0;
+  const cJSON *e;
+  cJSON_ArrayForEach(e, item) {
+    if (!cJSON_IsNumber(e) || !isfinite(e->valuedouble)) {
+      char ek[PATH_SIZE];
+      sub_index(ek, at, k);
+      return key_fail(rd, ek, "expected a finite number, found %s", type_name(e));
+    }
+    out[k++] = e->valuedouble;
+  }
+  return FASCIA_OK;
+}
+
+// "all" or an array of non-empty strings.
+static fascia_status get_parts(const reader *rd, const cJSON *obj, const char *path, const char *key,
+                               fascia_prep_parts *out) {
+  char at[PATH_SIZE];
+  sub_key(at, path, key);
+  const cJSON *item = cJSON_GetObjectItemCaseSensitive(obj, key);
+  out->count = 0;
+  out->names = NULL;
+  if (!item || (cJSON_IsString(item) && !strcmp(item->valuestring, "all"))) return FASCIA_OK;
+  if (!cJSON_IsArray(item) || cJSON_GetArraySize(item) == 0)
+    return key_fail(rd, at, "expected \"all\" or a non-empty array of part names, found %s", type_name(item));
+  const int n = cJSON_GetArraySize(item);
+  out->names = prep_calloc(n, sizeof(char *));
+  PREP_CHECK(out->names, rd->ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", rd->file);
+  const cJSON *e;
+  cJSON_ArrayForEach(e, item) {
+    char ek[PATH_SIZE];
+    sub_index(ek, at, out->count);
+    if (!cJSON_IsString(e) || !e->valuestring[0])
+      return key_fail(rd, ek, "expected a part name (string), found %s", type_name(e));
+    out->names[out->count] = prep_strdup(e->valuestring);
+    PREP_CHECK(out->names[out->count], rd->ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", rd->file);
+    out->count++;
+  }
+  return FASCIA_OK;
+}
+
+static int organ_index(const fascia_prep_scene *scene, const char *name) {
+  for (int32_t k = 0; k < scene->organ_count; ++k)
+    if (!strcmp(scene->organs[k].name, name)) return k;
+  return -1;
+}
+
+static int material_index(const fascia_prep_scene *scene, const char *name) {
+  for (int32_t k = 0; k < scene->material_count; ++k)
+    if (!strcmp(scene->materials[k].name, name)) return k;
+  return -1;
+}
+
+static fascia_status need_organ(const reader *rd, const fascia_prep_scene *scene, const char *at, const char *name,
+                                int32_t *out) {
+  *out = organ_index(scene, name);
+  if (*out >= 0) return FASCIA_OK;
+  char list[512] = "";
+  for (int32_t k = 0; k < scene->organ_count; ++k) {
+    strncat(list, scene->organs[k].name, sizeof list - strlen(list) - 1);
+    if (k + 1 < scene->organ_count) strncat(list, ", ", sizeof list - strlen(list) - 1);
+  }
+  return key_fail(rd, at, "no organ is named '%s' (organs: %s)", name, list);
+}
+
+// {"box": {"min": [..], "max": [..]}} or {"sphere": {"center": [..], "radius": r}}
+static fascia_status get_shape_region(const reader *rd, const cJSON *item, const char *path,
+                                      fascia_prep_region *out) {
+  memset(out, 0, sizeof *out);
+  const cJSON *box = cJSON_GetObjectItemCaseSensitive(item, "box");
+  const cJSON *sphere = cJSON_GetObjectItemCaseSensitive(item, "sphere");
+  char at[PATH_SIZE];
+  if (box && sphere) return key_fail(rd, path, "give either \"box\" or \"sphere\", not both");
+  if (box) {
+    sub_key(at, path, "box");
+    static const char *const known[] = {"min", "max", NULL};
+    PREP_TRY(check_keys(rd, box, at, known));
+    out->kind = FASCIA_PREP_REGION_BOX;
+    PREP_TRY(get_vector(rd, box, at, "min", 1, 3, out->min));
+    PREP_TRY(get_vector(rd, box, at, "max", 1, 3, out->max));
+    for (int r = 0; r < 3; ++r)
+      if (!(out->max[r] > out->min[r])) return key_fail(rd, at, "max must exceed min on every axis");
+  } else if (sphere) {
+    sub_key(at, path, "sphere");
+    static const char *const known[] = {"center", "radius", NULL};
+    PREP_TRY(check_keys(rd, sphere, at, known));
+    out->kind = FASCIA_PREP_REGION_SPHERE;
+    PREP_TRY(get_vector(rd, sphere, at, "center", 1, 3, out->center));
+    PREP_TRY(get_number(rd, sphere, at, "radius", 1, 0, 0, 0, INFINITY, &out->radius));
+  }
+  return FASCIA_OK;
+}
+
+static fascia_status parse_material(const reader *rd, const cJSON *item, const char *path, fascia_material *m) {
+  static const char *const known[] = {"law", "youngs_modulus", "poisson_ratio", "density", "rotation_coupling",
+                                      "description", NULL};
+  PREP_TRY(check_keys(rd, item, path, known));
+  if (strlen(item->string) >= FASCIA_NAME_SIZE) return key_fail(rd, path, "material name is too long");
+  strcpy(m->name, item->string);
+  const char *law = NULL, *description = NULL;
+  PREP_TRY(get_string(rd, item, path, "description", 0, &description));
+  PREP_TRY(get_string(rd, item, path, "law", 0, &law));
+  m->law = law ? fascia_law_from_name(law) : FASCIA_LAW_NEOHOOKEAN;
+  if (m->law < 0) {
+    char at[PATH_SIZE];
+    sub_key(at, path, "law");
+    return key_fail(rd, at, "unknown law '%s' (known: stvk, neohookean)", law);
+  }
+  PREP_TRY(get_number(rd, item, path, "youngs_modulus", 1, 0, 0, 0, INFINITY, &m->youngs_modulus));
+  PREP_TRY(get_number(rd, item, path, "poisson_ratio", 1, 0, 0, 1, 0.5, &m->poisson_ratio));
+  PREP_TRY(get_number(rd, item, path, "density", 0, 1000, 0, 0, INFINITY, &m->density));
+  PREP_TRY(get_number(rd, item, path, "rotation_coupling", 0, 0, 0, 1, INFINITY, &m->rotation_coupling));
+  return FASCIA_OK;
+}
+
+static fascia_status parse_motion(const reader *rd, const cJSON *organ, const char *path, fascia_motion *motion,
+                                  const char *organ_name) {
+  char at[PATH_SIZE];
+  sub_key(at, path, "motion");
+  const cJSON *item = cJSON_GetObjectItemCaseSensitive(organ, "motion");
+  if (!item) return key_fail(rd, at, "missing: a prescribed organ needs a motion {\"pivot\", \"keys\"}");
+  static const char *const known[] = {"pivot", "keys", NULL};
+  PREP_TRY(check_keys(rd, item, at, known));
+  PREP_TRY(get_vector(rd, item, at, "pivot", 1, 3, motion->pivot));
+  char kat[PATH_SIZE];
+  sub_key(kat, at, "keys");
+  const cJSON *keys = cJSON_GetObjectItemCaseSensitive(item, "keys");
+  if (!cJSON_IsArray(keys) || cJSON_GetArraySize(keys) < 1)
+    return key_fail(rd, kat, "expected a non-empty array of keys {\"time\", \"translation\", \"rotation\"}, found %s",
+                    type_name(keys));
+  snprintf(motion->name, FASCIA_NAME_SIZE, "%s", organ_name);
+  PREP_TRY(fascia_motion_alloc(rd->ctx, motion, cJSON_GetArraySize(keys)));
+  int k = 0;
+  const cJSON *key;
+  cJSON_ArrayForEach(key, keys) {
+    char ek[PATH_SIZE];
+    sub_index(ek, kat, k);
+    static const char *const known_key[] = {"time", "translation", "rotation", NULL};
+    PREP_TRY(check_keys(rd, key, ek, known_key));
+    PREP_TRY(get_number(rd, key, ek, "time", 1, 0, 0, 1, INFINITY, &motion->key_time[k]));
+    if (k > 0 && !(motion->key_time[k] > motion->key_time[k - 1]))
+      return key_fail(rd, ek, "key times must increase strictly");
+    PREP_TRY(get_vector(rd, key, ek, "translation", 0, 3, motion->key_translation + 3 * k));
+    double *q = motion->key_rotation + 4 * k;
+    PREP_TRY(get_vector(rd, key, ek, "rotation", 0, 4, q));
+    const double norm = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    if (!(norm > 0.5 && norm < 2))
+      return key_fail(rd, ek, "rotation must be a unit quaternion (w, x, y, z); its norm is %g", norm);
+    for (int r = 0; r < 4; ++r) q[r] /= norm;
+    ++k;
+  }
+  return FASCIA_OK;
+}
+
+static fascia_status parse_organ(const reader *rd, fascia_prep_scene *scene, const cJSON *item, const char *path,
+                                 const char *base_dir, fascia_prep_organ_def *o) {
+  static const char *const known[] = {"name", "mesh", "parts", "units", "transform", "model", "motion", "material",
+                                      "description", NULL};
+  PREP_TRY(check_keys(rd, item, path, known));
+  PREP_TRY(get_name(rd, item, path, "name", o->name));
+  const char *mesh, *units, *model, *description;
+  PREP_TRY(get_string(rd, item, path, "description", 0, &description));
+  PREP_TRY(get_string(rd, item, path, "mesh", 1, &mesh));
+  o->mesh = prep_strdup(mesh);
+  const size_t n = strlen(base_dir) + strlen(mesh) + 2;
+  o->mesh_path = malloc(n);
+  PREP_CHECK(o->mesh && o->mesh_path, rd->ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", rd->file);
+  if (mesh[0] == '/' || !base_dir[0])
+    snprintf(o->mesh_path, n, "%s", mesh);
+  else
+    snprintf(o->mesh_path, n, "%s/%s", base_dir, mesh);
+  PREP_TRY(get_parts(rd, item, path, "parts", &o->parts));
+  char at[PATH_SIZE];
+  PREP_TRY(get_string(rd, item, path, "units", 0, &units));
+  snprintf(o->units, sizeof o->units, "%s", units ? units : "m");
+  if (!units || !strcmp(units, "m"))
+    o->scale = 1;
+  else if (!strcmp(units, "cm"))
+    o->scale = 0.01;
+  else if (!strcmp(units, "mm"))
+    o->scale = 0.001;
+  else {
+    sub_key(at, path, "units");
+    return key_fail(rd, at, "unknown units '%s' (known: m, cm, mm)", units);
+  }
+  // transform: x' = translation + rotation (scale x)
+  for (int r = 0; r < 12; ++r) o->transform[r] = (r % 4 == r / 4) ? 1 : 0;
+  const cJSON *tr = cJSON_GetObjectItemCaseSensitive(item, "transform");
+  if (tr) {
+    sub_key(at, path, "transform");
+    static const char *const known_tr[] = {"translation", "rotation", "scale", NULL};
+    PREP_TRY(check_keys(rd, tr, at, known_tr));
+    double t[3] = {0, 0, 0}, q[4] = {1, 0, 0, 0}, s = 1;
+    PREP_TRY(get_vector(rd, tr, at, "translation", 0, 3, t));
+    PREP_TRY(get_vector(rd, tr, at, "rotation", 0, 4, q));
+    PREP_TRY(get_number(rd, tr, at, "scale", 0, 1, 0, 0, INFINITY, &s));
+    const double norm = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    if (!(norm > 0.5 && norm < 2)) return key_fail(rd, at, "rotation must be a unit quaternion (w, x, y, z)");
+    const double w = q[0] / norm, x = q[1] / norm, y = q[2] / norm, z = q[3] / norm;
+    const double R[9] = {1 - 2 * (y * y + z * z), 2 * (x * y - w * z),     2 * (x * z + w * y),
+                         2 * (x * y + w * z),     1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
+                         2 * (x * z - w * y),     2 * (y * z + w * x),     1 - 2 * (x * x + y * y)};
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) o->transform[4 * r + c] = s * R[3 * r + c];
+      o->transform[4 * r + 3] = t[r];
+    }
+  }
+  PREP_TRY(get_string(rd, item, path, "model", 0, &model));
+  o->material = -1;
+  o->motion.key_count = 0;
+  sub_key(at, path, "model");
+  if (!model || !strcmp(model, "fixed"))
+    o->kind = FASCIA_ORGAN_FIXED;
+  else if (!strcmp(model, "prescribed"))
+    o->kind = FASCIA_ORGAN_PRESCRIBED;
+  else if (!strcmp(model, "rigid"))
+    o->kind = FASCIA_ORGAN_RIGID;
+  else if (!strcmp(model, "deformable"))
+    o->kind = FASCIA_ORGAN_DEFORMABLE;
+  else
+    return key_fail(rd, at, "unknown model '%s' (known: fixed, prescribed, rigid, deformable)", model);
+  if (o->kind == FASCIA_ORGAN_PRESCRIBED) {
+    PREP_TRY(parse_motion(rd, item, path, &o->motion, o->name));
+  } else if (cJSON_GetObjectItemCaseSensitive(item, "motion")) {
+    sub_key(at, path, "motion");
+    return key_fail(rd, at, "only a \"prescribed\" organ takes a motion");
+  }
+  const char *material;
+  PREP_TRY(get_string(rd, item, path, "material", 0, &material));
+  sub_key(at, path, "material");
+  if (o->kind == FASCIA_ORGAN_DEFORMABLE) {
+    if (!material) return key_fail(rd, at, "missing: a deformable organ needs a material");
+    o->material = material_index(scene, material);
+    if (o->material < 0) return key_fail(rd, at, "no material is named '%s' in \"materials\"", material);
+    return key_fail(rd, at,
+                    "model \"deformable\" is not supported by this version of fascia prep (organ frames are not "
+                    "built yet); use \"fixed\", \"prescribed\" or \"rigid\"");
+  } else if (material) {
+    return key_fail(rd, at, "only a \"deformable\" organ takes a material");
+  }
+  return FASCIA_OK;
+}
+
+static fascia_status parse_coupling(const reader *rd, const fascia_prep_scene *scene, const cJSON *item,
+                                    const char *path, fascia_prep_tissue_def *t) {
+  static const char *const known[] = {"tolerance", "organs", NULL};
+  PREP_TRY(check_keys(rd, item, path, known));
+  PREP_TRY(get_number(rd, item, path, "tolerance", 0, scene->voxel_size, 0, 1, INFINITY, &t->coupling_tolerance));
+  const cJSON *organs = cJSON_GetObjectItemCaseSensitive(item, "organs");
+  if (!organs) return FASCIA_OK;
+  char at[PATH_SIZE];
+  sub_key(at, path, "organs");
+  if (!cJSON_IsObject(organs))
+    return key_fail(rd, at, "expected an object {organ name: false or {\"region\", \"parts\"}}, found %s",
+                    type_name(organs));
+  const int n = cJSON_GetArraySize(organs);
+  t->coupling = prep_calloc(n, sizeof *t->coupling);
+  PREP_CHECK(t->coupling, rd->ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", rd->file);
+  const cJSON *e;
+  cJSON_ArrayForEach(e, organs) {
+    char ek[PATH_SIZE];
+    sub_key(ek, at, e->string);
+    fascia_prep_coupling_def *c = t->coupling + t->coupling_count++;
+    PREP_TRY(need_organ(rd, scene, ek, e->string, &c->organ));
+    for (int32_t k = 0; k + 1 < t->coupling_count; ++k)
+      if (t->coupling[k].organ == c->organ) return key_fail(rd, ek, "the organ appears twice");
+    if (cJSON_IsBool(e)) {
+      c->enabled = cJSON_IsTrue(e);
+      continue;
+    }
+    static const char *const known_c[] = {"region", "parts", NULL};
+    PREP_TRY(check_keys(rd, e, ek, known_c));
+    c->enabled = 1;
+    const cJSON *region = cJSON_GetObjectItemCaseSensitive(e, "region");
+    if (region) {
+      char rk[PATH_SIZE];
+      sub_key(rk, ek, "region");
+      static const char *const known_r[] = {"box", "sphere", NULL};
+      PREP_TRY(check_keys(rd, region, rk, known_r));
+      PREP_TRY(get_shape_region(rd, region, rk, &c->region));
+    }
+    PREP_TRY(get_parts(rd, e, ek, "parts", &c->parts));
+  }
+  return FASCIA_OK;
+}
+
+static fascia_status parse_tissue(const reader *rd, const fascia_prep_scene *scene, const cJSON *item,
+                                  const char *path, fascia_prep_tissue_def *t) {
+  static const char *const known[] = {"name",           "connects", "max_gap",         "region",
+                                      "material",       "frame_spacing", "sample_spacing", "shape_functions",
+                                      "coupling",       "min_component", "description",   NULL};
+  PREP_TRY(check_keys(rd, item, path, known));
+  PREP_TRY(get_name(rd, item, path, "name", t->name));
+  const char *description;
+  PREP_TRY(get_string(rd, item, path, "description", 0, &description));
+  char at[PATH_SIZE];
+  sub_key(at, path, "connects");
+  const cJSON *connects = cJSON_GetObjectItemCaseSensitive(item, "connects");
+  if (!cJSON_IsArray(connects) || cJSON_GetArraySize(connects) < 2)
+    return key_fail(rd, at, "expected an array of two or more organ names, found %s%s", type_name(connects),
+                    cJSON_IsArray(connects) ? " with fewer" : "");
+  t->organs = prep_calloc(cJSON_GetArraySize(connects), sizeof(int32_t));
+  PREP_CHECK(t->organs, rd->ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", rd->file);
+  const cJSON *e;
+  cJSON_ArrayForEach(e, connects) {
+    char ek[PATH_SIZE];
+    sub_index(ek, at, t->organ_count);
+    if (!cJSON_IsString(e)) return key_fail(rd, ek, "expected an organ name, found %s", type_name(e));
+    PREP_TRY(need_organ(rd, scene, ek, e->valuestring, &t->organs[t->organ_count]));
+    for (int32_t k = 0; k < t->organ_count; ++k)
+      if (t->organs[k] == t->organs[t->organ_count]) return key_fail(rd, ek, "organ '%s' is named twice", e->valuestring);
+    t->organ_count++;
+  }
+  PREP_TRY(get_number(rd, item, path, "max_gap", 1, 0, 0, 0, INFINITY, &t->max_gap));
+  t->region_organ = -1;
+  const cJSON *region = cJSON_GetObjectItemCaseSensitive(item, "region");
+  if (region) {
+    sub_key(at, path, "region");
+    static const char *const known_r[] = {"box", "sphere", "parts", NULL};
+    PREP_TRY(check_keys(rd, region, at, known_r));
+    PREP_TRY(get_shape_region(rd, region, at, &t->region));
+    const cJSON *parts = cJSON_GetObjectItemCaseSensitive(region, "parts");
+    if (parts) {
+      char pk[PATH_SIZE];
+      sub_key(pk, at, "parts");
+      static const char *const known_p[] = {"organ", "names", NULL};
+      PREP_TRY(check_keys(rd, parts, pk, known_p));
+      const char *organ;
+      PREP_TRY(get_string(rd, parts, pk, "organ", 1, &organ));
+      char ok[PATH_SIZE];
+      sub_key(ok, pk, "organ");
+      PREP_TRY(need_organ(rd, scene, ok, organ, &t->region_organ));
+      int connected = 0;
+      for (int32_t k = 0; k < t->organ_count; ++k) connected |= t->organs[k] == t->region_organ;
+      if (!connected) return key_fail(rd, ok, "organ '%s' is not one the tissue connects", organ);
+      PREP_TRY(get_parts(rd, parts, pk, "names", &t->region_parts));
+      if (t->region_parts.count == 0) return key_fail(rd, pk, "\"names\" must list at least one part");
+    }
+  }
+  const char *material;
+  PREP_TRY(get_string(rd, item, path, "material", 1, &material));
+  t->material = material_index(scene, material);
+  sub_key(at, path, "material");
+  if (t->material < 0) return key_fail(rd, at, "no material is named '%s' in \"materials\"", material);
+  PREP_TRY(get_number(rd, item, path, "frame_spacing", 1, 0, 0, 0, INFINITY, &t->frame_spacing));
+  PREP_TRY(get_number(rd, item, path, "sample_spacing", 1, 0, 0, 0, INFINITY, &t->sample_spacing));
+  if (t->sample_spacing > t->frame_spacing) {
+    sub_key(at, path, "sample_spacing");
+    return key_fail(rd, at, "%g m is coarser than frame_spacing %g m; samples must be at least as fine as frames",
+                    t->sample_spacing, t->frame_spacing);
+  }
+  if (t->sample_spacing < scene->voxel_size) {
+    sub_key(at, path, "sample_spacing");
+    return key_fail(rd, at, "%g m is finer than the voxel size %g m; raise it or lower voxel_size", t->sample_spacing,
+                    scene->voxel_size);
+  }
+  t->shape_kind = FASCIA_PREP_SHAPE_MLS;
+  t->neighbours = 8;
+  const cJSON *shape = cJSON_GetObjectItemCaseSensitive(item, "shape_functions");
+  if (shape) {
+    sub_key(at, path, "shape_functions");
+    static const char *const known_s[] = {"kind", "neighbours", NULL};
+    PREP_TRY(check_keys(rd, shape, at, known_s));
+    const char *kind;
+    PREP_TRY(get_string(rd, shape, at, "kind", 0, &kind));
+    if (kind && !strcmp(kind, "tet"))
+      t->shape_kind = FASCIA_PREP_SHAPE_TET;
+    else if (kind && strcmp(kind, "mls")) {
+      char kk[PATH_SIZE];
+      sub_key(kk, at, "kind");
+      return key_fail(rd, kk, "unknown kind '%s' (known: mls, tet)", kind);
+    }
+    PREP_TRY(get_int(rd, shape, at, "neighbours", 0, 8, 4, 64, &t->neighbours));
+  }
+  t->coupling_tolerance = scene->voxel_size;
+  const cJSON *coupling = cJSON_GetObjectItemCaseSensitive(item, "coupling");
+  if (coupling) {
+    sub_key(at, path, "coupling");
+    PREP_TRY(parse_coupling(rd, scene, coupling, at, t));
+  }
+  const double fs = t->frame_spacing;
+  PREP_TRY(get_number(rd, item, path, "min_component", 0, fs * fs * fs, 0, 1, INFINITY, &t->min_component));
+  return FASCIA_OK;
+}
+
+static fascia_status parse_root(const reader *rd, const cJSON *root, const char *base_dir, fascia_prep_scene *s) {
+  static const char *const known[] = {"fascia_scene", "name",      "description", "voxel_size", "seed",
+                                      "gravity",      "output",    "close_holes", "materials",  "organs",
+                                      "tissues",      NULL};
+  PREP_TRY(check_keys(rd, root, "", known));
+  int version;
+  PREP_TRY(get_int(rd, root, "", "fascia_scene", 1, 1, 1, 1, &version));
+  const char *name, *description, *output;
+  PREP_TRY(get_string(rd, root, "", "name", 0, &name));
+  PREP_TRY(get_string(rd, root, "", "description", 0, &description));
+  PREP_TRY(get_number(rd, root, "", "voxel_size", 1, 0, 0, 0, INFINITY, &s->voxel_size));
+  int seed;
+  PREP_TRY(get_int(rd, root, "", "seed", 0, 1, 0, 2147483647, &seed));
+  s->seed = (uint64_t)seed;
+  s->gravity[0] = 0, s->gravity[1] = -9.81, s->gravity[2] = 0;
+  PREP_TRY(get_vector(rd, root, "", "gravity", 0, 3, s->gravity));
+  PREP_TRY(get_number(rd, root, "", "close_holes", 0, 0.01, 0, 1, 0.1, &s->close_holes));
+  PREP_TRY(get_string(rd, root, "", "output", 0, &output));
+  if (output) { // as given: relative to the working folder, like -o
+    s->output = prep_strdup(output);
+    PREP_CHECK(s->output, rd->ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", rd->file);
+  }
+
+  const cJSON *materials = cJSON_GetObjectItemCaseSensitive(root, "materials");
+  if (!cJSON_IsObject(materials) || cJSON_GetArraySize(materials) < 1)
+    return key_fail(rd, "materials", "expected an object {name: {\"youngs_modulus\", ...}}, found %s",
+                    type_name(materials));
+  s->materials = prep_calloc(cJSON_GetArraySize(materials), sizeof *s->materials);
+  PREP_CHECK(s->materials, rd->ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", rd->file);
+  const cJSON *e;
+  cJSON_ArrayForEach(e, materials) {
+    char at[PATH_SIZE];
+    sub_key(at, "materials", e->string);
+    PREP_TRY(parse_material(rd, e, at, s->materials + s->material_count));
+    s->material_count++;
+  }
+
+  const cJSON *organs = cJSON_GetObjectItemCaseSensitive(root, "organs");
+  if (!cJSON_IsArray(organs) || cJSON_GetArraySize(organs) < 1)
+    return key_fail(rd, "organs", "expected a non-empty array of organs, found %s", type_name(organs));
+  s->organs = prep_calloc(cJSON_GetArraySize(organs), sizeof *s->organs);
+  PREP_CHECK(s->organs, rd->ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", rd->file);
+  cJSON_ArrayForEach(e, organs) {
+    char at[PATH_SIZE];
+    sub_index(at, "organs", s->organ_count);
+    fascia_prep_organ_def *o = s->organs + s->organ_count;
+    s->organ_count++; // counted first so that destroy frees what was parsed
+    PREP_TRY(parse_organ(rd, s, e, at, base_dir, o));
+    for (int32_t k = 0; k + 1 < s->organ_count; ++k)
+      if (!strcmp(s->organs[k].name, o->name)) return key_fail(rd, at, "organ name '%s' is used twice", o->name);
+  }
+
+  const cJSON *tissues = cJSON_GetObjectItemCaseSensitive(root, "tissues");
+  if (!cJSON_IsArray(tissues) || cJSON_GetArraySize(tissues) < 1)
+    return key_fail(rd, "tissues", "expected a non-empty array of tissues, found %s", type_name(tissues));
+  if (cJSON_GetArraySize(tissues) > 250) return key_fail(rd, "tissues", "more than 250 tissues");
+  s->tissues = prep_calloc(cJSON_GetArraySize(tissues), sizeof *s->tissues);
+  PREP_CHECK(s->tissues, rd->ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", rd->file);
+  cJSON_ArrayForEach(e, tissues) {
+    char at[PATH_SIZE];
+    sub_index(at, "tissues", s->tissue_count);
+    fascia_prep_tissue_def *t = s->tissues + s->tissue_count;
+    s->tissue_count++;
+    PREP_TRY(parse_tissue(rd, s, e, at, t));
+  }
+  return FASCIA_OK;
+}
+
+fascia_status fascia_prep_scene_parse(fascia_ctx *ctx, const char *text, const char *origin, const char *base_dir,
+                                      fascia_prep_scene **out) {
+  PREP_CHECK(out && text, ctx, FASCIA_ERR_ARGUMENT, "fascia_prep_scene_parse: NULL argument");
+  *out = NULL;
+  if (!origin) origin = "(memory)";
+  if (!base_dir) base_dir = ".";
+  const reader rd = {ctx, origin};
+  const char *end = NULL;
+  cJSON *root = cJSON_ParseWithOpts(text, &end, 1);
+  if (!root) {
+    int line = 1, column = 1;
+    for (const char *c = text; end && c < end && *c; ++c) {
+      if (*c == '\n')
+        ++line, column = 1;
+      else
+        ++column;
+    }
+    return PREP_FAIL(ctx, FASCIA_ERR_FORMAT, "scene '%s': not valid JSON near line %d, column %d", origin, line,
+                     column);
+  }
+  fascia_prep_scene *s = calloc(1, sizeof *s);
+  fascia_status status = FASCIA_OK;
+  PREP_CHECK_GOTO(s, ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", origin);
+  s->path = prep_strdup(origin);
+  s->text = prep_strdup(text);
+  PREP_CHECK_GOTO(s->path && s->text, ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", origin);
+  PREP_TRY_GOTO(parse_root(&rd, root, base_dir, s));
+  *out = s;
+  s = NULL;
+cleanup:
+  fascia_prep_scene_destroy(&s);
+  cJSON_Delete(root);
+  return status;
+}
+
+fascia_status fascia_prep_scene_load(fascia_ctx *ctx, const char *path, fascia_prep_scene **out) {
+  PREP_CHECK(out && path, ctx, FASCIA_ERR_ARGUMENT, "fascia_prep_scene_load: NULL argument");
+  *out = NULL;
+  char *text = NULL;
+  PREP_TRY(prep_read_file(ctx, path, "scene", &text, NULL));
+  char *dir = prep_strdup(path);
+  if (!dir) {
+    free(text);
+    return PREP_FAIL(ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", path);
+  }
+  char *slash = strrchr(dir, '/');
+  if (slash)
+    *slash = 0;
+  else
+    strcpy(dir, ".");
+  const fascia_status status = fascia_prep_scene_parse(ctx, text, path, dir, out);
+  free(dir);
+  free(text);
+  return status;
+}
+
+static void free_parts(fascia_prep_parts *parts) {
+  for (int32_t k = 0; parts->names && k < parts->count; ++k) free(parts->names[k]);
+  free(parts->names);
+  parts->names = NULL;
+  parts->count = 0;
+}
+
+void fascia_prep_scene_destroy(fascia_prep_scene **scene) {
+  if (!scene || !*scene) return;
+  fascia_prep_scene *s = *scene;
+  for (int32_t k = 0; s->organs && k < s->organ_count; ++k) {
+    fascia_prep_organ_def *o = s->organs + k;
+    free(o->mesh);
+    free(o->mesh_path);
+    free_parts(&o->parts);
+    free(o->motion.key_time);
+    free(o->motion.key_translation);
+    free(o->motion.key_rotation);
+  }
+  for (int32_t k = 0; s->tissues && k < s->tissue_count; ++k) {
+    fascia_prep_tissue_def *t = s->tissues + k;
+    free(t->organs);
+    free_parts(&t->region_parts);
+    for (int32_t c = 0; t->coupling && c < t->coupling_count; ++c) free_parts(&t->coupling[c].parts);
+    free(t->coupling);
+  }
+  free(s->organs);
+  free(s->tissues);
+  free(s->materials);
+  free(s->path);
+  free(s->text);
+  free(s->output);
+  free(s);
+  *scene = NULL;
+}

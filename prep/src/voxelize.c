@@ -1,0 +1,637 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// Stage 3, voxelize: inside/outside of every organ near a tissue, signed
+// distances (OpenVDB), overlaps, and each tissue's region.
+//
+// Inside/outside. Real segmentations are open, doubled or self-intersecting,
+// so the sign does not come from normals. Instead (the "outer surface" rule):
+//
+//   1. every axis-parallel segment between two neighbouring voxel centres that
+//      a triangle crosses is blocked (exact scan conversion of the triangles);
+//   2. a flood fill from the grid's border over unblocked segments reaches
+//      exactly the voxels connected to the outside without crossing the
+//      surface; everything else is inside. Cavities and the space between the
+//      two sheets of a thin shell count as inside, as tissue cannot reach them;
+//   3. if the surface has holes (border edges) and the fill leaked in, the
+//      fill is redone with walls of voxels within (c + 1/2) h of the surface
+//      (2c + 1 = close_holes / h), then grown back towards the surface over unblocked
+//      segments by 2c + 2 steps: holes up to about 2c voxels across are
+//      closed, and away from the holes the surface stays exact.
+//
+// The report of each organ says which rule was used.
+//
+// Tissue region of tissue t (voxel centre x): outside every organ, within
+// max_gap of each organ t connects (or of the named parts), inside the
+// optional box or sphere; pieces smaller than min_component are dropped.
+// Overlapping organs: voxels inside two organs are counted and the depth
+// (largest distance to the nearer of the two surfaces) reported; the tissue
+// is built outside both (the rule), the organ surfaces are kept as given.
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "prep_util.h"
+
+// grids above this many voxels are refused (2^31: 2 GB per byte array)
+#define MAX_VOXELS ((int64_t)1 << 31)
+
+void fascia_prep_volume_destroy(fascia_prep_volume **volume) {
+  if (!volume || !*volume) return;
+  fascia_prep_volume *v = *volume;
+  free(v->region);
+  for (int32_t k = 0; v->distance && k < v->organ_count; ++k) free(v->distance[k]);
+  free(v->distance);
+  free(v->band);
+  free(v->tissues);
+  free(v->overlaps);
+  free(v->closest);
+  free(v);
+  *volume = NULL;
+}
+
+int fascia_prep_volume_region_at(const fascia_prep_volume *volume, const fascia_real *point) {
+  const prep_grid g = prep_volume_grid(volume);
+  const int64_t v = prep_grid_locate(&g, point);
+  return v < 0 ? 0 : volume->region[v];
+}
+
+// ------------------------------------------------------------ inside/outside
+
+// Marks the grid segments the triangle crosses: bit a of blocked[v] blocks the
+// segment from voxel v to its +a neighbour.
+static void block_triangle(const prep_grid *g, const double *p0, const double *p1, const double *p2,
+                           uint8_t *blocked) {
+  double q[3][3];
+  for (int r = 0; r < 3; ++r) {
+    q[0][r] = p0[r] / g->h - g->lo[r];
+    q[1][r] = p1[r] / g->h - g->lo[r];
+    q[2][r] = p2[r] / g->h - g->lo[r];
+  }
+  for (int ax = 0; ax < 3; ++ax) {
+    const int u = (ax + 1) % 3, w = (ax + 2) % 3;
+    const double area = (q[1][u] - q[0][u]) * (q[2][w] - q[0][w]) - (q[2][u] - q[0][u]) * (q[1][w] - q[0][w]);
+    if (fabs(area) < 1e-14) continue; // parallel to the axis: crossed by no line transversally
+    const double umin = fmin(q[0][u], fmin(q[1][u], q[2][u])), umax = fmax(q[0][u], fmax(q[1][u], q[2][u]));
+    const double wmin = fmin(q[0][w], fmin(q[1][w], q[2][w])), wmax = fmax(q[0][w], fmax(q[1][w], q[2][w]));
+    const double eps = 1e-9; // inclusive edges: a line through a shared edge is blocked twice, never zero times
+    for (int32_t jw = (int32_t)ceil(wmin - 1e-9); jw <= (int32_t)floor(wmax + 1e-9); ++jw)
+      for (int32_t ju = (int32_t)ceil(umin - 1e-9); ju <= (int32_t)floor(umax + 1e-9); ++ju) {
+        // barycentric coordinates of the line's foot (ju, jw) in the projected triangle
+        const double b0 = ((q[1][u] - ju) * (q[2][w] - jw) - (q[2][u] - ju) * (q[1][w] - jw)) / area;
+        const double b1 = ((q[2][u] - ju) * (q[0][w] - jw) - (q[0][u] - ju) * (q[2][w] - jw)) / area;
+        const double b2 = 1 - b0 - b1;
+        if (b0 < -eps || b1 < -eps || b2 < -eps) continue;
+        const double t = b0 * q[0][ax] + b1 * q[1][ax] + b2 * q[2][ax];
+        int32_t ijk[3];
+        ijk[u] = ju;
+        ijk[w] = jw;
+        const int32_t i = (int32_t)floor(t);
+        const int on_centre = fabs(t - floor(t + 0.5)) < 1e-9;
+        for (int32_t a = on_centre ? (int32_t)floor(t + 0.5) - 1 : i; a <= (on_centre ? (int32_t)floor(t + 0.5) : i);
+             ++a) {
+          ijk[ax] = a;
+          if (ijk[0] < 0 || ijk[1] < 0 || ijk[2] < 0 || ijk[0] >= g->dims[0] || ijk[1] >= g->dims[1] ||
+              ijk[2] >= g->dims[2])
+            continue;
+          blocked[prep_grid_index(g, ijk[0], ijk[1], ijk[2])] |= (uint8_t)(1u << ax);
+        }
+      }
+    // parity (bit 3 + ax): the same lines shifted by a tiny irrational-looking
+    // offset so that no line meets an edge or a vertex exactly; each crossing
+    // toggles the segment it falls in, so two sheets within one segment cancel
+    const double du = 1.2345e-4, dw = 2.3456e-4;
+    for (int32_t jw = (int32_t)ceil(wmin - dw); jw + dw <= wmax; ++jw)
+      for (int32_t ju = (int32_t)ceil(umin - du); ju + du <= umax; ++ju) {
+        const double fu = ju + du, fw = jw + dw;
+        const double b0 = ((q[1][u] - fu) * (q[2][w] - fw) - (q[2][u] - fu) * (q[1][w] - fw)) / area;
+        const double b1 = ((q[2][u] - fu) * (q[0][w] - fw) - (q[0][u] - fu) * (q[2][w] - fw)) / area;
+        const double b2 = 1 - b0 - b1;
+        if (b0 < 0 || b1 < 0 || b2 < 0) continue;
+        const double t = b0 * q[0][ax] + b1 * q[1][ax] + b2 * q[2][ax];
+        int32_t ijk[3];
+        ijk[u] = ju;
+        ijk[w] = jw;
+        ijk[ax] = (int32_t)floor(t);
+        if (ijk[0] < 0 || ijk[1] < 0 || ijk[2] < 0 || ijk[0] >= g->dims[0] || ijk[1] >= g->dims[1] ||
+            ijk[2] >= g->dims[2])
+          continue;
+        blocked[prep_grid_index(g, ijk[0], ijk[1], ijk[2])] ^= (uint8_t)(8u << ax);
+      }
+  }
+}
+
+// Ray-parity vote (Nooruddin and Turk 2003): along each axis, in both
+// directions, a voxel is inside when the rays from the grid border cross the
+// surface an odd number of times before it; inside[v] = 1 when at least 4 of
+// the 6 rays say so. Holes spoil only the rays that pass through them.
+static void parity_vote(const prep_grid *g, const uint8_t *bits, uint8_t *inside) {
+  const int64_t n = prep_grid_count(g);
+  memset(inside, 0, (size_t)n);
+  const int64_t stride[3] = {1, g->dims[0], (int64_t)g->dims[0] * g->dims[1]};
+  for (int ax = 0; ax < 3; ++ax) {
+    const int u = (ax + 1) % 3, w = (ax + 2) % 3;
+    const uint8_t bit = (uint8_t)(8u << ax);
+    for (int32_t jw = 0; jw < g->dims[w]; ++jw)
+      for (int32_t ju = 0; ju < g->dims[u]; ++ju) {
+        int32_t c[3];
+        c[u] = ju, c[w] = jw, c[ax] = 0;
+        const int64_t start = prep_grid_index(g, c[0], c[1], c[2]);
+        const int32_t len = g->dims[ax];
+        int state = 0;
+        for (int32_t i = 0; i < len; ++i) {
+          const int64_t v = start + i * stride[ax];
+          inside[v] += (uint8_t)state;
+          if (bits[v] & bit) state ^= 1;
+        }
+        state = 0;
+        for (int32_t i = len - 1; i >= 0; --i) {
+          const int64_t v = start + i * stride[ax];
+          if (i + 1 < len && (bits[v] & bit)) state ^= 1;
+          inside[v] += (uint8_t)state;
+        }
+      }
+  }
+  for (int64_t v = 0; v < n; ++v) inside[v] = inside[v] >= 4;
+}
+
+// Flood fill from the grid border: outside[v] = 1 for voxels reached over
+// unblocked segments and non-wall voxels (wall may be NULL).
+static void flood_outside(const prep_grid *g, const uint8_t *blocked, const uint8_t *wall, uint8_t *outside,
+                          int64_t *queue) {
+  const int64_t n = prep_grid_count(g);
+  memset(outside, 0, (size_t)n);
+  int64_t head = 0, tail = 0;
+  for (int64_t v = 0; v < n; ++v) {
+    int32_t c[3];
+    prep_grid_ijk(g, v, c);
+    const int border = c[0] == 0 || c[1] == 0 || c[2] == 0 || c[0] == g->dims[0] - 1 || c[1] == g->dims[1] - 1 ||
+                       c[2] == g->dims[2] - 1;
+    if (border && !(wall && wall[v])) {
+      outside[v] = 1;
+      queue[tail++] = v;
+    }
+  }
+  const int64_t stride[3] = {1, g->dims[0], (int64_t)g->dims[0] * g->dims[1]};
+  while (head < tail) {
+    const int64_t v = queue[head++];
+    int32_t c[3];
+    prep_grid_ijk(g, v, c);
+    for (int ax = 0; ax < 3; ++ax) {
+      if (c[ax] + 1 < g->dims[ax] && !(blocked[v] & (1u << ax))) {
+        const int64_t nb = v + stride[ax];
+        if (!outside[nb] && !(wall && wall[nb])) outside[nb] = 1, queue[tail++] = nb;
+      }
+      if (c[ax] > 0) {
+        const int64_t nb = v - stride[ax];
+        if (!(blocked[nb] & (1u << ax)) && !outside[nb] && !(wall && wall[nb])) outside[nb] = 1, queue[tail++] = nb;
+      }
+    }
+  }
+}
+
+// Grows outside by up to `layers` steps over unblocked segments: after a fill
+// stopped by walls, this brings back the outside voxels between the wall and
+// the surface without crossing the surface (except through its holes).
+static void grow_outside(const prep_grid *g, const uint8_t *blocked, uint8_t *outside, int32_t layers,
+                         int64_t *queue) {
+  const int64_t n = prep_grid_count(g);
+  const int64_t stride[3] = {1, g->dims[0], (int64_t)g->dims[0] * g->dims[1]};
+  int64_t head = 0, tail = 0;
+  for (int64_t v = 0; v < n; ++v)
+    if (outside[v]) queue[tail++] = v;
+  for (int32_t layer = 0; layer < layers; ++layer) {
+    const int64_t end = tail;
+    while (head < end) {
+      const int64_t v = queue[head++];
+      int32_t c[3];
+      prep_grid_ijk(g, v, c);
+      for (int ax = 0; ax < 3; ++ax) {
+        if (c[ax] + 1 < g->dims[ax] && !(blocked[v] & (1u << ax)) && !outside[v + stride[ax]])
+          outside[v + stride[ax]] = 1, queue[tail++] = v + stride[ax];
+        if (c[ax] > 0 && !(blocked[v - stride[ax]] & (1u << ax)) && !outside[v - stride[ax]])
+          outside[v - stride[ax]] = 1, queue[tail++] = v - stride[ax];
+      }
+    }
+  }
+}
+
+// inside[v] = 1 for voxels of the organ grid g inside organ o (see the note).
+static fascia_status organ_inside(fascia_ctx *ctx, const fascia_prep_scene *scene, fascia_prep_mesh *o,
+                                  const prep_grid *g, uint8_t *inside) {
+  fascia_status status = FASCIA_OK;
+  const int64_t n = prep_grid_count(g);
+  uint8_t *blocked = prep_calloc(n, 1), *outside = prep_calloc(n, 1), *wall = NULL;
+  int64_t *queue = prep_calloc(n, sizeof(int64_t));
+  float *udf = NULL;
+  PREP_CHECK_GOTO(blocked && outside && queue, ctx, FASCIA_ERR_MEMORY,
+                  "organ '%s': out of memory for %lld voxels; raise voxel_size", o->name, (long long)n);
+  for (int32_t t = 0; t < o->triangle_count; ++t) {
+    const int32_t *tri = o->triangles + 3 * (int64_t)t;
+    block_triangle(g, o->vertices + 3 * (int64_t)tri[0], o->vertices + 3 * (int64_t)tri[1],
+                   o->vertices + 3 * (int64_t)tri[2], blocked);
+  }
+  // rule 1: the exact surface
+  flood_outside(g, blocked, NULL, outside, queue);
+  int64_t chosen = 0;
+  for (int64_t v = 0; v < n; ++v) chosen += inside[v] = !outside[v];
+  snprintf(o->report.inside_rule, sizeof o->report.inside_rule,
+           "outer surface (flood fill from outside across the exact surface)%s",
+           o->report.border_edges ? "; open, but no hole leaks at this voxel size" : "");
+  if (o->report.border_edges > 0) {
+    // an open surface: two more rules, and the exact one is kept unless it
+    // finds less than half of what another rule finds (it leaked)
+    // closing radius c voxels: walls of (c + 1/2) h close holes up to (2c + 1) h across
+    const int32_t c = (int32_t)ceil(fmax(0, scene->close_holes / scene->voxel_size - 1) / 2);
+    wall = prep_calloc(n, 1);
+    PREP_CHECK_GOTO(wall, ctx, FASCIA_ERR_MEMORY, "organ '%s': out of memory for %lld voxels", o->name, (long long)n);
+    int64_t closed = 0, voted = 0;
+    if (c > 0) { // rule 2: morphological closing of the holes
+      udf = prep_calloc(n, sizeof(float));
+      PREP_CHECK_GOTO(udf, ctx, FASCIA_ERR_MEMORY, "organ '%s': out of memory for %lld voxels", o->name, (long long)n);
+      PREP_TRY_GOTO(fascia_vdb_unsigned_distance(ctx, o->vertex_count, o->vertices, o->triangle_count, o->triangles,
+                                                 g->h, (float)c + 2, g->lo, g->dims, udf));
+      for (int64_t v = 0; v < n; ++v) wall[v] = udf[v] <= (c + 0.5) * g->h;
+      flood_outside(g, blocked, wall, outside, queue);
+      grow_outside(g, blocked, outside, 2 * c + 2, queue);
+      for (int64_t v = 0; v < n; ++v) closed += !outside[v];
+      if (chosen < closed / 2) {
+        for (int64_t v = 0; v < n; ++v) inside[v] = !outside[v];
+        chosen = closed;
+        snprintf(o->report.inside_rule, sizeof o->report.inside_rule,
+                 "outer surface after closing holes up to %.3g mm (open mesh, %d border edges: the exact surface "
+                 "leaks at this voxel size)",
+                 1e3 * (2 * c + 1) * g->h, (int)o->report.border_edges);
+      }
+    }
+    // rule 3: ray-parity vote, then its outer surface (cavities count as inside)
+    parity_vote(g, blocked, wall);
+    memset(outside, 0, (size_t)n);
+    uint8_t *no_segments = prep_calloc(n, 1);
+    PREP_CHECK_GOTO(no_segments, ctx, FASCIA_ERR_MEMORY, "organ '%s': out of memory", o->name);
+    flood_outside(g, no_segments, wall, outside, queue);
+    free(no_segments);
+    for (int64_t v = 0; v < n; ++v) voted += !outside[v];
+    if (chosen < voted / 2) {
+      for (int64_t v = 0; v < n; ++v) inside[v] = !outside[v];
+      chosen = voted;
+      snprintf(o->report.inside_rule, sizeof o->report.inside_rule,
+               "ray-parity vote of 6 axis rays, then its outer surface (open mesh, %d border edges: holes too large "
+               "to close)",
+               (int)o->report.border_edges);
+    }
+  }
+  PREP_CHECK_GOTO(chosen > 0, ctx, FASCIA_ERR_FORMAT,
+                  "organ '%s': the surface encloses no volume at voxel size %g m (%d border edges: an open patch?); "
+                  "close the mesh, choose closed parts, or raise close_holes",
+                  o->name, g->h, (int)o->report.border_edges);
+  o->report.enclosed_volume = (double)chosen * g->h * g->h * g->h;
+cleanup:
+  free(blocked);
+  free(outside);
+  free(queue);
+  free(udf);
+  free(wall);
+  return status;
+}
+
+// ------------------------------------------------------------ the tissue domain
+
+// Bounding box of the space tissue t can occupy: the intersection of its
+// organs' boxes grown by max_gap, cut by its box or sphere. 0 if empty.
+static int tissue_box(const fascia_prep_scene *scene, const fascia_prep_meshes *meshes, int32_t t, double *lo,
+                      double *hi) {
+  const fascia_prep_tissue_def *td = scene->tissues + t;
+  const double grow = td->max_gap + 2 * scene->voxel_size;
+  for (int r = 0; r < 3; ++r) lo[r] = -INFINITY, hi[r] = INFINITY;
+  for (int32_t k = 0; k < td->organ_count; ++k) {
+    const double *b = meshes->organs[td->organs[k]].bounds;
+    for (int r = 0; r < 3; ++r) {
+      lo[r] = fmax(lo[r], b[r] - grow);
+      hi[r] = fmin(hi[r], b[3 + r] + grow);
+    }
+  }
+  if (td->region.kind == FASCIA_PREP_REGION_BOX)
+    for (int r = 0; r < 3; ++r) {
+      lo[r] = fmax(lo[r], td->region.min[r]);
+      hi[r] = fmin(hi[r], td->region.max[r]);
+    }
+  else if (td->region.kind == FASCIA_PREP_REGION_SPHERE)
+    for (int r = 0; r < 3; ++r) {
+      lo[r] = fmax(lo[r], td->region.center[r] - td->region.radius);
+      hi[r] = fmin(hi[r], td->region.center[r] + td->region.radius);
+    }
+  for (int r = 0; r < 3; ++r)
+    if (!(hi[r] > lo[r])) return 0;
+  return 1;
+}
+
+static const char *organ_list(const fascia_prep_scene *scene, const fascia_prep_tissue_def *td, char *out,
+                              size_t size) {
+  out[0] = 0;
+  for (int32_t k = 0; k < td->organ_count; ++k) {
+    const char *name = scene->organs[td->organs[k]].name;
+    if (strlen(out) + strlen(name) + 8 >= size) break;
+    if (k) strcat(out, k + 1 == td->organ_count ? " and " : ", ");
+    strcat(out, "'");
+    strcat(out, name);
+    strcat(out, "'");
+  }
+  return out;
+}
+
+// ------------------------------------------------------------ regions
+
+// Labels 26-connected pieces of tissue t; drops pieces below min_component.
+static fascia_status keep_components(fascia_ctx *ctx, const fascia_prep_scene *scene, fascia_prep_volume *vol,
+                                     int32_t t) {
+  const prep_grid g = prep_volume_grid(vol);
+  const int64_t n = prep_grid_count(&g);
+  int64_t *queue = prep_calloc(n, sizeof(int64_t));
+  uint8_t *seen = prep_calloc(n, 1);
+  if (!queue || !seen) {
+    free(queue);
+    free(seen);
+    return PREP_FAIL(ctx, FASCIA_ERR_MEMORY, "tissue '%s': out of memory", scene->tissues[t].name);
+  }
+  const uint8_t label = (uint8_t)(t + 1);
+  const double voxel_volume = g.h * g.h * g.h;
+  fascia_prep_tissue_report *rep = vol->tissues + t;
+  for (int64_t s = 0; s < n; ++s) {
+    if (vol->region[s] != label || seen[s]) continue;
+    int64_t head = 0, tail = 0;
+    queue[tail++] = s;
+    seen[s] = 1;
+    while (head < tail) {
+      const int64_t v = queue[head++];
+      int32_t c[3];
+      prep_grid_ijk(&g, v, c);
+      for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const int32_t x = c[0] + dx, y = c[1] + dy, z = c[2] + dz;
+            if (x < 0 || y < 0 || z < 0 || x >= g.dims[0] || y >= g.dims[1] || z >= g.dims[2]) continue;
+            const int64_t nb = prep_grid_index(&g, x, y, z);
+            if (vol->region[nb] == label && !seen[nb]) seen[nb] = 1, queue[tail++] = nb;
+          }
+    }
+    const double volume = (double)tail * voxel_volume;
+    if (volume < scene->tissues[t].min_component) {
+      for (int64_t k = 0; k < tail; ++k) vol->region[queue[k]] = 0;
+      rep->dropped_components++;
+      rep->dropped_volume += volume;
+    } else {
+      rep->components++;
+      rep->voxels += tail;
+      rep->volume += volume;
+    }
+  }
+  free(queue);
+  free(seen);
+  return FASCIA_OK;
+}
+
+// Builds region labels of tissue t on the volume grid; distances are ready.
+static fascia_status build_region(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_meshes *meshes,
+                                  fascia_prep_volume *vol, int32_t t) {
+  const fascia_prep_tissue_def *td = scene->tissues + t;
+  const prep_grid g = prep_volume_grid(vol);
+  const int64_t n = prep_grid_count(&g);
+  float *parts = NULL;
+  fascia_status status = FASCIA_OK;
+  char names[256];
+  organ_list(scene, td, names, sizeof names);
+  if (td->region_organ >= 0) {
+    // distance to the named parts only
+    const fascia_prep_mesh *o = meshes->organs + td->region_organ;
+    int32_t *sub = prep_calloc(3 * (int64_t)o->triangle_count, sizeof(int32_t));
+    parts = prep_calloc(n, sizeof(float));
+    PREP_CHECK_GOTO(sub && parts, ctx, FASCIA_ERR_MEMORY, "tissue '%s': out of memory", td->name);
+    int32_t count = 0;
+    for (int32_t k = 0; k < td->region_parts.count; ++k) {
+      const int32_t p = prep_mesh_part(o, td->region_parts.names[k]);
+      if (p < 0) {
+        free(sub);
+        PREP_CHECK_GOTO(0, ctx, FASCIA_ERR_FORMAT,
+                        "scene '%s' tissues[%d].region.parts.names[%d]: organ '%s' has no part '%s' among the parts "
+                        "it uses",
+                        scene->path, (int)t, (int)k, o->name, td->region_parts.names[k]);
+      }
+      for (int32_t f = 0; f < o->triangle_count; ++f)
+        if (o->triangle_part[f] == p) memcpy(sub + 3 * (int64_t)count++, o->triangles + 3 * (int64_t)f, 12);
+    }
+    status = fascia_vdb_unsigned_distance(ctx, o->vertex_count, o->vertices, count, sub, g.h,
+                                          (float)(td->max_gap / g.h + 2), g.lo, g.dims, parts);
+    free(sub);
+    if (status != FASCIA_OK) goto cleanup;
+  }
+  int64_t gap_voxels = 0, cut_voxels = 0;
+  double nearest = INFINITY; // smallest max-distance to the connected organs among free voxels
+  for (int64_t v = 0; v < n; ++v) {
+    int outside = 1;
+    for (int32_t o = 0; o < vol->organ_count && outside; ++o)
+      if (vol->distance[o] && vol->distance[o][v] <= 0) outside = 0;
+    if (!outside) continue;
+    double worst = 0;
+    for (int32_t k = 0; k < td->organ_count; ++k) {
+      const int32_t o = td->organs[k];
+      double d = vol->distance[o][v];
+      if (parts && o == td->region_organ) d = parts[v];
+      worst = fmax(worst, d);
+    }
+    if (worst < nearest) nearest = worst;
+    if (worst > td->max_gap) continue;
+    ++gap_voxels;
+    double x[3];
+    prep_grid_center(&g, v, x);
+    if (!prep_region_contains(&td->region, x)) continue;
+    if (vol->region[v]) continue; // an earlier tissue owns it
+    vol->region[v] = (uint8_t)(t + 1);
+    ++cut_voxels;
+  }
+  if (gap_voxels == 0) {
+    const double band = td->max_gap + g.h;
+    if (nearest < band)
+      PREP_CHECK_GOTO(0, ctx, FASCIA_ERR_ARGUMENT,
+                      "tissue '%s' (scene '%s'): organs %s are too far apart for max_gap %g m: the free point "
+                      "nearest to all of them is %.3g m from the farthest; raise max_gap above %.3g m",
+                      td->name, scene->path, names, td->max_gap, nearest, nearest + g.h);
+    PREP_CHECK_GOTO(0, ctx, FASCIA_ERR_ARGUMENT,
+                    "tissue '%s' (scene '%s'): organs %s are too far apart for max_gap %g m: no free point lies "
+                    "within max_gap of all of them%s",
+                    td->name, scene->path, names, td->max_gap,
+                    td->region_organ >= 0 ? " (and of the region's parts)" : "");
+  }
+  PREP_CHECK_GOTO(cut_voxels > 0, ctx, FASCIA_ERR_ARGUMENT,
+                  "tissue '%s' (scene '%s' tissues[%d].region): the region selects nothing of the %.3g cm^3 between "
+                  "organs %s; check its coordinates (metres, scene frame)",
+                  td->name, scene->path, (int)t, 1e6 * (double)gap_voxels * g.h * g.h * g.h, names);
+  PREP_TRY_GOTO(keep_components(ctx, scene, vol, t));
+  PREP_CHECK_GOTO(vol->tissues[t].voxels > 0, ctx, FASCIA_ERR_ARGUMENT,
+                  "tissue '%s': every piece of its region is smaller than min_component %g m^3 (largest dropped "
+                  "volume %g m^3 in %d pieces); lower min_component or frame_spacing",
+                  td->name, td->min_component, vol->tissues[t].dropped_volume, (int)vol->tissues[t].dropped_components);
+cleanup:
+  free(parts);
+  return status;
+}
+
+// Overlap of organs a and b on the volume grid, and the closest distance
+// between their surfaces there.
+static fascia_status measure_pairs(fascia_ctx *ctx, fascia_prep_volume *vol) {
+  const prep_grid g = prep_volume_grid(vol);
+  const int64_t n = prep_grid_count(&g);
+  const int32_t O = vol->organ_count;
+  for (int32_t a = 0; a < O; ++a)
+    for (int32_t b = a + 1; b < O; ++b) {
+      const float *da = vol->distance[a], *db = vol->distance[b];
+      if (!da || !db) continue;
+      int64_t both = 0;
+      double depth = 0, gap = INFINITY;
+      for (int64_t v = 0; v < n; ++v) {
+        if (da[v] <= 0 && db[v] <= 0) {
+          ++both;
+          depth = fmax(depth, fmin(-da[v], -db[v]));
+        } else if (da[v] > 0 && db[v] > 0) {
+          gap = fmin(gap, (double)da[v] + db[v]);
+        }
+      }
+      if (both > 0) {
+        fascia_prep_overlap *grown = realloc(vol->overlaps, (size_t)(vol->overlap_count + 1) * sizeof *grown);
+        PREP_CHECK(grown, ctx, FASCIA_ERR_MEMORY, "voxelize: out of memory");
+        vol->overlaps = grown;
+        fascia_prep_overlap *ov = vol->overlaps + vol->overlap_count++;
+        ov->a = a;
+        ov->b = b;
+        ov->volume = (double)both * g.h * g.h * g.h;
+        ov->depth = depth;
+        gap = 0;
+      }
+      // free voxel centres lie at least h/2 from a surface on each side: the
+      // sum overestimates the gap by up to about h
+      const double band = fmin(vol->band[a], vol->band[b]);
+      vol->closest[a * O + b] = vol->closest[b * O + a] = gap < band ? fmax(0, gap - g.h) : -1;
+    }
+  return FASCIA_OK;
+}
+
+fascia_status fascia_prep_voxelize(fascia_ctx *ctx, const fascia_prep_scene *scene, fascia_prep_meshes *meshes,
+                                   fascia_prep_volume **out) {
+  PREP_CHECK(ctx && scene && meshes && out, ctx, FASCIA_ERR_ARGUMENT, "fascia_prep_voxelize: NULL argument");
+  *out = NULL;
+  const double h = scene->voxel_size;
+  fascia_status status = FASCIA_OK;
+  uint8_t *inside = NULL;
+  float *udf = NULL;
+  fascia_prep_volume *vol = calloc(1, sizeof *vol);
+  PREP_CHECK(vol, ctx, FASCIA_ERR_MEMORY, "voxelize: out of memory");
+
+  // 1. checks of scale, the union of the tissues' boxes
+  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (int32_t t = 0; t < scene->tissue_count; ++t) {
+    const fascia_prep_tissue_def *td = scene->tissues + t;
+    char names[256];
+    PREP_CHECK_GOTO(td->max_gap >= 3 * h, ctx, FASCIA_ERR_ARGUMENT,
+                    "scene '%s' voxel_size: %g m is too large for tissue '%s' (max_gap %g m): a gap needs at least 3 "
+                    "voxels across; set voxel_size to %g m or less",
+                    scene->path, h, td->name, td->max_gap, td->max_gap / 3);
+    double a[3], b[3];
+    if (!tissue_box(scene, meshes, t, a, b)) {
+      PREP_CHECK_GOTO(td->region.kind == FASCIA_PREP_REGION_NONE, ctx, FASCIA_ERR_ARGUMENT,
+                      "tissue '%s' (scene '%s' tissues[%d].region): the region selects nothing: it does not meet the "
+                      "space within max_gap of organs %s; check its coordinates (metres, scene frame)",
+                      td->name, scene->path, (int)t, organ_list(scene, td, names, sizeof names));
+      PREP_CHECK_GOTO(0, ctx, FASCIA_ERR_ARGUMENT,
+                      "tissue '%s' (scene '%s'): organs %s are too far apart for max_gap %g m: their bounding boxes "
+                      "grown by max_gap do not meet; raise max_gap or check the organs' units and transforms",
+                      td->name, scene->path, organ_list(scene, td, names, sizeof names), td->max_gap);
+    }
+    for (int r = 0; r < 3; ++r) lo[r] = fmin(lo[r], a[r]), hi[r] = fmax(hi[r], b[r]);
+  }
+  prep_grid g;
+  prep_grid_cover(&g, h, lo, hi, 2);
+  const int64_t n = prep_grid_count(&g);
+  PREP_CHECK_GOTO(n < MAX_VOXELS, ctx, FASCIA_ERR_ARGUMENT,
+                  "scene '%s' voxel_size: %g m gives %lld voxels for the tissues' space, more than %lld; raise "
+                  "voxel_size",
+                  scene->path, h, (long long)n, (long long)MAX_VOXELS);
+  vol->voxel_size = h;
+  for (int r = 0; r < 3; ++r) {
+    vol->lattice[r] = g.lo[r];
+    vol->dims[r] = g.dims[r];
+    vol->origin[r] = h * g.lo[r];
+  }
+  vol->organ_count = meshes->count;
+  vol->tissue_count = scene->tissue_count;
+  vol->region = prep_calloc(n, 1);
+  vol->distance = prep_calloc(meshes->count, sizeof(float *));
+  vol->band = prep_calloc(meshes->count, sizeof(float));
+  vol->tissues = prep_calloc(scene->tissue_count, sizeof *vol->tissues);
+  vol->closest = prep_calloc((int64_t)meshes->count * meshes->count, sizeof(double));
+  PREP_CHECK_GOTO(vol->region && vol->distance && vol->band && vol->tissues && vol->closest, ctx, FASCIA_ERR_MEMORY,
+                  "voxelize: out of memory for %lld voxels; raise voxel_size", (long long)n);
+  for (int64_t k = 0; k < (int64_t)meshes->count * meshes->count; ++k) vol->closest[k] = -1;
+
+  // 2. every organ that reaches the grid: inside/outside, signed distance
+  for (int32_t o = 0; o < meshes->count; ++o) {
+    fascia_prep_mesh *m = meshes->organs + o;
+    int near = 1;
+    for (int r = 0; r < 3; ++r)
+      if (m->bounds[r] > h * (g.lo[r] + g.dims[r]) + h || m->bounds[3 + r] < h * g.lo[r] - h) near = 0;
+    if (!near) continue;
+    fascia_ctx_progress(ctx, "voxelize", (double)o / meshes->count, m->name);
+    double band = 2 * h + scene->voxel_size; // enough for coupling and the "outside" test
+    for (int32_t t = 0; t < scene->tissue_count; ++t) {
+      const fascia_prep_tissue_def *td = scene->tissues + t;
+      band = fmax(band, td->coupling_tolerance + 2 * h);
+      for (int32_t k = 0; k < td->organ_count; ++k)
+        if (td->organs[k] == o) band = fmax(band, td->max_gap + 2 * h);
+    }
+    prep_grid og;
+    prep_grid_cover(&og, h, m->bounds, m->bounds + 3, 2);
+    const int64_t on = prep_grid_count(&og);
+    PREP_CHECK_GOTO(on < MAX_VOXELS, ctx, FASCIA_ERR_ARGUMENT,
+                    "organ '%s': voxel_size %g m gives %lld voxels for its box, more than %lld; raise voxel_size",
+                    m->name, h, (long long)on, (long long)MAX_VOXELS);
+    inside = prep_calloc(on, 1);
+    udf = prep_calloc(n, sizeof(float));
+    PREP_CHECK_GOTO(inside && udf, ctx, FASCIA_ERR_MEMORY, "organ '%s': out of memory for %lld voxels", m->name,
+                    (long long)on);
+    PREP_TRY_GOTO(organ_inside(ctx, scene, m, &og, inside));
+    PREP_TRY_GOTO(fascia_vdb_unsigned_distance(ctx, m->vertex_count, m->vertices, m->triangle_count, m->triangles, h,
+                                               (float)(band / h), g.lo, g.dims, udf));
+    for (int64_t v = 0; v < n; ++v) {
+      int32_t c[3];
+      prep_grid_ijk(&g, v, c);
+      const int32_t x = c[0] + g.lo[0] - og.lo[0], y = c[1] + g.lo[1] - og.lo[1], z = c[2] + g.lo[2] - og.lo[2];
+      const int in = x >= 0 && y >= 0 && z >= 0 && x < og.dims[0] && y < og.dims[1] && z < og.dims[2] &&
+                     inside[prep_grid_index(&og, x, y, z)];
+      if (in) udf[v] = -udf[v];
+    }
+    vol->distance[o] = udf;
+    vol->band[o] = (float)band;
+    udf = NULL;
+    free(inside);
+    inside = NULL;
+  }
+  for (int32_t t = 0; t < scene->tissue_count; ++t)
+    for (int32_t k = 0; k < scene->tissues[t].organ_count; ++k)
+      PREP_CHECK_GOTO(vol->distance[scene->tissues[t].organs[k]], ctx, FASCIA_ERR_INTERNAL,
+                      "voxelize: organ %d of tissue '%s' has no distance field", (int)scene->tissues[t].organs[k],
+                      scene->tissues[t].name);
+
+  // 3. overlaps and gaps, then each tissue's region
+  PREP_TRY_GOTO(measure_pairs(ctx, vol));
+  for (int32_t t = 0; t < scene->tissue_count; ++t) {
+    fascia_ctx_progress(ctx, "voxelize", 0.9, scene->tissues[t].name);
+    PREP_TRY_GOTO(build_region(ctx, scene, meshes, vol, t));
+  }
+  fascia_ctx_progress(ctx, "voxelize", 1, "done");
+  *out = vol;
+  vol = NULL;
+cleanup:
+  free(inside);
+  free(udf);
+  fascia_prep_volume_destroy(&vol);
+  return status;
+}
