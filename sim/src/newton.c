@@ -121,6 +121,22 @@ static void assemble(fascia_solver *S, const step_terms *terms) {
   }
 }
 
+// Size of the rounding error of an energy evaluation, J. Each sample's
+// energy density is a sum of terms of size (lambda + 2 mu) that cancel near
+// rest (the stable Neo-Hookean's mu/2 (tr C - 3) - mu^2 / (2 l) ...), so the
+// total carries an absolute error of a few ulps of sum_s v_s (lambda_s + 2 mu_s)
+// whatever its value. Measured: the Neo-Hookean beam at rest, E = 1e8 Pa,
+// evaluates to 1.2e-8 J instead of 0, 0.1 ulp of this sum; 8 ulps is the
+// margin. Without this term a stiff Neo-Hookean model cannot see its energy
+// decrease near the minimum and every Newton step ends in 30 line-search cuts.
+static fascia_real energy_roundoff(const fascia_solver *S) {
+  const fascia_system *sys = S->sys;
+  fascia_real sum = 0;
+  for (int32_t s = 0; s < S->model->sample_count; ++s)
+    sum += S->model->sample_volume[s] * (fabs(sys->sample_lambda[s]) + 2 * fabs(sys->sample_mu[s]));
+  return 8 * FASCIA_R(2.220446049250313e-16) * sum;
+}
+
 // |external load| over free DOFs: the scale of the Newton tolerance
 static fascia_real load_norm(const fascia_solver *S) {
   const fascia_system *sys = S->sys;
@@ -161,6 +177,7 @@ fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iter
   if (dynamic || reference == 0) reference = reference > g0 ? reference : g0;
   if (reference == 0) reference = 1;
   rep->reference_norm = reference;
+  const fascia_real material_roundoff = energy_roundoff(S);
   int iteration = 0, converged = 0;
   fascia_real gnorm = g0;
   for (; iteration <= max_iterations; ++iteration) {
@@ -172,7 +189,6 @@ fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iter
     if (iteration == max_iterations) break;
     // the assembled matrix, the preconditioner and the Levenberg scale
     t = fascia_now_ms();
-    if (def->mass == FASCIA_MASS_LUMPED || dynamic) fascia_system_mass_lumped(S->sys, S->mass_blocks);
     if (S->use_assembled) {
       assemble(S, &terms);
       rep->profile.assemble_ms += fascia_now_ms() - t;
@@ -231,7 +247,8 @@ fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iter
         rep->profile.evaluate_ms += fascia_now_ms() - t;
         // near the minimum the energy decrease drowns in round-off: there a
         // step that lowers the gradient is accepted instead
-        const fascia_real roundoff = 1e-13 * (fabs(phi) + fabs(S->sys->energy_internal) + fabs(S->sys->energy_external));
+        const fascia_real roundoff =
+            1e-13 * (fabs(phi) + fabs(S->sys->energy_internal) + fabs(S->sys->energy_external)) + material_roundoff;
         if (st == FASCIA_OK &&
             (!def->line_search || phi_trial <= phi + ARMIJO * alpha * slope ||
              (phi_trial <= phi + roundoff && fascia_dot(g_trial, g_trial, n) < gnorm * gnorm))) {
