@@ -16,8 +16,8 @@
 
 static const char beam_usage[] =
     "usage: fascia beam [--frames NXxNYxNZ] [--shape hex|tet|meshless] [--samples-per-cell N]\n"
-    "                   [--neighbours K] [--E PA] [--nu V] [--law stvk|neohookean] [--mass KG]\n"
-    "                   [--density KG_M3] [--rotation-coupling R]\n"
+    "                   [--neighbours K] [--E PA --nu V | --lambda PA --mu PA] [--law stvk|neohookean]\n"
+    "                   [--mass KG] [--density KG_M3] [--rotation-coupling R]\n"
     "                   [--rotation-smoothing R] -o BEAM.h5 [--json]\n"
     "\n"
     "The cantilever of Bosman et al. 2013 sec. 4.1: 16 x 1 x 1 m along x, clamped at x = 0,\n"
@@ -29,6 +29,7 @@ static const char beam_usage[] =
     "                          tet: samples per tetrahedron, 1 or 4 (default 4)\n"
     "  --neighbours K          meshless: frames per sample (default 8)\n"
     "  --E PA, --nu V          Young's modulus (default 40000) and Poisson ratio (default 0.3)\n"
+    "  --lambda PA, --mu PA    or the Lame parameters instead (both, and neither --E nor --nu)\n"
     "  --law NAME              stvk (default) or neohookean\n"
     "  --mass KG               total mass (default 5); --density KG_M3 overrides it\n"
     "  --rotation-coupling R   Cosserat coupling as a fraction of mu (default 0)\n"
@@ -100,7 +101,8 @@ static int print_json(const fascia_model *m, const char *path) {
 int cmd_beam(int argc, char **argv) {
   fascia_scene_beam_def def = fascia_scene_beam_def_default();
   const char *path = NULL;
-  int json = 0, samples_given = 0;
+  int json = 0, samples_given = 0, young_given = 0;
+  double lambda = -1, mu = -1;
   int32_t samples_per_cell = 0;
   for (int k = 1; k < argc; ++k) {
     const char *opt = argv[k];
@@ -113,7 +115,7 @@ int cmd_beam(int argc, char **argv) {
       continue;
     }
     if (!strcmp(opt, "--verbose")) continue;
-    static const char *const valued[] = {"--frames", "--shape", "--samples-per-cell", "--neighbours", "--E", "--nu",
+    static const char *const valued[] = {"--frames", "--shape", "--samples-per-cell", "--neighbours", "--E", "--nu", "--lambda", "--mu",
                                          "--law", "--mass", "--density", "--rotation-coupling", "--rotation-smoothing", "-o", "--output"};
     int known = 0;
     for (size_t j = 0; j < sizeof valued / sizeof valued[0]; ++j) known |= !strcmp(opt, valued[j]);
@@ -130,9 +132,13 @@ int cmd_beam(int argc, char **argv) {
     else if (!strcmp(opt, "--neighbours"))
       ok = parse_int(value, &def.neighbours);
     else if (!strcmp(opt, "--E"))
-      ok = parse_real(value, &def.youngs_modulus);
+      ok = young_given = parse_real(value, &def.youngs_modulus);
     else if (!strcmp(opt, "--nu"))
-      ok = parse_real(value, &def.poisson_ratio);
+      ok = young_given = parse_real(value, &def.poisson_ratio);
+    else if (!strcmp(opt, "--lambda"))
+      ok = parse_real(value, &lambda);
+    else if (!strcmp(opt, "--mu"))
+      ok = parse_real(value, &mu);
     else if (!strcmp(opt, "--law"))
       ok = (def.law = fascia_law_from_name(value)) >= 0;
     else if (!strcmp(opt, "--mass"))
@@ -151,6 +157,11 @@ int cmd_beam(int argc, char **argv) {
     }
   }
   if (!path) return usage_error("%s", "missing -o PATH, the model file to write");
+  if (lambda >= 0 || mu >= 0) { // Lame parameters: both, instead of E and nu
+    if (young_given) return usage_error("%s", "give either --E/--nu or --lambda/--mu, not both");
+    if (!(lambda >= 0 && mu > 0)) return usage_error("%s", "--lambda needs a value >= 0 and --mu one > 0, both given");
+    fascia_lame_to_young(lambda, mu, &def.youngs_modulus, &def.poisson_ratio);
+  }
   if (samples_given) {
     if (def.shape == FASCIA_SCENE_TET)
       def.samples_per_tet = samples_per_cell;
