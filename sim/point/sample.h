@@ -73,6 +73,24 @@ static inline FASCIA_HD void fascia_pt_pair_C(const fascia_real *A, const fascia
     for (int c = 0; c < 3; ++c) C[3 * r + c] = a[r] * g[c] + w * A[3 * r + c];
 }
 
+/// Coupling term of pair (A, sample F): K = skew(A^T F) and, for the
+/// variation dF, dtheta of its frame, dK = skew(A^T (dF - [dtheta]x F));
+/// dF and dt may be NULL (K only).
+static inline FASCIA_HD void fascia_pt_coupling_K(const fascia_real *A, const fascia_real *F, const fascia_real *dF,
+                                                  const fascia_real *dt, fascia_real *K, fascia_real *dK) {
+  fascia_real G[9];
+  fascia_pt_mat_tmul(A, F, G);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) K[3 * r + c] = FASCIA_R(0.5) * (G[3 * r + c] - G[3 * c + r]);
+  if (!dF) return;
+  fascia_real tF[9], H[9];
+  fascia_pt_skew_mul(dt, F, tF);
+  for (int q = 0; q < 9; ++q) tF[q] = dF[q] - tF[q];
+  fascia_pt_mat_tmul(A, tF, H);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) dK[3 * r + c] = FASCIA_R(0.5) * (H[3 * r + c] - H[3 * c + r]);
+}
+
 /// Deformed position p_s (paper eq. 3) of sample s.
 static inline FASCIA_HD void fascia_pt_sample_position(const fascia_pt_model *m, const fascia_pt_state *st, int32_t s,
                                                        fascia_real *p) {
@@ -118,10 +136,8 @@ static inline FASCIA_HD fascia_real fascia_pt_sample_gradient(const fascia_pt_mo
   if (muc > 0) {
     for (int32_t k = begin; k < end; ++k) {
       const fascia_real *A = st->frame_A + 9 * m->pair_frame[k], w = m->pair_weight[k];
-      fascia_real G[9], K[9], AK[9];
-      fascia_pt_mat_tmul(A, F, G);
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) K[3 * r + c] = FASCIA_R(0.5) * (G[3 * r + c] - G[3 * c + r]);
+      fascia_real K[9], AK[9];
+      fascia_pt_coupling_K(A, F, NULL, NULL, K, NULL);
       psi += w * muc * fascia_pt_ddot(K, K);
       fascia_pt_mat_mul(A, K, AK);
       for (int q = 0; q < 9; ++q) P[q] += 2 * muc * w * AK[q];
@@ -151,10 +167,8 @@ static inline FASCIA_HD fascia_real fascia_pt_sample_gradient(const fascia_pt_mo
     fascia_pt_mat_mult(C, P, M);
     fascia_pt_axial(M, t);
     if (muc > 0) {
-      fascia_real G[9], K[9], FK[9], FKA[9], u[3];
-      fascia_pt_mat_tmul(A, F, G);
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) K[3 * r + c] = FASCIA_R(0.5) * (G[3 * r + c] - G[3 * c + r]);
+      fascia_real K[9], FK[9], FKA[9], u[3];
+      fascia_pt_coupling_K(A, F, NULL, NULL, K, NULL);
       fascia_pt_mat_mul(F, K, FK);
       fascia_pt_mat_mult(FK, A, FKA);
       fascia_pt_axial(FKA, u);
@@ -227,16 +241,8 @@ static inline FASCIA_HD void fascia_pt_sample_stiffness_parts(const fascia_pt_mo
     for (int32_t k = begin; k < end; ++k) {
       const int32_t j = m->pair_frame[k];
       const fascia_real *A = st->frame_A + 9 * j, *dt = dq + 6 * slot[k - begin] + 3, w = m->pair_weight[k];
-      fascia_real G[9], K[9], tF[9], H[9], dK[9], dA[9], t1[9], t2[9];
-      fascia_pt_mat_tmul(A, F, G);
-      fascia_pt_skew_mul(dt, F, tF);
-      for (int q = 0; q < 9; ++q) tF[q] = dF[q] - tF[q];
-      fascia_pt_mat_tmul(A, tF, H);
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) {
-          K[3 * r + c] = FASCIA_R(0.5) * (G[3 * r + c] - G[3 * c + r]);
-          dK[3 * r + c] = FASCIA_R(0.5) * (H[3 * r + c] - H[3 * c + r]);
-        }
+      fascia_real K[9], dK[9], dA[9], t1[9], t2[9];
+      fascia_pt_coupling_K(A, F, dF, dt, K, dK);
       fascia_pt_skew_mul(dt, A, dA);
       fascia_pt_mat_mul(dA, K, t1);
       fascia_pt_mat_mul(A, dK, t2);
@@ -277,16 +283,8 @@ static inline FASCIA_HD void fascia_pt_sample_stiffness_parts(const fascia_pt_mo
     }
     if (coupling && muc > 0) {
       // d axial(F K A^T) = axial(dF K A^T + F dK A^T + F K dA^T), dA^T = -A^T [dtheta]x
-      fascia_real G[9], K[9], tF[9], H[9], dK[9], X[9], Y[9], u[3], tA[9];
-      fascia_pt_mat_tmul(A, F, G);
-      fascia_pt_skew_mul(dt, F, tF);
-      for (int q = 0; q < 9; ++q) tF[q] = dF[q] - tF[q];
-      fascia_pt_mat_tmul(A, tF, H);
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) {
-          K[3 * r + c] = FASCIA_R(0.5) * (G[3 * r + c] - G[3 * c + r]);
-          dK[3 * r + c] = FASCIA_R(0.5) * (H[3 * r + c] - H[3 * c + r]);
-        }
+      fascia_real K[9], dK[9], X[9], Y[9], u[3], tA[9];
+      fascia_pt_coupling_K(A, F, dF, dt, K, dK);
       for (int q = 0; q < 9; ++q) X[q] = 0;
       fascia_pt_mat_mul(dF, K, Y); // dF K
       for (int q = 0; q < 9; ++q) X[q] += Y[q];

@@ -14,17 +14,6 @@ static int compare_int32(const void *a, const void *b) {
   return (x > y) - (x < y);
 }
 
-// sample owning pair k (bisection in sample_offsets)
-static int32_t owner(const fascia_model *m, int32_t k) {
-  int32_t lo = 0, hi = m->sample_count - 1;
-  while (lo < hi) {
-    const int32_t mid = (lo + hi + 1) / 2;
-    if (m->sample_offsets[mid] <= k) lo = mid;
-    else hi = mid - 1;
-  }
-  return lo;
-}
-
 static int32_t find_block(const fascia_bsr *B, int32_t i, int32_t j);
 
 // The assembly plan (see fascia_bsr in assemble.h).
@@ -70,7 +59,7 @@ fascia_status fascia_bsr_create(fascia_ctx *ctx, const fascia_model *m, fascia_b
   int64_t total = 0;
   for (int32_t i = 0; i < N; ++i)
     for (int32_t r = m->frame_offsets[i]; r < m->frame_offsets[i + 1]; ++r) {
-      const int32_t s = owner(m, m->frame_pairs[r]);
+      const int32_t s = fascia_model_pair_owner(m, m->frame_pairs[r]);
       total += m->sample_offsets[s + 1] - m->sample_offsets[s];
     }
   int32_t *scratch = fascia_calloc(total + N, sizeof(int32_t));
@@ -87,7 +76,7 @@ fascia_status fascia_bsr_create(fascia_ctx *ctx, const fascia_model *m, fascia_b
     int32_t *row = scratch + count, len = 0;
     row[len++] = i;
     for (int32_t r = m->frame_offsets[i]; r < m->frame_offsets[i + 1]; ++r) {
-      const int32_t s = owner(m, m->frame_pairs[r]);
+      const int32_t s = fascia_model_pair_owner(m, m->frame_pairs[r]);
       for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k) row[len++] = m->pair_frame[k];
     }
     qsort(row, (size_t)len, sizeof(int32_t), compare_int32);
@@ -167,7 +156,7 @@ static void mass_rows(fascia_system *sys, fascia_bsr *B, fascia_real coefficient
     for (int32_t i = 0; i < sys->frame_count; ++i) {
       if (!dq || !col) continue; // out of memory in a worker: rows stay as they were
       for (int32_t r = m->frame_offsets[i]; r < m->frame_offsets[i + 1]; ++r) {
-        const int32_t k = m->frame_pairs[r], s = owner(m, k), begin = m->sample_offsets[s];
+        const int32_t k = m->frame_pairs[r], s = sys->pair_sample[k], begin = m->sample_offsets[s];
         const int32_t n = m->sample_offsets[s + 1] - begin, j = k - begin;
         for (int c = 0; c < 6; ++c) {
           dq[6 * j + c] = 1;

@@ -40,6 +40,7 @@ fascia_status fascia_system_create(fascia_ctx *ctx, const fascia_model *m, int t
   sys->sample_mass = fascia_calloc(S, sizeof(fascia_real));
   sys->sample_law = fascia_calloc(S, sizeof(int32_t));
   sys->local_slot = fascia_calloc(sys->max_neighbours, sizeof(int32_t));
+  sys->pair_sample = fascia_calloc(P, sizeof(int32_t));
   sys->frame_mass = fascia_calloc(N, sizeof(fascia_real));
   sys->frame_moment = fascia_calloc(3 * N, sizeof(fascia_real));
   sys->x = fascia_calloc(3 * N, sizeof(fascia_real));
@@ -52,7 +53,7 @@ fascia_status fascia_system_create(fascia_ctx *ctx, const fascia_model *m, int t
   sys->conservative_torque = fascia_calloc(3 * N, sizeof(fascia_real));
   sys->gradient_scratch = fascia_calloc(6 * N, sizeof(fascia_real));
   if (!sys->pair_offset || !sys->sample_lambda || !sys->sample_mu || !sys->sample_coupling || !sys->sample_curvature || !sys->sample_mass ||
-      !sys->sample_law || !sys->local_slot || !sys->frame_mass || !sys->frame_moment || !sys->x || !sys->q ||
+      !sys->sample_law || !sys->local_slot || !sys->pair_sample || !sys->frame_mass || !sys->frame_moment || !sys->x || !sys->q ||
       !sys->A || !sys->A_mass || !sys->pair_buffer || !sys->cache || !sys->sample_flags ||
       !sys->conservative_torque || !sys->gradient_scratch) {
     fascia_system_destroy(&sys);
@@ -79,18 +80,13 @@ fascia_status fascia_system_create(fascia_ctx *ctx, const fascia_model *m, int t
       }
     sys->sample_curvature[s] = mu * mat->rotation_smoothing * mat->rotation_smoothing * h2;
   }
-  // gravity moments through the reverse table (fixed order); sample of a pair
-  // is found by bisection in sample_offsets
+  for (int32_t s = 0; s < m->sample_count; ++s)
+    for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k) sys->pair_sample[k] = s;
+  // gravity moments through the reverse table (fixed order)
   for (int32_t i = 0; i < m->frame_count; ++i)
     for (int32_t r = m->frame_offsets[i]; r < m->frame_offsets[i + 1]; ++r) {
       const int32_t k = m->frame_pairs[r];
-      int32_t lo = 0, hi = m->sample_count - 1;
-      while (lo < hi) {
-        const int32_t mid = (lo + hi + 1) / 2;
-        if (m->sample_offsets[mid] <= k) lo = mid;
-        else hi = mid - 1;
-      }
-      const fascia_real mw = sys->sample_mass[lo] * m->pair_weight[k];
+      const fascia_real mw = sys->sample_mass[sys->pair_sample[k]] * m->pair_weight[k];
       sys->frame_mass[i] += mw;
       for (int c = 0; c < 3; ++c) sys->frame_moment[3 * i + c] += mw * sys->pair_offset[3 * k + c];
     }
@@ -113,6 +109,16 @@ fascia_status fascia_system_create(fascia_ctx *ctx, const fascia_model *m, int t
   return FASCIA_OK;
 }
 
+int32_t fascia_model_pair_owner(const fascia_model *m, int32_t k) {
+  int32_t lo = 0, hi = m->sample_count - 1;
+  while (lo < hi) {
+    const int32_t mid = (lo + hi + 1) / 2;
+    if (m->sample_offsets[mid] <= k) lo = mid;
+    else hi = mid - 1;
+  }
+  return lo;
+}
+
 void fascia_system_destroy(fascia_system **sys) {
   if (!sys || !*sys) return;
   fascia_system *s = *sys;
@@ -124,6 +130,7 @@ void fascia_system_destroy(fascia_system **sys) {
   free(s->sample_mass);
   free(s->sample_law);
   free(s->local_slot);
+  free(s->pair_sample);
   free(s->frame_mass);
   free(s->frame_moment);
   free(s->x);
@@ -289,17 +296,6 @@ void fascia_system_hessian_apply(fascia_system *sys, const fascia_real *v, fasci
   }
 }
 
-// find the sample owning pair k (bisection in sample_offsets)
-static int32_t pair_sample(const fascia_model *m, int32_t k) {
-  int32_t lo = 0, hi = m->sample_count - 1;
-  while (lo < hi) {
-    const int32_t mid = (lo + hi + 1) / 2;
-    if (m->sample_offsets[mid] <= k) lo = mid;
-    else hi = mid - 1;
-  }
-  return lo;
-}
-
 void fascia_system_hessian_diagonal(fascia_system *sys, fascia_real *blocks) {
   const fascia_model *m = sys->model;
   const fascia_pt_state st = {sys->x, sys->A};
@@ -314,7 +310,7 @@ void fascia_system_hessian_diagonal(fascia_system *sys, fascia_real *blocks) {
       for (int c = 0; c < 36; ++c) B[c] = 0;
       if (!dq || !col) continue; // out of memory: leaves a zero block; the preconditioner guards zeros
       for (int32_t r = m->frame_offsets[i]; r < m->frame_offsets[i + 1]; ++r) {
-        const int32_t k = m->frame_pairs[r], s = pair_sample(m, k), j = k - m->sample_offsets[s];
+        const int32_t k = m->frame_pairs[r], s = sys->pair_sample[k], j = k - m->sample_offsets[s];
         for (int c = 0; c < 6; ++c) {
           dq[6 * j + c] = 1;
           fascia_pt_sample_stiffness(&sys->pm, &st, s, sys->cache + (int64_t)s * FASCIA_PT_CACHE_SIZE, dq,
@@ -367,7 +363,7 @@ void fascia_system_mass_lumped(fascia_system *sys, fascia_real *blocks) {
     fascia_real *B = blocks + 36 * (int64_t)i;
     for (int c = 0; c < 36; ++c) B[c] = 0;
     for (int32_t r = m->frame_offsets[i]; r < m->frame_offsets[i + 1]; ++r) {
-      const int32_t k = m->frame_pairs[r], s = pair_sample(m, k);
+      const int32_t k = m->frame_pairs[r], s = sys->pair_sample[k];
       const fascia_real mw = sys->sample_mass[s] * m->pair_weight[k];
       fascia_real a[3];
       fascia_pt_mat_vec(sys->A_mass + 9 * i, sys->pair_offset + 3 * k, a);

@@ -31,6 +31,7 @@ typedef struct fascia_system {
   fascia_real *sample_mass;     ///< [S] kg
   int32_t *sample_law;          ///< [S]
   int32_t *local_slot;          ///< [max neighbours] 0, 1, 2, ..
+  int32_t *pair_sample;         ///< [P] the sample each pair belongs to
 
   // gravity as frame moments: E_g = -sum_i g.(M_i x_i + A_i D_i)
   fascia_real *frame_mass;   ///< [N] M_i = sum_s m_s w_is
@@ -55,6 +56,9 @@ typedef struct fascia_system {
   int32_t inverted_count;
   int32_t first_inverted, first_nonfinite;
 } fascia_system;
+
+/// The sample that pair k belongs to (bisection in sample_offsets).
+FASCIA_INTERN int32_t fascia_model_pair_owner(const fascia_model *model, int32_t k);
 
 FASCIA_INTERN fascia_status fascia_system_create(fascia_ctx *ctx, const fascia_model *model, int threads,
                                                  fascia_system **out);
