@@ -6,7 +6,10 @@
 // point, so the triangle is known); interior frames keep farther than the
 // tissue's coupling tolerance from every organ, so the shared frames are
 // exactly the surface frames that the tissue's rules allow: an organ can be
-// switched off, or limited to a box, a sphere or named parts.
+// switched off, or limited to a box, a sphere or named parts. For a
+// deformable organ the sampling already applied the rules when it attached
+// the surface frames to the organ's inside; the frames it attached are the
+// shared ones (one frame index used by the tissue's and the organ's samples).
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -23,24 +26,6 @@ void fascia_prep_coupling_destroy(fascia_prep_coupling **coupling) {
   free(c->per_organ);
   free(c);
   *coupling = NULL;
-}
-
-static const fascia_prep_coupling_def *rule_for(const fascia_prep_tissue_def *td, int32_t organ) {
-  for (int32_t k = 0; k < td->coupling_count; ++k)
-    if (td->coupling[k].organ == organ) return td->coupling + k;
-  return NULL;
-}
-
-static int allowed(const fascia_prep_coupling_def *rule, const fascia_prep_mesh *mesh, int32_t triangle,
-                   const double *x) {
-  if (!rule) return 1;
-  if (!rule->enabled) return 0;
-  if (!prep_region_contains(&rule->region, x)) return 0;
-  if (rule->parts.count == 0) return 1;
-  const char *part = mesh->part_names[mesh->triangle_part[triangle]];
-  for (int32_t k = 0; k < rule->parts.count; ++k)
-    if (!strcmp(rule->parts.names[k], part)) return 1;
-  return 0;
 }
 
 fascia_status fascia_prep_couple(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_meshes *meshes,
@@ -76,7 +61,10 @@ fascia_status fascia_prep_couple(fascia_ctx *ctx, const fascia_prep_scene *scene
     if (o < 0) continue;
     const fascia_prep_mesh *m = meshes->organs + o;
     const double *x = points->frame_position + 3 * (int64_t)i;
-    if (!allowed(rule_for(scene->tissues + points->frame_tissue[i], o), m, tri, x)) continue;
+    if (points->frame_tissue[i] < 0) continue; // a deformable organ's own frame (never on a surface today)
+    if (!prep_coupling_allowed(scene->tissues + points->frame_tissue[i], o, m, tri, x)) continue;
+    // a deformable organ shares exactly the frames its inside reaches
+    if (scene->organs[o].kind == FASCIA_ORGAN_DEFORMABLE && points->frame_organ_voxel[i] < 0) continue;
     const int32_t *v = m->triangles + 3 * (int64_t)tri;
     double *b = c->barycentric + 3 * (int64_t)c->count;
     prep_triangle_barycentric(m->vertices + 3 * (int64_t)v[0], m->vertices + 3 * (int64_t)v[1],

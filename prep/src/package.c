@@ -83,6 +83,14 @@ static cJSON *provenance(const fascia_prep_scene *scene, const fascia_prep_meshe
     cJSON_AddStringToObject(e, "units", d->units);
     cJSON_AddItemToObject(e, "transform_3x4", vector(d->transform, 12));
     cJSON_AddStringToObject(e, "model", organ_kind_name(d->kind));
+    if (d->kind == FASCIA_ORGAN_DEFORMABLE) {
+      cJSON_AddStringToObject(e, "material", scene->materials[d->material].name);
+      cJSON_AddNumberToObject(e, "frame_spacing", d->frame_spacing);
+      cJSON_AddNumberToObject(e, "sample_spacing", d->sample_spacing);
+      cJSON_AddStringToObject(e, "shape_functions", d->shape_kind == FASCIA_PREP_SHAPE_TET ? "tet" : "mls");
+      cJSON_AddNumberToObject(e, "neighbours", d->neighbours);
+      cJSON_AddNumberToObject(e, "min_component", d->min_component);
+    }
     cJSON_AddItemToArray(inputs, e);
   }
   // every parameter actually used, defaults included
@@ -164,6 +172,25 @@ static cJSON *provenance(const fascia_prep_scene *scene, const fascia_prep_meshe
     cJSON_AddNumberToObject(e, "enclosed_volume_m3", r->enclosed_volume);
     cJSON_AddStringToObject(e, "inside_rule", r->inside_rule[0] ? r->inside_rule : "not voxelized (far from every tissue)");
     cJSON_AddNumberToObject(e, "shared_frames", cpl->per_organ[o]);
+    if (scene->organs[o].kind == FASCIA_ORGAN_DEFORMABLE) {
+      // the organ's own frames and samples are contiguous ranges (prep.h, fascia_prep_points)
+      const fascia_prep_tissue_report *r2 = vol->organ_regions + o;
+      int32_t first_frame = -1, frames = 0, first_sample = -1, samples = 0;
+      for (int32_t i = 0; i < pts->frame_count; ++i)
+        if (pts->frame_inside_organ[i] == o) first_frame = first_frame < 0 ? i : first_frame, ++frames;
+      for (int32_t s = 0; s < pts->sample_count; ++s)
+        if (pts->sample_inside_organ[s] == o) first_sample = first_sample < 0 ? s : first_sample, ++samples;
+      cJSON *d = cJSON_AddObjectToObject(e, "deformable");
+      cJSON_AddNumberToObject(d, "voxels", (double)r2->voxels);
+      cJSON_AddNumberToObject(d, "volume_m3", r2->volume);
+      cJSON_AddNumberToObject(d, "components", r2->components);
+      cJSON_AddNumberToObject(d, "dropped_components", r2->dropped_components);
+      cJSON_AddNumberToObject(d, "dropped_volume_m3", r2->dropped_volume);
+      cJSON_AddNumberToObject(d, "own_frames", frames);
+      cJSON_AddNumberToObject(d, "first_frame", first_frame);
+      cJSON_AddNumberToObject(d, "samples", samples);
+      cJSON_AddNumberToObject(d, "first_sample", first_sample);
+    }
     cJSON_AddItemToArray(org, e);
   }
   cJSON *trep = cJSON_AddArrayToObject(rep, "tissues");
@@ -266,7 +293,9 @@ fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_scene *scen
       organ->motion = motion++;
     }
   }
-  // frames (rest rotation identity, set by alloc), kinds from the organs they are shared with
+  // frames (rest rotation identity, set by alloc), kinds from the organs they are
+  // shared with; frames shared with rigid or deformable organs, and a
+  // deformable organ's own frames, stay FREE (alloc's zero)
   memcpy(m->frame_position, points->frame_position, 3 * (size_t)points->frame_count * sizeof(double));
   for (int32_t c = 0; c < coupling->count; ++c) {
     const int32_t i = coupling->frame[c];
@@ -286,8 +315,12 @@ fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_scene *scen
   // samples and pairs
   memcpy(m->sample_position, points->sample_position, 3 * (size_t)points->sample_count * sizeof(double));
   memcpy(m->sample_volume, points->sample_volume, (size_t)points->sample_count * sizeof(double));
-  for (int32_t s = 0; s < points->sample_count; ++s)
-    m->sample_material[s] = scene->tissues[points->sample_tissue[s]].material;
+  for (int32_t s = 0; s < points->sample_count; ++s) {
+    m->sample_material[s] = points->sample_tissue[s] >= 0 ? scene->tissues[points->sample_tissue[s]].material
+                                                          : scene->organs[points->sample_inside_organ[s]].material;
+    m->sample_organ[s] = points->sample_inside_organ[s]; // model organs are the scene's, in order
+  }
+  for (int32_t i = 0; i < points->frame_count; ++i) m->frame_organ[i] = points->frame_inside_organ[i];
   memcpy(m->sample_offsets, weights->sample_offsets, ((size_t)points->sample_count + 1) * sizeof(int32_t));
   memcpy(m->pair_frame, weights->pair_frame, (size_t)weights->pair_count * sizeof(int32_t));
   memcpy(m->pair_weight, weights->pair_weight, (size_t)weights->pair_count * sizeof(double));

@@ -119,6 +119,49 @@ int prep_region_contains(const fascia_prep_region *region, const double *p) {
   }
 }
 
+int prep_coupling_allowed(const fascia_prep_tissue_def *td, int32_t organ, const fascia_prep_mesh *mesh,
+                          int32_t triangle, const double *x) {
+  const fascia_prep_coupling_def *rule = NULL;
+  for (int32_t k = 0; k < td->coupling_count && !rule; ++k)
+    if (td->coupling[k].organ == organ) rule = td->coupling + k;
+  if (!rule) return 1;
+  if (!rule->enabled) return 0;
+  if (!prep_region_contains(&rule->region, x)) return 0;
+  if (rule->parts.count == 0) return 1;
+  const char *part = mesh->part_names[mesh->triangle_part[triangle]];
+  for (int32_t k = 0; k < rule->parts.count; ++k)
+    if (!strcmp(rule->parts.names[k], part)) return 1;
+  return 0;
+}
+
+int32_t prep_label_organ(const fascia_prep_volume *volume, uint8_t label) {
+  if (label == 0 || label <= volume->tissue_count || !volume->organ_label) return -1;
+  for (int32_t o = 0; o < volume->organ_count; ++o)
+    if (volume->organ_label[o] == label) return o;
+  return -1;
+}
+
+void prep_label_sampling(const fascia_prep_scene *scene, const fascia_prep_volume *volume, uint8_t label,
+                         double *frame_spacing, double *sample_spacing, int32_t *shape_kind, int32_t *neighbours) {
+  const int32_t o = prep_label_organ(volume, label);
+  const fascia_prep_organ_def *od = o >= 0 ? scene->organs + o : NULL;
+  const fascia_prep_tissue_def *td = o >= 0 ? NULL : scene->tissues + (label - 1);
+  if (frame_spacing) *frame_spacing = od ? od->frame_spacing : td->frame_spacing;
+  if (sample_spacing) *sample_spacing = od ? od->sample_spacing : td->sample_spacing;
+  if (shape_kind) *shape_kind = od ? od->shape_kind : td->shape_kind;
+  if (neighbours) *neighbours = od ? od->neighbours : td->neighbours;
+}
+
+const char *prep_label_name(const fascia_prep_scene *scene, const fascia_prep_volume *volume, uint8_t label,
+                            char *out, size_t size) {
+  const int32_t o = prep_label_organ(volume, label);
+  if (o >= 0)
+    snprintf(out, size, "deformable organ '%s'", scene->organs[o].name);
+  else
+    snprintf(out, size, "tissue '%s'", label >= 1 && label <= scene->tissue_count ? scene->tissues[label - 1].name : "?");
+  return out;
+}
+
 int32_t prep_mesh_part(const fascia_prep_mesh *mesh, const char *name) {
   for (int32_t p = 0; p < mesh->part_count; ++p)
     if (!strcmp(mesh->part_names[p], name)) return p;

@@ -90,6 +90,20 @@ FASCIA_PREP_INTERN prep_grid prep_volume_grid(const fascia_prep_volume *volume);
 
 /// 1 when p is inside region (a NONE region contains everything).
 FASCIA_PREP_INTERN int prep_region_contains(const fascia_prep_region *region, const double *p);
+/// 1 when tissue td's coupling rules let its frame at x on organ's triangle
+/// be shared with that organ (no rule for the organ: shared anywhere).
+FASCIA_PREP_INTERN int prep_coupling_allowed(const fascia_prep_tissue_def *td, int32_t organ,
+                                             const fascia_prep_mesh *mesh, int32_t triangle, const double *x);
+/// Deformable organ whose inside has region label (> 0), -1 for a tissue label.
+FASCIA_PREP_INTERN int32_t prep_label_organ(const fascia_prep_volume *volume, uint8_t label);
+/// Sampling parameters of the region with this label: a tissue's or a
+/// deformable organ's. Any pointer may be NULL.
+FASCIA_PREP_INTERN void prep_label_sampling(const fascia_prep_scene *scene, const fascia_prep_volume *volume,
+                                            uint8_t label, double *frame_spacing, double *sample_spacing,
+                                            int32_t *shape_kind, int32_t *neighbours);
+/// "tissue 'name'" or "deformable organ 'name'" into out.
+FASCIA_PREP_INTERN const char *prep_label_name(const fascia_prep_scene *scene, const fascia_prep_volume *volume,
+                                               uint8_t label, char *out, size_t size);
 /// Index of name among parts names of mesh, -1 if absent.
 FASCIA_PREP_INTERN int32_t prep_mesh_part(const fascia_prep_mesh *mesh, const char *name);
 /// Closest point on triangle (a, b, c) to p: barycentric coordinates in bary.

@@ -99,7 +99,7 @@ static fascia_status write_organs(fascia_ctx *ctx, const char *dir, const fascia
 
 static fascia_status write_region(fascia_ctx *ctx, const char *dir, const fascia_prep_volume *vol) {
   vtk_file v;
-  PREP_TRY(vtk_open(ctx, &v, dir, "region.vtk", "fascia prep: tissue region (tissue = index + 1, 0 none)",
+  PREP_TRY(vtk_open(ctx, &v, dir, "region.vtk", "fascia prep: regions (tissue = index + 1, then deformable organs' insides, 0 none)",
                     "STRUCTURED_POINTS"));
   const int64_t n = (int64_t)vol->dims[0] * vol->dims[1] * vol->dims[2];
   fprintf(v.f, "DIMENSIONS %d %d %d\nORIGIN %.9g %.9g %.9g\nSPACING %.9g %.9g %.9g\nPOINT_DATA %lld\n",
@@ -125,6 +125,7 @@ static fascia_status write_points(fascia_ctx *ctx, const char *dir, const fascia
   PREP_TRY(vtk_open(ctx, &v, dir, "frames.vtk", "fascia prep: frames", "POLYDATA"));
   vtk_points(v.f, pts->frame_count, pts->frame_position, NULL);
   vtk_int_field(v.f, "tissue", pts->frame_count, pts->frame_tissue, NULL);
+  vtk_int_field(v.f, "inside_organ", pts->frame_count, pts->frame_inside_organ, NULL);
   vtk_int_field(v.f, "on_organ", pts->frame_count, pts->frame_organ, NULL);
   int32_t *shared = prep_calloc(pts->frame_count, sizeof(int32_t));
   PREP_CHECK(shared, ctx, FASCIA_ERR_MEMORY, "preview: out of memory");
@@ -137,6 +138,7 @@ static fascia_status write_points(fascia_ctx *ctx, const char *dir, const fascia
   PREP_TRY(vtk_open(ctx, &v, dir, "samples.vtk", "fascia prep: samples", "POLYDATA"));
   vtk_points(v.f, pts->sample_count, pts->sample_position, NULL);
   vtk_int_field(v.f, "tissue", pts->sample_count, pts->sample_tissue, NULL);
+  vtk_int_field(v.f, "inside_organ", pts->sample_count, pts->sample_inside_organ, NULL);
   fprintf(v.f, "SCALARS volume float 1\nLOOKUP_TABLE default\n");
   for (int32_t s = 0; s < pts->sample_count; ++s) put_float(v.f, pts->sample_volume[s]);
   fprintf(v.f, "\n");

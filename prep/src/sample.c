@@ -18,6 +18,17 @@
 // the region (one Lloyd step: a better quadrature point).
 // A piece of region that receives fewer than 4 frames, or only coplanar ones,
 // gets more frames at its voxels farthest from the frames it has.
+//
+// Deformable organs. Their insides are regions too, sampled by the same code
+// after the tissues. Their surface frames are not new points: the tissue
+// frames on the organ's surface that the tissue's coupling rules allow are
+// *shared*, each attached to the organ's inside voxel nearest to it (within
+// two voxels; the frame sits exactly on the surface, between the tissue's
+// voxels and the organ's). The organ's interior frames are thrown against
+// them with the organ's frame_spacing, so both sides see the shared frames
+// as their frames on the interface: each side's weights are built from frames
+// that surround its samples (a partition of unity with linear reproduction on
+// each side, and the two sides move together through the shared frames).
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -33,9 +44,12 @@ void fascia_prep_points_destroy(fascia_prep_points **points) {
   free(p->frame_organ);
   free(p->frame_triangle);
   free(p->frame_voxel);
+  free(p->frame_inside_organ);
+  free(p->frame_organ_voxel);
   free(p->sample_position);
   free(p->sample_volume);
   free(p->sample_tissue);
+  free(p->sample_inside_organ);
   free(p->sample_voxel);
   free(p);
   *points = NULL;
@@ -48,6 +62,7 @@ typedef struct point_list {
   double *position; // [3 count]
   int32_t *organ, *triangle;
   int64_t *voxel;
+  int64_t *attach;  // [count] voxel of a deformable organ's inside the point is shared with, or -1
 } point_list;
 
 static int list_push(point_list *l, const double *x, int32_t organ, int32_t triangle, int64_t voxel) {
@@ -65,12 +80,16 @@ static int list_push(point_list *l, const double *x, int32_t organ, int32_t tria
     int64_t *v = realloc(l->voxel, (size_t)cap * sizeof(int64_t));
     if (!v) return 0;
     l->voxel = v;
+    int64_t *a = realloc(l->attach, (size_t)cap * sizeof(int64_t));
+    if (!a) return 0;
+    l->attach = a;
     l->capacity = cap;
   }
   memcpy(l->position + 3 * l->count, x, 3 * sizeof(double));
   l->organ[l->count] = organ;
   l->triangle[l->count] = triangle;
   l->voxel[l->count] = voxel;
+  l->attach[l->count] = -1;
   l->count++;
   return 1;
 }
@@ -80,6 +99,7 @@ static void list_free(point_list *l) {
   free(l->organ);
   free(l->triangle);
   free(l->voxel);
+  free(l->attach);
   memset(l, 0, sizeof *l);
 }
 
@@ -261,9 +281,18 @@ static double spread(const double *const *x, int32_t n, double spacing) {
   return det / (s2 * s2 * s2);
 }
 
-// Adds frames to pieces of tissue t with fewer than 4 frames or coplanar ones.
+// The voxel through which frame k belongs to the region with this label: its
+// own voxel, or the organ voxel it is shared with; -1 if neither is labelled.
+static int64_t frame_voxel_in(const fascia_prep_volume *vol, const point_list *frames, int64_t k, uint8_t label) {
+  if (vol->region[frames->voxel[k]] == label) return frames->voxel[k];
+  if (frames->attach[k] >= 0 && vol->region[frames->attach[k]] == label) return frames->attach[k];
+  return -1;
+}
+
+// Adds frames to pieces of the region with fewer than 4 frames or coplanar
+// ones; the frames of a piece are those whose voxel (or shared voxel) is in it.
 static fascia_status fill_thin_pieces(fascia_ctx *ctx, const fascia_prep_volume *vol, uint8_t label,
-                                      double spacing, int64_t first, point_list *frames) {
+                                      double spacing, point_list *frames) {
   const prep_grid g = prep_volume_grid(vol);
   const int64_t n = prep_grid_count(&g);
   fascia_status status = FASCIA_OK;
@@ -276,10 +305,12 @@ static fascia_status fill_thin_pieces(fascia_ctx *ctx, const fascia_prep_volume 
     for (int guard = 0; guard < 64; ++guard) {
       int32_t count = 0;
       free(members);
-      members = prep_calloc(frames->count - first + 64, sizeof(double *));
+      members = prep_calloc(frames->count + 64, sizeof(double *));
       PREP_CHECK_GOTO(members, ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
-      for (int64_t i = first; i < frames->count; ++i)
-        if (comp[frames->voxel[i]] == piece) members[count++] = frames->position + 3 * i;
+      for (int64_t i = 0; i < frames->count; ++i) {
+        const int64_t v = frame_voxel_in(vol, frames, i, label);
+        if (v >= 0 && comp[v] == piece) members[count++] = frames->position + 3 * i;
+      }
       if (count >= 4 && spread(members, count, spacing) > 1e-6) break;
       // the piece's voxel farthest from its frames becomes a frame
       double best = -1, x[3], far[3] = {0, 0, 0};
@@ -398,20 +429,61 @@ cleanup:
 
 // ------------------------------------------------------------ the stage
 
-static fascia_status sample_tissue(fascia_ctx *ctx, const fascia_prep_scene *scene,
-                                   const fascia_prep_meshes *meshes, const fascia_prep_volume *vol, int32_t t,
+// Shares with deformable organ o the tissue frames on its surface that their
+// tissue's coupling rules allow: each is attached to the organ's inside voxel
+// nearest to it within two voxels (ties to the lower voxel index). A frame
+// with no inside voxel that near (a sliver of the organ thinner than a voxel)
+// stays a tissue frame only. frame_tissue[k]: tissue of frame k.
+static void attach_shared(const fascia_prep_scene *scene, const fascia_prep_meshes *meshes,
+                          const fascia_prep_volume *vol, int32_t o, const int32_t *frame_tissue, point_list *frames) {
+  const prep_grid g = prep_volume_grid(vol);
+  const uint8_t label = (uint8_t)vol->organ_label[o];
+  for (int64_t k = 0; k < frames->count; ++k) {
+    if (frames->organ[k] != o || frame_tissue[k] < 0) continue;
+    const double *x = frames->position + 3 * k;
+    if (!prep_coupling_allowed(scene->tissues + frame_tissue[k], o, meshes->organs + o, frames->triangle[k], x))
+      continue;
+    int32_t c[3];
+    for (int r = 0; r < 3; ++r) c[r] = (int32_t)floor(x[r] / g.h + 0.5) - g.lo[r];
+    double best = INFINITY;
+    int64_t best_v = -1;
+    for (int dz = -2; dz <= 2; ++dz)
+      for (int dy = -2; dy <= 2; ++dy)
+        for (int dx = -2; dx <= 2; ++dx) {
+          const int32_t i = c[0] + dx, j = c[1] + dy, l = c[2] + dz;
+          if (i < 0 || j < 0 || l < 0 || i >= g.dims[0] || j >= g.dims[1] || l >= g.dims[2]) continue;
+          const int64_t v = prep_grid_index(&g, i, j, l);
+          if (vol->region[v] != label) continue;
+          double y[3];
+          prep_grid_center(&g, v, y);
+          const double d2 = (x[0] - y[0]) * (x[0] - y[0]) + (x[1] - y[1]) * (x[1] - y[1]) + (x[2] - y[2]) * (x[2] - y[2]);
+          if (d2 < best || (d2 == best && v < best_v)) best = d2, best_v = v;
+        }
+    frames->attach[k] = best_v;
+  }
+}
+
+// Frames and samples of the region with this label: a tissue (surface frames
+// on the organs it touches, then interior frames farther than the coupling
+// tolerance from every organ) or a deformable organ's inside (its shared
+// frames, already attached, then interior frames anywhere inside); then
+// samples and their volumes, the same for both.
+static fascia_status sample_region(fascia_ctx *ctx, const fascia_prep_scene *scene,
+                                   const fascia_prep_meshes *meshes, const fascia_prep_volume *vol, uint8_t label,
                                    fascia_cgal_tree **trees, point_list *frames, point_list *samples,
                                    double **volumes, int64_t *volume_capacity) {
-  const fascia_prep_tissue_def *td = scene->tissues + t;
+  const int32_t organ = prep_label_organ(vol, label);
+  const fascia_prep_tissue_def *td = organ < 0 ? scene->tissues + (label - 1) : NULL;
+  double frame_spacing, sample_spacing;
+  prep_label_sampling(scene, vol, label, &frame_spacing, &sample_spacing, NULL, NULL);
   const prep_grid g = prep_volume_grid(vol);
   const int64_t n = prep_grid_count(&g);
-  const uint8_t label = (uint8_t)(t + 1);
   const double h = g.h;
   fascia_status status = FASCIA_OK;
   point_list cand = {0};
   dart_grid darts = {0};
   double *cell_volume = NULL;
-  prep_rng rng = {scene->seed * 0x9e3779b97f4a7c15ull + (uint64_t)t};
+  prep_rng rng = {scene->seed * 0x9e3779b97f4a7c15ull + (uint64_t)(label - 1)};
   int64_t voxel_count = 0;
   for (int64_t v = 0; v < n; ++v) voxel_count += vol->region[v] == label;
   int64_t *voxels = prep_calloc(voxel_count, sizeof(int64_t));
@@ -420,26 +492,33 @@ static fascia_status sample_tissue(fascia_ctx *ctx, const fascia_prep_scene *sce
   for (int64_t v = 0; v < n; ++v)
     if (vol->region[v] == label) voxels[voxel_count++] = v;
 
-  // frames: surface first, then interior, one dart grid
-  const int64_t first_frame = frames->count;
-  PREP_CHECK_GOTO(dart_init(&darts, td->frame_spacing, voxel_count), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  // frames: surface (tissue) or shared (organ) first, then interior, one dart grid
+  PREP_CHECK_GOTO(dart_init(&darts, frame_spacing, voxel_count), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
   darts.points = frames;
-  PREP_TRY_GOTO(surface_candidates(ctx, meshes, vol, voxels, voxel_count, trees, &cand));
-  PREP_TRY_GOTO(throw_darts(ctx, &rng, &cand, &darts, frames));
+  if (td) {
+    PREP_TRY_GOTO(surface_candidates(ctx, meshes, vol, voxels, voxel_count, trees, &cand));
+    PREP_TRY_GOTO(throw_darts(ctx, &rng, &cand, &darts, frames));
+  } else {
+    for (int64_t k = 0; k < frames->count; ++k)
+      if (frames->attach[k] >= 0 && vol->region[frames->attach[k]] == label)
+        PREP_CHECK_GOTO(dart_add(&darts, k), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  }
   cand.count = 0;
   for (int64_t k = 0; k < voxel_count; ++k) {
     const int64_t v = voxels[k];
-    double nearest = INFINITY;
-    for (int32_t o = 0; o < vol->organ_count; ++o)
-      if (vol->distance[o]) nearest = fmin(nearest, vol->distance[o][v]);
-    if (nearest <= td->coupling_tolerance + h) continue; // jitter stays within h: never within tolerance
+    if (td) {
+      double nearest = INFINITY;
+      for (int32_t o = 0; o < vol->organ_count; ++o)
+        if (vol->distance[o]) nearest = fmin(nearest, vol->distance[o][v]);
+      if (nearest <= td->coupling_tolerance + h) continue; // jitter stays within h: never within tolerance
+    }
     double x[3];
     prep_grid_center(&g, v, x);
     for (int r = 0; r < 3; ++r) x[r] += (prep_rng_uniform(&rng) - 0.5) * 0.9 * h; // stays in its voxel
     PREP_CHECK_GOTO(list_push(&cand, x, -1, -1, v), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
   }
   PREP_TRY_GOTO(throw_darts(ctx, &rng, &cand, &darts, frames));
-  PREP_TRY_GOTO(fill_thin_pieces(ctx, vol, label, td->frame_spacing, first_frame, frames));
+  PREP_TRY_GOTO(fill_thin_pieces(ctx, vol, label, frame_spacing, frames));
   dart_free(&darts);
 
   // samples at voxel centres, then Voronoi volumes
@@ -450,8 +529,7 @@ static fascia_status sample_tissue(fascia_ctx *ctx, const fascia_prep_scene *sce
     prep_grid_center(&g, voxels[k], x);
     PREP_CHECK_GOTO(list_push(&cand, x, -1, -1, voxels[k]), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
   }
-  PREP_CHECK_GOTO(dart_init(&darts, td->sample_spacing, voxel_count), ctx, FASCIA_ERR_MEMORY,
-                  "sample: out of memory");
+  PREP_CHECK_GOTO(dart_init(&darts, sample_spacing, voxel_count), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
   darts.points = samples;
   PREP_TRY_GOTO(throw_darts(ctx, &rng, &cand, &darts, samples));
   PREP_TRY_GOTO(voronoi_volumes(ctx, vol, label, samples, first_sample, &cell_volume));
@@ -478,17 +556,37 @@ fascia_status fascia_prep_sample(fascia_ctx *ctx, const fascia_prep_scene *scene
   point_list frames = {0}, samples = {0};
   double *volumes = NULL;
   int64_t volume_capacity = 0;
-  int32_t *frame_tissue_end = prep_calloc(scene->tissue_count, sizeof(int32_t));
-  int32_t *sample_tissue_end = prep_calloc(scene->tissue_count, sizeof(int32_t));
+  // regions in order: the tissues, then the deformable organs; region r owns
+  // frames [frame_end[r-1], frame_end[r]) and the same for samples
+  const int32_t T = scene->tissue_count, O = scene->organ_count;
+  int32_t *frame_end = prep_calloc(T + O, sizeof(int32_t)), *sample_end = prep_calloc(T + O, sizeof(int32_t));
+  int32_t *region_organ = prep_calloc(T + O, sizeof(int32_t)), *tissue_of = NULL;
   fascia_cgal_tree **trees = prep_calloc(meshes->count, sizeof *trees);
   fascia_prep_points *p = calloc(1, sizeof *p);
-  PREP_CHECK_GOTO(p && trees && frame_tissue_end && sample_tissue_end, ctx, FASCIA_ERR_MEMORY,
+  int32_t regions = 0;
+  PREP_CHECK_GOTO(p && trees && frame_end && sample_end && region_organ, ctx, FASCIA_ERR_MEMORY,
                   "sample: out of memory");
-  for (int32_t t = 0; t < scene->tissue_count; ++t) {
-    fascia_ctx_progress(ctx, "sample", (double)t / scene->tissue_count, scene->tissues[t].name);
-    PREP_TRY_GOTO(sample_tissue(ctx, scene, meshes, volume, t, trees, &frames, &samples, &volumes, &volume_capacity));
-    frame_tissue_end[t] = (int32_t)frames.count;
-    sample_tissue_end[t] = (int32_t)samples.count;
+  for (int32_t t = 0; t < T; ++t) {
+    fascia_ctx_progress(ctx, "sample", (double)t / (T + O), scene->tissues[t].name);
+    PREP_TRY_GOTO(
+        sample_region(ctx, scene, meshes, volume, (uint8_t)(t + 1), trees, &frames, &samples, &volumes, &volume_capacity));
+    region_organ[regions] = -1;
+    frame_end[regions] = (int32_t)frames.count;
+    sample_end[regions++] = (int32_t)samples.count;
+  }
+  tissue_of = prep_calloc(frames.count, sizeof(int32_t)); // tissue frames only: organ frames come after
+  PREP_CHECK_GOTO(tissue_of, ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  for (int32_t t = 0, i = 0; t < T; ++t)
+    for (; i < frame_end[t]; ++i) tissue_of[i] = t;
+  for (int32_t o = 0; o < O; ++o) {
+    if (scene->organs[o].kind != FASCIA_ORGAN_DEFORMABLE) continue;
+    fascia_ctx_progress(ctx, "sample", (double)(T + o) / (T + O), scene->organs[o].name);
+    attach_shared(scene, meshes, volume, o, tissue_of, &frames);
+    PREP_TRY_GOTO(sample_region(ctx, scene, meshes, volume, (uint8_t)volume->organ_label[o], trees, &frames, &samples,
+                                &volumes, &volume_capacity));
+    region_organ[regions] = o;
+    frame_end[regions] = (int32_t)frames.count;
+    sample_end[regions++] = (int32_t)samples.count;
   }
   PREP_CHECK_GOTO(frames.count < INT32_MAX && samples.count < INT32_MAX, ctx, FASCIA_ERR_MEMORY,
                   "sample: too many points (%lld frames, %lld samples); raise the spacings", (long long)frames.count,
@@ -498,30 +596,36 @@ fascia_status fascia_prep_sample(fascia_ctx *ctx, const fascia_prep_scene *scene
   p->sample_count = (int32_t)S;
   p->frame_position = prep_calloc(3 * N, sizeof(double));
   p->frame_tissue = prep_calloc(N, sizeof(int32_t));
+  p->frame_inside_organ = prep_calloc(N, sizeof(int32_t));
   p->frame_organ = prep_calloc(N, sizeof(int32_t));
   p->frame_triangle = prep_calloc(N, sizeof(int32_t));
   p->frame_voxel = prep_calloc(N, sizeof(int64_t));
+  p->frame_organ_voxel = prep_calloc(N, sizeof(int64_t));
   p->sample_position = prep_calloc(3 * S, sizeof(double));
   p->sample_volume = prep_calloc(S, sizeof(double));
   p->sample_tissue = prep_calloc(S, sizeof(int32_t));
+  p->sample_inside_organ = prep_calloc(S, sizeof(int32_t));
   p->sample_voxel = prep_calloc(S, sizeof(int64_t));
-  PREP_CHECK_GOTO(p->frame_position && p->frame_tissue && p->frame_organ && p->frame_triangle && p->frame_voxel &&
-                      p->sample_position && p->sample_volume && p->sample_tissue && p->sample_voxel,
+  PREP_CHECK_GOTO(p->frame_position && p->frame_tissue && p->frame_inside_organ && p->frame_organ &&
+                      p->frame_triangle && p->frame_voxel && p->frame_organ_voxel && p->sample_position &&
+                      p->sample_volume && p->sample_tissue && p->sample_inside_organ && p->sample_voxel,
                   ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
   if (N) {
     memcpy(p->frame_position, frames.position, (size_t)(3 * N) * sizeof(double));
     memcpy(p->frame_organ, frames.organ, (size_t)N * sizeof(int32_t));
     memcpy(p->frame_triangle, frames.triangle, (size_t)N * sizeof(int32_t));
     memcpy(p->frame_voxel, frames.voxel, (size_t)N * sizeof(int64_t));
+    memcpy(p->frame_organ_voxel, frames.attach, (size_t)N * sizeof(int64_t));
   }
   if (S) {
     memcpy(p->sample_position, samples.position, (size_t)(3 * S) * sizeof(double));
     memcpy(p->sample_voxel, samples.voxel, (size_t)S * sizeof(int64_t));
     memcpy(p->sample_volume, volumes, (size_t)S * sizeof(double));
   }
-  for (int32_t t = 0, i = 0, s = 0; t < scene->tissue_count; ++t) {
-    for (; i < frame_tissue_end[t]; ++i) p->frame_tissue[i] = t;
-    for (; s < sample_tissue_end[t]; ++s) p->sample_tissue[s] = t;
+  for (int32_t r = 0, i = 0, s = 0; r < regions; ++r) {
+    const int32_t o = region_organ[r], t = o < 0 ? r : -1;
+    for (; i < frame_end[r]; ++i) p->frame_tissue[i] = t, p->frame_inside_organ[i] = o;
+    for (; s < sample_end[r]; ++s) p->sample_tissue[s] = t, p->sample_inside_organ[s] = o;
   }
   fascia_ctx_progress(ctx, "sample", 1, "done");
   *out = p;
@@ -529,8 +633,10 @@ fascia_status fascia_prep_sample(fascia_ctx *ctx, const fascia_prep_scene *scene
 cleanup:
   for (int32_t o = 0; trees && o < meshes->count; ++o) fascia_cgal_tree_destroy(trees + o);
   free(trees);
-  free(frame_tissue_end);
-  free(sample_tissue_end);
+  free(frame_end);
+  free(sample_end);
+  free(region_organ);
+  free(tissue_of);
   list_free(&frames);
   list_free(&samples);
   free(volumes);

@@ -331,10 +331,56 @@ static fascia_status parse_motion(const reader *rd, const cJSON *organ, const ch
   return FASCIA_OK;
 }
 
+// The sampling keys a tissue and a deformable organ share: frame_spacing,
+// sample_spacing, shape_functions {kind, neighbours}, min_component (default
+// frame_spacing^3).
+static fascia_status parse_sampling(const reader *rd, const fascia_prep_scene *scene, const cJSON *item,
+                                    const char *path, double *frame_spacing, double *sample_spacing,
+                                    int32_t *shape_kind, int32_t *neighbours, double *min_component) {
+  char at[PATH_SIZE];
+  PREP_TRY(get_number(rd, item, path, "frame_spacing", 1, 0, 0, 0, INFINITY, frame_spacing));
+  PREP_TRY(get_number(rd, item, path, "sample_spacing", 1, 0, 0, 0, INFINITY, sample_spacing));
+  if (*sample_spacing > *frame_spacing) {
+    sub_key(at, path, "sample_spacing");
+    return key_fail(rd, at, "%g m is coarser than frame_spacing %g m; samples must be at least as fine as frames",
+                    *sample_spacing, *frame_spacing);
+  }
+  if (*sample_spacing < scene->voxel_size) {
+    sub_key(at, path, "sample_spacing");
+    return key_fail(rd, at, "%g m is finer than the voxel size %g m; raise it or lower voxel_size", *sample_spacing,
+                    scene->voxel_size);
+  }
+  *shape_kind = FASCIA_PREP_SHAPE_MLS;
+  *neighbours = 8;
+  const cJSON *shape = cJSON_GetObjectItemCaseSensitive(item, "shape_functions");
+  if (shape) {
+    sub_key(at, path, "shape_functions");
+    static const char *const known_s[] = {"kind", "neighbours", NULL};
+    PREP_TRY(check_keys(rd, shape, at, known_s));
+    const char *kind;
+    PREP_TRY(get_string(rd, shape, at, "kind", 0, &kind));
+    if (kind && !strcmp(kind, "tet"))
+      *shape_kind = FASCIA_PREP_SHAPE_TET;
+    else if (kind && strcmp(kind, "mls")) {
+      char kk[PATH_SIZE];
+      sub_key(kk, at, "kind");
+      return key_fail(rd, kk, "unknown kind '%s' (known: mls, tet)", kind);
+    }
+    int count;
+    PREP_TRY(get_int(rd, shape, at, "neighbours", 0, 8, 4, 64, &count));
+    *neighbours = count;
+  }
+  const double fs = *frame_spacing;
+  PREP_TRY(get_number(rd, item, path, "min_component", 0, fs * fs * fs, 0, 1, INFINITY, min_component));
+  return FASCIA_OK;
+}
+
 static fascia_status parse_organ(const reader *rd, fascia_prep_scene *scene, const cJSON *item, const char *path,
                                  const char *base_dir, fascia_prep_organ_def *o) {
-  static const char *const known[] = {"name", "mesh", "parts", "units", "transform", "model", "motion", "material",
-                                      "description", NULL};
+  static const char *const known[] = {"name",          "mesh",           "parts",           "units",
+                                      "transform",     "model",          "motion",          "material",
+                                      "frame_spacing", "sample_spacing", "shape_functions", "min_component",
+                                      "description",   NULL};
   PREP_TRY(check_keys(rd, item, path, known));
   PREP_TRY(get_name(rd, item, path, "name", o->name));
   const char *mesh, *units, *model, *description;
@@ -411,12 +457,18 @@ static fascia_status parse_organ(const reader *rd, fascia_prep_scene *scene, con
     if (!material) return key_fail(rd, at, "missing: a deformable organ needs a material");
     o->material = material_index(scene, material);
     if (o->material < 0) return key_fail(rd, at, "no material is named '%s' in \"materials\"", material);
-    return key_fail(rd, at,
-                    "model \"deformable\" is not supported by this version of fascia prep (organ frames are not "
-                    "built yet); use \"fixed\", \"prescribed\" or \"rigid\"");
-  } else if (material) {
-    return key_fail(rd, at, "only a \"deformable\" organ takes a material");
+    return parse_sampling(rd, scene, item, path, &o->frame_spacing, &o->sample_spacing, &o->shape_kind,
+                          &o->neighbours, &o->min_component);
   }
+  if (material) return key_fail(rd, at, "only a \"deformable\" organ takes a material");
+  static const char *const sampling_keys[] = {"frame_spacing", "sample_spacing", "shape_functions", "min_component",
+                                              NULL};
+  for (int k = 0; sampling_keys[k]; ++k)
+    if (cJSON_GetObjectItemCaseSensitive(item, sampling_keys[k])) {
+      sub_key(at, path, sampling_keys[k]);
+      return key_fail(rd, at, "only a \"deformable\" organ is sampled (this organ's model is \"%s\")",
+                      model ? model : "fixed");
+    }
   return FASCIA_OK;
 }
 
@@ -521,44 +573,14 @@ static fascia_status parse_tissue(const reader *rd, const fascia_prep_scene *sce
   t->material = material_index(scene, material);
   sub_key(at, path, "material");
   if (t->material < 0) return key_fail(rd, at, "no material is named '%s' in \"materials\"", material);
-  PREP_TRY(get_number(rd, item, path, "frame_spacing", 1, 0, 0, 0, INFINITY, &t->frame_spacing));
-  PREP_TRY(get_number(rd, item, path, "sample_spacing", 1, 0, 0, 0, INFINITY, &t->sample_spacing));
-  if (t->sample_spacing > t->frame_spacing) {
-    sub_key(at, path, "sample_spacing");
-    return key_fail(rd, at, "%g m is coarser than frame_spacing %g m; samples must be at least as fine as frames",
-                    t->sample_spacing, t->frame_spacing);
-  }
-  if (t->sample_spacing < scene->voxel_size) {
-    sub_key(at, path, "sample_spacing");
-    return key_fail(rd, at, "%g m is finer than the voxel size %g m; raise it or lower voxel_size", t->sample_spacing,
-                    scene->voxel_size);
-  }
-  t->shape_kind = FASCIA_PREP_SHAPE_MLS;
-  t->neighbours = 8;
-  const cJSON *shape = cJSON_GetObjectItemCaseSensitive(item, "shape_functions");
-  if (shape) {
-    sub_key(at, path, "shape_functions");
-    static const char *const known_s[] = {"kind", "neighbours", NULL};
-    PREP_TRY(check_keys(rd, shape, at, known_s));
-    const char *kind;
-    PREP_TRY(get_string(rd, shape, at, "kind", 0, &kind));
-    if (kind && !strcmp(kind, "tet"))
-      t->shape_kind = FASCIA_PREP_SHAPE_TET;
-    else if (kind && strcmp(kind, "mls")) {
-      char kk[PATH_SIZE];
-      sub_key(kk, at, "kind");
-      return key_fail(rd, kk, "unknown kind '%s' (known: mls, tet)", kind);
-    }
-    PREP_TRY(get_int(rd, shape, at, "neighbours", 0, 8, 4, 64, &t->neighbours));
-  }
+  PREP_TRY(parse_sampling(rd, scene, item, path, &t->frame_spacing, &t->sample_spacing, &t->shape_kind,
+                          &t->neighbours, &t->min_component));
   t->coupling_tolerance = scene->voxel_size;
   const cJSON *coupling = cJSON_GetObjectItemCaseSensitive(item, "coupling");
   if (coupling) {
     sub_key(at, path, "coupling");
     PREP_TRY(parse_coupling(rd, scene, coupling, at, t));
   }
-  const double fs = t->frame_spacing;
-  PREP_TRY(get_number(rd, item, path, "min_component", 0, fs * fs * fs, 0, 1, INFINITY, &t->min_component));
   return FASCIA_OK;
 }
 

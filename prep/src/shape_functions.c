@@ -14,9 +14,15 @@
 // FASCIA_SHAPE_SUPPORT_MARGIN times the farthest chosen frame. When the
 // chosen frames are too flat for a linear basis, more are taken.
 //
-// TET (mesh-based). The tissue's frames are tetrahedralised (CGAL Delaunay);
+// Regions. Tissues and the insides of deformable organs are treated alike,
+// each sample by the region of its voxel. A frame is reached from its own
+// voxel and, when it is shared with a deformable organ, also from the organ's
+// inside voxel it is attached to (frame_organ_voxel): both the tissue's and
+// the organ's samples can take it.
+//
+// TET (mesh-based). The region's frames are tetrahedralised (CGAL Delaunay);
 // a tetrahedron is kept when its centroid and the midpoints of its edges lie
-// in the tissue's region. Each sample takes the barycentric weights of the
+// in the region. Each sample takes the barycentric weights of the
 // kept tetrahedron holding it, or, if none does, of the nearest kept one
 // (extrapolated: still a partition of unity reproducing linear fields).
 #include <math.h>
@@ -57,6 +63,14 @@ typedef struct candidate {
   int32_t frame;
 } candidate;
 
+// Frames by voxel: attachment a puts frame[a] at a voxel; head[v] is the
+// first attachment at voxel v, next[a] the following one (-1 ends).
+typedef struct frame_index {
+  int32_t *head;  // [voxels]
+  int32_t *next;  // [attachments]
+  int32_t *frame; // [attachments]
+} frame_index;
+
 static int touch(search *se, int64_t v, double d) {
   if (se->dist[v] == INFINITY) {
     if (se->touched_count == se->touched_capacity) {
@@ -76,8 +90,8 @@ static int touch(search *se, int64_t v, double d) {
 // distance (ties by frame index). Returns the count found (< want when the
 // piece holds fewer frames), -1 when out of memory.
 static int32_t nearest_frames(search *se, const prep_grid *g, const fascia_prep_volume *vol,
-                              const fascia_prep_points *pts, const int32_t *head, const int32_t *next, int32_t s,
-                              int32_t want, candidate *out) {
+                              const fascia_prep_points *pts, const frame_index *fi, int32_t s, int32_t want,
+                              candidate *out) {
   const uint8_t label = vol->region[pts->sample_voxel[s]];
   const double *ps = pts->sample_position + 3 * (int64_t)s;
   int32_t found = 0;
@@ -94,7 +108,8 @@ static int32_t nearest_frames(search *se, const prep_grid *g, const fascia_prep_
     if (key > se->dist[v]) continue;
     if (found == want && key > out[want - 1].distance) break;
     prep_grid_center(g, v, c);
-    for (int32_t i = head[v]; i >= 0; i = next[i]) {
+    for (int32_t a = fi->head[v]; a >= 0; a = fi->next[a]) {
+      const int32_t i = fi->frame[a];
       const double *x = pts->frame_position + 3 * (int64_t)i;
       const double d = key + sqrt((x[0] - c[0]) * (x[0] - c[0]) + (x[1] - c[1]) * (x[1] - c[1]) +
                                   (x[2] - c[2]) * (x[2] - c[2]));
@@ -135,14 +150,14 @@ static int by_frame(const void *a, const void *b) {
 // MLS weights of sample s into frame[0..count), w, grad (ascending frames).
 // Returns 0 ok, 1 no usable frame set (message on se->ctx), -1 out of memory.
 static int mls_sample(search *se, const prep_grid *g, const fascia_prep_volume *vol, const fascia_prep_points *pts,
-                      const int32_t *head, const int32_t *next, int32_t s, int32_t k, int32_t *frame, double *w,
-                      double *grad, int32_t *count) {
+                      const frame_index *fi, int32_t s, int32_t k, int32_t *frame, double *w, double *grad,
+                      int32_t *count) {
   candidate cand[MAX_PAIRS];
   const double *p = pts->sample_position + 3 * (int64_t)s;
   const int32_t tries[3] = {k + 4 < MAX_PAIRS ? k + 4 : MAX_PAIRS, 2 * k + 8 < MAX_PAIRS ? 2 * k + 8 : MAX_PAIRS,
                             MAX_PAIRS};
   for (int attempt = 0; attempt < 3; ++attempt) {
-    const int32_t found = nearest_frames(se, g, vol, pts, head, next, s, tries[attempt], cand);
+    const int32_t found = nearest_frames(se, g, vol, pts, fi, s, tries[attempt], cand);
     if (found < 0) return -1;
     for (int32_t m = k < found ? k : found; m <= found; ++m) {
       if (m < 4) continue;
@@ -213,27 +228,32 @@ static int tet_weights(const double *const *x, const double *p, double *w, doubl
   return 1;
 }
 
-// Tet weights for the samples of tissue t into the per-sample buffers.
-static fascia_status tet_tissue(fascia_ctx *ctx, const prep_grid *g, const fascia_prep_volume *vol,
-                                const fascia_prep_points *pts, int32_t t, int32_t *pair_frame, double *pair_w,
-                                double *pair_g, int32_t *pair_count) {
+// Tet weights for the samples of the region with this label (a tissue or a
+// deformable organ's inside) into the per-sample buffers. The region's frames
+// are those reached from its voxels (shared frames included).
+static fascia_status tet_region(fascia_ctx *ctx, const fascia_prep_scene *scene, const prep_grid *g,
+                                const fascia_prep_volume *vol, const fascia_prep_points *pts, uint8_t label,
+                                int32_t *pair_frame, double *pair_w, double *pair_g, int32_t *pair_count) {
   fascia_status status = FASCIA_OK;
-  const uint8_t label = (uint8_t)(t + 1);
-  int32_t first = -1, last = -1;
-  for (int32_t i = 0; i < pts->frame_count; ++i)
-    if (pts->frame_tissue[i] == t) {
-      if (first < 0) first = i;
-      last = i + 1;
-    }
-  int32_t *tets = NULL, tet_count = 0, kept = 0;
-  double *centre = NULL;
-  PREP_CHECK(first >= 0 && last - first >= 4, ctx, FASCIA_ERR_NUMERIC,
-             "tissue %d: fewer than 4 frames, no tetrahedral mesh", (int)t);
-  PREP_TRY(fascia_cgal_delaunay(ctx, last - first, pts->frame_position + 3 * (int64_t)first, &tets, &tet_count));
+  char name[FASCIA_NAME_SIZE + 32];
+  prep_label_name(scene, vol, label, name, sizeof name);
+  int32_t *tets = NULL, tet_count = 0, kept = 0, count = 0;
+  double *centre = NULL, *position = NULL;
+  int32_t *list = prep_calloc(pts->frame_count, sizeof(int32_t)); // region frame -> frame, ascending
+  PREP_CHECK(list, ctx, FASCIA_ERR_MEMORY, "shape functions: out of memory");
+  for (int32_t i = 0; i < pts->frame_count; ++i) {
+    const int64_t shared = pts->frame_organ_voxel[i];
+    if (vol->region[pts->frame_voxel[i]] == label || (shared >= 0 && vol->region[shared] == label)) list[count++] = i;
+  }
+  position = prep_calloc(3 * (int64_t)count, sizeof(double));
+  PREP_CHECK_GOTO(position, ctx, FASCIA_ERR_MEMORY, "shape functions: out of memory");
+  for (int32_t k = 0; k < count; ++k) memcpy(position + 3 * k, pts->frame_position + 3 * (int64_t)list[k], 3 * sizeof(double));
+  PREP_CHECK_GOTO(count >= 4, ctx, FASCIA_ERR_NUMERIC, "%s: fewer than 4 frames, no tetrahedral mesh", name);
+  PREP_TRY_GOTO(fascia_cgal_delaunay(ctx, count, position, &tets, &tet_count));
   // keep tets inside the region
   for (int32_t k = 0; k < tet_count; ++k) {
     const double *x[4];
-    for (int r = 0; r < 4; ++r) x[r] = pts->frame_position + 3 * (int64_t)(first + tets[4 * k + r]);
+    for (int r = 0; r < 4; ++r) x[r] = position + 3 * (int64_t)tets[4 * k + r];
     double c[3] = {0, 0, 0};
     for (int r = 0; r < 4; ++r)
       for (int a = 0; a < 3; ++a) c[a] += x[r][a] / 4;
@@ -247,27 +267,27 @@ static fascia_status tet_tissue(fascia_ctx *ctx, const prep_grid *g, const fasci
     if (ok && tet_weights(x, c, wtest, gtest)) memmove(tets + 4 * kept++, tets + 4 * k, 4 * sizeof(int32_t));
   }
   PREP_CHECK_GOTO(kept > 0, ctx, FASCIA_ERR_NUMERIC,
-                  "tissue %d: no tetrahedron of its frames lies inside its region; use shape_functions.kind \"mls\" "
+                  "%s: no tetrahedron of its frames lies inside its region; use shape_functions.kind \"mls\" "
                   "or a smaller frame_spacing",
-                  (int)t);
+                  name);
   centre = prep_calloc(3 * (int64_t)kept, sizeof(double));
   PREP_CHECK_GOTO(centre, ctx, FASCIA_ERR_MEMORY, "shape functions: out of memory");
   for (int32_t k = 0; k < kept; ++k)
     for (int r = 0; r < 4; ++r)
       for (int a = 0; a < 3; ++a)
-        centre[3 * k + a] += pts->frame_position[3 * (int64_t)(first + tets[4 * k + r]) + a] / 4;
+        centre[3 * k + a] += position[3 * (int64_t)tets[4 * k + r] + a] / 4;
   // each sample: the kept tet with the largest smallest barycentric weight
   // (inside when >= 0), ties to the lower tet index
 #pragma omp parallel for schedule(dynamic, 64) num_threads(fascia_ctx_threads(ctx))
   for (int32_t s = 0; s < pts->sample_count; ++s) {
-    if (pts->sample_tissue[s] != t) continue;
+    if (vol->region[pts->sample_voxel[s]] != label) continue;
     const double *p = pts->sample_position + 3 * (int64_t)s;
     double best = -INFINITY, bw[4] = {0}, bg[12] = {0};
     int32_t bk = -1;
     for (int32_t k = 0; k < kept; ++k) {
       const double *c = centre + 3 * k;
       const double *x[4];
-      for (int r = 0; r < 4; ++r) x[r] = pts->frame_position + 3 * (int64_t)(first + tets[4 * k + r]);
+      for (int r = 0; r < 4; ++r) x[r] = position + 3 * (int64_t)tets[4 * k + r];
       double reach = 0;
       for (int r = 0; r < 4; ++r)
         reach = fmax(reach, (x[r][0] - c[0]) * (x[r][0] - c[0]) + (x[r][1] - c[1]) * (x[r][1] - c[1]) +
@@ -292,7 +312,7 @@ static fascia_status tet_tissue(fascia_ctx *ctx, const prep_grid *g, const fasci
         order[b - 1] = tmp;
       }
     for (int r = 0; r < 4; ++r) {
-      pair_frame[(int64_t)MAX_PAIRS * s + r] = first + tets[4 * bk + order[r]];
+      pair_frame[(int64_t)MAX_PAIRS * s + r] = list[tets[4 * bk + order[r]]];
       pair_w[(int64_t)MAX_PAIRS * s + r] = bw[order[r]];
       memcpy(pair_g + 3 * ((int64_t)MAX_PAIRS * s + r), bg + 3 * order[r], 3 * sizeof(double));
     }
@@ -301,6 +321,8 @@ static fascia_status tet_tissue(fascia_ctx *ctx, const prep_grid *g, const fasci
 cleanup:
   free(tets);
   free(centre);
+  free(position);
+  free(list);
   return status;
 }
 
@@ -317,22 +339,35 @@ fascia_status fascia_prep_shape_functions(fascia_ctx *ctx, const fascia_prep_sce
   const int32_t S = points->sample_count, N = points->frame_count;
   fascia_status status = FASCIA_OK;
   fascia_prep_weights *W = calloc(1, sizeof *W);
-  int32_t *head = malloc((size_t)n * sizeof(int32_t)), *next = prep_calloc(N, sizeof(int32_t));
+  int32_t shared = 0;
+  for (int32_t i = 0; i < N; ++i) shared += points->frame_organ_voxel[i] >= 0;
+  frame_index fi = {malloc((size_t)n * sizeof(int32_t)), prep_calloc(N + shared, sizeof(int32_t)),
+                    prep_calloc(N + shared, sizeof(int32_t))};
   int32_t *pair_frame = prep_calloc((int64_t)MAX_PAIRS * S, sizeof(int32_t));
   double *pair_w = prep_calloc((int64_t)MAX_PAIRS * S, sizeof(double));
   double *pair_g = prep_calloc((int64_t)MAX_PAIRS * 3 * S, sizeof(double));
   int32_t *pair_count = prep_calloc(S, sizeof(int32_t));
-  PREP_CHECK_GOTO(W && head && next && pair_frame && pair_w && pair_g && pair_count, ctx, FASCIA_ERR_MEMORY,
+  PREP_CHECK_GOTO(W && fi.head && fi.next && fi.frame && pair_frame && pair_w && pair_g && pair_count, ctx, FASCIA_ERR_MEMORY,
                   "shape functions: out of memory for %d samples", (int)S);
-  for (int64_t v = 0; v < n; ++v) head[v] = -1;
-  for (int32_t i = N - 1; i >= 0; --i) { // lists ascend by frame index
-    next[i] = head[points->frame_voxel[i]];
-    head[points->frame_voxel[i]] = i;
+  for (int64_t v = 0; v < n; ++v) fi.head[v] = -1;
+  for (int32_t i = N - 1, a = N + shared - 1; i >= 0; --i) { // lists ascend by frame index
+    const int64_t at[2] = {points->frame_organ_voxel[i], points->frame_voxel[i]};
+    for (int k = 0; k < 2; ++k) {
+      if (at[k] < 0) continue;
+      fi.frame[a] = i;
+      fi.next[a] = fi.head[at[k]];
+      fi.head[at[k]] = a--;
+    }
   }
-  for (int32_t t = 0; t < scene->tissue_count; ++t) {
-    fascia_ctx_progress(ctx, "shape functions", (double)t / scene->tissue_count, scene->tissues[t].name);
-    if (scene->tissues[t].shape_kind == FASCIA_PREP_SHAPE_TET)
-      PREP_TRY_GOTO(tet_tissue(ctx, &g, volume, points, t, pair_frame, pair_w, pair_g, pair_count));
+  // TET regions: the tissues, then the deformable organs' insides
+  for (int32_t label = 1; label <= scene->tissue_count + volume->organ_count; ++label) {
+    const int32_t o = label > scene->tissue_count ? prep_label_organ(volume, (uint8_t)label) : -1;
+    if (label > scene->tissue_count && o < 0) continue;
+    int32_t kind;
+    prep_label_sampling(scene, volume, (uint8_t)label, NULL, NULL, &kind, NULL);
+    fascia_ctx_progress(ctx, "shape functions", 0, o >= 0 ? scene->organs[o].name : scene->tissues[label - 1].name);
+    if (kind == FASCIA_PREP_SHAPE_TET)
+      PREP_TRY_GOTO(tet_region(ctx, scene, &g, volume, points, (uint8_t)label, pair_frame, pair_w, pair_g, pair_count));
   }
   {
     int32_t failed = INT32_MAX, out_of_memory = 0;
@@ -348,16 +383,17 @@ fascia_status fascia_prep_shape_functions(fascia_ctx *ctx, const fascia_prep_sce
       const int ready = se.dist && fascia_ctx_create(&def, &se.ctx) == FASCIA_OK;
 #pragma omp for schedule(dynamic, 16)
       for (int32_t s = 0; s < S; ++s) {
-        const fascia_prep_tissue_def *td = scene->tissues + points->sample_tissue[s];
-        if (td->shape_kind != FASCIA_PREP_SHAPE_MLS) continue;
+        int32_t kind, neighbours;
+        prep_label_sampling(scene, volume, volume->region[points->sample_voxel[s]], NULL, NULL, &kind, &neighbours);
+        if (kind != FASCIA_PREP_SHAPE_MLS) continue;
         if (!ready) {
 #pragma omp atomic write
           out_of_memory = 1;
           continue;
         }
         const int64_t base = (int64_t)MAX_PAIRS * s;
-        const int r = mls_sample(&se, &g, volume, points, head, next, s, td->neighbours, pair_frame + base,
-                                 pair_w + base, pair_g + 3 * base, pair_count + s);
+        const int r = mls_sample(&se, &g, volume, points, &fi, s, neighbours, pair_frame + base, pair_w + base,
+                                 pair_g + 3 * base, pair_count + s);
         if (r < 0) {
 #pragma omp atomic write
           out_of_memory = 1;
@@ -375,8 +411,9 @@ fascia_status fascia_prep_shape_functions(fascia_ctx *ctx, const fascia_prep_sce
       prep_heap_free(&se.heap);
     }
     PREP_CHECK_GOTO(!out_of_memory, ctx, FASCIA_ERR_MEMORY, "shape functions: out of memory");
-    PREP_CHECK_GOTO(failed == INT32_MAX, ctx, FASCIA_ERR_NUMERIC, "tissue '%s' %s",
-                    scene->tissues[points->sample_tissue[failed]].name, message);
+    char name[FASCIA_NAME_SIZE + 32] = "";
+    if (failed != INT32_MAX) prep_label_name(scene, volume, volume->region[points->sample_voxel[failed]], name, sizeof name);
+    PREP_CHECK_GOTO(failed == INT32_MAX, ctx, FASCIA_ERR_NUMERIC, "%s %s", name, message);
   }
   // compact into CSR and measure linear reproduction
   int64_t P = 0;
@@ -410,8 +447,9 @@ fascia_status fascia_prep_shape_functions(fascia_ctx *ctx, const fascia_prep_sce
   W = NULL;
 cleanup:
   fascia_prep_weights_destroy(&W);
-  free(head);
-  free(next);
+  free(fi.head);
+  free(fi.next);
+  free(fi.frame);
   free(pair_frame);
   free(pair_w);
   free(pair_g);

@@ -31,10 +31,45 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <unistd.h>
+
 #include "prep_util.h"
 
 // grids above this many voxels are refused (2^31: 2 GB per byte array)
 #define MAX_VOXELS ((int64_t)1 << 31)
+
+// Refuses, before anything is allocated, a grid of spacing h covering
+// [lo, hi] (pad voxels around) with more than MAX_VOXELS voxels, or whose
+// arrays (bytes_per_voxel) would not fit in this machine's memory; the sizes
+// are computed in double, so absurd boxes or spacings cannot overflow.
+static fascia_status check_grid(fascia_ctx *ctx, const char *what, const char *scene_path, double h,
+                                const double *lo, const double *hi, int32_t pad, double bytes_per_voxel) {
+  double voxels = 1, extent[3];
+  for (int r = 0; r < 3; ++r) {
+    extent[r] = hi[r] - lo[r];
+    const double a = floor(lo[r] / h) - pad, b = ceil(hi[r] / h) + pad;
+    PREP_CHECK(isfinite(a) && isfinite(b) && a > -2e9 && b < 2e9, ctx, FASCIA_ERR_ARGUMENT,
+               "%s (scene '%s' voxel_size): coordinates up to %g m at voxel_size %g m are beyond the voxel lattice; "
+               "check the units and transforms of the meshes, or raise voxel_size",
+               what, scene_path, fmax(fabs(lo[r]), fabs(hi[r])), h);
+    voxels *= b - a + 1;
+  }
+  double memory = 0;
+#if defined(_SC_PHYS_PAGES) && defined(_SC_PAGESIZE)
+  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+  if (pages > 0 && page > 0) memory = (double)pages * (double)page;
+#endif
+  const double bytes = voxels * bytes_per_voxel;
+  const double limit = memory > 0 ? fmin((double)MAX_VOXELS, memory / bytes_per_voxel) : (double)MAX_VOXELS;
+  PREP_CHECK(voxels <= limit, ctx, FASCIA_ERR_ARGUMENT,
+             "%s (scene '%s' voxel_size): a box of %.3g x %.3g x %.3g m at voxel_size %g m needs %.3g voxels "
+             "(%.1f GiB), more than the limit of %.3g voxels (%lld at most%s%.1f GiB of memory here); set voxel_size "
+             "to at least %.3g m",
+             what, scene_path, extent[0], extent[1], extent[2], h, voxels, bytes / 1073741824.0, limit,
+             (long long)MAX_VOXELS, memory > 0 ? ", and " : ", memory unknown: ", memory / 1073741824.0,
+             h * cbrt(voxels / limit) * 1.01);
+  return FASCIA_OK;
+}
 
 void fascia_prep_volume_destroy(fascia_prep_volume **volume) {
   if (!volume || !*volume) return;
@@ -46,6 +81,8 @@ void fascia_prep_volume_destroy(fascia_prep_volume **volume) {
   free(v->tissues);
   free(v->overlaps);
   free(v->closest);
+  free(v->organ_label);
+  free(v->organ_regions);
   free(v);
   *volume = NULL;
 }
@@ -342,9 +379,10 @@ static const char *organ_list(const fascia_prep_scene *scene, const fascia_prep_
 
 // ------------------------------------------------------------ regions
 
-// Labels 26-connected pieces of tissue t; drops pieces below min_component.
-static fascia_status keep_components(fascia_ctx *ctx, const fascia_prep_scene *scene, fascia_prep_volume *vol,
-                                     int32_t t) {
+// Labels 26-connected pieces of the region with this label (a tissue or a
+// deformable organ's inside); drops pieces below min_component into rep.
+static fascia_status keep_components(fascia_ctx *ctx, const char *name, fascia_prep_volume *vol, uint8_t label,
+                                     double min_component, fascia_prep_tissue_report *rep) {
   const prep_grid g = prep_volume_grid(vol);
   const int64_t n = prep_grid_count(&g);
   int64_t *queue = prep_calloc(n, sizeof(int64_t));
@@ -352,11 +390,9 @@ static fascia_status keep_components(fascia_ctx *ctx, const fascia_prep_scene *s
   if (!queue || !seen) {
     free(queue);
     free(seen);
-    return PREP_FAIL(ctx, FASCIA_ERR_MEMORY, "tissue '%s': out of memory", scene->tissues[t].name);
+    return PREP_FAIL(ctx, FASCIA_ERR_MEMORY, "%s: out of memory", name);
   }
-  const uint8_t label = (uint8_t)(t + 1);
   const double voxel_volume = g.h * g.h * g.h;
-  fascia_prep_tissue_report *rep = vol->tissues + t;
   for (int64_t s = 0; s < n; ++s) {
     if (vol->region[s] != label || seen[s]) continue;
     int64_t head = 0, tail = 0;
@@ -376,7 +412,7 @@ static fascia_status keep_components(fascia_ctx *ctx, const fascia_prep_scene *s
           }
     }
     const double volume = (double)tail * voxel_volume;
-    if (volume < scene->tissues[t].min_component) {
+    if (volume < min_component) {
       for (int64_t k = 0; k < tail; ++k) vol->region[queue[k]] = 0;
       rep->dropped_components++;
       rep->dropped_volume += volume;
@@ -466,7 +502,9 @@ static fascia_status build_region(fascia_ctx *ctx, const fascia_prep_scene *scen
                   "tissue '%s' (scene '%s' tissues[%d].region): the region selects nothing of the %.3g cm^3 between "
                   "organs %s; check its coordinates (metres, scene frame)",
                   td->name, scene->path, (int)t, 1e6 * (double)gap_voxels * g.h * g.h * g.h, names);
-  PREP_TRY_GOTO(keep_components(ctx, scene, vol, t));
+  char what[FASCIA_NAME_SIZE + 16];
+  snprintf(what, sizeof what, "tissue '%s'", td->name);
+  PREP_TRY_GOTO(keep_components(ctx, what, vol, (uint8_t)(t + 1), td->min_component, vol->tissues + t));
   PREP_CHECK_GOTO(vol->tissues[t].voxels > 0, ctx, FASCIA_ERR_ARGUMENT,
                   "tissue '%s': every piece of its region is smaller than min_component %g m^3 (largest dropped "
                   "volume %g m^3 in %d pieces); lower min_component or frame_spacing",
@@ -474,6 +512,37 @@ static fascia_status build_region(fascia_ctx *ctx, const fascia_prep_scene *scen
 cleanup:
   free(parts);
   return status;
+}
+
+// The inside of deformable organ o becomes a region: its inside voxels
+// (signed distance <= 0, the complement of the tissues' "outside every
+// organ") that no earlier region holds, so an overlap with another deformable
+// organ goes to the one listed first; pieces below min_component are dropped.
+static fascia_status build_organ_region(fascia_ctx *ctx, const fascia_prep_scene *scene, fascia_prep_volume *vol,
+                                        int32_t o, uint8_t label) {
+  const fascia_prep_organ_def *od = scene->organs + o;
+  const prep_grid g = prep_volume_grid(vol);
+  const int64_t n = prep_grid_count(&g);
+  const float *d = vol->distance[o];
+  PREP_CHECK(d, ctx, FASCIA_ERR_INTERNAL, "voxelize: deformable organ '%s' has no distance field", od->name);
+  int64_t claimed = 0;
+  for (int64_t v = 0; v < n; ++v)
+    if (d[v] <= 0 && !vol->region[v]) vol->region[v] = label, ++claimed;
+  PREP_CHECK(claimed > 0, ctx, FASCIA_ERR_ARGUMENT,
+             "deformable organ '%s' (scene '%s'): no voxel of its inside is left at voxel_size %g m (it is thinner "
+             "than a voxel, or inside another deformable organ listed before it); lower voxel_size or make it "
+             "\"rigid\"",
+             od->name, scene->path, g.h);
+  char what[FASCIA_NAME_SIZE + 24];
+  snprintf(what, sizeof what, "deformable organ '%s'", od->name);
+  vol->organ_label[o] = label;
+  PREP_TRY(keep_components(ctx, what, vol, label, od->min_component, vol->organ_regions + o));
+  PREP_CHECK(vol->organ_regions[o].voxels > 0, ctx, FASCIA_ERR_ARGUMENT,
+             "deformable organ '%s': every piece of its inside is smaller than min_component %g m^3 (%d pieces, "
+             "%g m^3); lower min_component or frame_spacing",
+             od->name, od->min_component, (int)vol->organ_regions[o].dropped_components,
+             vol->organ_regions[o].dropped_volume);
+  return FASCIA_OK;
 }
 
 // Overlap of organs a and b on the volume grid, and the closest distance
@@ -548,6 +617,19 @@ fascia_status fascia_prep_voxelize(fascia_ctx *ctx, const fascia_prep_scene *sce
     }
     for (int r = 0; r < 3; ++r) lo[r] = fmin(lo[r], a[r]), hi[r] = fmax(hi[r], b[r]);
   }
+  // deformable organs: the whole inside is a region
+  int32_t deformable = 0;
+  for (int32_t o = 0; o < scene->organ_count; ++o) {
+    if (scene->organs[o].kind != FASCIA_ORGAN_DEFORMABLE) continue;
+    ++deformable;
+    const double *b = meshes->organs[o].bounds;
+    for (int r = 0; r < 3; ++r) lo[r] = fmin(lo[r], b[r] - h), hi[r] = fmax(hi[r], b[3 + r] + h);
+  }
+  PREP_CHECK_GOTO(scene->tissue_count + deformable < 255, ctx, FASCIA_ERR_ARGUMENT,
+                  "scene '%s': %d tissues and %d deformable organs make more than 254 regions", scene->path,
+                  (int)scene->tissue_count, (int)deformable);
+  // region byte, a distance per organ, the work distance, the organ's inside
+  PREP_TRY_GOTO(check_grid(ctx, "the tissues' space", scene->path, h, lo, hi, 2, 6 + 4.0 * meshes->count));
   prep_grid g;
   prep_grid_cover(&g, h, lo, hi, 2);
   const int64_t n = prep_grid_count(&g);
@@ -568,7 +650,11 @@ fascia_status fascia_prep_voxelize(fascia_ctx *ctx, const fascia_prep_scene *sce
   vol->band = prep_calloc(meshes->count, sizeof(float));
   vol->tissues = prep_calloc(scene->tissue_count, sizeof *vol->tissues);
   vol->closest = prep_calloc((int64_t)meshes->count * meshes->count, sizeof(double));
-  PREP_CHECK_GOTO(vol->region && vol->distance && vol->band && vol->tissues && vol->closest, ctx, FASCIA_ERR_MEMORY,
+  vol->organ_label = prep_calloc(meshes->count, sizeof(int32_t));
+  vol->organ_regions = prep_calloc(meshes->count, sizeof *vol->organ_regions);
+  PREP_CHECK_GOTO(vol->region && vol->distance && vol->band && vol->tissues && vol->closest && vol->organ_label &&
+                      vol->organ_regions,
+                  ctx, FASCIA_ERR_MEMORY,
                   "voxelize: out of memory for %lld voxels; raise voxel_size", (long long)n);
   for (int64_t k = 0; k < (int64_t)meshes->count * meshes->count; ++k) vol->closest[k] = -1;
 
@@ -587,6 +673,9 @@ fascia_status fascia_prep_voxelize(fascia_ctx *ctx, const fascia_prep_scene *sce
       for (int32_t k = 0; k < td->organ_count; ++k)
         if (td->organs[k] == o) band = fmax(band, td->max_gap + 2 * h);
     }
+    char what[FASCIA_NAME_SIZE + 16];
+    snprintf(what, sizeof what, "organ '%s'", m->name);
+    PREP_TRY_GOTO(check_grid(ctx, what, scene->path, h, m->bounds, m->bounds + 3, 2, 1));
     prep_grid og;
     prep_grid_cover(&og, h, m->bounds, m->bounds + 3, 2);
     const int64_t on = prep_grid_count(&og);
@@ -626,6 +715,11 @@ fascia_status fascia_prep_voxelize(fascia_ctx *ctx, const fascia_prep_scene *sce
     fascia_ctx_progress(ctx, "voxelize", 0.9, scene->tissues[t].name);
     PREP_TRY_GOTO(build_region(ctx, scene, meshes, vol, t));
   }
+  for (int32_t o = 0, label = scene->tissue_count + 1; o < scene->organ_count; ++o)
+    if (scene->organs[o].kind == FASCIA_ORGAN_DEFORMABLE) {
+      fascia_ctx_progress(ctx, "voxelize", 0.95, scene->organs[o].name);
+      PREP_TRY_GOTO(build_organ_region(ctx, scene, vol, o, (uint8_t)label++));
+    }
   fascia_ctx_progress(ctx, "voxelize", 1, "done");
   *out = vol;
   vol = NULL;

@@ -151,6 +151,7 @@ static fascia_status write_frames(writer *w, const fascia_model *m) {
   WRITE2(w, "/frames/rotation", ELEM_REAL, N, 4, m->frame_rotation, "1");
   WRITE1(w, "/frames/kind", ELEM_INT, N, m->frame_kind, NULL);
   WRITE1(w, "/frames/motion", ELEM_INT, N, m->frame_motion, NULL);
+  WRITE1(w, "/frames/organ", ELEM_INT, N, m->frame_organ, NULL);
   WRITE2(w, "/frames/load", ELEM_REAL, N, 6, m->frame_load, "N, N m");
   WRITE1(w, "/frames/offsets", ELEM_INT, N + 1, m->frame_offsets, NULL);
   WRITE1(w, "/frames/pairs", ELEM_INT, m->pair_count, m->frame_pairs, NULL);
@@ -163,6 +164,7 @@ static fascia_status write_samples_pairs(writer *w, const fascia_model *m) {
   WRITE2(w, "/samples/position", ELEM_REAL, S, 3, m->sample_position, "m");
   WRITE1(w, "/samples/volume", ELEM_REAL, S, m->sample_volume, "m^3");
   WRITE1(w, "/samples/material", ELEM_INT, S, m->sample_material, NULL);
+  WRITE1(w, "/samples/organ", ELEM_INT, S, m->sample_organ, NULL);
   WRITE1(w, "/samples/offsets", ELEM_INT, S + 1, m->sample_offsets, NULL);
   FASCIA_TRY(write_group(w, "/pairs", -1, -1, -1));
   WRITE1(w, "/pairs/frame", ELEM_INT, P, m->pair_frame, NULL);
@@ -713,6 +715,9 @@ static fascia_status read_frames_samples(reader *r, fascia_model *m) {
   READ(r, "/samples/position", ELEM_REAL, S, 3, m->sample_position);
   READ(r, "/samples/volume", ELEM_REAL, S, 0, m->sample_volume);
   READ(r, "/samples/material", ELEM_INT, S, 0, m->sample_material);
+  // organ owners came with deformable organs: files without them are all tissue
+  if (link_exists(r->file, "/frames/organ")) READ(r, "/frames/organ", ELEM_INT, N, 0, m->frame_organ);
+  if (link_exists(r->file, "/samples/organ")) READ(r, "/samples/organ", ELEM_INT, S, 0, m->sample_organ);
   READ(r, "/samples/offsets", ELEM_INT, S + 1, 0, m->sample_offsets);
   READ(r, "/pairs/frame", ELEM_INT, P, 0, m->pair_frame);
   READ(r, "/pairs/weight", ELEM_REAL, P, 0, m->pair_weight);

@@ -43,6 +43,8 @@ fascia_status fascia_model_alloc(fascia_ctx *ctx, const fascia_model_sizes *z, f
   m->frame_kind = fascia_calloc(N, sizeof(int32_t));
   m->frame_motion = fascia_calloc(N, sizeof(int32_t));
   m->frame_load = fascia_calloc(6 * N, sizeof(fascia_real));
+  m->frame_organ = fascia_calloc(N, sizeof(int32_t));
+  m->sample_organ = fascia_calloc(S, sizeof(int32_t));
   m->sample_position = fascia_calloc(3 * S, sizeof(fascia_real));
   m->sample_volume = fascia_calloc(S, sizeof(fascia_real));
   m->sample_material = fascia_calloc(S, sizeof(int32_t));
@@ -64,7 +66,7 @@ fascia_status fascia_model_alloc(fascia_ctx *ctx, const fascia_model_sizes *z, f
   m->coupling_frame = fascia_calloc(C, sizeof(int32_t));
   m->coupling_triangle = fascia_calloc(C, sizeof(int32_t));
   m->coupling_barycentric = fascia_calloc(3 * C, sizeof(fascia_real));
-  if (!m->frame_position || !m->frame_rotation || !m->frame_kind || !m->frame_motion || !m->frame_load ||
+  if (!m->frame_organ || !m->sample_organ || !m->frame_position || !m->frame_rotation || !m->frame_kind || !m->frame_motion || !m->frame_load ||
       !m->sample_position || !m->sample_volume || !m->sample_material || !m->sample_offsets || !m->pair_frame ||
       !m->pair_weight || !m->pair_gradient || !m->frame_offsets || !m->frame_pairs || !m->materials || !m->motions ||
       !m->probe_name || !m->probe_position || !m->probe_offsets || !m->probe_frame || !m->probe_weight ||
@@ -76,7 +78,9 @@ fascia_status fascia_model_alloc(fascia_ctx *ctx, const fascia_model_sizes *z, f
   for (int64_t i = 0; i < N; ++i) {
     m->frame_rotation[4 * i] = 1;
     m->frame_motion[i] = -1;
+    m->frame_organ[i] = -1;
   }
+  for (int64_t s = 0; s < S; ++s) m->sample_organ[s] = -1;
   for (int32_t k = 0; k < z->organs; ++k) m->organs[k].motion = -1;
   *out = m;
   return FASCIA_OK;
@@ -90,6 +94,8 @@ void fascia_model_destroy(fascia_model **model) {
   free(m->frame_kind);
   free(m->frame_motion);
   free(m->frame_load);
+  free(m->frame_organ);
+  free(m->sample_organ);
   free(m->sample_position);
   free(m->sample_volume);
   free(m->sample_material);
@@ -236,6 +242,9 @@ static fascia_status validate_frames(fascia_ctx *ctx, const fascia_model *m, con
     FASCIA_CHECK(kind >= 0 && kind < FASCIA_FRAME_KIND_COUNT_, ctx, FASCIA_ERR_FORMAT,
                  "model '%s' /frames/kind: frame %d has kind %d, expected 0 (free), 1 (fixed) or 2 (prescribed)",
                  origin, (int)i, (int)kind);
+    FASCIA_CHECK(m->frame_organ[i] >= -1 && m->frame_organ[i] < m->organ_count, ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' /frames/organ: frame %d names organ %d, but the model has %d (-1: tissue)", origin,
+                 (int)i, (int)m->frame_organ[i], (int)m->organ_count);
     const int32_t motion = m->frame_motion[i];
     if (kind == FASCIA_FRAME_PRESCRIBED)
       FASCIA_CHECK(motion >= 0 && motion < m->motion_count, ctx, FASCIA_ERR_FORMAT,
@@ -258,6 +267,9 @@ static fascia_status validate_samples(fascia_ctx *ctx, const fascia_model *m, co
     FASCIA_CHECK(isfinite(m->sample_volume[s]) && m->sample_volume[s] > 0, ctx, FASCIA_ERR_FORMAT,
                  "model '%s' /samples/volume: sample %d has volume %g, expected a positive number", origin, (int)s,
                  m->sample_volume[s]);
+    FASCIA_CHECK(m->sample_organ[s] >= -1 && m->sample_organ[s] < m->organ_count, ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' /samples/organ: sample %d names organ %d, but the model has %d (-1: tissue)", origin,
+                 (int)s, (int)m->sample_organ[s], (int)m->organ_count);
     FASCIA_CHECK(m->sample_material[s] >= 0 && m->sample_material[s] < m->material_count, ctx, FASCIA_ERR_FORMAT,
                  "model '%s' /samples/material: sample %d names material %d, but the model has %d", origin, (int)s,
                  (int)m->sample_material[s], (int)m->material_count);
@@ -440,6 +452,13 @@ fascia_status fascia_model_validate(fascia_ctx *ctx, const fascia_model *m, cons
 fascia_real fascia_model_volume(const fascia_model *m) {
   fascia_real v = 0;
   for (int32_t s = 0; s < m->sample_count; ++s) v += m->sample_volume[s];
+  return v;
+}
+
+fascia_real fascia_model_tissue_volume(const fascia_model *m) {
+  fascia_real v = 0;
+  for (int32_t s = 0; s < m->sample_count; ++s)
+    if (m->sample_organ[s] < 0) v += m->sample_volume[s];
   return v;
 }
 

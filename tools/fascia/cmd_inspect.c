@@ -24,7 +24,7 @@ static const char *organ_kind_names[FASCIA_ORGAN_KIND_COUNT_] = {"fixed", "presc
 typedef struct summary {
   int32_t frames_by_kind[FASCIA_FRAME_KIND_COUNT_];
   int32_t neighbours_min, neighbours_max;
-  double neighbours_mean, volume, mass;
+  double neighbours_mean, volume, tissue_volume, mass;
   int32_t *coupling_frames; ///< [organ_count] distinct frames shared with each organ
 } summary;
 
@@ -39,6 +39,7 @@ static int summarize(const fascia_model *m, summary *out) {
   }
   out->neighbours_mean = m->sample_count ? (double)m->pair_count / m->sample_count : 0;
   out->volume = fascia_model_volume(m);
+  out->tissue_volume = fascia_model_tissue_volume(m);
   out->mass = fascia_model_mass(m);
   // a frame listed twice for one organ counts once: mark frames per organ
   out->coupling_frames = calloc((size_t)m->organ_count + 1, sizeof(int32_t));
@@ -87,7 +88,8 @@ static void print_text(const char *path, const fascia_model *m, const summary *z
   printf("samples     %d\n", (int)m->sample_count);
   printf("pairs       %d (neighbours per sample: min %d, mean %.2f, max %d)\n", (int)m->pair_count,
          (int)z->neighbours_min, z->neighbours_mean, (int)z->neighbours_max);
-  printf("tissue      volume %.6g m^3, mass %.6g kg\n", z->volume, z->mass);
+  printf("volume      %.6g m^3 (tissue %.6g m^3, deformable organs %.6g m^3), mass %.6g kg\n", z->volume,
+         z->tissue_volume, z->volume - z->tissue_volume, z->mass);
   printf("gravity     (%g, %g, %g) m/s^2\n", m->gravity[0], m->gravity[1], m->gravity[2]);
   printf("materials   %d\n", (int)m->material_count);
   for (int32_t k = 0; k < m->material_count; ++k) {
@@ -131,7 +133,8 @@ static char *make_json(const char *path, const fascia_model *m, const summary *z
   cJSON_AddNumberToObject(neighbours, "min", z->neighbours_min);
   cJSON_AddNumberToObject(neighbours, "mean", z->neighbours_mean);
   cJSON_AddNumberToObject(neighbours, "max", z->neighbours_max);
-  cJSON_AddNumberToObject(root, "tissue_volume", z->volume);
+  cJSON_AddNumberToObject(root, "tissue_volume", z->tissue_volume);
+  cJSON_AddNumberToObject(root, "volume", z->volume);
   cJSON_AddNumberToObject(root, "mass", z->mass);
   cJSON_AddItemToObject(root, "gravity", cJSON_CreateDoubleArray(m->gravity, 3));
   cJSON *materials = cJSON_AddArrayToObject(root, "materials");

@@ -196,7 +196,8 @@ static void print_json(const prep_run *r, const step_clock *c, const char *outpu
   cJSON_AddNumberToObject(root, "frames", r->model->frame_count);
   cJSON_AddNumberToObject(root, "samples", r->model->sample_count);
   cJSON_AddNumberToObject(root, "pairs", r->model->pair_count);
-  cJSON_AddNumberToObject(root, "tissue_volume", fascia_model_volume(r->model));
+  cJSON_AddNumberToObject(root, "tissue_volume", fascia_model_tissue_volume(r->model));
+  cJSON_AddNumberToObject(root, "volume", fascia_model_volume(r->model));
   cJSON_AddNumberToObject(root, "voxel_size", v->voxel_size);
   int64_t voxels = 0;
   for (int32_t t = 0; t < v->tissue_count; ++t) voxels += v->tissues[t].voxels;

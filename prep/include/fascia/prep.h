@@ -74,6 +74,13 @@ typedef struct fascia_prep_organ_def {
   int32_t kind;            ///< fascia_organ_kind
   fascia_motion motion;    ///< PRESCRIBED only (keys owned by the scene)
   int32_t material;        ///< DEFORMABLE only: index into materials, else -1
+  // DEFORMABLE only: how the organ's inside is sampled (the same keys and
+  // meaning as a tissue's; see fascia_prep_tissue_def).
+  fascia_real frame_spacing;  ///< Poisson-disk radius of the organ's own frames, m
+  fascia_real sample_spacing; ///< Poisson-disk radius of its samples, m
+  int32_t shape_kind;         ///< fascia_prep_shape_kind
+  int32_t neighbours;         ///< frames per sample (MLS), >= 4
+  fascia_real min_component;  ///< pieces of the inside smaller than this are dropped, m^3
 } fascia_prep_organ_def;
 
 /// Coupling rule of a tissue for one organ.
@@ -206,13 +213,18 @@ typedef struct fascia_prep_tissue_report {
 
 /// The scene's voxel grid: voxel (i, j, k) is centred at
 /// origin + h (i, j, k), index i + nx (j + ny k). It covers every tissue's
-/// candidate space; organs have signed distances on it (negative inside).
+/// candidate space and every deformable organ; organs have signed distances
+/// on it (negative inside).
+///
+/// Regions are the pieces of space that get frames and samples: the tissues
+/// (labels 1 .. tissue_count) and the insides of the deformable organs
+/// (label organ_label[o] > tissue_count). They never share a voxel.
 typedef struct fascia_prep_volume {
   fascia_real voxel_size;   ///< h, m
   fascia_real origin[3];    ///< centre of voxel (0,0,0), m
   int32_t dims[3];          ///< nx, ny, nz
   int32_t lattice[3];       ///< global lattice index of voxel (0,0,0): origin = h lattice
-  uint8_t *region;          ///< [voxels] 0: not tissue; t + 1: tissue t
+  uint8_t *region;          ///< [voxels] 0: none; t + 1: tissue t; organ_label[o]: inside deformable organ o
   int32_t organ_count;
   float **distance;         ///< [organ_count][voxels] signed distance, m (NULL: organ not near)
   float *band;              ///< [organ_count] distances are exact up to this, m
@@ -221,33 +233,49 @@ typedef struct fascia_prep_volume {
   int32_t overlap_count;
   fascia_prep_overlap *overlaps;      ///< [overlap_count]
   fascia_real *closest;     ///< [organ_count^2] closest surface distance between organs near a tissue, m (-1: not measured)
+  int32_t *organ_label;     ///< [organ_count] region label of a deformable organ's inside, 0 for other organs
+  fascia_prep_tissue_report *organ_regions; ///< [organ_count] figures of each deformable organ's inside (zeros for others)
 } fascia_prep_volume;
 
 /// Decides inside/outside for every organ (edge-crossing flood fill from
 /// outside: the outer surface counts, so thin double shells and cavities are
 /// inside; open meshes whose holes leak get a morphological closing), measures
-/// overlaps, and builds each tissue's region. Errors: voxel size too large for
-/// a gap, organs farther apart than the gap, a region that selects nothing.
+/// overlaps, and builds each tissue's region, then each deformable organ's
+/// (its inside voxels that no earlier region holds; pieces smaller than its
+/// min_component dropped). Errors: voxel size too large for a gap, organs
+/// farther apart than the gap, a region that selects nothing, a deformable
+/// organ with no inside left.
 FASCIA_API fascia_status fascia_prep_voxelize(fascia_ctx *ctx, const fascia_prep_scene *scene,
                                               fascia_prep_meshes *meshes, fascia_prep_volume **out);
 FASCIA_API void fascia_prep_volume_destroy(fascia_prep_volume **volume);
-/// Tissue index + 1 of the voxel holding point (m), 0 if none or off the grid.
+/// Region label of the voxel holding point (m): tissue index + 1, a deformable
+/// organ's organ_label, 0 if none or off the grid.
 FASCIA_API int fascia_prep_volume_region_at(const fascia_prep_volume *volume, const fascia_real *point);
 
 // ---------------------------------------------------------------- sample
 
-/// Frames and samples of every tissue. Frame i sits on an organ surface when
+/// Frames and samples of every region. Frame i sits on an organ surface when
 /// frame_organ[i] >= 0 (then frame_triangle[i] is the closest triangle).
+/// Tissue frames and samples come first, tissue by tissue; then those of each
+/// deformable organ's inside, organ by organ (contiguous ranges).
+///
+/// A tissue frame on the surface of a deformable organ that the tissue's
+/// coupling rules allow is *shared*: frame_organ_voxel[i] names a voxel of the
+/// organ's inside it is reached from, so the organ's samples take it as a
+/// neighbour just as the tissue's samples do (one frame, two regions).
 typedef struct fascia_prep_points {
   int32_t frame_count, sample_count;
   fascia_real *frame_position;  ///< [3N] m
-  int32_t *frame_tissue;        ///< [N]
+  int32_t *frame_tissue;        ///< [N] tissue it was placed in, -1 for a deformable organ's own frame
+  int32_t *frame_inside_organ;  ///< [N] deformable organ whose inside holds it, -1 for a tissue frame
   int32_t *frame_organ;         ///< [N] organ whose surface it lies on, or -1
   int32_t *frame_triangle;      ///< [N] triangle of that organ, or -1
   int64_t *frame_voxel;         ///< [N] region voxel it is attached to
+  int64_t *frame_organ_voxel;   ///< [N] shared with a deformable organ: voxel of its inside; else -1
   fascia_real *sample_position; ///< [3S] m
-  fascia_real *sample_volume;   ///< [S] m^3, sum = region volume
-  int32_t *sample_tissue;       ///< [S]
+  fascia_real *sample_volume;   ///< [S] m^3, sum over a region = region volume
+  int32_t *sample_tissue;       ///< [S] tissue, -1 for a sample inside a deformable organ
+  int32_t *sample_inside_organ; ///< [S] deformable organ whose inside holds it, -1 for a tissue sample
   int64_t *sample_voxel;        ///< [S] voxel holding the sample
 } fascia_prep_points;
 
@@ -255,6 +283,9 @@ typedef struct fascia_prep_points {
 /// points): surface frames first (on the organ surfaces the region touches),
 /// then interior frames, then samples; each region voxel goes to the sample
 /// nearest inside the region, so sample volumes add up to the region volume.
+/// Then each deformable organ's inside the same way, its surface frames being
+/// the shared tissue frames on it (the organ's interior frames keep the
+/// organ's frame_spacing from them).
 FASCIA_API fascia_status fascia_prep_sample(fascia_ctx *ctx, const fascia_prep_scene *scene,
                                             const fascia_prep_meshes *meshes, const fascia_prep_volume *volume,
                                             fascia_prep_points **out);
@@ -272,12 +303,13 @@ typedef struct fascia_prep_weights {
   fascia_real max_linear_error; ///< largest |sum w_i x_i - p_s| over samples, m
 } fascia_prep_weights;
 
-/// Weights of every sample. MLS: the `neighbours` frames nearest by geodesic
-/// distance through the tissue's region voxels (so never across an organ or
-/// a void), more when the moment matrix is ill-conditioned; cubic kernel;
-/// reproduces constant and linear fields exactly. TET: barycentric weights
-/// in a Delaunay tetrahedralisation of the frames whose tets lie inside the
-/// region (CGAL).
+/// Weights of every sample, region by region (tissues and deformable organs
+/// alike). MLS: the `neighbours` frames nearest by geodesic distance through
+/// the sample's region voxels (so never across an organ or a void), more
+/// when the moment matrix is ill-conditioned; cubic kernel; reproduces
+/// constant and linear fields exactly. TET: barycentric weights in a Delaunay
+/// tetrahedralisation of the region's frames whose tets lie inside the
+/// region (CGAL). A shared frame belongs to both regions it touches.
 FASCIA_API fascia_status fascia_prep_shape_functions(fascia_ctx *ctx, const fascia_prep_scene *scene,
                                                      const fascia_prep_volume *volume,
                                                      const fascia_prep_points *points, fascia_prep_weights **out);
@@ -297,7 +329,8 @@ typedef struct fascia_prep_coupling {
 
 /// Chooses the shared frames: surface frames (and any frame within the
 /// tissue's coupling tolerance of an organ it may couple to), filtered by the
-/// tissue's per-organ rules (off, region, parts).
+/// tissue's per-organ rules (off, region, parts). For a deformable organ,
+/// exactly the frames the sampling shared with its inside (frame_organ_voxel).
 FASCIA_API fascia_status fascia_prep_couple(fascia_ctx *ctx, const fascia_prep_scene *scene,
                                             const fascia_prep_meshes *meshes, const fascia_prep_points *points,
                                             fascia_prep_coupling **out);
@@ -317,7 +350,9 @@ typedef struct fascia_prep_run_info {
 
 /// Builds the model: organs (repaired surfaces, kinds, motions), materials,
 /// frames (coupling frames of FIXED organs are FASCIA_FRAME_FIXED, of
-/// PRESCRIBED organs FASCIA_FRAME_PRESCRIBED with the organ's motion),
+/// PRESCRIBED organs FASCIA_FRAME_PRESCRIBED with the organ's motion; those
+/// of RIGID and DEFORMABLE organs and a deformable organ's own frames are
+/// FASCIA_FRAME_FREE), samples (a deformable organ's with its material),
 /// samples, pairs, the reverse table, coupling, gravity and the provenance
 /// JSON (input files and hashes, the scene, the version, every parameter and
 /// every report). The model is validated before it is returned.

@@ -105,11 +105,13 @@ typedef struct fascia_model {
   int32_t *frame_kind;         ///< [N] fascia_frame_kind
   int32_t *frame_motion;       ///< [N] motion index for PRESCRIBED frames, else -1
   fascia_real *frame_load;     ///< [6N] constant external force (N) then torque (N m), world
+  int32_t *frame_organ;        ///< [N] the deformable organ a frame belongs to, -1 for tissue frames
 
   // Samples (integration points).
   fascia_real *sample_position; ///< [3S] p_rest, m, world
   fascia_real *sample_volume;   ///< [S] m^3, > 0
   int32_t *sample_material;     ///< [S] material index
+  int32_t *sample_organ;        ///< [S] the deformable organ a sample belongs to, -1 for tissue samples
 
   // Sample -> frames (CSR): pairs of sample s are sample_offsets[s] ..
   // sample_offsets[s+1]-1, frames ascending within a sample.
@@ -147,7 +149,8 @@ typedef struct fascia_model {
 } fascia_model;
 
 /// Allocates a model with every array sized and zeroed (frame rotations set to
-/// identity, frame_motion to -1, sample_offsets/frame_offsets to 0). On error
+/// identity, frame_motion, frame_organ and sample_organ to -1,
+/// sample_offsets/frame_offsets to 0). On error
 /// *out is NULL.
 FASCIA_API fascia_status fascia_model_alloc(fascia_ctx *ctx, const fascia_model_sizes *sizes, fascia_model **out);
 /// Frees a model and everything it owns; accepts NULL, sets *model to NULL.
@@ -172,6 +175,8 @@ FASCIA_API fascia_status fascia_model_validate(fascia_ctx *ctx, const fascia_mod
 
 /// Total sample volume (m^3) and mass (kg).
 FASCIA_API fascia_real fascia_model_volume(const fascia_model *model);
+/// Volume of the tissue samples alone (sample_organ == -1), m^3.
+FASCIA_API fascia_real fascia_model_tissue_volume(const fascia_model *model);
 FASCIA_API fascia_real fascia_model_mass(const fascia_model *model);
 
 /// Lame parameters of a material: lambda, mu (Pa).
