@@ -7,7 +7,8 @@
 //   StVK (paper eq. 19):  E = (F^T F - I)/2,  S = lambda tr(E) I + 2 mu E,
 //                         P = F S,  psi = lambda/2 tr(E)^2 + mu E:E
 //   stable Neo-Hookean (Smith, de Goes, Kim 2018, without the origin term):
-//                         psi = mu/2 (tr(F^T F) - 3) + l/2 (J - a)^2 - mu^2/(2 l),
+//                         psi = mu/2 (tr(F^T F) - 3) + l/2 (J - a)^2 - mu^2/(2 l)
+//                         (evaluated in H = F - I, free of cancellation),
 //                         l = lambda + mu, a = 1 + mu/l,
 //                         P = mu F + l (J - a) cof(F).
 //   The shift l = lambda + mu makes its small-strain limit the same Hooke law
@@ -33,9 +34,17 @@ static inline FASCIA_HD fascia_real fascia_pt_stress(int law, fascia_real lambda
     fascia_real J = fascia_pt_det(F);
     aux[9] = J;
     for (int k = 0; k < 9; ++k) P[k] = mu * F[k] + l * (J - a) * aux[k];
-    // minus the rest value l/2 (1 - a)^2 = mu^2 / (2 l), so psi(I) = 0
-    return FASCIA_R(0.5) * mu * (fascia_pt_ddot(F, F) - 3) + FASCIA_R(0.5) * l * (J - a) * (J - a) -
-           FASCIA_R(0.5) * mu * mu / l;
+    // The same psi written in H = F - I so that no term of size mu cancels
+    // near rest (the line search compares energies there):
+    //   J - 1 = tr H + I2 + det H,  I2 = ((tr H)^2 - tr(H H))/2,
+    //   psi = mu/2 |H|^2 - mu (I2 + det H) + l/2 (J - 1)^2
+    fascia_real H[9];
+    for (int k = 0; k < 9; ++k) H[k] = F[k] - (k % 4 == 0);
+    const fascia_real trH = H[0] + H[4] + H[8];
+    const fascia_real trHH = H[0] * H[0] + H[4] * H[4] + H[8] * H[8] + 2 * (H[1] * H[3] + H[2] * H[6] + H[5] * H[7]);
+    const fascia_real I2 = FASCIA_R(0.5) * (trH * trH - trHH), detH = fascia_pt_det(H);
+    const fascia_real Jm1 = trH + I2 + detH;
+    return FASCIA_R(0.5) * mu * fascia_pt_ddot(H, H) - mu * (I2 + detH) + FASCIA_R(0.5) * l * Jm1 * Jm1;
   }
   fascia_real C[9], E[9];
   fascia_pt_mat_tmul(F, F, C);
