@@ -1,8 +1,11 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
 // The mesh-based shape functions and the user's rules: with kind "tet" every
-// sample has the 4 barycentric weights of one tetrahedron of frames (a
-// partition of unity reproducing linear fields); a sphere region keeps every
+// sample has the 4 barycentric weights of its own tetrahedron of frames, all
+// in [0, 1] (a partition of unity reproducing linear fields, nothing
+// extrapolated), and the sample volumes add up to the tetrahedra's volume,
+// which lies within the region's voxel volume (t507 checks each sample in
+// detail); a sphere region keeps every
 // sample inside it; coupling switched off for organ A shares no frame with A
 // (its surface frames stay free), coupling limited to a box for B shares
 // only frames inside the box.
@@ -35,13 +38,25 @@ int main(void) {
   fixture_run r;
   CHECK_OK(fixture_prep(ctx, path, &r), ctx);
   const fascia_model *m = r.model;
-  double worst = 0;
+  double worst = 0, volume = 0, tets = 0;
   for (int32_t s = 0; s < m->sample_count; ++s) {
     const double *p = m->sample_position + 3 * s;
-    CHECK(sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) <= 0.009 + 0.0005); // voxel centres inside, cells around
+    CHECK(sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) <= 0.009 + 0.0005); // in region voxels: within h of the sphere
     CHECK(m->sample_offsets[s + 1] - m->sample_offsets[s] == 4);
+    volume += m->sample_volume[s];
+    if (s % 4 == 0) { // 4 quadrature points per tet (the default), consecutive
+      const double *x[4];
+      for (int c = 0; c < 4; ++c) x[c] = m->frame_position + 3 * r.points->sample_tet_frame[4 * s + c];
+      double e[3][3];
+      for (int j = 0; j < 3; ++j)
+        for (int a = 0; a < 3; ++a) e[j][a] = x[j + 1][a] - x[0][a];
+      tets += fabs(e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) - e[0][1] * (e[1][0] * e[2][2] - e[1][2] * e[2][0]) +
+                   e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0])) / 6;
+    }
     double w = 0, x[3] = {0, 0, 0};
     for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k) {
+      CHECK(m->pair_weight[k] >= -1e-12 && m->pair_weight[k] <= 1 + 1e-12); // round-off only
+      CHECK(m->pair_frame[k] == r.points->sample_tet_frame[4 * s + (k - m->sample_offsets[s])]);
       w += m->pair_weight[k];
       for (int a = 0; a < 3; ++a) x[a] += m->pair_weight[k] * m->frame_position[3 * m->pair_frame[k] + a];
     }
@@ -49,6 +64,9 @@ int main(void) {
     for (int a = 0; a < 3; ++a) worst = fmax(worst, fabs(x[a] - p[a]) / 0.001); // relative to a millimetre
   }
   CHECK(worst < 1e-9);
+  CHECK(m->sample_count % 4 == 0);
+  CHECK_NEAR(volume, tets, 1e-12, 0);
+  CHECK(volume > 0.5 * r.volume->tissues[0].volume && volume < r.volume->tissues[0].volume);
   int32_t on_a_surface = 0, shared_b = 0;
   for (int32_t i = 0; i < r.points->frame_count; ++i)
     if (r.points->frame_organ[i] == 0) {

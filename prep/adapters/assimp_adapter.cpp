@@ -91,12 +91,21 @@ extern "C" fascia_status fascia_assimp_read(fascia_ctx *ctx, const char *path, f
   fascia_assimp_file *f = nullptr;
   try {
     Assimp::Importer importer;
-    // no vertex joining here: the CGAL repair merges duplicates and reports it
-    const aiScene *scene = importer.ReadFile(path, aiProcess_Triangulate);
-    if (!scene || !scene->mRootNode)
+    // no vertex joining here: the CGAL repair merges duplicates and reports it.
+    // ValidateDataStructure runs first and refuses what the loader built from a
+    // damaged file (indices past the vertices, empty faces): without it
+    // assimp's Triangulate step aborts the process on such a scene (fuzz_mesh,
+    // tests/fuzz/regressions/mesh/off-bad-face-abort).
+    const aiScene *scene = importer.ReadFile(path, aiProcess_ValidateDataStructure | aiProcess_Triangulate);
+    if (!scene || !scene->mRootNode) {
+      const char *why = importer.GetErrorString();
+      if (std::strstr(why, "contains no faces")) // points only, as validation says it
+        return fascia_ctx_fail(ctx, FASCIA_ERR_FORMAT, __FILE__, __LINE__,
+                               "mesh '%s' has no triangles (assimp: %s); give a file with a surface mesh", path, why);
       return fascia_ctx_fail(ctx, FASCIA_ERR_FORMAT, __FILE__, __LINE__,
                              "mesh '%s': cannot be read as a mesh (assimp: %s); check the file and its format", path,
-                             importer.GetErrorString());
+                             why);
+    }
     Collected c;
     collect(scene, scene->mRootNode, aiMatrix4x4(), c);
     f = (fascia_assimp_file *)std::calloc(1, sizeof *f);

@@ -55,6 +55,22 @@ static const char *organ_kind_name(int32_t kind) {
   }
 }
 
+// What the samples of one region (tissue t, or deformable organ o) add up
+// to: the region's voxel volume (MLS: Voronoi cells of voxels) or the volume
+// of the tetrahedra kept inside it (TET: quadrature weights x tet volumes),
+// with the tet count. Compare with the region's volume_m3 (voxels).
+static void sample_volume_json(cJSON *e, const fascia_prep_points *pts, int32_t t, int32_t o, int32_t kind,
+                               int32_t samples_per_tet) {
+  double sum = 0;
+  int32_t samples = 0;
+  for (int32_t s = 0; s < pts->sample_count; ++s)
+    if (t >= 0 ? pts->sample_tissue[s] == t : pts->sample_inside_organ[s] == o) sum += pts->sample_volume[s], ++samples;
+  cJSON_AddNumberToObject(e, "sample_volume_m3", sum);
+  const int tet = kind == FASCIA_PREP_SHAPE_TET;
+  cJSON_AddStringToObject(e, "sample_volume_of", tet ? "tetrahedra kept inside the region" : "region voxels");
+  if (tet) cJSON_AddNumberToObject(e, "tetrahedra", samples_per_tet > 0 ? samples / samples_per_tet : 0);
+}
+
 static cJSON *provenance(const fascia_prep_scene *scene, const fascia_prep_meshes *meshes,
                          const fascia_prep_volume *vol, const fascia_prep_points *pts, const fascia_prep_weights *W,
                          const fascia_prep_coupling *cpl, const fascia_prep_run_info *info) {
@@ -89,6 +105,7 @@ static cJSON *provenance(const fascia_prep_scene *scene, const fascia_prep_meshe
       cJSON_AddNumberToObject(e, "sample_spacing", d->sample_spacing);
       cJSON_AddStringToObject(e, "shape_functions", d->shape_kind == FASCIA_PREP_SHAPE_TET ? "tet" : "mls");
       cJSON_AddNumberToObject(e, "neighbours", d->neighbours);
+      if (d->shape_kind == FASCIA_PREP_SHAPE_TET) cJSON_AddNumberToObject(e, "samples_per_tet", d->samples_per_tet);
       cJSON_AddNumberToObject(e, "min_component", d->min_component);
     }
     cJSON_AddItemToArray(inputs, e);
@@ -132,6 +149,7 @@ static cJSON *provenance(const fascia_prep_scene *scene, const fascia_prep_meshe
     cJSON_AddNumberToObject(e, "sample_spacing", td->sample_spacing);
     cJSON_AddStringToObject(e, "shape_functions", td->shape_kind == FASCIA_PREP_SHAPE_TET ? "tet" : "mls");
     cJSON_AddNumberToObject(e, "neighbours", td->neighbours);
+    if (td->shape_kind == FASCIA_PREP_SHAPE_TET) cJSON_AddNumberToObject(e, "samples_per_tet", td->samples_per_tet);
     cJSON_AddNumberToObject(e, "coupling_tolerance", td->coupling_tolerance);
     cJSON_AddNumberToObject(e, "min_component", td->min_component);
     cJSON *rules = cJSON_AddArrayToObject(e, "coupling_rules");
@@ -190,6 +208,8 @@ static cJSON *provenance(const fascia_prep_scene *scene, const fascia_prep_meshe
       cJSON_AddNumberToObject(d, "first_frame", first_frame);
       cJSON_AddNumberToObject(d, "samples", samples);
       cJSON_AddNumberToObject(d, "first_sample", first_sample);
+      const fascia_prep_organ_def *od = scene->organs + o;
+      sample_volume_json(d, pts, -1, o, od->shape_kind, od->samples_per_tet);
     }
     cJSON_AddItemToArray(org, e);
   }
@@ -208,6 +228,7 @@ static cJSON *provenance(const fascia_prep_scene *scene, const fascia_prep_meshe
     for (int32_t s = 0; s < pts->sample_count; ++s) samples += pts->sample_tissue[s] == t;
     cJSON_AddNumberToObject(e, "frames", frames);
     cJSON_AddNumberToObject(e, "samples", samples);
+    sample_volume_json(e, pts, t, -1, scene->tissues[t].shape_kind, scene->tissues[t].samples_per_tet);
     cJSON_AddItemToArray(trep, e);
   }
   cJSON *ov = cJSON_AddArrayToObject(rep, "overlaps");

@@ -7,7 +7,8 @@
 //                   that frames shared with an organ lie exactly on it;
 //   interior frames candidates are jittered centres of region voxels farther
 //                   than the coupling tolerance from every organ;
-//   samples         candidates are region voxel centres.
+//   samples         candidates are region voxel centres (meshless regions;
+//                   mesh-based ones: see below).
 //
 // Candidates are visited in a seeded random order and kept when no kept
 // point of the same kind lies closer than the spacing (dart throwing on a
@@ -18,6 +19,17 @@
 // the region (one Lloyd step: a better quadrature point).
 // A piece of region that receives fewer than 4 frames, or only coplanar ones,
 // gets more frames at its voxels farthest from the frames it has.
+//
+// Mesh-based regions (shape_functions.kind "tet") get no Poisson-disk
+// samples: their frames are tetrahedralised (CGAL Delaunay), a tetrahedron is
+// kept when its centroid, the midpoints of its edges and its quadrature
+// points lie in the region's voxels, and the samples are the quadrature
+// points of the kept tets (fascia_shape_tet_quadrature: 4 points of degree 2,
+// or the centroid), each with its quadrature weight times the tet's volume.
+// Sample volumes then add up to the kept tets' volume, not to the voxel
+// volume: the tets reach at most the frames' hull, and tets poking out of the
+// region are dropped. Each sample records its tet's frames, so the shape functions are
+// barycentric in the sample's own tet and never extrapolate.
 //
 // Deformable organs. Their insides are regions too, sampled by the same code
 // after the tissues. Their surface frames are not new points: the tissue
@@ -34,6 +46,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "fascia/shape.h"
 #include "prep_util.h"
 
 void fascia_prep_points_destroy(fascia_prep_points **points) {
@@ -51,6 +64,7 @@ void fascia_prep_points_destroy(fascia_prep_points **points) {
   free(p->sample_tissue);
   free(p->sample_inside_organ);
   free(p->sample_voxel);
+  free(p->sample_tet_frame);
   free(p);
   *points = NULL;
 }
@@ -427,6 +441,156 @@ cleanup:
   return status;
 }
 
+// ------------------------------------------------------------ per-sample data
+
+// What a region adds per sample besides its point: volume[s] (m^3) and
+// tet_frame[4s..4s+3] (its tet's frames ascending, -1 for MLS samples).
+typedef struct sample_data {
+  int64_t capacity;
+  double *volume;
+  int32_t *tet_frame;
+} sample_data;
+
+static int data_reserve(sample_data *d, int64_t count) {
+  if (count <= d->capacity) return 1;
+  const int64_t cap = count > 2 * d->capacity ? count : 2 * d->capacity;
+  double *v = realloc(d->volume, (size_t)cap * sizeof(double));
+  if (!v) return 0;
+  d->volume = v;
+  int32_t *t = realloc(d->tet_frame, (size_t)(4 * cap) * sizeof(int32_t));
+  if (!t) return 0;
+  d->tet_frame = t;
+  d->capacity = cap;
+  return 1;
+}
+
+// ------------------------------------------------------------ TET samples
+
+typedef struct tet {
+  int32_t v[4];  // frame indices, ascending
+  double volume; // m^3
+  double q[12];  // quadrature points, m
+} tet;
+
+static int by_frame_index(const void *a, const void *b) {
+  const int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
+  return (x > y) - (x < y);
+}
+
+static int by_vertices(const void *a, const void *b) {
+  const int32_t *x = ((const tet *)a)->v, *y = ((const tet *)b)->v;
+  for (int r = 0; r < 4; ++r)
+    if (x[r] != y[r]) return (x[r] > y[r]) - (x[r] < y[r]);
+  return 0;
+}
+
+static int in_label(const prep_grid *g, const fascia_prep_volume *vol, uint8_t label, const double *x) {
+  const int64_t v = prep_grid_locate(g, x);
+  return v >= 0 && vol->region[v] == label;
+}
+
+// Volume of tet t if it is kept for the region with this label, else 0: not
+// flat (6 V above 1e-9 longest edge^3, far above fascia_shape_tet's limit),
+// and its centroid, edge midpoints and the `rule` quadrature points (bary
+// [4 rule]; into q [3 rule]) in the region.
+static double kept_volume(const prep_grid *g, const fascia_prep_volume *vol, uint8_t label, const double *const *x,
+                          int rule, const double *bary, double *q) {
+  double e[3][3], longest = 0;
+  for (int j = 0; j < 3; ++j)
+    for (int r = 0; r < 3; ++r) e[j][r] = x[j + 1][r] - x[0][r];
+  for (int a = 0; a < 4; ++a)
+    for (int b = a + 1; b < 4; ++b) {
+      const double d0 = x[a][0] - x[b][0], d1 = x[a][1] - x[b][1], d2 = x[a][2] - x[b][2];
+      longest = fmax(longest, sqrt(d0 * d0 + d1 * d1 + d2 * d2));
+    }
+  const double det = e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) -
+                     e[0][1] * (e[1][0] * e[2][2] - e[1][2] * e[2][0]) +
+                     e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0]);
+  if (!(fabs(det) > 1e-9 * longest * longest * longest)) return 0;
+  double c[3] = {0, 0, 0};
+  for (int r = 0; r < 4; ++r)
+    for (int a = 0; a < 3; ++a) c[a] += x[r][a] / 4;
+  if (!in_label(g, vol, label, c)) return 0;
+  for (int a = 0; a < 4; ++a)
+    for (int b = a + 1; b < 4; ++b) {
+      const double m[3] = {(x[a][0] + x[b][0]) / 2, (x[a][1] + x[b][1]) / 2, (x[a][2] + x[b][2]) / 2};
+      if (!in_label(g, vol, label, m)) return 0;
+    }
+  for (int k = 0; k < rule; ++k) {
+    for (int a = 0; a < 3; ++a) {
+      q[3 * k + a] = 0;
+      for (int r = 0; r < 4; ++r) q[3 * k + a] += bary[4 * k + r] * x[r][a];
+    }
+    if (!in_label(g, vol, label, q + 3 * k)) return 0;
+  }
+  return fabs(det) / 6;
+}
+
+// Samples of a TET region: the quadrature points of the kept tetrahedra of a
+// Delaunay tetrahedralisation of the region's frames (those whose voxel, or
+// shared voxel, has the label), kept tets in ascending order of their frames
+// (deterministic whatever CGAL's cell order). Errors: fewer than 4 frames,
+// no kept tet.
+static fascia_status tet_samples(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_volume *vol,
+                                 uint8_t label, int rule, const point_list *frames, point_list *samples,
+                                 sample_data *data) {
+  const prep_grid g = prep_volume_grid(vol);
+  fascia_status status = FASCIA_OK;
+  char name[FASCIA_NAME_SIZE + 32];
+  prep_label_name(scene, vol, label, name, sizeof name);
+  int32_t *list = prep_calloc(frames->count, sizeof(int32_t)), *cells = NULL, cell_count = 0, count = 0;
+  double *position = NULL;
+  tet *kept = NULL;
+  PREP_CHECK_GOTO(list, ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  for (int64_t k = 0; k < frames->count; ++k)
+    if (frame_voxel_in(vol, frames, k, label) >= 0) list[count++] = (int32_t)k;
+  PREP_CHECK_GOTO(count >= 4, ctx, FASCIA_ERR_NUMERIC,
+                  "%s: %d frames, no tetrahedral mesh (shape_functions.kind \"tet\" needs 4 or more); lower "
+                  "frame_spacing or use kind \"mls\"",
+                  name, (int)count);
+  position = prep_calloc(3 * (int64_t)count, sizeof(double));
+  PREP_CHECK_GOTO(position, ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  for (int32_t k = 0; k < count; ++k) memcpy(position + 3 * k, frames->position + 3 * (int64_t)list[k], 3 * sizeof(double));
+  PREP_TRY_GOTO(fascia_cgal_delaunay(ctx, count, position, &cells, &cell_count));
+  double bary[16], weight[4];
+  PREP_TRY_GOTO(fascia_shape_tet_quadrature(ctx, rule, bary, weight));
+  kept = prep_calloc(cell_count, sizeof(tet));
+  PREP_CHECK_GOTO(kept, ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  int32_t kept_count = 0;
+  for (int32_t k = 0; k < cell_count; ++k) {
+    tet *t = kept + kept_count;
+    for (int r = 0; r < 4; ++r) t->v[r] = list[cells[4 * k + r]];
+    qsort(t->v, 4, sizeof(int32_t), by_frame_index); // vertex order, hence points, independent of CGAL's
+    const double *x[4];
+    for (int r = 0; r < 4; ++r) x[r] = frames->position + 3 * (int64_t)t->v[r];
+    t->volume = kept_volume(&g, vol, label, x, rule, bary, t->q);
+    kept_count += t->volume > 0;
+  }
+  PREP_CHECK_GOTO(kept_count > 0, ctx, FASCIA_ERR_NUMERIC,
+                  "%s: none of the %d tetrahedra of its %d frames lies inside its region; use "
+                  "shape_functions.kind \"mls\" or a smaller frame_spacing",
+                  name, (int)cell_count, (int)count);
+  qsort(kept, (size_t)kept_count, sizeof(tet), by_vertices);
+  PREP_CHECK_GOTO(data_reserve(data, samples->count + (int64_t)rule * kept_count), ctx, FASCIA_ERR_MEMORY,
+                  "sample: out of memory");
+  for (int32_t k = 0; k < kept_count; ++k) {
+    for (int j = 0; j < rule; ++j) {
+      const int64_t s = samples->count;
+      const double *q = kept[k].q + 3 * j;
+      PREP_CHECK_GOTO(list_push(samples, q, -1, -1, prep_grid_locate(&g, q)), ctx, FASCIA_ERR_MEMORY,
+                      "sample: out of memory");
+      data->volume[s] = weight[j] * kept[k].volume;
+      memcpy(data->tet_frame + 4 * s, kept[k].v, 4 * sizeof(int32_t));
+    }
+  }
+cleanup:
+  free(list);
+  free(position);
+  free(cells);
+  free(kept);
+  return status;
+}
+
 // ------------------------------------------------------------ the stage
 
 // Shares with deformable organ o the tissue frames on its surface that their
@@ -467,15 +631,17 @@ static void attach_shared(const fascia_prep_scene *scene, const fascia_prep_mesh
 // on the organs it touches, then interior frames farther than the coupling
 // tolerance from every organ) or a deformable organ's inside (its shared
 // frames, already attached, then interior frames anywhere inside); then
-// samples and their volumes, the same for both.
+// samples and their volumes, the same for both: Poisson-disk samples with
+// Voronoi volumes (MLS), or the quadrature points of the kept tets (TET).
 static fascia_status sample_region(fascia_ctx *ctx, const fascia_prep_scene *scene,
                                    const fascia_prep_meshes *meshes, const fascia_prep_volume *vol, uint8_t label,
                                    fascia_cgal_tree **trees, point_list *frames, point_list *samples,
-                                   double **volumes, int64_t *volume_capacity) {
+                                   sample_data *data) {
   const int32_t organ = prep_label_organ(vol, label);
   const fascia_prep_tissue_def *td = organ < 0 ? scene->tissues + (label - 1) : NULL;
   double frame_spacing, sample_spacing;
-  prep_label_sampling(scene, vol, label, &frame_spacing, &sample_spacing, NULL, NULL);
+  int32_t shape_kind;
+  prep_label_sampling(scene, vol, label, &frame_spacing, &sample_spacing, &shape_kind, NULL);
   const prep_grid g = prep_volume_grid(vol);
   const int64_t n = prep_grid_count(&g);
   const double h = g.h;
@@ -520,6 +686,11 @@ static fascia_status sample_region(fascia_ctx *ctx, const fascia_prep_scene *sce
   PREP_TRY_GOTO(throw_darts(ctx, &rng, &cand, &darts, frames));
   PREP_TRY_GOTO(fill_thin_pieces(ctx, vol, label, frame_spacing, frames));
   dart_free(&darts);
+  if (shape_kind == FASCIA_PREP_SHAPE_TET) {
+    const int rule = td ? td->samples_per_tet : scene->organs[organ].samples_per_tet;
+    PREP_TRY_GOTO(tet_samples(ctx, scene, vol, label, rule, frames, samples, data));
+    goto cleanup;
+  }
 
   // samples at voxel centres, then Voronoi volumes
   const int64_t first_sample = samples->count;
@@ -533,13 +704,9 @@ static fascia_status sample_region(fascia_ctx *ctx, const fascia_prep_scene *sce
   darts.points = samples;
   PREP_TRY_GOTO(throw_darts(ctx, &rng, &cand, &darts, samples));
   PREP_TRY_GOTO(voronoi_volumes(ctx, vol, label, samples, first_sample, &cell_volume));
-  if (samples->count > *volume_capacity) {
-    double *grown = realloc(*volumes, (size_t)samples->count * sizeof(double));
-    PREP_CHECK_GOTO(grown, ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
-    *volumes = grown;
-    *volume_capacity = samples->count;
-  }
-  memcpy(*volumes + first_sample, cell_volume, (size_t)(samples->count - first_sample) * sizeof(double));
+  PREP_CHECK_GOTO(data_reserve(data, samples->count), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  memcpy(data->volume + first_sample, cell_volume, (size_t)(samples->count - first_sample) * sizeof(double));
+  for (int64_t s = 4 * first_sample; s < 4 * samples->count; ++s) data->tet_frame[s] = -1;
 cleanup:
   free(voxels);
   free(cell_volume);
@@ -554,8 +721,7 @@ fascia_status fascia_prep_sample(fascia_ctx *ctx, const fascia_prep_scene *scene
   *out = NULL;
   fascia_status status = FASCIA_OK;
   point_list frames = {0}, samples = {0};
-  double *volumes = NULL;
-  int64_t volume_capacity = 0;
+  sample_data data = {0};
   // regions in order: the tissues, then the deformable organs; region r owns
   // frames [frame_end[r-1], frame_end[r]) and the same for samples
   const int32_t T = scene->tissue_count, O = scene->organ_count;
@@ -569,7 +735,7 @@ fascia_status fascia_prep_sample(fascia_ctx *ctx, const fascia_prep_scene *scene
   for (int32_t t = 0; t < T; ++t) {
     fascia_ctx_progress(ctx, "sample", (double)t / (T + O), scene->tissues[t].name);
     PREP_TRY_GOTO(
-        sample_region(ctx, scene, meshes, volume, (uint8_t)(t + 1), trees, &frames, &samples, &volumes, &volume_capacity));
+        sample_region(ctx, scene, meshes, volume, (uint8_t)(t + 1), trees, &frames, &samples, &data));
     region_organ[regions] = -1;
     frame_end[regions] = (int32_t)frames.count;
     sample_end[regions++] = (int32_t)samples.count;
@@ -583,7 +749,7 @@ fascia_status fascia_prep_sample(fascia_ctx *ctx, const fascia_prep_scene *scene
     fascia_ctx_progress(ctx, "sample", (double)(T + o) / (T + O), scene->organs[o].name);
     attach_shared(scene, meshes, volume, o, tissue_of, &frames);
     PREP_TRY_GOTO(sample_region(ctx, scene, meshes, volume, (uint8_t)volume->organ_label[o], trees, &frames, &samples,
-                                &volumes, &volume_capacity));
+                                &data));
     region_organ[regions] = o;
     frame_end[regions] = (int32_t)frames.count;
     sample_end[regions++] = (int32_t)samples.count;
@@ -606,9 +772,11 @@ fascia_status fascia_prep_sample(fascia_ctx *ctx, const fascia_prep_scene *scene
   p->sample_tissue = prep_calloc(S, sizeof(int32_t));
   p->sample_inside_organ = prep_calloc(S, sizeof(int32_t));
   p->sample_voxel = prep_calloc(S, sizeof(int64_t));
+  p->sample_tet_frame = prep_calloc(4 * S, sizeof(int32_t));
   PREP_CHECK_GOTO(p->frame_position && p->frame_tissue && p->frame_inside_organ && p->frame_organ &&
                       p->frame_triangle && p->frame_voxel && p->frame_organ_voxel && p->sample_position &&
-                      p->sample_volume && p->sample_tissue && p->sample_inside_organ && p->sample_voxel,
+                      p->sample_volume && p->sample_tissue && p->sample_inside_organ && p->sample_voxel &&
+                      p->sample_tet_frame,
                   ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
   if (N) {
     memcpy(p->frame_position, frames.position, (size_t)(3 * N) * sizeof(double));
@@ -620,7 +788,8 @@ fascia_status fascia_prep_sample(fascia_ctx *ctx, const fascia_prep_scene *scene
   if (S) {
     memcpy(p->sample_position, samples.position, (size_t)(3 * S) * sizeof(double));
     memcpy(p->sample_voxel, samples.voxel, (size_t)S * sizeof(int64_t));
-    memcpy(p->sample_volume, volumes, (size_t)S * sizeof(double));
+    memcpy(p->sample_volume, data.volume, (size_t)S * sizeof(double));
+    memcpy(p->sample_tet_frame, data.tet_frame, (size_t)(4 * S) * sizeof(int32_t));
   }
   for (int32_t r = 0, i = 0, s = 0; r < regions; ++r) {
     const int32_t o = region_organ[r], t = o < 0 ? r : -1;
@@ -639,7 +808,8 @@ cleanup:
   free(tissue_of);
   list_free(&frames);
   list_free(&samples);
-  free(volumes);
+  free(data.volume);
+  free(data.tet_frame);
   fascia_prep_points_destroy(&p);
   return status;
 }

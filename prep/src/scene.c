@@ -332,11 +332,12 @@ static fascia_status parse_motion(const reader *rd, const cJSON *organ, const ch
 }
 
 // The sampling keys a tissue and a deformable organ share: frame_spacing,
-// sample_spacing, shape_functions {kind, neighbours}, min_component (default
-// frame_spacing^3).
+// sample_spacing, shape_functions {kind, neighbours, samples_per_tet},
+// min_component (default frame_spacing^3).
 static fascia_status parse_sampling(const reader *rd, const fascia_prep_scene *scene, const cJSON *item,
                                     const char *path, double *frame_spacing, double *sample_spacing,
-                                    int32_t *shape_kind, int32_t *neighbours, double *min_component) {
+                                    int32_t *shape_kind, int32_t *neighbours, int32_t *samples_per_tet,
+                                    double *min_component) {
   char at[PATH_SIZE];
   PREP_TRY(get_number(rd, item, path, "frame_spacing", 1, 0, 0, 0, INFINITY, frame_spacing));
   PREP_TRY(get_number(rd, item, path, "sample_spacing", 1, 0, 0, 0, INFINITY, sample_spacing));
@@ -352,10 +353,11 @@ static fascia_status parse_sampling(const reader *rd, const fascia_prep_scene *s
   }
   *shape_kind = FASCIA_PREP_SHAPE_MLS;
   *neighbours = 8;
+  *samples_per_tet = 4;
   const cJSON *shape = cJSON_GetObjectItemCaseSensitive(item, "shape_functions");
   if (shape) {
     sub_key(at, path, "shape_functions");
-    static const char *const known_s[] = {"kind", "neighbours", NULL};
+    static const char *const known_s[] = {"kind", "neighbours", "samples_per_tet", NULL};
     PREP_TRY(check_keys(rd, shape, at, known_s));
     const char *kind;
     PREP_TRY(get_string(rd, shape, at, "kind", 0, &kind));
@@ -369,6 +371,13 @@ static fascia_status parse_sampling(const reader *rd, const fascia_prep_scene *s
     int count;
     PREP_TRY(get_int(rd, shape, at, "neighbours", 0, 8, 4, 64, &count));
     *neighbours = count;
+    PREP_TRY(get_int(rd, shape, at, "samples_per_tet", 0, 4, 1, 4, &count));
+    if (count != 1 && count != 4) {
+      char kk[PATH_SIZE];
+      sub_key(kk, at, "samples_per_tet");
+      return key_fail(rd, kk, "%d is not a tetrahedron rule (expected 4: degree 2, or 1: the centroid)", count);
+    }
+    *samples_per_tet = count;
   }
   const double fs = *frame_spacing;
   PREP_TRY(get_number(rd, item, path, "min_component", 0, fs * fs * fs, 0, 1, INFINITY, min_component));
@@ -458,7 +467,7 @@ static fascia_status parse_organ(const reader *rd, fascia_prep_scene *scene, con
     o->material = material_index(scene, material);
     if (o->material < 0) return key_fail(rd, at, "no material is named '%s' in \"materials\"", material);
     return parse_sampling(rd, scene, item, path, &o->frame_spacing, &o->sample_spacing, &o->shape_kind,
-                          &o->neighbours, &o->min_component);
+                          &o->neighbours, &o->samples_per_tet, &o->min_component);
   }
   if (material) return key_fail(rd, at, "only a \"deformable\" organ takes a material");
   static const char *const sampling_keys[] = {"frame_spacing", "sample_spacing", "shape_functions", "min_component",
@@ -574,7 +583,7 @@ static fascia_status parse_tissue(const reader *rd, const fascia_prep_scene *sce
   sub_key(at, path, "material");
   if (t->material < 0) return key_fail(rd, at, "no material is named '%s' in \"materials\"", material);
   PREP_TRY(parse_sampling(rd, scene, item, path, &t->frame_spacing, &t->sample_spacing, &t->shape_kind,
-                          &t->neighbours, &t->min_component));
+                          &t->neighbours, &t->samples_per_tet, &t->min_component));
   t->coupling_tolerance = scene->voxel_size;
   const cJSON *coupling = cJSON_GetObjectItemCaseSensitive(item, "coupling");
   if (coupling) {

@@ -20,11 +20,11 @@
 // inside voxel it is attached to (frame_organ_voxel): both the tissue's and
 // the organ's samples can take it.
 //
-// TET (mesh-based). The region's frames are tetrahedralised (CGAL Delaunay);
-// a tetrahedron is kept when its centroid and the midpoints of its edges lie
-// in the region. Each sample takes the barycentric weights of the
-// kept tetrahedron holding it, or, if none does, of the nearest kept one
-// (extrapolated: still a partition of unity reproducing linear fields).
+// TET (mesh-based). The sampling stage tetrahedralised the region's frames
+// and put the samples at the quadrature points of the tetrahedra that lie in
+// the region (sample.c); each sample records its tet's frames
+// (sample_tet_frame). Its weights are the barycentric coordinates in that
+// tet (fascia_shape_tet), all in [0, 1]: nothing is extrapolated.
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -190,140 +190,35 @@ static int mls_sample(search *se, const prep_grid *g, const fascia_prep_volume *
 
 // ------------------------------------------------------------ TET
 
-static int in_region(const prep_grid *g, const fascia_prep_volume *vol, uint8_t label, const double *x) {
-  const int64_t v = prep_grid_locate(g, x);
-  return v >= 0 && vol->region[v] == label;
-}
-
-// Barycentric weights of p in tet (a, b, c, d): w[4], grad[12]; 0 if flat.
-static int tet_weights(const double *const *x, const double *p, double *w, double *grad) {
-  double e[3][3];
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) e[c][r] = x[c + 1][r] - x[0][r];
-  // columns e1 e2 e3; inverse rows give gradients of w1..w3
-  const double det = e[0][0] * (e[1][1] * e[2][2] - e[2][1] * e[1][2]) - e[1][0] * (e[0][1] * e[2][2] - e[2][1] * e[0][2]) +
-                     e[2][0] * (e[0][1] * e[1][2] - e[1][1] * e[0][2]);
-  double scale = 0;
-  for (int c = 0; c < 3; ++c) scale = fmax(scale, e[c][0] * e[c][0] + e[c][1] * e[c][1] + e[c][2] * e[c][2]);
-  if (!(fabs(det) > 1e-9 * scale * sqrt(scale))) return 0;
-  // inverse of the matrix A with A[r][c] = e[c][r]
-  double inv[3][3];
-  inv[0][0] = (e[1][1] * e[2][2] - e[2][1] * e[1][2]) / det;
-  inv[0][1] = -(e[1][0] * e[2][2] - e[2][0] * e[1][2]) / det;
-  inv[0][2] = (e[1][0] * e[2][1] - e[2][0] * e[1][1]) / det;
-  inv[1][0] = -(e[0][1] * e[2][2] - e[2][1] * e[0][2]) / det;
-  inv[1][1] = (e[0][0] * e[2][2] - e[2][0] * e[0][2]) / det;
-  inv[1][2] = -(e[0][0] * e[2][1] - e[2][0] * e[0][1]) / det;
-  inv[2][0] = (e[0][1] * e[1][2] - e[1][1] * e[0][2]) / det;
-  inv[2][1] = -(e[0][0] * e[1][2] - e[1][0] * e[0][2]) / det;
-  inv[2][2] = (e[0][0] * e[1][1] - e[1][0] * e[0][1]) / det;
-  const double d[3] = {p[0] - x[0][0], p[1] - x[0][1], p[2] - x[0][2]};
-  w[0] = 1;
-  for (int c = 0; c < 3; ++c) {
-    w[c + 1] = inv[c][0] * d[0] + inv[c][1] * d[1] + inv[c][2] * d[2];
-    w[0] -= w[c + 1];
-    for (int r = 0; r < 3; ++r) grad[3 * (c + 1) + r] = inv[c][r];
-  }
-  for (int r = 0; r < 3; ++r) grad[r] = -(grad[3 + r] + grad[6 + r] + grad[9 + r]);
-  return 1;
-}
-
-// Tet weights for the samples of the region with this label (a tissue or a
-// deformable organ's inside) into the per-sample buffers. The region's frames
-// are those reached from its voxels (shared frames included).
-static fascia_status tet_region(fascia_ctx *ctx, const fascia_prep_scene *scene, const prep_grid *g,
-                                const fascia_prep_volume *vol, const fascia_prep_points *pts, uint8_t label,
-                                int32_t *pair_frame, double *pair_w, double *pair_g, int32_t *pair_count) {
-  fascia_status status = FASCIA_OK;
-  char name[FASCIA_NAME_SIZE + 32];
-  prep_label_name(scene, vol, label, name, sizeof name);
-  int32_t *tets = NULL, tet_count = 0, kept = 0, count = 0;
-  double *centre = NULL, *position = NULL;
-  int32_t *list = prep_calloc(pts->frame_count, sizeof(int32_t)); // region frame -> frame, ascending
-  PREP_CHECK(list, ctx, FASCIA_ERR_MEMORY, "shape functions: out of memory");
-  for (int32_t i = 0; i < pts->frame_count; ++i) {
-    const int64_t shared = pts->frame_organ_voxel[i];
-    if (vol->region[pts->frame_voxel[i]] == label || (shared >= 0 && vol->region[shared] == label)) list[count++] = i;
-  }
-  position = prep_calloc(3 * (int64_t)count, sizeof(double));
-  PREP_CHECK_GOTO(position, ctx, FASCIA_ERR_MEMORY, "shape functions: out of memory");
-  for (int32_t k = 0; k < count; ++k) memcpy(position + 3 * k, pts->frame_position + 3 * (int64_t)list[k], 3 * sizeof(double));
-  PREP_CHECK_GOTO(count >= 4, ctx, FASCIA_ERR_NUMERIC, "%s: fewer than 4 frames, no tetrahedral mesh", name);
-  PREP_TRY_GOTO(fascia_cgal_delaunay(ctx, count, position, &tets, &tet_count));
-  // keep tets inside the region
-  for (int32_t k = 0; k < tet_count; ++k) {
-    const double *x[4];
-    for (int r = 0; r < 4; ++r) x[r] = position + 3 * (int64_t)tets[4 * k + r];
-    double c[3] = {0, 0, 0};
-    for (int r = 0; r < 4; ++r)
-      for (int a = 0; a < 3; ++a) c[a] += x[r][a] / 4;
-    int ok = in_region(g, vol, label, c);
-    for (int a = 0; a < 4 && ok; ++a)
-      for (int b = a + 1; b < 4 && ok; ++b) {
-        const double m[3] = {(x[a][0] + x[b][0]) / 2, (x[a][1] + x[b][1]) / 2, (x[a][2] + x[b][2]) / 2};
-        ok = in_region(g, vol, label, m);
-      }
-    double wtest[4], gtest[12];
-    if (ok && tet_weights(x, c, wtest, gtest)) memmove(tets + 4 * kept++, tets + 4 * k, 4 * sizeof(int32_t));
-  }
-  PREP_CHECK_GOTO(kept > 0, ctx, FASCIA_ERR_NUMERIC,
-                  "%s: no tetrahedron of its frames lies inside its region; use shape_functions.kind \"mls\" "
-                  "or a smaller frame_spacing",
-                  name);
-  centre = prep_calloc(3 * (int64_t)kept, sizeof(double));
-  PREP_CHECK_GOTO(centre, ctx, FASCIA_ERR_MEMORY, "shape functions: out of memory");
-  for (int32_t k = 0; k < kept; ++k)
-    for (int r = 0; r < 4; ++r)
-      for (int a = 0; a < 3; ++a)
-        centre[3 * k + a] += position[3 * (int64_t)tets[4 * k + r] + a] / 4;
-  // each sample: the kept tet with the largest smallest barycentric weight
-  // (inside when >= 0), ties to the lower tet index
-#pragma omp parallel for schedule(dynamic, 64) num_threads(fascia_ctx_threads(ctx))
+// Barycentric weights of every sample of a TET region in its own tet (frames
+// ascending, so the pairs are too). A sample of a TET region without a tet,
+// or a flat tet, is a bug of the sampling stage: FASCIA_ERR_INTERNAL naming
+// the lowest such sample.
+static fascia_status tet_weights(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_volume *vol,
+                                 const fascia_prep_points *pts, int32_t *pair_frame, double *pair_w, double *pair_g,
+                                 int32_t *pair_count) {
   for (int32_t s = 0; s < pts->sample_count; ++s) {
-    if (vol->region[pts->sample_voxel[s]] != label) continue;
-    const double *p = pts->sample_position + 3 * (int64_t)s;
-    double best = -INFINITY, bw[4] = {0}, bg[12] = {0};
-    int32_t bk = -1;
-    for (int32_t k = 0; k < kept; ++k) {
-      const double *c = centre + 3 * k;
-      const double *x[4];
-      for (int r = 0; r < 4; ++r) x[r] = position + 3 * (int64_t)tets[4 * k + r];
-      double reach = 0;
-      for (int r = 0; r < 4; ++r)
-        reach = fmax(reach, (x[r][0] - c[0]) * (x[r][0] - c[0]) + (x[r][1] - c[1]) * (x[r][1] - c[1]) +
-                                (x[r][2] - c[2]) * (x[r][2] - c[2]));
-      const double d2 = (p[0] - c[0]) * (p[0] - c[0]) + (p[1] - c[1]) * (p[1] - c[1]) + (p[2] - c[2]) * (p[2] - c[2]);
-      if (best >= 0 && d2 > reach) continue; // cannot contain p
-      double w[4], gr[12];
-      if (!tet_weights(x, p, w, gr)) continue;
-      const double low = fmin(fmin(w[0], w[1]), fmin(w[2], w[3]));
-      if (low > best) {
-        best = low, bk = k;
-        memcpy(bw, w, sizeof bw);
-        memcpy(bg, gr, sizeof bg);
-      }
+    const uint8_t label = vol->region[pts->sample_voxel[s]];
+    int32_t kind;
+    prep_label_sampling(scene, vol, label, NULL, NULL, &kind, NULL);
+    if (kind != FASCIA_PREP_SHAPE_TET) continue;
+    char name[FASCIA_NAME_SIZE + 32];
+    const int32_t *v = pts->sample_tet_frame + 4 * (int64_t)s;
+    PREP_CHECK(v[0] >= 0, ctx, FASCIA_ERR_INTERNAL, "%s sample %d: no tetrahedron recorded by the sampling stage",
+               prep_label_name(scene, vol, label, name, sizeof name), (int)s);
+    double x[12];
+    for (int r = 0; r < 4; ++r) memcpy(x + 3 * r, pts->frame_position + 3 * (int64_t)v[r], 3 * sizeof(double));
+    const int64_t base = (int64_t)MAX_PAIRS * s;
+    if (fascia_shape_tet(ctx, x, pts->sample_position + 3 * (int64_t)s, pair_w + base, pair_g + 3 * base) != FASCIA_OK) {
+      char why[512];
+      snprintf(why, sizeof why, "%s", fascia_ctx_message(ctx));
+      return PREP_FAIL(ctx, FASCIA_ERR_INTERNAL, "%s sample %d: %s", prep_label_name(scene, vol, label, name, sizeof name),
+                       (int)s, why);
     }
-    // ascending frame order
-    int32_t order[4] = {0, 1, 2, 3};
-    for (int a = 1; a < 4; ++a)
-      for (int b = a; b > 0 && tets[4 * bk + order[b - 1]] > tets[4 * bk + order[b]]; --b) {
-        const int32_t tmp = order[b];
-        order[b] = order[b - 1];
-        order[b - 1] = tmp;
-      }
-    for (int r = 0; r < 4; ++r) {
-      pair_frame[(int64_t)MAX_PAIRS * s + r] = list[tets[4 * bk + order[r]]];
-      pair_w[(int64_t)MAX_PAIRS * s + r] = bw[order[r]];
-      memcpy(pair_g + 3 * ((int64_t)MAX_PAIRS * s + r), bg + 3 * order[r], 3 * sizeof(double));
-    }
+    memcpy(pair_frame + base, v, 4 * sizeof(int32_t));
     pair_count[s] = 4;
   }
-cleanup:
-  free(tets);
-  free(centre);
-  free(position);
-  free(list);
-  return status;
+  return FASCIA_OK;
 }
 
 // ------------------------------------------------------------ the stage
@@ -359,16 +254,10 @@ fascia_status fascia_prep_shape_functions(fascia_ctx *ctx, const fascia_prep_sce
       fi.head[at[k]] = a--;
     }
   }
-  // TET regions: the tissues, then the deformable organs' insides
-  for (int32_t label = 1; label <= scene->tissue_count + volume->organ_count; ++label) {
-    const int32_t o = label > scene->tissue_count ? prep_label_organ(volume, (uint8_t)label) : -1;
-    if (label > scene->tissue_count && o < 0) continue;
-    int32_t kind;
-    prep_label_sampling(scene, volume, (uint8_t)label, NULL, NULL, &kind, NULL);
-    fascia_ctx_progress(ctx, "shape functions", 0, o >= 0 ? scene->organs[o].name : scene->tissues[label - 1].name);
-    if (kind == FASCIA_PREP_SHAPE_TET)
-      PREP_TRY_GOTO(tet_region(ctx, scene, &g, volume, points, (uint8_t)label, pair_frame, pair_w, pair_g, pair_count));
-  }
+  // TET samples: barycentric in their own tets; then MLS samples
+  fascia_ctx_progress(ctx, "shape functions", 0, "tet");
+  PREP_TRY_GOTO(tet_weights(ctx, scene, volume, points, pair_frame, pair_w, pair_g, pair_count));
+  fascia_ctx_progress(ctx, "shape functions", 0, "mls");
   {
     int32_t failed = INT32_MAX, out_of_memory = 0;
     char message[1024] = "";

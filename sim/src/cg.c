@@ -13,6 +13,10 @@
 #define ROUNDOFF 1e-14 // relative residual at which CG has converged as far as doubles go
 
 void fascia_operator_apply(const fascia_operator *op, const fascia_real *v, fascia_real *out) {
+  if (op->organs) { // rigid organs: reduced coordinates (organs.c)
+    fascia_organs_operator_apply(op, v, out);
+    return;
+  }
   fascia_system *sys = op->sys;
   const int64_t n = 6 * (int64_t)sys->frame_count;
   if (op->assembled) {

@@ -46,10 +46,17 @@
 //   /coupling/barycentric [C,3]  f64  1
 //   /gravity              [3]    f64  m/s^2, world
 //   /provenance           scalar string, JSON text (absent when unknown)
+//
+// Sizes come from the datasets' shapes; before anything is allocated for
+// them the reader checks that every dataset declaring values also stores
+// them (a small damaged or hostile file can declare a billion rows), and that
+// the arrays of the model would fit in this machine's memory.
+#define _POSIX_C_SOURCE 200809L
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "fascia/model.h"
 #include "h5io.h"
@@ -676,6 +683,67 @@ static fascia_status member(reader *r, const char *group, int64_t k, int32_t cou
   return FASCIA_OK;
 }
 
+// Datasets whose shapes give the model's sizes, and the others of fixed names.
+static const char *const sized_datasets[] = {
+    "/frames/position", "/frames/rotation", "/frames/kind",     "/frames/motion",   "/frames/load",
+    "/frames/offsets",  "/frames/pairs",    "/samples/position", "/samples/volume", "/samples/material",
+    "/samples/offsets", "/pairs/frame",     "/pairs/weight",     "/pairs/gradient", "/probes/position",
+    "/probes/offsets",  "/probes/frame",    "/probes/weight",    "/coupling/organ", "/coupling/frame",
+    "/coupling/triangle", "/coupling/barycentric", "/materials/name", "/probes/name"};
+
+// A dataset that declares many values must store them: HDF5 reads the fill
+// value (zeros) for storage never written, so a file of a few kilobytes can
+// declare arrays of gigabytes. Every dataset fascia writes is stored whole.
+// Small datasets are left to the shape, type and value checks (a wrong
+// shape says more than "not stored"); they cannot exhaust memory.
+#define STORED_CHECK_VALUES 65536
+static fascia_status check_stored(reader *r, const char *name) {
+  if (!link_exists(r->file, name)) return FASCIA_OK; // reported as missing where it is read
+  hid_t dset = H5Dopen2(r->file, name, H5P_DEFAULT);
+  if (dset < 0) return FASCIA_OK; // reported where it is read
+  hid_t space = H5Dget_space(dset);
+  const hssize_t values = space >= 0 ? H5Sget_simple_extent_npoints(space) : 0;
+  H5D_space_status_t stored = H5D_SPACE_STATUS_ERROR;
+  const herr_t ok = H5Dget_space_status(dset, &stored);
+  if (space >= 0) H5Sclose(space);
+  H5Dclose(dset);
+  FASCIA_CHECK(values < STORED_CHECK_VALUES || (ok >= 0 && stored == H5D_SPACE_STATUS_ALLOCATED), r->ctx, FASCIA_ERR_FORMAT,
+               "model '%s' %s: declares %lld values but the file stores %s of them; the file is damaged or "
+               "truncated, %s",
+               r->path, name, (long long)values, stored == H5D_SPACE_STATUS_PART_ALLOCATED ? "only some" : "none",
+               REMEDY);
+  return FASCIA_OK;
+}
+
+// Bytes the model's arrays take for these sizes (fascia_model_alloc), and the
+// machine's physical memory (0 when unknown).
+static double model_bytes(const fascia_model_sizes *z) {
+  const double R = sizeof(fascia_real), I = sizeof(int32_t);
+  return (double)z->frames * (13 * R + 3 * I) + (double)z->samples * (4 * R + 2 * I) +
+         (double)z->pairs * (4 * R + 2 * I) + (double)z->probes * (3 * R + I + FASCIA_NAME_SIZE) +
+         (double)z->probe_pairs * (R + I) + (double)z->couplings * (3 * R + 3 * I) +
+         (double)z->materials * sizeof(fascia_material) + (double)z->motions * sizeof(fascia_motion) +
+         (double)z->organs * sizeof(fascia_organ);
+}
+
+static double physical_memory(void) {
+#if defined(_SC_PHYS_PAGES) && defined(_SC_PAGESIZE)
+  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+  if (pages > 0 && page > 0) return (double)pages * (double)page;
+#endif
+  return 0;
+}
+
+// Refuses sizes whose arrays would not fit in memory, before allocating.
+static fascia_status check_memory(reader *r, const fascia_model_sizes *z) {
+  const double need = model_bytes(z), have = physical_memory();
+  FASCIA_CHECK(have <= 0 || need <= have, r->ctx, FASCIA_ERR_MEMORY,
+               "model '%s': %d frames, %d samples and %d sample-frame pairs need %.1f GiB for the model alone, more "
+               "than this machine's %.1f GiB of memory; use a coarser model (larger frame and sample spacing)",
+               r->path, (int)z->frames, (int)z->samples, (int)z->pairs, need / 1073741824.0, have / 1073741824.0);
+  return FASCIA_OK;
+}
+
 static fascia_status read_sizes(reader *r, fascia_model_sizes *z) {
   int64_t n[9];
   FASCIA_TRY(count_rows(r, "/frames/position", ELEM_REAL, 3, &n[0]));
@@ -700,7 +768,9 @@ static fascia_status read_sizes(reader *r, fascia_model_sizes *z) {
   z->probe_pairs = (int32_t)n[6];
   z->organs = (int32_t)n[7];
   z->couplings = (int32_t)n[8];
-  return FASCIA_OK;
+  for (size_t k = 0; k < sizeof sized_datasets / sizeof sized_datasets[0]; ++k)
+    FASCIA_TRY(check_stored(r, sized_datasets[k]));
+  return check_memory(r, z);
 }
 
 static fascia_status read_frames_samples(reader *r, fascia_model *m) {
@@ -772,6 +842,7 @@ static fascia_status read_motions(reader *r, fascia_model *m) {
     int64_t K;
     snprintf(name, sizeof name, "%s/time", group);
     FASCIA_TRY(count_rows(r, name, ELEM_REAL, 0, &K));
+    FASCIA_TRY(check_stored(r, name));
     FASCIA_CHECK(K >= 1, r->ctx, FASCIA_ERR_FORMAT, "model '%s' %s: no keyframe, expected at least one; %s", r->path,
                  name, REMEDY);
     FASCIA_TRY(fascia_motion_alloc(r->ctx, mo, (int32_t)K));
@@ -804,6 +875,8 @@ static fascia_status read_organs(reader *r, fascia_model *m) {
     snprintf(triangles, sizeof triangles, "%s/triangles", group);
     FASCIA_TRY(count_rows(r, name, ELEM_REAL, 3, &V));
     FASCIA_TRY(count_rows(r, triangles, ELEM_INT, 3, &T));
+    FASCIA_TRY(check_stored(r, name));
+    FASCIA_TRY(check_stored(r, triangles));
     FASCIA_TRY(fascia_organ_alloc(r->ctx, o, (int32_t)V, (int32_t)T));
     READ(r, name, ELEM_REAL, V, 3, o->vertices);
     READ(r, triangles, ELEM_INT, T, 3, o->triangles);

@@ -20,6 +20,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "organs.h"
 #include "solver_internal.h"
 
 #define ARMIJO 1e-4        // sufficient decrease of the line search
@@ -98,6 +99,8 @@ static fascia_status objective(fascia_solver *S, const step_terms *terms, const 
       for (int64_t k = 0; k < n; ++k)
         gradient[k] += (terms->c1 + terms->c2) * S->scratch[k] - terms->c1 * terms->target_M[k];
   }
+  // rigid organs: the bodies' own terms, gradient restricted to their masters
+  energy += fascia_organs_reduce(S->organs, S, terms->c1, terms->c2, terms->jacobian, d, gradient);
   if (gradient)
     for (int64_t k = 0; k < n; ++k)
       if (!S->mask[k]) gradient[k] = 0;
@@ -148,7 +151,7 @@ static fascia_real load_norm(const fascia_solver *S) {
       const fascia_real t = sys->gravity_scale * S->model->frame_load[6 * i + 3 + c];
       if (S->mask[6 * i + 3 + c]) sum += t * t;
     }
-  return sqrt(sum);
+  return sqrt(sum + fascia_organs_load_norm2(S->organs, S));
 }
 
 fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iterations, fascia_solve_report *rep) {
@@ -166,7 +169,8 @@ fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iter
     terms.target_norm = fascia_dot(S->inertia_target, terms.target_M, n);
   }
   fascia_operator op = {S->sys,  terms.c1 + terms.c2, def->mass, S->mass_blocks, S->damping_diagonal, 0, 1,
-                        S->use_assembled ? &S->K : NULL, S->mask, S->scratch + n};
+                        S->use_assembled ? &S->K : NULL, S->mask, S->scratch + n, NULL};
+  if (fascia_organs_body_count(S->organs) > 0) op.organs = S->organs;
   rep->direct = S->use_direct;
   fascia_real phi, *g = S->gradient, *p = S->direction, *g_trial = S->rhs;
   t = fascia_now_ms();
@@ -195,6 +199,7 @@ fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iter
       t = fascia_now_ms();
     }
     if (!S->use_direct) fascia_precond_build(&S->pc, &op, S->blocks);
+    if (op.organs) fascia_organs_precond(S->organs, &op, &S->pc, S->blocks);
     fascia_real scale = 0;
     for (int32_t i = 0; i < N; ++i)
       for (int c = 0; c < 6; ++c) {
@@ -242,6 +247,7 @@ fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iter
       fascia_real alpha = 1;
       for (int cut = 0; cut <= (def->line_search ? MAX_CUTS : 0); ++cut) {
         for (int64_t k = 0; k < n; ++k) S->d_trial[k] = S->d[k] + alpha * p[k];
+        fascia_organs_expand(S->organs, S, S->d_trial); // slaves of rigid organs follow their master
         t = fascia_now_ms();
         fascia_status st = objective(S, &terms, S->d_trial, &phi_trial, g_trial);
         rep->profile.evaluate_ms += fascia_now_ms() - t;
@@ -278,6 +284,7 @@ fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iter
         rep->profile.evaluate_ms += fascia_now_ms() - t;
         if (S->use_assembled) assemble(S, &terms);
         if (!S->use_direct) fascia_precond_build(&S->pc, &op, S->blocks);
+        if (op.organs) fascia_organs_precond(S->organs, &op, &S->pc, S->blocks);
         continue;
       }
       if (alpha == 1 && op.shift > 0) op.shift = op.shift < FASCIA_R(1e-3) ? 0 : op.shift / 10;

@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "organs.h"
 #include "solver_internal.h"
 
 fascia_solver_def fascia_solver_def_default(void) {
@@ -23,6 +24,7 @@ fascia_solver_def fascia_solver_def_default(void) {
   d.mass = FASCIA_MASS_LUMPED;
   d.line_search = 1;
   d.load_steps = 1;
+  d.step_retries = 4;
   d.cookie_ = FASCIA_DEF_COOKIE;
   return d;
 }
@@ -50,6 +52,8 @@ static fascia_status check_def(fascia_ctx *ctx, const fascia_solver_def *d) {
                "solver: mass damping %g 1/s must be >= 0", d->mass_damping);
   FASCIA_CHECK(d->load_steps >= 1 && d->load_steps <= 100000, ctx, FASCIA_ERR_ARGUMENT,
                "solver: %d load steps; give at least 1", d->load_steps);
+  FASCIA_CHECK(d->step_retries >= 0 && d->step_retries <= 30, ctx, FASCIA_ERR_ARGUMENT,
+               "solver: %d step retries; give 0 to 30 (each halves the time step)", d->step_retries);
   FASCIA_CHECK(d->threads >= 0, ctx, FASCIA_ERR_ARGUMENT, "solver: %d threads", d->threads);
   return FASCIA_OK;
 }
@@ -74,7 +78,12 @@ static fascia_status pick_backend(fascia_ctx *ctx, const char *name, char *chose
 #define DIRECT_MAX_BAND_BYTES ((int64_t)4 << 30)
 
 static fascia_status choose_linear_solver(fascia_solver *S) {
-  const fascia_linear_solver kind = S->def.linear_solver;
+  fascia_linear_solver kind = S->def.linear_solver;
+  if (fascia_organs_body_count(S->organs) > 0) { // no banded P^T K P for rigid organs yet (organs.c): CG
+    FASCIA_CHECK(kind != FASCIA_LINEAR_DIRECT, S->ctx, FASCIA_ERR_ARGUMENT,
+                 "solver: the direct linear solver does not handle rigid organs; use cg or auto");
+    kind = FASCIA_LINEAR_CG;
+  }
   if (kind == FASCIA_LINEAR_CG && !S->def.assembled) return FASCIA_OK;
   FASCIA_TRY(fascia_bsr_create(S->ctx, S->model, &S->K));
   S->use_assembled = 1;
@@ -138,11 +147,13 @@ fascia_status fascia_solver_create(fascia_ctx *ctx, const fascia_model *model, c
     status = FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "solver: out of memory for %lld frames", (long long)N);
     goto cleanup;
   }
+  FASCIA_TRY_GOTO(fascia_organs_create(ctx, model, &S->organs));
   FASCIA_TRY_GOTO(choose_linear_solver(S));
   memcpy(S->x, model->frame_position, 3 * (size_t)N * sizeof(fascia_real));
   memcpy(S->q, model->frame_rotation, 4 * (size_t)N * sizeof(fascia_real));
   for (int64_t i = 0; i < N; ++i)
     for (int c = 0; c < 6; ++c) S->mask[6 * i + c] = model->frame_kind[i] == FASCIA_FRAME_FREE;
+  if (S->organs) fascia_organs_masks(S->organs, S->mask);
   *out = S;
   return FASCIA_OK;
 cleanup:
@@ -156,6 +167,7 @@ void fascia_solver_destroy(fascia_solver **solver) {
   fascia_system_destroy(&S->sys);
   fascia_bsr_destroy(&S->K);
   fascia_banded_destroy(&S->band);
+  fascia_organs_destroy(&S->organs);
   free(S->x), free(S->q), free(S->u), free(S->mask), free(S->x_base), free(S->q_base), free(S->d);
   free(S->d_trial), free(S->inertia_target), free(S->gradient), free(S->direction), free(S->rhs), free(S->work);
   free(S->blocks), free(S->mass_blocks), free(S->damping_diagonal), free(S->scratch), free(S->pc.inverse);
@@ -169,15 +181,17 @@ static void place_prescribed(fascia_solver *S, fascia_real t) {
   const fascia_model *m = S->model;
   for (int32_t i = 0; i < S->frame_count; ++i)
     if (m->frame_kind[i] == FASCIA_FRAME_PRESCRIBED) fascia_motion_frame(m, i, t, S->x + 3 * i, S->q + 4 * i);
+  fascia_organs_place(S->organs, S->x, S->q);
 }
 
 static fascia_status save_state(fascia_solver *S, fascia_real **backup) {
   const size_t N = (size_t)S->frame_count;
-  *backup = malloc((3 + 4 + 6) * N * sizeof(fascia_real));
+  *backup = malloc(((3 + 4 + 6) * N + fascia_organs_state_size(S->organs)) * sizeof(fascia_real));
   FASCIA_CHECK(*backup, S->ctx, FASCIA_ERR_MEMORY, "solver: out of memory");
   memcpy(*backup, S->x, 3 * N * sizeof(fascia_real));
   memcpy(*backup + 3 * N, S->q, 4 * N * sizeof(fascia_real));
   memcpy(*backup + 7 * N, S->u, 6 * N * sizeof(fascia_real));
+  fascia_organs_save(S->organs, *backup + 13 * N);
   return FASCIA_OK;
 }
 
@@ -186,6 +200,7 @@ static void restore_state(fascia_solver *S, fascia_real *backup) {
   memcpy(S->x, backup, 3 * N * sizeof(fascia_real));
   memcpy(S->q, backup + 3 * N, 4 * N * sizeof(fascia_real));
   memcpy(S->u, backup + 7 * N, 6 * N * sizeof(fascia_real));
+  fascia_organs_restore(S->organs, backup + 13 * N);
   fascia_system_set_state(S->sys, S->x, S->q);
 }
 
@@ -221,14 +236,15 @@ fascia_status fascia_solver_solve_static(fascia_solver *S, fascia_solve_report *
   return FASCIA_OK;
 }
 
-fascia_status fascia_solver_step(fascia_solver *S, fascia_solve_report *report) {
-  FASCIA_CHECK(S, NULL, FASCIA_ERR_ARGUMENT, "NULL solver");
-  fascia_solve_report local;
-  if (!report) report = &local;
+// One implicit Euler step of length h from the current state (prescribed
+// frames at time + h). Returns FASCIA_ERR_NUMERIC with the state restored
+// when the Newton solve fails, or ends unconverged under
+// require_convergence (then with a message saying so).
+static fascia_status step_once(fascia_solver *S, fascia_real h, fascia_solve_report *report) {
   memset(report, 0, sizeof *report);
   const int32_t N = S->frame_count;
   const int64_t n = 6 * (int64_t)N;
-  const fascia_real h = S->def.time_step, t1 = S->time + h;
+  const fascia_real t1 = S->time + h;
   fascia_real *backup = NULL;
   FASCIA_TRY(save_state(S, &backup));
   // anchor at q_n, mass at q_n
@@ -253,7 +269,17 @@ fascia_status fascia_solver_step(fascia_solver *S, fascia_solve_report *report) 
       fascia_pt_quat_log(rel, d + 3);
     }
   }
+  fascia_organs_step_begin(S->organs, S, h); // rigid bodies, frames driven by the caller
+  // newton.c reads the step length from the settings
+  const fascia_real h_def = S->def.time_step;
+  S->def.time_step = h;
   fascia_status status = fascia_newton_minimize(S, 1, S->def.newton_iterations, report);
+  S->def.time_step = h_def;
+  if (status == FASCIA_OK && S->def.require_convergence && !report->converged)
+    status = FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
+                         "Newton solve not converged after %d iterations (|gradient| %.3g, tolerance %.3g)",
+                         report->newton_iterations, report->gradient_norm,
+                         S->def.newton_tolerance * report->reference_norm);
   if (status != FASCIA_OK) {
     restore_state(S, backup);
     free(backup);
@@ -261,8 +287,77 @@ fascia_status fascia_solver_step(fascia_solver *S, fascia_solve_report *report) 
   }
   free(backup);
   for (int64_t k = 0; k < n; ++k) S->u[k] = S->d[k] / h;
+  fascia_organs_step_end(S->organs, S, h);
   S->time = t1;
+  report->substeps = 1;
   return FASCIA_OK;
+}
+
+// Adds the work of one (sub)step to the step's report; the end-of-step
+// values (convergence, gradient, energy, inversions) are the last one's.
+static void merge_report(fascia_solve_report *sum, const fascia_solve_report *r) {
+  sum->converged = r->converged;
+  sum->newton_iterations += r->newton_iterations;
+  sum->cg_iterations += r->cg_iterations;
+  sum->line_search_cuts += r->line_search_cuts;
+  sum->negative_curvature += r->negative_curvature;
+  sum->direct = r->direct;
+  sum->gradient_norm = r->gradient_norm;
+  sum->reference_norm = r->reference_norm;
+  sum->energy = r->energy;
+  sum->inverted_samples = r->inverted_samples;
+  sum->substeps += r->substeps;
+  sum->profile.evaluate_ms += r->profile.evaluate_ms;
+  sum->profile.precond_ms += r->profile.precond_ms;
+  sum->profile.assemble_ms += r->profile.assemble_ms;
+  sum->profile.cg_ms += r->profile.cg_ms;
+  sum->profile.total_ms += r->profile.total_ms;
+}
+
+// A step of length h, rejected and redone as two steps of h/2 when it
+// fails, at most step_retries - depth halvings deeper. On failure the state
+// may be partway (the caller restores it); *smallest gets the shortest step
+// tried.
+static fascia_status step_split(fascia_solver *S, fascia_real h, int depth, fascia_solve_report *report,
+                                fascia_real *smallest) {
+  fascia_solve_report r;
+  if (h < *smallest) *smallest = h;
+  fascia_status status = step_once(S, h, &r);
+  merge_report(report, &r);
+  if (status != FASCIA_ERR_NUMERIC || depth >= S->def.step_retries) return status;
+  ++report->rejected;
+  status = step_split(S, h / 2, depth + 1, report, smallest);
+  if (status == FASCIA_OK) status = step_split(S, h / 2, depth + 1, report, smallest);
+  return status;
+}
+
+fascia_status fascia_solver_step(fascia_solver *S, fascia_solve_report *report) {
+  FASCIA_CHECK(S, NULL, FASCIA_ERR_ARGUMENT, "NULL solver");
+  fascia_solve_report local;
+  if (!report) report = &local;
+  memset(report, 0, sizeof *report);
+  const fascia_real t0 = S->time, h = S->def.time_step;
+  fascia_real *backup = NULL;
+  FASCIA_TRY(save_state(S, &backup));
+  fascia_real smallest = h;
+  fascia_status status = step_split(S, h, 0, report, &smallest);
+  if (status == FASCIA_OK) {
+    S->time = t0 + h; // the sum of the sub-steps, without their rounding
+  } else {
+    restore_state(S, backup);
+    S->time = t0;
+    if (status == FASCIA_ERR_NUMERIC) {
+      char cause[512];
+      snprintf(cause, sizeof cause, "%s", fascia_ctx_message(S->ctx));
+      status = FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
+                           "solver: the step from t = %.6g s failed%s (shortest step tried %.3g s, %d rejected): %s; "
+                           "the state is the one before the step; use a shorter time step, more Newton "
+                           "iterations or step retries",
+                           t0, S->def.step_retries > 0 ? " even split" : "", smallest, report->rejected, cause);
+    }
+  }
+  free(backup);
+  return status;
 }
 
 fascia_real fascia_solver_time(const fascia_solver *S) { return S->time; }
@@ -295,6 +390,7 @@ fascia_status fascia_solver_set_state(fascia_solver *S, const fascia_real *x, co
   }
   if (u) memcpy(S->u, u, 6 * (size_t)N * sizeof(fascia_real));
   else memset(S->u, 0, 6 * (size_t)N * sizeof(fascia_real));
+  fascia_organs_sync(S->organs, S);
   fascia_system_set_state(S->sys, S->x, S->q);
   return FASCIA_OK;
 }
@@ -325,13 +421,15 @@ fascia_real fascia_solver_kinetic_energy(fascia_solver *S) {
       for (int r = 0; r < 6; ++r)
         for (int c = 0; c < 6; ++c)
           e += S->u[6 * i + r] * S->mass_blocks[36 * (int64_t)i + 6 * r + c] * S->u[6 * i + c];
-    return FASCIA_R(0.5) * e;
+    return FASCIA_R(0.5) * e + fascia_organs_kinetic_energy(S->organs, S);
   }
   fascia_system_mass_apply(S->sys, S->u, S->scratch);
-  return FASCIA_R(0.5) * fascia_dot(S->u, S->scratch, n);
+  return FASCIA_R(0.5) * fascia_dot(S->u, S->scratch, n) + fascia_organs_kinetic_energy(S->organs, S);
 }
 
 fascia_status fascia_solver_potential_energy(fascia_solver *S, fascia_real *energy) {
   fascia_system_set_state(S->sys, S->x, S->q);
-  return fascia_system_evaluate(S->sys, NULL, energy);
+  FASCIA_TRY(fascia_system_evaluate(S->sys, NULL, energy));
+  *energy += fascia_organs_potential_energy(S->organs, S);
+  return FASCIA_OK;
 }

@@ -11,6 +11,8 @@
 #include "direct.h"
 #include "system.h"
 
+typedef struct fascia_organs fascia_organs; // organs.c: rigid organs, organs driven by the caller
+
 /// The linear operator of one Newton iteration:
 ///   A v = mass_coefficient M v + H v + shift * (D v)
 /// restricted to the free DOFs (mask), D the diagonal of |H| + M used for
@@ -26,9 +28,12 @@ typedef struct fascia_operator {
   const fascia_bsr *assembled; ///< when set: H + mass_coefficient M assembled, used instead of products
   const unsigned char *mask; ///< [6N] 1 free, 0 constrained
   fascia_real *scratch;      ///< [6N]
+  const fascia_organs *organs; ///< when set: P^T A P on the reduced coordinates of rigid organs (organs.c)
 } fascia_operator;
 
 FASCIA_INTERN void fascia_operator_apply(const fascia_operator *op, const fascia_real *v, fascia_real *out);
+/// out = P^T A P v for models with rigid organs (organs.c); fascia_operator_apply defers to it when op->organs is set.
+FASCIA_INTERN void fascia_organs_operator_apply(const fascia_operator *op, const fascia_real *v, fascia_real *out);
 
 /// Preconditioner: inverse blocks [36N] (block Jacobi) or inverse diagonal
 /// [6N] (Jacobi) or nothing.
@@ -84,6 +89,7 @@ struct fascia_solver {
   fascia_bsr K;
   fascia_banded band;
   char backend_name[16];
+  fascia_organs *organs; ///< NULL without organs (organs.c)
 };
 
 /// Minimizes the step objective (static: potential energy, re-anchored at

@@ -164,14 +164,21 @@ static void print_summary(const prep_run *r, const step_clock *c, const char *ou
   for (int32_t t = 0; t < sc->tissue_count; ++t) {
     const fascia_prep_tissue_report *tr = v->tissues + t;
     int32_t frames = 0, samples = 0;
+    double sample_volume = 0;
     for (int32_t i = 0; i < r->points->frame_count; ++i) frames += r->points->frame_tissue[i] == t;
-    for (int32_t s = 0; s < r->points->sample_count; ++s) samples += r->points->sample_tissue[s] == t;
+    for (int32_t s = 0; s < r->points->sample_count; ++s)
+      if (r->points->sample_tissue[s] == t) ++samples, sample_volume += r->points->sample_volume[s];
     voxels += tr->voxels;
     fprintf(stderr,
             "tissue '%s': %lld voxels of %.3g mm, %.4g cm^3 in %d piece(s) (%d smaller pieces, %.3g cm^3, dropped); "
             "%d frames, %d samples\n",
             sc->tissues[t].name, (long long)tr->voxels, 1e3 * h, 1e6 * tr->volume, (int)tr->components,
             (int)tr->dropped_components, 1e6 * tr->dropped_volume, (int)frames, (int)samples);
+    if (sc->tissues[t].shape_kind == FASCIA_PREP_SHAPE_TET)
+      fprintf(stderr, "  tet: %d tetrahedra kept inside the region, %.4g cm^3 (%.1f %% of its voxels); the samples, "
+                      "%d per tet, add up to the tetrahedra's volume\n",
+              (int)(samples / sc->tissues[t].samples_per_tet), 1e6 * sample_volume,
+              tr->volume > 0 ? 100 * sample_volume / tr->volume : 0, (int)sc->tissues[t].samples_per_tet);
   }
   fprintf(stderr, "model: %d frames (%d shared), %d samples, %d pairs, tissue volume %.6g m^3, linear reproduction "
                   "error %.2g m\n",
@@ -215,6 +222,12 @@ static void print_json(const prep_run *r, const step_clock *c, const char *outpu
     cJSON_AddNumberToObject(e, "volume", v->tissues[t].volume);
     cJSON_AddNumberToObject(e, "components", v->tissues[t].components);
     cJSON_AddNumberToObject(e, "dropped_volume", v->tissues[t].dropped_volume);
+    double sample_volume = 0;
+    for (int32_t s = 0; s < r->points->sample_count; ++s)
+      if (r->points->sample_tissue[s] == t) sample_volume += r->points->sample_volume[s];
+    const int tet = r->scene->tissues[t].shape_kind == FASCIA_PREP_SHAPE_TET;
+    cJSON_AddNumberToObject(e, "sample_volume", sample_volume);
+    cJSON_AddStringToObject(e, "sample_volume_of", tet ? "tetrahedra kept inside the region" : "region voxels");
     cJSON_AddItemToArray(tissues, e);
   }
   cJSON *organs = cJSON_AddArrayToObject(root, "organs");

@@ -19,7 +19,9 @@
 #include <unistd.h>
 
 #include "commands.h"
+#include "run_outputs.h"
 #include "fascia/fascia.h"
+#include "presets.h"
 
 static const char run_usage[] =
     "usage: fascia run MODEL.h5 [--static | --steps N [--dt S]] [-o RESULTS.h5] [--save-every K]\n"
@@ -27,7 +29,7 @@ static const char run_usage[] =
     "                  [--newton-iterations N] [--newton-tolerance X] [--cg-iterations N]\n"
     "                  [--cg-tolerance X] [--cg-fixed] [--precond none|jacobi|block]\n"
     "                  [--mass consistent|lumped] [--damping ALPHA] [--load-steps N]\n"
-    "                  [--linear-solver cg|direct|auto] [--assembled]\n"
+    "                  [--linear-solver cg|direct|auto] [--assembled] [--preset NAME]\n"
     "\n"
     "Solves a model file: static equilibrium (default) or N implicit Euler steps.\n"
     "  --static               static equilibrium under gravity and loads (the default)\n"
@@ -51,6 +53,9 @@ static const char run_usage[] =
     "  --linear-solver KIND   cg, direct (banded Cholesky of the assembled tangent) or auto\n"
     "                         (direct where the band is small enough, else CG; the default)\n"
     "  --assembled            CG multiplies by the assembled block matrix (default matrix-free)\n"
+    "  --preset NAME          interactive, balanced or accurate: solver settings measured by\n"
+    "                         'fascia tradeoff' (tools/bench/README.md) for dynamic runs; options\n"
+    "                         after it override it; a static solve keeps its Newton limit of 100\n"
     "  --verbose              on failure, also print where the error was found\n"
     "Progress with the time left goes to stderr when it is a terminal (or FASCIA_PROGRESS=1).\n";
 
@@ -93,12 +98,69 @@ static int parse_count(const char *text, int *out, int minimum) {
   return 1;
 }
 
+// --- checkpoints and restart (issue 7) -------------------------------------
+// Taken out of argv before parse_options, so they stay apart from the
+// solver options; the hooks are in run_steps and cmd_run.
+
+static const char checkpoint_usage[] =
+    "Checkpoints (dynamic runs):\n"
+    "  --checkpoint FILE      write the full state (time, step, frame positions, rotations,\n"
+    "                         velocities) to FILE every K steps, after the last step and when\n"
+    "                         stopped by SIGINT/SIGTERM; written to a temporary name, then renamed\n"
+    "  --checkpoint-every K   steps between checkpoints (default 10)\n"
+    "  --resume FILE          continue from checkpoint FILE (same model, --dt and --threads) up to\n"
+    "                         --steps N in all: the same final state, bit for bit on the CPU, as a\n"
+    "                         run never interrupted; -o then holds the steps from the resumed one on\n";
+
+typedef struct checkpoint_options {
+  const char *path, *resume;
+  int every;       ///< steps between checkpoints
+  int first_step;  ///< first step to take: 1, or the resumed step + 1
+  int help;        ///< --help was given
+  fascia_ctx *ctx; ///< for fascia_checkpoint_save in run_steps
+} checkpoint_options;
+
+// Removes --checkpoint, --checkpoint-every and --resume (with their values)
+// from argv. Returns -1 to go on, else the exit status (2: usage error).
+static int take_checkpoint_options(int *argc, char **argv, checkpoint_options *c) {
+  memset(c, 0, sizeof *c);
+  c->every = 10;
+  c->first_step = 1;
+  int kept = 1;
+  for (int k = 1; k < *argc; ++k) {
+    const char *o = argv[k];
+    if (!strcmp(o, "--help") || !strcmp(o, "-h")) c->help = 1; // printed after the usage
+    if (strcmp(o, "--checkpoint") && strcmp(o, "--checkpoint-every") && strcmp(o, "--resume")) {
+      argv[kept++] = argv[k];
+      continue;
+    }
+    if (k + 1 >= *argc) return usage_error("option %s needs a value", o);
+    const char *v = argv[++k];
+    if (!strcmp(o, "--checkpoint")) c->path = v;
+    else if (!strcmp(o, "--resume")) c->resume = v;
+    else if (!parse_count(v, &c->every, 1)) {
+      fprintf(stderr, "fascia run: bad value '%s' for %s (see fascia run --help)\n", v, o);
+      return 2;
+    }
+  }
+  *argc = kept;
+  return -1;
+}
+
+// After step n: a checkpoint every K steps, after the last and on a stop.
+static fascia_status checkpoint_after(const checkpoint_options *c, const fascia_solver *solver, int n, int last) {
+  if (!c || !c->path || (n % c->every != 0 && !last)) return FASCIA_OK;
+  return fascia_checkpoint_save(c->ctx, solver, n, c->path);
+}
+
 /// Everything the command line sets.
 typedef struct run_options {
   const char *model_path, *results_path;
   int dynamic, static_given, steps, save_every, samples, json, threads;
   int newton_given;
   fascia_solver_def solver;
+  const checkpoint_options *checkpoint; ///< --checkpoint, --resume (issue 7); NULL: none
+  run_outputs *outputs;                 ///< --history, --organs, --snapshots (issue 5); NULL: none
 } run_options;
 
 // Parses argv into opt. Returns -1 to go on, else the exit status (0 for
@@ -129,7 +191,7 @@ static int parse_options(int argc, char **argv, run_options *opt) {
       static const char *const valued[] = {"--steps", "--dt", "-o", "--output", "--save-every", "--backend",
                                            "--threads", "--newton-iterations", "--newton-tolerance",
                                            "--cg-iterations", "--cg-tolerance", "--precond", "--mass", "--damping",
-                                           "--load-steps", "--linear-solver"};
+                                           "--load-steps", "--linear-solver", "--preset"};
       int known = 0;
       for (size_t j = 0; j < sizeof valued / sizeof valued[0]; ++j) known |= !strcmp(o, valued[j]);
       if (!known) return usage_error("unknown option '%s'", o);
@@ -161,6 +223,8 @@ static int parse_options(int argc, char **argv, run_options *opt) {
         d->linear_solver = !strcmp(v, "cg")       ? FASCIA_LINEAR_CG
                            : !strcmp(v, "direct") ? FASCIA_LINEAR_DIRECT
                                                   : FASCIA_LINEAR_AUTO;
+      } else if (!strcmp(o, "--preset")) {
+        ok = cli_preset_apply(v, d); // a static solve keeps its own Newton limit (100)
       } else if (!strcmp(o, "--damping")) ok = parse_real(v, &d->mass_damping) && d->mass_damping >= 0;
       else ok = parse_count(v, &d->load_steps, 1); // --load-steps
       if (!ok) {
@@ -238,7 +302,7 @@ static fascia_status run_steps(fascia_solver *solver, const run_options *opt,
   void (*old_term)(int) = signal(SIGTERM, on_stop_signal);
   double last_print = -1e30;
   int last_saved = 0;
-  for (int n = 1; n <= opt->steps && st == FASCIA_OK; ++n) {
+  for (int n = opt->checkpoint ? opt->checkpoint->first_step : 1; n <= opt->steps && st == FASCIA_OK; ++n) {
     fascia_solve_report report;
     const double t0 = now_ms();
     st = fascia_solver_step(solver, &report);
@@ -250,6 +314,9 @@ static fascia_status run_steps(fascia_solver *solver, const run_options *opt,
       st = save_state(res, solver, opt->samples, buffers[0], buffers[1], buffers[2]);
       last_saved = n;
     }
+    if (st == FASCIA_OK && opt->outputs)
+      st = run_outputs_step(opt->outputs, solver, n, &report, now_ms() - t0, n % opt->save_every == 0 || last);
+    if (st == FASCIA_OK) st = checkpoint_after(opt->checkpoint, solver, n, last);
     if (show && (now_ms() - last_print > 200 || last)) {
       print_step_progress(n, opt->steps, fascia_solver_time(solver), tot->solve_ms, last);
       last_print = now_ms();
@@ -382,8 +449,19 @@ static int print_json(const run_options *opt, const fascia_model *m, fascia_solv
 
 int cmd_run(int argc, char **argv) {
   run_options opt;
-  int rc = parse_options(argc, argv, &opt);
+  checkpoint_options ck;
+  int rc = take_checkpoint_options(&argc, argv, &ck);
   if (rc >= 0) return rc;
+  run_outputs outs;
+  if ((rc = run_outputs_take(&argc, argv, &outs)) >= 0) return rc;
+  rc = parse_options(argc, argv, &opt);
+  if (rc == 0 && ck.help) fputs(checkpoint_usage, stdout), fputs("Outputs for people and plots:\n", stdout),
+                          fputs(run_outputs_usage, stdout);
+  if (rc >= 0) return rc;
+  if ((ck.path || ck.resume) && !opt.dynamic)
+    return usage_error("%s", "--checkpoint and --resume need a dynamic run (--steps N)");
+  opt.checkpoint = &ck;
+  opt.outputs = &outs;
   fascia_ctx *ctx = cli_ctx(opt.threads, 1);
   if (opt.threads <= 0) opt.threads = fascia_ctx_threads(ctx); // for the summary
   fascia_model *model = NULL;
@@ -401,6 +479,14 @@ int cmd_run(int argc, char **argv) {
     goto done;
   }
   if (st != FASCIA_OK) goto done;
+  ck.ctx = ctx;
+  if (ck.resume) { // the state, time and step count of the checkpoint
+    int64_t done_steps = 0;
+    if ((st = fascia_checkpoint_load(ctx, solver, ck.resume, &done_steps)) != FASCIA_OK) goto done;
+    ck.first_step = done_steps < opt.steps ? (int)done_steps + 1 : opt.steps + 1;
+    fprintf(stderr, "fascia run: resumed from '%s' after step %lld (t = %.9g s)\n", ck.resume,
+            (long long)done_steps, fascia_solver_time(solver));
+  }
   const size_t S = (size_t)model->sample_count + 1, steps = (size_t)(opt.dynamic ? opt.steps : 1);
   buffers[0] = malloc(3 * S * sizeof(fascia_real));
   buffers[1] = malloc(S * sizeof(fascia_real));
@@ -415,6 +501,7 @@ int cmd_run(int argc, char **argv) {
   fascia_results_def rdef = fascia_results_def_default();
   rdef.write_samples = opt.samples != 0;
   rdef.every = opt.dynamic ? opt.save_every : 1;
+  if ((st = run_outputs_begin(&outs, ctx, model, solver)) != FASCIA_OK) goto done;
   if (opt.dynamic) {
     if (opt.results_path && (st = fascia_results_open(ctx, opt.results_path, model, &rdef, &res)) != FASCIA_OK)
       goto done;
@@ -425,6 +512,7 @@ int cmd_run(int argc, char **argv) {
     st = fascia_solver_solve_static(solver, &report);
     tot.solve_ms = now_ms() - t0;
     if (st == FASCIA_OK || st == FASCIA_ERR_NUMERIC) add_report(&tot, &report); // not converged: state kept
+    if (st == FASCIA_OK) st = run_outputs_step(&outs, solver, 1, &report, tot.solve_ms, 1);
     // the equilibrium (or the state reached) is written either way
     if ((st == FASCIA_OK || st == FASCIA_ERR_NUMERIC) && opt.results_path) {
       fascia_status wst = fascia_results_open(ctx, opt.results_path, model, &rdef, &res);
@@ -432,6 +520,7 @@ int cmd_run(int argc, char **argv) {
       if (wst != FASCIA_OK) st = wst;
     }
   }
+  if (st == FASCIA_OK) st = run_outputs_end(&outs, solver, 1);
   if (res) {
     tot.saved = fascia_results_step_count(res);
     fascia_status cst = fascia_results_close(&res);
@@ -455,6 +544,7 @@ int cmd_run(int argc, char **argv) {
 done:
   if (st != FASCIA_OK && rc != 2) rc = cli_fail("run", ctx, st);
   else if (rc < 0) rc = 0;
+  (void)run_outputs_end(&outs, solver, 0); // closes what is still open after an error
   fascia_results_destroy(&res);
   free(buffers[0]), free(buffers[1]), free(buffers[2]);
   free(tot.newton_per_step), free(tot.cg_per_step);

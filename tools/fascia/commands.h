@@ -21,6 +21,7 @@ int cmd_inspect(int argc, char **argv);
 int cmd_prep(int argc, char **argv);
 int cmd_run(int argc, char **argv);
 int cmd_bench(int argc, char **argv);
+int cmd_tradeoff(int argc, char **argv);
 
 /// Prints "fascia NAME: <ctx message>" on stderr (and where, with --verbose)
 /// and returns 1.

@@ -19,6 +19,7 @@ static const fascia_command commands[] = {
     {"inspect", cmd_inspect, "check a model file and print a summary (--json for one JSON object)"},
     {"run", cmd_run, "solve a model statically or with implicit Euler steps; write results"},
     {"bench", cmd_bench, "time the paper's tables (paper) and the cantilever accuracy sweep (cantilever)"},
+    {"tradeoff", cmd_tradeoff, "sweep speed against accuracy on the cantilever: tables, Pareto and convergence plots"},
 };
 static const int command_count = (int)(sizeof commands / sizeof commands[0]);
 

@@ -12,9 +12,11 @@
 //        │                              the tissue region (outside every organ,
 //        │                              within max_gap of each connected organ)
 //        │ fascia_prep_sample           Poisson-disk frames (surface + interior)
-//        │                              and samples with Voronoi volumes
+//        │                              and samples: Voronoi volumes (mls), or
+//        │                              tet quadrature points (tet)
 //        │ fascia_prep_shape_functions  MLS weights over neighbours found by
-//        │                              geodesic distance inside the region
+//        │                              geodesic distance inside the region, or
+//        │                              barycentric weights in the sample's tet
 //        │ fascia_prep_couple           surface frames shared with organs
 //        ▼ fascia_prep_package          fascia_model + provenance JSON
 //
@@ -37,7 +39,7 @@ extern "C" {
 /// Shape-function kinds of a tissue.
 typedef enum fascia_prep_shape_kind {
   FASCIA_PREP_SHAPE_MLS = 0, ///< meshless: moving least squares, linear basis
-  FASCIA_PREP_SHAPE_TET = 1  ///< mesh-based: barycentric in a tetrahedral mesh of the frames
+  FASCIA_PREP_SHAPE_TET = 1  ///< mesh-based: tetrahedra of the frames, samples at their quadrature points
 } fascia_prep_shape_kind;
 
 /// A box or a sphere that limits a tissue or its coupling.
@@ -80,6 +82,7 @@ typedef struct fascia_prep_organ_def {
   fascia_real sample_spacing; ///< Poisson-disk radius of its samples, m
   int32_t shape_kind;         ///< fascia_prep_shape_kind
   int32_t neighbours;         ///< frames per sample (MLS), >= 4
+  int32_t samples_per_tet;    ///< TET: quadrature points per tetrahedron, 4 (degree 2) or 1 (centroid)
   fascia_real min_component;  ///< pieces of the inside smaller than this are dropped, m^3
 } fascia_prep_organ_def;
 
@@ -105,6 +108,7 @@ typedef struct fascia_prep_tissue_def {
   fascia_real sample_spacing; ///< Poisson-disk radius of samples, m
   int32_t shape_kind;        ///< fascia_prep_shape_kind
   int32_t neighbours;        ///< frames per sample (MLS), >= 4
+  int32_t samples_per_tet;   ///< TET: quadrature points per tetrahedron, 4 (degree 2) or 1 (centroid)
   fascia_real coupling_tolerance; ///< frames this close to an organ surface are shared, m
   int32_t coupling_count;
   fascia_prep_coupling_def *coupling; ///< [coupling_count] per-organ rules (absent organs: share everywhere)
@@ -273,19 +277,28 @@ typedef struct fascia_prep_points {
   int64_t *frame_voxel;         ///< [N] region voxel it is attached to
   int64_t *frame_organ_voxel;   ///< [N] shared with a deformable organ: voxel of its inside; else -1
   fascia_real *sample_position; ///< [3S] m
-  fascia_real *sample_volume;   ///< [S] m^3, sum over a region = region volume
+  fascia_real *sample_volume;   ///< [S] m^3; sum over a region = its voxel volume (MLS) or its kept tets' volume (TET)
   int32_t *sample_tissue;       ///< [S] tissue, -1 for a sample inside a deformable organ
   int32_t *sample_inside_organ; ///< [S] deformable organ whose inside holds it, -1 for a tissue sample
-  int64_t *sample_voxel;        ///< [S] voxel holding the sample
+  int64_t *sample_voxel;        ///< [S] voxel holding the sample (a region voxel)
+  /// [4S] TET regions: the frames at the vertices of the tetrahedron whose
+  /// quadrature point the sample is, ascending; -1 (all four) for MLS samples
+  int32_t *sample_tet_frame;
 } fascia_prep_points;
 
 /// Poisson-disk sampling in each tissue region (fixed seed: same input, same
 /// points): surface frames first (on the organ surfaces the region touches),
-/// then interior frames, then samples; each region voxel goes to the sample
-/// nearest inside the region, so sample volumes add up to the region volume.
-/// Then each deformable organ's inside the same way, its surface frames being
-/// the shared tissue frames on it (the organ's interior frames keep the
-/// organ's frame_spacing from them).
+/// then interior frames, then samples. MLS regions: Poisson-disk samples;
+/// each region voxel goes to the sample nearest inside the region, so sample
+/// volumes add up to the region's voxel volume. TET regions: the frames are
+/// tetrahedralised (CGAL Delaunay), the tetrahedra whose centroid, edge
+/// midpoints and quadrature points lie in the region are kept, and the
+/// samples are their quadrature points (samples_per_tet per tet, volume =
+/// quadrature weight x tet volume), so sample volumes add up to the kept
+/// tets' volume (sample_spacing is not used). Then each deformable organ's
+/// inside the same way, its surface frames being the shared tissue frames on
+/// it (the organ's interior frames keep the organ's frame_spacing from them).
+/// Errors: a TET region with fewer than 4 frames or no kept tetrahedron.
 FASCIA_API fascia_status fascia_prep_sample(fascia_ctx *ctx, const fascia_prep_scene *scene,
                                             const fascia_prep_meshes *meshes, const fascia_prep_volume *volume,
                                             fascia_prep_points **out);
@@ -307,9 +320,10 @@ typedef struct fascia_prep_weights {
 /// alike). MLS: the `neighbours` frames nearest by geodesic distance through
 /// the sample's region voxels (so never across an organ or a void), more
 /// when the moment matrix is ill-conditioned; cubic kernel; reproduces
-/// constant and linear fields exactly. TET: barycentric weights in a Delaunay
-/// tetrahedralisation of the region's frames whose tets lie inside the
-/// region (CGAL). A shared frame belongs to both regions it touches.
+/// constant and linear fields exactly. TET: the barycentric weights of the
+/// sample in its own tetrahedron (points->sample_tet_frame), all in [0, 1]
+/// since every sample is a quadrature point inside its tet: nothing is
+/// extrapolated. A shared frame belongs to both regions it touches.
 FASCIA_API fascia_status fascia_prep_shape_functions(fascia_ctx *ctx, const fascia_prep_scene *scene,
                                                      const fascia_prep_volume *volume,
                                                      const fascia_prep_points *points, fascia_prep_weights **out);

@@ -9,5 +9,7 @@
 #include "fascia/shape.h"
 #include "fascia/results.h"
 #include "fascia/solver.h"
+#include "fascia/organs.h"
+#include "fascia/checkpoint.h"
 
 #endif

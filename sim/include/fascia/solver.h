@@ -48,6 +48,17 @@ typedef struct fascia_solver_def {
   fascia_real mass_damping;      ///< Rayleigh mass damping alpha, 1/s (default 0)
   int line_search;               ///< 1: backtracking line search on the energy (default 1)
   int load_steps;                ///< static solve: external load applied in this many increments (default 1)
+  /// Dynamic steps: a step that fails (FASCIA_ERR_NUMERIC from its Newton
+  /// solve, or unconverged when require_convergence is set) is rejected and
+  /// redone as two steps of half the time step, each of which may be split
+  /// again, at most this many halvings deep (default 4: down to dt / 16).
+  /// 0: a failed step returns at once.
+  int step_retries;
+  /// Dynamic steps: 1 counts a step whose Newton solve ends unconverged
+  /// after newton_iterations as failed (split as above, then
+  /// FASCIA_ERR_NUMERIC); 0 accepts it (default: the paper's fixed-cost mode,
+  /// where one Newton iteration per step is the point).
+  int require_convergence;
   int cookie_;                   ///< private
 } fascia_solver_def;
 
@@ -74,6 +85,8 @@ typedef struct fascia_solve_report {
   fascia_real reference_norm;  ///< |external load|, the tolerance's scale
   fascia_real energy;          ///< final potential energy, J
   int32_t inverted_samples;    ///< samples with det F <= 0 at the end
+  int substeps;                ///< dynamic: time steps taken (1, more when the step was split)
+  int rejected;                ///< dynamic: attempts rejected and split (step_retries)
   fascia_profile profile;
 } fascia_solve_report;
 
@@ -86,8 +99,12 @@ FASCIA_API fascia_status fascia_solver_create(fascia_ctx *ctx, const fascia_mode
                                               const fascia_solver_def *def, fascia_solver **out);
 FASCIA_API void fascia_solver_destroy(fascia_solver **solver);
 
-/// One implicit Euler step of def.time_step. On FASCIA_ERR_NUMERIC the state
-/// is left as it was before the step.
+/// One implicit Euler step of def.time_step, split into shorter steps where
+/// a step fails (def.step_retries, def.require_convergence; the report sums
+/// the iterations of all of them and counts them in substeps). On
+/// FASCIA_ERR_NUMERIC, even at the shortest step, the state and the time are
+/// left as they were before the step and the message names the time, the
+/// shortest step tried and the cause.
 FASCIA_API fascia_status fascia_solver_step(fascia_solver *solver, fascia_solve_report *report);
 /// Static equilibrium under gravity and loads at the current time, starting
 /// from the current state; velocities are set to zero. Not converging within

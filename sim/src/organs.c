@@ -1,0 +1,868 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// Organ models in the solver (DESIGN.md "Coupling", paper sec. 4.2 "coupling
+// with a rigid object": the frames of the tissue that lie on the rigid
+// surface have a rigid motion with respect to the body), and the C API of
+// fascia/organs.h for an outside simulator.
+//
+// Design note: rigid organs by elimination of the slave DOFs.
+//
+//   A rigid organ b has mass m, rest centre c_rest and inertia I (from its
+//   closed surface, density FASCIA_ORGAN_DENSITY). Its coupling frames are
+//   tissue frames; one of them, the master m(b) (the one nearest the
+//   centre), carries the body's 6 DOFs, the others (slaves i) follow:
+//
+//       Q   = q_m conj(q_m,rest)                 body rotation
+//       x_i = x_m + Q r_i,  q_i = Q q_i,rest      r_i = x_i,rest - x_m,rest
+//       c   = x_m + Q r_c                         r_c = c_rest - x_m,rest
+//
+//   so the body's pose is the master frame's state (saved, restored and set
+//   with it) and no DOF is added. The Newton unknowns stay a vector of 6N
+//   entries: free tissue frames and masters are free (the solver's mask),
+//   slaves are masked. What changes is the map from those unknowns to the
+//   frames (the prolongation P):
+//
+//       increment of slave i = T_i (dx_m, dtheta_m),  T_i = [[I, -[a_i]x], [0, I]],
+//       a_i = Q r_i the slave's current offset from the master,
+//
+//   taken exactly (nonlinear in the rotation) when the increments are
+//   expanded (fascia_organs_expand), linearly in the operator. Gradients
+//   restrict as T_i^T g_i (plus the Jacobian of the rotation map for
+//   dynamic steps, as newton.c does per frame), the Newton operator is
+//   P^T A P applied matrix-free (expand, the existing operator on all
+//   frames, restrict), plus the body's own terms: its mass and inertia
+//   (T_c^T diag(m, I_world) T_c with T_c the map to the centre), its
+//   gravity -m g.c, and the geometric term sum_i sym(g_i a_i^T) - (g_i.a_i) I
+//   of the rotation of the offsets. The body's inertia in a step is that of
+//   the frames: c1/2 |d_c - h v_c|^2_M with its world inertia frozen at the
+//   step's start, so its momentum balance is exact to the Newton tolerance.
+//
+//   Linear solvers: the matrix-free and the assembled CG both work (the
+//   assembled block matrix of all frames sits inside P^T . P); the banded
+//   Cholesky would need P^T K P assembled with its new fill, so a model with
+//   rigid organs solves by CG (solver.c: auto takes CG, direct is refused).
+//
+//   A rigid organ without coupling frames flies freely under gravity.
+//   An organ driven by the caller (fascia_solver_organ_set_frames) has its
+//   coupling frames prescribed to the caller's targets; its body, if rigid,
+//   is not simulated until it is released.
+#include <stdlib.h>
+#include <string.h>
+
+#include "fascia/organs.h"
+#include "organs.h"
+#include "point/linalg.h"
+
+struct fascia_organs {
+  const fascia_model *model;
+  int32_t organ_count, frame_count;
+  // per organ
+  int32_t *frame_offsets;   ///< [O+1] CSR into frames: each organ's coupling frames, once each
+  int32_t *frames;          ///< coupling-table order
+  unsigned char *driven;    ///< [O] 1 while the caller drives the organ
+  int32_t *master;          ///< [O] master frame of a rigid organ, -1 without coupling frames or not rigid
+  fascia_real *mass;        ///< [O] kg (rigid organs)
+  fascia_real *centre;      ///< [3O] rest centre of mass, m
+  fascia_real *inertia;     ///< [9O] about the centre, rest, world axes
+  fascia_real *velocity;    ///< [6O] body: centre velocity, angular velocity (state)
+  fascia_real *free_pose;   ///< [7O] rigid organs without coupling frames: centre, rotation (state)
+  fascia_real *target;      ///< [6O] h v at the step's start
+  fascia_real *world_inertia; ///< [9O] Q0 I Q0^T at the step's start
+  fascia_real *geometric;   ///< [9O] rotation block of the reduced Hessian from the last gradient
+  // per frame
+  int32_t *frame_body;      ///< [N] rigid organ the frame is a slave of (master included), -1
+  fascia_real *target_x;    ///< [3N] targets of frames driven by the caller
+  fascia_real *target_q;    ///< [4N]
+  unsigned char *full_mask; ///< [6N]
+  fascia_real *w, *y;       ///< [6N] operator scratch
+};
+
+int32_t fascia_model_find_organ(const fascia_model *m, const char *name) {
+  for (int32_t k = 0; m && name && k < m->organ_count; ++k)
+    if (!strcmp(m->organs[k].name, name)) return k;
+  return -1;
+}
+
+// ---------------------------------------------------------------- helpers
+
+static void quat_conj(const fascia_real *q, fascia_real *out) {
+  out[0] = q[0], out[1] = -q[1], out[2] = -q[2], out[3] = -q[3];
+}
+
+// Body rotation from the master's state: Q = q_m conj(q_m,rest).
+static void body_rotation(const fascia_organs *O, int32_t b, const fascia_real *q, fascia_real *Q, fascia_real *R) {
+  const int32_t m = O->master[b];
+  fascia_real c[4];
+  quat_conj(O->model->frame_rotation + 4 * m, c);
+  fascia_pt_quat_mul(q + 4 * m, c, Q);
+  fascia_pt_quat_normalize(Q);
+  if (R) fascia_pt_quat_to_mat(Q, R);
+}
+
+// Rest offset of frame i (or the centre when i < 0) from body b's master.
+static void rest_offset(const fascia_organs *O, int32_t b, int32_t i, fascia_real *r) {
+  const fascia_real *xm = O->model->frame_position + 3 * O->master[b];
+  const fascia_real *p = i < 0 ? O->centre + 3 * b : O->model->frame_position + 3 * i;
+  for (int c = 0; c < 3; ++c) r[c] = p[c] - xm[c];
+}
+
+// J_l(phi)^T g, the transposed left Jacobian of the exponential map (same
+// series as newton.c).
+static void left_jacobian_t(const fascia_real *phi, const fascia_real *g, fascia_real *out) {
+  const fascia_real t2 = fascia_pt_dot3(phi, phi), t = sqrt(t2);
+  fascia_real a, b;
+  if (t < 1e-4) {
+    a = FASCIA_R(0.5) - t2 / 24;
+    b = FASCIA_R(1.0) / 6 - t2 / 120;
+  } else {
+    a = (1 - cos(t)) / t2;
+    b = (t - sin(t)) / (t2 * t);
+  }
+  fascia_real pg[3], ppg[3];
+  fascia_pt_cross(phi, g, pg);
+  fascia_pt_cross(phi, pg, ppg);
+  for (int c = 0; c < 3; ++c) out[c] = g[c] - a * pg[c] + b * ppg[c];
+}
+
+// Mass properties of a closed triangle surface at density rho: signed
+// tetrahedra from a reference point (divergence theorem); the covariance of
+// a tetrahedron with one vertex at the origin is V/20 (sum_j w_j w_j^T + s s^T).
+static int mass_properties(const fascia_organ *o, fascia_real rho, fascia_real *mass, fascia_real *centre,
+                           fascia_real *inertia) {
+  if (o->vertex_count < 4 || o->triangle_count < 4) return 0;
+  fascia_real ref[3] = {0, 0, 0};
+  for (int32_t v = 0; v < o->vertex_count; ++v)
+    for (int c = 0; c < 3; ++c) ref[c] += o->vertices[3 * v + c] / o->vertex_count;
+  fascia_real V = 0, first[3] = {0, 0, 0}, C[9] = {0};
+  for (int32_t t = 0; t < o->triangle_count; ++t) {
+    fascia_real w[3][3], s[3] = {0, 0, 0};
+    for (int j = 0; j < 3; ++j)
+      for (int c = 0; c < 3; ++c) {
+        w[j][c] = o->vertices[3 * o->triangles[3 * t + j] + c] - ref[c];
+        s[c] += w[j][c];
+      }
+    fascia_real bc[3];
+    fascia_pt_cross(w[1], w[2], bc);
+    const fascia_real vol = fascia_pt_dot3(w[0], bc) / 6;
+    V += vol;
+    for (int c = 0; c < 3; ++c) first[c] += vol * s[c] / 4;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c)
+        C[3 * r + c] += vol / 20 * (w[0][r] * w[0][c] + w[1][r] * w[1][c] + w[2][r] * w[2][c] + s[r] * s[c]);
+  }
+  if (!(fabs(V) > 0) || !isfinite(V)) return 0;
+  if (V < 0) { // inward orientation
+    V = -V;
+    for (int c = 0; c < 3; ++c) first[c] = -first[c];
+    for (int k = 0; k < 9; ++k) C[k] = -C[k];
+  }
+  fascia_real g[3];
+  for (int c = 0; c < 3; ++c) g[c] = first[c] / V, centre[c] = ref[c] + g[c];
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) C[3 * r + c] -= V * g[r] * g[c];
+  const fascia_real tr = C[0] + C[4] + C[8];
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) inertia[3 * r + c] = rho * ((r == c) * tr - C[3 * r + c]);
+  *mass = rho * V;
+  return 1;
+}
+
+// ---------------------------------------------------------------- create
+
+void fascia_organs_destroy(fascia_organs **organs) {
+  if (!organs || !*organs) return;
+  fascia_organs *O = *organs;
+  free(O->frame_offsets), free(O->frames), free(O->driven), free(O->master), free(O->mass), free(O->centre);
+  free(O->inertia), free(O->velocity), free(O->free_pose), free(O->target), free(O->world_inertia);
+  free(O->geometric), free(O->frame_body), free(O->target_x), free(O->target_q), free(O->full_mask), free(O->w);
+  free(O->y);
+  free(O);
+  *organs = NULL;
+}
+
+// Each organ's coupling frames, once each, in coupling-table order.
+static fascia_status list_frames(fascia_ctx *ctx, fascia_organs *O) {
+  const fascia_model *m = O->model;
+  const int32_t N = m->frame_count, K = m->organ_count;
+  int32_t *seen = malloc(((size_t)N + 1) * sizeof(int32_t));
+  FASCIA_CHECK(seen, ctx, FASCIA_ERR_MEMORY, "organs: out of memory");
+  for (int32_t i = 0; i < N; ++i) seen[i] = -1;
+  int32_t count = 0;
+  for (int32_t k = 0; k < K; ++k) {
+    O->frame_offsets[k] = count;
+    for (int32_t c = 0; c < m->coupling_count; ++c) {
+      const int32_t i = m->coupling_frame[c];
+      if (m->coupling_organ[c] != k || seen[i] == k) continue;
+      seen[i] = k;
+      O->frames[count++] = i;
+    }
+  }
+  O->frame_offsets[K] = count;
+  free(seen);
+  return FASCIA_OK;
+}
+
+// Masters, mass properties, and the frame -> body table of rigid organs.
+static fascia_status setup_bodies(fascia_ctx *ctx, fascia_organs *O) {
+  const fascia_model *m = O->model;
+  for (int32_t k = 0; k < m->organ_count; ++k) {
+    O->master[k] = -1;
+    O->free_pose[7 * k + 3] = 1;
+    if (m->organs[k].kind != FASCIA_ORGAN_RIGID) continue;
+    const fascia_organ *o = m->organs + k;
+    FASCIA_CHECK(mass_properties(o, FASCIA_ORGAN_DENSITY, O->mass + k, O->centre + 3 * k, O->inertia + 9 * k), ctx,
+                 FASCIA_ERR_ARGUMENT,
+                 "organ '%s' is rigid but its surface (%d vertices, %d triangles) encloses no volume; give it a "
+                 "closed surface or make it fixed or prescribed",
+                 o->name, (int)o->vertex_count, (int)o->triangle_count);
+    memcpy(O->free_pose + 7 * k, O->centre + 3 * k, 3 * sizeof(fascia_real));
+    fascia_real best = INFINITY;
+    for (int32_t f = O->frame_offsets[k]; f < O->frame_offsets[k + 1]; ++f) {
+      const int32_t i = O->frames[f];
+      FASCIA_CHECK(m->frame_kind[i] == FASCIA_FRAME_FREE, ctx, FASCIA_ERR_ARGUMENT,
+                   "organ '%s' is rigid but its coupling frame %d is %s in the model; a frame on a rigid organ "
+                   "must be free (re-run 'fascia prep')",
+                   o->name, (int)i, m->frame_kind[i] == FASCIA_FRAME_FIXED ? "fixed" : "prescribed");
+      FASCIA_CHECK(O->frame_body[i] < 0, ctx, FASCIA_ERR_ARGUMENT,
+                   "frame %d is a coupling frame of the rigid organs '%s' and '%s'; it can follow one only", (int)i,
+                   m->organs[O->frame_body[i]].name, o->name);
+      O->frame_body[i] = k;
+      fascia_real r[3];
+      for (int c = 0; c < 3; ++c) r[c] = m->frame_position[3 * i + c] - O->centre[3 * k + c];
+      if (fascia_pt_dot3(r, r) < best) best = fascia_pt_dot3(r, r), O->master[k] = i;
+    }
+  }
+  return FASCIA_OK;
+}
+
+fascia_status fascia_organs_create(fascia_ctx *ctx, const fascia_model *m, fascia_organs **out) {
+  *out = NULL;
+  if (m->organ_count == 0) return FASCIA_OK;
+  fascia_organs *O = calloc(1, sizeof *O);
+  FASCIA_CHECK(O, ctx, FASCIA_ERR_MEMORY, "organs: out of memory");
+  const int64_t N = m->frame_count, K = m->organ_count;
+  O->model = m;
+  O->organ_count = m->organ_count;
+  O->frame_count = m->frame_count;
+  O->frame_offsets = fascia_calloc(K + 1, sizeof(int32_t));
+  O->frames = fascia_calloc(m->coupling_count + 1, sizeof(int32_t));
+  O->driven = fascia_calloc(K, 1);
+  O->master = fascia_calloc(K, sizeof(int32_t));
+  O->mass = fascia_calloc(K, sizeof(fascia_real));
+  O->centre = fascia_calloc(3 * K, sizeof(fascia_real));
+  O->inertia = fascia_calloc(9 * K, sizeof(fascia_real));
+  O->velocity = fascia_calloc(6 * K, sizeof(fascia_real));
+  O->free_pose = fascia_calloc(7 * K, sizeof(fascia_real));
+  O->target = fascia_calloc(6 * K, sizeof(fascia_real));
+  O->world_inertia = fascia_calloc(9 * K, sizeof(fascia_real));
+  O->geometric = fascia_calloc(9 * K, sizeof(fascia_real));
+  O->frame_body = fascia_calloc(N, sizeof(int32_t));
+  O->target_x = fascia_calloc(3 * N, sizeof(fascia_real));
+  O->target_q = fascia_calloc(4 * N, sizeof(fascia_real));
+  O->full_mask = fascia_calloc(6 * N, 1);
+  O->w = fascia_calloc(6 * N, sizeof(fascia_real));
+  O->y = fascia_calloc(6 * N, sizeof(fascia_real));
+  fascia_status status = FASCIA_OK;
+  if (!O->frame_offsets || !O->frames || !O->driven || !O->master || !O->mass || !O->centre || !O->inertia ||
+      !O->velocity || !O->free_pose || !O->target || !O->world_inertia || !O->geometric || !O->frame_body ||
+      !O->target_x || !O->target_q || !O->full_mask || !O->w || !O->y) {
+    status = FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "organs: out of memory for %lld frames", (long long)N);
+    goto cleanup;
+  }
+  for (int64_t i = 0; i < N; ++i) O->frame_body[i] = -1;
+  for (int64_t k = 0; k < K; ++k)
+    for (int c = 0; c < 3; ++c) O->world_inertia[9 * k + 4 * c] = 1;
+  FASCIA_TRY_GOTO(list_frames(ctx, O));
+  FASCIA_TRY_GOTO(setup_bodies(ctx, O));
+  *out = O;
+  return FASCIA_OK;
+cleanup:
+  fascia_organs_destroy(&O);
+  return status;
+}
+
+// A body is simulated when it is rigid, has a master and is not driven.
+static int active(const fascia_organs *O, int32_t b) { return O->master[b] >= 0 && !O->driven[b]; }
+
+int32_t fascia_organs_body_count(const fascia_organs *O) {
+  int32_t count = 0;
+  for (int32_t b = 0; O && b < O->organ_count; ++b) count += active(O, b);
+  return count;
+}
+
+void fascia_organs_masks(fascia_organs *O, unsigned char *mask) {
+  const fascia_model *m = O->model;
+  for (int32_t i = 0; i < O->frame_count; ++i)
+    for (int c = 0; c < 6; ++c) O->full_mask[6 * i + c] = m->frame_kind[i] == FASCIA_FRAME_FREE;
+  for (int32_t k = 0; k < O->organ_count; ++k)
+    for (int32_t f = O->frame_offsets[k]; O->driven[k] && f < O->frame_offsets[k + 1]; ++f)
+      memset(O->full_mask + 6 * (int64_t)O->frames[f], 0, 6);
+  memcpy(mask, O->full_mask, 6 * (size_t)O->frame_count);
+  for (int32_t i = 0; i < O->frame_count; ++i) {
+    const int32_t b = O->frame_body[i];
+    if (b >= 0 && active(O, b) && O->master[b] != i) memset(mask + 6 * (int64_t)i, 0, 6);
+  }
+}
+
+// ---------------------------------------------------------------- steps
+
+void fascia_organs_place(const fascia_organs *O, fascia_real *x, fascia_real *q) {
+  for (int32_t k = 0; O && k < O->organ_count; ++k)
+    for (int32_t f = O->frame_offsets[k]; O->driven[k] && f < O->frame_offsets[k + 1]; ++f) {
+      const int32_t i = O->frames[f];
+      memcpy(x + 3 * i, O->target_x + 3 * i, 3 * sizeof(fascia_real));
+      memcpy(q + 4 * i, O->target_q + 4 * i, 4 * sizeof(fascia_real));
+    }
+}
+
+void fascia_organs_expand(const fascia_organs *O, const fascia_solver *S, fascia_real *d) {
+  for (int32_t b = 0; O && b < O->organ_count; ++b) {
+    if (!active(O, b)) continue;
+    const int32_t m = O->master[b];
+    fascia_real Q0[4], Q[4], R[9], xm[3];
+    body_rotation(O, b, S->q_base, Q0, NULL);
+    fascia_pt_quat_exp(d + 6 * m + 3, Q);
+    fascia_real t[4];
+    fascia_pt_quat_mul(Q, Q0, t);
+    fascia_pt_quat_normalize(t);
+    fascia_pt_quat_to_mat(t, R);
+    for (int c = 0; c < 3; ++c) xm[c] = S->x_base[3 * m + c] + d[6 * m + c];
+    for (int32_t f = O->frame_offsets[b]; f < O->frame_offsets[b + 1]; ++f) {
+      const int32_t i = O->frames[f];
+      if (i == m) continue;
+      fascia_real r[3], a[3];
+      rest_offset(O, b, i, r);
+      fascia_pt_mat_vec(R, r, a);
+      for (int c = 0; c < 3; ++c) {
+        d[6 * i + c] = xm[c] + a[c] - S->x_base[3 * i + c];
+        d[6 * i + 3 + c] = d[6 * m + 3 + c];
+      }
+    }
+  }
+}
+
+void fascia_organs_step_begin(fascia_organs *O, fascia_solver *S, fascia_real h) {
+  if (!O) return;
+  for (int32_t b = 0; b < O->organ_count; ++b) {
+    if (O->driven[b]) {
+      for (int32_t f = O->frame_offsets[b]; f < O->frame_offsets[b + 1]; ++f) {
+        const int32_t i = O->frames[f];
+        fascia_real *d = S->d + 6 * i, qc[4], rel[4];
+        for (int c = 0; c < 3; ++c) d[c] = O->target_x[3 * i + c] - S->x_base[3 * i + c];
+        quat_conj(S->q_base + 4 * i, qc);
+        fascia_pt_quat_mul(O->target_q + 4 * i, qc, rel);
+        fascia_pt_quat_log(rel, d + 3);
+      }
+      continue;
+    }
+    if (!active(O, b)) continue;
+    fascia_real Q0[4], R0[9], IR[9];
+    body_rotation(O, b, S->q_base, Q0, R0);
+    fascia_pt_mat_mult(O->inertia + 9 * b, R0, IR); // I R0^T
+    fascia_pt_mat_mul(R0, IR, O->world_inertia + 9 * b);
+    for (int c = 0; c < 6; ++c) O->target[6 * b + c] = h * O->velocity[6 * b + c];
+  }
+  fascia_organs_expand(O, S, S->d);
+}
+
+// Increment of body b's centre over the step: d_c = x_m + Q r_c - c0.
+static void centre_increment(const fascia_organs *O, const fascia_solver *S, int32_t b, fascia_real *dc) {
+  const int32_t m = O->master[b];
+  fascia_real Q[4], R[9], Q0[4], R0[9], r[3], a[3], a0[3];
+  body_rotation(O, b, S->q, Q, R);
+  body_rotation(O, b, S->q_base, Q0, R0);
+  rest_offset(O, b, -1, r);
+  fascia_pt_mat_vec(R, r, a);
+  fascia_pt_mat_vec(R0, r, a0);
+  for (int c = 0; c < 3; ++c) dc[c] = S->x[3 * m + c] + a[c] - S->x_base[3 * m + c] - a0[c];
+}
+
+void fascia_organs_step_end(fascia_organs *O, fascia_solver *S, fascia_real h) {
+  if (!O) return;
+  const fascia_real *g = S->sys->gravity;
+  for (int32_t b = 0; b < O->organ_count; ++b) {
+    fascia_real *v = O->velocity + 6 * b;
+    if (active(O, b)) {
+      centre_increment(O, S, b, v);
+      for (int c = 0; c < 3; ++c) v[c] /= h, v[3 + c] = S->d[6 * O->master[b] + 3 + c] / h;
+    } else if (S->model->organs[b].kind == FASCIA_ORGAN_RIGID && O->master[b] < 0) {
+      // free flight, backward Euler: no torque, constant angular velocity
+      fascia_real *pose = O->free_pose + 7 * b, phi[3];
+      for (int c = 0; c < 3; ++c) v[c] += h * g[c], pose[c] += h * v[c], phi[c] = h * v[3 + c];
+      fascia_pt_quat_rotate_by(phi, pose + 3);
+    }
+  }
+}
+
+// ---------------------------------------------------------------- reduction
+
+// g += T^T y for the offset a: (y_x, a x y_x + y_theta); the moment part
+// goes to mom so that the caller can apply the rotation map's Jacobian.
+static void restrict_add(const fascia_real *a, const fascia_real *y, fascia_real *gx, fascia_real *mom,
+                         fascia_real *gt) {
+  fascia_real ay[3];
+  fascia_pt_cross(a, y, ay);
+  for (int c = 0; c < 3; ++c) gx[c] += y[c], mom[c] += ay[c], gt[c] += y[3 + c];
+}
+
+// G += sym(g a^T) - (g.a) I: second derivative of g.x under a rotation of a.
+static void geometric_add(const fascia_real *g, const fascia_real *a, fascia_real *G) {
+  const fascia_real ga = fascia_pt_dot3(g, a);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) G[3 * r + c] += FASCIA_R(0.5) * (g[r] * a[c] + a[r] * g[c]) - (r == c) * ga;
+}
+
+fascia_real fascia_organs_reduce(fascia_organs *O, fascia_solver *S, fascia_real c1, fascia_real c2, int jacobian,
+                                 const fascia_real *d, fascia_real *gradient) {
+  if (!O) return 0;
+  const fascia_real s = S->sys->gravity_scale, *gravity = S->sys->gravity;
+  fascia_real energy = 0;
+  for (int32_t b = 0; b < O->organ_count; ++b) {
+    if (!active(O, b)) continue;
+    const int32_t m = O->master[b];
+    const fascia_real mass = O->mass[b], *Iw = O->world_inertia + 9 * b, *t = O->target + 6 * b;
+    const fascia_real *phi = d + 6 * m + 3;
+    fascia_real Q[4], R[9], r[3], ac[3], dc[3], cpos[3];
+    body_rotation(O, b, S->q, Q, R);
+    rest_offset(O, b, -1, r);
+    fascia_pt_mat_vec(R, r, ac);
+    centre_increment(O, S, b, dc);
+    for (int c = 0; c < 3; ++c) cpos[c] = S->x[3 * m + c] + ac[c];
+    // body energy: gravity, inertia and mass damping (newton.c's Phi)
+    fascia_real e[3], p[3], Ie[3], Ip[3];
+    for (int c = 0; c < 3; ++c) e[c] = dc[c] - t[c], p[c] = phi[c] - t[3 + c];
+    fascia_pt_mat_vec(Iw, p, Ie);
+    fascia_pt_mat_vec(Iw, phi, Ip);
+    energy += -s * mass * fascia_pt_dot3(gravity, cpos) +
+              FASCIA_R(0.5) * c1 * (mass * fascia_pt_dot3(e, e) + fascia_pt_dot3(p, Ie)) +
+              FASCIA_R(0.5) * c2 * (mass * fascia_pt_dot3(dc, dc) + fascia_pt_dot3(phi, Ip));
+    if (!gradient) continue;
+    fascia_real y[6], gx[3] = {0, 0, 0}, mom[3] = {0, 0, 0}, gt[3] = {0, 0, 0}, *G = O->geometric + 9 * b;
+    for (int c = 0; c < 3; ++c) {
+      y[c] = -s * mass * gravity[c] + c1 * mass * e[c] + c2 * mass * dc[c];
+      y[3 + c] = c1 * Ie[c] + c2 * Ip[c];
+    }
+    memset(G, 0, 9 * sizeof(fascia_real));
+    restrict_add(ac, y, gx, mom, gt);
+    geometric_add(y, ac, G);
+    for (int32_t f = O->frame_offsets[b]; f < O->frame_offsets[b + 1]; ++f) {
+      const int32_t i = O->frames[f];
+      if (i == m) continue;
+      fascia_real a[3], *gi = gradient + 6 * i;
+      for (int c = 0; c < 3; ++c) a[c] = S->x[3 * i + c] - S->x[3 * m + c];
+      restrict_add(a, gi, gx, mom, gt);
+      geometric_add(gi, a, G);
+      memset(gi, 0, 6 * sizeof(fascia_real));
+    }
+    fascia_real jm[3];
+    if (jacobian) left_jacobian_t(phi, mom, jm);
+    else memcpy(jm, mom, sizeof jm);
+    for (int c = 0; c < 3; ++c) gradient[6 * m + c] += gx[c], gradient[6 * m + 3 + c] += jm[c] + gt[c];
+  }
+  return energy;
+}
+
+// w = T y: (y_x - a x y_theta, y_theta)
+static void prolong(const fascia_real *a, const fascia_real *v, fascia_real *w) {
+  fascia_real av[3];
+  fascia_pt_cross(a, v + 3, av);
+  for (int c = 0; c < 3; ++c) w[c] = v[c] - av[c], w[3 + c] = v[3 + c];
+}
+
+void fascia_organs_operator_apply(const fascia_operator *op, const fascia_real *v, fascia_real *out) {
+  const fascia_organs *O = op->organs;
+  const fascia_system *sys = op->sys;
+  const int64_t n = 6 * (int64_t)O->frame_count;
+  memcpy(O->w, v, (size_t)n * sizeof(fascia_real));
+  for (int32_t b = 0; b < O->organ_count; ++b) {
+    if (!active(O, b)) continue;
+    const int32_t m = O->master[b];
+    for (int32_t f = O->frame_offsets[b]; f < O->frame_offsets[b + 1]; ++f) {
+      const int32_t i = O->frames[f];
+      if (i == m) continue;
+      fascia_real a[3];
+      for (int c = 0; c < 3; ++c) a[c] = sys->x[3 * i + c] - sys->x[3 * m + c];
+      prolong(a, v + 6 * m, O->w + 6 * i);
+    }
+  }
+  fascia_operator inner = *op;
+  inner.organs = NULL;
+  inner.mask = O->full_mask;
+  fascia_operator_apply(&inner, O->w, out);
+  for (int32_t b = 0; b < O->organ_count; ++b) {
+    if (!active(O, b)) continue;
+    const int32_t m = O->master[b];
+    fascia_real gx[3] = {0, 0, 0}, mom[3] = {0, 0, 0}, gt[3] = {0, 0, 0};
+    for (int32_t f = O->frame_offsets[b]; f < O->frame_offsets[b + 1]; ++f) {
+      const int32_t i = O->frames[f];
+      if (i == m) continue;
+      fascia_real a[3];
+      for (int c = 0; c < 3; ++c) a[c] = sys->x[3 * i + c] - sys->x[3 * m + c];
+      restrict_add(a, out + 6 * i, gx, mom, gt);
+    }
+    // the body: mass and inertia through the centre, geometric term
+    fascia_real Q[4], R[9], r[3], ac[3], wc[6], yc[6], Gv[3];
+    body_rotation(O, b, sys->q, Q, R);
+    rest_offset(O, b, -1, r);
+    fascia_pt_mat_vec(R, r, ac);
+    prolong(ac, v + 6 * m, wc);
+    const fascia_real coefficient = op->mass_coefficient;
+    for (int c = 0; c < 3; ++c) yc[c] = coefficient * O->mass[b] * wc[c];
+    fascia_pt_mat_vec(O->world_inertia + 9 * b, wc + 3, yc + 3);
+    for (int c = 0; c < 3; ++c) yc[3 + c] *= coefficient;
+    restrict_add(ac, yc, gx, mom, gt);
+    fascia_pt_mat_vec(O->geometric + 9 * b, v + 6 * m + 3, Gv);
+    for (int c = 0; c < 3; ++c) out[6 * m + c] += gx[c], out[6 * m + 3 + c] += mom[c] + gt[c] + Gv[c];
+  }
+  for (int64_t k = 0; k < n; ++k)
+    if (!op->mask[k]) out[k] = 0;
+}
+
+// out = T^T B T for a 6x6 block B and offset a.
+static void congruence(const fascia_real *B, const fascia_real *a, fascia_real *out) {
+  fascia_real T[36] = {0}, BT[36];
+  for (int c = 0; c < 6; ++c) T[7 * c] = 1;
+  // -[a]x in the upper right block
+  T[0 * 6 + 4] = a[2], T[0 * 6 + 5] = -a[1];
+  T[1 * 6 + 3] = -a[2], T[1 * 6 + 5] = a[0];
+  T[2 * 6 + 3] = a[1], T[2 * 6 + 4] = -a[0];
+  for (int r = 0; r < 6; ++r)
+    for (int c = 0; c < 6; ++c) {
+      fascia_real sum = 0;
+      for (int k = 0; k < 6; ++k) sum += B[6 * r + k] * T[6 * k + c];
+      BT[6 * r + c] = sum;
+    }
+  for (int r = 0; r < 6; ++r)
+    for (int c = 0; c < 6; ++c) {
+      fascia_real sum = 0;
+      for (int k = 0; k < 6; ++k) sum += T[6 * k + r] * BT[6 * k + c];
+      out[6 * r + c] = sum;
+    }
+}
+
+// Inverse of a symmetric 6x6 block by Cholesky after the smallest shift
+// that makes it positive (the preconditioner must stay positive for CG).
+static void spd_inverse(const fascia_real *B, fascia_real *inv) {
+  fascia_real trace = 0;
+  for (int c = 0; c < 6; ++c) trace += fabs(B[7 * c]);
+  if (trace == 0 || !isfinite(trace)) trace = 1;
+  fascia_real shift = 0;
+  for (int attempt = 0; attempt < 60; ++attempt, shift = shift == 0 ? 1e-10 * trace : 4 * shift) {
+    fascia_real L[36];
+    memcpy(L, B, sizeof L);
+    int ok = 1;
+    for (int j = 0; j < 6 && ok; ++j) {
+      fascia_real dj = L[7 * j] + shift;
+      for (int k = 0; k < j; ++k) dj -= L[6 * j + k] * L[6 * j + k];
+      if (!(dj > 0)) ok = 0;
+      else {
+        dj = sqrt(dj);
+        L[7 * j] = dj;
+        for (int i = j + 1; i < 6; ++i) {
+          fascia_real sum = L[6 * i + j];
+          for (int k = 0; k < j; ++k) sum -= L[6 * i + k] * L[6 * j + k];
+          L[6 * i + j] = sum / dj;
+        }
+      }
+    }
+    if (!ok) continue;
+    for (int col = 0; col < 6; ++col) {
+      fascia_real z[6];
+      for (int i = 0; i < 6; ++i) {
+        fascia_real sum = (i == col);
+        for (int k = 0; k < i; ++k) sum -= L[6 * i + k] * z[k];
+        z[i] = sum / L[7 * i];
+      }
+      for (int i = 5; i >= 0; --i) {
+        fascia_real sum = z[i];
+        for (int k = i + 1; k < 6; ++k) sum -= L[6 * k + i] * inv[6 * k + col];
+        inv[6 * i + col] = sum / L[7 * i];
+      }
+    }
+    return;
+  }
+  memset(inv, 0, 36 * sizeof(fascia_real));
+  for (int c = 0; c < 6; ++c) inv[7 * c] = 6 / trace;
+}
+
+void fascia_organs_precond(const fascia_organs *O, const fascia_operator *op, fascia_preconditioner *pc,
+                           fascia_real *blocks) {
+  if (!O) return;
+  const fascia_system *sys = op->sys;
+  for (int32_t b = 0; b < O->organ_count; ++b) {
+    if (!active(O, b)) continue;
+    const int32_t m = O->master[b];
+    fascia_real *B = blocks + 36 * (int64_t)m, TBT[36];
+    for (int32_t f = O->frame_offsets[b]; f < O->frame_offsets[b + 1]; ++f) {
+      const int32_t i = O->frames[f];
+      if (i == m) continue;
+      fascia_real a[3];
+      for (int c = 0; c < 3; ++c) a[c] = sys->x[3 * i + c] - sys->x[3 * m + c];
+      congruence(blocks + 36 * (int64_t)i, a, TBT);
+      for (int k = 0; k < 36; ++k) B[k] += TBT[k];
+    }
+    fascia_real Q[4], R[9], r[3], ac[3], M[36] = {0};
+    body_rotation(O, b, sys->q, Q, R);
+    rest_offset(O, b, -1, r);
+    fascia_pt_mat_vec(R, r, ac);
+    for (int c = 0; c < 3; ++c) M[7 * c] = op->mass_coefficient * O->mass[b];
+    for (int rr = 0; rr < 3; ++rr)
+      for (int c = 0; c < 3; ++c)
+        M[6 * (3 + rr) + 3 + c] = op->mass_coefficient * O->world_inertia[9 * b + 3 * rr + c] +
+                                  O->geometric[9 * b + 3 * rr + c];
+    congruence(M, ac, TBT);
+    for (int k = 0; k < 36; ++k) B[k] += TBT[k];
+    fascia_real *inv = pc->inverse + 36 * (int64_t)m;
+    if (pc->kind == FASCIA_PRECOND_BLOCK_JACOBI) {
+      spd_inverse(B, inv);
+    } else if (pc->kind == FASCIA_PRECOND_JACOBI) {
+      fascia_real trace = 0;
+      for (int c = 0; c < 6; ++c) trace += fabs(B[7 * c]);
+      memset(inv, 0, 36 * sizeof(fascia_real));
+      for (int c = 0; c < 6; ++c) inv[7 * c] = fabs(B[7 * c]) > 1e-12 * trace ? 1 / fabs(B[7 * c]) : 6 / trace;
+    }
+  }
+}
+
+fascia_real fascia_organs_load_norm2(const fascia_organs *O, const fascia_solver *S) {
+  fascia_real sum = 0;
+  const fascia_system *sys = S->sys;
+  for (int32_t b = 0; O && b < O->organ_count; ++b) {
+    if (!active(O, b)) continue;
+    fascia_real f[3];
+    for (int c = 0; c < 3; ++c) f[c] = O->mass[b] * sys->gravity[c];
+    for (int32_t k = O->frame_offsets[b]; k < O->frame_offsets[b + 1]; ++k) {
+      const int32_t i = O->frames[k];
+      if (i == O->master[b]) continue;
+      for (int c = 0; c < 3; ++c) f[c] += sys->frame_mass[i] * sys->gravity[c] + S->model->frame_load[6 * i + c];
+    }
+    sum += sys->gravity_scale * sys->gravity_scale * fascia_pt_dot3(f, f);
+  }
+  return sum;
+}
+
+// ---------------------------------------------------------------- state
+
+size_t fascia_organs_state_size(const fascia_organs *O) { return O ? 13 * (size_t)O->organ_count : 0; }
+
+void fascia_organs_save(const fascia_organs *O, fascia_real *buffer) {
+  if (!O) return;
+  memcpy(buffer, O->velocity, 6 * (size_t)O->organ_count * sizeof(fascia_real));
+  memcpy(buffer + 6 * O->organ_count, O->free_pose, 7 * (size_t)O->organ_count * sizeof(fascia_real));
+}
+
+void fascia_organs_restore(fascia_organs *O, const fascia_real *buffer) {
+  if (!O) return;
+  memcpy(O->velocity, buffer, 6 * (size_t)O->organ_count * sizeof(fascia_real));
+  memcpy(O->free_pose, buffer + 6 * O->organ_count, 7 * (size_t)O->organ_count * sizeof(fascia_real));
+}
+
+// Puts body b's slaves rigidly on its master, with the rigid velocity field.
+static void place_slaves(fascia_organs *O, fascia_solver *S, int32_t b) {
+  const int32_t m = O->master[b];
+  fascia_real Q[4], R[9], r[3], a[3];
+  body_rotation(O, b, S->q, Q, R);
+  const fascia_real *um = S->u + 6 * m;
+  for (int32_t f = O->frame_offsets[b]; f < O->frame_offsets[b + 1]; ++f) {
+    const int32_t i = O->frames[f];
+    if (i == m) continue;
+    rest_offset(O, b, i, r);
+    fascia_pt_mat_vec(R, r, a);
+    fascia_real wa[3];
+    fascia_pt_cross(um + 3, a, wa);
+    for (int c = 0; c < 3; ++c) {
+      S->x[3 * i + c] = S->x[3 * m + c] + a[c];
+      S->u[6 * i + c] = um[c] + wa[c];
+      S->u[6 * i + 3 + c] = um[3 + c];
+    }
+    fascia_pt_quat_mul(Q, O->model->frame_rotation + 4 * i, S->q + 4 * i);
+    fascia_pt_quat_normalize(S->q + 4 * i);
+  }
+  rest_offset(O, b, -1, r);
+  fascia_pt_mat_vec(R, r, a);
+  fascia_real wa[3];
+  fascia_pt_cross(um + 3, a, wa);
+  for (int c = 0; c < 3; ++c) O->velocity[6 * b + c] = um[c] + wa[c], O->velocity[6 * b + 3 + c] = um[3 + c];
+}
+
+void fascia_organs_sync(fascia_organs *O, fascia_solver *S) {
+  for (int32_t b = 0; O && b < O->organ_count; ++b)
+    if (active(O, b)) place_slaves(O, S, b);
+}
+
+fascia_real fascia_organs_kinetic_energy(const fascia_organs *O, const fascia_solver *S) {
+  fascia_real e = 0;
+  for (int32_t b = 0; O && b < O->organ_count; ++b) {
+    if (S->model->organs[b].kind != FASCIA_ORGAN_RIGID || O->driven[b]) continue;
+    const fascia_real *v = O->velocity + 6 * b;
+    fascia_real Q[4], R[9], Rw[3], IRw[3], w[3];
+    if (O->master[b] >= 0) body_rotation(O, b, S->q, Q, R);
+    else fascia_pt_quat_to_mat(O->free_pose + 7 * b + 3, R);
+    fascia_pt_mat_tvec(R, v + 3, Rw); // body-axes angular velocity
+    fascia_pt_mat_vec(O->inertia + 9 * b, Rw, IRw);
+    fascia_pt_mat_vec(R, IRw, w);
+    e += FASCIA_R(0.5) * (O->mass[b] * fascia_pt_dot3(v, v) + fascia_pt_dot3(v + 3, w));
+  }
+  return e;
+}
+
+fascia_real fascia_organs_potential_energy(const fascia_organs *O, const fascia_solver *S) {
+  fascia_real e = 0;
+  for (int32_t b = 0; O && b < O->organ_count; ++b) {
+    if (S->model->organs[b].kind != FASCIA_ORGAN_RIGID || O->driven[b]) continue;
+    fascia_real t[3], q[4];
+    (void)fascia_solver_organ_pose(S, b, t, q);
+    fascia_real R[9], c[3];
+    fascia_pt_quat_to_mat(q, R);
+    fascia_pt_mat_vec(R, O->centre + 3 * b, c);
+    for (int k = 0; k < 3; ++k) c[k] += t[k];
+    e -= O->mass[b] * fascia_pt_dot3(S->sys->gravity, c);
+  }
+  return e;
+}
+
+// ---------------------------------------------------------------- public API
+
+static fascia_status check_organ(const fascia_solver *S, int32_t organ, const char *what) {
+  FASCIA_CHECK(S, NULL, FASCIA_ERR_ARGUMENT, "%s: NULL solver", what);
+  FASCIA_CHECK(organ >= 0 && organ < S->model->organ_count, S->ctx, FASCIA_ERR_ARGUMENT,
+               "%s: organ %d does not exist (the model has %d organs)", what, (int)organ, (int)S->model->organ_count);
+  return FASCIA_OK;
+}
+
+fascia_status fascia_solver_organ_mass(const fascia_solver *S, int32_t organ, fascia_real *mass, fascia_real *centre,
+                                       fascia_real *inertia) {
+  FASCIA_TRY(check_organ(S, organ, "organ mass"));
+  fascia_real mm, cc[3], II[9];
+  const fascia_organ *o = S->model->organs + organ;
+  FASCIA_CHECK(mass_properties(o, FASCIA_ORGAN_DENSITY, &mm, cc, II), S->ctx, FASCIA_ERR_ARGUMENT,
+               "organ '%s': its surface encloses no volume", o->name);
+  if (mass) *mass = mm;
+  if (centre) memcpy(centre, cc, sizeof cc);
+  if (inertia) memcpy(inertia, II, sizeof II);
+  return FASCIA_OK;
+}
+
+fascia_status fascia_solver_organ_pose(const fascia_solver *S, int32_t organ, fascia_real *translation,
+                                       fascia_real *rotation) {
+  FASCIA_TRY(check_organ(S, organ, "organ pose"));
+  const fascia_organs *O = S->organs;
+  const fascia_organ *o = S->model->organs + organ;
+  FASCIA_CHECK(!O->driven[organ], S->ctx, FASCIA_ERR_UNSUPPORTED,
+               "organ '%s' is driven by the caller: its pose is the caller's", o->name);
+  fascia_real R[9], p[3];
+  if (o->kind == FASCIA_ORGAN_PRESCRIBED && o->motion >= 0) {
+    // x = pivot + T + Q (x_rest - pivot)
+    const fascia_motion *mo = S->model->motions + o->motion;
+    fascia_real T[3];
+    fascia_motion_pose(mo, S->time, T, rotation);
+    fascia_pt_quat_to_mat(rotation, R);
+    fascia_pt_mat_vec(R, mo->pivot, p);
+    for (int c = 0; c < 3; ++c) translation[c] = mo->pivot[c] + T[c] - p[c];
+  } else if (o->kind == FASCIA_ORGAN_RIGID && O->master[organ] >= 0) {
+    // x_m = t + Q x_m,rest
+    const int32_t m = O->master[organ];
+    body_rotation(O, organ, S->q, rotation, R);
+    fascia_pt_mat_vec(R, S->model->frame_position + 3 * m, p);
+    for (int c = 0; c < 3; ++c) translation[c] = S->x[3 * m + c] - p[c];
+  } else if (o->kind == FASCIA_ORGAN_RIGID) {
+    // c = t + Q c_rest
+    memcpy(rotation, O->free_pose + 7 * organ + 3, 4 * sizeof(fascia_real));
+    fascia_pt_quat_to_mat(rotation, R);
+    fascia_pt_mat_vec(R, O->centre + 3 * organ, p);
+    for (int c = 0; c < 3; ++c) translation[c] = O->free_pose[7 * organ + c] - p[c];
+  } else {
+    for (int c = 0; c < 3; ++c) translation[c] = 0;
+    rotation[0] = 1, rotation[1] = rotation[2] = rotation[3] = 0;
+  }
+  return FASCIA_OK;
+}
+
+fascia_status fascia_solver_organ_velocity(const fascia_solver *S, int32_t organ, fascia_real *linear,
+                                           fascia_real *angular) {
+  FASCIA_TRY(check_organ(S, organ, "organ velocity"));
+  const int rigid = S->model->organs[organ].kind == FASCIA_ORGAN_RIGID && !S->organs->driven[organ];
+  for (int c = 0; c < 3; ++c) {
+    if (linear) linear[c] = rigid ? S->organs->velocity[6 * organ + c] : 0;
+    if (angular) angular[c] = rigid ? S->organs->velocity[6 * organ + 3 + c] : 0;
+  }
+  return FASCIA_OK;
+}
+
+int32_t fascia_solver_organ_frame_count(const fascia_solver *S, int32_t organ) {
+  if (!S || !S->organs || organ < 0 || organ >= S->model->organ_count) return 0;
+  return S->organs->frame_offsets[organ + 1] - S->organs->frame_offsets[organ];
+}
+
+fascia_status fascia_solver_organ_frames(const fascia_solver *S, int32_t organ, int32_t *frames) {
+  FASCIA_TRY(check_organ(S, organ, "organ frames"));
+  const fascia_organs *O = S->organs;
+  for (int32_t f = O->frame_offsets[organ]; f < O->frame_offsets[organ + 1]; ++f)
+    frames[f - O->frame_offsets[organ]] = O->frames[f];
+  return FASCIA_OK;
+}
+
+fascia_status fascia_solver_organ_set_frames(fascia_solver *S, int32_t organ, const fascia_real *positions,
+                                             const fascia_real *rotations) {
+  FASCIA_TRY(check_organ(S, organ, "set organ frames"));
+  fascia_organs *O = S->organs;
+  const char *name = S->model->organs[organ].name;
+  const int32_t begin = O->frame_offsets[organ], count = O->frame_offsets[organ + 1] - begin;
+  FASCIA_CHECK(positions && rotations, S->ctx, FASCIA_ERR_ARGUMENT, "set organ '%s' frames: NULL array", name);
+  for (int32_t k = 0; k < count; ++k) {
+    const fascia_real *x = positions + 3 * k, *q = rotations + 4 * k;
+    const fascia_real norm = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    FASCIA_CHECK(isfinite(x[0]) && isfinite(x[1]) && isfinite(x[2]) && isfinite(norm) && norm > 1e-12, S->ctx,
+                 FASCIA_ERR_ARGUMENT,
+                 "set organ '%s' frames: coupling frame %d (frame %d) has a non-finite position or a zero or "
+                 "non-finite rotation; nothing changed",
+                 name, (int)k, (int)O->frames[begin + k]);
+  }
+  for (int32_t k = 0; k < count; ++k) {
+    const int32_t i = O->frames[begin + k];
+    const fascia_real *q = rotations + 4 * k;
+    const fascia_real norm = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    memcpy(O->target_x + 3 * i, positions + 3 * k, 3 * sizeof(fascia_real));
+    for (int c = 0; c < 4; ++c) O->target_q[4 * i + c] = q[c] / norm;
+  }
+  if (!O->driven[organ]) {
+    O->driven[organ] = 1;
+    fascia_organs_masks(O, S->mask);
+  }
+  return FASCIA_OK;
+}
+
+fascia_status fascia_solver_organ_release(fascia_solver *S, int32_t organ) {
+  FASCIA_TRY(check_organ(S, organ, "release organ"));
+  fascia_organs *O = S->organs;
+  if (!O->driven[organ]) return FASCIA_OK;
+  O->driven[organ] = 0;
+  fascia_organs_masks(O, S->mask);
+  if (active(O, organ)) place_slaves(O, S, organ);
+  fascia_system_set_state(S->sys, S->x, S->q);
+  return FASCIA_OK;
+}
+
+fascia_status fascia_solver_organ_reaction(fascia_solver *S, int32_t organ, fascia_real *forces,
+                                           fascia_real *torques) {
+  FASCIA_TRY(check_organ(S, organ, "organ reaction"));
+  FASCIA_CHECK(forces, S->ctx, FASCIA_ERR_ARGUMENT, "organ reaction: NULL forces");
+  fascia_organs *O = S->organs;
+  fascia_real energy, *g = O->y;
+  const fascia_real scale = S->sys->gravity_scale;
+  S->sys->gravity_scale = 1;
+  fascia_system_set_state(S->sys, S->x, S->q);
+  fascia_status st = fascia_system_evaluate(S->sys, g, &energy);
+  S->sys->gravity_scale = scale;
+  FASCIA_TRY(st);
+  // the gradient holds -frame_load too: take it out
+  const fascia_real *load = S->model->frame_load;
+  for (int32_t f = O->frame_offsets[organ]; f < O->frame_offsets[organ + 1]; ++f) {
+    const int32_t i = O->frames[f], k = f - O->frame_offsets[organ];
+    for (int c = 0; c < 3; ++c) {
+      forces[3 * k + c] = -(g[6 * i + c] + load[6 * i + c]);
+      if (torques) torques[3 * k + c] = -(g[6 * i + 3 + c] + load[6 * i + 3 + c]);
+    }
+  }
+  return FASCIA_OK;
+}

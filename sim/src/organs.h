@@ -1,0 +1,70 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// Organ models inside the solver (organs.c): rigid organs as one 6-DOF body
+// whose coupling frames move rigidly with it, eliminated from the Newton
+// systems by a prolongation P; organs driven by an outside simulator. See
+// the design note at the top of organs.c.
+#ifndef FASCIA_SRC_ORGANS_H
+#define FASCIA_SRC_ORGANS_H
+
+#include "solver_internal.h"
+
+/// Builds the organ state of a solver: mass properties of rigid organs, the
+/// master and slave frames, the masks. Checks that every coupling frame of a
+/// rigid organ is a free frame of one rigid organ only. *out is NULL when
+/// the model has no organ.
+FASCIA_INTERN fascia_status fascia_organs_create(fascia_ctx *ctx, const fascia_model *model, fascia_organs **out);
+FASCIA_INTERN void fascia_organs_destroy(fascia_organs **organs);
+
+/// Fills the solver's mask (free DOFs of the reduced coordinates: free
+/// tissue frames and the master frame of each simulated rigid organ) and
+/// the organs' own full mask (every frame the tissue may move).
+FASCIA_INTERN void fascia_organs_masks(fascia_organs *O, unsigned char *mask);
+
+/// Static solve: puts frames driven by the caller at their targets.
+FASCIA_INTERN void fascia_organs_place(const fascia_organs *O, fascia_real *x, fascia_real *q);
+/// Dynamic step of length h: anchors the bodies at the step's start
+/// (solver->x_base, q_base), sets their inertia targets and world inertia,
+/// the increments of frames driven by the caller, and expands d.
+FASCIA_INTERN void fascia_organs_step_begin(fascia_organs *O, fascia_solver *S, fascia_real h);
+/// After a successful step of length h: the bodies' velocities, and free
+/// flight of rigid organs without coupling frames.
+FASCIA_INTERN void fascia_organs_step_end(fascia_organs *O, fascia_solver *S, fascia_real h);
+
+/// Prolongation of increments: overwrites the increments [6N] of each body's
+/// slave frames from its master's (exactly rigid, nonlinear in the rotation).
+FASCIA_INTERN void fascia_organs_expand(const fascia_organs *O, const fascia_solver *S, fascia_real *d);
+/// At the state objective() just evaluated (increments d, full gradient of
+/// Phi with respect to d, may be NULL): adds each body's gravity and inertia
+/// (coefficients c1, c2 of newton.c) and returns their energy; restricts the
+/// gradient to the master frames (T_i^T, with the Jacobian of the rotation
+/// map when `jacobian`), and keeps the geometric term of the reduced Hessian.
+FASCIA_INTERN fascia_real fascia_organs_reduce(fascia_organs *O, fascia_solver *S, fascia_real c1, fascia_real c2,
+                                               int jacobian, const fascia_real *d, fascia_real *gradient);
+// fascia_organs_operator_apply (out = P^T A P v plus the body's mass and
+// geometric terms) is declared in solver_internal.h for cg.c.
+/// After fascia_precond_build: each master's block becomes the reduced
+/// body block (blocks [36N]) and its inverse goes into the preconditioner.
+FASCIA_INTERN void fascia_organs_precond(const fascia_organs *O, const fascia_operator *op, fascia_preconditioner *pc,
+                                         fascia_real *blocks);
+/// Squared norm of the loads on the bodies (gravity of the body, loads and
+/// tissue weight on the slave frames), for the Newton tolerance.
+FASCIA_INTERN fascia_real fascia_organs_load_norm2(const fascia_organs *O, const fascia_solver *S);
+
+/// Body state that a failed step must restore: size in reals, save, restore.
+FASCIA_INTERN size_t fascia_organs_state_size(const fascia_organs *O);
+FASCIA_INTERN void fascia_organs_save(const fascia_organs *O, fascia_real *buffer);
+FASCIA_INTERN void fascia_organs_restore(fascia_organs *O, const fascia_real *buffer);
+/// After fascia_solver_set_state: bodies take the pose and velocity of
+/// their master frame; slave frames are put rigidly on it.
+FASCIA_INTERN void fascia_organs_sync(fascia_organs *O, fascia_solver *S);
+
+/// Kinetic energy of the bodies, and their gravity energy, J.
+FASCIA_INTERN fascia_real fascia_organs_kinetic_energy(const fascia_organs *O, const fascia_solver *S);
+FASCIA_INTERN fascia_real fascia_organs_potential_energy(const fascia_organs *O, const fascia_solver *S);
+
+/// Number of rigid organs simulated as bodies with coupling frames (0: the
+/// reduced and full coordinates coincide).
+FASCIA_INTERN int32_t fascia_organs_body_count(const fascia_organs *O);
+
+#endif

@@ -1,0 +1,90 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// A step the solver cannot take is rejected and redone as shorter steps
+// (fascia_solver_def.step_retries, require_convergence; issue 6 "detect it,
+// say so, and recover"): on a Neo-Hookean beam whose end is pushed 3 m into
+// it, steps of 0.05 s do not converge while it buckles. Without retries the
+// first such step is refused with FASCIA_ERR_NUMERIC, a message, and the
+// state and time exactly as before; with the default retries every step is
+// taken, some split, and the energy still does not grow once the push stops.
+// A push of 5 m buckles so violently that even 1/16 of the step fails: the
+// step is refused, the message names the shortest step tried.
+#include "stability.h"
+
+#define MOTION_END 1.0 // s
+#define DT 0.05
+
+static fascia_model *pushed_beam(fascia_ctx *ctx, int law, double plane, double push) {
+  fascia_scene_beam_def bd = stab_beam_def(6, law);
+  bd.gravity[2] = 0;
+  fascia_model *src = NULL;
+  if (fascia_scene_beam_build(ctx, &bd, &src) != FASCIA_OK) return NULL;
+  fascia_model *m = stab_copy_model(ctx, src, 0, 0, 0, 1, 1);
+  fascia_model_destroy(&src);
+  if (!m) return NULL;
+  fascia_motion *mo = &m->motions[0];
+  strcpy(mo->name, "push");
+  if (fascia_motion_alloc(ctx, mo, 2) != FASCIA_OK) {
+    fascia_model_destroy(&m);
+    return NULL;
+  }
+  mo->key_time[0] = 0, mo->key_time[1] = MOTION_END;
+  mo->key_translation[3] = -push;
+  mo->key_rotation[0] = mo->key_rotation[4] = 1;
+  for (int32_t i = 0; i < m->frame_count; ++i) {
+    const double x = m->frame_position[3 * i];
+    m->frame_kind[i] = x < 1e-9 ? FASCIA_FRAME_FIXED : fabs(x - plane) < 1e-9 ? FASCIA_FRAME_PRESCRIBED : FASCIA_FRAME_FREE;
+    m->frame_motion[i] = m->frame_kind[i] == FASCIA_FRAME_PRESCRIBED ? 0 : -1;
+  }
+  if (fascia_model_build_reverse(ctx, m) != FASCIA_OK || fascia_model_validate(ctx, m, "pushed beam") != FASCIA_OK)
+    fascia_model_destroy(&m);
+  return m;
+}
+
+int main(void) {
+  fascia_ctx *ctx = stab_ctx();
+  if (!ctx) return 1;
+  const fascia_solver_def defaults = fascia_solver_def_default();
+  CHECK(defaults.step_retries == 4);
+  CHECK(defaults.require_convergence == 0);
+  const int steps = (int)(1.2 * MOTION_END / DT + 0.5);
+  fascia_model *m = pushed_beam(ctx, FASCIA_LAW_NEOHOOKEAN, 4.0, 3.0);
+  CHECK(m != NULL);
+  if (!m) return 1;
+  fascia_solver_def sd = fascia_solver_def_default();
+  sd.time_step = DT;
+  sd.require_convergence = 1;
+  // no retries: refused at the first hard step, state kept (stab_run checks)
+  sd.step_retries = 0;
+  stab_result r = stab_run(ctx, "no retries", m, &sd, steps, MOTION_END, 1);
+  CHECK(!r.bad);
+  CHECK(r.numeric_errors == 1);
+  CHECK(r.steps < steps);
+  // default retries: all taken, some split
+  sd.step_retries = defaults.step_retries;
+  r = stab_run(ctx, "retries", m, &sd, steps, MOTION_END, 1);
+  CHECK(!r.bad);
+  CHECK(r.steps == steps);
+  CHECK(r.substeps > steps);
+  CHECK(r.converged == steps);
+  fascia_model_destroy(&m);
+  // beyond recovery: refused after splitting, the message says how far
+  m = pushed_beam(ctx, FASCIA_LAW_NEOHOOKEAN, 4.0, 5.0);
+  CHECK(m != NULL);
+  if (!m) return 1;
+  r = stab_run(ctx, "beyond recovery", m, &sd, steps, MOTION_END, 1);
+  CHECK(!r.bad);
+  CHECK(r.numeric_errors == 1);
+  CHECK(strstr(fascia_ctx_message(ctx), "shortest step tried") != NULL);
+  fascia_solver *s = NULL;
+  CHECK_OK(fascia_solver_create(ctx, m, &sd, &s), ctx);
+  fascia_solve_report rep;
+  fascia_status st = FASCIA_OK;
+  for (int n = 0; n < steps && st == FASCIA_OK; ++n) st = fascia_solver_step(s, &rep);
+  CHECK(st == FASCIA_ERR_NUMERIC);
+  CHECK(rep.rejected >= sd.step_retries); // split down to DT / 16 along one path at least
+  fascia_solver_destroy(&s);
+  fascia_model_destroy(&m);
+  fascia_ctx_destroy(&ctx);
+  return CHECK_RESULT();
+}

@@ -1,0 +1,44 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// Extra outputs of `fascia run` for people and plotting scripts (issue 5):
+// a per-step history CSV, the organ surfaces moved by the simulation as
+// ParaView files per saved step, and CSV snapshots of the scene at rest and
+// at the end for tools/plots/.
+#ifndef FASCIA_TOOLS_RUN_OUTPUTS_H
+#define FASCIA_TOOLS_RUN_OUTPUTS_H
+
+#include <stdio.h>
+
+#include "fascia/fascia.h"
+
+typedef struct run_outputs {
+  const char *history_path;  ///< --history FILE.csv
+  const char *organs_dir;    ///< --organs DIR: DIR/organs.pvd + DIR/<organ>-<k>.vtp
+  const char *snapshots_dir; ///< --snapshots DIR: tissue-{rest,final}.csv, organs-{rest,final}.csv
+  // state
+  fascia_ctx *ctx;
+  const fascia_model *model;
+  FILE *history;
+  FILE *pvd;
+  int organ_steps;
+  fascia_real *strain, *stress, *positions; ///< [S], [S], [3S]
+} run_outputs;
+
+/// Takes --history, --organs and --snapshots (with their values) out of
+/// argv. Returns -1 to go on, else the exit status (2: usage error).
+int run_outputs_take(int *argc, char **argv, run_outputs *out);
+/// Usage lines of the options.
+extern const char run_outputs_usage[];
+
+/// Before the first step: opens the files, writes the rest snapshot and the
+/// organs at the current state. On error the ctx holds the message.
+fascia_status run_outputs_begin(run_outputs *out, fascia_ctx *ctx, const fascia_model *model, fascia_solver *solver);
+/// After step `step` (1-based) that took `ms`: a history row; the organs
+/// too when `saved`.
+fascia_status run_outputs_step(run_outputs *out, fascia_solver *solver, int step, const fascia_solve_report *report,
+                               double ms, int saved);
+/// After the last step: the final snapshot; closes everything (also after
+/// an error, then with status ignored).
+fascia_status run_outputs_end(run_outputs *out, fascia_solver *solver, int ok);
+
+#endif

@@ -1,0 +1,89 @@
+# SPDX-License-Identifier: MIT
+# Pictures of a `fascia run` without a display (gnuplot, pngcairo):
+#   gnuplot -e "dir='out/demo'" tools/plots/demo.gp
+# reads   dir/data/{tissue,organs}-{rest,final}.csv  (fascia run --snapshots dir/data)
+#         dir/history.csv                            (fascia run --history dir/history.csv)
+# writes  dir/scene-rest.png, dir/scene-deformed.png  tissue samples coloured by strain, organ surface points
+#         dir/energy.png, dir/iterations.png, dir/ms-per-step.png
+if (!exists("dir")) dir = "out/demo"
+if (!exists("title")) title = "fascia"
+set datafile separator ","
+set terminal pngcairo size 1200,900 enhanced font "DejaVu Sans,14"
+
+# --- the scene, at rest and deformed -------------------------------------
+# The HRA meshes have +y superior and +z anterior: the picture shows a
+# sagittal view from the patient's left (anterior to the right, superior up).
+stats dir."/data/tissue-final.csv" using 4 every ::1 nooutput
+strain_max = STATS_max > 0 ? STATS_max : 1
+stats dir."/data/tissue-rest.csv" using 1 every ::1 nooutput
+samples = STATS_records
+stats dir."/data/organs-rest.csv" using ($4*1000) every ::1 nooutput
+z_lo = STATS_min - 5; z_hi = STATS_max + 5
+stats dir."/data/organs-rest.csv" using ($3*1000) every ::1 nooutput
+y_lo = STATS_min - 5; y_hi = STATS_max + 5
+if (!exists("organs")) organs = "organ-0 organ-1 organ-2 organ-3"
+organ_count = words(organs)
+set view 90, 0, 1.35, 1.35
+set view equal xyz
+set xyplane 0
+set xrange [z_lo:z_hi]
+set zrange [y_lo:y_hi]
+set xlabel "z, anterior (mm)" offset 0,-1
+set zlabel "y, superior (mm)" rotate parallel offset -2,0
+unset ylabel
+set ytics format ""
+set grid
+set palette defined (0 "#2c7bb6", 0.25 "#abd9e9", 0.5 "#ffffbf", 0.75 "#fdae61", 1 "#d7191c")
+set cbrange [0:strain_max]
+set cblabel "tissue strain: Green-Lagrange |E|"
+set key top left box opaque
+set colorbox vertical user origin 0.86, 0.2 size 0.03, 0.6
+mm = 1000
+array organ_colour[4] = ["#c97b9b", "#d9b13b", "#7fa36b", "#8a8ac9"]
+do for [stage in "rest final"] {
+  out = stage eq "rest" ? "scene-rest.png" : "scene-deformed.png"
+  set output dir."/".out
+  set title sprintf("%s: %s, sagittal view from the left (%d tissue samples)", title, \
+                    stage eq "rest" ? "at rest" : "deformed, end of the run", samples)
+  splot for [k=0:organ_count-1] dir."/data/organs-".stage.".csv" every ::1 \
+          using ($1 == k ? $4*mm : NaN):($2*mm):($3*mm) with points pt 7 ps 0.3 lc rgb organ_colour[k+1] \
+          title word(organs, k+1)." surface", \
+        dir."/data/tissue-".stage.".csv" every ::1 using ($3*mm):($1*mm):($2*mm):4 \
+          with points pt 7 ps 0.8 palette title "tissue samples (colour: strain)"
+}
+reset
+
+# --- history: energy, iterations, ms per step ------------------------------
+set datafile separator ","
+set terminal pngcairo size 1200,700 enhanced font "DejaVu Sans,14"
+set grid
+set key top right box opaque
+set xlabel "time (s)"
+
+set output dir."/energy.png"
+set title title.": energy per step"
+set ylabel "energy (J)"
+set format y "%.3g"
+plot dir."/history.csv" every ::1 using 2:3 with linespoints lw 2 pt 7 ps 0.6 title "potential (elastic + gravity)", \
+     "" every ::1 using 2:4 with linespoints lw 2 pt 5 ps 0.6 title "kinetic"
+
+set output dir."/iterations.png"
+set title title.": solver iterations per step"
+set ylabel "Newton iterations"
+set y2label "CG iterations"
+set ytics nomirror
+set y2tics
+stats dir."/history.csv" using 6 every ::1 nooutput
+set yrange [0:*]
+if (STATS_max > 0) { set y2range [0:*] } else { set y2range [0:1] } # direct solver: no CG
+plot dir."/history.csv" every ::1 using 2:5 with linespoints lw 2 pt 7 ps 0.6 axes x1y1 title "Newton", \
+     "" every ::1 using 2:6 with linespoints lw 2 pt 5 ps 0.6 axes x1y2 title "CG (0: direct solver)"
+unset y2label
+unset y2tics
+set ytics mirror
+
+set output dir."/ms-per-step.png"
+set title title.": wall time per step"
+set ylabel "ms per step"
+plot dir."/history.csv" every ::1 using 2:7 with linespoints lw 2 pt 7 ps 0.6 title "ms per step"
+set output
