@@ -12,8 +12,8 @@
 #   tools/check-sanitizers.sh valgrind        the core tests (t0xx-t3xx, not 'slow') of a normal
 #                                             build under valgrind: no errors, no leaks
 #
-# Environment: FASCIA_SANITIZE_BUILD (default /tmp/build-sanitize[-core]), FASCIA_VALGRIND_BUILD
-# (default /tmp/build-valgrind), JOBS (default nproc).
+# Environment: FASCIA_SANITIZE_BUILD (default build-sanitize[-core]/ in the checkout), FASCIA_VALGRIND_BUILD
+# (default build-valgrind/), JOBS (default nproc).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 jobs="${JOBS:-$(nproc 2>/dev/null || echo 2)}"
@@ -30,7 +30,7 @@ asan)
   exclude=gpu
   if [ "${1:-}" = "--core" ]; then core=1; fi
   if [ "${2:-}" = "--quick" ]; then exclude="gpu|slow"; fi
-  build="${FASCIA_SANITIZE_BUILD:-/tmp/build-sanitize$([ $core = 1 ] && echo -core)}"
+  build="${FASCIA_SANITIZE_BUILD:-$root/build-sanitize$([ $core = 1 ] && echo -core)}"
   prep=ON
   if [ $core = 1 ]; then prep=OFF; fi
   cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFASCIA_SANITIZE=ON -DFASCIA_PREP=$prep \
@@ -46,7 +46,7 @@ asan)
   ;;
 valgrind)
   command -v valgrind >/dev/null || { echo "check-sanitizers: valgrind is not installed (apt-get install valgrind)" >&2; exit 2; }
-  build="${FASCIA_VALGRIND_BUILD:-/tmp/build-valgrind}"
+  build="${FASCIA_VALGRIND_BUILD:-$root/build-valgrind}"
   cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFASCIA_PREP=OFF -DFASCIA_CUDA=OFF \
     -DCMAKE_C_FLAGS="$posix" >"$build.configure.log" 2>&1 || { cat "$build.configure.log" >&2; exit 1; }
   cmake --build "$build" -j "$jobs"

@@ -9,13 +9,13 @@
 #
 #   tools/fuzz.sh [SECONDS_PER_HARNESS] [HARNESS ...]      (default 60, all)
 #
-# Environment: FASCIA_FUZZ_BUILD (default /tmp/build-fuzz), FASCIA_FUZZ_WORK
+# Environment: FASCIA_FUZZ_BUILD (default build-fuzz/ in the checkout), FASCIA_FUZZ_WORK
 # (default BUILD/fuzz-work: grown corpora and findings), FASCIA_FUZZ_JOBS (1),
 # FASCIA_FUZZ_PREP (ON; OFF skips prep and its harnesses: the CGAL and
 # OpenVDB adapters take many minutes to compile with the sanitizers).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
-build="${FASCIA_FUZZ_BUILD:-/tmp/build-fuzz}"
+build="${FASCIA_FUZZ_BUILD:-$root/build-fuzz}"
 work="${FASCIA_FUZZ_WORK:-$build/fuzz-work}"
 seconds="${1:-60}"
 shift || true
