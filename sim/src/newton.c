@@ -17,6 +17,7 @@
 // (damped Newton). This is what lets the solver cross the singular or
 // indefinite tangents of the frame scheme (zero-energy rotation modes,
 // buckling, compressed StVK).
+#define _POSIX_C_SOURCE 200809L // clock_gettime (strict C11 hides it; gcc's OpenMP header happened to define it)
 #include <string.h>
 #include <time.h>
 

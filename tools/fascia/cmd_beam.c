@@ -38,41 +38,6 @@ static const char beam_usage[] =
     "  -o PATH                 model file to write (required)\n"
     "  --json                  print a JSON summary on stdout\n";
 
-static int usage_error(const char *format, const char *what) {
-  fprintf(stderr, "fascia beam: ");
-  fprintf(stderr, format, what);
-  fprintf(stderr, " (see fascia beam --help)\n");
-  return 2;
-}
-
-static int parse_real(const char *text, fascia_real *out) {
-  char *end = NULL;
-  errno = 0;
-  const double x = strtod(text, &end);
-  if (!text[0] || *end || errno || !isfinite(x)) return 0;
-  *out = x;
-  return 1;
-}
-
-static int parse_int(const char *text, int32_t *out) {
-  char *end = NULL;
-  errno = 0;
-  const long x = strtol(text, &end, 10);
-  if (!text[0] || *end || errno || x < -2147483647L || x > 2147483647L) return 0;
-  *out = (int32_t)x;
-  return 1;
-}
-
-static int parse_frames(const char *text, int32_t frames[3]) {
-  char extra;
-  int a, b, c;
-  if (sscanf(text, "%dx%dx%d%c", &a, &b, &c, &extra) != 3) return 0;
-  frames[0] = a;
-  frames[1] = b;
-  frames[2] = c;
-  return 1;
-}
-
 static int print_json(const fascia_model *m, const char *path) {
   int32_t neighbours = 0;
   for (int32_t s = 0; s < m->sample_count; ++s) {
@@ -119,36 +84,36 @@ int cmd_beam(int argc, char **argv) {
                                          "--law", "--mass", "--density", "--rotation-coupling", "--rotation-smoothing", "-o", "--output"};
     int known = 0;
     for (size_t j = 0; j < sizeof valued / sizeof valued[0]; ++j) known |= !strcmp(opt, valued[j]);
-    if (!known) return usage_error("unknown option '%s'", opt);
-    if (k + 1 >= argc) return usage_error("option %s needs a value", opt);
+    if (!known) return cli_usage_error("beam", "unknown option '%s'", opt);
+    if (k + 1 >= argc) return cli_usage_error("beam", "option %s needs a value", opt);
     const char *value = argv[++k];
     int ok = 1;
     if (!strcmp(opt, "--frames"))
-      ok = parse_frames(value, def.frames);
+      ok = cli_parse_grid(value, def.frames, -2147483647);
     else if (!strcmp(opt, "--shape"))
       ok = (def.shape = fascia_scene_shape_from_name(value)) >= 0;
     else if (!strcmp(opt, "--samples-per-cell"))
-      ok = samples_given = parse_int(value, &samples_per_cell);
+      ok = samples_given = cli_parse_count(value, &samples_per_cell, -2147483647L);
     else if (!strcmp(opt, "--neighbours"))
-      ok = parse_int(value, &def.neighbours);
+      ok = cli_parse_count(value, &def.neighbours, -2147483647L);
     else if (!strcmp(opt, "--E"))
-      ok = young_given = parse_real(value, &def.youngs_modulus);
+      ok = young_given = cli_parse_real(value, &def.youngs_modulus);
     else if (!strcmp(opt, "--nu"))
-      ok = young_given = parse_real(value, &def.poisson_ratio);
+      ok = young_given = cli_parse_real(value, &def.poisson_ratio);
     else if (!strcmp(opt, "--lambda"))
-      ok = parse_real(value, &lambda);
+      ok = cli_parse_real(value, &lambda);
     else if (!strcmp(opt, "--mu"))
-      ok = parse_real(value, &mu);
+      ok = cli_parse_real(value, &mu);
     else if (!strcmp(opt, "--law"))
       ok = (def.law = fascia_law_from_name(value)) >= 0;
     else if (!strcmp(opt, "--mass"))
-      ok = parse_real(value, &def.mass);
+      ok = cli_parse_real(value, &def.mass);
     else if (!strcmp(opt, "--density"))
-      ok = parse_real(value, &def.density);
+      ok = cli_parse_real(value, &def.density);
     else if (!strcmp(opt, "--rotation-coupling"))
-      ok = parse_real(value, &def.rotation_coupling);
+      ok = cli_parse_real(value, &def.rotation_coupling);
     else if (!strcmp(opt, "--rotation-smoothing"))
-      ok = parse_real(value, &def.rotation_smoothing);
+      ok = cli_parse_real(value, &def.rotation_smoothing);
     else
       path = value;
     if (!ok) {
@@ -156,10 +121,10 @@ int cmd_beam(int argc, char **argv) {
       return 2;
     }
   }
-  if (!path) return usage_error("%s", "missing -o PATH, the model file to write");
+  if (!path) return cli_usage_error("beam", "%s", "missing -o PATH, the model file to write");
   if (lambda >= 0 || mu >= 0) { // Lame parameters: both, instead of E and nu
-    if (young_given) return usage_error("%s", "give either --E/--nu or --lambda/--mu, not both");
-    if (!(lambda >= 0 && mu > 0)) return usage_error("%s", "--lambda needs a value >= 0 and --mu one > 0, both given");
+    if (young_given) return cli_usage_error("beam", "%s", "give either --E/--nu or --lambda/--mu, not both");
+    if (!(lambda >= 0 && mu > 0)) return cli_usage_error("beam", "%s", "--lambda needs a value >= 0 and --mu one > 0, both given");
     fascia_lame_to_young(lambda, mu, &def.youngs_modulus, &def.poisson_ratio);
   }
   if (samples_given) {

@@ -63,36 +63,6 @@ static const char bench_usage[] =
 #define MAX_LIST 16
 #define MAX_ROWS 64
 
-static double now_ms(void) {
-  struct timespec t;
-  clock_gettime(CLOCK_MONOTONIC, &t);
-  return 1e3 * (double)t.tv_sec + 1e-6 * (double)t.tv_nsec;
-}
-
-static int usage_error(const char *format, const char *what) {
-  fprintf(stderr, "fascia bench: ");
-  fprintf(stderr, format, what);
-  fprintf(stderr, " (see fascia bench --help)\n");
-  return 2;
-}
-
-static int parse_count(const char *text, int *out, int minimum) {
-  char *end = NULL;
-  errno = 0;
-  const long x = strtol(text, &end, 10);
-  if (!text[0] || *end || errno || x < minimum || x > 2147483647L) return 0;
-  *out = (int)x;
-  return 1;
-}
-
-static int parse_grid(const char *text, int32_t grid[3]) {
-  char extra;
-  int a, b, c;
-  if (sscanf(text, "%dx%dx%d%c", &a, &b, &c, &extra) != 3 || a < 2 || b < 2 || c < 2) return 0;
-  grid[0] = a, grid[1] = b, grid[2] = c;
-  return 1;
-}
-
 /// A comma-separated list option of the cantilever sweep.
 typedef struct value_list {
   int count;
@@ -118,9 +88,9 @@ static int parse_list(const char *text, char kind, value_list *out) {
       if (shape < 0) return 0;
       *v = shape;
     } else if (kind == 'g') {
-      if (!parse_grid(item, out->grid[out->count])) return 0;
+      if (!cli_parse_grid(item, out->grid[out->count], 2)) return 0;
     } else if (kind == 'i') {
-      if (!parse_count(item, &n, 1)) return 0;
+      if (!cli_parse_count(item, &n, 1)) return 0;
       *v = n;
     } else {
       errno = 0;
@@ -149,8 +119,8 @@ static int add_row_name(bench_options *opt, const char *name) {
   else if (!strcmp(name, "cantilever")) opt->cantilever = 1;
   else {
     const fascia_scene_paper_row *row = fascia_scene_paper_find(name);
-    if (!row) return usage_error("unknown benchmark or row '%s'; fascia bench --list shows them", name);
-    if (opt->row_count == MAX_ROWS) return usage_error("%s", "too many rows");
+    if (!row) return cli_usage_error("bench", "unknown benchmark or row '%s'; fascia bench --list shows them", name);
+    if (opt->row_count == MAX_ROWS) return cli_usage_error("bench", "%s", "too many rows");
     opt->rows[opt->row_count++] = row;
   }
   return -1;
@@ -181,15 +151,15 @@ static int parse_options(int argc, char **argv, bench_options *opt) {
                                            "--samples-per-cell", "--neighbours", "--rotation-smoothing"};
       int known = 0;
       for (size_t j = 0; j < sizeof valued / sizeof valued[0]; ++j) known |= !strcmp(o, valued[j]);
-      if (!known) return usage_error("unknown option '%s'", o);
-      if (k + 1 >= argc) return usage_error("option %s needs a value", o);
+      if (!known) return cli_usage_error("bench", "unknown option '%s'", o);
+      if (k + 1 >= argc) return cli_usage_error("bench", "option %s needs a value", o);
       const char *v = argv[++k];
       int ok = 1;
-      if (!strcmp(o, "--table")) ok = parse_count(v, &opt->table, 2) && opt->table <= 3;
+      if (!strcmp(o, "--table")) ok = cli_parse_count(v, &opt->table, 2) && opt->table <= 3;
       else if (!strcmp(o, "--backend")) ok = !strcmp(v, "cpu") || !strcmp(v, "cuda") || !strcmp(v, "auto"), opt->backend = v;
-      else if (!strcmp(o, "--threads")) ok = parse_count(v, &opt->threads, 1);
-      else if (!strcmp(o, "--repeats")) ok = parse_count(v, &opt->repeats, 1);
-      else if (!strcmp(o, "--steps")) ok = parse_count(v, &opt->steps, 1);
+      else if (!strcmp(o, "--threads")) ok = cli_parse_count(v, &opt->threads, 1);
+      else if (!strcmp(o, "--repeats")) ok = cli_parse_count(v, &opt->repeats, 1);
+      else if (!strcmp(o, "--steps")) ok = cli_parse_count(v, &opt->steps, 1);
       else if (!strcmp(o, "--csv")) opt->csv = v;
       else if (!strcmp(o, "--scene")) {
         const int rc = add_row_name(opt, v);
@@ -217,7 +187,7 @@ static int parse_options(int argc, char **argv, bench_options *opt) {
   if (!opt->list && !opt->paper_all && !opt->cantilever && !opt->row_count) opt->paper_all = 1;
   const int paper = opt->paper_all || opt->row_count;
   if (opt->csv && paper && opt->cantilever)
-    return usage_error("%s", "--csv writes one benchmark at a time: run paper and cantilever separately");
+    return cli_usage_error("bench", "%s", "--csv writes one benchmark at a time: run paper and cantilever separately");
   if (!opt->repeats) opt->repeats = paper ? 3 : 1;
   if (!opt->steps) opt->steps = 5;
   return -1;
@@ -317,9 +287,9 @@ static fascia_status bench_paper_row(fascia_ctx *ctx, const bench_options *opt, 
     memset(&sum, 0, sizeof sum);
     double ms = 0, cg = 0;
     for (int n = 0; n < opt->steps && st == FASCIA_OK; ++n) {
-      const double t0 = now_ms();
+      const double t0 = cli_now_ms();
       st = fascia_solver_step(solver, &report);
-      ms += now_ms() - t0;
+      ms += cli_now_ms() - t0;
       sum.evaluate_ms += report.profile.evaluate_ms;
       sum.precond_ms += report.profile.precond_ms;
       sum.assemble_ms += report.profile.assemble_ms;
@@ -510,9 +480,9 @@ static fascia_status bench_cantilever_case(fascia_ctx *ctx, const bench_options 
     fascia_solver_destroy(&solver);
     if ((st = fascia_solver_create(ctx, model, &def, &solver)) != FASCIA_OK) goto cleanup;
     fascia_solve_report report;
-    const double t0 = now_ms();
+    const double t0 = cli_now_ms();
     st = fascia_solver_solve_static(solver, &report);
-    const double ms = now_ms() - t0;
+    const double ms = cli_now_ms() - t0;
     if (st != FASCIA_OK && st != FASCIA_ERR_NUMERIC) goto cleanup;
     if (st == FASCIA_ERR_NUMERIC && report.newton_iterations == 0) goto cleanup; // failed, not just unconverged
     st = FASCIA_OK;
@@ -640,7 +610,7 @@ int cmd_bench(int argc, char **argv) {
   int case_count = 0;
   if (opt.cantilever) {
     case_count = opt.sweep ? sweep_cases(&opt, cases, MAX_ROWS) : default_cases(cases);
-    if (case_count < 0) return usage_error("the sweep has more than %s rows; give shorter lists", "64");
+    if (case_count < 0) return cli_usage_error("bench", "the sweep has more than %s rows; give shorter lists", "64");
   }
   paper_result *paper = calloc((size_t)paper_count + 1, sizeof *paper);
   cantilever_result *cant = calloc((size_t)case_count + 1, sizeof *cant);

@@ -19,6 +19,7 @@
 #include <unistd.h>
 
 #include "commands.h"
+#include "drive.h"
 #include "run_outputs.h"
 #include "fascia/fascia.h"
 #include "presets.h"
@@ -50,6 +51,9 @@ static const char run_usage[] =
     "  --mass KIND            consistent or lumped (default lumped)\n"
     "  --damping ALPHA        Rayleigh mass damping, 1/s (default 0)\n"
     "  --load-steps N         static: apply the load in N increments (default 1)\n"
+    "  --step-retries N       a failed step is redone as halved steps, N halvings at most (default 4);\n"
+    "                         0 stops at the first failure, the last good state saved\n"
+    "  --require-convergence  a step whose Newton iterations do not converge counts as failed\n"
     "  --linear-solver KIND   cg, direct (banded Cholesky of the assembled tangent) or auto\n"
     "                         (direct where the band is small enough, else CG; the default)\n"
     "  --assembled            CG multiplies by the assembled block matrix (default matrix-free)\n"
@@ -65,37 +69,6 @@ static volatile sig_atomic_t run_stop_requested = 0;
 static void on_stop_signal(int sig) {
   (void)sig;
   run_stop_requested = 1;
-}
-
-static double now_ms(void) {
-  struct timespec t;
-  clock_gettime(CLOCK_MONOTONIC, &t);
-  return 1e3 * (double)t.tv_sec + 1e-6 * (double)t.tv_nsec;
-}
-
-static int usage_error(const char *format, const char *what) {
-  fprintf(stderr, "fascia run: ");
-  fprintf(stderr, format, what);
-  fprintf(stderr, " (see fascia run --help)\n");
-  return 2;
-}
-
-static int parse_real(const char *text, fascia_real *out) {
-  char *end = NULL;
-  errno = 0;
-  const double x = strtod(text, &end);
-  if (!text[0] || *end || errno || !isfinite(x)) return 0;
-  *out = x;
-  return 1;
-}
-
-static int parse_count(const char *text, int *out, int minimum) {
-  char *end = NULL;
-  errno = 0;
-  const long x = strtol(text, &end, 10);
-  if (!text[0] || *end || errno || x < minimum || x > 2147483647L) return 0;
-  *out = (int)x;
-  return 1;
 }
 
 // --- checkpoints and restart (issue 7) -------------------------------------
@@ -134,11 +107,11 @@ static int take_checkpoint_options(int *argc, char **argv, checkpoint_options *c
       argv[kept++] = argv[k];
       continue;
     }
-    if (k + 1 >= *argc) return usage_error("option %s needs a value", o);
+    if (k + 1 >= *argc) return cli_usage_error("run", "option %s needs a value", o);
     const char *v = argv[++k];
     if (!strcmp(o, "--checkpoint")) c->path = v;
     else if (!strcmp(o, "--resume")) c->resume = v;
-    else if (!parse_count(v, &c->every, 1)) {
+    else if (!cli_parse_count(v, &c->every, 1)) {
       fprintf(stderr, "fascia run: bad value '%s' for %s (see fascia run --help)\n", v, o);
       return 2;
     }
@@ -161,6 +134,7 @@ typedef struct run_options {
   fascia_solver_def solver;
   const checkpoint_options *checkpoint; ///< --checkpoint, --resume (issue 7); NULL: none
   run_outputs *outputs;                 ///< --history, --organs, --snapshots (issue 5); NULL: none
+  run_drive *drive;                     ///< --drive ORGAN=FILE.csv (issue 5); NULL: none
 } run_options;
 
 // Parses argv into opt. Returns -1 to go on, else the exit status (0 for
@@ -177,7 +151,7 @@ static int parse_options(int argc, char **argv, run_options *opt) {
       return 0;
     }
     if (o[0] != '-' || !o[1]) {
-      if (opt->model_path) return usage_error("unexpected argument '%s': one model file only", o);
+      if (opt->model_path) return cli_usage_error("run", "unexpected argument '%s': one model file only", o);
       opt->model_path = o;
       continue;
     }
@@ -187,29 +161,30 @@ static int parse_options(int argc, char **argv, run_options *opt) {
     else if (!strcmp(o, "--json")) opt->json = 1;
     else if (!strcmp(o, "--cg-fixed")) opt->solver.cg_fixed = 1;
     else if (!strcmp(o, "--assembled")) opt->solver.assembled = 1;
+    else if (!strcmp(o, "--require-convergence")) opt->solver.require_convergence = 1;
     else {
       static const char *const valued[] = {"--steps", "--dt", "-o", "--output", "--save-every", "--backend",
                                            "--threads", "--newton-iterations", "--newton-tolerance",
                                            "--cg-iterations", "--cg-tolerance", "--precond", "--mass", "--damping",
-                                           "--load-steps", "--linear-solver", "--preset"};
+                                           "--load-steps", "--linear-solver", "--preset", "--step-retries"};
       int known = 0;
       for (size_t j = 0; j < sizeof valued / sizeof valued[0]; ++j) known |= !strcmp(o, valued[j]);
-      if (!known) return usage_error("unknown option '%s'", o);
-      if (k + 1 >= argc) return usage_error("option %s needs a value", o);
+      if (!known) return cli_usage_error("run", "unknown option '%s'", o);
+      if (k + 1 >= argc) return cli_usage_error("run", "option %s needs a value", o);
       const char *v = argv[++k];
       fascia_solver_def *d = &opt->solver;
       int ok = 1;
-      if (!strcmp(o, "--steps")) ok = parse_count(v, &opt->steps, 1), opt->dynamic = 1;
-      else if (!strcmp(o, "--dt")) ok = parse_real(v, &d->time_step) && d->time_step > 0, dt_given = 1;
+      if (!strcmp(o, "--steps")) ok = cli_parse_count(v, &opt->steps, 1), opt->dynamic = 1;
+      else if (!strcmp(o, "--dt")) ok = cli_parse_real(v, &d->time_step) && d->time_step > 0, dt_given = 1;
       else if (!strcmp(o, "-o") || !strcmp(o, "--output")) opt->results_path = v;
-      else if (!strcmp(o, "--save-every")) ok = parse_count(v, &opt->save_every, 1);
+      else if (!strcmp(o, "--save-every")) ok = cli_parse_count(v, &opt->save_every, 1);
       else if (!strcmp(o, "--backend")) ok = !strcmp(v, "cpu") || !strcmp(v, "cuda") || !strcmp(v, "auto"), d->backend = v;
-      else if (!strcmp(o, "--threads")) ok = parse_count(v, &opt->threads, 1), d->threads = opt->threads;
-      else if (!strcmp(o, "--newton-iterations")) ok = parse_count(v, &d->newton_iterations, 1), opt->newton_given = 1;
-      else if (!strcmp(o, "--newton-tolerance")) ok = parse_real(v, &d->newton_tolerance) && d->newton_tolerance >= 0;
-      else if (!strcmp(o, "--cg-iterations")) ok = parse_count(v, &d->cg_iterations, 1);
+      else if (!strcmp(o, "--threads")) ok = cli_parse_count(v, &opt->threads, 1), d->threads = opt->threads;
+      else if (!strcmp(o, "--newton-iterations")) ok = cli_parse_count(v, &d->newton_iterations, 1), opt->newton_given = 1;
+      else if (!strcmp(o, "--newton-tolerance")) ok = cli_parse_real(v, &d->newton_tolerance) && d->newton_tolerance >= 0;
+      else if (!strcmp(o, "--cg-iterations")) ok = cli_parse_count(v, &d->cg_iterations, 1);
       else if (!strcmp(o, "--cg-tolerance"))
-        ok = parse_real(v, &d->cg_tolerance) && d->cg_tolerance >= 0 && d->cg_tolerance < 1;
+        ok = cli_parse_real(v, &d->cg_tolerance) && d->cg_tolerance >= 0 && d->cg_tolerance < 1;
       else if (!strcmp(o, "--precond")) {
         ok = !strcmp(v, "none") || !strcmp(v, "jacobi") || !strcmp(v, "block");
         d->precond = !strcmp(v, "none") ? FASCIA_PRECOND_NONE
@@ -225,17 +200,18 @@ static int parse_options(int argc, char **argv, run_options *opt) {
                                                   : FASCIA_LINEAR_AUTO;
       } else if (!strcmp(o, "--preset")) {
         ok = cli_preset_apply(v, d); // a static solve keeps its own Newton limit (100)
-      } else if (!strcmp(o, "--damping")) ok = parse_real(v, &d->mass_damping) && d->mass_damping >= 0;
-      else ok = parse_count(v, &d->load_steps, 1); // --load-steps
+      } else if (!strcmp(o, "--damping")) ok = cli_parse_real(v, &d->mass_damping) && d->mass_damping >= 0;
+      else if (!strcmp(o, "--step-retries")) ok = cli_parse_count(v, &d->step_retries, 0);
+      else ok = cli_parse_count(v, &d->load_steps, 1); // --load-steps
       if (!ok) {
         fprintf(stderr, "fascia run: bad value '%s' for %s (see fascia run --help)\n", v, o);
         return 2;
       }
     }
   }
-  if (!opt->model_path) return usage_error("%s", "missing MODEL.h5, the model file to run");
-  if (opt->static_given && opt->dynamic) return usage_error("%s", "--static and --steps exclude each other");
-  if (dt_given && !opt->dynamic) return usage_error("%s", "--dt needs --steps N (a dynamic run)");
+  if (!opt->model_path) return cli_usage_error("run", "%s", "missing MODEL.h5, the model file to run");
+  if (opt->static_given && opt->dynamic) return cli_usage_error("run", "%s", "--static and --steps exclude each other");
+  if (dt_given && !opt->dynamic) return cli_usage_error("run", "%s", "--dt needs --steps N (a dynamic run)");
   if (!opt->dynamic && !opt->newton_given) opt->solver.newton_iterations = 100;
   return -1;
 }
@@ -304,9 +280,12 @@ static fascia_status run_steps(fascia_solver *solver, const run_options *opt,
   int last_saved = 0;
   for (int n = opt->checkpoint ? opt->checkpoint->first_step : 1; n <= opt->steps && st == FASCIA_OK; ++n) {
     fascia_solve_report report;
-    const double t0 = now_ms();
+    const double t0 = cli_now_ms();
+    if (opt->drive && opt->drive->count) // driven organs: their frames at this step's end
+      st = run_drive_before_step(opt->drive, solver, fascia_solver_time(solver) + opt->solver.time_step);
+    if (st != FASCIA_OK) break;
     st = fascia_solver_step(solver, &report);
-    tot->solve_ms += now_ms() - t0;
+    tot->solve_ms += cli_now_ms() - t0;
     if (st != FASCIA_OK) break;
     add_report(tot, &report);
     const int last = n == opt->steps || run_stop_requested;
@@ -315,11 +294,11 @@ static fascia_status run_steps(fascia_solver *solver, const run_options *opt,
       last_saved = n;
     }
     if (st == FASCIA_OK && opt->outputs)
-      st = run_outputs_step(opt->outputs, solver, n, &report, now_ms() - t0, n % opt->save_every == 0 || last);
+      st = run_outputs_step(opt->outputs, solver, n, &report, cli_now_ms() - t0, n % opt->save_every == 0 || last);
     if (st == FASCIA_OK) st = checkpoint_after(opt->checkpoint, solver, n, last);
-    if (show && (now_ms() - last_print > 200 || last)) {
+    if (show && (cli_now_ms() - last_print > 200 || last)) {
       print_step_progress(n, opt->steps, fascia_solver_time(solver), tot->solve_ms, last);
-      last_print = now_ms();
+      last_print = cli_now_ms();
     }
     if (run_stop_requested) {
       tot->interrupted = 1;
@@ -379,6 +358,11 @@ static void print_text(const run_options *opt, const fascia_model *m, fascia_sol
     printf("probe %-12s displacement (%.6g, %.6g, %.6g) m, position (%.6g, %.6g, %.6g) m\n", m->probe_name[p],
            u[0], u[1], u[2], pos[0], pos[1], pos[2]);
   }
+  for (int k = 0; opt->drive && k < opt->drive->count; ++k) {
+    const drive_organ *d = opt->drive->organs + k;
+    printf("drive       organ %s from %s (%d rows, t = %g to %g s)\n", d->organ_name, d->path, (int)d->row_count,
+           d->time[0], d->time[d->row_count - 1]);
+  }
   if (opt->results_path) printf("results     %s (%d saved steps)\n", opt->results_path, t->saved);
 }
 
@@ -430,6 +414,9 @@ static int print_json(const run_options *opt, const fascia_model *m, fascia_solv
     cJSON_AddItemToObject(item, "position", cJSON_CreateDoubleArray(pos, 3));
     cJSON_AddItemToObject(item, "rest_position", cJSON_CreateDoubleArray(m->probe_position + 3 * p, 3));
   }
+  cJSON *driven = cJSON_AddObjectToObject(root, "drive"); // organ name -> its CSV file
+  for (int k = 0; opt->drive && k < opt->drive->count; ++k)
+    cJSON_AddStringToObject(driven, opt->drive->organs[k].organ_name, opt->drive->organs[k].path);
   if (opt->results_path) {
     cJSON_AddStringToObject(root, "results", opt->results_path);
     cJSON_AddNumberToObject(root, "saved_steps", t->saved);
@@ -454,14 +441,21 @@ int cmd_run(int argc, char **argv) {
   if (rc >= 0) return rc;
   run_outputs outs;
   if ((rc = run_outputs_take(&argc, argv, &outs)) >= 0) return rc;
-  rc = parse_options(argc, argv, &opt);
+  run_drive drive;
+  if ((rc = run_drive_take(&argc, argv, &drive)) < 0) rc = parse_options(argc, argv, &opt);
   if (rc == 0 && ck.help) fputs(checkpoint_usage, stdout), fputs("Outputs for people and plots:\n", stdout),
-                          fputs(run_outputs_usage, stdout);
-  if (rc >= 0) return rc;
-  if ((ck.path || ck.resume) && !opt.dynamic)
-    return usage_error("%s", "--checkpoint and --resume need a dynamic run (--steps N)");
+                          fputs(run_outputs_usage, stdout), fputs(run_drive_usage, stdout);
+  if (rc < 0 && (ck.path || ck.resume) && !opt.dynamic)
+    rc = cli_usage_error("run", "%s", "--checkpoint and --resume need a dynamic run (--steps N)");
+  if (rc < 0 && drive.count && !opt.dynamic && !drive.template_count)
+    rc = cli_usage_error("run", "%s", "--drive needs a dynamic run (--steps N)");
+  if (rc >= 0) {
+    run_drive_free(&drive);
+    return rc;
+  }
   opt.checkpoint = &ck;
   opt.outputs = &outs;
+  opt.drive = &drive;
   fascia_ctx *ctx = cli_ctx(opt.threads, 1);
   if (opt.threads <= 0) opt.threads = fascia_ctx_threads(ctx); // for the summary
   fascia_model *model = NULL;
@@ -487,6 +481,16 @@ int cmd_run(int argc, char **argv) {
     fprintf(stderr, "fascia run: resumed from '%s' after step %lld (t = %.9g s)\n", ck.resume,
             (long long)done_steps, fascia_solver_time(solver));
   }
+  if (drive.template_count) { // --drive-template: write them and stop, nothing solved
+    if ((st = run_drive_write_templates(&drive, ctx, model, solver)) != FASCIA_OK) goto done;
+    for (int k = 0; k < drive.template_count; ++k)
+      printf("drive template for organ %s (%d coupling frames): %s\n", drive.templates[k].organ_name,
+             (int)drive.templates[k].frame_count, drive.templates[k].path);
+    rc = 0;
+    goto done;
+  }
+  // every drive file is read and checked before any output is opened
+  if ((st = run_drive_load(&drive, ctx, model, solver)) != FASCIA_OK) goto done;
   const size_t S = (size_t)model->sample_count + 1, steps = (size_t)(opt.dynamic ? opt.steps : 1);
   buffers[0] = malloc(3 * S * sizeof(fascia_real));
   buffers[1] = malloc(S * sizeof(fascia_real));
@@ -508,9 +512,9 @@ int cmd_run(int argc, char **argv) {
     st = run_steps(solver, &opt, res, buffers, &tot);
   } else {
     fascia_solve_report report;
-    const double t0 = now_ms();
+    const double t0 = cli_now_ms();
     st = fascia_solver_solve_static(solver, &report);
-    tot.solve_ms = now_ms() - t0;
+    tot.solve_ms = cli_now_ms() - t0;
     if (st == FASCIA_OK || st == FASCIA_ERR_NUMERIC) add_report(&tot, &report); // not converged: state kept
     if (st == FASCIA_OK) st = run_outputs_step(&outs, solver, 1, &report, tot.solve_ms, 1);
     // the equilibrium (or the state reached) is written either way
@@ -546,6 +550,7 @@ done:
   else if (rc < 0) rc = 0;
   (void)run_outputs_end(&outs, solver, 0); // closes what is still open after an error
   fascia_results_destroy(&res);
+  run_drive_free(&drive);
   free(buffers[0]), free(buffers[1]), free(buffers[2]);
   free(tot.newton_per_step), free(tot.cg_per_step);
   fascia_solver_destroy(&solver);

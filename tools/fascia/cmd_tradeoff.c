@@ -86,12 +86,6 @@ typedef struct tradeoff_options {
   double time;
 } tradeoff_options;
 
-static double now_ms(void) {
-  struct timespec t;
-  clock_gettime(CLOCK_MONOTONIC, &t);
-  return 1e3 * (double)t.tv_sec + 1e-6 * (double)t.tv_nsec;
-}
-
 static double resident_mb(void) {
   FILE *f = fopen("/proc/self/statm", "r");
   long pages = 0, resident = 0;
@@ -144,7 +138,7 @@ static fascia_status run_row(fascia_ctx *ctx, const tradeoff_options *opt, row *
     if ((st = fascia_solver_create(ctx, model, &r->solver, &solver)) != FASCIA_OK) goto cleanup;
     fascia_solve_report rep;
     int newton = 0, cg = 0, converged = 1, steps = 0;
-    const double t0 = now_ms();
+    const double t0 = cli_now_ms();
     if (!r->dynamic) {
       st = fascia_solver_solve_static(solver, &rep);
       if (st == FASCIA_ERR_NUMERIC && rep.newton_iterations > 0) st = FASCIA_OK; // unconverged: reported
@@ -156,7 +150,7 @@ static fascia_status run_row(fascia_ctx *ctx, const tradeoff_options *opt, row *
         newton += rep.newton_iterations, cg += rep.cg_iterations, converged &= rep.converged != 0;
       }
     }
-    const double ms = (now_ms() - t0) / (steps > 0 ? steps : 1);
+    const double ms = (cli_now_ms() - t0) / (steps > 0 ? steps : 1);
     if (st != FASCIA_OK) goto cleanup;
     if (ms < r->ms) r->ms = ms;
     r->newton = newton, r->cg = cg, r->converged = converged, r->steps = steps;

@@ -29,6 +29,17 @@ int cli_fail(const char *command, fascia_ctx *ctx, fascia_status status);
 /// A context with a progress printer on stderr when progress is nonzero
 /// (and stderr is a terminal or FASCIA_PROGRESS=1), threads as given.
 fascia_ctx *cli_ctx(int threads, int progress);
+/// "fascia COMMAND: <format with what> (see fascia COMMAND --help)" on stderr; returns 2.
+int cli_usage_error(const char *command, const char *format, const char *what);
+/// A finite number, the whole text: 1, else 0 (out untouched).
+int cli_parse_real(const char *text, fascia_real *out);
+/// A whole number >= minimum that fits an int: 1, else 0.
+int cli_parse_count(const char *text, int *out, long minimum);
+/// "NXxNYxNZ", each >= minimum: 1, else 0.
+int cli_parse_grid(const char *text, int32_t grid[3], int minimum);
+/// Wall clock, ms.
+double cli_now_ms(void);
+
 /// 1 when --verbose was given anywhere on the command line.
 extern int cli_verbose;
 

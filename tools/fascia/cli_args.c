@@ -1,0 +1,51 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// Option parsing shared by the subcommands: numbers that must be whole and
+// finite, NXxNYxNZ grids, the one-line usage error, a wall clock.
+#define _POSIX_C_SOURCE 200809L // clock_gettime
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <time.h>
+
+#include "commands.h"
+
+int cli_usage_error(const char *command, const char *format, const char *what) {
+  fprintf(stderr, "fascia %s: ", command);
+  fprintf(stderr, format, what);
+  fprintf(stderr, " (see fascia %s --help)\n", command);
+  return 2;
+}
+
+int cli_parse_real(const char *text, fascia_real *out) {
+  char *end = NULL;
+  errno = 0;
+  const double x = strtod(text, &end);
+  if (!text[0] || *end || errno || !isfinite(x)) return 0;
+  *out = x;
+  return 1;
+}
+
+int cli_parse_count(const char *text, int *out, long minimum) {
+  char *end = NULL;
+  errno = 0;
+  const long x = strtol(text, &end, 10);
+  if (!text[0] || *end || errno || x < minimum || x > 2147483647L) return 0;
+  *out = (int)x;
+  return 1;
+}
+
+int cli_parse_grid(const char *text, int32_t grid[3], int minimum) {
+  char extra;
+  int a, b, c;
+  if (sscanf(text, "%dx%dx%d%c", &a, &b, &c, &extra) != 3 || a < minimum || b < minimum || c < minimum) return 0;
+  grid[0] = a, grid[1] = b, grid[2] = c;
+  return 1;
+}
+
+double cli_now_ms(void) {
+  struct timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return 1e3 * (double)t.tv_sec + 1e-6 * (double)t.tv_nsec;
+}
