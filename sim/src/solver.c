@@ -331,6 +331,29 @@ static fascia_status step_split(fascia_solver *S, fascia_real h, int depth, fasc
   return status;
 }
 
+// Where a failed attempt went wrong, for the message: the free frame with the
+// largest residual force, and the lowest inverted sample if any (the state of
+// the last attempt, before it is restored).
+static void describe_failure(const fascia_solver *S, char *text, size_t size) {
+  int32_t worst = -1;
+  fascia_real worst_norm = -1;
+  for (int32_t i = 0; i < S->frame_count; ++i) {
+    if (!S->mask[6 * (int64_t)i]) continue;
+    const fascia_real *g = S->gradient + 6 * (int64_t)i;
+    const fascia_real norm = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+    if (norm > worst_norm || (worst < 0 && !isfinite(norm))) worst = i, worst_norm = norm;
+  }
+  int n = 0;
+  if (worst >= 0)
+    n = snprintf(text, size, "; largest residual force %.3g N at frame %d (rest position %.4g %.4g %.4g m)",
+                 worst_norm, (int)worst, S->model->frame_position[3 * worst], S->model->frame_position[3 * worst + 1],
+                 S->model->frame_position[3 * worst + 2]);
+  if (n >= 0 && (size_t)n < size && S->sys->inverted_count > 0)
+    snprintf(text + n, size - (size_t)n, "; %d inverted samples, the first sample %d (likely cause: the material is "
+             "crushed; StVK loses stiffness in compression, the stable Neo-Hookean does not)",
+             (int)S->sys->inverted_count, (int)S->sys->first_inverted);
+}
+
 fascia_status fascia_solver_step(fascia_solver *S, fascia_solve_report *report) {
   FASCIA_CHECK(S, NULL, FASCIA_ERR_ARGUMENT, "NULL solver");
   fascia_solve_report local;
@@ -344,16 +367,18 @@ fascia_status fascia_solver_step(fascia_solver *S, fascia_solve_report *report) 
   if (status == FASCIA_OK) {
     S->time = t0 + h; // the sum of the sub-steps, without their rounding
   } else {
+    char where[384] = "";
+    if (status == FASCIA_ERR_NUMERIC) describe_failure(S, where, sizeof where);
     restore_state(S, backup);
     S->time = t0;
     if (status == FASCIA_ERR_NUMERIC) {
       char cause[512];
       snprintf(cause, sizeof cause, "%s", fascia_ctx_message(S->ctx));
       status = FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
-                           "solver: the step from t = %.6g s failed%s (shortest step tried %.3g s, %d rejected): %s; "
+                           "solver: the step from t = %.6g s failed%s (shortest step tried %.3g s, %d rejected): %s%s; "
                            "the state is the one before the step; use a shorter time step, more Newton "
                            "iterations or step retries",
-                           t0, S->def.step_retries > 0 ? " even split" : "", smallest, report->rejected, cause);
+                           t0, S->def.step_retries > 0 ? " even split" : "", smallest, report->rejected, cause, where);
     }
   }
   free(backup);
