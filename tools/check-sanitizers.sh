@@ -30,7 +30,7 @@ asan)
   exclude=gpu
   if [ "${1:-}" = "--core" ]; then core=1; fi
   if [ "${2:-}" = "--quick" ]; then exclude="gpu|slow"; fi
-  build="${FASCIA_SANITIZE_BUILD:-$root/build-sanitize$([ $core = 1 ] && echo -core)}"
+  build="${FASCIA_SANITIZE_BUILD:-$root/build-sanitize$([ $core = 1 ] && echo -core || true)}"
   prep=ON
   if [ $core = 1 ]; then prep=OFF; fi
   cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFASCIA_SANITIZE=ON -DFASCIA_PREP=$prep \
