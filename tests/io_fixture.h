@@ -78,6 +78,7 @@ static inline fascia_status fixture_model(fascia_ctx *ctx, int minimal, fascia_m
     m->materials[j].density = j ? 1100 : 950.5;
     m->materials[j].rotation_coupling = j ? 0.1 : 0;
     m->materials[j].rotation_smoothing = j ? 0 : 0.25;
+    m->materials[j].part = j ? FASCIA_PART_DEVIATORIC : FASCIA_PART_FULL;
   }
   m->gravity[2] = -9.81;
   if (!minimal) {

@@ -46,6 +46,7 @@ static void compare(const fascia_model *a, const fascia_model *b) {
     SAME(&x->density, &y->density, 1);
     SAME(&x->rotation_coupling, &y->rotation_coupling, 1);
     SAME(&x->rotation_smoothing, &y->rotation_smoothing, 1);
+    SAME(&x->part, &y->part, 1);
   }
   for (int32_t k = 0; k < a->motion_count; ++k) {
     const fascia_motion *x = a->motions + k, *y = b->motions + k;

@@ -29,7 +29,8 @@ enum { FASCIA_PT_LAW_STVK = 0, FASCIA_PT_LAW_NEOHOOKEAN = 1 };
 static inline FASCIA_HD fascia_real fascia_pt_stress(int law, fascia_real lambda, fascia_real mu,
                                                      const fascia_real *F, fascia_real *P, fascia_real *aux) {
   if (law == FASCIA_PT_LAW_NEOHOOKEAN) {
-    fascia_real l = lambda + mu, a = 1 + mu / l;
+    // l = 0 only for the volumetric part of a nu = 0 material: no energy at all
+    fascia_real l = lambda + mu, a = l > 0 ? 1 + mu / l : 1;
     fascia_pt_cofactor(F, aux);
     fascia_real J = fascia_pt_det(F);
     aux[9] = J;
@@ -66,7 +67,8 @@ static inline FASCIA_HD fascia_real fascia_pt_stress(int law, fascia_real lambda
 static inline FASCIA_HD void fascia_pt_stress_diff(int law, fascia_real lambda, fascia_real mu, const fascia_real *F,
                                                    const fascia_real *aux, const fascia_real *dF, fascia_real *dP) {
   if (law == FASCIA_PT_LAW_NEOHOOKEAN) {
-    fascia_real l = lambda + mu, a = 1 + mu / l;
+    // l = 0 only for the volumetric part of a nu = 0 material: no energy at all
+    fascia_real l = lambda + mu, a = l > 0 ? 1 + mu / l : 1;
     fascia_real dJ = fascia_pt_ddot(aux, dF), s = l * (aux[9] - a);
     // d cof: column c of cof is f_{c+1} x f_{c+2}; differentiate each product
     for (int c = 0; c < 3; ++c) {

@@ -210,6 +210,8 @@ static fascia_status write_materials(writer *w, const fascia_model *m) {
   FASCIA_TRY_GOTO(write_dataset(w, "/materials/density", ELEM_REAL, 1, M, 0, values + 2 * M, "kg/m^3"));
   FASCIA_TRY_GOTO(write_dataset(w, "/materials/rotation_coupling", ELEM_REAL, 1, M, 0, values + 3 * M, "1"));
   FASCIA_TRY_GOTO(write_dataset(w, "/materials/rotation_smoothing", ELEM_REAL, 1, M, 0, values + 4 * M, "1"));
+  for (int64_t k = 0; k < M; ++k) law[k] = m->materials[k].part;
+  FASCIA_TRY_GOTO(write_dataset(w, "/materials/part", ELEM_INT, 1, M, 0, law, NULL));
 cleanup:
   free(names);
   free(law);
@@ -812,6 +814,18 @@ static fascia_status read_materials(reader *r, fascia_model *m) {
   FASCIA_TRY_GOTO(read_numbers(r, "/materials/density", ELEM_REAL, M, 0, values + 2 * M));
   FASCIA_TRY_GOTO(read_numbers(r, "/materials/rotation_coupling", ELEM_REAL, M, 0, values + 3 * M));
   FASCIA_TRY_GOTO(read_numbers(r, "/materials/rotation_smoothing", ELEM_REAL, M, 0, values + 4 * M));
+  int32_t *part = fascia_calloc(M, sizeof *part); // optional: files before reduced integration are all FULL
+  if (!part) {
+    status = FASCIA_FAIL(r->ctx, FASCIA_ERR_MEMORY, "model '%s' /materials: out of memory", r->path);
+    goto cleanup;
+  }
+  if (link_exists(r->file, "/materials/part")) {
+    status = read_numbers(r, "/materials/part", ELEM_INT, M, 0, part);
+    if (status != FASCIA_OK) {
+      free(part);
+      goto cleanup;
+    }
+  }
   for (int64_t k = 0; k < M; ++k) {
     fascia_material *mat = m->materials + k;
     memcpy(mat->name, names[k], FASCIA_NAME_SIZE);
@@ -821,7 +835,9 @@ static fascia_status read_materials(reader *r, fascia_model *m) {
     mat->density = values[2 * M + k];
     mat->rotation_coupling = values[3 * M + k];
     mat->rotation_smoothing = values[4 * M + k];
+    mat->part = part[k];
   }
+  free(part);
 cleanup:
   free(names);
   free(law);

@@ -340,6 +340,10 @@ static fascia_status validate_materials(fascia_ctx *ctx, const fascia_model *m, 
     FASCIA_CHECK(isfinite(mat->density) && mat->density > 0, ctx, FASCIA_ERR_FORMAT,
                  "model '%s' /materials: material %d ('%s') has density %g kg/m^3, expected > 0", origin, (int)k,
                  mat->name, mat->density);
+    FASCIA_CHECK(mat->part >= 0 && mat->part < FASCIA_PART_COUNT_, ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' /materials/part: material %d ('%s') has part %d, expected 0 (full), 1 (deviatoric) or "
+                 "2 (volumetric)",
+                 origin, (int)k, mat->name, (int)mat->part);
     FASCIA_CHECK(isfinite(mat->rotation_smoothing) && mat->rotation_smoothing >= 0, ctx, FASCIA_ERR_FORMAT,
                  "model '%s' /materials: material %d ('%s') has rotation smoothing %g, expected >= 0",
                  origin, (int)k, mat->name, mat->rotation_smoothing);
@@ -451,21 +455,24 @@ fascia_status fascia_model_validate(fascia_ctx *ctx, const fascia_model *m, cons
 
 fascia_real fascia_model_volume(const fascia_model *m) {
   fascia_real v = 0;
-  for (int32_t s = 0; s < m->sample_count; ++s) v += m->sample_volume[s];
+  for (int32_t s = 0; s < m->sample_count; ++s)
+    if (m->materials[m->sample_material[s]].part != FASCIA_PART_VOLUMETRIC) v += m->sample_volume[s];
   return v;
 }
 
 fascia_real fascia_model_tissue_volume(const fascia_model *m) {
   fascia_real v = 0;
   for (int32_t s = 0; s < m->sample_count; ++s)
-    if (m->sample_organ[s] < 0) v += m->sample_volume[s];
+    if (m->sample_organ[s] < 0 && m->materials[m->sample_material[s]].part != FASCIA_PART_VOLUMETRIC)
+      v += m->sample_volume[s];
   return v;
 }
 
 fascia_real fascia_model_mass(const fascia_model *m) {
   fascia_real mass = 0;
   for (int32_t s = 0; s < m->sample_count; ++s)
-    mass += m->sample_volume[s] * m->materials[m->sample_material[s]].density;
+    if (m->materials[m->sample_material[s]].part != FASCIA_PART_VOLUMETRIC)
+      mass += m->sample_volume[s] * m->materials[m->sample_material[s]].density;
   return mass;
 }
 

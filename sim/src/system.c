@@ -65,11 +65,13 @@ fascia_status fascia_system_create(fascia_ctx *ctx, const fascia_model *m, int t
     const fascia_material *mat = m->materials + m->sample_material[s];
     fascia_real lambda, mu;
     fascia_material_lame(mat, &lambda, &mu);
-    sys->sample_lambda[s] = lambda;
-    sys->sample_mu[s] = mu;
-    sys->sample_coupling[s] = mat->rotation_coupling * mu;
+    // selective reduced integration: each part keeps its share of the energy
+    const int volumetric = mat->part == FASCIA_PART_VOLUMETRIC;
+    sys->sample_lambda[s] = mat->part == FASCIA_PART_DEVIATORIC ? 0 : lambda;
+    sys->sample_mu[s] = volumetric ? 0 : mu;
+    sys->sample_coupling[s] = volumetric ? 0 : mat->rotation_coupling * mu;
     sys->sample_law[s] = mat->law;
-    sys->sample_mass[s] = mat->density * m->sample_volume[s];
+    sys->sample_mass[s] = volumetric ? 0 : mat->density * m->sample_volume[s];
     // smoothing length l = r h, h the weighted RMS distance to the frames
     fascia_real h2 = 0;
     for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k)
@@ -78,7 +80,7 @@ fascia_status fascia_system_create(fascia_ctx *ctx, const fascia_model *m, int t
         sys->pair_offset[3 * k + r] = d;
         h2 += fabs(m->pair_weight[k]) * d * d;
       }
-    sys->sample_curvature[s] = mu * mat->rotation_smoothing * mat->rotation_smoothing * h2;
+    sys->sample_curvature[s] = volumetric ? 0 : mu * mat->rotation_smoothing * mat->rotation_smoothing * h2;
   }
   for (int32_t s = 0; s < m->sample_count; ++s)
     for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k) sys->pair_sample[k] = s;

@@ -68,6 +68,7 @@ fascia_scene_beam_def fascia_scene_beam_def_default(void) {
   def.density = 0;
   def.rotation_coupling = 0;
   def.rotation_smoothing = 0.1;
+  def.reduced_volumetric = 0;
   def.gravity[2] = -9.81;
   def.cookie_ = FASCIA_SCENE_BEAM_COOKIE_;
   return def;
@@ -115,6 +116,10 @@ static fascia_status check_beam(fascia_ctx *ctx, const fascia_scene_beam_def *de
   SCENE_CHECK(frames <= BEAM_MAX_PAIRS && cells * per_cell * *per_sample <= BEAM_MAX_PAIRS, ctx, FASCIA_ERR_MEMORY,
               "%s: %lld frames and %lld sample-frame pairs is too large (at most %lld)", who, (long long)frames,
               (long long)(cells * per_cell * *per_sample), (long long)BEAM_MAX_PAIRS);
+  SCENE_CHECK(def->reduced_volumetric == 0 || def->reduced_volumetric == 1, ctx, FASCIA_ERR_ARGUMENT,
+              "%s: reduced_volumetric %d, expected 0 or 1", who, (int)def->reduced_volumetric);
+  // reduced volumetric integration: one more sample per cell (per tetrahedron)
+  if (def->reduced_volumetric) per_cell += def->shape == FASCIA_SCENE_TET ? 6 : 1;
   *samples = (int32_t)(cells * per_cell);
   return FASCIA_OK;
 }
@@ -150,16 +155,18 @@ static fascia_status tip_probe(fascia_ctx *ctx, const fascia_scene_beam_def *def
 }
 
 // Samples on the n^3 Gauss points of every cell, trilinear or MLS weights.
+// Samples at the n x n x n Gauss points of every cell, from sample *first on,
+// with material `material`; *first moves past them.
 static fascia_status fill_gauss_samples(fascia_ctx *ctx, const fascia_scene_beam_def *def, const scene_grid *g,
-                                        const fascia_frame_grid *grid, fascia_model *m) {
-  const int n = def->samples_per_cell_dir;
+                                        const fascia_frame_grid *grid, fascia_model *m, int n, int32_t material,
+                                        int32_t *first) {
   fascia_real gp[4], gw[4];
   fascia_status st = fascia_shape_gauss_legendre(ctx, n, gp, gw);
   if (st != FASCIA_OK) return st;
   const int32_t k = def->shape == FASCIA_SCENE_MESHLESS ? def->neighbours : 8;
   int32_t frame[FASCIA_SHAPE_MAX_NEIGHBOURS];
   fascia_real w[FASCIA_SHAPE_MAX_NEIGHBOURS], grad[3 * FASCIA_SHAPE_MAX_NEIGHBOURS];
-  int32_t s = 0;
+  int32_t s = *first;
   for (int32_t c = 0; c < scene_grid_cell_count(g); ++c) {
     int32_t cell[3], corner[8];
     fascia_real lo[3], hi[3];
@@ -173,6 +180,7 @@ static fascia_status fill_gauss_samples(fascia_ctx *ctx, const fascia_scene_beam
           fascia_real *p = m->sample_position + 3 * (int64_t)s;
           for (int d = 0; d < 3; ++d) p[d] = lo[d] + (hi[d] - lo[d]) * gp[idx[d]];
           m->sample_volume[s] = gw[a] * gw[b] * gw[q] * cell_volume;
+          m->sample_material[s] = material;
           if (def->shape == FASCIA_SCENE_HEX) {
             st = fascia_shape_hex(ctx, lo, hi, p, w, grad);
             memcpy(frame, corner, sizeof corner);
@@ -183,17 +191,18 @@ static fascia_status fill_gauss_samples(fascia_ctx *ctx, const fascia_scene_beam
           scene_set_pairs(m, s, k, frame, w, grad);
         }
   }
+  *first = s;
   return FASCIA_OK;
 }
 
 // Samples at the quadrature points of the 6 Kuhn tetrahedra of every cell.
-static fascia_status fill_tet_samples(fascia_ctx *ctx, const fascia_scene_beam_def *def, const scene_grid *g,
-                                      fascia_model *m) {
-  const int n = def->samples_per_tet;
+// (from sample *first on, with material `material`, rule n; *first moves on)
+static fascia_status fill_tet_samples(fascia_ctx *ctx, const scene_grid *g, fascia_model *m, int n, int32_t material,
+                                      int32_t *first) {
   fascia_real bary[16], qw[4];
   fascia_status st = fascia_shape_tet_quadrature(ctx, n, bary, qw);
   if (st != FASCIA_OK) return st;
-  int32_t s = 0;
+  int32_t s = *first;
   for (int32_t c = 0; c < scene_grid_cell_count(g); ++c) {
     int32_t cell[3], corner[8];
     fascia_real lo[3], hi[3];
@@ -211,12 +220,14 @@ static fascia_status fill_tet_samples(fascia_ctx *ctx, const fascia_scene_beam_d
           p[d] = bary[4 * q] * vertex[d] + bary[4 * q + 1] * vertex[3 + d] + bary[4 * q + 2] * vertex[6 + d] +
                  bary[4 * q + 3] * vertex[9 + d];
         m->sample_volume[s] = qw[q] * tet_volume;
+        m->sample_material[s] = material;
         st = fascia_shape_tet(ctx, vertex, p, w, grad);
         if (st != FASCIA_OK) return st;
         scene_set_pairs(m, s, 4, frame, w, grad);
       }
     }
   }
+  *first = s;
   return FASCIA_OK;
 }
 
@@ -265,15 +276,20 @@ fascia_status fascia_scene_beam_build(fascia_ctx *ctx, const fascia_scene_beam_d
   sizes.frames = frames;
   sizes.samples = samples;
   sizes.pairs = samples * per_sample;
-  sizes.materials = 1;
+  sizes.materials = def->reduced_volumetric ? 2 : 1;
   sizes.probes = 1;
   sizes.probe_pairs = probe.count;
   SCENE_TRY_GOTO(fascia_model_alloc(ctx, &sizes, &m));
   memcpy(m->frame_position, position, 3 * (size_t)frames * sizeof *position);
-  if (def->shape == FASCIA_SCENE_TET)
-    SCENE_TRY_GOTO(fill_tet_samples(ctx, def, &g, m));
-  else
-    SCENE_TRY_GOTO(fill_gauss_samples(ctx, def, &g, grid, m));
+  // samples are written in order: the (deviatoric) rule, then the volumetric centres
+  int32_t next = 0;
+  if (def->shape == FASCIA_SCENE_TET) {
+    SCENE_TRY_GOTO(fill_tet_samples(ctx, &g, m, def->samples_per_tet, 0, &next));
+    if (def->reduced_volumetric) SCENE_TRY_GOTO(fill_tet_samples(ctx, &g, m, 1, 1, &next));
+  } else {
+    SCENE_TRY_GOTO(fill_gauss_samples(ctx, def, &g, grid, m, def->samples_per_cell_dir, 0, &next));
+    if (def->reduced_volumetric) SCENE_TRY_GOTO(fill_gauss_samples(ctx, def, &g, grid, m, 1, 1, &next));
+  }
   beam_provenance(provenance, PROVENANCE_SIZE, def, m);
   SCENE_TRY_GOTO(scene_finish(ctx, m, def, &probe, provenance, "beam generator"));
   *out = m;

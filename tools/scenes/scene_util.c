@@ -216,6 +216,13 @@ fascia_status scene_finish(fascia_ctx *ctx, fascia_model *m, const fascia_scene_
   mat->density = scene_density(def);
   mat->rotation_coupling = def->rotation_coupling;
   mat->rotation_smoothing = def->rotation_smoothing;
+  if (m->material_count == 2) { // selective reduced integration: the same material split in two parts
+    m->materials[1] = *mat;
+    mat->part = FASCIA_PART_DEVIATORIC;
+    m->materials[1].part = FASCIA_PART_VOLUMETRIC;
+    snprintf(mat->name, sizeof mat->name, "beam-deviatoric");
+    snprintf(m->materials[1].name, sizeof m->materials[1].name, "beam-volumetric");
+  }
   for (int d = 0; d < 3; ++d) m->gravity[d] = def->gravity[d];
   // the clamped end: frames placed at exactly x = 0 by scene_grid_positions
   for (int32_t i = 0; i < m->frame_count; ++i)
@@ -263,6 +270,7 @@ void scene_append_body_json(char *buf, size_t size, const fascia_scene_beam_def 
   append_real(buf, size, "density", scene_density(def), ", ");
   append_real(buf, size, "rotation_coupling", def->rotation_coupling, ", ");
   append_real(buf, size, "rotation_smoothing", def->rotation_smoothing, ", ");
+  scene_append(buf, size, "\"reduced_volumetric\": %d, ", (int)def->reduced_volumetric);
   scene_append(buf, size, "\"gravity\": [%.15g, %.15g, %.15g], ", def->gravity[0], def->gravity[1], def->gravity[2]);
   scene_append(buf, size, "\"fixed\": \"frames at x = 0\", \"probe\": \"tip at (%.15g, 0, 0)\"", def->length);
 }

@@ -48,6 +48,11 @@ typedef struct fascia_scene_beam_def {
   fascia_real density;            ///< kg/m^3; > 0 overrides mass; default 0 (from mass)
   fascia_real rotation_coupling;  ///< fascia_material.rotation_coupling; default 0
   fascia_real rotation_smoothing; ///< fascia_material.rotation_smoothing; default 0.1 (see docs/mechanics.md)
+  /// 1: selective reduced integration (beam only): the samples above carry
+  /// the deviatoric energy, one more sample per cell (per tetrahedron for
+  /// TET) at its centre carries the volumetric energy over the whole cell:
+  /// cures locking as nu -> 1/2 (docs/mechanics.md). Default 0.
+  int32_t reduced_volumetric;
   fascia_real gravity[3];         ///< m/s^2; default (0, 0, -9.81)
   int cookie_;                    ///< private: set by fascia_scene_beam_def_default
 } fascia_scene_beam_def;

@@ -27,6 +27,17 @@ typedef enum fascia_law {
   FASCIA_LAW_COUNT_
 } fascia_law;
 
+/// Which part of a material's energy its samples integrate. Splitting the
+/// volumetric (lambda) term onto fewer samples than the deviatoric (mu) term
+/// is selective reduced integration, the cure of volumetric locking as nu
+/// approaches 1/2 (docs/mechanics.md). Values are stored in model files.
+typedef enum fascia_material_part {
+  FASCIA_PART_FULL = 0,        ///< the whole energy
+  FASCIA_PART_DEVIATORIC = 1,  ///< lambda dropped; the samples carry the mass
+  FASCIA_PART_VOLUMETRIC = 2,  ///< mu dropped; no mass, no rotation coupling or smoothing
+  FASCIA_PART_COUNT_
+} fascia_material_part;
+
 /// How a frame moves. Values are stored in model files: never renumber.
 typedef enum fascia_frame_kind {
   FASCIA_FRAME_FREE = 0,       ///< a degree of freedom of the solver
@@ -61,6 +72,7 @@ typedef struct fascia_material {
   /// rotation fields nearly free; its effect on smooth fields vanishes as h^2
   /// under refinement (see docs/mechanics.md). 0 gives the paper's scheme.
   fascia_real rotation_smoothing;
+  int32_t part; ///< fascia_material_part
 } fascia_material;
 
 /// A rigid motion given by keyframes, linear in translation and spherical
