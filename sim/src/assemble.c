@@ -103,7 +103,35 @@ fascia_status fascia_bsr_create(fascia_ctx *ctx, const fascia_model *m, fascia_b
   return plan(ctx, m, out);
 }
 
+fascia_status fascia_bsr_make_single(fascia_ctx *ctx, fascia_bsr *B, int threads) {
+  if (!B->values_single) {
+    B->values_single = fascia_calloc(36 * B->blocks, sizeof(float));
+    FASCIA_CHECK(B->values_single, ctx, FASCIA_ERR_MEMORY, "assembly: out of memory for a float copy of %lld blocks",
+                 (long long)B->blocks);
+  }
+  const int64_t n = 36 * B->blocks;
+#pragma omp parallel for num_threads(threads) schedule(static)
+  for (int64_t k = 0; k < n; ++k) B->values_single[k] = (float)B->values[k];
+  return FASCIA_OK;
+}
+
+void fascia_bsr_apply_single(const fascia_bsr *B, int threads, const fascia_real *v, fascia_real *out) {
+#pragma omp parallel for num_threads(threads) schedule(static)
+  for (int32_t i = 0; i < B->rows; ++i) {
+    fascia_real sum[6] = {0, 0, 0, 0, 0, 0};
+    for (int32_t b = B->row_offsets[i]; b < B->row_offsets[i + 1]; ++b) {
+      const float *blk = B->values_single + 36 * (int64_t)b;
+      const fascia_real *vj = v + 6 * (int64_t)B->cols[b];
+      for (int r = 0; r < 6; ++r)
+        sum[r] += blk[6 * r] * vj[0] + blk[6 * r + 1] * vj[1] + blk[6 * r + 2] * vj[2] + blk[6 * r + 3] * vj[3] +
+                  blk[6 * r + 4] * vj[4] + blk[6 * r + 5] * vj[5];
+    }
+    for (int r = 0; r < 6; ++r) out[6 * (int64_t)i + r] = sum[r];
+  }
+}
+
 void fascia_bsr_destroy(fascia_bsr *bsr) {
+  free(bsr->values_single);
   free(bsr->local_offsets);
   free(bsr->local_block);
   free(bsr->contrib_offsets);

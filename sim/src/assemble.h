@@ -18,6 +18,7 @@ typedef struct fascia_bsr {
   int32_t *cols;        ///< [blocks]
   int32_t *diagonal;    ///< [rows] position of the diagonal block
   fascia_real *values;  ///< [36 blocks]
+  float *values_single; ///< [36 blocks] a float copy for products, when asked for (NULL otherwise)
   int64_t blocks;
   // Assembly plan: every sample's n x n local blocks, numbered e =
   // local_offsets[s] + a n + b (sample order), are summed into their BSR
@@ -39,6 +40,10 @@ FASCIA_INTERN fascia_status fascia_bsr_create(fascia_ctx *ctx, const fascia_mode
 FASCIA_INTERN void fascia_bsr_destroy(fascia_bsr *bsr);
 /// out = B v
 FASCIA_INTERN void fascia_bsr_apply(const fascia_bsr *bsr, int threads, const fascia_real *v, fascia_real *out);
+/// Rounds the values to the float copy (allocated on first use); FASCIA_ERR_MEMORY if it cannot be.
+FASCIA_INTERN fascia_status fascia_bsr_make_single(fascia_ctx *ctx, fascia_bsr *bsr, int threads);
+/// out = B v with the float copy (products summed in double).
+FASCIA_INTERN void fascia_bsr_apply_single(const fascia_bsr *bsr, int threads, const fascia_real *v, fascia_real *out);
 
 /// Fills bsr->values with the symmetric Hessian H at the state of the last
 /// fascia_system_evaluate (what fascia_system_hessian_apply applies).

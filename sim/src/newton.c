@@ -110,19 +110,21 @@ static fascia_status objective(fascia_solver *S, const step_terms *terms, const 
                           : FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC, "solver: the energy is not finite");
 }
 
-// K = H (+ (c1 + c2) M for a dynamic step) at the current iterate
-static void assemble(fascia_solver *S, const step_terms *terms) {
+// K = H (+ (c1 + c2) M for a dynamic step) at the current iterate, and its
+// float copy when the products use one
+static fascia_status assemble(fascia_solver *S, const step_terms *terms) {
   fascia_system_hessian_assemble(S->sys, &S->K);
   const fascia_real c = terms->c1 + terms->c2;
-  if (c == 0) return;
-  if (S->def.mass == FASCIA_MASS_CONSISTENT) {
+  if (c != 0 && S->def.mass == FASCIA_MASS_CONSISTENT) {
     fascia_system_mass_assemble_add(S->sys, c, &S->K);
-    return;
+  } else if (c != 0) {
+    for (int32_t i = 0; i < S->frame_count; ++i) {
+      fascia_real *D = S->K.values + 36 * (int64_t)S->K.diagonal[i];
+      for (int q = 0; q < 36; ++q) D[q] += c * S->mass_blocks[36 * (int64_t)i + q];
+    }
   }
-  for (int32_t i = 0; i < S->frame_count; ++i) {
-    fascia_real *D = S->K.values + 36 * (int64_t)S->K.diagonal[i];
-    for (int q = 0; q < 36; ++q) D[q] += c * S->mass_blocks[36 * (int64_t)i + q];
-  }
+  if (S->def.single_precision_matrix && !S->use_direct) return fascia_bsr_make_single(S->ctx, &S->K, S->sys->threads);
+  return FASCIA_OK;
 }
 
 // Size of the rounding error of an energy evaluation, J. Each sample's
@@ -170,8 +172,9 @@ fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iter
     terms.target_norm = fascia_dot(S->inertia_target, terms.target_M, n);
   }
   fascia_operator op = {S->sys,  terms.c1 + terms.c2, def->mass, S->mass_blocks, S->damping_diagonal, 0, 1,
-                        S->use_assembled ? &S->K : NULL, S->mask, S->scratch + n, NULL};
+                        S->use_assembled ? &S->K : NULL, S->mask, S->scratch + n, NULL, 0};
   if (fascia_organs_body_count(S->organs) > 0) op.organs = S->organs;
+  op.single = S->use_assembled && !S->use_direct && def->single_precision_matrix;
   rep->direct = S->use_direct;
   fascia_real phi, *g = S->gradient, *p = S->direction, *g_trial = S->rhs;
   t = fascia_now_ms();
@@ -195,7 +198,7 @@ fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iter
     // the assembled matrix, the preconditioner and the Levenberg scale
     t = fascia_now_ms();
     if (S->use_assembled) {
-      assemble(S, &terms);
+      FASCIA_TRY(assemble(S, &terms));
       rep->profile.assemble_ms += fascia_now_ms() - t;
       t = fascia_now_ms();
     }
@@ -283,7 +286,7 @@ fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iter
         t = fascia_now_ms();
         FASCIA_TRY(objective(S, &terms, S->d, &phi, g)); // restores the cache of the current iterate
         rep->profile.evaluate_ms += fascia_now_ms() - t;
-        if (S->use_assembled) assemble(S, &terms);
+        if (S->use_assembled) FASCIA_TRY(assemble(S, &terms));
         if (!S->use_direct) fascia_precond_build(&S->pc, &op, S->blocks);
         if (op.organs) fascia_organs_precond(S->organs, &op, &S->pc, S->blocks);
         continue;

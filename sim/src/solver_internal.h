@@ -29,6 +29,7 @@ typedef struct fascia_operator {
   const unsigned char *mask; ///< [6N] 1 free, 0 constrained
   fascia_real *scratch;      ///< [6N]
   const fascia_organs *organs; ///< when set: P^T A P on the reduced coordinates of rigid organs (organs.c)
+  int single;                  ///< products with the assembled matrix's float copy
 } fascia_operator;
 
 FASCIA_INTERN void fascia_operator_apply(const fascia_operator *op, const fascia_real *v, fascia_real *out);

@@ -28,7 +28,7 @@
 static const char bench_usage[] =
     "usage: fascia bench [--list] [paper | cantilever | ROW ...] [--table 2|3] [--backend NAME]\n"
     "                    [--threads T] [--repeats R] [--steps S] [--json] [--csv FILE]\n"
-    "                    [--assembled] [--linear-solver cg|direct|auto]\n"
+    "                    [--assembled [--single]] [--linear-solver cg|direct|auto]\n"
     "                    [--shapes hex,tet,meshless] [--frames 10x2x2,20x3x3,...]\n"
     "                    [--samples-per-cell N,...] [--neighbours K,...] [--rotation-smoothing R,...]\n"
     "\n"
@@ -46,6 +46,7 @@ static const char bench_usage[] =
     "  --json                one JSON array of row objects on stdout\n"
     "  --csv FILE            also write the rows as CSV with a header row (one benchmark at a time)\n"
     "  --assembled           CG multiplies by the assembled block matrix (default matrix-free)\n"
+    "  --single              ... stored in float (half the memory traffic of the products)\n"
     "  --linear-solver KIND  cantilever: cg, direct or auto (default: the solver's default)\n"
     "cantilever sweep (any of these replaces the default rows by the product of the lists):\n"
     "  --shapes LIST              hex, tet, meshless (default hex)\n"
@@ -104,7 +105,7 @@ static int parse_list(const char *text, char kind, value_list *out) {
 
 /// Everything the command line sets.
 typedef struct bench_options {
-  int list, json, threads, repeats, steps, table, paper_all, cantilever, assembled;
+  int list, json, threads, repeats, steps, table, paper_all, cantilever, assembled, single;
   int linear_given;
   fascia_linear_solver linear;
   const char *backend, *csv;
@@ -145,6 +146,7 @@ static int parse_options(int argc, char **argv, bench_options *opt) {
     if (!strcmp(o, "--list")) opt->list = 1;
     else if (!strcmp(o, "--json")) opt->json = 1;
     else if (!strcmp(o, "--assembled")) opt->assembled = 1;
+    else if (!strcmp(o, "--single")) opt->single = 1;
     else {
       static const char *const valued[] = {"--table", "--backend", "--threads", "--repeats", "--steps", "--csv",
                                            "--scene", "--linear-solver", "--shapes", "--frames",
@@ -272,6 +274,7 @@ static fascia_status bench_paper_row(fascia_ctx *ctx, const bench_options *opt, 
   def.line_search = 0;
   def.linear_solver = FASCIA_LINEAR_CG; // the paper's mode, whatever the default
   def.assembled = opt->assembled;
+  def.single_precision_matrix = opt->single;
   st = fascia_solver_create(ctx, model, &def, &solver);
   if (st != FASCIA_OK) goto cleanup;
   out->frames = model->frame_count;
@@ -350,6 +353,7 @@ static cJSON *paper_json(const paper_result *r, const bench_options *opt) {
   cJSON_AddStringToObject(o, "backend", opt->backend);
   cJSON_AddNumberToObject(o, "threads", r->threads);
   cJSON_AddBoolToObject(o, "assembled", opt->assembled);
+  cJSON_AddBoolToObject(o, "single_precision_matrix", opt->single);
   cJSON_AddNumberToObject(o, "steps", opt->steps);
   cJSON_AddNumberToObject(o, "repeats", opt->repeats);
   return o;
@@ -468,6 +472,7 @@ static fascia_status bench_cantilever_case(fascia_ctx *ctx, const bench_options 
   def.threads = opt->threads;
   def.newton_iterations = 100; // the static solve's limit (solver.h)
   def.assembled = opt->assembled;
+  def.single_precision_matrix = opt->single;
   if (opt->linear_given) def.linear_solver = opt->linear;
   if (c->linear >= 0) def.linear_solver = (fascia_linear_solver)c->linear;
   out->frames = model->frame_count;

@@ -57,6 +57,7 @@ static const char run_usage[] =
     "  --linear-solver KIND   cg, direct (banded Cholesky of the assembled tangent) or auto\n"
     "                         (direct where the band is small enough, else CG; the default)\n"
     "  --assembled            CG multiplies by the assembled block matrix (default matrix-free)\n"
+    "  --single               ... stored in float for the products (half their memory traffic)\n"
     "  --preset NAME          interactive, balanced or accurate: solver settings measured by\n"
     "                         'fascia tradeoff' (tools/bench/README.md) for dynamic runs; options\n"
     "                         after it override it; a static solve keeps its Newton limit of 100\n"
@@ -161,6 +162,7 @@ static int parse_options(int argc, char **argv, run_options *opt) {
     else if (!strcmp(o, "--json")) opt->json = 1;
     else if (!strcmp(o, "--cg-fixed")) opt->solver.cg_fixed = 1;
     else if (!strcmp(o, "--assembled")) opt->solver.assembled = 1;
+    else if (!strcmp(o, "--single")) opt->solver.single_precision_matrix = 1;
     else if (!strcmp(o, "--require-convergence")) opt->solver.require_convergence = 1;
     else {
       static const char *const valued[] = {"--steps", "--dt", "-o", "--output", "--save-every", "--backend",

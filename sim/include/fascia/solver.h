@@ -44,6 +44,10 @@ typedef struct fascia_solver_def {
   fascia_precond precond;        ///< default block Jacobi
   fascia_linear_solver linear_solver; ///< default auto
   int assembled;                 ///< CG: 1 multiplies by the assembled 6x6-block matrix, 0 matrix-free (default)
+  /// Assembled CG: 1 stores the matrix in float for the products (half the
+  /// memory traffic; each product then carries ~1e-7 relative error, which
+  /// only changes the linear solve, not the energy or forces); default 0.
+  int single_precision_matrix;
   fascia_mass_kind mass;         ///< default lumped (frames carry rotational inertia; docs/mechanics.md)
   fascia_real mass_damping;      ///< Rayleigh mass damping alpha, 1/s (default 0)
   int line_search;               ///< 1: backtracking line search on the energy (default 1)
