@@ -72,7 +72,7 @@ static const char *const problem_names[PROBLEM_COUNT] = {"cantilever", "stiff", 
 /// One row: what was run and what it gave.
 typedef struct row {
   const char *group, *preset; ///< preset NULL unless group "preset"
-  int problem, dynamic, shape, spc, neighbours;
+  int problem, dynamic, shape, spc, neighbours, reduced; ///< reduced: selective reduced integration
   int32_t grid[3];
   fascia_solver_def solver;
   // results
@@ -117,6 +117,7 @@ static fascia_scene_beam_def beam_def(const row *r) {
   if (r->shape == FASCIA_SCENE_MESHLESS) b.neighbours = r->neighbours;
   if (r->problem == PROBLEM_STIFF) b.youngs_modulus = 4e6;
   if (r->problem == PROBLEM_INCOMPRESSIBLE) b.poisson_ratio = 0.49;
+  b.reduced_volumetric = r->reduced;
   return b;
 }
 
@@ -200,6 +201,10 @@ static void discretization_rows(row *rows, int *count, int problem, int quick) {
   }
   add_row(rows, count, "discretization", problem, 0, FASCIA_SCENE_MESHLESS, "10x2x2", 2, 16);
   add_row(rows, count, "discretization", problem, 0, FASCIA_SCENE_MESHLESS, "20x3x3", 2, 16);
+  // selective reduced integration (after the full rows: the references are those)
+  add_row(rows, count, "discretization", problem, 0, FASCIA_SCENE_HEX, "10x2x2", 2, 0)->reduced = 1;
+  add_row(rows, count, "discretization", problem, 0, FASCIA_SCENE_HEX, "20x3x3", 2, 0)->reduced = 1;
+  if (!quick && main_problem) add_row(rows, count, "discretization", problem, 0, FASCIA_SCENE_HEX, "40x5x5", 2, 0)->reduced = 1;
   if (!main_problem) return;
   add_row(rows, count, "discretization", problem, 0, FASCIA_SCENE_HEX, "20x3x3", 1, 0);
   add_row(rows, count, "discretization", problem, 0, FASCIA_SCENE_HEX, "20x3x3", 3, 0);
@@ -235,6 +240,8 @@ static void dynamic_rows(row *rows, int *count, int quick) {
   }
   r = dyn(rows, count, "solver");
   r->solver.linear_solver = FASCIA_LINEAR_CG, r->solver.assembled = 1;
+  r = dyn(rows, count, "solver"); // float or double: the assembled matrix in float
+  r->solver.linear_solver = FASCIA_LINEAR_CG, r->solver.assembled = 1, r->solver.single_precision_matrix = 1;
   for (int p = FASCIA_PRECOND_NONE; p <= FASCIA_PRECOND_JACOBI && !quick; ++p) {
     r = dyn(rows, count, "solver");
     r->solver.linear_solver = FASCIA_LINEAR_CG, r->solver.precond = (fascia_precond)p;
@@ -322,7 +329,7 @@ static void row_label(const row *r, char *out, size_t size) {
   if (!r->dynamic) {
     if (r->shape == FASCIA_SCENE_MESHLESS)
       snprintf(out, size, "meshless %s k%d s%d", grid, r->neighbours, r->spc);
-    else snprintf(out, size, "%s %s s%d", fascia_scene_shape_name(r->shape), grid, r->spc);
+    else snprintf(out, size, "%s %s s%d%s", fascia_scene_shape_name(r->shape), grid, r->spc, r->reduced ? " sri" : "");
   } else if (r->preset) {
     snprintf(out, size, "preset %s", r->preset);
   } else {
@@ -331,7 +338,8 @@ static void row_label(const row *r, char *out, size_t size) {
       snprintf(out, size, "dt %g newton %d cg %d fixed", d->time_step, d->newton_iterations, d->cg_iterations);
     else if (d->linear_solver == FASCIA_LINEAR_CG)
       snprintf(out, size, "dt %g newton %d cg %s tol %g%s", d->time_step, d->newton_iterations,
-               precond_name(d->precond), d->cg_tolerance, d->assembled ? " assembled" : "");
+               precond_name(d->precond), d->cg_tolerance,
+               d->single_precision_matrix ? " assembled float" : d->assembled ? " assembled" : "");
     else snprintf(out, size, "dt %g newton %d %s", d->time_step, d->newton_iterations, linear_name(d));
   }
 }
