@@ -120,3 +120,16 @@ herr_t fascia_h5_attr_int(hid_t loc, const char *name, int32_t value) {
   H5Sclose(space);
   return status;
 }
+
+int fascia_h5_link_exists(hid_t file, const char *name) {
+  char prefix[512];
+  const size_t length = strlen(name);
+  if (length >= sizeof prefix) return 0;
+  for (size_t k = 1; k <= length; ++k)
+    if (k == length || name[k] == '/') {
+      memcpy(prefix, name, k);
+      prefix[k] = 0;
+      if (H5Lexists(file, prefix, H5P_DEFAULT) <= 0) return 0;
+    }
+  return 1;
+}

@@ -47,6 +47,9 @@ FASCIA_INTERN fascia_status fascia_commit_temp(fascia_ctx *ctx, const char *what
 
 /// Small attribute writers; each returns a negative value on failure (the
 /// HDF5 error stack tells why).
+/// 1 when every link along the absolute path `name` exists (H5Lexists fails
+/// on a missing intermediate group, so each prefix is tested in turn).
+FASCIA_INTERN int fascia_h5_link_exists(hid_t file, const char *name);
 FASCIA_INTERN herr_t fascia_h5_attr_string(hid_t loc, const char *name, const char *value);
 FASCIA_INTERN herr_t fascia_h5_attr_int(hid_t loc, const char *name, int32_t value);
 

@@ -190,23 +190,11 @@ typedef struct reader {
   hid_t file;
 } reader;
 
-// 1 when every link along the absolute path `name` (at most two levels) exists.
-static int path_exists(hid_t file, const char *name) {
-  char group[64];
-  const char *slash = strchr(name + 1, '/');
-  if (slash && (size_t)(slash - name) < sizeof group) {
-    memcpy(group, name, (size_t)(slash - name));
-    group[slash - name] = 0;
-    if (H5Lexists(file, group, H5P_DEFAULT) <= 0) return 0;
-  }
-  return H5Lexists(file, name, H5P_DEFAULT) > 0;
-}
-
 // Reads dataset `name`, which must hold exactly `count` values of class
 // `cls` (any rank), converted to mem_type.
 static fascia_status read_exact(reader *r, const char *name, H5T_class_t cls, hid_t mem_type, hsize_t count,
                                 void *out) {
-  FASCIA_CHECK(path_exists(r->file, name), r->ctx, FASCIA_ERR_FORMAT,
+  FASCIA_CHECK(fascia_h5_link_exists(r->file, name), r->ctx, FASCIA_ERR_FORMAT,
                "checkpoint '%s' %s: dataset missing; not a checkpoint written by 'fascia run --checkpoint'", r->path,
                name);
   hid_t dset = H5Dopen2(r->file, name, H5P_DEFAULT);

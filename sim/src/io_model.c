@@ -355,21 +355,6 @@ typedef struct reader {
   hid_t file;
 } reader;
 
-// 1 when every link along the absolute path `name` exists (H5Lexists fails
-// on a missing intermediate group, so each prefix is tested in turn).
-static int link_exists(hid_t file, const char *name) {
-  char prefix[PATH_SIZE];
-  const size_t length = strlen(name);
-  if (length >= sizeof prefix) return 0;
-  for (size_t k = 1; k <= length; ++k)
-    if (k == length || name[k] == '/') {
-      memcpy(prefix, name, k);
-      prefix[k] = 0;
-      if (H5Lexists(file, prefix, H5P_DEFAULT) <= 0) return 0;
-    }
-  return 1;
-}
-
 static const char *class_phrase(H5T_class_t cls) {
   switch (cls) {
   case H5T_INTEGER: return "integers";
@@ -404,7 +389,7 @@ static fascia_status read_failed(reader *r, const char *name, const char *action
 // allocates for them. On success *out is an open dataset.
 static fascia_status open_checked(reader *r, const char *name, elem kind, int rank, int64_t *dims, hid_t *out) {
   *out = H5I_INVALID_HID;
-  FASCIA_CHECK(link_exists(r->file, name), r->ctx, FASCIA_ERR_FORMAT, "model '%s' %s: dataset missing; %s", r->path,
+  FASCIA_CHECK(fascia_h5_link_exists(r->file, name), r->ctx, FASCIA_ERR_FORMAT, "model '%s' %s: dataset missing; %s", r->path,
                name, REMEDY);
   hid_t dset = H5Dopen2(r->file, name, H5P_DEFAULT);
   if (dset < 0) return read_failed(r, name, "open it as a dataset");
@@ -567,7 +552,7 @@ static fascia_status read_names(reader *r, const char *name, int64_t count, char
 // Reads the optional scalar string /provenance into *out (NULL if absent).
 static fascia_status read_provenance(reader *r, char **out) {
   *out = NULL;
-  if (!link_exists(r->file, "/provenance")) return FASCIA_OK;
+  if (!fascia_h5_link_exists(r->file, "/provenance")) return FASCIA_OK;
   int64_t dims[1];
   hid_t dset;
   FASCIA_TRY(open_checked(r, "/provenance", ELEM_NAME, 0, dims, &dset));
@@ -650,7 +635,7 @@ static fascia_status read_version(reader *r) {
 
 // Number of members of group `name` (each a motion or organ).
 static fascia_status count_members(reader *r, const char *name, int64_t *count) {
-  FASCIA_CHECK(link_exists(r->file, name), r->ctx, FASCIA_ERR_FORMAT, "model '%s' %s: group missing; %s", r->path,
+  FASCIA_CHECK(fascia_h5_link_exists(r->file, name), r->ctx, FASCIA_ERR_FORMAT, "model '%s' %s: group missing; %s", r->path,
                name, REMEDY);
   hid_t group = H5Gopen2(r->file, name, H5P_DEFAULT);
   if (group < 0) return read_failed(r, name, "open it as a group");
@@ -700,7 +685,7 @@ static const char *const sized_datasets[] = {
 // shape says more than "not stored"); they cannot exhaust memory.
 #define STORED_CHECK_VALUES 65536
 static fascia_status check_stored(reader *r, const char *name) {
-  if (!link_exists(r->file, name)) return FASCIA_OK; // reported as missing where it is read
+  if (!fascia_h5_link_exists(r->file, name)) return FASCIA_OK; // reported as missing where it is read
   hid_t dset = H5Dopen2(r->file, name, H5P_DEFAULT);
   if (dset < 0) return FASCIA_OK; // reported where it is read
   hid_t space = H5Dget_space(dset);
@@ -788,8 +773,8 @@ static fascia_status read_frames_samples(reader *r, fascia_model *m) {
   READ(r, "/samples/volume", ELEM_REAL, S, 0, m->sample_volume);
   READ(r, "/samples/material", ELEM_INT, S, 0, m->sample_material);
   // organ owners came with deformable organs: files without them are all tissue
-  if (link_exists(r->file, "/frames/organ")) READ(r, "/frames/organ", ELEM_INT, N, 0, m->frame_organ);
-  if (link_exists(r->file, "/samples/organ")) READ(r, "/samples/organ", ELEM_INT, S, 0, m->sample_organ);
+  if (fascia_h5_link_exists(r->file, "/frames/organ")) READ(r, "/frames/organ", ELEM_INT, N, 0, m->frame_organ);
+  if (fascia_h5_link_exists(r->file, "/samples/organ")) READ(r, "/samples/organ", ELEM_INT, S, 0, m->sample_organ);
   READ(r, "/samples/offsets", ELEM_INT, S + 1, 0, m->sample_offsets);
   READ(r, "/pairs/frame", ELEM_INT, P, 0, m->pair_frame);
   READ(r, "/pairs/weight", ELEM_REAL, P, 0, m->pair_weight);
@@ -819,7 +804,7 @@ static fascia_status read_materials(reader *r, fascia_model *m) {
     status = FASCIA_FAIL(r->ctx, FASCIA_ERR_MEMORY, "model '%s' /materials: out of memory", r->path);
     goto cleanup;
   }
-  if (link_exists(r->file, "/materials/part")) {
+  if (fascia_h5_link_exists(r->file, "/materials/part")) {
     status = read_numbers(r, "/materials/part", ELEM_INT, M, 0, part);
     if (status != FASCIA_OK) {
       free(part);

@@ -1,13 +1,15 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// Option parsing shared by the subcommands: numbers that must be whole and
-// finite, NXxNYxNZ grids, the one-line usage error, a wall clock.
-#define _POSIX_C_SOURCE 200809L // clock_gettime
+// Helpers shared by the subcommands: numbers that must be whole and finite,
+// NXxNYxNZ grids, the one-line usage error, a wall clock, memory in use.
+#define _POSIX_C_SOURCE 200809L // clock_gettime, sysconf
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <sys/resource.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "commands.h"
 
@@ -48,4 +50,18 @@ double cli_now_ms(void) {
   struct timespec t;
   clock_gettime(CLOCK_MONOTONIC, &t);
   return 1e3 * (double)t.tv_sec + 1e-6 * (double)t.tv_nsec;
+}
+
+double cli_resident_mb(void) {
+  FILE *f = fopen("/proc/self/statm", "r"); // Linux; 0 where absent
+  long pages = 0, resident = 0;
+  if (!f) return 0;
+  if (fscanf(f, "%ld %ld", &pages, &resident) != 2) resident = 0;
+  fclose(f);
+  return (double)resident * (double)sysconf(_SC_PAGESIZE) / (1024.0 * 1024.0);
+}
+
+double cli_peak_mb(void) {
+  struct rusage usage; // ru_maxrss is KiB on Linux
+  return getrusage(RUSAGE_SELF, &usage) == 0 ? (double)usage.ru_maxrss / 1024.0 : 0;
 }

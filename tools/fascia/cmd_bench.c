@@ -218,23 +218,6 @@ static void progress_line(const char *bench, int k, int total, const char *what)
   fflush(stderr);
 }
 
-// Resident memory of the process now, MiB (Linux /proc; 0 where absent).
-static double resident_mb(void) {
-  FILE *f = fopen("/proc/self/statm", "r");
-  long pages = 0, resident = 0;
-  if (!f) return 0;
-  if (fscanf(f, "%ld %ld", &pages, &resident) != 2) resident = 0;
-  fclose(f);
-  return (double)resident * (double)sysconf(_SC_PAGESIZE) / (1024.0 * 1024.0);
-}
-
-// Peak resident memory of the process so far, MiB (ru_maxrss is KiB on Linux).
-static double peak_mb(void) {
-  struct rusage usage;
-  if (getrusage(RUSAGE_SELF, &usage) != 0) return 0;
-  return (double)usage.ru_maxrss / 1024.0;
-}
-
 static int32_t max_neighbours(const fascia_model *m) {
   int32_t k = 0;
   for (int32_t s = 0; s < m->sample_count; ++s) {
@@ -259,7 +242,7 @@ static fascia_status bench_paper_row(fascia_ctx *ctx, const bench_options *opt, 
                                      paper_result *out) {
   memset(out, 0, sizeof *out);
   out->row = row;
-  const double base_mb = resident_mb();
+  const double base_mb = cli_resident_mb();
   fascia_model *model = NULL;
   fascia_solver *solver = NULL;
   fascia_status st = fascia_scene_paper_build(ctx, row, NULL, &model);
@@ -308,8 +291,8 @@ static fascia_status bench_paper_row(fascia_ctx *ctx, const bench_options *opt, 
       out->cg_per_step = cg / opt->steps;
     }
   }
-  out->memory_mb = resident_mb() - base_mb;
-  out->peak_memory_mb = peak_mb();
+  out->memory_mb = cli_resident_mb() - base_mb;
+  out->peak_memory_mb = cli_peak_mb();
 cleanup:
   fascia_solver_destroy(&solver);
   fascia_model_destroy(&model);

@@ -86,20 +86,6 @@ typedef struct tradeoff_options {
   double time;
 } tradeoff_options;
 
-static double resident_mb(void) {
-  FILE *f = fopen("/proc/self/statm", "r");
-  long pages = 0, resident = 0;
-  if (!f) return 0;
-  if (fscanf(f, "%ld %ld", &pages, &resident) != 2) resident = 0;
-  fclose(f);
-  return (double)resident * (double)sysconf(_SC_PAGESIZE) / (1024.0 * 1024.0);
-}
-
-static double peak_mb(void) {
-  struct rusage usage;
-  return getrusage(RUSAGE_SELF, &usage) == 0 ? (double)usage.ru_maxrss / 1024.0 : 0;
-}
-
 static const char *linear_name(const fascia_solver_def *d) {
   return d->linear_solver == FASCIA_LINEAR_CG ? "cg" : d->linear_solver == FASCIA_LINEAR_DIRECT ? "direct" : "auto";
 }
@@ -124,7 +110,7 @@ static fascia_scene_beam_def beam_def(const row *r) {
 // Runs one row `repeats` times (once when slow), keeping the least time.
 // Static rows: time per solve; dynamic rows: time per step over `time` s.
 static fascia_status run_row(fascia_ctx *ctx, const tradeoff_options *opt, row *r) {
-  const double base_mb = resident_mb();
+  const double base_mb = cli_resident_mb();
   fascia_scene_beam_def bdef = beam_def(r);
   fascia_model *model = NULL;
   fascia_solver *solver = NULL;
@@ -160,8 +146,8 @@ static fascia_status run_row(fascia_ctx *ctx, const tradeoff_options *opt, row *
   fascia_real p[3] = {NAN, NAN, NAN};
   if (tip >= 0) fascia_solver_probe_position(solver, tip, p);
   r->uz = tip >= 0 ? p[2] - model->probe_position[3 * tip + 2] : NAN;
-  r->memory_mb = resident_mb() - base_mb;
-  r->peak_mb = peak_mb();
+  r->memory_mb = cli_resident_mb() - base_mb;
+  r->peak_mb = cli_peak_mb();
 cleanup:
   fascia_solver_destroy(&solver);
   fascia_model_destroy(&model);

@@ -39,6 +39,9 @@ int cli_parse_count(const char *text, int *out, long minimum);
 int cli_parse_grid(const char *text, int32_t grid[3], int minimum);
 /// Wall clock, ms.
 double cli_now_ms(void);
+/// Resident memory of the process now, and its peak so far, MiB.
+double cli_resident_mb(void);
+double cli_peak_mb(void);
 
 /// 1 when --verbose was given anywhere on the command line.
 extern int cli_verbose;
