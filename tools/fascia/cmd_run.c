@@ -374,6 +374,32 @@ static cJSON *int_array(const int *values, int count) {
   return a;
 }
 
+// Displacement of the body from rest: the volume-weighted mean over samples
+// (an integral of |u|, comparable across resolutions) and the largest (m).
+// Samples that integrate only the volumetric energy repeat the volume of
+// others and are left out.
+static void sample_displacements(const fascia_model *m, const fascia_solver *solver, double *mean, double *max) {
+  *mean = *max = 0;
+  fascia_real *p = malloc(3 * (size_t)m->sample_count * sizeof *p);
+  if (!p) return;
+  fascia_solver_sample_positions(solver, p);
+  double volume = 0;
+  for (int32_t s = 0; s < m->sample_count; ++s) {
+    if (m->materials[m->sample_material[s]].part == FASCIA_PART_VOLUMETRIC) continue;
+    double u2 = 0;
+    for (int c = 0; c < 3; ++c) {
+      const double d = p[3 * (int64_t)s + c] - m->sample_position[3 * (int64_t)s + c];
+      u2 += d * d;
+    }
+    const double u = sqrt(u2);
+    *mean += m->sample_volume[s] * u;
+    volume += m->sample_volume[s];
+    if (u > *max) *max = u;
+  }
+  if (volume > 0) *mean /= volume;
+  free(p);
+}
+
 static int print_json(const run_options *opt, const fascia_model *m, fascia_solver *solver, const run_totals *t,
                       fascia_real max_strain, fascia_real max_stress) {
   const int steps = t->steps > 0 ? t->steps : 1;
@@ -407,6 +433,11 @@ static int print_json(const run_options *opt, const fascia_model *m, fascia_solv
   cJSON_AddNumberToObject(root, "kinetic_energy", fascia_solver_kinetic_energy(solver));
   cJSON_AddNumberToObject(root, "max_strain", max_strain);
   cJSON_AddNumberToObject(root, "max_stress", max_stress);
+  double mean_u, max_u;
+  sample_displacements(m, solver, &mean_u, &max_u);
+  cJSON *displacement = cJSON_AddObjectToObject(root, "displacement");
+  cJSON_AddNumberToObject(displacement, "mean", mean_u);
+  cJSON_AddNumberToObject(displacement, "max", max_u);
   cJSON *probes = cJSON_AddObjectToObject(root, "probes");
   for (int32_t p = 0; p < m->probe_count; ++p) {
     fascia_real pos[3], u[3];
