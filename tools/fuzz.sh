@@ -58,8 +58,12 @@ for h in "${harnesses[@]}"; do
   # 49-byte file asks for 4 GiB, tests/fuzz/third-party/README.md); fascia's
   # own allocations are bounded far below by the loader's size checks; under
   # ASan that realloc touches ~2.4 GB, hence the 6 GB resident limit
+  # CI (CI=true) fuzzes from a fixed seed, so that its result does not
+  # depend on luck: a fresh search is `tools/fuzz.sh` by hand
+  seed=()
+  if [ "${CI:-}" = true ]; then seed=(-seed="${FASCIA_FUZZ_SEED:-1}"); fi
   "$build/tests/fuzz/fuzz_$h" -max_total_time="$seconds" -timeout=20 -rss_limit_mb=6144 -malloc_limit_mb=4200 \
-    -max_len=4096 \
+    -max_len=4096 "${seed[@]}" \
     -artifact_prefix="$findings/" -print_final_stats=1 "$corpus" "$root/tests/fuzz/corpus/$h" >"$log" 2>&1
   rc=$?
   set -e
