@@ -213,4 +213,34 @@ static inline double stab_static_tip(fascia_ctx *ctx, const fascia_model *m, int
   return tip >= 0 ? p[2] - m->probe_position[3 * tip + 2] : NAN;
 }
 
+// The 6 x 2 x 2 beam without gravity, frames at x = 0 fixed, frames at
+// x = plane moving by -push along x over motion_end (s).
+static inline fascia_model *stab_pushed_beam(fascia_ctx *ctx, int law, double plane, double push,
+                                             double motion_end) {
+  fascia_scene_beam_def bd = stab_beam_def(6, law);
+  bd.gravity[2] = 0;
+  fascia_model *src = NULL;
+  if (fascia_scene_beam_build(ctx, &bd, &src) != FASCIA_OK) return NULL;
+  fascia_model *m = stab_copy_model(ctx, src, 0, 0, 0, 1, 1);
+  fascia_model_destroy(&src);
+  if (!m) return NULL;
+  fascia_motion *mo = &m->motions[0];
+  strcpy(mo->name, "push");
+  if (fascia_motion_alloc(ctx, mo, 2) != FASCIA_OK) {
+    fascia_model_destroy(&m);
+    return NULL;
+  }
+  mo->key_time[0] = 0, mo->key_time[1] = motion_end;
+  mo->key_translation[3] = -push;
+  mo->key_rotation[0] = mo->key_rotation[4] = 1;
+  for (int32_t i = 0; i < m->frame_count; ++i) {
+    const double x = m->frame_position[3 * i];
+    m->frame_kind[i] = x < 1e-9 ? FASCIA_FRAME_FIXED : fabs(x - plane) < 1e-9 ? FASCIA_FRAME_PRESCRIBED : FASCIA_FRAME_FREE;
+    m->frame_motion[i] = m->frame_kind[i] == FASCIA_FRAME_PRESCRIBED ? 0 : -1;
+  }
+  if (fascia_model_build_reverse(ctx, m) != FASCIA_OK || fascia_model_validate(ctx, m, "pushed beam") != FASCIA_OK)
+    fascia_model_destroy(&m);
+  return m;
+}
+
 #endif

@@ -14,42 +14,13 @@
 #define MOTION_END 1.0 // s
 #define DT 0.05
 
-// The 6 x 2 x 2 beam without gravity, frames at x = 0 fixed, frames at
-// x = plane moving by -push along x over MOTION_END.
-static fascia_model *pushed_beam(fascia_ctx *ctx, int law, double plane, double push) {
-  fascia_scene_beam_def bd = stab_beam_def(6, law);
-  bd.gravity[2] = 0;
-  fascia_model *src = NULL;
-  if (fascia_scene_beam_build(ctx, &bd, &src) != FASCIA_OK) return NULL;
-  fascia_model *m = stab_copy_model(ctx, src, 0, 0, 0, 1, 1);
-  fascia_model_destroy(&src);
-  if (!m) return NULL;
-  fascia_motion *mo = &m->motions[0];
-  strcpy(mo->name, "push");
-  if (fascia_motion_alloc(ctx, mo, 2) != FASCIA_OK) {
-    fascia_model_destroy(&m);
-    return NULL;
-  }
-  mo->key_time[0] = 0, mo->key_time[1] = MOTION_END;
-  mo->key_translation[3] = -push;
-  mo->key_rotation[0] = mo->key_rotation[4] = 1;
-  for (int32_t i = 0; i < m->frame_count; ++i) {
-    const double x = m->frame_position[3 * i];
-    m->frame_kind[i] = x < 1e-9 ? FASCIA_FRAME_FIXED : fabs(x - plane) < 1e-9 ? FASCIA_FRAME_PRESCRIBED : FASCIA_FRAME_FREE;
-    m->frame_motion[i] = m->frame_kind[i] == FASCIA_FRAME_PRESCRIBED ? 0 : -1;
-  }
-  if (fascia_model_build_reverse(ctx, m) != FASCIA_OK || fascia_model_validate(ctx, m, "pushed beam") != FASCIA_OK)
-    fascia_model_destroy(&m);
-  return m;
-}
-
 int main(void) {
   fascia_ctx *ctx = stab_ctx();
   if (!ctx) return 1;
   const double planes[2] = {4.0, 2.4}, pushes[2] = {3.0, 2.0};
   for (int c = 0; c < 2; ++c)
     for (int law = 0; law < FASCIA_LAW_COUNT_; ++law) {
-      fascia_model *m = pushed_beam(ctx, law, planes[c], pushes[c]);
+      fascia_model *m = stab_pushed_beam(ctx, law, planes[c], pushes[c], MOTION_END);
       CHECK(m != NULL);
       if (!m) return 1;
       fascia_solver_def sd = fascia_solver_def_default();

@@ -127,14 +127,13 @@ static fascia_status assemble(fascia_solver *S, const step_terms *terms) {
   return FASCIA_OK;
 }
 
-// Size of the rounding error of an energy evaluation, J. Each sample's
-// energy density is a sum of terms of size (lambda + 2 mu) that cancel near
-// rest (the stable Neo-Hookean's mu/2 (tr C - 3) - mu^2 / (2 l) ...), so the
-// total carries an absolute error of a few ulps of sum_s v_s (lambda_s + 2 mu_s)
-// whatever its value. Measured: the Neo-Hookean beam at rest, E = 1e8 Pa,
-// evaluates to 1.2e-8 J instead of 0, 0.1 ulp of this sum; 8 ulps is the
-// margin. Without this term a stiff Neo-Hookean model cannot see its energy
-// decrease near the minimum and every Newton step ends in 30 line-search cuts.
+// Size of the rounding error of an energy evaluation, J: an absolute error of
+// a few ulps of sum_s v_s (lambda_s + 2 mu_s) whatever the energy's value
+// (StVK's E = (F^T F - I)/2 loses the digits of F^T F near rest; the
+// Neo-Hookean law is written free of such cancellation, material.h). 8 ulps
+// is the margin. Without this term a stiff StVK model (E = 1e8 Pa, t311)
+// cannot see its energy decrease near the minimum and a step fails to
+// converge in its line search.
 static fascia_real energy_roundoff(const fascia_solver *S) {
   const fascia_system *sys = S->sys;
   fascia_real sum = 0;

@@ -18,17 +18,6 @@
 
 #include "scene_util.h"
 
-#define SCENE_FAIL(ctx, st, ...) fascia_ctx_fail((ctx), (st), __FILE__, __LINE__, __VA_ARGS__)
-#define SCENE_CHECK(cond, ctx, st, ...)                                                                               \
-  do {                                                                                                                \
-    if (!(cond)) return SCENE_FAIL(ctx, st, __VA_ARGS__);                                                            \
-  } while (0)
-#define SCENE_TRY_GOTO(expr)                                                                                          \
-  do {                                                                                                                \
-    status = (expr);                                                                                                  \
-    if (status != FASCIA_OK) goto cleanup;                                                                            \
-  } while (0)
-
 // Largest model the generator agrees to build (pairs), far above any use.
 #define BEAM_MAX_PAIRS ((int64_t)1 << 28)
 #define PROVENANCE_SIZE 4096

@@ -25,17 +25,6 @@
 
 #include "scene_util.h"
 
-#define SCENE_FAIL(ctx, st, ...) fascia_ctx_fail((ctx), (st), __FILE__, __LINE__, __VA_ARGS__)
-#define SCENE_CHECK(cond, ctx, st, ...)                                                                               \
-  do {                                                                                                                \
-    if (!(cond)) return SCENE_FAIL(ctx, st, __VA_ARGS__);                                                            \
-  } while (0)
-#define SCENE_TRY_GOTO(expr)                                                                                          \
-  do {                                                                                                                \
-    status = (expr);                                                                                                  \
-    if (status != FASCIA_OK) goto cleanup;                                                                            \
-  } while (0)
-
 #define PAPER_SEED 0x2013b05a17ULL // fixed: the same row always gives the same model
 #define PAPER_FRAME_TOLERANCE 0.05 // grid frame count within 5 % of the request when possible
 #define PROVENANCE_SIZE 4096

@@ -10,17 +10,6 @@
 
 #include "scene_util.h"
 
-#define SCENE_FAIL(ctx, st, ...) fascia_ctx_fail((ctx), (st), __FILE__, __LINE__, __VA_ARGS__)
-#define SCENE_CHECK(cond, ctx, st, ...)                                                                               \
-  do {                                                                                                                \
-    if (!(cond)) return SCENE_FAIL(ctx, st, __VA_ARGS__);                                                            \
-  } while (0)
-#define SCENE_TRY(expr)                                                                                               \
-  do {                                                                                                                \
-    fascia_status scene_try_st_ = (expr);                                                                             \
-    if (scene_try_st_ != FASCIA_OK) return scene_try_st_;                                                            \
-  } while (0)
-
 scene_grid scene_grid_of_beam(const fascia_scene_beam_def *def, const int32_t frames[3]) {
   scene_grid g;
   const fascia_real size[3] = {def->length, def->width, def->height};
