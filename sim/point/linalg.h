@@ -162,4 +162,23 @@ static inline FASCIA_HD void fascia_pt_quat_rotate_by(const fascia_real *t, fasc
   for (int k = 0; k < 4; ++k) q[k] = r[k];
 }
 
+/// J_l(phi)^T g: the left Jacobian of the exponential map, transposed (the
+/// gradient with respect to increments phi anchored at a rotation, from the
+/// gradient with respect to a world-space rotation at exp(phi) R).
+static inline FASCIA_HD void fascia_pt_left_jacobian_t(const fascia_real *phi, const fascia_real *g, fascia_real *out) {
+  const fascia_real t2 = fascia_pt_dot3(phi, phi), t = sqrt(t2);
+  fascia_real a, b;
+  if (t < 1e-4) { // series: exact to rounding for small angles
+    a = FASCIA_R(0.5) - t2 / 24;
+    b = FASCIA_R(1.0) / 6 - t2 / 120;
+  } else {
+    a = (1 - cos(t)) / t2;
+    b = (t - sin(t)) / (t2 * t);
+  }
+  fascia_real pg[3], ppg[3];
+  fascia_pt_cross(phi, g, pg);
+  fascia_pt_cross(phi, pg, ppg);
+  for (int c = 0; c < 3; ++c) out[c] = g[c] - a * pg[c] + b * ppg[c];
+}
+
 #endif

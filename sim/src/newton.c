@@ -24,31 +24,10 @@
 #include "organs.h"
 #include "solver_internal.h"
 
-#define ARMIJO 1e-4        // sufficient decrease of the line search
-#define MAX_CUTS 30        // step halvings before the Levenberg shift grows
-#define MAX_SHIFT 1e12     // relative Levenberg shift beyond which we give up
-
 double fascia_now_ms(void) {
   struct timespec t;
   clock_gettime(CLOCK_MONOTONIC, &t);
   return 1e3 * (double)t.tv_sec + 1e-6 * (double)t.tv_nsec;
-}
-
-// J_l(phi)^T g: left Jacobian of the exponential map, transposed.
-static void left_jacobian_t(const fascia_real *phi, const fascia_real *g, fascia_real *out) {
-  const fascia_real t2 = fascia_pt_dot3(phi, phi), t = sqrt(t2);
-  fascia_real a, b;
-  if (t < 1e-4) { // series: exact to rounding for small angles
-    a = FASCIA_R(0.5) - t2 / 24;
-    b = FASCIA_R(1.0) / 6 - t2 / 120;
-  } else {
-    a = (1 - cos(t)) / t2;
-    b = (t - sin(t)) / (t2 * t);
-  }
-  fascia_real pg[3], ppg[3];
-  fascia_pt_cross(phi, g, pg);
-  fascia_pt_cross(phi, pg, ppg);
-  for (int c = 0; c < 3; ++c) out[c] = g[c] - a * pg[c] + b * ppg[c];
 }
 
 static void mass_apply(fascia_solver *S, const fascia_real *v, fascia_real *out) {
@@ -89,7 +68,7 @@ static fascia_status objective(fascia_solver *S, const step_terms *terms, const 
   if (gradient && terms->jacobian)
     for (int32_t i = 0; i < N; ++i) {
       fascia_real g[3] = {gradient[6 * i + 3], gradient[6 * i + 4], gradient[6 * i + 5]};
-      left_jacobian_t(d + 6 * i + 3, g, gradient + 6 * i + 3);
+      fascia_pt_left_jacobian_t(d + 6 * i + 3, g, gradient + 6 * i + 3);
     }
   if (terms->c1 != 0 || terms->c2 != 0) {
     // c1/2 (d - hu).M(d - hu) + c2/2 d.M d with M(hu) precomputed
@@ -134,7 +113,7 @@ static fascia_status assemble(fascia_solver *S, const step_terms *terms) {
 // is the margin. Without this term a stiff StVK model (E = 1e8 Pa, t311)
 // cannot see its energy decrease near the minimum and a step fails to
 // converge in its line search.
-static fascia_real energy_roundoff(const fascia_solver *S) {
+fascia_real fascia_newton_energy_roundoff(const fascia_solver *S) {
   const fascia_system *sys = S->sys;
   fascia_real sum = 0;
   for (int32_t s = 0; s < S->model->sample_count; ++s)
@@ -143,7 +122,7 @@ static fascia_real energy_roundoff(const fascia_solver *S) {
 }
 
 // |external load| over free DOFs: the scale of the Newton tolerance
-static fascia_real load_norm(const fascia_solver *S) {
+fascia_real fascia_newton_load_norm(const fascia_solver *S) {
   const fascia_system *sys = S->sys;
   fascia_real sum = 0;
   for (int32_t i = 0; i < S->frame_count; ++i)
@@ -180,11 +159,11 @@ fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iter
   FASCIA_TRY(objective(S, &terms, S->d, &phi, g));
   rep->profile.evaluate_ms += fascia_now_ms() - t;
   const fascia_real g0 = sqrt(fascia_dot(g, g, n));
-  fascia_real reference = load_norm(S);
+  fascia_real reference = fascia_newton_load_norm(S);
   if (dynamic || reference == 0) reference = reference > g0 ? reference : g0;
   if (reference == 0) reference = 1;
   rep->reference_norm = reference;
-  const fascia_real material_roundoff = energy_roundoff(S);
+  const fascia_real material_roundoff = fascia_newton_energy_roundoff(S);
   int iteration = 0, converged = 0;
   fascia_real gnorm = g0;
   for (; iteration <= max_iterations; ++iteration) {
@@ -226,7 +205,7 @@ fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iter
         while (!fascia_banded_factor(&S->band, &S->K, S->mask, S->damping_diagonal, op.shift)) {
           ++rep->negative_curvature;
           op.shift = op.shift == 0 ? FASCIA_R(1e-8) : 10 * op.shift;
-          if (op.shift > MAX_SHIFT)
+          if (op.shift > FASCIA_NEWTON_MAX_SHIFT)
             return FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
                                "solver: Newton iteration %d: the tangent stays singular under any damping (a NaN, "
                                "or a frame with no sample?)",
@@ -248,7 +227,7 @@ fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iter
       }
       // backtracking line search on Phi
       fascia_real alpha = 1;
-      for (int cut = 0; cut <= (def->line_search ? MAX_CUTS : 0); ++cut) {
+      for (int cut = 0; cut <= (def->line_search ? FASCIA_NEWTON_MAX_CUTS : 0); ++cut) {
         for (int64_t k = 0; k < n; ++k) S->d_trial[k] = S->d[k] + alpha * p[k];
         fascia_organs_expand(S->organs, S, S->d_trial); // slaves of rigid organs follow their master
         t = fascia_now_ms();
@@ -259,7 +238,7 @@ fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iter
         const fascia_real roundoff =
             1e-13 * (fabs(phi) + fabs(S->sys->energy_internal) + fabs(S->sys->energy_external)) + material_roundoff;
         if (st == FASCIA_OK &&
-            (!def->line_search || phi_trial <= phi + ARMIJO * alpha * slope ||
+            (!def->line_search || phi_trial <= phi + FASCIA_NEWTON_ARMIJO * alpha * slope ||
              (phi_trial <= phi + roundoff && fascia_dot(g_trial, g_trial, n) < gnorm * gnorm))) {
           accepted = 1;
           break;
@@ -271,7 +250,7 @@ fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iter
       if (!accepted) {
         // even tiny steps fail: damp the tangent (Levenberg) and try again
         op.shift = op.shift == 0 ? FASCIA_R(1e-4) : 10 * op.shift;
-        if (op.shift > MAX_SHIFT) {
+        if (op.shift > FASCIA_NEWTON_MAX_SHIFT) {
           fascia_real restore;
           (void)objective(S, &terms, S->d, &restore, NULL);
           rep->newton_iterations = iteration;

@@ -106,24 +106,6 @@ static void rest_offset(const fascia_organs *O, int32_t b, int32_t i, fascia_rea
   for (int c = 0; c < 3; ++c) r[c] = p[c] - xm[c];
 }
 
-// J_l(phi)^T g, the transposed left Jacobian of the exponential map (same
-// series as newton.c).
-static void left_jacobian_t(const fascia_real *phi, const fascia_real *g, fascia_real *out) {
-  const fascia_real t2 = fascia_pt_dot3(phi, phi), t = sqrt(t2);
-  fascia_real a, b;
-  if (t < 1e-4) {
-    a = FASCIA_R(0.5) - t2 / 24;
-    b = FASCIA_R(1.0) / 6 - t2 / 120;
-  } else {
-    a = (1 - cos(t)) / t2;
-    b = (t - sin(t)) / (t2 * t);
-  }
-  fascia_real pg[3], ppg[3];
-  fascia_pt_cross(phi, g, pg);
-  fascia_pt_cross(phi, pg, ppg);
-  for (int c = 0; c < 3; ++c) out[c] = g[c] - a * pg[c] + b * ppg[c];
-}
-
 // Mass properties of a closed triangle surface at density rho: signed
 // tetrahedra from a reference point (divergence theorem); the covariance of
 // a tetrahedron with one vertex at the origin is V/20 (sum_j w_j w_j^T + s s^T).
@@ -455,7 +437,7 @@ fascia_real fascia_organs_reduce(fascia_organs *O, fascia_solver *S, fascia_real
       memset(gi, 0, 6 * sizeof(fascia_real));
     }
     fascia_real jm[3];
-    if (jacobian) left_jacobian_t(phi, mom, jm);
+    if (jacobian) fascia_pt_left_jacobian_t(phi, mom, jm);
     else memcpy(jm, mom, sizeof jm);
     for (int c = 0; c < 3; ++c) gradient[6 * m + c] += gx[c], gradient[6 * m + 3 + c] += jm[c] + gt[c];
   }

@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "device.h"
 #include "organs.h"
 #include "solver_internal.h"
 
@@ -58,17 +59,64 @@ static fascia_status check_def(fascia_ctx *ctx, const fascia_solver_def *d) {
   return FASCIA_OK;
 }
 
-// The backends this build has, fastest first. The CUDA backend registers
-// itself here when it is built (cuda/).
-static fascia_status pick_backend(fascia_ctx *ctx, const char *name, char *chosen) {
-  if (!name || !strcmp(name, "auto") || !strcmp(name, "cpu")) {
-    strcpy(chosen, "cpu");
-    return FASCIA_OK;
+// The backend: the CPU, or the device solver (cuda/) on a GPU or in the host
+// emulation. "auto" takes the GPU when there is one and the settings run on
+// it, and records why not otherwise.
+static fascia_status pick_backend(fascia_solver *S) {
+  const char *name = S->def.backend ? S->def.backend : "auto";
+  const int automatic = !strcmp(name, "auto");
+  const int threads = S->sys->threads;
+  snprintf(S->device_text, sizeof S->device_text, "cpu, %d thread%s", threads, threads == 1 ? "" : "s");
+  strcpy(S->backend_name, "cpu");
+  if (!strcmp(name, "cpu")) return FASCIA_OK;
+  FASCIA_CHECK(automatic || !strcmp(name, "cuda") || !strcmp(name, "emulated"), S->ctx, FASCIA_ERR_ARGUMENT,
+               "unknown backend '%s'; valid: auto, cpu, cuda, emulated", name);
+  const char *device = automatic ? "cuda" : name;
+  const fascia_launcher_ops *ops = fascia_device_ops(device);
+  char why[256] = "";
+  if (!ops) {
+    snprintf(why, sizeof why, "this build has no CUDA backend (built without the CUDA toolkit)");
+  } else if (fascia_device_supports(S, why, sizeof why)) {
+    const fascia_status st = fascia_device_create(S, ops, &S->device);
+    if (st == FASCIA_OK) {
+      snprintf(S->backend_name, sizeof S->backend_name, "%s", device);
+      snprintf(S->device_text, sizeof S->device_text, "%s", fascia_device_name(S->device));
+      return FASCIA_OK;
+    }
+    if (!automatic) return st;
+    snprintf(why, sizeof why, "%s", fascia_ctx_message(S->ctx));
+    fascia_ctx_clear(S->ctx);
   }
-  if (!strcmp(name, "cuda"))
-    return FASCIA_FAIL(ctx, FASCIA_ERR_UNSUPPORTED,
-                       "backend 'cuda' is not available in this build; use --backend cpu (or auto)");
-  return FASCIA_FAIL(ctx, FASCIA_ERR_ARGUMENT, "unknown backend '%s'; valid: auto, cpu, cuda", name);
+  if (!automatic)
+    return FASCIA_FAIL(S->ctx, ops ? FASCIA_ERR_ARGUMENT : FASCIA_ERR_UNSUPPORTED,
+                       "backend '%s' cannot run this: %s; use --backend cpu (or auto)", name, why);
+  const size_t used = strlen(S->device_text);
+  snprintf(S->device_text + used, sizeof S->device_text - used, " (auto: not on a GPU: %s)", why);
+  return FASCIA_OK;
+}
+
+int fascia_backend_available(const char *backend, char *detail, size_t size) {
+  if (detail && size) detail[0] = 0;
+  if (backend && !strcmp(backend, "cpu")) {
+    if (detail) snprintf(detail, size, "the CPU reference backend");
+    return 1;
+  }
+  const fascia_launcher_ops *ops = fascia_device_ops(backend);
+  if (!ops) {
+    if (detail) snprintf(detail, size, "%s", backend && !strcmp(backend, "cuda") ? "built without the CUDA toolkit"
+                                                                                   : "unknown backend");
+    return 0;
+  }
+  fascia_ctx *ctx = NULL;
+  fascia_ctx_def def = fascia_ctx_def_default();
+  def.threads = 1;
+  if (fascia_ctx_create(&def, &ctx) != FASCIA_OK) return 0;
+  fascia_launcher *L = NULL;
+  const fascia_status st = ops->create(ctx, 1, &L);
+  if (detail) snprintf(detail, size, "%s", st == FASCIA_OK ? ops->device_name(L) : fascia_ctx_message(ctx));
+  if (L) ops->destroy(L);
+  fascia_ctx_destroy(&ctx);
+  return st == FASCIA_OK;
 }
 
 // Largest band the automatic choice accepts, and its factorization cost:
@@ -118,7 +166,6 @@ fascia_status fascia_solver_create(fascia_ctx *ctx, const fascia_model *model, c
   S->model = model;
   S->def = *def;
   S->frame_count = model->frame_count;
-  FASCIA_TRY_GOTO(pick_backend(ctx, def->backend, S->backend_name));
   FASCIA_TRY_GOTO(fascia_system_create(ctx, model, def->threads > 0 ? def->threads : fascia_ctx_threads(ctx), &S->sys));
   const int64_t N = model->frame_count, n = 6 * N;
   S->x = fascia_calloc(3 * N, sizeof(fascia_real));
@@ -148,12 +195,13 @@ fascia_status fascia_solver_create(fascia_ctx *ctx, const fascia_model *model, c
     goto cleanup;
   }
   FASCIA_TRY_GOTO(fascia_organs_create(ctx, model, &S->organs));
-  FASCIA_TRY_GOTO(choose_linear_solver(S));
   memcpy(S->x, model->frame_position, 3 * (size_t)N * sizeof(fascia_real));
   memcpy(S->q, model->frame_rotation, 4 * (size_t)N * sizeof(fascia_real));
   for (int64_t i = 0; i < N; ++i)
     for (int c = 0; c < 6; ++c) S->mask[6 * i + c] = model->frame_kind[i] == FASCIA_FRAME_FREE;
   if (S->organs) fascia_organs_masks(S->organs, S->mask);
+  FASCIA_TRY_GOTO(pick_backend(S));
+  if (!S->device) FASCIA_TRY_GOTO(choose_linear_solver(S)); // the device solver is matrix-free CG
   *out = S;
   return FASCIA_OK;
 cleanup:
@@ -164,6 +212,7 @@ cleanup:
 void fascia_solver_destroy(fascia_solver **solver) {
   if (!solver || !*solver) return;
   fascia_solver *S = *solver;
+  fascia_device_destroy(&S->device);
   fascia_system_destroy(&S->sys);
   fascia_bsr_destroy(&S->K);
   fascia_banded_destroy(&S->band);
@@ -204,6 +253,12 @@ static void restore_state(fascia_solver *S, fascia_real *backup) {
   fascia_system_set_state(S->sys, S->x, S->q);
 }
 
+// The Newton minimization of a step's objective on the solver's backend
+static fascia_status minimize(fascia_solver *S, int dynamic, fascia_solve_report *report) {
+  if (S->device) return fascia_device_minimize(S, dynamic, S->def.newton_iterations, report);
+  return fascia_newton_minimize(S, dynamic, S->def.newton_iterations, report);
+}
+
 fascia_status fascia_solver_solve_static(fascia_solver *S, fascia_solve_report *report) {
   FASCIA_CHECK(S, NULL, FASCIA_ERR_ARGUMENT, "NULL solver");
   fascia_solve_report local;
@@ -221,7 +276,7 @@ fascia_status fascia_solver_solve_static(fascia_solver *S, fascia_solve_report *
     char detail[96];
     snprintf(detail, sizeof detail, "load step %d of %d", l, steps);
     fascia_ctx_progress(S->ctx, "static solve", (double)(l - 1) / steps, detail);
-    status = fascia_newton_minimize(S, 0, S->def.newton_iterations, report);
+    status = minimize(S, 0, report);
   }
   S->sys->gravity_scale = 1;
   memset(S->u, 0, 6 * (size_t)N * sizeof(fascia_real));
@@ -250,9 +305,11 @@ static fascia_status step_once(fascia_solver *S, fascia_real h, fascia_solve_rep
   // anchor at q_n, mass at q_n
   memcpy(S->x_base, S->x, 3 * (size_t)N * sizeof(fascia_real));
   memcpy(S->q_base, S->q, 4 * (size_t)N * sizeof(fascia_real));
-  fascia_system_set_state(S->sys, S->x, S->q);
-  fascia_system_mass_snapshot(S->sys);
-  fascia_system_mass_lumped(S->sys, S->mass_blocks);
+  if (!S->device) { // the device takes its mass at the anchor itself
+    fascia_system_set_state(S->sys, S->x, S->q);
+    fascia_system_mass_snapshot(S->sys);
+    fascia_system_mass_lumped(S->sys, S->mass_blocks);
+  }
   // initial increments: the explicit prediction h u for free frames, the
   // motion for prescribed ones, nothing for fixed ones
   const fascia_model *m = S->model;
@@ -273,7 +330,7 @@ static fascia_status step_once(fascia_solver *S, fascia_real h, fascia_solve_rep
   // newton.c reads the step length from the settings
   const fascia_real h_def = S->def.time_step;
   S->def.time_step = h;
-  fascia_status status = fascia_newton_minimize(S, 1, S->def.newton_iterations, report);
+  fascia_status status = minimize(S, 1, report);
   S->def.time_step = h_def;
   if (status == FASCIA_OK && S->def.require_convergence && !report->converged)
     status = FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
@@ -387,6 +444,7 @@ fascia_status fascia_solver_step(fascia_solver *S, fascia_solve_report *report) 
 
 fascia_real fascia_solver_time(const fascia_solver *S) { return S->time; }
 const char *fascia_solver_backend(const fascia_solver *S) { return S->backend_name; }
+const char *fascia_solver_device(const fascia_solver *S) { return S->device_text; }
 const fascia_real *fascia_solver_frame_positions(const fascia_solver *S) { return S->x; }
 const fascia_real *fascia_solver_frame_rotations(const fascia_solver *S) { return S->q; }
 const fascia_real *fascia_solver_frame_velocities(const fascia_solver *S) { return S->u; }

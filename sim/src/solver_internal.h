@@ -91,6 +91,8 @@ struct fascia_solver {
   fascia_banded band;
   char backend_name[16];
   fascia_organs *organs; ///< NULL without organs (organs.c)
+  struct fascia_device *device; ///< the device solver (cuda/), NULL on the CPU backend
+  char device_text[320];        ///< fascia_solver_device()
 };
 
 /// Minimizes the step objective (static: potential energy, re-anchored at
@@ -101,5 +103,16 @@ FASCIA_INTERN fascia_status fascia_newton_minimize(fascia_solver *solver, int dy
                                                    fascia_solve_report *report);
 
 FASCIA_INTERN double fascia_now_ms(void);
+
+// Newton globalization, shared by the CPU loop (newton.c) and the device
+// loop (cuda/device_solver.c)
+#define FASCIA_NEWTON_ARMIJO 1e-4    // sufficient decrease of the line search
+#define FASCIA_NEWTON_MAX_CUTS 30    // step halvings before the Levenberg shift grows
+#define FASCIA_NEWTON_MAX_SHIFT 1e12 // relative Levenberg shift beyond which Newton gives up
+
+/// |external load| over free DOFs: the scale of the Newton tolerance.
+FASCIA_INTERN fascia_real fascia_newton_load_norm(const fascia_solver *S);
+/// Size of the rounding error of one energy evaluation, J (newton.c).
+FASCIA_INTERN fascia_real fascia_newton_energy_roundoff(const fascia_solver *S);
 
 #endif

@@ -33,7 +33,10 @@ typedef enum fascia_mass_kind {
 
 /// Solver options; start from fascia_solver_def_default().
 typedef struct fascia_solver_def {
-  const char *backend;           ///< "cpu", "cuda" or "auto" (default "auto")
+  /// "cpu", "cuda", "auto" (default: cuda when a GPU is there and the
+  /// settings run on it, else cpu; fascia_solver_device says which and why)
+  /// or "emulated" (the device solver in host loops: for tests, slow)
+  const char *backend;
   int threads;                   ///< 0: the context's
   fascia_real time_step;         ///< s, dynamic steps (default 0.01)
   int newton_iterations;         ///< most Newton iterations per solve (default 20; static 100)
@@ -116,7 +119,15 @@ FASCIA_API fascia_status fascia_solver_step(fascia_solver *solver, fascia_solve_
 FASCIA_API fascia_status fascia_solver_solve_static(fascia_solver *solver, fascia_solve_report *report);
 
 FASCIA_API fascia_real fascia_solver_time(const fascia_solver *solver);
+/// The backend the solver runs on: "cpu", "cuda" or "emulated".
 FASCIA_API const char *fascia_solver_backend(const fascia_solver *solver);
+/// What it runs on, in words: the GPU's name, or the CPU threads; for a
+/// solver made with backend "auto" that runs on the CPU, also why not on a
+/// GPU.
+FASCIA_API const char *fascia_solver_device(const fascia_solver *solver);
+/// Whether backend ("cpu", "cuda", "emulated") can run here; detail (may
+/// be NULL) gets the device in words, or why it cannot.
+FASCIA_API int fascia_backend_available(const char *backend, char *detail, size_t size);
 /// Current frame positions [3N] (m) and rotations [4N] (unit quaternions).
 FASCIA_API const fascia_real *fascia_solver_frame_positions(const fascia_solver *solver);
 FASCIA_API const fascia_real *fascia_solver_frame_rotations(const fascia_solver *solver);

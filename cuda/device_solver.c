@@ -1,0 +1,520 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// The solver on the device: the model's arrays uploaded once, and the Newton
+// loop of newton.c driving the device through a launcher (launch.h). The
+// loop reads a few scalars per Newton iteration (energy, slope, gradient
+// norm); conjugate gradients run entirely on the device, their scalar logic
+// in kernels (items.h), as recorded launch sequences (CUDA graphs): a fixed
+// count in one sequence, a tolerance in chunks whose end the host checks.
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "device.h"
+#include "organs.h"
+
+#define CG_CHUNK 8 // CG iterations per recorded chunk in tolerance mode
+#define MAX_BUFFERS 64
+
+enum { SLOT_CG_FIXED = 0, SLOT_CG_CHUNK = 1 };
+
+struct fascia_device {
+  fascia_ctx *ctx;
+  const fascia_launcher_ops *ops;
+  fascia_launcher *L;
+  fascia_dev D;                  ///< device pointers, passed to every launch
+  fascia_dev_settings set;       ///< host copy of D.set
+  fascia_dev_settings *set_dev;
+  fascia_dev_scalars sc;         ///< host copy of D.sc after pull_scalars
+  fascia_dev_scalars *sc_dev;
+  void *buffers[MAX_BUFFERS];
+  int buffer_count;
+  size_t bytes;                  ///< device memory held
+  int recorded[FASCIA_LAUNCH_SLOTS];
+  fascia_real *zeros;            ///< host [6N]
+  char name[256];
+};
+
+const fascia_launcher_ops *fascia_device_ops(const char *backend) {
+  if (backend && !strcmp(backend, "emulated")) return &fascia_launcher_emulated;
+#ifdef FASCIA_HAVE_CUDA
+  if (backend && !strcmp(backend, "cuda")) return &fascia_launcher_cuda;
+#endif
+  return NULL;
+}
+
+int fascia_device_supports(const fascia_solver *S, char *why, size_t size) {
+  const fascia_solver_def *def = &S->def;
+  const char *reason = NULL;
+  if (fascia_organs_body_count(S->organs) > 0) reason = "rigid organs are solved on the CPU only";
+  else if (def->linear_solver == FASCIA_LINEAR_DIRECT) reason = "the direct linear solver runs on the CPU only";
+  else if (def->assembled) reason = "the assembled matrix runs on the CPU only (the device is matrix-free)";
+  else if (def->single_precision_matrix) reason = "the float matrix runs on the CPU only";
+  else if (S->sys->max_neighbours > FASCIA_DEV_MAX_NEIGHBOURS) {
+    if (why) snprintf(why, size, "a sample has %d neighbour frames, the device takes at most %d",
+                      (int)S->sys->max_neighbours, FASCIA_DEV_MAX_NEIGHBOURS);
+    return 0;
+  }
+  if (reason && why) snprintf(why, size, "%s", reason);
+  return reason == NULL;
+}
+
+// ---------------------------------------------------------------- memory --
+
+static fascia_status make(fascia_device *dev, size_t bytes, void **out) {
+  FASCIA_CHECK(dev->buffer_count < MAX_BUFFERS, dev->ctx, FASCIA_ERR_INTERNAL, "device: too many buffers");
+  FASCIA_TRY(dev->ops->alloc(dev->L, bytes, out));
+  dev->buffers[dev->buffer_count++] = *out;
+  dev->bytes += bytes;
+  return FASCIA_OK;
+}
+
+static fascia_status put(fascia_device *dev, const void *host, size_t bytes, void **out) {
+  FASCIA_TRY(make(dev, bytes, out));
+  return bytes ? dev->ops->upload(dev->L, *out, host, bytes) : FASCIA_OK;
+}
+
+#define MAKE(field, count, type) FASCIA_TRY(make(dev, (size_t)(count) * sizeof(type), (void **)&D->field))
+#define PUT(field, host, count, type) FASCIA_TRY(put(dev, (host), (size_t)(count) * sizeof(type), (void **)&D->field))
+
+static fascia_status upload_model(fascia_device *dev, const fascia_solver *S) {
+  const fascia_system *sys = S->sys;
+  const fascia_model *m = S->model;
+  const int64_t N = m->frame_count, Sn = m->sample_count, P = m->pair_count;
+  fascia_dev *D = &dev->D;
+  D->frame_count = m->frame_count;
+  D->sample_count = m->sample_count;
+  D->pair_count = P;
+  D->max_neighbours = sys->max_neighbours;
+  for (int c = 0; c < 3; ++c) D->gravity[c] = sys->gravity[c];
+  // the per-sample math's arrays (fascia_pt_model), then the reverse table
+  PUT(pm.sample_offsets, m->sample_offsets, Sn + 1, int32_t);
+  PUT(pm.pair_frame, m->pair_frame, P, int32_t);
+  PUT(pm.pair_weight, m->pair_weight, P, fascia_real);
+  PUT(pm.pair_gradient, m->pair_gradient, 3 * P, fascia_real);
+  PUT(pm.pair_offset, sys->pair_offset, 3 * P, fascia_real);
+  PUT(pm.sample_volume, m->sample_volume, Sn, fascia_real);
+  PUT(pm.sample_lambda, sys->sample_lambda, Sn, fascia_real);
+  PUT(pm.sample_mu, sys->sample_mu, Sn, fascia_real);
+  PUT(pm.sample_coupling, sys->sample_coupling, Sn, fascia_real);
+  PUT(pm.sample_curvature, sys->sample_curvature, Sn, fascia_real);
+  PUT(pm.sample_law, sys->sample_law, Sn, int32_t);
+  PUT(frame_offsets, m->frame_offsets, N + 1, int32_t);
+  PUT(frame_pairs, m->frame_pairs, P, int32_t);
+  PUT(pair_sample, sys->pair_sample, P, int32_t);
+  PUT(sample_mass, sys->sample_mass, Sn, fascia_real);
+  PUT(frame_mass, sys->frame_mass, N, fascia_real);
+  PUT(frame_moment, sys->frame_moment, 3 * N, fascia_real);
+  PUT(frame_load, m->frame_load, 6 * N, fascia_real);
+  PUT(rest_rotation, m->frame_rotation, 4 * N, fascia_real);
+  PUT(mask, S->mask, 6 * N, unsigned char);
+  // state and work
+  MAKE(x_base, 3 * N, fascia_real);
+  MAKE(q_base, 4 * N, fascia_real);
+  MAKE(x, 3 * N, fascia_real);
+  MAKE(q, 4 * N, fascia_real);
+  MAKE(A, 9 * N, fascia_real);
+  MAKE(A_mass, 9 * N, fascia_real);
+  MAKE(d, 6 * N, fascia_real);
+  MAKE(d_trial, 6 * N, fascia_real);
+  MAKE(target, 6 * N, fascia_real);
+  MAKE(target_M, 6 * N, fascia_real);
+  MAKE(g, 6 * N, fascia_real);
+  MAKE(g_trial, 6 * N, fascia_real);
+  MAKE(p, 6 * N, fascia_real);
+  MAKE(r, 6 * N, fascia_real);
+  MAKE(z, 6 * N, fascia_real);
+  MAKE(dir, 6 * N, fascia_real);
+  MAKE(Ad, 6 * N, fascia_real);
+  MAKE(mass_blocks, 36 * N, fascia_real);
+  MAKE(blocks, 36 * N, fascia_real);
+  MAKE(inverse, 36 * N, fascia_real);
+  MAKE(damping, 6 * N, fascia_real);
+  MAKE(torque, 3 * N, fascia_real);
+  MAKE(frame_terms, 4 * N, fascia_real);
+  MAKE(pair_buffer, 6 * P, fascia_real);
+  MAKE(pair_mass, 6 * P, fascia_real);
+  if (S->def.precond != FASCIA_PRECOND_NONE) MAKE(pair_blocks, 36 * P, fascia_real);
+  MAKE(cache, Sn * FASCIA_PT_CACHE_SIZE, fascia_real);
+  MAKE(sample_energy, Sn, fascia_real);
+  MAKE(sample_flags, Sn, int);
+  FASCIA_TRY(make(dev, sizeof(fascia_dev_settings), (void **)&dev->set_dev));
+  FASCIA_TRY(make(dev, sizeof(fascia_dev_scalars), (void **)&dev->sc_dev));
+  D->set = dev->set_dev;
+  D->sc = dev->sc_dev;
+  return FASCIA_OK;
+}
+
+#undef MAKE
+#undef PUT
+
+void fascia_device_destroy(fascia_device **out) {
+  if (!out || !*out) return;
+  fascia_device *dev = *out;
+  for (int k = 0; k < dev->buffer_count; ++k) dev->ops->release(dev->L, dev->buffers[k]);
+  if (dev->L) dev->ops->destroy(dev->L);
+  free(dev->zeros);
+  free(dev);
+  *out = NULL;
+}
+
+fascia_status fascia_device_create(fascia_solver *S, const fascia_launcher_ops *ops, fascia_device **out) {
+  *out = NULL;
+  fascia_device *dev = calloc(1, sizeof *dev);
+  FASCIA_CHECK(dev, S->ctx, FASCIA_ERR_MEMORY, "device: out of memory");
+  dev->ctx = S->ctx;
+  dev->ops = ops;
+  dev->zeros = calloc(6 * (size_t)S->frame_count + 1, sizeof(fascia_real));
+  fascia_status status = dev->zeros ? FASCIA_OK : FASCIA_FAIL(S->ctx, FASCIA_ERR_MEMORY, "device: out of memory");
+  if (status == FASCIA_OK) status = ops->create(S->ctx, S->sys->threads, &dev->L);
+  if (status == FASCIA_OK) status = upload_model(dev, S);
+  if (status == FASCIA_OK) status = ops->finish(dev->L);
+  if (status != FASCIA_OK) {
+    fascia_device_destroy(&dev);
+    return status;
+  }
+  dev->set.cg_max = S->def.cg_iterations;
+  dev->set.cg_fixed = S->def.cg_fixed;
+  dev->set.cg_tolerance = S->def.cg_tolerance;
+  dev->set.consistent_mass = S->def.mass == FASCIA_MASS_CONSISTENT;
+  dev->set.precond = (int32_t)S->def.precond;
+  dev->set.gravity_scale = 1;
+  snprintf(dev->name, sizeof dev->name, "%s, %.1f MB of device memory for the model", ops->device_name(dev->L),
+           (double)dev->bytes / (1 << 20));
+  *out = dev;
+  return FASCIA_OK;
+}
+
+const char *fascia_device_name(const fascia_device *dev) { return dev->name; }
+
+// ------------------------------------------------------------ launches --
+
+static void kernel(fascia_device *dev, fascia_dev_kernel k, int64_t n, const fascia_real *in, fascia_real *out,
+                   fascia_real value) {
+  dev->ops->kernel(dev->L, &dev->D, k, n, in, out, value);
+}
+
+static void reduce(fascia_device *dev, fascia_dev_terms t, int64_t n, const fascia_real *a, const fascia_real *b,
+                   fascia_dev_step step) {
+  dev->ops->reduce(dev->L, &dev->D, t, n, a, b, step);
+}
+
+static fascia_status push_settings(fascia_device *dev) {
+  return dev->ops->upload(dev->L, dev->set_dev, &dev->set, sizeof dev->set);
+}
+
+static fascia_status pull_scalars(fascia_device *dev) {
+  return dev->ops->download(dev->L, &dev->sc, dev->sc_dev, sizeof dev->sc);
+}
+
+// The first sample whose flags have bit `flag`, -1 if none (downloads the
+// flags: only on the way to a message).
+static int32_t first_flagged(fascia_device *dev, int flag) {
+  const int32_t S = dev->D.sample_count;
+  int *flags = malloc((size_t)S * sizeof *flags + 1);
+  int32_t first = -1;
+  if (flags && dev->ops->download(dev->L, flags, dev->D.sample_flags, (size_t)S * sizeof *flags) == FASCIA_OK)
+    for (int32_t s = 0; s < S && first < 0; ++s)
+      if (flags[s] & flag) first = s;
+  free(flags);
+  return first;
+}
+
+// The step objective Phi at d + alpha p (d_trial), its projected gradient
+// in g_trial, and |g_trial|^2 (newton.c objective()).
+static fascia_status objective(fascia_device *dev, fascia_real alpha, fascia_real *phi, fascia_real *gg) {
+  fascia_dev *D = &dev->D;
+  const int64_t N = D->frame_count, n = 6 * N, S = D->sample_count;
+  kernel(dev, FASCIA_K_TRIAL, n, NULL, NULL, alpha);
+  kernel(dev, FASCIA_K_STATE, N, NULL, NULL, 0);
+  kernel(dev, FASCIA_K_SAMPLE_GRADIENT, S, NULL, NULL, 0);
+  if (dev->set.consistent_mass && (dev->set.c1 != 0 || dev->set.c2 != 0))
+    kernel(dev, FASCIA_K_SAMPLE_MASS, S, D->d_trial, NULL, 0);
+  kernel(dev, FASCIA_K_FRAME_GRADIENT, N, NULL, NULL, 0);
+  reduce(dev, FASCIA_T_SAMPLES, S, NULL, NULL, FASCIA_S_SAMPLES);
+  reduce(dev, FASCIA_T_FRAMES, N, NULL, NULL, FASCIA_S_OBJECTIVE);
+  FASCIA_TRY(pull_scalars(dev));
+  *phi = dev->sc.phi;
+  *gg = dev->sc.gradient_norm2;
+  if (dev->sc.nonfinite > 0 || !isfinite(dev->sc.energy_internal + dev->sc.energy_external)) {
+    const int32_t s = first_flagged(dev, FASCIA_PT_FLAG_NONFINITE);
+    return FASCIA_FAIL(dev->ctx, FASCIA_ERR_NUMERIC,
+                       "sample %d: energy is not finite (deformation gradient blew up); the step is too large or the "
+                       "model is unstable",
+                       (int)(s >= 0 ? s : 0));
+  }
+  return isfinite(*phi) ? FASCIA_OK : FASCIA_FAIL(dev->ctx, FASCIA_ERR_NUMERIC, "solver: the energy is not finite");
+}
+
+// Diagonal blocks and preconditioner of the Newton operator at the state of
+// the last objective (precond.c)
+static void build_precond(fascia_device *dev) {
+  const fascia_dev *D = &dev->D;
+  if (dev->set.precond == FASCIA_PRECOND_NONE) return;
+  kernel(dev, FASCIA_K_PAIR_DIAGONAL, D->pair_count, NULL, NULL, 0);
+  kernel(dev, FASCIA_K_FRAME_PRECOND, D->frame_count, NULL, NULL, 0);
+}
+
+// The Levenberg diagonal and the operator's scale from the diagonal blocks
+static void build_damping(fascia_device *dev) {
+  const int64_t n = 6 * (int64_t)dev->D.frame_count;
+  kernel(dev, FASCIA_K_DAMPING, n, NULL, NULL, 0);
+  reduce(dev, FASCIA_T_SUM, n, dev->D.damping, NULL, FASCIA_S_SCALE);
+  kernel(dev, FASCIA_K_DAMPING_CLAMP, n, NULL, NULL, 0);
+}
+
+typedef struct cg_body_arg {
+  fascia_device *dev;
+  int iterations;
+} cg_body_arg;
+
+// `iterations` CG iterations; each one stops short on the device once CG
+// has ended (the kernels test sc->running and sc->action)
+static void cg_body(void *argument) {
+  const cg_body_arg *arg = argument;
+  fascia_device *dev = arg->dev;
+  const fascia_dev *D = &dev->D;
+  const int64_t N = D->frame_count, S = D->sample_count;
+  for (int it = 0; it < arg->iterations; ++it) {
+    kernel(dev, FASCIA_K_SAMPLE_STIFFNESS, S, D->dir, NULL, 0);
+    kernel(dev, FASCIA_K_CG_SAMPLE_MASS, S, D->dir, NULL, 0);
+    reduce(dev, FASCIA_T_OPERATOR, N, NULL, NULL, FASCIA_S_CG_CURVATURE);
+    reduce(dev, FASCIA_T_CG_UPDATE, N, NULL, NULL, FASCIA_S_CG_RESIDUAL);
+    kernel(dev, FASCIA_K_CG_DIRECTION, 6 * N, NULL, NULL, 0);
+  }
+}
+
+// Solves A p = -g on the free DOFs (cg.c); reports iterations and negative
+// curvature.
+static fascia_status cg_solve(fascia_device *dev, fascia_solve_report *rep) {
+  const int fixed = dev->set.cg_fixed, slot = fixed ? SLOT_CG_FIXED : SLOT_CG_CHUNK;
+  reduce(dev, FASCIA_T_CG_START, dev->D.frame_count, NULL, NULL, FASCIA_S_CG_START);
+  if (!dev->recorded[slot]) {
+    cg_body_arg arg = {dev, fixed ? dev->set.cg_max : CG_CHUNK};
+    FASCIA_TRY(dev->ops->record(dev->L, slot, cg_body, &arg));
+    dev->recorded[slot] = 1;
+  }
+  if (fixed) {
+    dev->ops->replay(dev->L, slot);
+    FASCIA_TRY(pull_scalars(dev));
+  } else {
+    for (int done = 0; done < dev->set.cg_max; done += CG_CHUNK) {
+      dev->ops->replay(dev->L, slot);
+      FASCIA_TRY(pull_scalars(dev)); // four bytes that matter, every CG_CHUNK iterations
+      if (!dev->sc.running) break;
+    }
+  }
+  rep->cg_iterations += dev->sc.iterations;
+  rep->negative_curvature += dev->sc.negative_curvature;
+  return FASCIA_OK;
+}
+
+static fascia_status slope(fascia_device *dev, fascia_real *out) {
+  reduce(dev, FASCIA_T_DOT, 6 * (int64_t)dev->D.frame_count, dev->D.p, dev->D.g, FASCIA_S_STORE);
+  FASCIA_TRY(pull_scalars(dev));
+  *out = dev->sc.sum[0];
+  return FASCIA_OK;
+}
+
+// The state of the last objective back to the host, as the CPU loop leaves
+// it: S->x, S->q, S->d, S->gradient and the host system's state.
+static fascia_status download_state(fascia_solver *S, fascia_device *dev) {
+  const size_t N = (size_t)S->frame_count;
+  const fascia_launcher_ops *ops = dev->ops;
+  FASCIA_TRY(ops->download(dev->L, S->x, dev->D.x, 3 * N * sizeof(fascia_real)));
+  FASCIA_TRY(ops->download(dev->L, S->q, dev->D.q, 4 * N * sizeof(fascia_real)));
+  FASCIA_TRY(ops->download(dev->L, S->d, dev->D.d, 6 * N * sizeof(fascia_real)));
+  FASCIA_TRY(ops->download(dev->L, S->gradient, dev->D.g_trial, 6 * N * sizeof(fascia_real)));
+  fascia_system_set_state(S->sys, S->x, S->q);
+  S->sys->energy_internal = dev->sc.energy_internal;
+  S->sys->energy_external = dev->sc.energy_external;
+  S->sys->inverted_count = (int32_t)dev->sc.inverted;
+  S->sys->first_inverted = dev->sc.inverted > 0 ? first_flagged(dev, FASCIA_PT_FLAG_INVERTED) : -1;
+  return FASCIA_OK;
+}
+
+// Anchor, increments and step terms up; the mass at the anchor for a
+// dynamic step (solver.c step_once does this on the host for the CPU).
+static fascia_status begin(fascia_solver *S, fascia_device *dev, int dynamic) {
+  fascia_dev *D = &dev->D;
+  const size_t N = (size_t)S->frame_count, n = 6 * N;
+  const fascia_launcher_ops *ops = dev->ops;
+  FASCIA_TRY(ops->upload(dev->L, D->x_base, S->x_base, 3 * N * sizeof(fascia_real)));
+  FASCIA_TRY(ops->upload(dev->L, D->q_base, S->q_base, 4 * N * sizeof(fascia_real)));
+  FASCIA_TRY(ops->upload(dev->L, D->d, S->d, n * sizeof(fascia_real)));
+  const fascia_real h = S->def.time_step;
+  dev->set.c1 = dynamic ? 1 / (h * h) : 0;
+  dev->set.c2 = dynamic ? S->def.mass_damping / h : 0;
+  dev->set.mass_coefficient = dev->set.c1 + dev->set.c2;
+  dev->set.shift = 0;
+  dev->set.gravity_scale = S->sys->gravity_scale;
+  dev->set.jacobian = dynamic;
+  FASCIA_TRY(push_settings(dev));
+  if (!dynamic) return FASCIA_OK;
+  FASCIA_TRY(ops->upload(dev->L, D->target, S->inertia_target, n * sizeof(fascia_real)));
+  kernel(dev, FASCIA_K_MASS_SNAPSHOT, (int64_t)N, NULL, NULL, 0);
+  kernel(dev, FASCIA_K_LUMPED_MASS, (int64_t)N, NULL, NULL, 0);
+  if (dev->set.consistent_mass) kernel(dev, FASCIA_K_SAMPLE_MASS, D->sample_count, D->target, NULL, 0);
+  kernel(dev, FASCIA_K_FRAME_MASS_APPLY, (int64_t)N, D->target, D->target_M, 0);
+  reduce(dev, FASCIA_T_DOT, (int64_t)n, D->target, D->target_M, FASCIA_S_TARGET);
+  return FASCIA_OK;
+}
+
+// The Newton loop of newton.c, step for step, with the device doing the
+// vector work. Rigid organs never come here (fascia_device_supports).
+fascia_status fascia_device_minimize(fascia_solver *S, int dynamic, int max_iterations, fascia_solve_report *rep) {
+  fascia_device *dev = S->device;
+  const fascia_solver_def *def = &S->def;
+  const int64_t n = 6 * (int64_t)S->frame_count;
+  const double t0 = fascia_now_ms();
+  double t = t0;
+  rep->direct = 0;
+  FASCIA_TRY(begin(S, dev, dynamic));
+  fascia_real phi, gg;
+  FASCIA_TRY(objective(dev, 0, &phi, &gg));
+  kernel(dev, FASCIA_K_COPY_GRADIENT, n, NULL, NULL, 0);
+  rep->profile.evaluate_ms += fascia_now_ms() - t;
+  const fascia_real g0 = sqrt(gg);
+  fascia_real reference = fascia_newton_load_norm(S);
+  if (dynamic || reference == 0) reference = reference > g0 ? reference : g0;
+  if (reference == 0) reference = 1;
+  rep->reference_norm = reference;
+  const fascia_real material_roundoff = fascia_newton_energy_roundoff(S);
+  int iteration = 0, converged = 0;
+  fascia_real gnorm = g0;
+  fascia_status status = FASCIA_OK;
+  for (; iteration <= max_iterations; ++iteration) {
+    gnorm = sqrt(gg);
+    if (gnorm <= def->newton_tolerance * reference) {
+      converged = 1;
+      break;
+    }
+    if (iteration == max_iterations) break;
+    t = fascia_now_ms();
+    build_precond(dev);
+    build_damping(dev);
+    FASCIA_TRY(dev->ops->finish(dev->L));
+    rep->profile.precond_ms += fascia_now_ms() - t;
+    int accepted = 0;
+    fascia_real phi_trial = phi, gg_trial = gg;
+    while (!accepted) {
+      t = fascia_now_ms();
+      FASCIA_TRY(cg_solve(dev, rep));
+      rep->profile.cg_ms += fascia_now_ms() - t;
+      fascia_real sl;
+      FASCIA_TRY(slope(dev, &sl));
+      if (!(sl < 0)) { // not a descent direction: preconditioned gradient
+        kernel(dev, FASCIA_K_PRECOND_DESCENT, S->frame_count, NULL, NULL, 0);
+        FASCIA_TRY(slope(dev, &sl));
+      }
+      // backtracking line search on Phi
+      fascia_real alpha = 1;
+      for (int cut = 0; cut <= (def->line_search ? FASCIA_NEWTON_MAX_CUTS : 0); ++cut) {
+        t = fascia_now_ms();
+        const fascia_status st = objective(dev, alpha, &phi_trial, &gg_trial);
+        rep->profile.evaluate_ms += fascia_now_ms() - t;
+        // near the minimum the energy decrease drowns in round-off: there a
+        // step that lowers the gradient is accepted instead
+        const fascia_real roundoff =
+            1e-13 * (fabs(phi) + fabs(dev->sc.energy_internal) + fabs(dev->sc.energy_external)) + material_roundoff;
+        if (st == FASCIA_OK && (!def->line_search || phi_trial <= phi + FASCIA_NEWTON_ARMIJO * alpha * sl ||
+                                (phi_trial <= phi + roundoff && gg_trial < gnorm * gnorm))) {
+          accepted = 1;
+          break;
+        }
+        if (st != FASCIA_OK && st != FASCIA_ERR_NUMERIC) return st;
+        ++rep->line_search_cuts;
+        alpha *= FASCIA_R(0.5);
+      }
+      if (!accepted) {
+        // even tiny steps fail: damp the tangent (Levenberg) and try again
+        dev->set.shift = dev->set.shift == 0 ? FASCIA_R(1e-4) : 10 * dev->set.shift;
+        if (dev->set.shift > FASCIA_NEWTON_MAX_SHIFT) {
+          fascia_real restore, restore_gg;
+          (void)objective(dev, 0, &restore, &restore_gg);
+          status = FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
+                               "solver: Newton iteration %d found no decrease of the energy (|gradient| %.3g, "
+                               "tolerance %.3g); the model may be unstable or the time step too large",
+                               iteration, gnorm, def->newton_tolerance * reference);
+          break;
+        }
+        FASCIA_TRY(push_settings(dev));
+        t = fascia_now_ms();
+        FASCIA_TRY(objective(dev, 0, &phi, &gg)); // restores the cache of the current iterate
+        kernel(dev, FASCIA_K_COPY_GRADIENT, n, NULL, NULL, 0);
+        rep->profile.evaluate_ms += fascia_now_ms() - t;
+        build_precond(dev);
+        continue;
+      }
+      if (alpha == 1 && dev->set.shift > 0) {
+        dev->set.shift = dev->set.shift < FASCIA_R(1e-3) ? 0 : dev->set.shift / 10;
+        FASCIA_TRY(push_settings(dev));
+      }
+    }
+    if (status != FASCIA_OK) break;
+    // static: re-anchor at the accepted state, so d = 0 and the Hessian of
+    // the next iteration is exact; dynamic: keep the increments
+    kernel(dev, dynamic ? FASCIA_K_ACCEPT_DYNAMIC : FASCIA_K_ACCEPT_STATIC, dynamic ? n : S->frame_count, NULL, NULL,
+           0);
+    phi = phi_trial;
+    gg = gg_trial;
+  }
+  t = fascia_now_ms();
+  const fascia_status down = download_state(S, dev);
+  if (!dynamic && down == FASCIA_OK) { // the host's anchor follows the device's
+    memcpy(S->x_base, S->x, 3 * (size_t)S->frame_count * sizeof(fascia_real));
+    memcpy(S->q_base, S->q, 4 * (size_t)S->frame_count * sizeof(fascia_real));
+  }
+  rep->profile.evaluate_ms += fascia_now_ms() - t;
+  rep->newton_iterations += iteration;
+  rep->gradient_norm = gnorm;
+  rep->energy = phi;
+  if (status != FASCIA_OK) return status;
+  FASCIA_TRY(down);
+  rep->converged = converged;
+  rep->inverted_samples = S->sys->inverted_count;
+  rep->profile.total_ms += fascia_now_ms() - t0;
+  return FASCIA_OK;
+}
+
+// ---------------------------------------------------------------- tests --
+
+fascia_status fascia_device_gradient(fascia_solver *S, const fascia_real *x, const fascia_real *q,
+                                     fascia_real *gradient, fascia_real *energy) {
+  fascia_device *dev = S->device;
+  FASCIA_CHECK(dev, S->ctx, FASCIA_ERR_ARGUMENT, "device: the solver runs on the CPU");
+  const size_t N = (size_t)S->frame_count;
+  FASCIA_TRY(dev->ops->upload(dev->L, dev->D.x_base, x, 3 * N * sizeof(fascia_real)));
+  FASCIA_TRY(dev->ops->upload(dev->L, dev->D.q_base, q, 4 * N * sizeof(fascia_real)));
+  FASCIA_TRY(dev->ops->upload(dev->L, dev->D.d, dev->zeros, 6 * N * sizeof(fascia_real)));
+  dev->set.c1 = dev->set.c2 = dev->set.mass_coefficient = dev->set.shift = 0;
+  dev->set.jacobian = 0;
+  dev->set.gravity_scale = S->sys->gravity_scale;
+  FASCIA_TRY(push_settings(dev));
+  fascia_real phi, gg;
+  FASCIA_TRY(objective(dev, 0, &phi, &gg));
+  *energy = phi;
+  return dev->ops->download(dev->L, gradient, dev->D.g_trial, 6 * N * sizeof(fascia_real));
+}
+
+fascia_status fascia_device_hessian_apply(fascia_solver *S, const fascia_real *v, fascia_real *out) {
+  fascia_device *dev = S->device;
+  FASCIA_CHECK(dev, S->ctx, FASCIA_ERR_ARGUMENT, "device: the solver runs on the CPU");
+  const size_t N = (size_t)S->frame_count;
+  fascia_dev_scalars sc = dev->sc;
+  sc.running = 1; // the operator kernels run only inside CG
+  FASCIA_TRY(dev->ops->upload(dev->L, dev->sc_dev, &sc, sizeof sc));
+  FASCIA_TRY(dev->ops->upload(dev->L, dev->D.dir, v, 6 * N * sizeof(fascia_real)));
+  kernel(dev, FASCIA_K_SAMPLE_STIFFNESS, dev->D.sample_count, dev->D.dir, NULL, 0);
+  reduce(dev, FASCIA_T_OPERATOR, (int64_t)N, NULL, NULL, FASCIA_S_STORE);
+  return dev->ops->download(dev->L, out, dev->D.Ad, 6 * N * sizeof(fascia_real));
+}
+
+fascia_status fascia_device_hessian_diagonal(fascia_solver *S, fascia_real *blocks) {
+  fascia_device *dev = S->device;
+  FASCIA_CHECK(dev, S->ctx, FASCIA_ERR_ARGUMENT, "device: the solver runs on the CPU");
+  FASCIA_CHECK(dev->set.precond != FASCIA_PRECOND_NONE, S->ctx, FASCIA_ERR_ARGUMENT,
+               "device: no diagonal blocks without a preconditioner");
+  build_precond(dev);
+  return dev->ops->download(dev->L, blocks, dev->D.blocks, 36 * (size_t)S->frame_count * sizeof(fascia_real));
+}

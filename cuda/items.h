@@ -1,0 +1,569 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// The device backend's work, one item at a time: what one GPU thread does
+// for one sample, pair, frame or vector entry, and the scalar steps that one
+// thread runs after a reduction. nvcc compiles these bodies into kernels
+// (launch_cuda.cu); the C compiler compiles the same bodies into loops
+// (launch_emulated.c), so the device code paths are tested on any machine.
+//
+// The scheme is the paper's two kernels (sec. 3.2): one thread per sample
+// writes its partial contribution for each neighbour frame into a pair
+// buffer; one thread per frame sums its pairs through the reverse table.
+// No atomics: every sum has a fixed order, so runs are bit-reproducible.
+//
+// Everything lives in device memory; the host changes only the settings
+// block between launches and reads the scalars block once per Newton
+// iteration (never per CG iteration).
+#ifndef FASCIA_CUDA_ITEMS_H
+#define FASCIA_CUDA_ITEMS_H
+
+#include "point/block6.h"
+#include "point/sample.h"
+
+/// Most neighbour frames of one sample on the device (the diagonal blocks of
+/// the preconditioner keep one sample's partial products in registers).
+#define FASCIA_DEV_MAX_NEIGHBOURS 64
+
+/// A relative CG residual at which CG has converged as far as doubles go
+/// (as cg.c).
+#define FASCIA_DEV_ROUNDOFF 1e-14
+
+/// What the host sets between launches (never written on the device).
+typedef struct fascia_dev_settings {
+  fascia_real c1, c2;            ///< inertia and mass damping coefficients of the step objective
+  fascia_real mass_coefficient;  ///< c1 + c2: the mass term of the Newton operator
+  fascia_real shift;             ///< Levenberg shift
+  fascia_real gravity_scale;     ///< load factor on gravity and loads
+  fascia_real cg_tolerance;      ///< relative residual of a linear solve
+  int32_t jacobian;              ///< 1: gradient with respect to anchored increments (dynamic)
+  int32_t cg_max;                ///< most CG iterations
+  int32_t cg_fixed;              ///< 1: exactly cg_max (unless round-off or negative curvature)
+  int32_t consistent_mass;       ///< 1: consistent mass products; 0: lumped blocks
+  int32_t precond;               ///< FASCIA_PRECOND_* (solver.h)
+} fascia_dev_settings;
+
+/// What the device computes for the host and for later kernels.
+typedef struct fascia_dev_scalars {
+  fascia_real sum[4];           ///< last stored reduction
+  fascia_real energy_internal, energy_external, phi, gradient_norm2;
+  fascia_real inverted, nonfinite; ///< sample counts (exact in double)
+  fascia_real target_norm;      ///< (h u).M(h u) of the inertia target
+  fascia_real scale;            ///< mean absolute tangent diagonal
+  // conjugate gradients
+  fascia_real bnorm, rz, rnorm, alpha, beta;
+  int32_t iterations, running, negative_curvature, action;
+} fascia_dev_scalars;
+
+/// What the CG update does this iteration (set by the scalar steps).
+enum { FASCIA_CG_NONE = 0, FASCIA_CG_UPDATE = 1, FASCIA_CG_COPY_Z = 2, FASCIA_CG_DIRECTION = 3 };
+
+/// Device views of the model, the state and the work arrays (all device
+/// pointers; passed to every kernel by value).
+typedef struct fascia_dev {
+  fascia_pt_model pm;
+  int32_t frame_count, sample_count, max_neighbours;
+  int64_t pair_count;
+  const int32_t *frame_offsets, *frame_pairs, *pair_sample; ///< reverse table, pair -> sample
+  const fascia_real *sample_mass;    ///< [S] kg
+  const fascia_real *frame_mass;     ///< [N] sum_s m_s w_is
+  const fascia_real *frame_moment;   ///< [3N] sum_s m_s w_is d_is
+  const fascia_real *frame_load;     ///< [6N] force, torque
+  const fascia_real *rest_rotation;  ///< [4N] quaternions at rest
+  fascia_real gravity[3];
+  const unsigned char *mask;         ///< [6N] 1 free
+  // state: anchor, increments, current iterate
+  fascia_real *x_base, *q_base, *x, *q, *A, *A_mass; ///< [3N] [4N] [3N] [4N] [9N] [9N]
+  fascia_real *d, *d_trial, *target, *target_M;     ///< [6N] each
+  fascia_real *g, *g_trial, *p;                     ///< gradient at d and at d_trial, direction
+  fascia_real *r, *z, *dir, *Ad;                    ///< CG vectors [6N]
+  fascia_real *mass_blocks, *blocks, *inverse;      ///< [36N] lumped mass, tangent diagonal, preconditioner
+  fascia_real *damping, *torque, *frame_terms;      ///< [6N] Levenberg diagonal, [3N], [4N]
+  fascia_real *pair_buffer, *pair_mass, *pair_blocks; ///< [6P] [6P] [36P]
+  fascia_real *cache, *sample_energy;               ///< [S * FASCIA_PT_CACHE_SIZE], [S]
+  int *sample_flags;                                ///< [S]
+  const fascia_dev_settings *set;
+  fascia_dev_scalars *sc;
+} fascia_dev;
+
+/// Per-item kernels; the comment gives the item count.
+typedef enum fascia_dev_kernel {
+  FASCIA_K_TRIAL = 0,        ///< 6N: d_trial = d + value p (value 0: d)
+  FASCIA_K_STATE,            ///< N: x, q, A at x_base, q_base (+) d_trial
+  FASCIA_K_MASS_SNAPSHOT,    ///< N: A_mass = A at the anchor q_base
+  FASCIA_K_LUMPED_MASS,      ///< N: lumped 6x6 mass blocks at A_mass
+  FASCIA_K_SAMPLE_GRADIENT,  ///< S: energy, partial gradients, cache
+  FASCIA_K_SAMPLE_MASS,      ///< S: partial consistent-mass products of in
+  FASCIA_K_FRAME_GRADIENT,   ///< N: g_trial and frame_terms of the step objective
+  FASCIA_K_FRAME_MASS_APPLY, ///< N: out = M in (after FASCIA_K_SAMPLE_MASS for consistent mass)
+  FASCIA_K_SAMPLE_STIFFNESS, ///< S: partial stiffness products of in (skipped when CG is not running)
+  FASCIA_K_CG_SAMPLE_MASS,   ///< S: FASCIA_K_SAMPLE_MASS inside CG: only with consistent mass and a mass term
+  FASCIA_K_PAIR_DIAGONAL,    ///< P: one pair's 6x6 block of its sample's stiffness
+  FASCIA_K_FRAME_PRECOND,    ///< N: tangent diagonal blocks, preconditioner blocks
+  FASCIA_K_DAMPING,          ///< 6N: Levenberg diagonal |diag(blocks)|
+  FASCIA_K_DAMPING_CLAMP,    ///< 6N: at least 1e-8 scale
+  FASCIA_K_CG_DIRECTION,     ///< 6N: dir = z + beta dir when the step says so
+  FASCIA_K_PRECOND_DESCENT,  ///< N: p = -P^-1 g (fallback descent direction)
+  FASCIA_K_COPY_GRADIENT,    ///< 6N: g = g_trial
+  FASCIA_K_ACCEPT_STATIC,    ///< N: re-anchor at the iterate, d = 0, g = g_trial
+  FASCIA_K_ACCEPT_DYNAMIC,   ///< 6N: d = d_trial, g = g_trial
+  FASCIA_K_COUNT
+} fascia_dev_kernel;
+
+/// Reduction terms: each item gives up to four values, summed over items.
+typedef enum fascia_dev_terms {
+  FASCIA_T_SAMPLES = 0, ///< S: energy, inverted, not finite
+  FASCIA_T_FRAMES,      ///< N: frame_terms (external energy, d.Md, d.target_M, |g|^2)
+  FASCIA_T_DOT,         ///< n: a.b
+  FASCIA_T_SUM,         ///< n: a
+  FASCIA_T_CG_START,    ///< N: r = -g, p = 0, z = P^-1 r, dir = z; gives r.r, r.z
+  FASCIA_T_OPERATOR,    ///< N: Ad = A dir (skipped unless CG runs); gives dir.Ad, dir.dir
+  FASCIA_T_CG_UPDATE,   ///< N: p, r, z by the step's action; gives r.r, r.z
+  FASCIA_T_COUNT
+} fascia_dev_terms;
+
+/// Scalar steps run by one thread on the reduced sums.
+typedef enum fascia_dev_step {
+  FASCIA_S_STORE = 0,    ///< sum -> sc->sum
+  FASCIA_S_SAMPLES,      ///< internal energy, inverted and non-finite counts
+  FASCIA_S_OBJECTIVE,    ///< external energy, the step objective phi, |g|^2
+  FASCIA_S_TARGET,       ///< target norm
+  FASCIA_S_SCALE,        ///< mean absolute diagonal
+  FASCIA_S_CG_START,
+  FASCIA_S_CG_CURVATURE,
+  FASCIA_S_CG_RESIDUAL,
+  FASCIA_S_COUNT
+} fascia_dev_step;
+
+/// The state views the per-sample math reads.
+static inline FASCIA_HD fascia_pt_state fascia_dev_state(const fascia_dev *D) {
+  fascia_pt_state st;
+  st.frame_x = D->x;
+  st.frame_A = D->A;
+  return st;
+}
+
+static inline FASCIA_HD fascia_pt_state fascia_dev_mass_state(const fascia_dev *D) {
+  fascia_pt_state st;
+  st.frame_x = D->x;
+  st.frame_A = D->A_mass;
+  return st;
+}
+
+// sum over the reverse table of frame i of a pair buffer of width 6
+static inline FASCIA_HD void fascia_dev_gather6(const fascia_dev *D, const fascia_real *buffer, int32_t i,
+                                                fascia_real *sum) {
+  for (int c = 0; c < 6; ++c) sum[c] = 0;
+  for (int32_t r = D->frame_offsets[i]; r < D->frame_offsets[i + 1]; ++r) {
+    const fascia_real *b = buffer + 6 * (int64_t)D->frame_pairs[r];
+    for (int c = 0; c < 6; ++c) sum[c] += b[c];
+  }
+}
+
+// out = B v for a 6x6 block
+static inline FASCIA_HD void fascia_dev_block_apply(const fascia_real *B, const fascia_real *v, fascia_real *out) {
+  for (int r = 0; r < 6; ++r) {
+    fascia_real s = 0;
+    for (int c = 0; c < 6; ++c) s += B[6 * r + c] * v[c];
+    out[r] = s;
+  }
+}
+
+// frame i's share of M v: lumped block, or the gathered consistent products
+static inline FASCIA_HD void fascia_dev_frame_mass(const fascia_dev *D, int32_t i, const fascia_real *v,
+                                                   fascia_real *out) {
+  if (D->set->consistent_mass) fascia_dev_gather6(D, D->pair_mass, i, out);
+  else fascia_dev_block_apply(D->mass_blocks + 36 * (int64_t)i, v + 6 * (int64_t)i, out);
+}
+
+static inline FASCIA_HD void fascia_dev_rest_A(const fascia_dev *D, int32_t i, const fascia_real *q, fascia_real *A) {
+  fascia_real R[9], Rr[9];
+  fascia_pt_quat_to_mat(q, R);
+  fascia_pt_quat_to_mat(D->rest_rotation + 4 * (int64_t)i, Rr);
+  fascia_pt_mat_mult(R, Rr, A);
+}
+
+// ------------------------------------------------------------------ items --
+
+static inline FASCIA_HD void fascia_dev_state_item(const fascia_dev *D, int32_t i) {
+  const fascia_real *d = D->d_trial + 6 * (int64_t)i;
+  fascia_real *x = D->x + 3 * (int64_t)i, *q = D->q + 4 * (int64_t)i;
+  for (int c = 0; c < 3; ++c) x[c] = D->x_base[3 * (int64_t)i + c] + d[c];
+  for (int c = 0; c < 4; ++c) q[c] = D->q_base[4 * (int64_t)i + c];
+  fascia_pt_quat_rotate_by(d + 3, q);
+  fascia_dev_rest_A(D, i, q, D->A + 9 * (int64_t)i);
+}
+
+// lumped (row-sum) 6x6 mass block of frame i at A_mass (as system.c)
+static inline FASCIA_HD void fascia_dev_lumped_mass_item(const fascia_dev *D, int32_t i) {
+  fascia_real *B = D->mass_blocks + 36 * (int64_t)i;
+  for (int c = 0; c < 36; ++c) B[c] = 0;
+  for (int32_t r = D->frame_offsets[i]; r < D->frame_offsets[i + 1]; ++r) {
+    const int32_t k = D->frame_pairs[r], s = D->pair_sample[k];
+    const fascia_real mw = D->sample_mass[s] * D->pm.pair_weight[k];
+    fascia_real a[3];
+    fascia_pt_mat_vec(D->A_mass + 9 * (int64_t)i, D->pm.pair_offset + 3 * (int64_t)k, a);
+    const fascia_real aa = fascia_pt_dot3(a, a);
+    const fascia_real skew[9] = {0, -a[2], a[1], a[2], 0, -a[0], -a[1], a[0], 0};
+    for (int r3 = 0; r3 < 3; ++r3)
+      for (int c = 0; c < 3; ++c) {
+        B[6 * r3 + c] += mw * (r3 == c);
+        B[6 * r3 + 3 + c] -= mw * skew[3 * r3 + c];
+        B[6 * (3 + r3) + c] += mw * skew[3 * r3 + c];
+        B[6 * (3 + r3) + 3 + c] += mw * ((r3 == c) * aa - a[r3] * a[c]);
+      }
+  }
+}
+
+static inline FASCIA_HD void fascia_dev_sample_gradient_item(const fascia_dev *D, int32_t s) {
+  const fascia_pt_state st = fascia_dev_state(D);
+  int flags = 0;
+  D->sample_energy[s] = fascia_pt_sample_gradient(&D->pm, &st, s, D->pair_buffer + 6 * (int64_t)D->pm.sample_offsets[s],
+                                                  D->cache + (int64_t)s * FASCIA_PT_CACHE_SIZE, &flags);
+  D->sample_flags[s] = flags;
+}
+
+static inline FASCIA_HD void fascia_dev_sample_mass_item(const fascia_dev *D, int32_t s, const fascia_real *v) {
+  const fascia_pt_state st = fascia_dev_mass_state(D);
+  const int32_t begin = D->pm.sample_offsets[s];
+  fascia_pt_sample_mass(&D->pm, &st, s, D->sample_mass[s], v, D->pm.pair_frame + begin,
+                        D->pair_mass + 6 * (int64_t)begin);
+}
+
+// The step objective's gradient on frame i at d_trial (newton.c objective()
+// and system.c fascia_system_evaluate, frame by frame), and the frame's terms
+// of the objective: external energy, d.Md, d.target_M, |g_i|^2.
+static inline FASCIA_HD void fascia_dev_frame_gradient_item(const fascia_dev *D, int32_t i) {
+  const fascia_dev_settings *set = D->set;
+  const int64_t i6 = 6 * (int64_t)i;
+  fascia_real gi[6], b[3], bg[3];
+  fascia_dev_gather6(D, D->pair_buffer, i, gi);
+  // gravity and frame loads, scaled by the load factor
+  const fascia_real gs = set->gravity_scale, *grav = D->gravity, *x = D->x + 3 * (int64_t)i;
+  const fascia_real *load = D->frame_load + i6;
+  fascia_pt_mat_vec(D->A + 9 * (int64_t)i, D->frame_moment + 3 * (int64_t)i, b);
+  fascia_real external = -gs * (D->frame_mass[i] * fascia_pt_dot3(grav, x) + fascia_pt_dot3(grav, b));
+  external -= gs * fascia_pt_dot3(load, x);
+  fascia_pt_cross(b, grav, bg);
+  for (int c = 0; c < 3; ++c) {
+    gi[c] -= gs * (D->frame_mass[i] * grav[c] + load[c]);
+    gi[3 + c] -= gs * bg[c];
+    D->torque[3 * (int64_t)i + c] = gi[3 + c];
+    gi[3 + c] -= gs * load[3 + c];
+  }
+  const fascia_real *d = D->d_trial + i6;
+  if (set->jacobian) {
+    const fascia_real t[3] = {gi[3], gi[4], gi[5]};
+    fascia_pt_left_jacobian_t(d + 3, t, gi + 3);
+  }
+  fascia_real dMd = 0, dz = 0;
+  if (set->c1 != 0 || set->c2 != 0) {
+    fascia_real Md[6];
+    fascia_dev_frame_mass(D, i, D->d_trial, Md);
+    const fascia_real *tM = D->target_M + i6;
+    for (int c = 0; c < 6; ++c) {
+      dMd += d[c] * Md[c];
+      dz += d[c] * tM[c];
+      gi[c] += (set->c1 + set->c2) * Md[c] - set->c1 * tM[c];
+    }
+  }
+  fascia_real gg = 0;
+  for (int c = 0; c < 6; ++c) {
+    if (!D->mask[i6 + c]) gi[c] = 0;
+    D->g_trial[i6 + c] = gi[c];
+    gg += gi[c] * gi[c];
+  }
+  fascia_real *terms = D->frame_terms + 4 * (int64_t)i;
+  terms[0] = external;
+  terms[1] = dMd;
+  terms[2] = dz;
+  terms[3] = gg;
+}
+
+// One pair's 6x6 diagonal block of its sample's stiffness: six products
+// with unit vectors on that pair's slot (column c of the block is the
+// response to unit c), as fascia_system_hessian_diagonal does on the CPU.
+static inline FASCIA_HD void fascia_dev_pair_diagonal_item(const fascia_dev *D, int64_t k) {
+  const int32_t s = D->pair_sample[k], begin = D->pm.sample_offsets[s], n = D->pm.sample_offsets[s + 1] - begin;
+  const int32_t j = (int32_t)(k - begin);
+  const fascia_pt_state st = fascia_dev_state(D);
+  // slot 0 of dq is zero, slot 1 the unit vector: every other pair reads zeros
+  int32_t slot[FASCIA_DEV_MAX_NEIGHBOURS];
+  fascia_real dq[12], col[6 * FASCIA_DEV_MAX_NEIGHBOURS];
+  for (int32_t a = 0; a < n; ++a) slot[a] = a == j;
+  fascia_real *B = D->pair_blocks + 36 * k;
+  for (int c = 0; c < 6; ++c) {
+    for (int e = 0; e < 12; ++e) dq[e] = 0;
+    dq[6 + c] = 1;
+    fascia_pt_sample_stiffness(&D->pm, &st, s, D->cache + (int64_t)s * FASCIA_PT_CACHE_SIZE, dq, slot, col);
+    for (int row = 0; row < 6; ++row) B[6 * row + c] = col[6 * j + row];
+  }
+}
+
+// Frame i's diagonal block of the Newton operator and its preconditioner
+// block (system.c fascia_system_hessian_diagonal + precond.c)
+static inline FASCIA_HD void fascia_dev_frame_precond_item(const fascia_dev *D, int32_t i) {
+  const fascia_dev_settings *set = D->set;
+  fascia_real *B = D->blocks + 36 * (int64_t)i;
+  for (int c = 0; c < 36; ++c) B[c] = 0;
+  for (int32_t r = D->frame_offsets[i]; r < D->frame_offsets[i + 1]; ++r) {
+    const fascia_real *P = D->pair_blocks + 36 * (int64_t)D->frame_pairs[r];
+    for (int c = 0; c < 36; ++c) B[c] += P[c];
+  }
+  // gravity block (theta-theta): -s (b g^T - (b.g) I), plus 1/2 [g_theta]x
+  fascia_real b[3];
+  fascia_pt_mat_vec(D->A + 9 * (int64_t)i, D->frame_moment + 3 * (int64_t)i, b);
+  const fascia_real gs = set->gravity_scale, *grav = D->gravity, bg = fascia_pt_dot3(b, grav);
+  const fascia_real *t = D->torque + 3 * (int64_t)i;
+  const fascia_real half_skew[9] = {0, -t[2], t[1], t[2], 0, -t[0], -t[1], t[0], 0};
+  for (int a = 0; a < 3; ++a)
+    for (int c = 0; c < 3; ++c)
+      B[6 * (3 + a) + 3 + c] += -gs * (b[a] * grav[c] - (a == c ? bg : 0)) + FASCIA_R(0.5) * half_skew[3 * a + c];
+  for (int a = 0; a < 6; ++a) // the exact H is symmetric; average away rounding
+    for (int c = a + 1; c < 6; ++c) {
+      const fascia_real avg = FASCIA_R(0.5) * (B[6 * a + c] + B[6 * c + a]);
+      B[6 * a + c] = B[6 * c + a] = avg;
+    }
+  if (set->mass_coefficient != 0) // lumped blocks stand in for consistent ones (precond.c)
+    for (int c = 0; c < 36; ++c) B[c] += set->mass_coefficient * D->mass_blocks[36 * (int64_t)i + c];
+  for (int c = 0; c < 6; ++c) B[7 * c] += set->shift * D->damping[6 * (int64_t)i + c];
+  fascia_pt_block6_precond(B, set->precond == 1 /* FASCIA_PRECOND_JACOBI */, D->inverse + 36 * (int64_t)i);
+}
+
+static inline FASCIA_HD const fascia_real *fascia_dev_inverse(const fascia_dev *D, int32_t i) {
+  return D->set->precond == 0 /* FASCIA_PRECOND_NONE */ ? (const fascia_real *)0 : D->inverse + 36 * (int64_t)i;
+}
+
+static inline FASCIA_HD void fascia_dev_precond_descent_item(const fascia_dev *D, int32_t i) {
+  const int64_t i6 = 6 * (int64_t)i;
+  fascia_pt_block6_apply(fascia_dev_inverse(D, i), D->mask + i6, D->g + i6, D->p + i6);
+  for (int c = 0; c < 6; ++c) D->p[i6 + c] = -D->p[i6 + c];
+}
+
+static inline FASCIA_HD void fascia_dev_accept_static_item(const fascia_dev *D, int32_t i) {
+  for (int c = 0; c < 3; ++c) D->x_base[3 * (int64_t)i + c] = D->x[3 * (int64_t)i + c];
+  for (int c = 0; c < 4; ++c) D->q_base[4 * (int64_t)i + c] = D->q[4 * (int64_t)i + c];
+  for (int c = 0; c < 6; ++c) {
+    D->d[6 * (int64_t)i + c] = 0;
+    D->g[6 * (int64_t)i + c] = D->g_trial[6 * (int64_t)i + c];
+  }
+}
+
+/// Runs item i of a per-item kernel; in, out and value as the kernel's
+/// comment says.
+static inline FASCIA_HD void fascia_dev_item(const fascia_dev *D, int kernel, int64_t i, const fascia_real *in,
+                                             fascia_real *out, fascia_real value) {
+  const int32_t i32 = (int32_t)i;
+  switch (kernel) {
+  case FASCIA_K_TRIAL:
+    D->d_trial[i] = value == 0 ? D->d[i] : D->d[i] + value * D->p[i];
+    break;
+  case FASCIA_K_STATE: fascia_dev_state_item(D, i32); break;
+  case FASCIA_K_MASS_SNAPSHOT: fascia_dev_rest_A(D, i32, D->q_base + 4 * i, D->A_mass + 9 * i); break;
+  case FASCIA_K_LUMPED_MASS: fascia_dev_lumped_mass_item(D, i32); break;
+  case FASCIA_K_SAMPLE_GRADIENT: fascia_dev_sample_gradient_item(D, i32); break;
+  case FASCIA_K_CG_SAMPLE_MASS:
+    if (!D->sc->running || !D->set->consistent_mass || D->set->mass_coefficient == 0) break;
+    fascia_dev_sample_mass_item(D, i32, in);
+    break;
+  case FASCIA_K_SAMPLE_MASS: fascia_dev_sample_mass_item(D, i32, in); break;
+  case FASCIA_K_FRAME_GRADIENT: fascia_dev_frame_gradient_item(D, i32); break;
+  case FASCIA_K_FRAME_MASS_APPLY: fascia_dev_frame_mass(D, i32, in, out + 6 * i); break;
+  case FASCIA_K_SAMPLE_STIFFNESS: {
+    if (!D->sc->running) break;
+    const fascia_pt_state st = fascia_dev_state(D);
+    const int32_t begin = D->pm.sample_offsets[i];
+    fascia_pt_sample_stiffness(&D->pm, &st, i32, D->cache + i * FASCIA_PT_CACHE_SIZE, in, D->pm.pair_frame + begin,
+                               D->pair_buffer + 6 * (int64_t)begin);
+    break;
+  }
+  case FASCIA_K_PAIR_DIAGONAL: fascia_dev_pair_diagonal_item(D, i); break;
+  case FASCIA_K_FRAME_PRECOND: fascia_dev_frame_precond_item(D, i32); break;
+  case FASCIA_K_DAMPING: D->damping[i] = fabs(D->blocks[36 * (i / 6) + 7 * (i % 6)]); break;
+  case FASCIA_K_DAMPING_CLAMP:
+    if (D->damping[i] < 1e-8 * D->sc->scale) D->damping[i] = 1e-8 * D->sc->scale;
+    break;
+  case FASCIA_K_CG_DIRECTION:
+    if (D->sc->action == FASCIA_CG_DIRECTION) D->dir[i] = D->z[i] + D->sc->beta * D->dir[i];
+    break;
+  case FASCIA_K_PRECOND_DESCENT: fascia_dev_precond_descent_item(D, i32); break;
+  case FASCIA_K_COPY_GRADIENT: D->g[i] = D->g_trial[i]; break;
+  case FASCIA_K_ACCEPT_STATIC: fascia_dev_accept_static_item(D, i32); break;
+  case FASCIA_K_ACCEPT_DYNAMIC:
+    D->d[i] = D->d_trial[i];
+    D->g[i] = D->g_trial[i];
+    break;
+  default: break;
+  }
+}
+
+// ------------------------------------------------------------- reductions --
+
+// Newton operator on frame i: Ad_i = (H + mass_coefficient M + shift D) dir
+// restricted to free DOFs (cg.c fascia_operator_apply, frame by frame);
+// t gets dir_i.Ad_i and dir_i.dir_i
+static inline FASCIA_HD void fascia_dev_operator_term(const fascia_dev *D, int32_t i, fascia_real *t) {
+  const fascia_dev_settings *set = D->set;
+  const int64_t i6 = 6 * (int64_t)i;
+  const fascia_real *v = D->dir + i6;
+  fascia_real out[6], b[3], vb[3], vbg[3], tv[3];
+  fascia_dev_gather6(D, D->pair_buffer, i, out);
+  // gravity's own stiffness, frame-local: -s ((v x b) x g)
+  fascia_pt_mat_vec(D->A + 9 * (int64_t)i, D->frame_moment + 3 * (int64_t)i, b);
+  fascia_pt_cross(v + 3, b, vb);
+  fascia_pt_cross(vb, D->gravity, vbg);
+  for (int c = 0; c < 3; ++c) out[3 + c] -= set->gravity_scale * vbg[c];
+  // symmetrizing term of the rotation update: + 1/2 g_theta x v_theta
+  fascia_pt_cross(D->torque + 3 * (int64_t)i, v + 3, tv);
+  for (int c = 0; c < 3; ++c) out[3 + c] += FASCIA_R(0.5) * tv[c];
+  if (set->mass_coefficient != 0) {
+    fascia_real Mv[6];
+    fascia_dev_frame_mass(D, i, D->dir, Mv);
+    for (int c = 0; c < 6; ++c) out[c] += set->mass_coefficient * Mv[c];
+  }
+  if (set->shift != 0)
+    for (int c = 0; c < 6; ++c) out[c] += set->shift * D->damping[i6 + c] * v[c];
+  t[0] = t[1] = 0;
+  for (int c = 0; c < 6; ++c) {
+    if (!D->mask[i6 + c]) out[c] = 0;
+    D->Ad[i6 + c] = out[c];
+    t[0] += v[c] * out[c];
+    t[1] += v[c] * v[c];
+  }
+}
+
+static inline FASCIA_HD void fascia_dev_cg_start_term(const fascia_dev *D, int32_t i, fascia_real *t) {
+  const int64_t i6 = 6 * (int64_t)i;
+  for (int c = 0; c < 6; ++c) {
+    D->r[i6 + c] = D->mask[i6 + c] ? -D->g[i6 + c] : 0;
+    D->p[i6 + c] = 0;
+  }
+  fascia_pt_block6_apply(fascia_dev_inverse(D, i), D->mask + i6, D->r + i6, D->z + i6);
+  t[0] = t[1] = 0;
+  for (int c = 0; c < 6; ++c) {
+    D->dir[i6 + c] = D->z[i6 + c];
+    t[0] += D->r[i6 + c] * D->r[i6 + c];
+    t[1] += D->r[i6 + c] * D->z[i6 + c];
+  }
+}
+
+static inline FASCIA_HD void fascia_dev_cg_update_term(const fascia_dev *D, int32_t i, fascia_real *t) {
+  const int64_t i6 = 6 * (int64_t)i;
+  const int action = D->sc->action;
+  if (action == FASCIA_CG_COPY_Z)
+    for (int c = 0; c < 6; ++c) D->p[i6 + c] = D->z[i6 + c];
+  if (action != FASCIA_CG_UPDATE) return;
+  const fascia_real alpha = D->sc->alpha;
+  for (int c = 0; c < 6; ++c) {
+    D->p[i6 + c] += alpha * D->dir[i6 + c];
+    D->r[i6 + c] -= alpha * D->Ad[i6 + c];
+  }
+  fascia_pt_block6_apply(fascia_dev_inverse(D, i), D->mask + i6, D->r + i6, D->z + i6);
+  for (int c = 0; c < 6; ++c) {
+    t[0] += D->r[i6 + c] * D->r[i6 + c];
+    t[1] += D->r[i6 + c] * D->z[i6 + c];
+  }
+}
+
+/// Item i's values of a reduction (t: four values, zero on entry).
+static inline FASCIA_HD void fascia_dev_term(const fascia_dev *D, int terms, int64_t i, const fascia_real *a,
+                                             const fascia_real *b, fascia_real *t) {
+  switch (terms) {
+  case FASCIA_T_SAMPLES: {
+    const int f = D->sample_flags[i];
+    t[0] = D->sample_energy[i];
+    t[1] = (f & FASCIA_PT_FLAG_INVERTED) ? 1 : 0;
+    t[2] = (f & FASCIA_PT_FLAG_NONFINITE) ? 1 : 0;
+    break;
+  }
+  case FASCIA_T_FRAMES:
+    for (int c = 0; c < 4; ++c) t[c] = D->frame_terms[4 * i + c];
+    break;
+  case FASCIA_T_DOT: t[0] = a[i] * b[i]; break;
+  case FASCIA_T_SUM: t[0] = a[i]; break;
+  case FASCIA_T_CG_START: fascia_dev_cg_start_term(D, (int32_t)i, t); break;
+  case FASCIA_T_OPERATOR:
+    if (D->sc->running) fascia_dev_operator_term(D, (int32_t)i, t);
+    break;
+  case FASCIA_T_CG_UPDATE: fascia_dev_cg_update_term(D, (int32_t)i, t); break;
+  default: break;
+  }
+}
+
+/// The scalar step after a reduction, run by one thread (cg.c's scalar
+/// logic, so that CG never waits for the host).
+static inline FASCIA_HD void fascia_dev_scalar_step(const fascia_dev *D, int step, const fascia_real *sum) {
+  fascia_dev_scalars *sc = D->sc;
+  const fascia_dev_settings *set = D->set;
+  switch (step) {
+  case FASCIA_S_STORE:
+    for (int c = 0; c < 4; ++c) sc->sum[c] = sum[c];
+    break;
+  case FASCIA_S_SAMPLES:
+    sc->energy_internal = sum[0];
+    sc->inverted = sum[1];
+    sc->nonfinite = sum[2];
+    break;
+  case FASCIA_S_OBJECTIVE: {
+    sc->energy_external = sum[0];
+    const fascia_real dMd = sum[1], dz = sum[2];
+    sc->phi = sc->energy_internal + sc->energy_external;
+    if (set->c1 != 0 || set->c2 != 0)
+      sc->phi += FASCIA_R(0.5) * set->c1 * (dMd - 2 * dz + sc->target_norm) + FASCIA_R(0.5) * set->c2 * dMd;
+    sc->gradient_norm2 = sum[3];
+    break;
+  }
+  case FASCIA_S_TARGET: sc->target_norm = sum[0]; break;
+  case FASCIA_S_SCALE: {
+    const fascia_real n = 6 * (fascia_real)D->frame_count;
+    sc->scale = sum[0] > 0 ? sum[0] / n : 1;
+    break;
+  }
+  case FASCIA_S_CG_START:
+    sc->bnorm = sc->rnorm = sqrt(sum[0]);
+    sc->rz = sum[1];
+    sc->iterations = 0;
+    sc->negative_curvature = 0;
+    sc->running = sc->bnorm > 0 && set->cg_max > 0;
+    sc->action = FASCIA_CG_NONE;
+    break;
+  case FASCIA_S_CG_CURVATURE: {
+    sc->action = FASCIA_CG_NONE;
+    if (!sc->running) break;
+    const fascia_real curvature = sum[0], dd = sum[1];
+    if (!(curvature > 1e-12 * sc->scale * dd) || !isfinite(curvature)) {
+      // non-positive curvature: keep p, or the preconditioned residual if
+      // nothing was done yet (a descent direction either way)
+      sc->negative_curvature = 1;
+      sc->running = 0;
+      if (sc->iterations == 0) sc->action = FASCIA_CG_COPY_Z;
+      break;
+    }
+    sc->alpha = sc->rz / curvature;
+    sc->action = FASCIA_CG_UPDATE;
+    break;
+  }
+  case FASCIA_S_CG_RESIDUAL: {
+    if (sc->action != FASCIA_CG_UPDATE) {
+      sc->action = FASCIA_CG_NONE;
+      break;
+    }
+    sc->iterations += 1;
+    sc->rnorm = sqrt(sum[0]);
+    const fascia_real rz_next = sum[1];
+    sc->action = FASCIA_CG_NONE;
+    // a fixed count still ends at round-off: past it iterations churn noise
+    if (sc->rnorm <= FASCIA_DEV_ROUNDOFF * sc->bnorm || (!set->cg_fixed && sc->rnorm <= set->cg_tolerance * sc->bnorm) ||
+        sc->iterations >= set->cg_max || !(rz_next > 0)) {
+      sc->running = 0;
+      break;
+    }
+    sc->beta = rz_next / sc->rz;
+    sc->rz = rz_next;
+    sc->action = FASCIA_CG_DIRECTION;
+    break;
+  }
+  default: break;
+  }
+}
+
+#endif

@@ -1,0 +1,90 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// 6x6 frame blocks of the preconditioners (Jacobi, block Jacobi), shared by
+// the CPU backend (precond.c) and the device kernels (cuda/): Cholesky,
+// inverse, and the masked block product z = B r.
+#ifndef FASCIA_POINT_BLOCK6_H
+#define FASCIA_POINT_BLOCK6_H
+
+#include "hd.h"
+
+/// Cholesky factor of a 6x6 block in place (lower triangle); 0 if the block
+/// is not positive definite.
+static inline FASCIA_HD int fascia_pt_cholesky6(fascia_real *a) {
+  for (int j = 0; j < 6; ++j) {
+    fascia_real d = a[6 * j + j];
+    for (int k = 0; k < j; ++k) d -= a[6 * j + k] * a[6 * j + k];
+    if (!(d > 0)) return 0;
+    d = sqrt(d);
+    a[6 * j + j] = d;
+    for (int i = j + 1; i < 6; ++i) {
+      fascia_real s = a[6 * i + j];
+      for (int k = 0; k < j; ++k) s -= a[6 * i + k] * a[6 * j + k];
+      a[6 * i + j] = s / d;
+    }
+  }
+  return 1;
+}
+
+/// Inverse of an SPD block from its Cholesky factor L: solves L L^T X = I.
+static inline FASCIA_HD void fascia_pt_cholesky6_inverse(const fascia_real *L, fascia_real *inv) {
+  for (int col = 0; col < 6; ++col) {
+    fascia_real y[6];
+    for (int i = 0; i < 6; ++i) {
+      fascia_real s = (i == col);
+      for (int k = 0; k < i; ++k) s -= L[6 * i + k] * y[k];
+      y[i] = s / L[6 * i + i];
+    }
+    for (int i = 5; i >= 0; --i) {
+      fascia_real s = y[i];
+      for (int k = i + 1; k < 6; ++k) s -= L[6 * k + i] * inv[6 * k + col];
+      inv[6 * i + col] = s / L[6 * i + i];
+    }
+  }
+}
+
+/// Preconditioner block of one frame from its (shifted) diagonal block B of
+/// the tangent: the inverse diagonal (jacobi) or the inverse block, after
+/// the smallest shift that makes the block positive definite (the tangent
+/// may be indefinite; the preconditioner must stay positive for CG).
+static inline FASCIA_HD void fascia_pt_block6_precond(const fascia_real *B, int jacobi, fascia_real *inv) {
+  fascia_real trace = 0;
+  for (int c = 0; c < 6; ++c) trace += fabs(B[7 * c]);
+  if (trace == 0 || !isfinite(trace)) trace = 1;
+  if (jacobi) {
+    for (int k = 0; k < 36; ++k) inv[k] = 0;
+    for (int c = 0; c < 6; ++c) {
+      const fascia_real d = fabs(B[7 * c]);
+      inv[7 * c] = d > 1e-12 * trace ? 1 / d : 6 / trace;
+    }
+    return;
+  }
+  fascia_real shift = 0;
+  for (int attempt = 0; attempt < 60; ++attempt) {
+    fascia_real L[36];
+    for (int k = 0; k < 36; ++k) L[k] = B[k];
+    for (int c = 0; c < 6; ++c) L[7 * c] += shift;
+    if (fascia_pt_cholesky6(L)) {
+      fascia_pt_cholesky6_inverse(L, inv);
+      return;
+    }
+    shift = shift == 0 ? 1e-10 * trace : 4 * shift;
+  }
+}
+
+/// z = inv r on the free entries of one frame (mask), 0 on the others;
+/// inv NULL: no preconditioner (z = masked r).
+static inline FASCIA_HD void fascia_pt_block6_apply(const fascia_real *inv, const unsigned char *mask,
+                                                    const fascia_real *r, fascia_real *z) {
+  for (int a = 0; a < 6; ++a) {
+    if (!inv) {
+      z[a] = mask[a] ? r[a] : 0;
+      continue;
+    }
+    fascia_real s = 0;
+    for (int c = 0; c < 6; ++c) s += inv[6 * a + c] * (mask[c] ? r[c] : 0);
+    z[a] = mask[a] ? s : 0;
+  }
+}
+
+#endif
