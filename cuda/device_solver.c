@@ -277,7 +277,7 @@ static void cg_body(void *argument) {
   const int64_t N = D->frame_count, S = D->sample_count;
   for (int it = 0; it < arg->iterations; ++it) {
     kernel(dev, FASCIA_K_SAMPLE_STIFFNESS, S, D->dir, NULL, 0);
-    kernel(dev, FASCIA_K_CG_SAMPLE_MASS, S, D->dir, NULL, 0);
+    if (dev->set.consistent_mass) kernel(dev, FASCIA_K_CG_SAMPLE_MASS, S, D->dir, NULL, 0); // lumped: per frame
     reduce(dev, FASCIA_T_OPERATOR, N, NULL, NULL, FASCIA_S_CG_CURVATURE);
     reduce(dev, FASCIA_T_CG_UPDATE, N, NULL, NULL, FASCIA_S_CG_RESIDUAL);
     kernel(dev, FASCIA_K_CG_DIRECTION, 6 * N, NULL, NULL, 0);

@@ -1,0 +1,189 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// The device solver against the CPU backend on one model (t330, t331):
+// operators at a random deformed state, and whole runs. The backend is the
+// one named by --backend ("emulated" by default); a backend that cannot run
+// here makes the test skip (exit 77) with a line that says why.
+#ifndef FASCIA_TESTS_DEVICE_COMPARE_H
+#define FASCIA_TESTS_DEVICE_COMPARE_H
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+#include "device.h"
+#include "random_model.h"
+
+static const char *backend = "emulated"; // --backend
+
+// Double precision against the CPU: the same operations in another order
+// (reductions, FMA on a GPU) differ by rounding, which CG and Newton
+// amplify but do not let grow.
+#define TOL_OPERATOR 1e-11 // forces, products, blocks
+#define TOL_STEP 1e-8      // states after one step or a static solve (Newton converged to 1e-10)
+#define TOL_STEPS 1e-6     // states after 100 steps
+#define TOL_FIXED 1e-7     // the paper's mode: 60 CG iterations amplify rounding
+
+static inline double max_abs(const double *a, int64_t n) {
+  double m = 0;
+  for (int64_t k = 0; k < n; ++k) m = fabs(a[k]) > m ? fabs(a[k]) : m;
+  return m;
+}
+
+// max |a - b| / max |b|, printed with its label
+static inline double relative_difference(const char *label, const double *a, const double *b, int64_t n) {
+  double diff = 0;
+  for (int64_t k = 0; k < n; ++k) {
+    const double e = fabs(a[k] - b[k]);
+    diff = e > diff || e != e ? e : diff;
+  }
+  const double scale = max_abs(b, n), rel = scale > 0 ? diff / scale : diff;
+  printf("  %-44s %.3g\n", label, rel);
+  return rel;
+}
+
+// Creates the device solver, or tells the caller to skip (no GPU here).
+static inline int make_device(fascia_ctx *ctx, const fascia_model *m, fascia_solver_def def, fascia_solver **out) {
+  def.backend = backend;
+  const fascia_status st = fascia_solver_create(ctx, m, &def, out);
+  if (st == FASCIA_OK) return 0;
+  if (st == FASCIA_ERR_UNSUPPORTED) {
+    printf("skipped: backend %s cannot run here: %s\n", backend, fascia_ctx_message(ctx));
+    return TEST_SKIP;
+  }
+  fprintf(stderr, "creating the %s solver: %s\n", backend, fascia_ctx_message(ctx));
+  return 1;
+}
+
+// Forces, energy, products and diagonal blocks at a random deformed state.
+static inline int check_operators(fascia_ctx *ctx, const char *name, const fascia_model *m, unsigned long long seed) {
+  printf("%s: %d frames, %d samples\n", name, (int)m->frame_count, (int)m->sample_count);
+  fascia_solver_def def = fascia_solver_def_default();
+  def.backend = "cpu";
+  def.threads = 1;
+  def.linear_solver = FASCIA_LINEAR_CG;
+  fascia_solver *cpu = NULL, *dev = NULL;
+  CHECK_OK(fascia_solver_create(ctx, m, &def, &cpu), ctx);
+  const int rc = make_device(ctx, m, def, &dev);
+  if (rc) {
+    fascia_solver_destroy(&cpu);
+    return rc;
+  }
+  const int64_t N = m->frame_count, n = 6 * N;
+  double *x = malloc(3 * N * sizeof *x), *q = malloc(4 * N * sizeof *q), *v = malloc(n * sizeof *v);
+  double *a = malloc(36 * N * sizeof *a), *b = malloc(36 * N * sizeof *b);
+  unsigned long long st = seed;
+  for (int64_t i = 0; i < N; ++i) {
+    double t[3];
+    for (int c = 0; c < 3; ++c) {
+      x[3 * i + c] = m->frame_position[3 * i + c] + rnd_uniform(&st, -0.05, 0.05);
+      t[c] = rnd_uniform(&st, -0.2, 0.2);
+    }
+    memcpy(q + 4 * i, m->frame_rotation + 4 * i, 4 * sizeof *q);
+    fascia_pt_quat_rotate_by(t, q + 4 * i);
+  }
+  for (int64_t k = 0; k < n; ++k) v[k] = rnd_uniform(&st, -1, 1);
+  // forces and energy
+  double e_cpu, e_dev;
+  fascia_system_set_state(cpu->sys, x, q);
+  CHECK_OK(fascia_system_evaluate(cpu->sys, a, &e_cpu), ctx);
+  for (int64_t k = 0; k < n; ++k)
+    if (!cpu->mask[k]) a[k] = 0;
+  CHECK_OK(fascia_device_gradient(dev, x, q, b, &e_dev), ctx);
+  CHECK(relative_difference("gradient", b, a, n) <= TOL_OPERATOR);
+  CHECK(relative_difference("energy", &e_dev, &e_cpu, 1) <= TOL_OPERATOR);
+  // stiffness product (symmetric Hessian), free DOFs
+  fascia_system_hessian_apply(cpu->sys, v, a);
+  for (int64_t k = 0; k < n; ++k)
+    if (!cpu->mask[k]) a[k] = 0;
+  CHECK_OK(fascia_device_hessian_apply(dev, v, b), ctx);
+  CHECK(relative_difference("stiffness product", b, a, n) <= TOL_OPERATOR);
+  // diagonal blocks (the block-Jacobi preconditioner's)
+  fascia_system_hessian_diagonal(cpu->sys, a);
+  CHECK_OK(fascia_device_hessian_diagonal(dev, b), ctx);
+  CHECK(relative_difference("diagonal blocks", b, a, 36 * N) <= TOL_OPERATOR);
+  free(x), free(q), free(v), free(a), free(b);
+  fascia_solver_destroy(&cpu);
+  fascia_solver_destroy(&dev);
+  return 0;
+}
+
+// Runs `steps` steps (0: a static solve) on the CPU and on the device and
+// compares the states; `repeat` also checks that a second device run gives
+// the same bits.
+static inline int check_run(fascia_ctx *ctx, const char *name, const fascia_model *m, fascia_solver_def def, int steps,
+                     double tolerance, int repeat) {
+  def.backend = "cpu";
+  def.linear_solver = FASCIA_LINEAR_CG;
+  fascia_solver *cpu = NULL, *dev = NULL, *again = NULL;
+  CHECK_OK(fascia_solver_create(ctx, m, &def, &cpu), ctx);
+  int rc = make_device(ctx, m, def, &dev);
+  if (!rc && repeat) rc = make_device(ctx, m, def, &again);
+  if (rc) {
+    fascia_solver_destroy(&cpu);
+    fascia_solver_destroy(&dev);
+    return rc;
+  }
+  fascia_solve_report rc_cpu, rc_dev;
+  memset(&rc_cpu, 0, sizeof rc_cpu);
+  memset(&rc_dev, 0, sizeof rc_dev);
+  int cg_cpu = 0, cg_dev = 0;
+  for (int k = 0; k < (steps ? steps : 1); ++k) {
+    if (steps) {
+      CHECK_OK(fascia_solver_step(cpu, &rc_cpu), ctx);
+      CHECK_OK(fascia_solver_step(dev, &rc_dev), ctx);
+      if (again) CHECK_OK(fascia_solver_step(again, NULL), ctx);
+    } else {
+      CHECK_OK(fascia_solver_solve_static(cpu, &rc_cpu), ctx);
+      CHECK_OK(fascia_solver_solve_static(dev, &rc_dev), ctx);
+      if (again) CHECK_OK(fascia_solver_solve_static(again, NULL), ctx);
+    }
+    cg_cpu += rc_cpu.cg_iterations;
+    cg_dev += rc_dev.cg_iterations;
+  }
+  const int64_t N = m->frame_count;
+  printf("%s (%d frames, %s): CG iterations cpu %d, %s %d\n", name, (int)N,
+         steps ? "steps" : "static", cg_cpu, backend, cg_dev);
+  // displacements, so that the tolerance is relative to the motion
+  double *ua = malloc(3 * N * sizeof *ua), *ub = malloc(3 * N * sizeof *ub);
+  const double *xa = fascia_solver_frame_positions(cpu), *xb = fascia_solver_frame_positions(dev);
+  for (int64_t k = 0; k < 3 * N; ++k) {
+    ua[k] = xa[k] - m->frame_position[k];
+    ub[k] = xb[k] - m->frame_position[k];
+  }
+  CHECK(relative_difference("displacements", ub, ua, 3 * N) <= tolerance);
+  CHECK(relative_difference("rotations", fascia_solver_frame_rotations(dev), fascia_solver_frame_rotations(cpu),
+                            4 * N) <= tolerance);
+  if (steps)
+    CHECK(relative_difference("velocities", fascia_solver_frame_velocities(dev), fascia_solver_frame_velocities(cpu),
+                              6 * N) <= tolerance);
+  if (again) {
+    CHECK(!memcmp(fascia_solver_frame_positions(again), xb, 3 * N * sizeof(double)));
+    CHECK(!memcmp(fascia_solver_frame_rotations(again), fascia_solver_frame_rotations(dev), 4 * N * sizeof(double)));
+    printf("  repeated run: %s\n",
+           memcmp(fascia_solver_frame_positions(again), xb, 3 * N * sizeof(double)) ? "DIFFERENT" : "bit-identical");
+  }
+  free(ua), free(ub);
+  fascia_solver_destroy(&cpu);
+  fascia_solver_destroy(&dev);
+  fascia_solver_destroy(&again);
+  return 0;
+}
+
+/// Reads --backend NAME from the command line.
+static inline void compare_parse_args(int argc, char **argv) {
+  for (int k = 1; k + 1 < argc; ++k)
+    if (!strcmp(argv[k], "--backend")) backend = argv[k + 1];
+}
+
+#define RUN(expr)                                                                                                     \
+  do {                                                                                                                \
+    const int rc_ = (expr);                                                                                           \
+    if (rc_) {                                                                                                        \
+      fascia_model_destroy(&m);                                                                                       \
+      fascia_ctx_destroy(&ctx);                                                                                       \
+      return rc_;                                                                                                     \
+    }                                                                                                                 \
+  } while (0)
+
+#endif
