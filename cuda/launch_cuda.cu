@@ -168,6 +168,11 @@ static void cuda_destroy(fascia_launcher *L) {
 static fascia_status open_device(fascia_launcher *L) {
   int count = 0;
   cudaError_t error = handled(cudaGetDeviceCount(&count));
+  // without any NVIDIA driver the runtime also answers "insufficient driver"
+  if (error == cudaErrorInsufficientDriver)
+    return FASCIA_FAIL(L->ctx, FASCIA_ERR_UNSUPPORTED,
+                       "no CUDA device: no NVIDIA driver, or one older than this build's CUDA runtime %d.%d needs",
+                       CUDART_VERSION / 1000, CUDART_VERSION % 1000 / 10);
   if (error != cudaSuccess)
     return FASCIA_FAIL(L->ctx, FASCIA_ERR_UNSUPPORTED, "no CUDA device: %s", cudaGetErrorString(error));
   if (count <= 0) return FASCIA_FAIL(L->ctx, FASCIA_ERR_UNSUPPORTED, "no CUDA device: the driver reports none");
