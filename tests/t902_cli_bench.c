@@ -5,10 +5,14 @@
 // rows with the paper's GPU time), 60 CG iterations per step as in the
 // paper; `bench cantilever --json` rows carry the tip error against the
 // reference; --csv writes a header row and one line per row; an unknown row
-// is a usage error.
+// is a usage error. --backend emulated (the device solver in host loops)
+// times the row there and on the CPU, beside the paper's GPU figure;
+// --backend cuda runs, or fails naming CUDA without crashing; settings the
+// device refuses (--assembled) are a usage error; --list shows the large rows.
 // Usage: t902_cli_bench PATH/TO/fascia WORK_DIR
 #define _POSIX_C_SOURCE 200809L
 #include <cjson/cJSON.h>
+#include <ctype.h>
 #include <math.h>
 
 #include "check.h"
@@ -95,6 +99,86 @@ static void check_cantilever(const char *fascia, const char *err) {
   cJSON_Delete(rows);
 }
 
+static double number(const cJSON *row, const char *key) {
+  const cJSON *x = cJSON_GetObjectItemCaseSensitive(row, key);
+  return cJSON_IsNumber(x) ? x->valuedouble : NAN;
+}
+
+// 1 when text contains word, letters compared without case.
+static int contains_nocase(const char *text, const char *word) {
+  const size_t n = strlen(word);
+  for (; *text; ++text) {
+    size_t k = 0;
+    while (k < n && text[k] && tolower((unsigned char)text[k]) == tolower((unsigned char)word[k])) ++k;
+    if (k == n) return 1;
+  }
+  return 0;
+}
+
+// The smallest row of Table 3, from the scene list rather than by name.
+static const char *smallest_table3_row(const char *fascia, const char *err, char *name, size_t size) {
+  name[0] = '\0';
+  if (!cli_exec(fascia, "bench --list", err, &result) || result.status != 0) return name;
+  long fewest = -1;
+  for (char *line = strtok(result.out, "\n"); line; line = strtok(NULL, "\n")) {
+    char row[128];
+    int table = 0, frames = 0, samples = 0;
+    if (sscanf(line, " %127s %d %d %d", row, &table, &frames, &samples) == 4 && table == 3 &&
+        (fewest < 0 || samples < fewest)) {
+      fewest = samples;
+      snprintf(name, size, "%s", row);
+    }
+  }
+  return name;
+}
+
+static void check_device_backends(const char *fascia, const char *err) {
+  char row[128], args[1024];
+  smallest_table3_row(fascia, err, row, sizeof row);
+  CHECK(row[0] != '\0');
+  if (!row[0]) return;
+  snprintf(args, sizeof args, "bench %s --backend emulated --steps 1 --repeats 1 --threads 1 --json", row);
+  CHECK(cli_exec(fascia, args, err, &result));
+  CHECK(result.status == 0);
+  cJSON *rows = cJSON_Parse(result.out);
+  const cJSON *r = cJSON_GetArrayItem(rows, 0);
+  CHECK(cJSON_IsArray(rows) && cJSON_GetArraySize(rows) == 1);
+  const cJSON *backend = cJSON_GetObjectItemCaseSensitive(r, "backend");
+  const cJSON *device = cJSON_GetObjectItemCaseSensitive(r, "device");
+  CHECK(cJSON_IsString(backend) && !strcmp(backend->valuestring, "emulated"));
+  CHECK(cJSON_IsString(device) && device->valuestring[0] != '\0');
+  const double ms = number(r, "ms_per_step"), cpu = number(r, "cpu_ms_per_step"), gpu = number(r, "paper_gpu_ms");
+  CHECK(isfinite(ms) && ms > 0);
+  CHECK(isfinite(cpu) && cpu > 0);
+  CHECK(isfinite(gpu) && gpu > 0); // Table 3 gives a GTX 570 figure for every row
+  // the ratios are of the figures beside them
+  CHECK_NEAR(number(r, "paper_gpu_ratio"), gpu / ms, 1e-12, 0);
+  CHECK_NEAR(number(r, "cpu_gpu_ratio"), cpu / ms, 1e-12, 0);
+  CHECK(number(r, "cg_iterations_per_step") == 60); // the paper's mode on the device too
+  if (!r) fprintf(stderr, "stdout: %.400s\nstderr: %.400s\n", result.out, result.err);
+  cJSON_Delete(rows);
+
+  // cuda: runs where there is a GPU, else fails naming it (no crash, no rows)
+  snprintf(args, sizeof args, "bench %s --backend cuda --steps 1 --repeats 1 --threads 1 --json", row);
+  CHECK(cli_exec(fascia, args, err, &result));
+  if (result.status == 0) {
+    rows = cJSON_Parse(result.out);
+    backend = cJSON_GetObjectItemCaseSensitive(cJSON_GetArrayItem(rows, 0), "backend");
+    CHECK(cJSON_IsString(backend) && !strcmp(backend->valuestring, "cuda"));
+    cJSON_Delete(rows);
+  } else {
+    CHECK(result.status == 1 || result.status == 2);
+    CHECK(contains_nocase(result.err, "cuda"));
+    CHECK(result.out[0] == '\0');
+  }
+  // the device solver is matrix-free: the assembled matrix is refused as a usage error
+  snprintf(args, sizeof args, "bench %s --backend emulated --assembled --steps 1 --repeats 1", row);
+  CHECK(cli_exec(fascia, args, err, &result) && result.status == 2);
+  CHECK(strstr(result.err, "assembled") != NULL);
+  CHECK(cli_exec(fascia, "bench --backend bogus", err, &result) && result.status == 2);
+  CHECK(strstr(result.err, "bogus") != NULL);
+}
+
 int main(int argc, char **argv) {
   if (argc < 3) {
     fprintf(stderr, "usage: t902_cli_bench PATH/TO/fascia WORK_DIR\n");
@@ -108,6 +192,8 @@ int main(int argc, char **argv) {
   check_cantilever(fascia, err);
   CHECK(cli_exec(fascia, "bench --list", err, &result) && result.status == 0);
   CHECK(strstr(result.out, "t3-s34610") != NULL);
+  CHECK(strstr(result.out, "s1000000-k4") != NULL); // a large row of a million samples
+  check_device_backends(fascia, err);
   CHECK(cli_exec(fascia, "bench no-such-row", err, &result) && result.status == 2);
   CHECK(strstr(result.err, "no-such-row") != NULL);
   CHECK(cli_exec(fascia, "bench paper --table 4", err, &result) && result.status == 2);

@@ -1,12 +1,14 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
 // Helpers shared by the subcommands: numbers that must be whole and finite,
-// NXxNYxNZ grids, the one-line usage error, a wall clock, memory in use.
+// NXxNYxNZ grids, backend names, the one-line usage error, the report of a
+// solver that could not be made, CSV text fields, a wall clock, memory in use.
 #define _POSIX_C_SOURCE 200809L // clock_gettime, sysconf
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <sys/resource.h>
 #include <time.h>
 #include <unistd.h>
@@ -44,6 +46,39 @@ int cli_parse_grid(const char *text, int32_t grid[3], int minimum) {
   if (sscanf(text, "%dx%dx%d%c", &a, &b, &c, &extra) != 3 || a < minimum || b < minimum || c < minimum) return 0;
   grid[0] = a, grid[1] = b, grid[2] = c;
   return 1;
+}
+
+int cli_parse_backend(const char *text, const char **out) {
+  static const char *const names[] = {"cpu", "cuda", "auto", "emulated"};
+  for (size_t k = 0; k < sizeof names / sizeof names[0]; ++k)
+    if (!strcmp(text, names[k])) {
+      *out = names[k]; // static: outlives argv edits
+      return 1;
+    }
+  return 0;
+}
+
+int cli_solver_fail(const char *command, const char *backend, fascia_ctx *ctx, fascia_status status) {
+  if (status == FASCIA_ERR_ARGUMENT) { // an impossible setting, such as --assembled on the GPU: the user's option
+    fprintf(stderr, "fascia %s: %s (see fascia %s --help)\n", command, fascia_ctx_message(ctx), command);
+    return 2;
+  }
+  if (status == FASCIA_ERR_UNSUPPORTED && backend && strcmp(backend, "cpu")) { // no GPU here, or not built
+    fprintf(stderr, "fascia %s: backend %s: %s; --backend auto falls back to the CPU\n", command, backend,
+            fascia_ctx_message(ctx));
+    if (cli_verbose) fprintf(stderr, "  (%s at %s)\n", fascia_status_name(status), fascia_ctx_where(ctx));
+    return 1;
+  }
+  return cli_fail(command, ctx, status);
+}
+
+void cli_csv_text(FILE *f, const char *text) {
+  fputc('"', f);
+  for (const char *c = text ? text : ""; *c; ++c) {
+    if (*c == '"') fputc('"', f); // RFC 4180: a quote inside is doubled
+    fputc(*c, f);
+  }
+  fputc('"', f);
 }
 
 double cli_now_ms(void) {

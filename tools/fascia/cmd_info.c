@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// `fascia info`: version, build options and which parts were built.
+// `fascia info`: version, build options, which parts were built and which
+// solver backends can run here (fascia_backend_available).
 #include <stdio.h>
 #include <string.h>
 
@@ -10,7 +11,8 @@
 int cmd_info(int argc, char **argv) {
   for (int k = 1; k < argc; ++k)
     if (!strcmp(argv[k], "--help")) {
-      printf("usage: fascia info\n");
+      printf("usage: fascia info\n\nPrints the version, the worker threads and, one line each, whether the solver\n"
+             "backends cpu, cuda and emulated can run here (and on what, or why not).\n");
       return 0;
     } else if (strcmp(argv[k], "--verbose")) {
       fprintf(stderr, "fascia info: unknown option '%s'\n", argv[k]);
@@ -20,5 +22,14 @@ int cmd_info(int argc, char **argv) {
   fascia_ctx *ctx = cli_ctx(0, 0);
   printf("threads: %d\n", fascia_ctx_threads(ctx));
   fascia_ctx_destroy(&ctx);
+  // "auto" is not listed: it is cuda where that is available, else cpu
+  static const char *const backends[] = {"cpu", "cuda", "emulated"};
+  for (size_t k = 0; k < sizeof backends / sizeof backends[0]; ++k) {
+    char detail[512];
+    if (fascia_backend_available(backends[k], detail, sizeof detail))
+      printf("backend %s: available (%s)\n", backends[k], detail);
+    else
+      printf("backend %s: not available: %s\n", backends[k], detail);
+  }
   return 0;
 }

@@ -26,7 +26,7 @@
 
 static const char run_usage[] =
     "usage: fascia run MODEL.h5 [--static | --steps N [--dt S]] [-o RESULTS.h5] [--save-every K]\n"
-    "                  [--samples] [--json] [--backend cpu|cuda|auto] [--threads T]\n"
+    "                  [--samples] [--json] [--backend cpu|cuda|auto|emulated] [--threads T]\n"
     "                  [--newton-iterations N] [--newton-tolerance X] [--cg-iterations N]\n"
     "                  [--cg-tolerance X] [--cg-fixed] [--precond none|jacobi|block]\n"
     "                  [--mass consistent|lumped] [--damping ALPHA] [--load-steps N]\n"
@@ -40,7 +40,10 @@ static const char run_usage[] =
     "  --save-every K         dynamic: save the rest state, every K-th step and the last (default 1)\n"
     "  --samples              also save sample positions and the fields 'strain', 'stress'\n"
     "  --json                 print one JSON object on stdout instead of text\n"
-    "  --backend NAME         cpu, cuda or auto (default auto)\n"
+    "  --backend NAME         cpu; cuda (the GPU: matrix-free CG only, no --assembled, --single,\n"
+    "                         --linear-solver direct or rigid organs); auto (the default: cuda\n"
+    "                         where there is a GPU and the settings run there, else cpu); or\n"
+    "                         emulated (the GPU solver in host loops: slow, for tests)\n"
     "  --threads T            worker threads (default: OpenMP's)\n"
     "  --newton-iterations N  most Newton iterations per solve (default 20; static 100)\n"
     "  --newton-tolerance X   relative gradient tolerance (default 1e-6)\n"
@@ -180,7 +183,7 @@ static int parse_options(int argc, char **argv, run_options *opt) {
       else if (!strcmp(o, "--dt")) ok = cli_parse_real(v, &d->time_step) && d->time_step > 0, dt_given = 1;
       else if (!strcmp(o, "-o") || !strcmp(o, "--output")) opt->results_path = v;
       else if (!strcmp(o, "--save-every")) ok = cli_parse_count(v, &opt->save_every, 1);
-      else if (!strcmp(o, "--backend")) ok = !strcmp(v, "cpu") || !strcmp(v, "cuda") || !strcmp(v, "auto"), d->backend = v;
+      else if (!strcmp(o, "--backend")) ok = cli_parse_backend(v, &d->backend);
       else if (!strcmp(o, "--threads")) ok = cli_parse_count(v, &opt->threads, 1), d->threads = opt->threads;
       else if (!strcmp(o, "--newton-iterations")) ok = cli_parse_count(v, &d->newton_iterations, 1), opt->newton_given = 1;
       else if (!strcmp(o, "--newton-tolerance")) ok = cli_parse_real(v, &d->newton_tolerance) && d->newton_tolerance >= 0;
@@ -343,7 +346,8 @@ static void print_text(const run_options *opt, const fascia_model *m, fascia_sol
            opt->solver.time_step, t->interrupted ? " (interrupted)" : "", fascia_solver_time(solver));
   else
     printf("run         static equilibrium, %s\n", t->converged_steps == t->steps ? "converged" : "NOT converged");
-  printf("backend     %s, %d threads\n", fascia_solver_backend(solver), opt->threads);
+  printf("backend     %s\n", fascia_solver_backend(solver));
+  printf("device      %s\n", fascia_solver_device(solver));
   printf("linear      %s\n", linear_name(t));
   printf("time        %.3f ms per step (evaluate %.3f, preconditioner %.3f, assembly %.3f, linear solves %.3f)\n",
          t->solve_ms / steps, t->profile.evaluate_ms / steps, t->profile.precond_ms / steps,
@@ -407,6 +411,7 @@ static int print_json(const run_options *opt, const fascia_model *m, fascia_solv
   cJSON_AddStringToObject(root, "model", opt->model_path);
   cJSON_AddStringToObject(root, "mode", opt->dynamic ? "dynamic" : "static");
   cJSON_AddStringToObject(root, "backend", fascia_solver_backend(solver));
+  cJSON_AddStringToObject(root, "device", fascia_solver_device(solver));
   cJSON_AddStringToObject(root, "linear_solver", linear_name(t));
   cJSON_AddNumberToObject(root, "threads", opt->threads);
   cJSON_AddNumberToObject(root, "frames", m->frame_count);
@@ -500,12 +505,11 @@ int cmd_run(int argc, char **argv) {
   fascia_status st = fascia_model_load(ctx, opt.model_path, &model);
   if (st != FASCIA_OK) goto done;
   st = fascia_solver_create(ctx, model, &opt.solver, &solver);
-  if (st == FASCIA_ERR_ARGUMENT) { // an impossible setting: the user's option
-    fprintf(stderr, "fascia run: %s (see fascia run --help)\n", fascia_ctx_message(ctx));
-    rc = 2;
+  if (st != FASCIA_OK) { // an impossible setting (usage error) or no such device
+    rc = cli_solver_fail("run", opt.solver.backend, ctx, st);
+    st = FASCIA_OK;
     goto done;
   }
-  if (st != FASCIA_OK) goto done;
   ck.ctx = ctx;
   if (ck.resume) { // the state, time and step count of the checkpoint
     int64_t done_steps = 0;

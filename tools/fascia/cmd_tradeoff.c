@@ -20,6 +20,8 @@
 //                   iterations, linear solver, CG tolerance or fixed count,
 //                   preconditioner, assembled or matrix-free, time step, and the
 //                   presets of `fascia run --preset`.
+// Every row runs on the CPU unless --backend says otherwise (its times are
+// CPU figures); the backend and device of each row are in the CSV and JSON.
 // Writes tradeoff.csv/.json, convergence.csv (paper Figure 3, with the
 // CalculiX C3D8 figures of issue 6), gnuplot scripts and, when gnuplot is on
 // the PATH, pareto.png and convergence.png into --out DIR.
@@ -41,6 +43,7 @@
 
 static const char tradeoff_usage[] =
     "usage: fascia tradeoff [--out DIR] [--quick] [--repeats R] [--threads T] [--time T] [--json] [--no-plot]\n"
+    "                       [--backend cpu|cuda|auto|emulated]\n"
     "\n"
     "Sweeps the knobs that trade time for accuracy on the paper's cantilever and writes\n"
     "DIR/tradeoff.csv, tradeoff.json, convergence.csv, pareto.gp, convergence.gp and, with\n"
@@ -52,7 +55,10 @@ static const char tradeoff_usage[] =
     "  --threads T    worker threads (default 1)\n"
     "  --time T       dynamic rows: simulated time, s (default 0.3)\n"
     "  --json         also print the rows as one JSON array on stdout\n"
-    "  --no-plot      write the gnuplot scripts but do not run gnuplot\n";
+    "  --no-plot      write the gnuplot scripts but do not run gnuplot\n"
+    "  --backend NAME cpu (default: the published tables are CPU figures), cuda, auto or emulated\n"
+    "                 (the GPU solver in host loops: slow); rows the GPU solver cannot run (direct\n"
+    "                 linear solver, assembled matrix) run on the CPU: the backend column says where\n";
 
 #define CANTILEVER_UZ (-6.511) // CalculiX C3D20R / FEniCS P2, issue 2
 // nu = 0.49: fascia's own refinement does not converge monotonically there
@@ -78,10 +84,11 @@ typedef struct row {
   // results
   int frames, samples, newton, cg, converged, steps, pareto;
   double uz, reference, error_percent, ms, memory_mb, peak_mb;
+  char backend[16], device[256]; ///< where it ran: fascia_solver_backend, fascia_solver_device
 } row;
 
 typedef struct tradeoff_options {
-  const char *out;
+  const char *out, *backend;
   int quick, repeats, threads, json, plot;
   double time;
 } tradeoff_options;
@@ -122,7 +129,15 @@ static fascia_status run_row(fascia_ctx *ctx, const tradeoff_options *opt, row *
   const int32_t tip = fascia_model_find_probe(model, "tip");
   for (int k = 0; k < opt->repeats; ++k) {
     fascia_solver_destroy(&solver);
-    if ((st = fascia_solver_create(ctx, model, &r->solver, &solver)) != FASCIA_OK) goto cleanup;
+    st = fascia_solver_create(ctx, model, &r->solver, &solver);
+    if (st == FASCIA_ERR_ARGUMENT && strcmp(r->solver.backend, "cpu")) { // settings the GPU solver refuses
+      fascia_ctx_clear(ctx);
+      r->solver.backend = "cpu";
+      st = fascia_solver_create(ctx, model, &r->solver, &solver);
+    }
+    if (st != FASCIA_OK) goto cleanup;
+    snprintf(r->backend, sizeof r->backend, "%s", fascia_solver_backend(solver));
+    snprintf(r->device, sizeof r->device, "%s", fascia_solver_device(solver));
     fascia_solve_report rep;
     int newton = 0, cg = 0, converged = 1, steps = 0;
     const double t0 = cli_now_ms();
@@ -333,20 +348,23 @@ static void row_label(const row *r, char *out, size_t size) {
 static const char csv_header[] =
     "group,problem,mode,label,shape,grid,frames,dofs,samples,samples_per_cell,neighbours,dt,newton_iterations,"
     "newton_tolerance,linear_solver,assembled,precond,cg_iterations,cg_fixed,cg_tolerance,tip_uz,reference_uz,"
-    "error_percent,ms,ms_unit,newton_total,cg_total,converged,memory_mb,peak_memory_mb,pareto\n";
+    "error_percent,ms,ms_unit,newton_total,cg_total,converged,memory_mb,peak_memory_mb,pareto,backend,device\n";
 
 static void csv_row(FILE *f, const row *r) {
   char label[96], grid[32];
   row_label(r, label, sizeof label);
   snprintf(grid, sizeof grid, "%dx%dx%d", (int)r->grid[0], (int)r->grid[1], (int)r->grid[2]);
   const fascia_solver_def *d = &r->solver;
-  fprintf(f, "%s,%s,%s,%s,%s,%s,%d,%d,%d,%d,%d,%g,%d,%g,%s,%d,%s,%d,%d,%g,%.6f,%.6f,%.4f,%.3f,%s,%d,%d,%d,%.2f,%.1f,%d\n",
+  fprintf(f, "%s,%s,%s,%s,%s,%s,%d,%d,%d,%d,%d,%g,%d,%g,%s,%d,%s,%d,%d,%g,%.6f,%.6f,%.4f,%.3f,%s,%d,%d,%d,%.2f,%.1f,%d",
           r->group, problem_names[r->problem], r->dynamic ? "dynamic" : "static", label,
           fascia_scene_shape_name(r->shape), grid, r->frames, 6 * r->frames, r->samples, r->spc, r->neighbours,
           r->dynamic ? d->time_step : 0.0, d->newton_iterations, d->newton_tolerance, linear_name(d), d->assembled,
           precond_name(d->precond), d->cg_iterations, d->cg_fixed, d->cg_tolerance, r->uz, r->reference,
           r->error_percent, r->ms, r->dynamic ? "per_step" : "per_solve", r->newton, r->cg, r->converged,
           r->memory_mb, r->peak_mb, r->pareto);
+  fprintf(f, ",%s,", r->backend);
+  cli_csv_text(f, r->device);
+  fputc('\n', f);
 }
 
 static cJSON *json_row(const row *r) {
@@ -386,6 +404,8 @@ static cJSON *json_row(const row *r) {
   cJSON_AddNumberToObject(o, "memory_mb", r->memory_mb);
   cJSON_AddNumberToObject(o, "peak_memory_mb", r->peak_mb);
   cJSON_AddBoolToObject(o, "pareto", r->pareto);
+  cJSON_AddStringToObject(o, "backend", r->backend);
+  cJSON_AddStringToObject(o, "device", r->device);
   return o;
 }
 
@@ -517,6 +537,7 @@ static int run_gnuplot(const tradeoff_options *opt) {
 static int parse_options(int argc, char **argv, tradeoff_options *opt) {
   memset(opt, 0, sizeof *opt);
   opt->out = ".", opt->repeats = 2, opt->threads = 1, opt->plot = 1, opt->time = 0.3;
+  opt->backend = "cpu"; // the published tables are CPU figures
   for (int k = 1; k < argc; ++k) {
     const char *o = argv[k];
     if (!strcmp(o, "--help") || !strcmp(o, "-h")) {
@@ -527,7 +548,8 @@ static int parse_options(int argc, char **argv, tradeoff_options *opt) {
     if (!strcmp(o, "--quick")) opt->quick = 1;
     else if (!strcmp(o, "--json")) opt->json = 1;
     else if (!strcmp(o, "--no-plot")) opt->plot = 0;
-    else if (!strcmp(o, "--out") || !strcmp(o, "--repeats") || !strcmp(o, "--threads") || !strcmp(o, "--time")) {
+    else if (!strcmp(o, "--out") || !strcmp(o, "--repeats") || !strcmp(o, "--threads") || !strcmp(o, "--time") ||
+             !strcmp(o, "--backend")) {
       if (k + 1 >= argc) {
         fprintf(stderr, "fascia tradeoff: option %s needs a value (see fascia tradeoff --help)\n", o);
         return 2;
@@ -536,6 +558,7 @@ static int parse_options(int argc, char **argv, tradeoff_options *opt) {
       char *end = NULL;
       int ok = 1;
       if (!strcmp(o, "--out")) opt->out = v;
+      else if (!strcmp(o, "--backend")) ok = cli_parse_backend(v, &opt->backend);
       else if (!strcmp(o, "--time")) opt->time = strtod(v, &end), ok = *end == 0 && opt->time >= 0.01 && opt->time <= 100;
       else {
         const long x = strtol(v, &end, 10);
@@ -562,6 +585,15 @@ static void print_row(const row *r) {
          r->pareto ? "*" : "");
 }
 
+// Where the rows ran: the first row's backend and device, and how many rows
+// ran elsewhere (on the CPU where the GPU solver refuses their settings).
+static void print_backends(const row *rows, int count) {
+  int elsewhere = 0;
+  for (int k = 1; k < count; ++k) elsewhere += strcmp(rows[k].backend, rows[0].backend) != 0;
+  printf("backend: %s; device: %s\n", rows[0].backend, rows[0].device);
+  if (elsewhere) printf("         %d rows ran on another backend (see the backend column of tradeoff.csv)\n", elsewhere);
+}
+
 int cmd_tradeoff(int argc, char **argv) {
   tradeoff_options opt;
   int rc = parse_options(argc, argv, &opt);
@@ -583,14 +615,14 @@ int cmd_tradeoff(int argc, char **argv) {
   fascia_ctx *ctx = cli_ctx(opt.threads, 0);
   for (int k = 0; k < count; ++k) {
     rows[k].solver.threads = opt.threads;
-    rows[k].solver.backend = "cpu";
+    rows[k].solver.backend = opt.backend;
     char label[96];
     row_label(rows + k, label, sizeof label);
     fprintf(stderr, "\rtradeoff %d/%d: %s %s\033[K", k + 1, count, problem_names[rows[k].problem], label);
     const fascia_status st = run_row(ctx, &opt, rows + k);
     if (st != FASCIA_OK) {
       fprintf(stderr, "\n");
-      rc = cli_fail("tradeoff", ctx, st);
+      rc = cli_solver_fail("tradeoff", rows[k].solver.backend, ctx, st);
       goto done;
     }
   }
@@ -603,6 +635,7 @@ int cmd_tradeoff(int argc, char **argv) {
     printf("%s uz %.5f m (hex Richardson %.5f, order %.2f)%s", problem_names[p], references[p], extrapolated[p],
            orders[p], p + 1 < PROBLEM_COUNT ? "; " : "\n");
   printf("dynamic: 20x3x3 hex cantilever, tip uz at t = %g s, dt -> 0 value %.6f m\n", opt.time, dynamic_ref);
+  print_backends(rows, count);
   printf("%-14s %-14s %-7s %-40s %6s %10s %10s %9s %10s %s\n", "group", "problem", "mode", "row", "dofs", "tip_uz",
          "reference", "error%", "ms", "pareto");
   for (int k = 0; k < count; ++k) print_row(rows + k);

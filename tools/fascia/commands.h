@@ -5,6 +5,8 @@
 #ifndef FASCIA_TOOLS_COMMANDS_H
 #define FASCIA_TOOLS_COMMANDS_H
 
+#include <stdio.h>
+
 #include "fascia/base.h"
 
 typedef int (*fascia_command_fn)(int argc, char **argv);
@@ -37,6 +39,16 @@ int cli_parse_real(const char *text, fascia_real *out);
 int cli_parse_count(const char *text, int *out, long minimum);
 /// "NXxNYxNZ", each >= minimum: 1, else 0.
 int cli_parse_grid(const char *text, int32_t grid[3], int minimum);
+/// A --backend value: "cpu", "cuda", "auto" or "emulated" (fascia_solver_def
+/// backend): 1 with *out the name, else 0 (out untouched).
+int cli_parse_backend(const char *text, const char **out);
+/// Reports a solver that could not be made or run: FASCIA_ERR_ARGUMENT (the
+/// settings, e.g. --assembled on the GPU) as a usage error (returns 2); no
+/// such device for a backend other than cpu naming the backend (1); else as
+/// cli_fail (1).
+int cli_solver_fail(const char *command, const char *backend, fascia_ctx *ctx, fascia_status status);
+/// Writes text as one quoted CSV field (device names hold commas).
+void cli_csv_text(FILE *f, const char *text);
 /// Wall clock, ms.
 double cli_now_ms(void);
 /// Resident memory of the process now, and its peak so far, MiB.

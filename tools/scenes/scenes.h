@@ -3,7 +3,8 @@
 // Code-built scenes shared by the tests, the benchmarks and the CLI: the
 // paper's cantilever (Bosman et al. 2013 sec. 4.1) with hexahedral,
 // tetrahedral or meshless shape functions, and the models behind the paper's
-// timing tables (sec. 4.3, Tables 2 and 3). Each builder fills a
+// timing tables (sec. 4.3, Tables 2 and 3) and larger ones of the same
+// density for the GPU goals. Each builder fills a
 // fascia_model, builds its reverse table and validates it before returning.
 #ifndef FASCIA_TOOLS_SCENES_H
 #define FASCIA_TOOLS_SCENES_H
@@ -71,20 +72,25 @@ fascia_scene_beam_def fascia_scene_beam_def_default(void);
 /// FASCIA_ERR_MEMORY; *out is NULL after an error.
 fascia_status fascia_scene_beam_build(fascia_ctx *ctx, const fascia_scene_beam_def *def, fascia_model **out);
 
-/// One row of the paper's timing tables (sec. 4.3).
+/// One row of the paper's timing tables (sec. 4.3), or a larger row of
+/// the same kind (table 0).
 typedef struct fascia_scene_paper_row {
-  const char *name;       ///< e.g. "t2-f72-s400-k4", "t3-s12700"
-  int table;              ///< 2 or 3
+  const char *name;       ///< e.g. "t2-f72-s400-k4", "t3-s12700", "big-f200000-s1000000-k4"
+  int table;              ///< 2 or 3; 0: not in the paper
   int32_t frames;         ///< requested frame count (the model gets within 10 %)
   int32_t samples;        ///< exact sample count
   int32_t neighbours;     ///< frames per sample
-  double paper_cpu_ms;    ///< paper's CPU time per step (Xeon W3520, one thread)
-  double paper_gpu_ms;    ///< paper's GPU time per step (GTX 570); 0 where not given (Table 2)
+  double paper_cpu_ms;    ///< paper's CPU time per step (Xeon W3520, one thread); 0 for table 0
+  double paper_gpu_ms;    ///< paper's GPU time per step (GTX 570); 0 where not given (Table 2, table 0)
+  double gpu_goal_ms;     ///< the issue's goal for a step on the GPU, ms; 0 where it sets none
 } fascia_scene_paper_row;
 
 /// The rows of Tables 2 and 3, in the paper's order; *count gets their number.
 const fascia_scene_paper_row *fascia_scene_paper_rows(int *count);
-/// Row by name, NULL if absent.
+/// Rows beyond the paper (table 0): Table 3's density (4 neighbours, one
+/// frame per five samples) at 100k, 300k, 1M and 2M samples, smallest first.
+const fascia_scene_paper_row *fascia_scene_large_rows(int *count);
+/// Row by name among both lists, NULL if absent.
 const fascia_scene_paper_row *fascia_scene_paper_find(const char *name);
 
 /// Builds the model of one row: the beam body of `body` (the cantilever box,

@@ -1,0 +1,72 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
+# The CUDA backend's check on a GPU (issue 4, docs/gpu.md), in two halves,
+# because a GPU machine may have the CUDA driver and toolkit but none of the
+# Debian packages fascia builds with:
+#
+#   tools/gpu-check.sh pack        here: builds build-gpu/ (CUDA on, prep off),
+#                                  prepares the demo tissue model, and gathers
+#                                  the programs and the shared libraries they
+#                                  need into build-gpu/pack (a few MB)
+#   tools/gpu-check.sh run [DIR]   on the GPU machine, from the repository root,
+#                                  with build-gpu/pack carried there: the GPU
+#                                  tests, then the benchmarks; logs and JSON
+#                                  into DIR (default: $OUT, else out/gpu-check)
+#
+# With the session's device tool: run(command="tools/gpu-check.sh run",
+# carry=["build-gpu/pack"]).
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+pack="$root/build-gpu/pack"
+
+case "${1:-}" in
+pack)
+  jobs="$(nproc 2>/dev/null || echo 2)"
+  prep_fascia="${FASCIA_BUILD_DIR:-$root/build}/tools/fascia"
+  [ -x "$prep_fascia" ] || { echo "gpu-check: build first (tools/setup/build.sh): $prep_fascia is missing" >&2; exit 1; }
+  mkdir -p "$root/build-gpu"
+  cmake -S "$root" -B "$root/build-gpu" -DCMAKE_BUILD_TYPE=Release -DFASCIA_CUDA=ON -DFASCIA_PREP=OFF \
+    -DFASCIA_TESTS=ON >"$root/build-gpu/configure.log" 2>&1 || { cat "$root/build-gpu/configure.log" >&2; exit 1; }
+  cmake --build "$root/build-gpu" -j "$jobs" --target fascia t330_device_against_cpu t331_device_tissue
+  rm -rf "$pack"
+  mkdir -p "$pack/bin" "$pack/lib"
+  cp "$root/build-gpu/tools/fascia" "$root/build-gpu/tests/t330_device_against_cpu" \
+    "$root/build-gpu/tests/t331_device_tissue" "$pack/bin/"
+  # every shared library but the C library's own (the GPU machine has those)
+  for program in "$pack"/bin/*; do
+    ldd "$program" | awk '$3 ~ /^\// {print $3}'
+  done | sort -u | grep -vE '/(libc|libm|libdl|librt|libpthread|libresolv|libnsl|libutil|libanl|ld-linux[^/]*)\.so' | while read -r lib; do
+    cp -L "$lib" "$pack/lib/"
+  done
+  "$prep_fascia" prep "$root/data/scenes/pelvis-female-demo.json" -o "$pack/demo.h5" >/dev/null
+  echo "gpu-check: packed $(du -sh "$pack" | cut -f1) into $pack"
+  ;;
+run)
+  out="${2:-${OUT:-$root/out/gpu-check}}"
+  mkdir -p "$out"
+  [ -x "$pack/bin/fascia" ] || { echo "gpu-check: $pack is missing: run 'tools/gpu-check.sh pack' first and carry it" >&2; exit 1; }
+  export LD_LIBRARY_PATH="$pack/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+  status=0
+  { nvidia-smi -L || true; date -u +%Y-%m-%dT%H:%MZ; "$pack/bin/fascia" info; } 2>&1 | tee "$out/device.txt"
+  echo "== t330: device against CPU (cantilever, random models, edge cases)"
+  "$pack/bin/t330_device_against_cpu" --backend cuda 2>&1 | tee "$out/t330.log" || status=1
+  echo "== t331: device against CPU on the demo tissue"
+  "$pack/bin/t331_device_tissue" --backend cuda "$pack/demo.h5" 2>&1 | tee "$out/t331.log" || status=1
+  echo "== the paper's Table 2 and 3 rows on the GPU and the CPU"
+  "$pack/bin/fascia" bench paper --backend cuda --csv "$out/bench-paper.csv" 2>&1 | tee "$out/bench-paper.txt" || status=1
+  echo "== larger rows on the GPU"
+  "$pack/bin/fascia" bench large --backend cuda --no-cpu --csv "$out/bench-large.csv" 2>&1 |
+    tee "$out/bench-large.txt" || status=1
+  if command -v compute-sanitizer >/dev/null 2>&1; then
+    echo "== compute-sanitizer memcheck of t330 (out-of-bounds and uninitialized device memory)"
+    compute-sanitizer --tool memcheck --leak-check full "$pack/bin/t330_device_against_cpu" --backend cuda \
+      >"$out/memcheck.log" 2>&1 || status=1
+    tail -3 "$out/memcheck.log"
+  fi
+  exit $status
+  ;;
+*)
+  echo "usage: tools/gpu-check.sh pack | run [DIR]" >&2
+  exit 2
+  ;;
+esac
