@@ -413,12 +413,9 @@ fascia_status fascia_device_minimize(fascia_solver *S, int dynamic, int max_iter
         t = fascia_now_ms();
         const fascia_status st = objective(dev, alpha, &phi_trial, &gg_trial);
         rep->profile.evaluate_ms += fascia_now_ms() - t;
-        // near the minimum the energy decrease drowns in round-off: there a
-        // step that lowers the gradient is accepted instead
-        const fascia_real roundoff =
-            1e-13 * (fabs(phi) + fabs(dev->sc.energy_internal) + fabs(dev->sc.energy_external)) + material_roundoff;
-        if (st == FASCIA_OK && (!def->line_search || phi_trial <= phi + FASCIA_NEWTON_ARMIJO * alpha * sl ||
-                                (phi_trial <= phi + roundoff && gg_trial < gnorm * gnorm))) {
+        if (st == FASCIA_OK &&
+            fascia_newton_accepts(def, phi, phi_trial, alpha, sl, gnorm, gg_trial,
+                                  fabs(dev->sc.energy_internal) + fabs(dev->sc.energy_external), material_roundoff)) {
           accepted = 1;
           break;
         }

@@ -199,18 +199,8 @@ static inline FASCIA_HD void fascia_dev_lumped_mass_item(const fascia_dev *D, in
   for (int c = 0; c < 36; ++c) B[c] = 0;
   for (int32_t r = D->frame_offsets[i]; r < D->frame_offsets[i + 1]; ++r) {
     const int32_t k = D->frame_pairs[r], s = D->pair_sample[k];
-    const fascia_real mw = D->sample_mass[s] * D->pm.pair_weight[k];
-    fascia_real a[3];
-    fascia_pt_mat_vec(D->A_mass + 9 * (int64_t)i, D->pm.pair_offset + 3 * (int64_t)k, a);
-    const fascia_real aa = fascia_pt_dot3(a, a);
-    const fascia_real skew[9] = {0, -a[2], a[1], a[2], 0, -a[0], -a[1], a[0], 0};
-    for (int r3 = 0; r3 < 3; ++r3)
-      for (int c = 0; c < 3; ++c) {
-        B[6 * r3 + c] += mw * (r3 == c);
-        B[6 * r3 + 3 + c] -= mw * skew[3 * r3 + c];
-        B[6 * (3 + r3) + c] += mw * skew[3 * r3 + c];
-        B[6 * (3 + r3) + 3 + c] += mw * ((r3 == c) * aa - a[r3] * a[c]);
-      }
+    fascia_pt_lumped_mass_add(D->A_mass + 9 * (int64_t)i, D->pm.pair_offset + 3 * (int64_t)k,
+                              D->sample_mass[s] * D->pm.pair_weight[k], B);
   }
 }
 

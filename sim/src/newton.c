@@ -121,6 +121,16 @@ fascia_real fascia_newton_energy_roundoff(const fascia_solver *S) {
   return 8 * FASCIA_R(2.220446049250313e-16) * sum;
 }
 
+int fascia_newton_accepts(const fascia_solver_def *def, fascia_real phi, fascia_real phi_trial, fascia_real alpha,
+                          fascia_real slope, fascia_real gnorm, fascia_real gg_trial, fascia_real energy_size,
+                          fascia_real material_roundoff) {
+  if (!def->line_search || phi_trial <= phi + FASCIA_NEWTON_ARMIJO * alpha * slope) return 1;
+  // near the minimum the energy decrease drowns in round-off: there a step
+  // that lowers the gradient is accepted instead
+  const fascia_real roundoff = 1e-13 * (fabs(phi) + energy_size) + material_roundoff;
+  return phi_trial <= phi + roundoff && gg_trial < gnorm * gnorm;
+}
+
 // |external load| over free DOFs: the scale of the Newton tolerance
 fascia_real fascia_newton_load_norm(const fascia_solver *S) {
   const fascia_system *sys = S->sys;
@@ -233,13 +243,9 @@ fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iter
         t = fascia_now_ms();
         fascia_status st = objective(S, &terms, S->d_trial, &phi_trial, g_trial);
         rep->profile.evaluate_ms += fascia_now_ms() - t;
-        // near the minimum the energy decrease drowns in round-off: there a
-        // step that lowers the gradient is accepted instead
-        const fascia_real roundoff =
-            1e-13 * (fabs(phi) + fabs(S->sys->energy_internal) + fabs(S->sys->energy_external)) + material_roundoff;
         if (st == FASCIA_OK &&
-            (!def->line_search || phi_trial <= phi + FASCIA_NEWTON_ARMIJO * alpha * slope ||
-             (phi_trial <= phi + roundoff && fascia_dot(g_trial, g_trial, n) < gnorm * gnorm))) {
+            fascia_newton_accepts(def, phi, phi_trial, alpha, slope, gnorm, fascia_dot(g_trial, g_trial, n),
+                                  fabs(S->sys->energy_internal) + fabs(S->sys->energy_external), material_roundoff)) {
           accepted = 1;
           break;
         }

@@ -112,6 +112,14 @@ FASCIA_INTERN double fascia_now_ms(void);
 
 /// |external load| over free DOFs: the scale of the Newton tolerance.
 FASCIA_INTERN fascia_real fascia_newton_load_norm(const fascia_solver *S);
+/// The line search's verdict on a trial step alpha along a direction of
+/// slope p.g: sufficient (Armijo) decrease of Phi, or, near the minimum where
+/// the decrease drowns in round-off, a lower |gradient| (gg_trial against
+/// gnorm^2) without a rise beyond it. energy_size: |internal| + |external|
+/// energy; material_roundoff: fascia_newton_energy_roundoff.
+FASCIA_INTERN int fascia_newton_accepts(const fascia_solver_def *def, fascia_real phi, fascia_real phi_trial,
+                                        fascia_real alpha, fascia_real slope, fascia_real gnorm, fascia_real gg_trial,
+                                        fascia_real energy_size, fascia_real material_roundoff);
 /// Size of the rounding error of one energy evaluation, J (newton.c).
 FASCIA_INTERN fascia_real fascia_newton_energy_roundoff(const fascia_solver *S);
 

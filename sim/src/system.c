@@ -366,18 +366,8 @@ void fascia_system_mass_lumped(fascia_system *sys, fascia_real *blocks) {
     for (int c = 0; c < 36; ++c) B[c] = 0;
     for (int32_t r = m->frame_offsets[i]; r < m->frame_offsets[i + 1]; ++r) {
       const int32_t k = m->frame_pairs[r], s = sys->pair_sample[k];
-      const fascia_real mw = sys->sample_mass[s] * m->pair_weight[k];
-      fascia_real a[3];
-      fascia_pt_mat_vec(sys->A_mass + 9 * i, sys->pair_offset + 3 * k, a);
-      const fascia_real aa = fascia_pt_dot3(a, a);
-      const fascia_real skew[9] = {0, -a[2], a[1], a[2], 0, -a[0], -a[1], a[0], 0};
-      for (int r3 = 0; r3 < 3; ++r3)
-        for (int c = 0; c < 3; ++c) {
-          B[6 * r3 + c] += mw * (r3 == c);
-          B[6 * r3 + 3 + c] -= mw * skew[3 * r3 + c];
-          B[6 * (3 + r3) + c] += mw * skew[3 * r3 + c];
-          B[6 * (3 + r3) + 3 + c] += mw * ((r3 == c) * aa - a[r3] * a[c]);
-        }
+      fascia_pt_lumped_mass_add(sys->A_mass + 9 * i, sys->pair_offset + 3 * k, sys->sample_mass[s] * m->pair_weight[k],
+                                B);
     }
   }
 }
