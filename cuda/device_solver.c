@@ -317,7 +317,7 @@ static fascia_status slope(fascia_device *dev, fascia_real *out) {
 }
 
 // The state of the last objective back to the host, as the CPU loop leaves
-// it: S->x, S->q, S->d, S->gradient and the host system's state.
+// it: S->x, S->q, S->d, S->gradient, the energies and inversions.
 static fascia_status download_state(fascia_solver *S, fascia_device *dev) {
   const size_t N = (size_t)S->frame_count;
   const fascia_launcher_ops *ops = dev->ops;
@@ -325,7 +325,7 @@ static fascia_status download_state(fascia_solver *S, fascia_device *dev) {
   FASCIA_TRY(ops->download(dev->L, S->q, dev->D.q, 4 * N * sizeof(fascia_real)));
   FASCIA_TRY(ops->download(dev->L, S->d, dev->D.d, 6 * N * sizeof(fascia_real)));
   FASCIA_TRY(ops->download(dev->L, S->gradient, dev->D.g_trial, 6 * N * sizeof(fascia_real)));
-  fascia_system_set_state(S->sys, S->x, S->q);
+  // the host system's own state is set where it is read (probes, strain)
   S->sys->energy_internal = dev->sc.energy_internal;
   S->sys->energy_external = dev->sc.energy_external;
   S->sys->inverted_count = (int32_t)dev->sc.inverted;
@@ -429,10 +429,7 @@ fascia_status fascia_device_minimize(fascia_solver *S, int dynamic, int max_iter
         if (dev->set.shift > FASCIA_NEWTON_MAX_SHIFT) {
           fascia_real restore, restore_gg;
           (void)objective(dev, 0, &restore, &restore_gg);
-          status = FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
-                               "solver: Newton iteration %d found no decrease of the energy (|gradient| %.3g, "
-                               "tolerance %.3g); the model may be unstable or the time step too large",
-                               iteration, gnorm, def->newton_tolerance * reference);
+          status = fascia_newton_no_decrease(S, iteration, gnorm, def->newton_tolerance * reference);
           break;
         }
         FASCIA_TRY(push_settings(dev));

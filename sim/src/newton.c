@@ -131,6 +131,14 @@ int fascia_newton_accepts(const fascia_solver_def *def, fascia_real phi, fascia_
   return phi_trial <= phi + roundoff && gg_trial < gnorm * gnorm;
 }
 
+fascia_status fascia_newton_no_decrease(const fascia_solver *S, int iteration, fascia_real gnorm,
+                                        fascia_real tolerance) {
+  return FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
+                     "solver: Newton iteration %d found no decrease of the energy (|gradient| %.3g, tolerance %.3g); "
+                     "the model may be unstable or the time step too large",
+                     iteration, gnorm, tolerance);
+}
+
 // |external load| over free DOFs: the scale of the Newton tolerance
 fascia_real fascia_newton_load_norm(const fascia_solver *S) {
   const fascia_system *sys = S->sys;
@@ -262,10 +270,7 @@ fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iter
           rep->newton_iterations = iteration;
           rep->gradient_norm = gnorm;
           rep->energy = phi;
-          return FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
-                             "solver: Newton iteration %d found no decrease of the energy (|gradient| %.3g, "
-                             "tolerance %.3g); the model may be unstable or the time step too large",
-                             iteration, gnorm, def->newton_tolerance * reference);
+          return fascia_newton_no_decrease(S, iteration, gnorm, def->newton_tolerance * reference);
         }
         t = fascia_now_ms();
         FASCIA_TRY(objective(S, &terms, S->d, &phi, g)); // restores the cache of the current iterate

@@ -120,6 +120,9 @@ FASCIA_INTERN fascia_real fascia_newton_load_norm(const fascia_solver *S);
 FASCIA_INTERN int fascia_newton_accepts(const fascia_solver_def *def, fascia_real phi, fascia_real phi_trial,
                                         fascia_real alpha, fascia_real slope, fascia_real gnorm, fascia_real gg_trial,
                                         fascia_real energy_size, fascia_real material_roundoff);
+/// The failure of a Newton iteration that no damping could make descend.
+FASCIA_INTERN fascia_status fascia_newton_no_decrease(const fascia_solver *S, int iteration, fascia_real gnorm,
+                                                      fascia_real tolerance);
 /// Size of the rounding error of one energy evaluation, J (newton.c).
 FASCIA_INTERN fascia_real fascia_newton_energy_roundoff(const fascia_solver *S);
 
