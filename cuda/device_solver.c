@@ -31,6 +31,7 @@ struct fascia_device {
   int buffer_count;
   size_t bytes;                  ///< device memory held
   int recorded[FASCIA_LAUNCH_SLOTS];
+  fascia_dev_kernel stiffness;   ///< the stiffness product kernel for this model's terms
   fascia_real *zeros;            ///< host [6N]
   char name[256];
 };
@@ -50,11 +51,6 @@ int fascia_device_supports(const fascia_solver *S, char *why, size_t size) {
   else if (def->linear_solver == FASCIA_LINEAR_DIRECT) reason = "the direct linear solver runs on the CPU only";
   else if (def->assembled) reason = "the assembled matrix runs on the CPU only (the device is matrix-free)";
   else if (def->single_precision_matrix) reason = "the float matrix runs on the CPU only";
-  else if (S->sys->max_neighbours > FASCIA_DEV_MAX_NEIGHBOURS) {
-    if (why) snprintf(why, size, "a sample has %d neighbour frames, the device takes at most %d",
-                      (int)S->sys->max_neighbours, FASCIA_DEV_MAX_NEIGHBOURS);
-    return 0;
-  }
   if (reason && why) snprintf(why, size, "%s", reason);
   return reason == NULL;
 }
@@ -86,6 +82,15 @@ static fascia_status upload_model(fascia_device *dev, const fascia_solver *S) {
   D->sample_count = m->sample_count;
   D->pair_count = P;
   D->max_neighbours = sys->max_neighbours;
+  // the leanest stiffness kernel that has every term this model uses
+  int coupling = 0, smoothing = 0;
+  for (int64_t s = 0; s < Sn; ++s) {
+    coupling |= sys->sample_coupling[s] > 0;
+    smoothing |= sys->sample_curvature[s] > 0;
+  }
+  dev->stiffness = coupling    ? FASCIA_K_SAMPLE_STIFFNESS
+                   : smoothing ? FASCIA_K_SAMPLE_STIFFNESS_SMOOTHING
+                               : FASCIA_K_SAMPLE_STIFFNESS_PAPER;
   for (int c = 0; c < 3; ++c) D->gravity[c] = sys->gravity[c];
   // the per-sample math's arrays (fascia_pt_model), then the reverse table
   PUT(pm.sample_offsets, m->sample_offsets, Sn + 1, int32_t);
@@ -276,7 +281,7 @@ static void cg_body(void *argument) {
   const fascia_dev *D = &dev->D;
   const int64_t N = D->frame_count, S = D->sample_count;
   for (int it = 0; it < arg->iterations; ++it) {
-    kernel(dev, FASCIA_K_SAMPLE_STIFFNESS, S, D->dir, NULL, 0);
+    kernel(dev, dev->stiffness, S, D->dir, NULL, 0);
     if (dev->set.consistent_mass) kernel(dev, FASCIA_K_CG_SAMPLE_MASS, S, D->dir, NULL, 0); // lumped: per frame
     reduce(dev, FASCIA_T_OPERATOR, N, NULL, NULL, FASCIA_S_CG_CURVATURE);
     reduce(dev, FASCIA_T_CG_UPDATE, N, NULL, NULL, FASCIA_S_CG_RESIDUAL);
@@ -499,7 +504,7 @@ fascia_status fascia_device_hessian_apply(fascia_solver *S, const fascia_real *v
   sc.running = 1; // the operator kernels run only inside CG
   FASCIA_TRY(dev->ops->upload(dev->L, dev->sc_dev, &sc, sizeof sc));
   FASCIA_TRY(dev->ops->upload(dev->L, dev->D.dir, v, 6 * N * sizeof(fascia_real)));
-  kernel(dev, FASCIA_K_SAMPLE_STIFFNESS, dev->D.sample_count, dev->D.dir, NULL, 0);
+  kernel(dev, dev->stiffness, dev->D.sample_count, dev->D.dir, NULL, 0);
   reduce(dev, FASCIA_T_OPERATOR, (int64_t)N, NULL, NULL, FASCIA_S_STORE);
   return dev->ops->download(dev->L, out, dev->D.Ad, 6 * N * sizeof(fascia_real));
 }

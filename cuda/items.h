@@ -20,10 +20,6 @@
 #include "point/block6.h"
 #include "point/sample.h"
 
-/// Most neighbour frames of one sample on the device (the diagonal blocks of
-/// the preconditioner keep one sample's partial products in registers).
-#define FASCIA_DEV_MAX_NEIGHBOURS 64
-
 /// A relative CG residual at which CG has converged as far as doubles go
 /// (as cg.c).
 #define FASCIA_DEV_ROUNDOFF 1e-14
@@ -96,6 +92,8 @@ typedef enum fascia_dev_kernel {
   FASCIA_K_FRAME_GRADIENT,   ///< N: g_trial and frame_terms of the step objective
   FASCIA_K_FRAME_MASS_APPLY, ///< N: out = M in (after FASCIA_K_SAMPLE_MASS for consistent mass)
   FASCIA_K_SAMPLE_STIFFNESS, ///< S: partial stiffness products of in (skipped when CG is not running)
+  FASCIA_K_SAMPLE_STIFFNESS_SMOOTHING, ///< S: the same for models without rotation coupling
+  FASCIA_K_SAMPLE_STIFFNESS_PAPER,     ///< S: the same for models with neither coupling nor smoothing
   FASCIA_K_CG_SAMPLE_MASS,   ///< S: FASCIA_K_SAMPLE_MASS inside CG: only with consistent mass and a mass term
   FASCIA_K_PAIR_DIAGONAL,    ///< P: one pair's 6x6 block of its sample's stiffness
   FASCIA_K_FRAME_PRECOND,    ///< N: tangent diagonal blocks, preconditioner blocks
@@ -219,6 +217,20 @@ static inline FASCIA_HD void fascia_dev_sample_mass_item(const fascia_dev *D, in
                         D->pair_mass + 6 * (int64_t)begin);
 }
 
+// Sample s's partial stiffness products of in (the CG direction). parts is
+// a constant in each caller: a model without rotation coupling (or also
+// without smoothing) gets a kernel without that code, in far fewer
+// registers (sm_90: 94 for the paper's terms alone, 255 and spilling for
+// all three).
+FASCIA_STATIC_FORCE_INLINE FASCIA_HD void fascia_dev_sample_stiffness_item(const fascia_dev *D, int32_t s,
+                                                                           const fascia_real *in, int parts) {
+  if (!D->sc->running) return;
+  const fascia_pt_state st = fascia_dev_state(D);
+  const int32_t begin = D->pm.sample_offsets[s];
+  fascia_pt_sample_stiffness_parts(&D->pm, &st, s, D->cache + (int64_t)s * FASCIA_PT_CACHE_SIZE, in,
+                                   D->pm.pair_frame + begin, D->pair_buffer + 6 * (int64_t)begin, parts);
+}
+
 // The step objective's gradient on frame i at d_trial (newton.c objective()
 // and system.c fascia_system_evaluate, frame by frame), and the frame's terms
 // of the objective: external energy, d.Md, d.target_M, |g_i|^2.
@@ -269,24 +281,13 @@ static inline FASCIA_HD void fascia_dev_frame_gradient_item(const fascia_dev *D,
   terms[3] = gg;
 }
 
-// One pair's 6x6 diagonal block of its sample's stiffness: six products
-// with unit vectors on that pair's slot (column c of the block is the
-// response to unit c), as fascia_system_hessian_diagonal does on the CPU.
+// One pair's 6x6 diagonal block of its sample's stiffness (as
+// fascia_system_hessian_diagonal does on the CPU, frame by frame).
 static inline FASCIA_HD void fascia_dev_pair_diagonal_item(const fascia_dev *D, int64_t k) {
-  const int32_t s = D->pair_sample[k], begin = D->pm.sample_offsets[s], n = D->pm.sample_offsets[s + 1] - begin;
-  const int32_t j = (int32_t)(k - begin);
+  const int32_t s = D->pair_sample[k];
   const fascia_pt_state st = fascia_dev_state(D);
-  // slot 0 of dq is zero, slot 1 the unit vector: every other pair reads zeros
-  int32_t slot[FASCIA_DEV_MAX_NEIGHBOURS];
-  fascia_real dq[12], col[6 * FASCIA_DEV_MAX_NEIGHBOURS];
-  for (int32_t a = 0; a < n; ++a) slot[a] = a == j;
-  fascia_real *B = D->pair_blocks + 36 * k;
-  for (int c = 0; c < 6; ++c) {
-    for (int e = 0; e < 12; ++e) dq[e] = 0;
-    dq[6 + c] = 1;
-    fascia_pt_sample_stiffness(&D->pm, &st, s, D->cache + (int64_t)s * FASCIA_PT_CACHE_SIZE, dq, slot, col);
-    for (int row = 0; row < 6; ++row) B[6 * row + c] = col[6 * j + row];
-  }
+  fascia_pt_sample_pair_block(&D->pm, &st, s, D->cache + (int64_t)s * FASCIA_PT_CACHE_SIZE,
+                              (int32_t)(k - D->pm.sample_offsets[s]), D->pair_blocks + 36 * k);
 }
 
 // Frame i's diagonal block of the Newton operator and its preconditioner
@@ -358,14 +359,11 @@ static inline FASCIA_HD void fascia_dev_item(const fascia_dev *D, int kernel, in
   case FASCIA_K_SAMPLE_MASS: fascia_dev_sample_mass_item(D, i32, in); break;
   case FASCIA_K_FRAME_GRADIENT: fascia_dev_frame_gradient_item(D, i32); break;
   case FASCIA_K_FRAME_MASS_APPLY: fascia_dev_frame_mass(D, i32, in, out + 6 * i); break;
-  case FASCIA_K_SAMPLE_STIFFNESS: {
-    if (!D->sc->running) break;
-    const fascia_pt_state st = fascia_dev_state(D);
-    const int32_t begin = D->pm.sample_offsets[i];
-    fascia_pt_sample_stiffness(&D->pm, &st, i32, D->cache + i * FASCIA_PT_CACHE_SIZE, in, D->pm.pair_frame + begin,
-                               D->pair_buffer + 6 * (int64_t)begin);
+  case FASCIA_K_SAMPLE_STIFFNESS: fascia_dev_sample_stiffness_item(D, i32, in, FASCIA_PT_PART_ALL); break;
+  case FASCIA_K_SAMPLE_STIFFNESS_SMOOTHING:
+    fascia_dev_sample_stiffness_item(D, i32, in, FASCIA_PT_PART_BASE | FASCIA_PT_PART_SMOOTHING);
     break;
-  }
+  case FASCIA_K_SAMPLE_STIFFNESS_PAPER: fascia_dev_sample_stiffness_item(D, i32, in, FASCIA_PT_PART_BASE); break;
   case FASCIA_K_PAIR_DIAGONAL: fascia_dev_pair_diagonal_item(D, i); break;
   case FASCIA_K_FRAME_PRECOND: fascia_dev_frame_precond_item(D, i32); break;
   case FASCIA_K_DAMPING: D->damping[i] = fabs(D->blocks[36 * (i / 6) + 7 * (i % 6)]); break;

@@ -49,6 +49,7 @@ struct fascia_launcher {
 // sample count over more multiprocessors.
 static constexpr __host__ __device__ int item_threads(int kernel) {
   return kernel == FASCIA_K_SAMPLE_GRADIENT || kernel == FASCIA_K_SAMPLE_STIFFNESS ||
+                 kernel == FASCIA_K_SAMPLE_STIFFNESS_SMOOTHING || kernel == FASCIA_K_SAMPLE_STIFFNESS_PAPER ||
                  kernel == FASCIA_K_PAIR_DIAGONAL || kernel == FASCIA_K_CG_SAMPLE_MASS ||
                  kernel == FASCIA_K_SAMPLE_MASS
              ? 128
@@ -318,6 +319,10 @@ static void cuda_kernel(fascia_launcher *L, const fascia_dev *D, fascia_dev_kern
   case FASCIA_K_FRAME_GRADIENT: launch_items<FASCIA_K_FRAME_GRADIENT>(L, D, n, in, out, value); break;
   case FASCIA_K_FRAME_MASS_APPLY: launch_items<FASCIA_K_FRAME_MASS_APPLY>(L, D, n, in, out, value); break;
   case FASCIA_K_SAMPLE_STIFFNESS: launch_items<FASCIA_K_SAMPLE_STIFFNESS>(L, D, n, in, out, value); break;
+  case FASCIA_K_SAMPLE_STIFFNESS_SMOOTHING:
+    launch_items<FASCIA_K_SAMPLE_STIFFNESS_SMOOTHING>(L, D, n, in, out, value);
+    break;
+  case FASCIA_K_SAMPLE_STIFFNESS_PAPER: launch_items<FASCIA_K_SAMPLE_STIFFNESS_PAPER>(L, D, n, in, out, value); break;
   case FASCIA_K_CG_SAMPLE_MASS: launch_items<FASCIA_K_CG_SAMPLE_MASS>(L, D, n, in, out, value); break;
   case FASCIA_K_PAIR_DIAGONAL: launch_items<FASCIA_K_PAIR_DIAGONAL>(L, D, n, in, out, value); break;
   case FASCIA_K_FRAME_PRECOND: launch_items<FASCIA_K_FRAME_PRECOND>(L, D, n, in, out, value); break;

@@ -6,10 +6,11 @@
 //   - forces, energy, stiffness products and diagonal blocks at a random
 //     deformed state of random models (1 to 6 neighbours per sample, rest
 //     rotations not identity, coupling and smoothing on, fixed frames) and of
-//     a meshless beam with 20 neighbours per sample;
+//     meshless beams with 20 and 80 neighbours per sample;
 //   - one full step, 100 steps and a static solve of the cantilever;
 //   - the paper's fixed-cost mode (1 Newton iteration, 60 CG iterations);
 //   - consistent mass, Jacobi and no preconditioner;
+//   - each stiffness kernel: all terms, no coupling, the paper's terms alone;
 //   - a model larger than one block (320 frames), a frame with no samples,
 //     no fixed frame at all (free fall);
 //   - a run repeated gives bit-identical states (no atomics in any sum).
@@ -36,13 +37,18 @@ int main(int argc, char **argv) {
     RUN(check_operators(ctx, law ? "random model, Neo-Hookean" : "random model, StVK", m, 99 + law));
     fascia_model_destroy(&m);
   }
-  // many neighbours: meshless beam, 20 frames per sample
+  // many neighbours: meshless beams, 20 and 80 frames per sample (no
+  // per-sample limit on the device)
   fascia_scene_beam_def bd = fascia_scene_beam_def_default();
   bd.frames[0] = 8, bd.frames[1] = 3, bd.frames[2] = 3;
   bd.shape = FASCIA_SCENE_MESHLESS;
   bd.neighbours = 20;
   CHECK_OK(fascia_scene_beam_build(ctx, &bd, &m), ctx);
   RUN(check_operators(ctx, "meshless beam, 20 neighbours", m, 7));
+  fascia_model_destroy(&m);
+  bd.frames[0] = 10, bd.neighbours = 80, bd.samples_per_cell_dir = 1;
+  CHECK_OK(fascia_scene_beam_build(ctx, &bd, &m), ctx);
+  RUN(check_operators(ctx, "meshless beam, 80 neighbours", m, 8));
   fascia_model_destroy(&m);
 
   // the cantilever (hex, 8 neighbours): steps, static, the paper's mode
@@ -80,6 +86,15 @@ int main(int argc, char **argv) {
   for (int32_t i = 0; i < m->frame_count; ++i) m->frame_kind[i] = FASCIA_FRAME_FREE;
   RUN(check_run(ctx, "free beam (no fixed frame)", m, def, 3, TOL_STEP, 0));
   fascia_model_destroy(&m);
+
+  // the paper's scheme (no rotation smoothing or coupling): the device's
+  // lean stiffness kernel
+  bd.rotation_smoothing = 0;
+  CHECK_OK(fascia_scene_beam_build(ctx, &bd, &m), ctx);
+  RUN(check_operators(ctx, "cantilever, paper's scheme", m, 5));
+  RUN(check_run(ctx, "cantilever, paper's scheme and mode", m, paper, 5, TOL_FIXED, 0));
+  fascia_model_destroy(&m);
+  bd = fascia_scene_beam_def_default();
 
   // larger than one block of 256 frames
   bd.frames[0] = 20, bd.frames[1] = 4, bd.frames[2] = 4;

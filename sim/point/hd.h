@@ -2,6 +2,9 @@
 // SPDX-FileCopyrightText: fascia developers
 // The only place that tells nvcc from a C compiler: FASCIA_HD marks the
 // per-point math as host and device code, so cc and nvcc compile one body.
+// FASCIA_STATIC_FORCE_INLINE (in place of static inline) marks a body that
+// its callers specialize by constant arguments: each caller gets its own
+// copy, with the dead branches gone.
 #ifndef FASCIA_POINT_HD_H
 #define FASCIA_POINT_HD_H
 
@@ -11,9 +14,11 @@
 #if defined(__CUDACC__)
 #define FASCIA_HD __host__ __device__
 #define FASCIA_RESTRICT __restrict__
+#define FASCIA_STATIC_FORCE_INLINE static __forceinline__
 #else
 #define FASCIA_HD
 #define FASCIA_RESTRICT restrict
+#define FASCIA_STATIC_FORCE_INLINE static inline __attribute__((always_inline))
 #endif
 
 #ifndef FASCIA_REAL_DEFINED

@@ -213,18 +213,26 @@ enum {
   FASCIA_PT_PART_ALL = 7
 };
 
-static inline FASCIA_HD void fascia_pt_sample_stiffness_parts(const fascia_pt_model *m, const fascia_pt_state *st,
-                                                              int32_t s, const fascia_real *cache,
-                                                              const fascia_real *dq, const int32_t *slot,
-                                                              fascia_real *out6, int parts) {
+// The stiffness product's body. only < 0: every pair moves by dq + 6
+// slot[j] and every pair gets its row out6 + 6 j. only = j: pair j alone
+// moves, by dq[0..5], and only its row is written, to out6[0..5] (one column
+// of the diagonal block per call; the other pairs' zero directions are
+// skipped, not multiplied).
+FASCIA_STATIC_FORCE_INLINE FASCIA_HD void
+fascia_pt_stiffness_core(const fascia_pt_model *m, const fascia_pt_state *st, int32_t s, const fascia_real *cache,
+                         const fascia_real *dq, const int32_t *slot, fascia_real *out6, int parts, int32_t only) {
   const fascia_real *F = cache, *P = cache + 9, *aux = cache + 18;
   const fascia_real v = m->sample_volume[s], muc = m->sample_coupling[s];
   const int32_t begin = m->sample_offsets[s], end = m->sample_offsets[s + 1];
+  // the pairs that move and get a row
+  const int32_t first = only < 0 ? begin : begin + only, last = only < 0 ? end : begin + only + 1;
+  const fascia_real zero[6] = {0, 0, 0, 0, 0, 0};
+#define FASCIA_PT_DQ(k) (only < 0 ? dq + 6 * slot[(k) - begin] : (k) == first ? dq : zero)
   // dF = sum_i dx_i g^T + [dtheta_i]x C_i
   fascia_real dF[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
-  for (int32_t k = begin; k < end; ++k) {
+  for (int32_t k = first; k < last; ++k) {
     const int32_t i = m->pair_frame[k];
-    const fascia_real *A = st->frame_A + 9 * i, *g = m->pair_gradient + 3 * k, *dx = dq + 6 * slot[k - begin];
+    const fascia_real *A = st->frame_A + 9 * i, *g = m->pair_gradient + 3 * k, *dx = FASCIA_PT_DQ(k);
     const fascia_real *dt = dx + 3;
     fascia_real a[3], C[9], tC[9];
     fascia_pt_pair_C(A, m->pair_offset + 3 * k, g, m->pair_weight[k], a, C);
@@ -240,7 +248,7 @@ static inline FASCIA_HD void fascia_pt_sample_stiffness_parts(const fascia_pt_mo
     // dK_j = skew(A_j^T dF - A_j^T [dtheta_j]x F)
     for (int32_t k = begin; k < end; ++k) {
       const int32_t j = m->pair_frame[k];
-      const fascia_real *A = st->frame_A + 9 * j, *dt = dq + 6 * slot[k - begin] + 3, w = m->pair_weight[k];
+      const fascia_real *A = st->frame_A + 9 * j, *dt = FASCIA_PT_DQ(k) + 3, w = m->pair_weight[k];
       fascia_real K[9], dK[9], dA[9], t1[9], t2[9];
       fascia_pt_coupling_K(A, F, dF, dt, K, dK);
       fascia_pt_skew_mul(dt, A, dA);
@@ -256,20 +264,22 @@ static inline FASCIA_HD void fascia_pt_sample_stiffness_parts(const fascia_pt_mo
     for (int q = 0; q < 27; ++q) Mc[q] = dMc[q] = 0;
     for (int32_t k = begin; k < end; ++k) {
       const fascia_real *A = st->frame_A + 9 * m->pair_frame[k], *g = m->pair_gradient + 3 * k;
-      fascia_real tA[9];
-      fascia_pt_skew_mul(dq + 6 * slot[k - begin] + 3, A, tA);
       for (int c = 0; c < 3; ++c)
-        for (int q = 0; q < 9; ++q) {
-          Mc[9 * c + q] += g[c] * A[q];
-          dMc[9 * c + q] += g[c] * tA[q];
-        }
+        for (int q = 0; q < 9; ++q) Mc[9 * c + q] += g[c] * A[q];
+    }
+    for (int32_t k = first; k < last; ++k) {
+      const fascia_real *A = st->frame_A + 9 * m->pair_frame[k], *g = m->pair_gradient + 3 * k;
+      fascia_real tA[9];
+      fascia_pt_skew_mul(FASCIA_PT_DQ(k) + 3, A, tA);
+      for (int c = 0; c < 3; ++c)
+        for (int q = 0; q < 9; ++q) dMc[9 * c + q] += g[c] * tA[q];
     }
   }
-  for (int32_t k = begin; k < end; ++k) {
+  for (int32_t k = first; k < last; ++k) {
     const int32_t i = m->pair_frame[k];
-    const fascia_real *A = st->frame_A + 9 * i, *g = m->pair_gradient + 3 * k, *dt = dq + 6 * slot[k - begin] + 3;
+    const fascia_real *A = st->frame_A + 9 * i, *g = m->pair_gradient + 3 * k, *dt = FASCIA_PT_DQ(k) + 3;
     const fascia_real w = m->pair_weight[k];
-    fascia_real a[3], C[9], M[9], t[3], *out = out6 + 6 * (k - begin);
+    fascia_real a[3], C[9], M[9], t[3], *out = out6 + 6 * (k - first);
     fascia_pt_pair_C(A, m->pair_offset + 3 * k, g, w, a, C);
     fascia_pt_mat_vec(dP, g, out);
     // material part axial(C dPt^T) plus geometric part axial([dtheta]x C Pt^T)
@@ -319,6 +329,29 @@ static inline FASCIA_HD void fascia_pt_sample_stiffness_parts(const fascia_pt_mo
       out[r] *= v;
       out[3 + r] = v * t[r];
     }
+  }
+}
+#undef FASCIA_PT_DQ
+
+static inline FASCIA_HD void fascia_pt_sample_stiffness_parts(const fascia_pt_model *m, const fascia_pt_state *st,
+                                                              int32_t s, const fascia_real *cache,
+                                                              const fascia_real *dq, const int32_t *slot,
+                                                              fascia_real *out6, int parts) {
+  fascia_pt_stiffness_core(m, st, s, cache, dq, slot, out6, parts, -1);
+}
+
+/// The 6x6 diagonal block of sample s's stiffness on its j-th pair's frame
+/// (row-major; column c is the response to unit c on that frame alone):
+/// what six full products with unit vectors give, without the other pairs'
+/// zero directions and rows.
+static inline FASCIA_HD void fascia_pt_sample_pair_block(const fascia_pt_model *m, const fascia_pt_state *st,
+                                                         int32_t s, const fascia_real *cache, int32_t j,
+                                                         fascia_real *block) {
+  for (int c = 0; c < 6; ++c) {
+    fascia_real e[6] = {0, 0, 0, 0, 0, 0}, col[6];
+    e[c] = 1;
+    fascia_pt_stiffness_core(m, st, s, cache, e, (const int32_t *)0, col, FASCIA_PT_PART_ALL, j);
+    for (int row = 0; row < 6; ++row) block[6 * row + c] = col[row];
   }
 }
 

@@ -301,44 +301,32 @@ void fascia_system_hessian_apply(fascia_system *sys, const fascia_real *v, fasci
 void fascia_system_hessian_diagonal(fascia_system *sys, fascia_real *blocks) {
   const fascia_model *m = sys->model;
   const fascia_pt_state st = {sys->x, sys->A};
-  const int32_t maxn = sys->max_neighbours;
-#pragma omp parallel num_threads(sys->threads)
-  {
-    fascia_real *dq = calloc(6 * (size_t)maxn, sizeof(fascia_real));
-    fascia_real *col = calloc(6 * (size_t)maxn, sizeof(fascia_real));
-#pragma omp for schedule(static)
-    for (int32_t i = 0; i < sys->frame_count; ++i) {
-      fascia_real *B = blocks + 36 * (int64_t)i;
-      for (int c = 0; c < 36; ++c) B[c] = 0;
-      if (!dq || !col) continue; // out of memory: leaves a zero block; the preconditioner guards zeros
-      for (int32_t r = m->frame_offsets[i]; r < m->frame_offsets[i + 1]; ++r) {
-        const int32_t k = m->frame_pairs[r], s = sys->pair_sample[k], j = k - m->sample_offsets[s];
-        for (int c = 0; c < 6; ++c) {
-          dq[6 * j + c] = 1;
-          fascia_pt_sample_stiffness(&sys->pm, &st, s, sys->cache + (int64_t)s * FASCIA_PT_CACHE_SIZE, dq,
-                                     sys->local_slot, col);
-          dq[6 * j + c] = 0;
-          for (int row = 0; row < 6; ++row) B[6 * row + c] += col[6 * j + row];
-        }
-      }
-      // gravity block (theta-theta): -s (b g^T - (b.g) I), plus 1/2 [g_theta]x
-      fascia_real b[3];
-      fascia_pt_mat_vec(sys->A + 9 * i, sys->frame_moment + 3 * i, b);
-      const fascia_real gs = sys->gravity_scale, *g = sys->gravity, bg = fascia_pt_dot3(b, g);
-      const fascia_real *t = sys->conservative_torque + 3 * i;
-      const fascia_real half_skew[9] = {0, -t[2], t[1], t[2], 0, -t[0], -t[1], t[0], 0};
-      for (int a = 0; a < 3; ++a)
-        for (int c = 0; c < 3; ++c)
-          B[6 * (3 + a) + 3 + c] += -gs * (b[a] * g[c] - (a == c ? bg : 0)) + FASCIA_R(0.5) * half_skew[3 * a + c];
-      // the exact H is symmetric; average away rounding
-      for (int a = 0; a < 6; ++a)
-        for (int c = a + 1; c < 6; ++c) {
-          const fascia_real avg = FASCIA_R(0.5) * (B[6 * a + c] + B[6 * c + a]);
-          B[6 * a + c] = B[6 * c + a] = avg;
-        }
+#pragma omp parallel for num_threads(sys->threads) schedule(static)
+  for (int32_t i = 0; i < sys->frame_count; ++i) {
+    fascia_real *B = blocks + 36 * (int64_t)i;
+    for (int c = 0; c < 36; ++c) B[c] = 0;
+    for (int32_t r = m->frame_offsets[i]; r < m->frame_offsets[i + 1]; ++r) {
+      const int32_t k = m->frame_pairs[r], s = sys->pair_sample[k];
+      fascia_real P[36];
+      fascia_pt_sample_pair_block(&sys->pm, &st, s, sys->cache + (int64_t)s * FASCIA_PT_CACHE_SIZE,
+                                  k - m->sample_offsets[s], P);
+      for (int c = 0; c < 36; ++c) B[c] += P[c];
     }
-    free(dq);
-    free(col);
+    // gravity block (theta-theta): -s (b g^T - (b.g) I), plus 1/2 [g_theta]x
+    fascia_real b[3];
+    fascia_pt_mat_vec(sys->A + 9 * i, sys->frame_moment + 3 * i, b);
+    const fascia_real gs = sys->gravity_scale, *g = sys->gravity, bg = fascia_pt_dot3(b, g);
+    const fascia_real *t = sys->conservative_torque + 3 * i;
+    const fascia_real half_skew[9] = {0, -t[2], t[1], t[2], 0, -t[0], -t[1], t[0], 0};
+    for (int a = 0; a < 3; ++a)
+      for (int c = 0; c < 3; ++c)
+        B[6 * (3 + a) + 3 + c] += -gs * (b[a] * g[c] - (a == c ? bg : 0)) + FASCIA_R(0.5) * half_skew[3 * a + c];
+    // the exact H is symmetric; average away rounding
+    for (int a = 0; a < 6; ++a)
+      for (int c = a + 1; c < 6; ++c) {
+        const fascia_real avg = FASCIA_R(0.5) * (B[6 * a + c] + B[6 * c + a]);
+        B[6 * a + c] = B[6 * c + a] = avg;
+      }
   }
 }
 
