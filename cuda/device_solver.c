@@ -281,11 +281,11 @@ static void cg_body(void *argument) {
   const fascia_dev *D = &dev->D;
   const int64_t N = D->frame_count, S = D->sample_count;
   for (int it = 0; it < arg->iterations; ++it) {
-    kernel(dev, dev->stiffness, S, D->dir, NULL, 0);
-    if (dev->set.consistent_mass) kernel(dev, FASCIA_K_CG_SAMPLE_MASS, S, D->dir, NULL, 0); // lumped: per frame
+    // products of z; the operator's reduction makes dir and A dir of them
+    kernel(dev, dev->stiffness, S, D->z, NULL, 0);
+    if (dev->set.consistent_mass) kernel(dev, FASCIA_K_CG_SAMPLE_MASS, S, D->z, NULL, 0); // lumped: per frame
     reduce(dev, FASCIA_T_OPERATOR, N, NULL, NULL, FASCIA_S_CG_CURVATURE);
     reduce(dev, FASCIA_T_CG_UPDATE, N, NULL, NULL, FASCIA_S_CG_RESIDUAL);
-    kernel(dev, FASCIA_K_CG_DIRECTION, 6 * N, NULL, NULL, 0);
   }
 }
 
@@ -502,9 +502,10 @@ fascia_status fascia_device_hessian_apply(fascia_solver *S, const fascia_real *v
   const size_t N = (size_t)S->frame_count;
   fascia_dev_scalars sc = dev->sc;
   sc.running = 1; // the operator kernels run only inside CG
+  sc.action = FASCIA_CG_NONE; // as in CG's first iteration: Ad = A z
   FASCIA_TRY(dev->ops->upload(dev->L, dev->sc_dev, &sc, sizeof sc));
-  FASCIA_TRY(dev->ops->upload(dev->L, dev->D.dir, v, 6 * N * sizeof(fascia_real)));
-  kernel(dev, dev->stiffness, dev->D.sample_count, dev->D.dir, NULL, 0);
+  FASCIA_TRY(dev->ops->upload(dev->L, dev->D.z, v, 6 * N * sizeof(fascia_real)));
+  kernel(dev, dev->stiffness, dev->D.sample_count, dev->D.z, NULL, 0);
   reduce(dev, FASCIA_T_OPERATOR, (int64_t)N, NULL, NULL, FASCIA_S_STORE);
   return dev->ops->download(dev->L, out, dev->D.Ad, 6 * N * sizeof(fascia_real));
 }

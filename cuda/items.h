@@ -99,7 +99,6 @@ typedef enum fascia_dev_kernel {
   FASCIA_K_FRAME_PRECOND,    ///< N: tangent diagonal blocks, preconditioner blocks
   FASCIA_K_DAMPING,          ///< 6N: Levenberg diagonal |diag(blocks)|
   FASCIA_K_DAMPING_CLAMP,    ///< 6N: at least 1e-8 scale
-  FASCIA_K_CG_DIRECTION,     ///< 6N: dir = z + beta dir when the step says so
   FASCIA_K_PRECOND_DESCENT,  ///< N: p = -P^-1 g (fallback descent direction)
   FASCIA_K_COPY_GRADIENT,    ///< 6N: g = g_trial
   FASCIA_K_ACCEPT_STATIC,    ///< N: re-anchor at the iterate, d = 0, g = g_trial
@@ -114,7 +113,7 @@ typedef enum fascia_dev_terms {
   FASCIA_T_DOT,         ///< n: a.b
   FASCIA_T_SUM,         ///< n: a
   FASCIA_T_CG_START,    ///< N: r = -g, p = 0, z = P^-1 r, dir = z; gives r.r, r.z
-  FASCIA_T_OPERATOR,    ///< N: Ad = A dir (skipped unless CG runs); gives dir.Ad, dir.dir
+  FASCIA_T_OPERATOR,    ///< N: dir = z + beta dir, Ad = A dir (skipped unless CG runs); gives dir.Ad, dir.dir
   FASCIA_T_CG_UPDATE,   ///< N: p, r, z by the step's action; gives r.r, r.z
   FASCIA_T_COUNT
 } fascia_dev_terms;
@@ -370,9 +369,6 @@ static inline FASCIA_HD void fascia_dev_item(const fascia_dev *D, int kernel, in
   case FASCIA_K_DAMPING_CLAMP:
     if (D->damping[i] < 1e-8 * D->sc->scale) D->damping[i] = 1e-8 * D->sc->scale;
     break;
-  case FASCIA_K_CG_DIRECTION:
-    if (D->sc->action == FASCIA_CG_DIRECTION) D->dir[i] = D->z[i] + D->sc->beta * D->dir[i];
-    break;
   case FASCIA_K_PRECOND_DESCENT: fascia_dev_precond_descent_item(D, i32); break;
   case FASCIA_K_COPY_GRADIENT: D->g[i] = D->g_trial[i]; break;
   case FASCIA_K_ACCEPT_STATIC: fascia_dev_accept_static_item(D, i32); break;
@@ -386,13 +382,16 @@ static inline FASCIA_HD void fascia_dev_item(const fascia_dev *D, int kernel, in
 
 // ------------------------------------------------------------- reductions --
 
-// Newton operator on frame i: Ad_i = (H + mass_coefficient M + shift D) dir
-// restricted to free DOFs (cg.c fascia_operator_apply, frame by frame);
-// t gets dir_i.Ad_i and dir_i.dir_i
+// Newton operator on frame i: w_i = ((H + mass_coefficient M + shift D) z)_i
+// restricted to free DOFs (cg.c fascia_operator_apply, frame by frame), then
+// CG's new direction and its image, dir = z + beta dir and Ad = w + beta Ad
+// (A dir by recurrence: the product takes z, which the previous reduction
+// left complete, so no launch of its own updates dir); t gets dir_i.Ad_i
+// and dir_i.dir_i. Right after CG starts dir = z and Ad = w.
 static inline FASCIA_HD void fascia_dev_operator_term(const fascia_dev *D, int32_t i, fascia_real *t) {
   const fascia_dev_settings *set = D->set;
   const int64_t i6 = 6 * (int64_t)i;
-  const fascia_real *v = D->dir + i6;
+  const fascia_real *v = D->z + i6;
   fascia_real out[6], b[3], vb[3], vbg[3], tv[3];
   fascia_dev_gather6(D, D->pair_buffer, i, out);
   // gravity's own stiffness, frame-local: -s ((v x b) x g)
@@ -405,17 +404,22 @@ static inline FASCIA_HD void fascia_dev_operator_term(const fascia_dev *D, int32
   for (int c = 0; c < 3; ++c) out[3 + c] += FASCIA_R(0.5) * tv[c];
   if (set->mass_coefficient != 0) {
     fascia_real Mv[6];
-    fascia_dev_frame_mass(D, i, D->dir, Mv);
+    fascia_dev_frame_mass(D, i, D->z, Mv);
     for (int c = 0; c < 6; ++c) out[c] += set->mass_coefficient * Mv[c];
   }
   if (set->shift != 0)
     for (int c = 0; c < 6; ++c) out[c] += set->shift * D->damping[i6 + c] * v[c];
+  const int next = D->sc->action == FASCIA_CG_DIRECTION;
+  const fascia_real beta = D->sc->beta;
   t[0] = t[1] = 0;
   for (int c = 0; c < 6; ++c) {
     if (!D->mask[i6 + c]) out[c] = 0;
-    D->Ad[i6 + c] = out[c];
-    t[0] += v[c] * out[c];
-    t[1] += v[c] * v[c];
+    const fascia_real dir = next ? v[c] + beta * D->dir[i6 + c] : v[c];
+    const fascia_real Ad = next ? out[c] + beta * D->Ad[i6 + c] : out[c];
+    D->dir[i6 + c] = dir;
+    D->Ad[i6 + c] = Ad;
+    t[0] += dir * Ad;
+    t[1] += dir * dir;
   }
 }
 
