@@ -15,6 +15,7 @@
 
 #define CG_CHUNK 8 // CG iterations per recorded chunk in tolerance mode
 #define MAX_BUFFERS 64
+#define MAX_PINNED 8
 
 enum { SLOT_CG_FIXED = 0, SLOT_CG_CHUNK = 1 };
 
@@ -32,6 +33,8 @@ struct fascia_device {
   size_t bytes;                  ///< device memory held
   int recorded[FASCIA_LAUNCH_SLOTS];
   fascia_dev_kernel stiffness;   ///< the stiffness product kernel for this model's terms
+  void *pinned[MAX_PINNED];      ///< the solver's arrays that cross every step, page-locked
+  int pinned_count;
   fascia_real *zeros;            ///< host [6N]
   char name[256];
 };
@@ -157,6 +160,7 @@ void fascia_device_destroy(fascia_device **out) {
   if (!out || !*out) return;
   fascia_device *dev = *out;
   for (int k = 0; k < dev->buffer_count; ++k) dev->ops->release(dev->L, dev->buffers[k]);
+  for (int k = 0; k < dev->pinned_count; ++k) dev->ops->unpin(dev->L, dev->pinned[k]);
   if (dev->L) dev->ops->destroy(dev->L);
   free(dev->zeros);
   free(dev);
@@ -178,6 +182,15 @@ fascia_status fascia_device_create(fascia_solver *S, const fascia_launcher_ops *
     fascia_device_destroy(&dev);
     return status;
   }
+  // the state crosses every step: page-locked, it copies at the link's rate
+  // and without the runtime's staging copy (where locking fails, it still
+  // copies, only slower)
+  const size_t N = (size_t)S->frame_count, real = sizeof(fascia_real);
+  void *const crossing[] = {S->x_base, S->q_base, S->d, S->inertia_target, S->x, S->q, S->gradient};
+  const size_t sizes[] = {3 * N * real, 4 * N * real, 6 * N * real, 6 * N * real, 3 * N * real, 4 * N * real,
+                          6 * N * real};
+  for (size_t k = 0; k < sizeof crossing / sizeof crossing[0] && dev->pinned_count < MAX_PINNED; ++k)
+    if (ops->pin(dev->L, crossing[k], sizes[k])) dev->pinned[dev->pinned_count++] = crossing[k];
   dev->set.cg_max = S->def.cg_iterations;
   dev->set.cg_fixed = S->def.cg_fixed;
   dev->set.cg_tolerance = S->def.cg_tolerance;
@@ -326,10 +339,11 @@ static fascia_status slope(fascia_device *dev, fascia_real *out) {
 static fascia_status download_state(fascia_solver *S, fascia_device *dev) {
   const size_t N = (size_t)S->frame_count;
   const fascia_launcher_ops *ops = dev->ops;
-  FASCIA_TRY(ops->download(dev->L, S->x, dev->D.x, 3 * N * sizeof(fascia_real)));
-  FASCIA_TRY(ops->download(dev->L, S->q, dev->D.q, 4 * N * sizeof(fascia_real)));
-  FASCIA_TRY(ops->download(dev->L, S->d, dev->D.d, 6 * N * sizeof(fascia_real)));
-  FASCIA_TRY(ops->download(dev->L, S->gradient, dev->D.g_trial, 6 * N * sizeof(fascia_real)));
+  ops->receive(dev->L, S->x, dev->D.x, 3 * N * sizeof(fascia_real));
+  ops->receive(dev->L, S->q, dev->D.q, 4 * N * sizeof(fascia_real));
+  ops->receive(dev->L, S->d, dev->D.d, 6 * N * sizeof(fascia_real));
+  ops->receive(dev->L, S->gradient, dev->D.g_trial, 6 * N * sizeof(fascia_real));
+  FASCIA_TRY(ops->finish(dev->L)); // one wait for the four
   // the host system's own state is set where it is read (probes, strain)
   S->sys->energy_internal = dev->sc.energy_internal;
   S->sys->energy_external = dev->sc.energy_external;
@@ -344,9 +358,11 @@ static fascia_status begin(fascia_solver *S, fascia_device *dev, int dynamic) {
   fascia_dev *D = &dev->D;
   const size_t N = (size_t)S->frame_count, n = 6 * N;
   const fascia_launcher_ops *ops = dev->ops;
-  FASCIA_TRY(ops->upload(dev->L, D->x_base, S->x_base, 3 * N * sizeof(fascia_real)));
-  FASCIA_TRY(ops->upload(dev->L, D->q_base, S->q_base, 4 * N * sizeof(fascia_real)));
-  FASCIA_TRY(ops->upload(dev->L, D->d, S->d, n * sizeof(fascia_real)));
+  // no waits: the host leaves these arrays alone until the step's first
+  // objective() waits for its scalars
+  ops->send(dev->L, D->x_base, S->x_base, 3 * N * sizeof(fascia_real));
+  ops->send(dev->L, D->q_base, S->q_base, 4 * N * sizeof(fascia_real));
+  ops->send(dev->L, D->d, S->d, n * sizeof(fascia_real));
   const fascia_real h = S->def.time_step;
   dev->set.c1 = dynamic ? 1 / (h * h) : 0;
   dev->set.c2 = dynamic ? S->def.mass_damping / h : 0;
@@ -356,7 +372,7 @@ static fascia_status begin(fascia_solver *S, fascia_device *dev, int dynamic) {
   dev->set.jacobian = dynamic;
   FASCIA_TRY(push_settings(dev));
   if (!dynamic) return FASCIA_OK;
-  FASCIA_TRY(ops->upload(dev->L, D->target, S->inertia_target, n * sizeof(fascia_real)));
+  ops->send(dev->L, D->target, S->inertia_target, n * sizeof(fascia_real));
   kernel(dev, FASCIA_K_MASS_SNAPSHOT, (int64_t)N, NULL, NULL, 0);
   kernel(dev, FASCIA_K_LUMPED_MASS, (int64_t)N, NULL, NULL, 0);
   if (dev->set.consistent_mass) kernel(dev, FASCIA_K_SAMPLE_MASS, D->sample_count, D->target, NULL, 0);

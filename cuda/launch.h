@@ -41,6 +41,16 @@ typedef struct fascia_launcher_ops {
   fascia_status (*download)(fascia_launcher *L, void *host_dst, const void *device_src, size_t bytes);
   /// Device-to-device copy, in order with the launches.
   void (*copy)(fascia_launcher *L, void *device_dst, const void *device_src, size_t bytes);
+  /// Page-locks host memory, so that copies from and to it run at the full
+  /// rate of the link and without a staging copy: 1 if it did (unpin before
+  /// the memory is freed), 0 if not (copies work all the same).
+  int (*pin)(fascia_launcher *L, void *host, size_t bytes);
+  void (*unpin)(fascia_launcher *L, void *host);
+  /// Copies that do not wait, in order with the launches: host_src must stay
+  /// as it is, and host_dst is filled, only once the next download() or
+  /// finish() returns. A failure is reported there.
+  void (*send)(fascia_launcher *L, void *device_dst, const void *host_src, size_t bytes);
+  void (*receive)(fascia_launcher *L, void *host_dst, const void *device_src, size_t bytes);
   /// fascia_dev_item(D, kernel, i, in, out, value) for i in [0, n).
   void (*kernel)(fascia_launcher *L, const fascia_dev *D, fascia_dev_kernel kernel, int64_t n,
                  const fascia_real *in, fascia_real *out, fascia_real value);

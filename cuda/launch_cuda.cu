@@ -291,6 +291,39 @@ static void cuda_copy(fascia_launcher *L, void *device_dst, const void *device_s
                  "copy of %zu bytes", bytes);
 }
 
+// Registering fails where a page is already locked (two small arrays on one
+// page): that array then copies through the runtime's staging buffer.
+static int cuda_pin(fascia_launcher *L, void *host, size_t bytes) {
+  if (!host || !bytes || L->recording) return 0;
+  return handled(cudaHostRegister(host, bytes, cudaHostRegisterDefault)) == cudaSuccess;
+}
+
+static void cuda_unpin(fascia_launcher *L, void *host) {
+  if (!host) return;
+  remember_error(L, handled(cudaStreamSynchronize(L->stream)), "the launches before an unpin");
+  handled(cudaHostUnregister(host));
+}
+
+static void cuda_send(fascia_launcher *L, void *device_dst, const void *host_src, size_t bytes) {
+  if (!bytes) return;
+  if (L->recording) {
+    remember_error(L, cudaErrorStreamCaptureUnsupported, "upload while recording a launch sequence");
+    return;
+  }
+  remember_error(L, handled(cudaMemcpyAsync(device_dst, host_src, bytes, cudaMemcpyHostToDevice, L->stream)),
+                 "upload of %zu bytes", bytes);
+}
+
+static void cuda_receive(fascia_launcher *L, void *host_dst, const void *device_src, size_t bytes) {
+  if (!bytes) return;
+  if (L->recording) {
+    remember_error(L, cudaErrorStreamCaptureUnsupported, "download while recording a launch sequence");
+    return;
+  }
+  remember_error(L, handled(cudaMemcpyAsync(host_dst, device_src, bytes, cudaMemcpyDeviceToHost, L->stream)),
+                 "download of %zu bytes", bytes);
+}
+
 // --------------------------------------------------------------- launches --
 
 template <int K>
@@ -417,6 +450,7 @@ static fascia_status cuda_finish(fascia_launcher *L) {
 }
 
 extern "C" const fascia_launcher_ops fascia_launcher_cuda = {
-    "cuda",        cuda_create, cuda_destroy, cuda_name,   cuda_alloc,  cuda_release, cuda_upload,
-    cuda_download, cuda_copy,   cuda_kernel,  cuda_reduce, cuda_record, cuda_replay,  cuda_finish,
+    "cuda",      cuda_create, cuda_destroy, cuda_name,   cuda_alloc,  cuda_release, cuda_upload, cuda_download,
+    cuda_copy,   cuda_pin,    cuda_unpin,   cuda_send,   cuda_receive, cuda_kernel, cuda_reduce, cuda_record,
+    cuda_replay, cuda_finish,
 };

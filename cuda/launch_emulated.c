@@ -73,6 +73,14 @@ static void emu_copy(fascia_launcher *L, void *dst, const void *src, size_t byte
   if (bytes) memmove(dst, src, bytes);
 }
 
+// Host memory is all the emulation has: nothing to lock.
+static int emu_pin(fascia_launcher *L, void *host, size_t bytes) {
+  (void)L, (void)host, (void)bytes;
+  return 0;
+}
+
+static void emu_unpin(fascia_launcher *L, void *host) { (void)L, (void)host; }
+
 static void run_kernel(const launch_record *c, int threads) {
   const fascia_dev *D = &c->D;
 #pragma omp parallel for num_threads(threads) schedule(static) if (c->n > 256)
@@ -149,7 +157,24 @@ static fascia_status emu_finish(fascia_launcher *L) {
   return FASCIA_OK;
 }
 
+// Launches run when they are made, so send and receive are plain copies.
 const fascia_launcher_ops fascia_launcher_emulated = {
-    "emulated", emu_create,  emu_destroy, emu_name,   emu_alloc,  emu_release, emu_copy_in,
-    emu_copy_in, emu_copy,   emu_kernel,  emu_reduce, emu_record, emu_replay,  emu_finish,
+    .backend = "emulated",
+    .create = emu_create,
+    .destroy = emu_destroy,
+    .device_name = emu_name,
+    .alloc = emu_alloc,
+    .release = emu_release,
+    .upload = emu_copy_in,
+    .download = emu_copy_in,
+    .copy = emu_copy,
+    .pin = emu_pin,
+    .unpin = emu_unpin,
+    .send = emu_copy,
+    .receive = emu_copy,
+    .kernel = emu_kernel,
+    .reduce = emu_reduce,
+    .record = emu_record,
+    .replay = emu_replay,
+    .finish = emu_finish,
 };

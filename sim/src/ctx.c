@@ -3,6 +3,7 @@
 // The context: last error (status, message, source location), thread count,
 // progress hook. Libraries never print; the CLI reads the message from here.
 #include <stdarg.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -100,4 +101,15 @@ void *fascia_calloc(int64_t count, size_t size) {
   if (count < 0 || count > FASCIA_MAX_COUNT * 16) return NULL;
   if (count == 0) count = 1; // a valid pointer for empty arrays keeps loops simple
   return calloc((size_t)count, size);
+}
+
+#define PAGE_BYTES 4096 // the x86-64 and arm64 base page; larger pages are multiples
+
+void *fascia_calloc_pages(int64_t count, size_t size) {
+  if (count < 0 || count > FASCIA_MAX_COUNT * 16 || (size && (size_t)count > (SIZE_MAX - PAGE_BYTES) / size))
+    return NULL;
+  const size_t bytes = ((size_t)(count ? count : 1) * size + PAGE_BYTES - 1) / PAGE_BYTES * PAGE_BYTES;
+  void *p = aligned_alloc(PAGE_BYTES, bytes ? bytes : PAGE_BYTES);
+  if (p) memset(p, 0, bytes);
+  return p;
 }

@@ -168,16 +168,17 @@ fascia_status fascia_solver_create(fascia_ctx *ctx, const fascia_model *model, c
   S->frame_count = model->frame_count;
   FASCIA_TRY_GOTO(fascia_system_create(ctx, model, def->threads > 0 ? def->threads : fascia_ctx_threads(ctx), &S->sys));
   const int64_t N = model->frame_count, n = 6 * N;
-  S->x = fascia_calloc(3 * N, sizeof(fascia_real));
-  S->q = fascia_calloc(4 * N, sizeof(fascia_real));
+  // the arrays a GPU backend copies every step are on pages of their own
+  S->x = fascia_calloc_pages(3 * N, sizeof(fascia_real));
+  S->q = fascia_calloc_pages(4 * N, sizeof(fascia_real));
   S->u = fascia_calloc(n, sizeof(fascia_real));
   S->mask = fascia_calloc(n, 1);
-  S->x_base = fascia_calloc(3 * N, sizeof(fascia_real));
-  S->q_base = fascia_calloc(4 * N, sizeof(fascia_real));
-  S->d = fascia_calloc(n, sizeof(fascia_real));
+  S->x_base = fascia_calloc_pages(3 * N, sizeof(fascia_real));
+  S->q_base = fascia_calloc_pages(4 * N, sizeof(fascia_real));
+  S->d = fascia_calloc_pages(n, sizeof(fascia_real));
   S->d_trial = fascia_calloc(n, sizeof(fascia_real));
-  S->inertia_target = fascia_calloc(2 * n, sizeof(fascia_real));
-  S->gradient = fascia_calloc(n, sizeof(fascia_real));
+  S->inertia_target = fascia_calloc_pages(2 * n, sizeof(fascia_real));
+  S->gradient = fascia_calloc_pages(n, sizeof(fascia_real));
   S->direction = fascia_calloc(n, sizeof(fascia_real));
   S->rhs = fascia_calloc(n, sizeof(fascia_real));
   S->work = fascia_calloc(6 * n, sizeof(fascia_real));

@@ -38,6 +38,10 @@
 
 /// calloc of count elements of size bytes, NULL on overflow or failure.
 FASCIA_INTERN void *fascia_calloc(int64_t count, size_t size);
+/// The same on pages of its own (aligned, the size rounded up to whole
+/// pages), for arrays that a GPU backend page-locks: locking works page by
+/// page and fails where two arrays share one. Freed with free().
+FASCIA_INTERN void *fascia_calloc_pages(int64_t count, size_t size);
 
 #define FASCIA_DEF_COOKIE 0x5fa5c1a
 
