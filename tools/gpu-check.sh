@@ -10,11 +10,12 @@
 #                                  need into build-gpu/pack (a few MB)
 #   tools/gpu-check.sh run [DIR]   on the GPU machine, from the repository root,
 #                                  with build-gpu/pack carried there: the GPU
-#                                  tests, then the benchmarks; logs and JSON
-#                                  into DIR (default: $OUT, else out/gpu-check)
+#                                  tests, the benchmarks, a kernel profile (ncu)
+#                                  and compute-sanitizer; logs and CSV into DIR
+#                                  (default: $OUT, else out/gpu-check)
 #
 # With the session's device tool: run(command="tools/gpu-check.sh run",
-# carry=["build-gpu/pack"]).
+# carry=["build-gpu/pack"]); it writes 8 files, what that tool brings back.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 pack="$root/build-gpu/pack"
@@ -49,14 +50,24 @@ run)
   status=0
   { nvidia-smi -L || true; date -u +%Y-%m-%dT%H:%MZ; "$pack/bin/fascia" info; } 2>&1 | tee "$out/device.txt"
   echo "== t330: device against CPU (cantilever, random models, edge cases)"
-  "$pack/bin/t330_device_against_cpu" --backend cuda 2>&1 | tee "$out/t330.log" || status=1
+  "$pack/bin/t330_device_against_cpu" --backend cuda 2>&1 | tee "$out/tests.log" || status=1
   echo "== t331: device against CPU on the demo tissue"
-  "$pack/bin/t331_device_tissue" --backend cuda "$pack/demo.h5" 2>&1 | tee "$out/t331.log" || status=1
+  "$pack/bin/t331_device_tissue" --backend cuda "$pack/demo.h5" 2>&1 | tee -a "$out/tests.log" || status=1
   echo "== the paper's Table 2 and 3 rows on the GPU and the CPU"
   "$pack/bin/fascia" bench paper --backend cuda --csv "$out/bench-paper.csv" 2>&1 | tee "$out/bench-paper.txt" || status=1
   echo "== larger rows on the GPU"
   "$pack/bin/fascia" bench large --backend cuda --no-cpu --csv "$out/bench-large.csv" 2>&1 |
     tee "$out/bench-large.txt" || status=1
+  if command -v ncu >/dev/null 2>&1; then
+    # where the time of a step goes, kernel by kernel (graph nodes profiled
+    # one by one): duration, occupancy, registers; a profile, not a timing
+    echo "== ncu: kernels of one paper-mode step of the 34610-sample row"
+    ncu --graph-profiling node --launch-count 600 --print-summary per-kernel \
+      --metrics gpu__time_duration.sum,sm__warps_active.avg.pct_of_peak_sustained_active,launch__registers_per_thread \
+      "$pack/bin/fascia" bench t3-s34610 --backend cuda --no-cpu --repeats 1 --steps 1 >"$out/ncu.txt" 2>&1 ||
+      echo "gpu-check: ncu failed (not counted; see ncu.txt)"
+    grep -E "k_item|k_reduce|gpu__time_duration" "$out/ncu.txt" | head -60 || true
+  fi
   if command -v compute-sanitizer >/dev/null 2>&1; then
     echo "== compute-sanitizer memcheck of t330 (out-of-bounds and uninitialized device memory)"
     compute-sanitizer --tool memcheck --leak-check full "$pack/bin/t330_device_against_cpu" --backend cuda \
