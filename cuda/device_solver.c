@@ -197,8 +197,11 @@ fascia_status fascia_device_create(fascia_solver *S, const fascia_launcher_ops *
   dev->set.consistent_mass = S->def.mass == FASCIA_MASS_CONSISTENT;
   dev->set.precond = (int32_t)S->def.precond;
   dev->set.gravity_scale = 1;
-  snprintf(dev->name, sizeof dev->name, "%s, %.1f MB of device memory for the model", ops->device_name(dev->L),
-           (double)dev->bytes / (1 << 20));
+  const char *terms = dev->stiffness == FASCIA_K_SAMPLE_STIFFNESS_PAPER       ? "the paper's terms"
+                      : dev->stiffness == FASCIA_K_SAMPLE_STIFFNESS_SMOOTHING ? "no rotation coupling"
+                                                                              : "all terms";
+  snprintf(dev->name, sizeof dev->name, "%s, %.1f MB of device memory for the model, stiffness kernel: %s",
+           ops->device_name(dev->L), (double)dev->bytes / (1 << 20), terms);
   *out = dev;
   return FASCIA_OK;
 }
