@@ -93,7 +93,7 @@ static int run_case(fascia_ctx *ctx, unsigned long long seed, int law, double co
     for (int k = 0; k < n; ++k) u[k] = rnd_uniform(&st, -1, 1);
     fascia_system_hessian_apply(sys, v, Hv);
     fascia_system_hessian_apply(sys, u, Hu);
-    const double uHv = fascia_dot(u, Hv, n), vHu = fascia_dot(v, Hu, n);
+    const double uHv = fascia_dot(u, Hv, n, sys->threads), vHu = fascia_dot(v, Hu, n, sys->threads);
     CHECK_NEAR(uHv, vHu, 1e-10, 1e-12 * kscale);
     // ... and is the second derivative of the energy along the update
     double e00;
@@ -107,7 +107,7 @@ static int run_case(fascia_ctx *ctx, unsigned long long seed, int law, double co
     CHECK_OK(fascia_system_evaluate(sys, NULL, &em), ctx);
     fascia_system_set_state(sys, x0, q0);
     CHECK_OK(fascia_system_evaluate(sys, NULL, NULL), ctx);
-    const double second = (ep - 2 * e00 + em) / (h2 * h2), vHv = fascia_dot(v, Hv, n);
+    const double second = (ep - 2 * e00 + em) / (h2 * h2), vHv = fascia_dot(v, Hv, n, sys->threads);
     CHECK_NEAR(vHv, second, 1e-5, 1e-6 * kscale);
   }
   // 4. diagonal blocks equal H applied to unit vectors

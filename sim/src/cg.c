@@ -55,15 +55,15 @@ fascia_cg_result fascia_cg_solve(const fascia_operator *op, const fascia_precond
   fascia_cg_result result = {0, 0, 0};
   memset(p, 0, (size_t)n * sizeof(fascia_real));
   for (int64_t k = 0; k < n; ++k) r[k] = op->mask[k] ? b[k] : 0;
-  const fascia_real bnorm = sqrt(fascia_dot(r, r, n));
+  const fascia_real bnorm = sqrt(fascia_dot(r, r, n, op->sys->threads));
   if (bnorm == 0) return result;
   fascia_precond_apply(pc, op->mask, r, z);
   memcpy(dir, z, (size_t)n * sizeof(fascia_real));
-  fascia_real rz = fascia_dot(r, z, n), rnorm = bnorm;
+  fascia_real rz = fascia_dot(r, z, n, op->sys->threads), rnorm = bnorm;
   for (int it = 0; it < max_iterations; ++it) {
     fascia_operator_apply(op, dir, Ad);
-    const fascia_real curvature = fascia_dot(dir, Ad, n);
-    const fascia_real dd = fascia_dot(dir, dir, n);
+    const fascia_real curvature = fascia_dot(dir, Ad, n, op->sys->threads);
+    const fascia_real dd = fascia_dot(dir, dir, n, op->sys->threads);
     if (!(curvature > 1e-12 * op->scale * dd) || !isfinite(curvature)) {
       // non-positive curvature: keep p, or the preconditioned gradient if
       // nothing was done yet (a descent direction either way)
@@ -77,12 +77,12 @@ fascia_cg_result fascia_cg_solve(const fascia_operator *op, const fascia_precond
       r[k] -= alpha * Ad[k];
     }
     result.iterations = it + 1;
-    rnorm = sqrt(fascia_dot(r, r, n));
+    rnorm = sqrt(fascia_dot(r, r, n, op->sys->threads));
     // A fixed iteration count still ends at round-off: past it the
     // iterations only churn noise (and underflow into slow subnormals)
     if (rnorm <= ROUNDOFF * bnorm || (!fixed && rnorm <= tolerance * bnorm)) break;
     fascia_precond_apply(pc, op->mask, r, z);
-    const fascia_real rz_next = fascia_dot(r, z, n);
+    const fascia_real rz_next = fascia_dot(r, z, n, op->sys->threads);
     if (rz_next <= 0) break; // preconditioner not positive: stop with p
     const fascia_real beta = rz_next / rz;
     rz = rz_next;

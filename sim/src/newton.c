@@ -73,7 +73,7 @@ static fascia_status objective(fascia_solver *S, const step_terms *terms, const 
   if (terms->c1 != 0 || terms->c2 != 0) {
     // c1/2 (d - hu).M(d - hu) + c2/2 d.M d with M(hu) precomputed
     mass_apply(S, d, S->scratch);
-    const fascia_real dMd = fascia_dot(d, S->scratch, n), dz = fascia_dot(d, terms->target_M, n);
+    const fascia_real dMd = fascia_dot(d, S->scratch, n, S->sys->threads), dz = fascia_dot(d, terms->target_M, n, S->sys->threads);
     energy += FASCIA_R(0.5) * terms->c1 * (dMd - 2 * dz + terms->target_norm) + FASCIA_R(0.5) * terms->c2 * dMd;
     if (gradient)
       for (int64_t k = 0; k < n; ++k)
@@ -165,7 +165,7 @@ fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iter
     terms.c2 = def->mass_damping / h;
     terms.target_M = S->inertia_target + n; // second half of the buffer holds M(hu)
     mass_apply(S, S->inertia_target, terms.target_M);
-    terms.target_norm = fascia_dot(S->inertia_target, terms.target_M, n);
+    terms.target_norm = fascia_dot(S->inertia_target, terms.target_M, n, S->sys->threads);
   }
   fascia_operator op = {S->sys,  terms.c1 + terms.c2, def->mass, S->mass_blocks, S->damping_diagonal, 0, 1,
                         S->use_assembled ? &S->K : NULL, S->mask, S->scratch + n, NULL, 0};
@@ -176,7 +176,7 @@ fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iter
   t = fascia_now_ms();
   FASCIA_TRY(objective(S, &terms, S->d, &phi, g));
   rep->profile.evaluate_ms += fascia_now_ms() - t;
-  const fascia_real g0 = sqrt(fascia_dot(g, g, n));
+  const fascia_real g0 = sqrt(fascia_dot(g, g, n, S->sys->threads));
   fascia_real reference = fascia_newton_load_norm(S);
   if (dynamic || reference == 0) reference = reference > g0 ? reference : g0;
   if (reference == 0) reference = 1;
@@ -185,7 +185,7 @@ fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iter
   int iteration = 0, converged = 0;
   fascia_real gnorm = g0;
   for (; iteration <= max_iterations; ++iteration) {
-    gnorm = sqrt(fascia_dot(g, g, n));
+    gnorm = sqrt(fascia_dot(g, g, n, S->sys->threads));
     if (gnorm <= def->newton_tolerance * reference) {
       converged = 1;
       break;
@@ -237,11 +237,11 @@ fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iter
         rep->negative_curvature += cg.negative_curvature;
       }
       rep->profile.cg_ms += fascia_now_ms() - t;
-      fascia_real slope = fascia_dot(p, g, n);
+      fascia_real slope = fascia_dot(p, g, n, S->sys->threads);
       if (!(slope < 0)) { // not a descent direction: preconditioned gradient
         fascia_precond_apply(&S->pc, S->mask, g, p);
         for (int64_t k = 0; k < n; ++k) p[k] = -p[k];
-        slope = fascia_dot(p, g, n);
+        slope = fascia_dot(p, g, n, S->sys->threads);
       }
       // backtracking line search on Phi
       fascia_real alpha = 1;
@@ -252,7 +252,7 @@ fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iter
         fascia_status st = objective(S, &terms, S->d_trial, &phi_trial, g_trial);
         rep->profile.evaluate_ms += fascia_now_ms() - t;
         if (st == FASCIA_OK &&
-            fascia_newton_accepts(def, phi, phi_trial, alpha, slope, gnorm, fascia_dot(g_trial, g_trial, n),
+            fascia_newton_accepts(def, phi, phi_trial, alpha, slope, gnorm, fascia_dot(g_trial, g_trial, n, S->sys->threads),
                                   fabs(S->sys->energy_internal) + fabs(S->sys->energy_external), material_roundoff)) {
           accepted = 1;
           break;

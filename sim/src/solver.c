@@ -508,7 +508,7 @@ fascia_real fascia_solver_kinetic_energy(fascia_solver *S) {
     return FASCIA_R(0.5) * e + fascia_organs_kinetic_energy(S->organs, S);
   }
   fascia_system_mass_apply(S->sys, S->u, S->scratch);
-  return FASCIA_R(0.5) * fascia_dot(S->u, S->scratch, n) + fascia_organs_kinetic_energy(S->organs, S);
+  return FASCIA_R(0.5) * fascia_dot(S->u, S->scratch, n, S->sys->threads) + fascia_organs_kinetic_energy(S->organs, S);
 }
 
 fascia_status fascia_solver_potential_energy(fascia_solver *S, fascia_real *energy) {

@@ -180,7 +180,7 @@ static void gather(const fascia_system *sys, fascia_real *out) {
   }
 }
 
-fascia_real fascia_dot(const fascia_real *a, const fascia_real *b, int64_t n) {
+fascia_real fascia_dot(const fascia_real *a, const fascia_real *b, int64_t n, int threads) {
   const int64_t blocks = (n + DOT_BLOCK - 1) / DOT_BLOCK;
   fascia_real partial_stack[64], *partial = blocks <= 64 ? partial_stack : malloc((size_t)blocks * sizeof *partial);
   if (!partial) { // cannot happen in practice; fall back to a serial sum
@@ -188,7 +188,7 @@ fascia_real fascia_dot(const fascia_real *a, const fascia_real *b, int64_t n) {
     for (int64_t k = 0; k < n; ++k) s += a[k] * b[k];
     return s;
   }
-#pragma omp parallel for schedule(static) if (n > 8 * DOT_BLOCK)
+#pragma omp parallel for num_threads(threads) schedule(static) if (n > 8 * DOT_BLOCK)
   for (int64_t blk = 0; blk < blocks; ++blk) {
     fascia_real s = 0;
     const int64_t end = (blk + 1) * DOT_BLOCK < n ? (blk + 1) * DOT_BLOCK : n;

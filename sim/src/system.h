@@ -103,7 +103,8 @@ FASCIA_INTERN void fascia_system_probe_position(const fascia_system *sys, int32_
 /// is not NULL.
 FASCIA_INTERN void fascia_system_sample_strain(const fascia_system *sys, fascia_real *strain, fascia_real *stress);
 
-/// Deterministic dot product (fixed blocking, independent of thread count).
-FASCIA_INTERN fascia_real fascia_dot(const fascia_real *a, const fascia_real *b, int64_t n);
+/// Deterministic dot product (fixed blocking: the same bits for any thread
+/// count) on `threads` threads.
+FASCIA_INTERN fascia_real fascia_dot(const fascia_real *a, const fascia_real *b, int64_t n, int threads);
 
 #endif
