@@ -108,8 +108,9 @@ void *fascia_calloc(int64_t count, size_t size) {
 void *fascia_calloc_pages(int64_t count, size_t size) {
   if (count < 0 || count > FASCIA_MAX_COUNT * 16 || (size && (size_t)count > (SIZE_MAX - PAGE_BYTES) / size))
     return NULL;
-  const size_t bytes = ((size_t)(count ? count : 1) * size + PAGE_BYTES - 1) / PAGE_BYTES * PAGE_BYTES;
-  void *p = aligned_alloc(PAGE_BYTES, bytes ? bytes : PAGE_BYTES);
+  // at least one page: a valid pointer for empty arrays, as fascia_calloc
+  const size_t bytes = ((size_t)count * size / PAGE_BYTES + 1) * PAGE_BYTES;
+  void *p = aligned_alloc(PAGE_BYTES, bytes);
   if (p) memset(p, 0, bytes);
   return p;
 }

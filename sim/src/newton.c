@@ -73,7 +73,8 @@ static fascia_status objective(fascia_solver *S, const step_terms *terms, const 
   if (terms->c1 != 0 || terms->c2 != 0) {
     // c1/2 (d - hu).M(d - hu) + c2/2 d.M d with M(hu) precomputed
     mass_apply(S, d, S->scratch);
-    const fascia_real dMd = fascia_dot(d, S->scratch, n, S->sys->threads), dz = fascia_dot(d, terms->target_M, n, S->sys->threads);
+    const int threads = S->sys->threads;
+    const fascia_real dMd = fascia_dot(d, S->scratch, n, threads), dz = fascia_dot(d, terms->target_M, n, threads);
     energy += FASCIA_R(0.5) * terms->c1 * (dMd - 2 * dz + terms->target_norm) + FASCIA_R(0.5) * terms->c2 * dMd;
     if (gradient)
       for (int64_t k = 0; k < n; ++k)
@@ -252,7 +253,8 @@ fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iter
         fascia_status st = objective(S, &terms, S->d_trial, &phi_trial, g_trial);
         rep->profile.evaluate_ms += fascia_now_ms() - t;
         if (st == FASCIA_OK &&
-            fascia_newton_accepts(def, phi, phi_trial, alpha, slope, gnorm, fascia_dot(g_trial, g_trial, n, S->sys->threads),
+            fascia_newton_accepts(def, phi, phi_trial, alpha, slope, gnorm,
+                                  fascia_dot(g_trial, g_trial, n, S->sys->threads),
                                   fabs(S->sys->energy_internal) + fabs(S->sys->energy_external), material_roundoff)) {
           accepted = 1;
           break;
