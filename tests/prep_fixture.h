@@ -5,6 +5,7 @@
 #ifndef FASCIA_TESTS_PREP_FIXTURE_H
 #define FASCIA_TESTS_PREP_FIXTURE_H
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -52,6 +53,45 @@ static inline int fixture_box(const char *dir, const char *name, const double *l
     n += snprintf(text + n, sizeof text - (size_t)n, "f %d %d %d\nf %d %d %d\n", quads[f][0], quads[f][1],
                   quads[f][2], quads[f][0], quads[f][2], quads[f][3]);
   return fixture_write(dir, name, text);
+}
+
+/// The two-organ layout of several prep tests: box A ends at x = -face, box
+/// B starts at x = +face (20 x 20.4 x 20.4 mm each), written as a.obj and
+/// b.obj; with scene text also scene.json, whose path goes into
+/// path[512]. 0 on failure.
+static inline int fixture_two_boxes(const char *dir, double face, const char *scene, char *path) {
+  const double a_lo[3] = {-0.02, -0.0102, -0.0102}, a_hi[3] = {-face, 0.0102, 0.0102};
+  const double b_lo[3] = {face, -0.0102, -0.0102}, b_hi[3] = {0.02, 0.0102, 0.0102};
+  if (!fixture_box(dir, "a.obj", a_lo, a_hi) || !fixture_box(dir, "b.obj", b_lo, b_hi)) return 0;
+  if (!scene) return 1;
+  snprintf(path, 512, "%s/scene.json", dir);
+  return fixture_write(dir, "scene.json", scene);
+}
+
+/// How far a model's weights are from what the mechanics needs, over all
+/// samples: worst[0] |sum w - 1|, worst[1] |sum w x_i - p| (m), worst[2]
+/// |sum grad w| (at mm scale: gradients go as 1/spacing) and
+/// |sum x_i (x) grad w - I|.
+static inline void fixture_weight_errors(const fascia_model *m, double worst[3]) {
+  worst[0] = worst[1] = worst[2] = 0;
+  for (int32_t s = 0; s < m->sample_count; ++s) {
+    double w = 0, g[3] = {0, 0, 0}, p[3] = {0, 0, 0}, G[9] = {0};
+    for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k) {
+      const double *x = m->frame_position + 3 * m->pair_frame[k], *dw = m->pair_gradient + 3 * k;
+      w += m->pair_weight[k];
+      for (int a = 0; a < 3; ++a) {
+        g[a] += dw[a];
+        p[a] += m->pair_weight[k] * x[a];
+        for (int b = 0; b < 3; ++b) G[3 * a + b] += x[a] * dw[b];
+      }
+    }
+    worst[0] = fmax(worst[0], fabs(w - 1));
+    for (int a = 0; a < 3; ++a) {
+      worst[1] = fmax(worst[1], fabs(p[a] - m->sample_position[3 * s + a]));
+      worst[2] = fmax(worst[2], fabs(g[a]) * 1e-3);
+      for (int b = 0; b < 3; ++b) worst[2] = fmax(worst[2], fabs(G[3 * a + b] - (a == b)));
+    }
+  }
 }
 
 /// Everything the pipeline builds.

@@ -23,11 +23,7 @@ static const char scene[] =
 int main(void) {
   char dir[256], path[512];
   if (!fixture_tmpdir(dir)) return 1;
-  const double a_lo[3] = {-0.02, -0.0102, -0.0102}, a_hi[3] = {-0.0031, 0.0102, 0.0102};
-  const double b_lo[3] = {0.0031, -0.0102, -0.0102}, b_hi[3] = {0.02, 0.0102, 0.0102};
-  CHECK(fixture_box(dir, "a.obj", a_lo, a_hi) && fixture_box(dir, "b.obj", b_lo, b_hi) &&
-        fixture_write(dir, "scene.json", scene));
-  snprintf(path, sizeof path, "%s/scene.json", dir);
+  CHECK(fixture_two_boxes(dir, 0.0031, scene, path));
   fascia_ctx *ctx = fixture_ctx();
   fixture_run r;
   CHECK_OK(fixture_prep(ctx, path, &r), ctx);

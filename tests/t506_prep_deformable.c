@@ -37,28 +37,11 @@ static const char scene[] =
 // Weights of every sample: sum w = 1, sum grad w = 0, sum w x_i = p,
 // sum x_i (x) grad w = I (1e-9: MLS solves a 4x4 system in double per sample).
 static int check_weights(const fascia_model *m) {
-  double worst_pou = 0, worst_lin = 0, worst_grad = 0;
-  for (int32_t s = 0; s < m->sample_count; ++s) {
-    double w = 0, g[3] = {0, 0, 0}, p[3] = {0, 0, 0}, G[9] = {0};
-    for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k) {
-      const double *x = m->frame_position + 3 * m->pair_frame[k], *dw = m->pair_gradient + 3 * k;
-      w += m->pair_weight[k];
-      for (int a = 0; a < 3; ++a) {
-        g[a] += dw[a];
-        p[a] += m->pair_weight[k] * x[a];
-        for (int b = 0; b < 3; ++b) G[3 * a + b] += x[a] * dw[b];
-      }
-    }
-    worst_pou = fmax(worst_pou, fabs(w - 1));
-    for (int a = 0; a < 3; ++a) {
-      worst_lin = fmax(worst_lin, fabs(p[a] - m->sample_position[3 * s + a]));
-      worst_grad = fmax(worst_grad, fabs(g[a]) * 1e-3); // gradients ~ 1/spacing: compare at mm scale
-      for (int b = 0; b < 3; ++b) worst_grad = fmax(worst_grad, fabs(G[3 * a + b] - (a == b)));
-    }
-  }
-  CHECK(worst_pou < 1e-9);
-  CHECK(worst_lin < 1e-12); // metres: 1e-9 of a millimetre
-  CHECK(worst_grad < 1e-8);
+  double worst[3];
+  fixture_weight_errors(m, worst);
+  CHECK(worst[0] < 1e-9);
+  CHECK(worst[1] < 1e-12); // metres: 1e-9 of a millimetre
+  CHECK(worst[2] < 1e-8);
   return 0;
 }
 
