@@ -111,6 +111,7 @@ static fascia_status upload_model(fascia_device *dev, const fascia_solver *S) {
   PUT(frame_pairs, m->frame_pairs, P, int32_t);
   PUT(pair_sample, sys->pair_sample, P, int32_t);
   PUT(sample_mass, sys->sample_mass, Sn, fascia_real);
+  PUT(pair_lumped_mass, sys->pair_lumped_mass, P, fascia_real);
   PUT(frame_mass, sys->frame_mass, N, fascia_real);
   PUT(frame_moment, sys->frame_moment, 3 * N, fascia_real);
   PUT(frame_load, m->frame_load, 6 * N, fascia_real);
@@ -403,13 +404,15 @@ fascia_status fascia_device_minimize(fascia_solver *S, int dynamic, int max_iter
   if (dynamic || reference == 0) reference = reference > g0 ? reference : g0;
   if (reference == 0) reference = 1;
   rep->reference_norm = reference;
+  FASCIA_TRY(fascia_newton_check_range(S, phi, g0, reference));
   const fascia_real material_roundoff = fascia_newton_energy_roundoff(S);
+  const fascia_real force_roundoff = material_roundoff / S->model_size; // a residual no iteration can lower
   int iteration = 0, converged = 0;
   fascia_real gnorm = g0;
   fascia_status status = FASCIA_OK;
   for (; iteration <= max_iterations; ++iteration) {
     gnorm = sqrt(gg);
-    if (gnorm <= def->newton_tolerance * reference) {
+    if (gnorm <= def->newton_tolerance * reference || gnorm <= force_roundoff) {
       converged = 1;
       break;
     }

@@ -61,6 +61,7 @@ typedef struct fascia_dev {
   int64_t pair_count;
   const int32_t *frame_offsets, *frame_pairs, *pair_sample; ///< reverse table, pair -> sample
   const fascia_real *sample_mass;    ///< [S] kg
+  const fascia_real *pair_lumped_mass; ///< [P] kg, the lumped mass's share of each pair (system.c)
   const fascia_real *frame_mass;     ///< [N] sum_s m_s w_is
   const fascia_real *frame_moment;   ///< [3N] sum_s m_s w_is d_is
   const fascia_real *frame_load;     ///< [6N] force, torque
@@ -190,14 +191,14 @@ static inline FASCIA_HD void fascia_dev_state_item(const fascia_dev *D, int32_t 
   fascia_dev_rest_A(D, i, q, D->A + 9 * (int64_t)i);
 }
 
-// lumped (row-sum) 6x6 mass block of frame i at A_mass (as system.c)
+// lumped 6x6 mass block of frame i at A_mass (as system.c)
 static inline FASCIA_HD void fascia_dev_lumped_mass_item(const fascia_dev *D, int32_t i) {
   fascia_real *B = D->mass_blocks + 36 * (int64_t)i;
   for (int c = 0; c < 36; ++c) B[c] = 0;
   for (int32_t r = D->frame_offsets[i]; r < D->frame_offsets[i + 1]; ++r) {
-    const int32_t k = D->frame_pairs[r], s = D->pair_sample[k];
+    const int32_t k = D->frame_pairs[r];
     fascia_pt_lumped_mass_add(D->A_mass + 9 * (int64_t)i, D->pm.pair_offset + 3 * (int64_t)k,
-                              D->sample_mass[s] * D->pm.pair_weight[k], B);
+                              D->pair_lumped_mass[k], B);
   }
 }
 

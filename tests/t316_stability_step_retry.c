@@ -19,7 +19,7 @@ int main(void) {
   if (!ctx) return 1;
   const fascia_solver_def defaults = fascia_solver_def_default();
   CHECK(defaults.step_retries == 4);
-  CHECK(defaults.require_convergence == 0);
+  CHECK(defaults.require_convergence == 1);
   const int steps = (int)(1.2 * MOTION_END / DT + 0.5);
   fascia_model *m = stab_pushed_beam(ctx, FASCIA_LAW_NEOHOOKEAN, 4.0, 3.0, MOTION_END);
   CHECK(m != NULL);

@@ -468,8 +468,8 @@ static inline FASCIA_HD void fascia_pt_sample_local_stiffness(const fascia_pt_mo
   }
 }
 
-/// Adds one pair's share to its frame's lumped (row-sum) 6x6 mass block B:
-/// mass mw = m_s w_is at offset a = A d from the frame,
+/// Adds one pair's share to its frame's lumped 6x6 mass block B: a point
+/// mass mw >= 0 (the pair's share of m_s) at offset a = A d from the frame,
 ///   [mw I, -mw [a]x; mw [a]x, mw (|a|^2 I - a a^T)].
 static inline FASCIA_HD void fascia_pt_lumped_mass_add(const fascia_real *A, const fascia_real *d, fascia_real mw,
                                                        fascia_real *B) {

@@ -331,15 +331,17 @@ static fascia_status validate_materials(fascia_ctx *ctx, const fascia_model *m, 
     FASCIA_CHECK(mat->law >= 0 && mat->law < FASCIA_LAW_COUNT_, ctx, FASCIA_ERR_FORMAT,
                  "model '%s' /materials: material %d ('%s') has law %d, expected 0 (stvk) or 1 (neohookean)", origin,
                  (int)k, mat->name, (int)mat->law);
-    FASCIA_CHECK(isfinite(mat->youngs_modulus) && mat->youngs_modulus > 0, ctx, FASCIA_ERR_FORMAT,
-                 "model '%s' /materials: material %d ('%s') has Young's modulus %g Pa, expected > 0", origin, (int)k,
-                 mat->name, mat->youngs_modulus);
+    FASCIA_CHECK(isfinite(mat->youngs_modulus) && mat->youngs_modulus > 0 && mat->youngs_modulus <= FASCIA_MAX_MODULUS,
+                 ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' /materials: material %d ('%s') has Young's modulus %g Pa, expected (0, %g] (stiffer than "
+                 "any solid; check the units: Pa)", origin, (int)k, mat->name, mat->youngs_modulus, FASCIA_MAX_MODULUS);
     FASCIA_CHECK(isfinite(mat->poisson_ratio) && mat->poisson_ratio >= 0 && mat->poisson_ratio < 0.5, ctx,
                  FASCIA_ERR_FORMAT, "model '%s' /materials: material %d ('%s') has Poisson ratio %g, expected [0, 0.5)",
                  origin, (int)k, mat->name, mat->poisson_ratio);
-    FASCIA_CHECK(isfinite(mat->density) && mat->density > 0, ctx, FASCIA_ERR_FORMAT,
-                 "model '%s' /materials: material %d ('%s') has density %g kg/m^3, expected > 0", origin, (int)k,
-                 mat->name, mat->density);
+    FASCIA_CHECK(isfinite(mat->density) && mat->density > 0 && mat->density <= FASCIA_MAX_DENSITY, ctx,
+                 FASCIA_ERR_FORMAT,
+                 "model '%s' /materials: material %d ('%s') has density %g kg/m^3, expected (0, %g] (denser than any "
+                 "matter; check the units: kg/m^3)", origin, (int)k, mat->name, mat->density, FASCIA_MAX_DENSITY);
     FASCIA_CHECK(mat->part >= 0 && mat->part < FASCIA_PART_COUNT_, ctx, FASCIA_ERR_FORMAT,
                  "model '%s' /materials/part: material %d ('%s') has part %d, expected 0 (full), 1 (deviatoric) or "
                  "2 (volumetric)",

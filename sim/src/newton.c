@@ -114,6 +114,9 @@ static fascia_status assemble(fascia_solver *S, const step_terms *terms) {
 // is the margin. Without this term a stiff StVK model (E = 1e8 Pa, t311)
 // cannot see its energy decrease near the minimum and a step fails to
 // converge in its line search.
+// (Its quotient by the model's size is the round-off of the forces: a
+// residual below it is converged whatever the tolerance asks, as when
+// nothing loads the tissue and the reference itself is round-off.)
 fascia_real fascia_newton_energy_roundoff(const fascia_solver *S) {
   const fascia_system *sys = S->sys;
   fascia_real sum = 0;
@@ -154,6 +157,19 @@ fascia_real fascia_newton_load_norm(const fascia_solver *S) {
   return sqrt(sum + fascia_organs_load_norm2(S->organs, S));
 }
 
+// Beyond this magnitude an energy or a residual norm is taken for an
+// overflow: its square (in the norms and the line search) would not be
+// finite, and comparisons against the tolerance would pass vacuously.
+#define NEWTON_OVERFLOW 1e150
+
+fascia_status fascia_newton_check_range(fascia_solver *S, fascia_real phi, fascia_real g0, fascia_real reference) {
+  if (fabs(phi) < NEWTON_OVERFLOW && g0 < NEWTON_OVERFLOW && reference < NEWTON_OVERFLOW) return FASCIA_OK;
+  return FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
+                     "solver: the energy (%.3g J), forces (%.3g) or loads (%.3g) overflow the arithmetic: a modulus, "
+                     "density, load or gravity is out of any physical range; check the values and their units (SI)",
+                     phi, g0, reference);
+}
+
 fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iterations, fascia_solve_report *rep) {
   const int32_t N = S->frame_count;
   const int64_t n = 6 * (int64_t)N;
@@ -182,12 +198,14 @@ fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iter
   if (dynamic || reference == 0) reference = reference > g0 ? reference : g0;
   if (reference == 0) reference = 1;
   rep->reference_norm = reference;
+  FASCIA_TRY(fascia_newton_check_range(S, phi, g0, reference));
   const fascia_real material_roundoff = fascia_newton_energy_roundoff(S);
+  const fascia_real force_roundoff = material_roundoff / S->model_size; // a residual no iteration can lower
   int iteration = 0, converged = 0;
   fascia_real gnorm = g0;
   for (; iteration <= max_iterations; ++iteration) {
     gnorm = sqrt(fascia_dot(g, g, n, S->sys->threads));
-    if (gnorm <= def->newton_tolerance * reference) {
+    if (gnorm <= def->newton_tolerance * reference || gnorm <= force_roundoff) {
       converged = 1;
       break;
     }

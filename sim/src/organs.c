@@ -263,6 +263,14 @@ cleanup:
   return status;
 }
 
+int fascia_organs_any_driven(const fascia_organs *O) {
+  for (int32_t b = 0; O && b < O->model->organ_count; ++b)
+    if (O->driven[b]) return 1;
+  return 0;
+}
+
+int32_t fascia_organs_frame_body(const fascia_organs *O, int32_t i) { return O ? O->frame_body[i] : -1; }
+
 // A body is simulated when it is rigid, has a master and is not driven.
 static int active(const fascia_organs *O, int32_t b) { return O->master[b] >= 0 && !O->driven[b]; }
 

@@ -63,6 +63,14 @@ FASCIA_INTERN void fascia_organs_sync(fascia_organs *O, fascia_solver *S);
 FASCIA_INTERN fascia_real fascia_organs_kinetic_energy(const fascia_organs *O, const fascia_solver *S);
 FASCIA_INTERN fascia_real fascia_organs_potential_energy(const fascia_organs *O, const fascia_solver *S);
 
+/// The rigid organ whose body carries frame i (its master or a slave), -1
+/// for none (O may be NULL).
+FASCIA_INTERN int32_t fascia_organs_frame_body(const fascia_organs *O, int32_t i);
+
+/// 1 when the caller drives some organ now (its work on the tissue is not
+/// known to the solver); O may be NULL.
+FASCIA_INTERN int fascia_organs_any_driven(const fascia_organs *O);
+
 /// Number of rigid organs simulated as bodies with coupling frames (0: the
 /// reduced and full coordinates coincide).
 FASCIA_INTERN int32_t fascia_organs_body_count(const fascia_organs *O);

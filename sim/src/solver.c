@@ -26,6 +26,8 @@ fascia_solver_def fascia_solver_def_default(void) {
   d.line_search = 1;
   d.load_steps = 1;
   d.step_retries = 4;
+  d.require_convergence = 1;
+  d.blow_up_strain = 10;
   d.cookie_ = FASCIA_DEF_COOKIE;
   return d;
 }
@@ -35,6 +37,11 @@ static fascia_status check_def(fascia_ctx *ctx, const fascia_solver_def *d) {
                "solver: the settings were not made by fascia_solver_def_default()");
   FASCIA_CHECK(isfinite(d->time_step) && d->time_step > 0, ctx, FASCIA_ERR_ARGUMENT,
                "solver: time step %g s is impossible; give a positive number of seconds", d->time_step);
+  FASCIA_CHECK(d->time_step >= FASCIA_MIN_TIME_STEP, ctx, FASCIA_ERR_ARGUMENT,
+               "solver: time step %g s is below the shortest one, %g s (the inertia term would swamp the tissue's "
+               "stiffness beyond double precision); give a longer time step", d->time_step, FASCIA_MIN_TIME_STEP);
+  FASCIA_CHECK(isfinite(d->blow_up_strain) && d->blow_up_strain >= 0, ctx, FASCIA_ERR_ARGUMENT,
+               "solver: blow-up strain %g must be >= 0 (0: off)", d->blow_up_strain);
   FASCIA_CHECK(d->newton_iterations >= 1 && d->newton_iterations <= 100000, ctx, FASCIA_ERR_ARGUMENT,
                "solver: %d Newton iterations; give 1 to 100000", d->newton_iterations);
   FASCIA_CHECK(isfinite(d->newton_tolerance) && d->newton_tolerance >= 0, ctx, FASCIA_ERR_ARGUMENT,
@@ -154,6 +161,47 @@ static fascia_status choose_linear_solver(fascia_solver *S) {
   return FASCIA_OK;
 }
 
+// Every free tissue frame must carry mass: a frame no sample puts mass on
+// has no inertia and, having no sample, no stiffness either, so the implicit
+// step has no unique solution. (A rigid organ's frames move with its body,
+// whose mass is the organ's.) The lumped blocks cannot be indefinite: their
+// shares are never negative (system.c); t340 checks that the blocks of
+// prepared models are positive definite.
+static fascia_status check_mass(fascia_solver *S) {
+  const fascia_model *m = S->model;
+  for (int32_t i = 0; i < m->frame_count; ++i) {
+    if (!S->mask[6 * (int64_t)i] || fascia_organs_frame_body(S->organs, i) >= 0) continue;
+    fascia_real mass = 0;
+    for (int32_t r = m->frame_offsets[i]; r < m->frame_offsets[i + 1]; ++r)
+      mass += S->sys->pair_lumped_mass[m->frame_pairs[r]];
+    if (mass > 0) continue;
+    const fascia_real *x = m->frame_position + 3 * (int64_t)i;
+    return FASCIA_FAIL(S->ctx, FASCIA_ERR_FORMAT,
+                       "model: free frame %d (rest position %.4g %.4g %.4g m) has no mass: no sample puts weight on "
+                       "it, so nothing holds it; re-run 'fascia prep', or make the frame fixed",
+                       (int)i, x[0], x[1], x[2]);
+  }
+  return FASCIA_OK;
+}
+
+// What the blow-up rule needs of the model: whether any frame is prescribed
+// (then the motion does work the rule cannot account for), and the energy
+// scale m |g| L (L the diagonal of the frames' bounding box).
+static void energy_scale(fascia_solver *S) {
+  const fascia_model *m = S->model;
+  fascia_real lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  S->closed = 1;
+  for (int32_t i = 0; i < m->frame_count; ++i) {
+    S->closed &= m->frame_kind[i] != FASCIA_FRAME_PRESCRIBED;
+    for (int c = 0; c < 3; ++c)
+      lo[c] = fmin(lo[c], m->frame_position[3 * i + c]), hi[c] = fmax(hi[c], m->frame_position[3 * i + c]);
+  }
+  fascia_real size2 = 0;
+  for (int c = 0; m->frame_count > 0 && c < 3; ++c) size2 += (hi[c] - lo[c]) * (hi[c] - lo[c]);
+  S->model_size = size2 > 0 ? sqrt(size2) : 1;
+  S->weight_scale = fascia_model_mass(m) * sqrt(fascia_pt_dot3(m->gravity, m->gravity)) * S->model_size;
+}
+
 fascia_status fascia_solver_create(fascia_ctx *ctx, const fascia_model *model, const fascia_solver_def *def,
                                    fascia_solver **out) {
   FASCIA_CHECK(out && model && def, ctx, FASCIA_ERR_ARGUMENT, "fascia_solver_create: NULL argument");
@@ -201,6 +249,8 @@ fascia_status fascia_solver_create(fascia_ctx *ctx, const fascia_model *model, c
   for (int64_t i = 0; i < N; ++i)
     for (int c = 0; c < 6; ++c) S->mask[6 * i + c] = model->frame_kind[i] == FASCIA_FRAME_FREE;
   if (S->organs) fascia_organs_masks(S->organs, S->mask);
+  FASCIA_TRY_GOTO(check_mass(S));
+  energy_scale(S);
   FASCIA_TRY_GOTO(pick_backend(S));
   if (!S->device) FASCIA_TRY_GOTO(choose_linear_solver(S)); // the device solver is matrix-free CG
   *out = S;
@@ -280,15 +330,81 @@ fascia_status fascia_solver_solve_static(fascia_solver *S, fascia_solve_report *
     status = minimize(S, 0, report);
   }
   S->sys->gravity_scale = 1;
+  S->energy_known = 0;
   memset(S->u, 0, 6 * (size_t)N * sizeof(fascia_real));
   if (status != FASCIA_OK) return status;
   fascia_ctx_progress(S->ctx, "static solve", 1.0, report->converged ? "converged" : "not converged");
+  if (!report->converged && !(report->gradient_norm <= report->reference_norm))
+    return FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
+                       "static solve: diverged: after %d Newton iterations the residual %.3g is above the load %.3g; "
+                       "a piece of tissue may be held by nothing, or the load is too large for one step (use more "
+                       "load steps)", report->newton_iterations, report->gradient_norm, report->reference_norm);
   if (!report->converged)
     return FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
                        "static solve: not converged after %d Newton iterations (|gradient| %.3g, load %.3g, "
                        "tolerance %.3g relative); raise the iteration limit or use more load steps",
                        report->newton_iterations, report->gradient_norm, report->reference_norm,
                        S->def.newton_tolerance);
+  return FASCIA_OK;
+}
+
+// The rule for a step that has blown up (docs/mechanics.md, "When a run has
+// diverged"), applied to every dynamic step the Newton solve returns from:
+//  1. a number in the state is not finite;
+//  2. the solve ended unconverged with a residual above the load it started
+//     from: it made the step worse, so the state is no approximation at all;
+//  3. some sample's strain passed def.blow_up_strain;
+//  4. where nothing outside does work (no prescribed frame, no driven
+//     organ), the total energy E_kin + E_pot rose by more than ENERGY_RISE
+//     of its scale in one step: implicit Euler dissipates, a converged step
+//     never gains energy, and an inexact one gains a little (measured: at
+//     most 2e-4 of the scale in the crudest solves of the stability suite).
+// Returns FASCIA_ERR_NUMERIC with the cause, so the step is split or refused
+// like one the Newton solve could not take.
+#define ENERGY_RISE 0.1
+
+// E_kin + E_pot at the current state. On the CPU the potential is the one
+// of the Newton solve's last evaluation (at the accepted state: nothing is
+// evaluated twice); the device keeps its own, so it is evaluated here.
+static fascia_status total_energy(fascia_solver *S, fascia_real *out) {
+  fascia_real potential = 0;
+  if (S->device) FASCIA_TRY(fascia_solver_potential_energy(S, &potential));
+  else potential = S->sys->energy_internal + S->sys->energy_external + fascia_organs_potential_energy(S->organs, S);
+  *out = potential + fascia_solver_kinetic_energy(S);
+  return FASCIA_OK;
+}
+static fascia_status check_blow_up(fascia_solver *S, const fascia_solve_report *r, int energy_before_known,
+                                   fascia_real energy_before) {
+  const int64_t N = S->frame_count;
+  for (int64_t k = 0; k < 6 * N; ++k)
+    if (!isfinite(S->d[k]) || (k < 3 * N && !isfinite(S->x[k])) || (k < 4 * N && !isfinite(S->q[k])))
+      return FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC, "the state of frame %lld is not finite (overflow)",
+                         (long long)(k / 6));
+  if (!r->converged && !(r->gradient_norm <= r->reference_norm))
+    return FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
+                       "the Newton solve diverged: after %d iterations the residual %.3g is above the load %.3g it "
+                       "started from", r->newton_iterations, r->gradient_norm, r->reference_norm);
+  fascia_system_set_state(S->sys, S->x, S->q);
+  if (S->def.blow_up_strain > 0) {
+    const fascia_real strain = fascia_system_largest_strain(S->sys, NULL);
+    if (!(strain <= S->def.blow_up_strain)) {
+      int32_t s = -1;
+      (void)fascia_system_largest_strain(S->sys, &s);
+      return FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
+                         "the solution blew up: sample %d reached a strain of %.3g, past the limit %.3g",
+                         (int)s, strain, S->def.blow_up_strain);
+    }
+  }
+  if (energy_before_known) {
+    fascia_real after = 0;
+    FASCIA_TRY(total_energy(S, &after));
+    const fascia_real scale = fabs(energy_before) + S->weight_scale;
+    if (!(after - energy_before <= ENERGY_RISE * scale))
+      return FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
+                         "the solution blew up: the energy rose from %.4g J to %.4g J in one step with nothing "
+                         "doing work on the tissue", energy_before, after);
+    S->energy_last = after; // kept by the caller only if the step is accepted
+  }
   return FASCIA_OK;
 }
 
@@ -303,6 +419,18 @@ static fascia_status step_once(fascia_solver *S, fascia_real h, fascia_solve_rep
   const fascia_real t1 = S->time + h;
   fascia_real *backup = NULL;
   FASCIA_TRY(save_state(S, &backup));
+  // the energy rule needs E at the start: the last accepted step's, or now
+  const int energy_rule = S->closed && !fascia_organs_any_driven(S->organs);
+  if (energy_rule && !S->energy_known) {
+    fascia_status st = fascia_solver_potential_energy(S, &S->energy_last);
+    if (st != FASCIA_OK) {
+      free(backup);
+      return st;
+    }
+    S->energy_last += fascia_solver_kinetic_energy(S);
+    S->energy_known = 1;
+  }
+  const fascia_real energy_before = S->energy_last;
   // anchor at q_n, mass at q_n
   memcpy(S->x_base, S->x, 3 * (size_t)N * sizeof(fascia_real));
   memcpy(S->q_base, S->q, 4 * (size_t)N * sizeof(fascia_real));
@@ -338,14 +466,18 @@ static fascia_status step_once(fascia_solver *S, fascia_real h, fascia_solve_rep
                          "Newton solve not converged after %d iterations (|gradient| %.3g, tolerance %.3g)",
                          report->newton_iterations, report->gradient_norm,
                          S->def.newton_tolerance * report->reference_norm);
+  if (status == FASCIA_OK) { // the new velocities, then the blow-up rule on the new state
+    for (int64_t k = 0; k < n; ++k) S->u[k] = S->d[k] / h;
+    fascia_organs_step_end(S->organs, S, h);
+    status = check_blow_up(S, report, energy_rule, energy_before);
+  }
   if (status != FASCIA_OK) {
+    S->energy_last = energy_before;
     restore_state(S, backup);
     free(backup);
     return status;
   }
   free(backup);
-  for (int64_t k = 0; k < n; ++k) S->u[k] = S->d[k] / h;
-  fascia_organs_step_end(S->organs, S, h);
   S->time = t1;
   report->substeps = 1;
   return FASCIA_OK;
@@ -476,6 +608,7 @@ fascia_status fascia_solver_set_state(fascia_solver *S, const fascia_real *x, co
   else memset(S->u, 0, 6 * (size_t)N * sizeof(fascia_real));
   fascia_organs_sync(S->organs, S);
   fascia_system_set_state(S->sys, S->x, S->q);
+  S->energy_known = 0;
   return FASCIA_OK;
 }
 

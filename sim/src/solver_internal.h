@@ -93,6 +93,12 @@ struct fascia_solver {
   fascia_organs *organs; ///< NULL without organs (organs.c)
   struct fascia_device *device; ///< the device solver (cuda/), NULL on the CPU backend
   char device_text[320];        ///< fascia_solver_device()
+  // the blow-up rule (solver.c, check_blow_up)
+  int closed;                   ///< 1: no prescribed frame (only a driven organ can do work)
+  fascia_real weight_scale;     ///< model mass * |g| * size, J: the energy scale of the rule
+  fascia_real model_size;       ///< diagonal of the frames' bounding box, m (> 0)
+  int energy_known;             ///< 1: energy_last is E_kin + E_pot of the current state
+  fascia_real energy_last;
 };
 
 /// Minimizes the step objective (static: potential energy, re-anchored at
@@ -110,6 +116,11 @@ FASCIA_INTERN double fascia_now_ms(void);
 #define FASCIA_NEWTON_MAX_CUTS 30    // step halvings before the Levenberg shift grows
 #define FASCIA_NEWTON_MAX_SHIFT 1e12 // relative Levenberg shift beyond which Newton gives up
 
+/// FASCIA_ERR_NUMERIC when the starting energy phi, residual norm g0 or load
+/// norm of a Newton solve is not finite or past any representable use
+/// (an overflow that would make the tolerance test pass vacuously).
+FASCIA_INTERN fascia_status fascia_newton_check_range(fascia_solver *S, fascia_real phi, fascia_real g0,
+                                                      fascia_real reference);
 /// |external load| over free DOFs: the scale of the Newton tolerance.
 FASCIA_INTERN fascia_real fascia_newton_load_norm(const fascia_solver *S);
 /// The line search's verdict on a trial step alpha along a direction of

@@ -15,6 +15,28 @@ static void rest_rotation(const fascia_model *m, int32_t i, fascia_real *R) {
   fascia_pt_quat_to_mat(m->frame_rotation + 4 * i, R);
 }
 
+// The lumped mass splits each sample's mass among its frames as point masses
+// at the sample, which the frames carry rigidly. The row sum of the
+// consistent mass would split it by the weights w_is, but meshless (MLS)
+// weights can be negative, and a negative share makes a frame's 6x6 block
+// indefinite: the implicit step then has no minimum and blows up at small
+// time steps. The shares here are the positive parts of the weights,
+// renormalized: never negative, summing to the sample's mass, and equal to
+// the row sum wherever no weight is negative (hexahedral, tetrahedral). Each
+// frame's block is then positive semi-definite, and positive definite unless
+// its samples lie on one line (checked when the solver is made).
+static void lumped_mass_shares(fascia_system *sys) {
+  const fascia_model *m = sys->model;
+  for (int32_t s = 0; s < m->sample_count; ++s) {
+    fascia_real positive = 0;
+    for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k)
+      positive += m->pair_weight[k] > 0 ? m->pair_weight[k] : 0;
+    // the weights sum to one, so the positive ones sum to at least one
+    for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k)
+      sys->pair_lumped_mass[k] = m->pair_weight[k] > 0 ? sys->sample_mass[s] * m->pair_weight[k] / positive : 0;
+  }
+}
+
 fascia_status fascia_system_create(fascia_ctx *ctx, const fascia_model *m, int threads, fascia_system **out) {
   FASCIA_CHECK(m && out, ctx, FASCIA_ERR_ARGUMENT, "system: NULL argument");
   *out = NULL;
@@ -41,6 +63,7 @@ fascia_status fascia_system_create(fascia_ctx *ctx, const fascia_model *m, int t
   sys->sample_law = fascia_calloc(S, sizeof(int32_t));
   sys->local_slot = fascia_calloc(sys->max_neighbours, sizeof(int32_t));
   sys->pair_sample = fascia_calloc(P, sizeof(int32_t));
+  sys->pair_lumped_mass = fascia_calloc(P, sizeof(fascia_real));
   sys->frame_mass = fascia_calloc(N, sizeof(fascia_real));
   sys->frame_moment = fascia_calloc(3 * N, sizeof(fascia_real));
   sys->x = fascia_calloc(3 * N, sizeof(fascia_real));
@@ -53,7 +76,7 @@ fascia_status fascia_system_create(fascia_ctx *ctx, const fascia_model *m, int t
   sys->conservative_torque = fascia_calloc(3 * N, sizeof(fascia_real));
   sys->gradient_scratch = fascia_calloc(6 * N, sizeof(fascia_real));
   if (!sys->pair_offset || !sys->sample_lambda || !sys->sample_mu || !sys->sample_coupling || !sys->sample_curvature || !sys->sample_mass ||
-      !sys->sample_law || !sys->local_slot || !sys->pair_sample || !sys->frame_mass || !sys->frame_moment || !sys->x || !sys->q ||
+      !sys->sample_law || !sys->local_slot || !sys->pair_sample || !sys->pair_lumped_mass || !sys->frame_mass || !sys->frame_moment || !sys->x || !sys->q ||
       !sys->A || !sys->A_mass || !sys->pair_buffer || !sys->cache || !sys->sample_flags ||
       !sys->conservative_torque || !sys->gradient_scratch) {
     fascia_system_destroy(&sys);
@@ -84,6 +107,7 @@ fascia_status fascia_system_create(fascia_ctx *ctx, const fascia_model *m, int t
   }
   for (int32_t s = 0; s < m->sample_count; ++s)
     for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k) sys->pair_sample[k] = s;
+  lumped_mass_shares(sys);
   // gravity moments through the reverse table (fixed order)
   for (int32_t i = 0; i < m->frame_count; ++i)
     for (int32_t r = m->frame_offsets[i]; r < m->frame_offsets[i + 1]; ++r) {
@@ -133,6 +157,7 @@ void fascia_system_destroy(fascia_system **sys) {
   free(s->sample_law);
   free(s->local_slot);
   free(s->pair_sample);
+  free(s->pair_lumped_mass);
   free(s->frame_mass);
   free(s->frame_moment);
   free(s->x);
@@ -353,9 +378,8 @@ void fascia_system_mass_lumped(fascia_system *sys, fascia_real *blocks) {
     fascia_real *B = blocks + 36 * (int64_t)i;
     for (int c = 0; c < 36; ++c) B[c] = 0;
     for (int32_t r = m->frame_offsets[i]; r < m->frame_offsets[i + 1]; ++r) {
-      const int32_t k = m->frame_pairs[r], s = sys->pair_sample[k];
-      fascia_pt_lumped_mass_add(sys->A_mass + 9 * i, sys->pair_offset + 3 * k, sys->sample_mass[s] * m->pair_weight[k],
-                                B);
+      const int32_t k = m->frame_pairs[r];
+      fascia_pt_lumped_mass_add(sys->A_mass + 9 * i, sys->pair_offset + 3 * k, sys->pair_lumped_mass[k], B);
     }
   }
 }
@@ -378,17 +402,45 @@ void fascia_system_probe_position(const fascia_system *sys, int32_t p, fascia_re
   }
 }
 
+// |E| = |F^T F - I| / 2 of sample s (Frobenius norm), with F for the caller
+static fascia_real strain_norm(const fascia_system *sys, const fascia_pt_state *st, int32_t s, fascia_real *F) {
+  fascia_real C[9];
+  fascia_pt_sample_F(&sys->pm, st, s, F);
+  fascia_pt_mat_tmul(F, F, C);
+  C[0] -= 1;
+  C[4] -= 1;
+  C[8] -= 1;
+  return FASCIA_R(0.5) * sqrt(fascia_pt_ddot(C, C));
+}
+
+fascia_real fascia_system_largest_strain(const fascia_system *sys, int32_t *sample) {
+  const fascia_pt_state st = {sys->x, sys->A};
+  fascia_real largest = 0;
+  int nonfinite = 0;
+#pragma omp parallel for num_threads(sys->threads) schedule(static) reduction(max : largest) reduction(| : nonfinite)
+  for (int32_t s = 0; s < sys->sample_count; ++s) {
+    fascia_real F[9];
+    const fascia_real e = strain_norm(sys, &st, s, F);
+    if (e > largest) largest = e;
+    nonfinite |= !isfinite(e);
+  }
+  if (nonfinite) largest = INFINITY;
+  if (!sample) return largest;
+  *sample = -1; // the lowest sample with the largest value (the same for any thread count)
+  for (int32_t s = 0; s < sys->sample_count && *sample < 0; ++s) {
+    fascia_real F[9];
+    const fascia_real e = strain_norm(sys, &st, s, F);
+    if (e == largest || (nonfinite && !isfinite(e))) *sample = s;
+  }
+  return largest;
+}
+
 void fascia_system_sample_strain(const fascia_system *sys, fascia_real *strain, fascia_real *stress) {
   const fascia_pt_state st = {sys->x, sys->A};
 #pragma omp parallel for num_threads(sys->threads) schedule(static)
   for (int32_t s = 0; s < sys->sample_count; ++s) {
-    fascia_real F[9], C[9], P[9], aux[FASCIA_PT_AUX_SIZE];
-    fascia_pt_sample_F(&sys->pm, &st, s, F);
-    fascia_pt_mat_tmul(F, F, C);
-    C[0] -= 1;
-    C[4] -= 1;
-    C[8] -= 1;
-    strain[s] = FASCIA_R(0.5) * sqrt(fascia_pt_ddot(C, C));
+    fascia_real F[9], P[9], aux[FASCIA_PT_AUX_SIZE];
+    strain[s] = strain_norm(sys, &st, s, F);
     if (stress) {
       fascia_pt_stress(sys->sample_law[s], sys->sample_lambda[s], sys->sample_mu[s], F, P, aux);
       stress[s] = sqrt(fascia_pt_ddot(P, P));

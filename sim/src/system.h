@@ -32,6 +32,7 @@ typedef struct fascia_system {
   int32_t *sample_law;          ///< [S]
   int32_t *local_slot;          ///< [max neighbours] 0, 1, 2, ..
   int32_t *pair_sample;         ///< [P] the sample each pair belongs to
+  fascia_real *pair_lumped_mass; ///< [P] kg: the share of its sample's mass the lumped mass puts on the pair's frame
 
   // gravity as frame moments: E_g = -sum_i g.(M_i x_i + A_i D_i)
   fascia_real *frame_mass;   ///< [N] M_i = sum_s m_s w_is
@@ -102,6 +103,9 @@ FASCIA_INTERN void fascia_system_probe_position(const fascia_system *sys, int32_
 /// current state, and von Mises-like stress magnitude |P| (Pa) if stress
 /// is not NULL.
 FASCIA_INTERN void fascia_system_sample_strain(const fascia_system *sys, fascia_real *strain, fascia_real *stress);
+/// The largest |E| over the samples at the current state (infinity when one
+/// is not finite), and in *sample (if not NULL) the lowest sample that has it.
+FASCIA_INTERN fascia_real fascia_system_largest_strain(const fascia_system *sys, int32_t *sample);
 
 /// Deterministic dot product (fixed blocking: the same bits for any thread
 /// count) on `threads` threads.

@@ -285,6 +285,7 @@ static fascia_status time_paper_mode(fascia_ctx *ctx, const bench_options *opt, 
   def.threads = opt->threads;
   def.time_step = PAPER_TIME_STEP;
   def.newton_iterations = 1;
+  def.require_convergence = 0; // one Newton iteration per step is the mode
   def.cg_fixed = 1;
   def.cg_iterations = PAPER_CG_ITERATIONS;
   def.line_search = 0;

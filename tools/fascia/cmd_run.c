@@ -56,7 +56,12 @@ static const char run_usage[] =
     "  --load-steps N         static: apply the load in N increments (default 1)\n"
     "  --step-retries N       a failed step is redone as halved steps, N halvings at most (default 4);\n"
     "                         0 stops at the first failure, the last good state saved\n"
-    "  --require-convergence  a step whose Newton iterations do not converge counts as failed\n"
+    "  --require-convergence  a step whose Newton iterations do not converge counts as failed and\n"
+    "                         is split (the default; the interactive and balanced presets accept it)\n"
+    "  --accept-unconverged   keep a step whose Newton iterations did not converge\n"
+    "  --blow-up-strain E     a step after which a sample's strain passes E has blown up and fails\n"
+    "                         (default 10; 0: off). Blown-up steps, overflow and diverging Newton\n"
+    "                         solves end the run with exit 1 (docs/mechanics.md)\n"
     "  --linear-solver KIND   cg, direct (banded Cholesky of the assembled tangent) or auto\n"
     "                         (direct where the band is small enough, else CG; the default)\n"
     "  --assembled            CG multiplies by the assembled block matrix (default matrix-free)\n"
@@ -167,11 +172,13 @@ static int parse_options(int argc, char **argv, run_options *opt) {
     else if (!strcmp(o, "--assembled")) opt->solver.assembled = 1;
     else if (!strcmp(o, "--single")) opt->solver.single_precision_matrix = 1;
     else if (!strcmp(o, "--require-convergence")) opt->solver.require_convergence = 1;
+    else if (!strcmp(o, "--accept-unconverged")) opt->solver.require_convergence = 0;
     else {
       static const char *const valued[] = {"--steps", "--dt", "-o", "--output", "--save-every", "--backend",
                                            "--threads", "--newton-iterations", "--newton-tolerance",
                                            "--cg-iterations", "--cg-tolerance", "--precond", "--mass", "--damping",
-                                           "--load-steps", "--linear-solver", "--preset", "--step-retries"};
+                                           "--load-steps", "--linear-solver", "--preset", "--step-retries",
+                                           "--blow-up-strain"};
       int known = 0;
       for (size_t j = 0; j < sizeof valued / sizeof valued[0]; ++j) known |= !strcmp(o, valued[j]);
       if (!known) return cli_usage_error("run", "unknown option '%s'", o);
@@ -207,6 +214,7 @@ static int parse_options(int argc, char **argv, run_options *opt) {
         ok = cli_preset_apply(v, d); // a static solve keeps its own Newton limit (100)
       } else if (!strcmp(o, "--damping")) ok = cli_parse_real(v, &d->mass_damping) && d->mass_damping >= 0;
       else if (!strcmp(o, "--step-retries")) ok = cli_parse_count(v, &d->step_retries, 0);
+      else if (!strcmp(o, "--blow-up-strain")) ok = cli_parse_real(v, &d->blow_up_strain) && d->blow_up_strain >= 0;
       else ok = cli_parse_count(v, &d->load_steps, 1); // --load-steps
       if (!ok) {
         fprintf(stderr, "fascia run: bad value '%s' for %s (see fascia run --help)\n", v, o);

@@ -38,6 +38,12 @@ typedef enum fascia_material_part {
   FASCIA_PART_COUNT_
 } fascia_material_part;
 
+/// Largest Young's modulus (Pa) and density (kg/m^3) a model may hold: past
+/// any real solid (diamond: 1.2e12 Pa; osmium: 2.3e4 kg/m^3), and far enough
+/// below overflow that energies and forces stay meaningful in double.
+#define FASCIA_MAX_MODULUS 1e13
+#define FASCIA_MAX_DENSITY 1e6
+
 /// How a frame moves. Values are stored in model files: never renumber.
 typedef enum fascia_frame_kind {
   FASCIA_FRAME_FREE = 0,       ///< a degree of freedom of the solver

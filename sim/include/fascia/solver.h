@@ -28,8 +28,13 @@ typedef enum fascia_linear_solver {
 
 typedef enum fascia_mass_kind {
   FASCIA_MASS_CONSISTENT = 0, ///< M = sum_s m_s J_s^T J_s, samples follow frames exactly
-  FASCIA_MASS_LUMPED = 1,     ///< row-sum lumped 6x6 blocks per frame
+  FASCIA_MASS_LUMPED = 1,     ///< 6x6 blocks per frame: each sample's mass split among its frames (never negative)
 } fascia_mass_kind;
+
+/// The shortest time step a solver takes, s: below it the inertia term
+/// (mass / dt^2) swamps the stiffness by more than double precision can
+/// resolve for any tissue, and the step would compute nothing.
+#define FASCIA_MIN_TIME_STEP 1e-8
 
 /// Solver options; start from fascia_solver_def_default().
 typedef struct fascia_solver_def {
@@ -38,7 +43,7 @@ typedef struct fascia_solver_def {
   /// or "emulated" (the device solver in host loops: for tests, slow)
   const char *backend;
   int threads;                   ///< 0: the context's
-  fascia_real time_step;         ///< s, dynamic steps (default 0.01)
+  fascia_real time_step;         ///< s, dynamic steps (default 0.01; at least FASCIA_MIN_TIME_STEP)
   int newton_iterations;         ///< most Newton iterations per solve (default 20; static 100)
   fascia_real newton_tolerance;  ///< stop when |gradient| <= tol * |external load| (default 1e-6)
   int cg_iterations;             ///< most CG iterations per linear solve (default 200)
@@ -63,9 +68,16 @@ typedef struct fascia_solver_def {
   int step_retries;
   /// Dynamic steps: 1 counts a step whose Newton solve ends unconverged
   /// after newton_iterations as failed (split as above, then
-  /// FASCIA_ERR_NUMERIC); 0 accepts it (default: the paper's fixed-cost mode,
-  /// where one Newton iteration per step is the point).
+  /// FASCIA_ERR_NUMERIC; the default: no unconverged state is passed off as
+  /// a solution); 0 accepts it (the paper's fixed-cost mode and the
+  /// interactive presets, where a capped Newton count per step is the point).
   int require_convergence;
+  /// Dynamic steps: a step after which some sample's Green-Lagrange strain
+  /// norm exceeds this has blown up and is failed like an unsolvable one
+  /// (default 10, a stretch of about 4.6; tissue tears long before). 0 turns
+  /// this rule off; the others stay (docs/mechanics.md, "When a run has
+  /// diverged").
+  fascia_real blow_up_strain;
   int cookie_;                   ///< private
 } fascia_solver_def;
 

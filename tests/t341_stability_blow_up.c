@@ -1,0 +1,109 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// A run that diverges is never reported as a step taken: each rule of the
+// blow-up check (docs/mechanics.md, "When a run has diverged") turns a step
+// into FASCIA_ERR_NUMERIC with a message naming the cause and the state left
+// as before the step; values out of any physical range are refused before
+// any step. Each case passed silently (status OK) before the check existed.
+#include "stability.h"
+
+// One step of sd on m from the state (x, q) (NULL: rest). Returns the
+// status; *moved is 1 when the state or time changed.
+static fascia_status one_step(fascia_ctx *ctx, const fascia_model *m, const fascia_solver_def *sd,
+                              const fascia_real *x, const fascia_real *q, int *moved) {
+  fascia_solver *s = NULL;
+  fascia_status st = fascia_solver_create(ctx, m, sd, &s);
+  if (st != FASCIA_OK) return st;
+  const size_t N = (size_t)m->frame_count;
+  if (x) st = fascia_solver_set_state(s, x, q, NULL);
+  fascia_real *before = malloc(7 * N * sizeof(fascia_real));
+  if (st == FASCIA_OK && before) {
+    memcpy(before, fascia_solver_frame_positions(s), 3 * N * sizeof(fascia_real));
+    memcpy(before + 3 * N, fascia_solver_frame_rotations(s), 4 * N * sizeof(fascia_real));
+    st = fascia_solver_step(s, NULL);
+    *moved = memcmp(before, fascia_solver_frame_positions(s), 3 * N * sizeof(fascia_real)) != 0 ||
+             memcmp(before + 3 * N, fascia_solver_frame_rotations(s), 4 * N * sizeof(fascia_real)) != 0 ||
+             fascia_solver_time(s) != 0;
+  }
+  free(before);
+  fascia_solver_destroy(&s);
+  return st;
+}
+
+#define EXPECT_REFUSED(st, moved, text)                                                                            \
+  do {                                                                                                             \
+    CHECK((st) == FASCIA_ERR_NUMERIC);                                                                             \
+    CHECK(!(moved));                                                                                               \
+    if (!strstr(fascia_ctx_message(ctx), text)) {                                                                  \
+      fprintf(stderr, "%s:%d: message lacks '%s': %s\n", __FILE__, __LINE__, text, fascia_ctx_message(ctx));       \
+      return 1;                                                                                                    \
+    }                                                                                                              \
+  } while (0)
+
+int main(void) {
+  fascia_ctx *ctx = stab_ctx();
+  CHECK(ctx != NULL);
+  fascia_scene_beam_def bd = stab_beam_def(4, FASCIA_LAW_STVK);
+  fascia_model *m = NULL;
+  CHECK_OK(fascia_scene_beam_build(ctx, &bd, &m), ctx);
+  const int32_t N = m->frame_count;
+  int moved = 1;
+
+  // the healthy run takes its step (the rules do not fire on it)
+  fascia_solver_def sd = fascia_solver_def_default();
+  CHECK_OK(one_step(ctx, m, &sd, NULL, NULL, &moved), ctx);
+  CHECK(moved);
+
+  // 1. a load that overflows the arithmetic: the Newton test |g| <= tol |load|
+  //    passed vacuously (0 iterations, "converged")
+  int32_t tip = -1;
+  for (int32_t i = 0; i < N; ++i)
+    if (m->frame_kind[i] == FASCIA_FRAME_FREE) tip = i;
+  m->frame_load[6 * tip + 2] = -1e160;
+  moved = 1;
+  EXPECT_REFUSED(one_step(ctx, m, &sd, NULL, NULL, &moved), moved, "overflow");
+  m->frame_load[6 * tip + 2] = 0;
+
+  // 3. strain past the limit: the same healthy step under a limit it passes
+  sd.blow_up_strain = 1e-12;
+  moved = 1;
+  EXPECT_REFUSED(one_step(ctx, m, &sd, NULL, NULL, &moved), moved, "strain");
+  sd.blow_up_strain = 10;
+
+  // 2 and 4. one undamped Newton iteration (no line search) of a very soft
+  // clamped beam under its own weight from rest, where nothing does work on
+  // it: the linearized step sags it by far more than its length, and the
+  // state it lands on has a residual and an energy far above the start
+  fascia_model *soft = NULL;
+  bd.youngs_modulus = 20;
+  CHECK_OK(fascia_scene_beam_build(ctx, &bd, &soft), ctx);
+  sd.newton_iterations = 1;
+  sd.line_search = 0;
+  sd.step_retries = 0;
+  sd.time_step = 1;
+  sd.blow_up_strain = 0; // rules 2 and 4 alone
+  sd.require_convergence = 0; // the capped step is kept when it passes the rules
+  moved = 1;
+  fascia_status st = one_step(ctx, soft, &sd, NULL, NULL, &moved);
+  if (getenv("T341_VERBOSE")) fprintf(stderr, "soft: %s: %s\n", fascia_status_name(st), fascia_ctx_message(ctx));
+  CHECK(st == FASCIA_ERR_NUMERIC && !moved);
+  CHECK(strstr(fascia_ctx_message(ctx), "diverged") || strstr(fascia_ctx_message(ctx), "energy rose"));
+  fascia_model_destroy(&soft);
+
+  // out of range before any step: a time step below the shortest, moduli
+  // and densities past any solid
+  sd = fascia_solver_def_default();
+  sd.time_step = 1e-300;
+  fascia_solver *s = NULL;
+  CHECK(fascia_solver_create(ctx, m, &sd, &s) == FASCIA_ERR_ARGUMENT && !s);
+  CHECK(strstr(fascia_ctx_message(ctx), "shortest") != NULL);
+  m->materials[0].youngs_modulus = 1e160;
+  CHECK(fascia_model_validate(ctx, m, "t341") == FASCIA_ERR_FORMAT);
+  CHECK(strstr(fascia_ctx_message(ctx), "Young's modulus") != NULL);
+  m->materials[0].youngs_modulus = bd.youngs_modulus;
+  m->materials[0].density = 1e40;
+  CHECK(fascia_model_validate(ctx, m, "t341") == FASCIA_ERR_FORMAT);
+  fascia_model_destroy(&m);
+  fascia_ctx_destroy(&ctx);
+  return CHECK_RESULT();
+}
