@@ -902,26 +902,8 @@ static fascia_status read_rest(reader *r, fascia_model *m) {
 
 // Opens path read-only; a missing, unreadable or non-HDF5 file is FASCIA_ERR_IO.
 static fascia_status open_file(reader *r) {
-  FILE *probe = fopen(r->path, "rb");
-  if (!probe) {
-    const int err = errno;
-    return FASCIA_FAIL(r->ctx, FASCIA_ERR_IO, "model '%s': cannot open: %s", r->path, strerror(err));
-  }
-  fclose(probe);
-  char detail[600];
-  const htri_t is_hdf5 = H5Fis_hdf5(r->path);
-  FASCIA_CHECK(is_hdf5 > 0, r->ctx, FASCIA_ERR_IO,
-               "model '%s': not an HDF5 file (%s); expected a model written by 'fascia prep' or 'fascia beam'",
-               r->path, is_hdf5 < 0 ? fascia_h5_error(detail, sizeof detail) : "no HDF5 signature");
-  // strong close: closing the file also closes anything an error path left open
-  hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
-  if (fapl >= 0) H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG);
-  r->file = H5Fopen(r->path, H5F_ACC_RDONLY, fapl >= 0 ? fapl : H5P_DEFAULT);
-  if (r->file < 0) fascia_h5_error(detail, sizeof detail);
-  if (fapl >= 0) H5Pclose(fapl);
-  FASCIA_CHECK(r->file >= 0, r->ctx, FASCIA_ERR_IO, "model '%s': cannot open as HDF5 (%s); the file is damaged or truncated",
-               r->path, detail);
-  return FASCIA_OK;
+  return fascia_h5_open_read(r->ctx, "model", r->path, "expected a model written by 'fascia prep' or 'fascia beam'",
+                             &r->file);
 }
 
 fascia_status fascia_model_load(fascia_ctx *ctx, const char *path, fascia_model **out) {
