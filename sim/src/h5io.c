@@ -9,6 +9,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "fascia/model.h"
 #include "h5io.h"
 
 void fascia_h5_quiet_begin(fascia_h5_quiet *quiet) {
@@ -137,6 +138,8 @@ int fascia_h5_link_exists(hid_t file, const char *name) {
 // ---------------------------------------------------------------------------
 // Reading
 
+void fascia_hdf5_quiet(void) { H5Eset_auto2(H5E_DEFAULT, NULL, NULL); }
+
 hid_t fascia_h5_keep(fascia_h5_scope *scope, hid_t id) {
   if (id < 0) return id;
   if (scope->count == FASCIA_H5_SCOPE_SIZE) { // a bug in the caller: fail the call, leak nothing
@@ -161,6 +164,22 @@ void fascia_h5_scope_close(fascia_h5_scope *scope) {
     default: H5Idec_ref(id); break;
     }
   }
+}
+
+int fascia_h5_number_type_ok(hid_t type) {
+  const H5T_class_t cls = H5Tget_class(type);
+  if (cls != H5T_INTEGER && cls != H5T_FLOAT) return 0;
+  const size_t size = H5Tget_size(type), precision = H5Tget_precision(type);
+  const int offset = H5Tget_offset(type);
+  if ((size != 1 && size != 2 && size != 4 && size != 8) || precision == 0 || offset < 0 ||
+      (size_t)offset + precision > 8 * size)
+    return 0;
+  if (cls == H5T_INTEGER) return 1;
+  size_t sign_bit = 0, exponent_at = 0, exponent_bits = 0, mantissa_at = 0, mantissa_bits = 0;
+  if (H5Tget_fields(type, &sign_bit, &exponent_at, &exponent_bits, &mantissa_at, &mantissa_bits) < 0) return 0;
+  const size_t bits = (size_t)offset + precision;
+  return sign_bit < bits && exponent_bits > 0 && exponent_bits < 64 && exponent_at + exponent_bits <= bits &&
+         mantissa_bits > 0 && mantissa_at + mantissa_bits <= bits && H5Tget_ebias(type) < ((size_t)1 << exponent_bits);
 }
 
 fascia_status fascia_h5_open_read(fascia_ctx *ctx, const char *what, const char *path, const char *remedy,

@@ -74,6 +74,14 @@ FASCIA_INTERN hid_t fascia_h5_keep(fascia_h5_scope *scope, hid_t id);
 /// Closes every id recorded in scope, newest first, and empties it.
 FASCIA_INTERN void fascia_h5_scope_close(fascia_h5_scope *scope);
 
+/// 1 when `type`, a file's integer or floating-point type, has a layout HDF5
+/// can convert safely: 1, 2, 4 or 8 bytes, its bits (offset, precision, and
+/// for reals the sign, exponent and mantissa fields) inside them. HDF5 1.10
+/// converts a damaged type without these checks and writes past its own
+/// buffers (a crash on a corrupt file), so readers call this before H5Dread
+/// or H5Aread of numbers. 0 for any other type.
+FASCIA_INTERN int fascia_h5_number_type_ok(hid_t type);
+
 /// Opens `path` read-only for a reader of `what` ("model", "checkpoint"),
 /// with strong close (closing the file closes anything left open in it). A
 /// missing or unreadable file, one that is not HDF5, or one HDF5 cannot open

@@ -355,7 +355,8 @@ static fascia_status read_exact(reader *r, const char *name, H5T_class_t cls, hi
   if (dset < 0 || type < 0 || space < 0) {
     status = FASCIA_FAIL(r->ctx, FASCIA_ERR_IO, "checkpoint '%s' %s: cannot open (HDF5: %s); %s", r->path, name,
                          fascia_h5_error(detail, sizeof detail), DAMAGED);
-  } else if (H5Tget_class(type) != cls || H5Sget_simple_extent_npoints(space) != (hssize_t)count) {
+  } else if (H5Tget_class(type) != cls || !fascia_h5_number_type_ok(type) ||
+             H5Sget_simple_extent_npoints(space) != (hssize_t)count) {
     status = FASCIA_FAIL(r->ctx, FASCIA_ERR_FORMAT, "checkpoint '%s' %s: expected %llu %s, found %lld values; %s",
                          r->path, name, (unsigned long long)count, cls == H5T_FLOAT ? "reals" : "integers",
                          (long long)H5Sget_simple_extent_npoints(space), DAMAGED);
@@ -377,7 +378,8 @@ static fascia_status read_attr(reader *r, const char *name, const char *attr_nam
   const hid_t type = attr >= 0 ? fascia_h5_keep(&scope, H5Aget_type(attr)) : H5I_INVALID_HID;
   const hid_t space = attr >= 0 ? fascia_h5_keep(&scope, H5Aget_space(attr)) : H5I_INVALID_HID;
   const H5T_class_t cls = type >= 0 ? H5Tget_class(type) : H5T_NO_CLASS;
-  const int ok = space >= 0 && (cls == H5T_INTEGER || cls == H5T_FLOAT) && H5Sget_simple_extent_npoints(space) == 1 &&
+  const int ok = space >= 0 && (cls == H5T_INTEGER || cls == H5T_FLOAT) && fascia_h5_number_type_ok(type) &&
+                 H5Sget_simple_extent_npoints(space) == 1 &&
                  H5Aread(attr, H5T_NATIVE_DOUBLE, value) >= 0;
   fascia_h5_scope_close(&scope);
   FASCIA_CHECK(ok, r->ctx, FASCIA_ERR_FORMAT, "checkpoint '%s' %s: attribute '%s' is not one number; %s", r->path,

@@ -406,6 +406,11 @@ static fascia_status open_checked(reader *r, const char *name, elem kind, int ra
                          class_phrase(want), class_phrase(cls), REMEDY);
     goto cleanup;
   }
+  if (kind != ELEM_NAME && !fascia_h5_number_type_ok(type)) {
+    status = FASCIA_FAIL(r->ctx, FASCIA_ERR_FORMAT, "model '%s' %s: %s of a damaged or unsupported layout; %s",
+                         r->path, name, class_phrase(cls), REMEDY);
+    goto cleanup;
+  }
   hsize_t found[H5S_MAX_RANK];
   const int found_rank = H5Sget_simple_extent_type(space) == H5S_NULL ? -1 : H5Sget_simple_extent_dims(space, found, NULL);
   int64_t found64[H5S_MAX_RANK];
@@ -609,7 +614,8 @@ static fascia_status read_int_attr(reader *r, const char *name, const char *attr
   fascia_status status = FASCIA_OK;
   if (type < 0 || space < 0)
     status = read_failed(r, name, "read an attribute");
-  else if (H5Tget_class(type) != H5T_INTEGER || H5Sget_simple_extent_npoints(space) != 1)
+  else if (H5Tget_class(type) != H5T_INTEGER || !fascia_h5_number_type_ok(type) ||
+           H5Sget_simple_extent_npoints(space) != 1)
     status = FASCIA_FAIL(r->ctx, FASCIA_ERR_FORMAT, "model '%s' %s: attribute '%s' is not one integer (found %s); %s",
                          r->path, name, attr_name, class_phrase(H5Tget_class(type)), REMEDY);
   else if (H5Aread(attr, H5T_NATIVE_INT32, value) < 0)

@@ -574,6 +574,12 @@ int cmd_run(int argc, char **argv) {
     }
   }
   st = fascia_solver_create(ctx, model, &opt.solver, &solver);
+  if (st == FASCIA_ERR_FORMAT) { // the model cannot be simulated as it is (an organ, say): not a usage error
+    fprintf(stderr, "fascia run: model '%s': %s\n", opt.model_path, fascia_ctx_message(ctx));
+    rc = 1;
+    st = FASCIA_OK;
+    goto done;
+  }
   if (st != FASCIA_OK) { // an impossible setting (usage error) or no such device
     rc = cli_solver_fail("run", opt.solver.backend, ctx, st);
     st = FASCIA_OK;
