@@ -86,8 +86,9 @@ static const char checkpoint_usage[] =
     "                         stopped by SIGINT/SIGTERM; written to a temporary name, then renamed\n"
     "  --checkpoint-every K   steps between checkpoints (default 10)\n"
     "  --resume FILE          continue from checkpoint FILE (same model) up to --steps N in all\n"
-    "                         (N counts every step from t = 0 and must exceed the checkpoint's\n"
-    "                         step): the same final state, bit for bit on the CPU, as a run never\n"
+    "                         (N counts every step from t = 0: below the checkpoint's step it is\n"
+    "                         an error, equal to it the run is complete and nothing is done):\n"
+    "                         the same final state, bit for bit on the CPU, as a run never\n"
     "                         interrupted; -o then holds the steps from the resumed one on. The run\n"
     "                         continues with the solver settings stored in FILE (--dt, Newton, CG,\n"
     "                         preconditioner, linear solver, mass, damping, retries): an option or\n"
@@ -563,12 +564,17 @@ int cmd_run(int argc, char **argv) {
     fascia_solver_def recorded = opt.solver;
     if ((st = fascia_checkpoint_read_settings(ctx, ck.resume, model, &recorded, &done_steps)) != FASCIA_OK) goto done;
     if ((rc = take_resume_settings(argc, argv, &opt, &recorded, ck.resume)) >= 0) goto done;
-    if (done_steps >= opt.steps) {
+    if (done_steps == opt.steps) { // a run resumed after it finished (a script resuming blindly): said, not run
+      fprintf(stderr, "fascia run: checkpoint '%s' is at step %lld of --steps %d: the run is already complete, "
+              "nothing to do\n", ck.resume, (long long)done_steps, opt.steps);
+      rc = 0;
+      goto done;
+    }
+    if (done_steps > opt.steps) {
       fprintf(stderr,
-              "fascia run: checkpoint '%s' is at step %lld, %s --steps %d; --steps counts every step from t = 0: give "
-              "--steps larger than %lld to continue (see fascia run --help)\n",
-              ck.resume, (long long)done_steps, done_steps == opt.steps ? "the run is already complete at" : "past",
-              opt.steps, (long long)done_steps);
+              "fascia run: checkpoint '%s' is at step %lld, past --steps %d; --steps counts every step from t = 0: "
+              "give --steps larger than %lld to continue (see fascia run --help)\n",
+              ck.resume, (long long)done_steps, opt.steps, (long long)done_steps);
       rc = 2;
       goto done;
     }
