@@ -496,6 +496,21 @@ static const char *setting_option(const char *name) {
   return "no option";
 }
 
+// A setting's value as the option spells it: "block", "lumped", "on", 0.005.
+static const char *setting_text(const char *name, double value, int digits, char *buf, size_t size) {
+  static const char *const precond[] = {"none", "jacobi", "block"}, *const linear[] = {"auto", "cg", "direct"},
+                           *const mass[] = {"consistent", "lumped"};
+  const int i = (int)value;
+  const int flag = !strcmp(name, "cg_fixed") || !strcmp(name, "assembled") || !strcmp(name, "single_precision_matrix") ||
+                   !strcmp(name, "line_search") || !strcmp(name, "require_convergence");
+  if (!strcmp(name, "precond") && i >= 0 && i < 3) return precond[i];
+  if (!strcmp(name, "linear_solver") && i >= 0 && i < 3) return linear[i];
+  if (!strcmp(name, "mass") && i >= 0 && i < 2) return mass[i];
+  if (flag && (i == 0 || i == 1)) return i ? "on" : "off";
+  snprintf(buf, size, "%.*g", digits, value);
+  return buf;
+}
+
 #define SETTING_UNSET 2000000001.0 // beyond every setting's valid range: no option or preset sets it
 
 // Resuming takes the settings stored in the checkpoint; a setting the command
@@ -516,10 +531,17 @@ static int take_resume_settings(int argc, char **argv, run_options *opt, const f
     const double stored = fascia_checkpoint_setting_get(recorded, k);
     if (asked != SETTING_UNSET && asked != stored) {
       const char *name = fascia_checkpoint_setting_name(k);
+      char there_buf[32], here_buf[32];
+      const char *there = setting_text(name, stored, 15, there_buf, sizeof there_buf);
+      const char *here = setting_text(name, asked, 15, here_buf, sizeof here_buf);
+      if (!strcmp(there, here)) { // apart beyond 15 digits: show them all
+        there = setting_text(name, stored, 17, there_buf, sizeof there_buf);
+        here = setting_text(name, asked, 17, here_buf, sizeof here_buf);
+      }
       fprintf(stderr,
-              "fascia run: checkpoint '%s' was written with %s = %.17g, the command line asks for %.17g (%s%s); a "
+              "fascia run: checkpoint '%s' was written with %s = %s, the command line asks for %s (%s%s); a "
               "resumed run keeps the settings it started with: leave the option out (see fascia run --help)\n",
-              checkpoint, name, stored, asked, setting_option(name), preset ? " or --preset" : "");
+              checkpoint, name, there, here, setting_option(name), preset ? " or --preset" : "");
       return 2;
     }
     fascia_checkpoint_setting_set(&opt->solver, k, stored);
