@@ -52,11 +52,14 @@ static fascia_status load_checkpoint(fascia_ctx *ctx, const char *path, void *us
   return st;
 }
 
+static int refusals; // attempts refused: the damage reached the readers
+
 // One damaged copy: loaded, then the open objects counted.
 static void attempt(fascia_ctx *ctx, const char *path, load_fn load, void *user, const char *what, long where) {
   fascia_ctx_clear(ctx);
   const fascia_status st = load(ctx, path, user);
   const ssize_t left = open_ids();
+  refusals += st != FASCIA_OK;
   if (left != 0 || (st != FASCIA_OK && !strstr(fascia_ctx_message(ctx), path))) {
     fprintf(stderr, "t208: %s at byte %ld: %s, %ld HDF5 objects left open, message \"%s\"\n", what, where,
             fascia_status_name(st), (long)left, fascia_ctx_message(ctx));
@@ -107,7 +110,10 @@ int main(void) {
   CHECK(open_ids() == 0);
 
   damage(ctx, model_path, "model.h5", 23, load_model, NULL);
+  CHECK(refusals > 100);
+  refusals = 0;
   damage(ctx, checkpoint_path, "checkpoint.h5", 9, load_checkpoint, solver);
+  CHECK(refusals > 100);
 
   fascia_solver_destroy(&solver);
   fascia_model_destroy(&m);
