@@ -9,6 +9,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "fascia/model.h"
 #include "h5io.h"
 
 void fascia_h5_quiet_begin(fascia_h5_quiet *quiet) {
@@ -132,4 +133,75 @@ int fascia_h5_link_exists(hid_t file, const char *name) {
       if (H5Lexists(file, prefix, H5P_DEFAULT) <= 0) return 0;
     }
   return 1;
+}
+
+// ---------------------------------------------------------------------------
+// Reading
+
+void fascia_hdf5_quiet(void) { H5Eset_auto2(H5E_DEFAULT, NULL, NULL); }
+
+hid_t fascia_h5_keep(fascia_h5_scope *scope, hid_t id) {
+  if (id < 0) return id;
+  if (scope->count == FASCIA_H5_SCOPE_SIZE) { // a bug in the caller: fail the call, leak nothing
+    H5Idec_ref(id);
+    return H5I_INVALID_HID;
+  }
+  scope->id[scope->count++] = id;
+  return id;
+}
+
+void fascia_h5_scope_close(fascia_h5_scope *scope) {
+  while (scope->count > 0) {
+    const hid_t id = scope->id[--scope->count];
+    switch (H5Iget_type(id)) {
+    case H5I_FILE: H5Fclose(id); break;
+    case H5I_GROUP: H5Gclose(id); break;
+    case H5I_DATATYPE: H5Tclose(id); break;
+    case H5I_DATASPACE: H5Sclose(id); break;
+    case H5I_DATASET: H5Dclose(id); break;
+    case H5I_ATTR: H5Aclose(id); break;
+    case H5I_GENPROP_LST: H5Pclose(id); break;
+    default: H5Idec_ref(id); break;
+    }
+  }
+}
+
+int fascia_h5_number_type_ok(hid_t type) {
+  const H5T_class_t cls = H5Tget_class(type);
+  if (cls != H5T_INTEGER && cls != H5T_FLOAT) return 0;
+  const size_t size = H5Tget_size(type), precision = H5Tget_precision(type);
+  const int offset = H5Tget_offset(type);
+  if ((size != 1 && size != 2 && size != 4 && size != 8) || precision == 0 || offset < 0 ||
+      (size_t)offset + precision > 8 * size)
+    return 0;
+  if (cls == H5T_INTEGER) return 1;
+  size_t sign_bit = 0, exponent_at = 0, exponent_bits = 0, mantissa_at = 0, mantissa_bits = 0;
+  if (H5Tget_fields(type, &sign_bit, &exponent_at, &exponent_bits, &mantissa_at, &mantissa_bits) < 0) return 0;
+  const size_t bits = (size_t)offset + precision;
+  return sign_bit < bits && exponent_bits > 0 && exponent_bits < 64 && exponent_at + exponent_bits <= bits &&
+         mantissa_bits > 0 && mantissa_at + mantissa_bits <= bits && H5Tget_ebias(type) < ((size_t)1 << exponent_bits);
+}
+
+fascia_status fascia_h5_open_read(fascia_ctx *ctx, const char *what, const char *path, const char *remedy,
+                                  hid_t *file) {
+  *file = H5I_INVALID_HID;
+  FILE *probe = fopen(path, "rb");
+  if (!probe) {
+    const int err = errno;
+    return FASCIA_FAIL(ctx, FASCIA_ERR_IO, "%s '%s': cannot open: %s", what, path, strerror(err));
+  }
+  fclose(probe);
+  char detail[600];
+  const htri_t is_hdf5 = H5Fis_hdf5(path);
+  FASCIA_CHECK(is_hdf5 > 0, ctx, FASCIA_ERR_IO, "%s '%s': not an HDF5 file (%s); %s", what, path,
+               is_hdf5 < 0 ? fascia_h5_error(detail, sizeof detail) : "no HDF5 signature", remedy);
+  fascia_h5_scope scope = FASCIA_H5_SCOPE_INIT;
+  const hid_t fapl = fascia_h5_keep(&scope, H5Pcreate(H5P_FILE_ACCESS));
+  if (fapl >= 0) H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG);
+  *file = H5Fopen(path, H5F_ACC_RDONLY, fapl >= 0 ? fapl : H5P_DEFAULT);
+  if (*file < 0) fascia_h5_error(detail, sizeof detail);
+  fascia_h5_scope_close(&scope);
+  FASCIA_CHECK(*file >= 0, ctx, FASCIA_ERR_IO, "%s '%s': cannot open as HDF5 (%s); the file is damaged or truncated",
+               what, path, detail);
+  return FASCIA_OK;
 }

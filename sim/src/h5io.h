@@ -53,4 +53,42 @@ FASCIA_INTERN int fascia_h5_link_exists(hid_t file, const char *name);
 FASCIA_INTERN herr_t fascia_h5_attr_string(hid_t loc, const char *name, const char *value);
 FASCIA_INTERN herr_t fascia_h5_attr_int(hid_t loc, const char *name, int32_t value);
 
+// --- reading ---------------------------------------------------------------
+
+/// The HDF5 ids one reader function holds, closed together on its single
+/// cleanup path (newest first, whatever their kind: file, group, dataset,
+/// dataspace, datatype, attribute, property list), so that no error path can
+/// forget one. Start with FASCIA_H5_SCOPE_INIT.
+#define FASCIA_H5_SCOPE_SIZE 16
+typedef struct fascia_h5_scope {
+  hid_t id[FASCIA_H5_SCOPE_SIZE];
+  int count;
+} fascia_h5_scope;
+#define FASCIA_H5_SCOPE_INIT {{0}, 0}
+
+/// Records id (when valid) in scope and returns it; an invalid id is
+/// returned as it is. A full scope closes id at once and returns
+/// H5I_INVALID_HID, so the caller sees a failed call.
+FASCIA_INTERN hid_t fascia_h5_keep(fascia_h5_scope *scope, hid_t id);
+
+/// Closes every id recorded in scope, newest first, and empties it.
+FASCIA_INTERN void fascia_h5_scope_close(fascia_h5_scope *scope);
+
+/// 1 when `type`, a file's integer or floating-point type, has a layout HDF5
+/// can convert safely: 1, 2, 4 or 8 bytes, its bits (offset, precision, and
+/// for reals the sign, exponent and mantissa fields) inside them. HDF5 1.10
+/// converts a damaged type without these checks and writes past its own
+/// buffers (a crash on a corrupt file), so readers call this before H5Dread
+/// or H5Aread of numbers. 0 for any other type.
+FASCIA_INTERN int fascia_h5_number_type_ok(hid_t type);
+
+/// Opens `path` read-only for a reader of `what` ("model", "checkpoint"),
+/// with strong close (closing the file closes anything left open in it). A
+/// missing or unreadable file, one that is not HDF5, or one HDF5 cannot open
+/// is FASCIA_ERR_IO with a message naming the file; `remedy` ends the
+/// not-HDF5 message ("expected a model written by 'fascia prep'"). On error
+/// *file is H5I_INVALID_HID.
+FASCIA_INTERN fascia_status fascia_h5_open_read(fascia_ctx *ctx, const char *what, const char *path,
+                                                const char *remedy, hid_t *file);
+
 #endif

@@ -1,24 +1,46 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// Checkpoints of a dynamic run (issue 7, "nothing lost"): the solver state
-// that the next implicit Euler step reads (solver.c: x, q, u and the time)
-// written whole through a temporary name, and read back bit for bit.
+// Checkpoints of a dynamic run ("nothing lost"): the solver state that the
+// next implicit Euler step reads (solver.c: x, q, u and the time), written
+// whole through a temporary name and read back bit for bit, with what it
+// belongs to (the model, the solver settings) and a checksum, so that a
+// damaged or edited file, another model or other settings are refused
+// instead of resumed into a different trajectory.
 //
-// Schema, version 1 (N frames; reals f64 little endian):
-//   /                     attributes fascia_checkpoint_version (int32, = 1),
+// Schema, version 2 (N frames; reals f64 little endian):
+//   /                     attributes fascia_checkpoint_version (int32, = 2),
 //                         units ("SI: m, kg, s, Pa"), creator ("fascia X.Y.Z")
-//   /run/step             [1]   i64  completed steps
-//   /run/time             [1]   f64  s, the solver's time after them
-//   /run/time_step        [1]   f64  s, the run's time step (must match on resume)
+//   /run/step             [1]   i64  completed steps, 0 <= step <= 2^31 - 1
+//   /run/time             [1]   f64  s, the solver's time after them; a run
+//                                    starts at t = 0, so time = step * time_step
+//                                    to rounding
+//   /run/time_step        [1]   f64  s, the run's time step (also a setting)
 //   /model/sizes          [9]   i64  frames, samples, pairs, materials, motions,
 //                                    probes, probe pairs, organs, couplings
 //   /model/fingerprint    [1]   u64  FNV-1a of the model's arrays (see fingerprint)
+//   /settings             group, one f64 attribute per solver setting that
+//                         changes the trajectory (the table `settings`:
+//                         time_step, newton_iterations, ..., require_convergence)
 //   /state/position       [N,3] f64  m, world
 //   /state/rotation       [N,4] f64  unit quaternions w,x,y,z
 //   /state/velocity       [N,6] f64  m/s then rad/s, world
 //   /state/organs         [B]   f64  state of the rigid organ bodies (organs.c:
 //                                    fascia_organs_save), B = 0 without them
+//   /state/checksum       [1]   u64  FNV-1a of step, time, position, rotation,
+//                                    velocity and organs, in that order, as
+//                                    the native values
+//
+// Version 1 (no settings, no checksum) is refused with a message saying so.
+//
+// Why a checksum of our own and not HDF5's Fletcher32 filter: the filter
+// only sees damage below HDF5 (a flipped bit on disk) and needs chunked
+// datasets; a state rewritten through the HDF5 API (a tool, a script, a
+// partial copy) gets a fresh, valid Fletcher32 sum. A checksum over the
+// values themselves, stored beside them, catches both. FNV-1a is the hash
+// this file already uses for the model's fingerprint: every single-byte
+// change changes it (each step is a bijection of the running value).
 #define _POSIX_C_SOURCE 200809L
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -29,9 +51,10 @@
 #include "organs.h"
 #include "solver_internal.h"
 
-#define CHECKPOINT_VERSION 1
+#define CHECKPOINT_VERSION 2
 #define CHECKPOINT_UNITS "SI: m, kg, s, Pa"
 #define SIZE_COUNT 9
+#define MAX_STEP INT64_C(2147483647) // fascia_solver_step counts in int; the CLI's --steps too
 
 _Static_assert(sizeof(fascia_real) == sizeof(double), "checkpoints store fascia_real as f64");
 
@@ -51,21 +74,28 @@ static uint64_t fnv(uint64_t h, const void *data, size_t bytes) {
   return h;
 }
 
+#define FNV_START UINT64_C(0xcbf29ce484222325)
+
 // FNV-1a over every array the solver reads (rest state, kinds, motions,
-// loads, samples, weights, materials, gravity): two models with the same
-// fingerprint simulate alike. Names, organs and provenance do not count.
+// loads, samples, weights, materials, organs and their coupling, gravity):
+// two models with the same fingerprint simulate alike. Names, probes and
+// provenance do not count. The contents, not the file's bytes, identify the
+// model: a copy, a rename or a re-save by another HDF5 is the same model.
 static uint64_t fingerprint(const fascia_model *m) {
   const size_t R = sizeof(fascia_real), I = sizeof(int32_t);
   const size_t N = (size_t)m->frame_count, S = (size_t)m->sample_count, P = (size_t)m->pair_count;
-  uint64_t h = UINT64_C(0xcbf29ce484222325);
+  const size_t C = (size_t)m->coupling_count;
+  uint64_t h = FNV_START;
   h = fnv(h, m->frame_position, 3 * N * R);
   h = fnv(h, m->frame_rotation, 4 * N * R);
   h = fnv(h, m->frame_kind, N * I);
   h = fnv(h, m->frame_motion, N * I);
   h = fnv(h, m->frame_load, 6 * N * R);
+  h = fnv(h, m->frame_organ, N * I);
   h = fnv(h, m->sample_position, 3 * S * R);
   h = fnv(h, m->sample_volume, S * R);
   h = fnv(h, m->sample_material, S * I);
+  h = fnv(h, m->sample_organ, S * I);
   h = fnv(h, m->sample_offsets, (S + 1) * I);
   h = fnv(h, m->pair_frame, P * I);
   h = fnv(h, m->pair_weight, P * R);
@@ -74,7 +104,8 @@ static uint64_t fingerprint(const fascia_model *m) {
     const fascia_material *mat = m->materials + k;
     const fascia_real values[5] = {mat->youngs_modulus, mat->poisson_ratio, mat->density, mat->rotation_coupling,
                                    mat->rotation_smoothing};
-    h = fnv(h, &mat->law, I);
+    const int32_t kinds[2] = {mat->law, mat->part};
+    h = fnv(h, kinds, sizeof kinds);
     h = fnv(h, values, sizeof values);
   }
   for (int32_t k = 0; k < m->motion_count; ++k) {
@@ -85,7 +116,103 @@ static uint64_t fingerprint(const fascia_model *m) {
     h = fnv(h, mo->key_translation, 3 * K * R);
     h = fnv(h, mo->key_rotation, 4 * K * R);
   }
+  for (int32_t k = 0; k < m->organ_count; ++k) {
+    const fascia_organ *o = m->organs + k;
+    const int32_t kinds[4] = {o->kind, o->motion, o->vertex_count, o->triangle_count};
+    h = fnv(h, kinds, sizeof kinds);
+    h = fnv(h, o->vertices, 3 * (size_t)o->vertex_count * R);
+    h = fnv(h, o->triangles, 3 * (size_t)o->triangle_count * I);
+  }
+  h = fnv(h, m->coupling_organ, C * I);
+  h = fnv(h, m->coupling_frame, C * I);
+  h = fnv(h, m->coupling_triangle, C * I);
+  h = fnv(h, m->coupling_barycentric, 3 * C * R);
   return fnv(h, m->gravity, 3 * R);
+}
+
+// The checksum of a state: step, time, x [3N], q [4N], u [6N], bodies [B].
+static uint64_t state_checksum(int64_t step, double time, int64_t N, const fascia_real *x, const fascia_real *q,
+                               const fascia_real *u, size_t B, const fascia_real *bodies) {
+  const size_t R = sizeof(fascia_real);
+  uint64_t h = fnv(FNV_START, &step, sizeof step);
+  h = fnv(h, &time, sizeof time);
+  h = fnv(h, x, 3 * (size_t)N * R);
+  h = fnv(h, q, 4 * (size_t)N * R);
+  h = fnv(h, u, 6 * (size_t)N * R);
+  return fnv(h, bodies, B * R);
+}
+
+// ---------------------------------------------------------------------------
+// The settings that change the trajectory
+
+typedef enum setting_kind { SETTING_INT, SETTING_REAL } setting_kind;
+
+typedef struct setting {
+  const char *name;
+  setting_kind kind;
+} setting;
+
+// Every fascia_solver_def field that changes the state a step reaches. Not
+// here: backend and threads (the CPU result does not depend on the thread
+// count; the device's differs by rounding, a choice the user makes), and
+// load_steps (static solves only).
+static const setting settings[] = {
+    {"time_step", SETTING_REAL},      {"newton_iterations", SETTING_INT},
+    {"newton_tolerance", SETTING_REAL}, {"cg_iterations", SETTING_INT},
+    {"cg_fixed", SETTING_INT},        {"cg_tolerance", SETTING_REAL},
+    {"precond", SETTING_INT},         {"linear_solver", SETTING_INT},
+    {"assembled", SETTING_INT},       {"single_precision_matrix", SETTING_INT},
+    {"mass", SETTING_INT},            {"mass_damping", SETTING_REAL},
+    {"line_search", SETTING_INT},     {"step_retries", SETTING_INT},
+    {"require_convergence", SETTING_INT},
+};
+#define SETTING_COUNT ((int)(sizeof settings / sizeof settings[0]))
+
+int fascia_checkpoint_setting_count(void) { return SETTING_COUNT; }
+
+const char *fascia_checkpoint_setting_name(int k) { return k >= 0 && k < SETTING_COUNT ? settings[k].name : NULL; }
+
+double fascia_checkpoint_setting_get(const fascia_solver_def *d, int k) {
+  switch (k) {
+  case 0: return d->time_step;
+  case 1: return d->newton_iterations;
+  case 2: return d->newton_tolerance;
+  case 3: return d->cg_iterations;
+  case 4: return d->cg_fixed;
+  case 5: return d->cg_tolerance;
+  case 6: return (double)d->precond;
+  case 7: return (double)d->linear_solver;
+  case 8: return d->assembled;
+  case 9: return d->single_precision_matrix;
+  case 10: return (double)d->mass;
+  case 11: return d->mass_damping;
+  case 12: return d->line_search;
+  case 13: return d->step_retries;
+  case 14: return d->require_convergence;
+  default: return NAN;
+  }
+}
+
+void fascia_checkpoint_setting_set(fascia_solver_def *d, int k, double v) {
+  const int i = (int)v;
+  switch (k) {
+  case 0: d->time_step = v; break;
+  case 1: d->newton_iterations = i; break;
+  case 2: d->newton_tolerance = v; break;
+  case 3: d->cg_iterations = i; break;
+  case 4: d->cg_fixed = i; break;
+  case 5: d->cg_tolerance = v; break;
+  case 6: d->precond = (fascia_precond)i; break;
+  case 7: d->linear_solver = (fascia_linear_solver)i; break;
+  case 8: d->assembled = i; break;
+  case 9: d->single_precision_matrix = i; break;
+  case 10: d->mass = (fascia_mass_kind)i; break;
+  case 11: d->mass_damping = v; break;
+  case 12: d->line_search = i; break;
+  case 13: d->step_retries = i; break;
+  case 14: d->require_convergence = i; break;
+  default: break;
+  }
 }
 
 // ---------------------------------------------------------------------------
@@ -120,6 +247,22 @@ static int write_group(hid_t file, const char *name) {
   return 1;
 }
 
+// /settings: one scalar f64 attribute per entry of `settings`.
+static int write_settings(hid_t file, const fascia_solver_def *def) {
+  hid_t group = H5Gcreate2(file, "/settings", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  hid_t space = H5Screate(H5S_SCALAR);
+  int ok = group >= 0 && space >= 0;
+  for (int k = 0; ok && k < SETTING_COUNT; ++k) {
+    const double value = fascia_checkpoint_setting_get(def, k);
+    hid_t attr = H5Acreate2(group, settings[k].name, H5T_IEEE_F64LE, space, H5P_DEFAULT, H5P_DEFAULT);
+    ok = attr >= 0 && H5Awrite(attr, H5T_NATIVE_DOUBLE, &value) >= 0;
+    if (attr >= 0) H5Aclose(attr);
+  }
+  if (space >= 0) H5Sclose(space);
+  if (group >= 0) H5Gclose(group);
+  return ok;
+}
+
 static fascia_status write_checkpoint(fascia_ctx *ctx, hid_t file, const fascia_solver *S, int64_t step,
                                       const char *path) {
   char creator[64];
@@ -134,19 +277,21 @@ static fascia_status write_checkpoint(fascia_ctx *ctx, hid_t file, const fascia_
   int64_t sizes[SIZE_COUNT];
   model_sizes(S->model, sizes);
   const uint64_t print = fingerprint(S->model);
-  const double time_step = S->def.time_step;
+  const double time_step = S->def.time_step, time = S->time;
   const size_t B = S->organs ? fascia_organs_state_size(S->organs) : 0;
   fascia_real *bodies = fascia_calloc((int64_t)B + 1, sizeof(fascia_real));
   FASCIA_CHECK(bodies, ctx, FASCIA_ERR_MEMORY, "checkpoint '%s': out of memory", path);
   if (B) fascia_organs_save(S->organs, bodies);
+  const uint64_t checksum = state_checksum(step, time, S->frame_count, S->x, S->q, S->u, B, bodies);
   fascia_status status = FASCIA_OK;
   if (!write_group(file, "/run") || !write_group(file, "/model") || !write_group(file, "/state"))
     status = write_failed(ctx, path, "groups");
+  if (status == FASCIA_OK && !write_settings(file, &S->def)) status = write_failed(ctx, path, "/settings");
 #define PUT(name, rank, d0, d1, ftype, mtype, data)                                                                  \
   if (status == FASCIA_OK && !write_dataset(file, name, rank, d0, d1, ftype, mtype, data))                          \
   status = write_failed(ctx, path, name)
   PUT("/run/step", 1, 1, 0, H5T_STD_I64LE, H5T_NATIVE_INT64, &step);
-  PUT("/run/time", 1, 1, 0, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &S->time);
+  PUT("/run/time", 1, 1, 0, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &time);
   PUT("/run/time_step", 1, 1, 0, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &time_step);
   PUT("/model/sizes", 1, SIZE_COUNT, 0, H5T_STD_I64LE, H5T_NATIVE_INT64, sizes);
   PUT("/model/fingerprint", 1, 1, 0, H5T_STD_U64LE, H5T_NATIVE_UINT64, &print);
@@ -154,6 +299,7 @@ static fascia_status write_checkpoint(fascia_ctx *ctx, hid_t file, const fascia_
   PUT("/state/rotation", 2, N, 4, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, S->q);
   PUT("/state/velocity", 2, N, 6, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, S->u);
   PUT("/state/organs", 1, B, 0, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, bodies);
+  PUT("/state/checksum", 1, 1, 0, H5T_STD_U64LE, H5T_NATIVE_UINT64, &checksum);
 #undef PUT
   free(bodies);
   return status;
@@ -162,7 +308,8 @@ static fascia_status write_checkpoint(fascia_ctx *ctx, hid_t file, const fascia_
 fascia_status fascia_checkpoint_save(fascia_ctx *ctx, const fascia_solver *solver, int64_t step, const char *path) {
   FASCIA_CHECK(solver && path && path[0], ctx, FASCIA_ERR_ARGUMENT,
                "fascia_checkpoint_save: NULL solver or empty path");
-  FASCIA_CHECK(step >= 0, ctx, FASCIA_ERR_ARGUMENT, "checkpoint '%s': step %lld is negative", path, (long long)step);
+  FASCIA_CHECK(step >= 0 && step <= MAX_STEP, ctx, FASCIA_ERR_ARGUMENT,
+               "checkpoint '%s': step %lld is outside 0..%lld", path, (long long)step, (long long)MAX_STEP);
   char tmp[4096];
   fascia_h5_quiet quiet;
   fascia_h5_quiet_begin(&quiet);
@@ -190,6 +337,8 @@ typedef struct reader {
   hid_t file;
 } reader;
 
+#define DAMAGED "the file is damaged or was edited; resume from another checkpoint or start the run again"
+
 // Reads dataset `name`, which must hold exactly `count` values of class
 // `cls` (any rank), converted to mem_type.
 static fascia_status read_exact(reader *r, const char *name, H5T_class_t cls, hid_t mem_type, hsize_t count,
@@ -197,100 +346,160 @@ static fascia_status read_exact(reader *r, const char *name, H5T_class_t cls, hi
   FASCIA_CHECK(fascia_h5_link_exists(r->file, name), r->ctx, FASCIA_ERR_FORMAT,
                "checkpoint '%s' %s: dataset missing; not a checkpoint written by 'fascia run --checkpoint'", r->path,
                name);
-  hid_t dset = H5Dopen2(r->file, name, H5P_DEFAULT);
-  hid_t type = dset >= 0 ? H5Dget_type(dset) : H5I_INVALID_HID, space = dset >= 0 ? H5Dget_space(dset) : H5I_INVALID_HID;
+  fascia_h5_scope scope = FASCIA_H5_SCOPE_INIT;
+  const hid_t dset = fascia_h5_keep(&scope, H5Dopen2(r->file, name, H5P_DEFAULT));
+  const hid_t type = dset >= 0 ? fascia_h5_keep(&scope, H5Dget_type(dset)) : H5I_INVALID_HID;
+  const hid_t space = dset >= 0 ? fascia_h5_keep(&scope, H5Dget_space(dset)) : H5I_INVALID_HID;
   fascia_status status = FASCIA_OK;
   char detail[600];
   if (dset < 0 || type < 0 || space < 0) {
-    status = FASCIA_FAIL(r->ctx, FASCIA_ERR_IO, "checkpoint '%s' %s: cannot open (HDF5: %s); the file is damaged",
-                         r->path, name, fascia_h5_error(detail, sizeof detail));
-  } else if (H5Tget_class(type) != cls || H5Sget_simple_extent_npoints(space) != (hssize_t)count) {
-    status = FASCIA_FAIL(r->ctx, FASCIA_ERR_FORMAT,
-                         "checkpoint '%s' %s: expected %llu %s, found %lld values of another kind; the file is damaged",
+    status = FASCIA_FAIL(r->ctx, FASCIA_ERR_IO, "checkpoint '%s' %s: cannot open (HDF5: %s); %s", r->path, name,
+                         fascia_h5_error(detail, sizeof detail), DAMAGED);
+  } else if (H5Tget_class(type) != cls || !fascia_h5_number_type_ok(type) ||
+             H5Sget_simple_extent_npoints(space) != (hssize_t)count) {
+    status = FASCIA_FAIL(r->ctx, FASCIA_ERR_FORMAT, "checkpoint '%s' %s: expected %llu %s, found %lld values; %s",
                          r->path, name, (unsigned long long)count, cls == H5T_FLOAT ? "reals" : "integers",
-                         (long long)H5Sget_simple_extent_npoints(space));
+                         (long long)H5Sget_simple_extent_npoints(space), DAMAGED);
   } else if (count > 0 && H5Dread(dset, mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, out) < 0) {
-    status = FASCIA_FAIL(r->ctx, FASCIA_ERR_IO, "checkpoint '%s' %s: cannot read (HDF5: %s); the file is damaged",
-                         r->path, name, fascia_h5_error(detail, sizeof detail));
+    status = FASCIA_FAIL(r->ctx, FASCIA_ERR_IO, "checkpoint '%s' %s: cannot read (HDF5: %s); %s", r->path, name,
+                         fascia_h5_error(detail, sizeof detail), DAMAGED);
   }
-  if (space >= 0) H5Sclose(space);
-  if (type >= 0) H5Tclose(type);
-  if (dset >= 0) H5Dclose(dset);
+  fascia_h5_scope_close(&scope);
   return status;
 }
 
-static fascia_status open_checkpoint(reader *r) {
-  char detail[600];
-  FILE *probe = fopen(r->path, "rb");
-  FASCIA_CHECK(probe, r->ctx, FASCIA_ERR_IO, "checkpoint '%s': cannot open: no such file or not readable", r->path);
-  fclose(probe);
-  const htri_t is_hdf5 = H5Fis_hdf5(r->path);
-  FASCIA_CHECK(is_hdf5 > 0, r->ctx, FASCIA_ERR_IO, "checkpoint '%s': not an HDF5 file (%s)", r->path,
-               is_hdf5 < 0 ? fascia_h5_error(detail, sizeof detail) : "no HDF5 signature");
-  hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
-  if (fapl >= 0) H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG);
-  r->file = H5Fopen(r->path, H5F_ACC_RDONLY, fapl >= 0 ? fapl : H5P_DEFAULT);
-  if (r->file < 0) fascia_h5_error(detail, sizeof detail);
-  if (fapl >= 0) H5Pclose(fapl);
-  FASCIA_CHECK(r->file >= 0, r->ctx, FASCIA_ERR_IO, "checkpoint '%s': cannot open as HDF5 (%s); the file is damaged",
-               r->path, detail);
-  const htri_t has_version = H5Aexists_by_name(r->file, "/", "fascia_checkpoint_version", H5P_DEFAULT);
-  FASCIA_CHECK(has_version > 0, r->ctx, FASCIA_ERR_FORMAT,
-               "checkpoint '%s' /: not a fascia checkpoint (no root attribute 'fascia_checkpoint_version')", r->path);
-  int32_t version = 0;
-  hid_t attr = H5Aopen_by_name(r->file, "/", "fascia_checkpoint_version", H5P_DEFAULT, H5P_DEFAULT);
-  const herr_t read = attr >= 0 ? H5Aread(attr, H5T_NATIVE_INT32, &version) : -1;
-  if (attr >= 0) H5Aclose(attr);
-  FASCIA_CHECK(read >= 0 && version == CHECKPOINT_VERSION, r->ctx, FASCIA_ERR_FORMAT,
-               "checkpoint '%s' /: format version %d, this fascia (%s) reads version %d; resume with the fascia that "
-               "wrote it",
-               r->path, (int)version, fascia_version(), CHECKPOINT_VERSION);
+// Reads the scalar numeric attribute `attr_name` of object `name` as a double.
+static fascia_status read_attr(reader *r, const char *name, const char *attr_name, double *value) {
+  const htri_t exists = H5Aexists_by_name(r->file, name, attr_name, H5P_DEFAULT);
+  FASCIA_CHECK(exists > 0, r->ctx, FASCIA_ERR_FORMAT, "checkpoint '%s' %s: attribute '%s' missing; %s", r->path,
+               name, attr_name, DAMAGED);
+  fascia_h5_scope scope = FASCIA_H5_SCOPE_INIT;
+  const hid_t attr = fascia_h5_keep(&scope, H5Aopen_by_name(r->file, name, attr_name, H5P_DEFAULT, H5P_DEFAULT));
+  const hid_t type = attr >= 0 ? fascia_h5_keep(&scope, H5Aget_type(attr)) : H5I_INVALID_HID;
+  const hid_t space = attr >= 0 ? fascia_h5_keep(&scope, H5Aget_space(attr)) : H5I_INVALID_HID;
+  const H5T_class_t cls = type >= 0 ? H5Tget_class(type) : H5T_NO_CLASS;
+  const int ok = space >= 0 && (cls == H5T_INTEGER || cls == H5T_FLOAT) && fascia_h5_number_type_ok(type) &&
+                 H5Sget_simple_extent_npoints(space) == 1 &&
+                 H5Aread(attr, H5T_NATIVE_DOUBLE, value) >= 0;
+  fascia_h5_scope_close(&scope);
+  FASCIA_CHECK(ok, r->ctx, FASCIA_ERR_FORMAT, "checkpoint '%s' %s: attribute '%s' is not one number; %s", r->path,
+               name, attr_name, DAMAGED);
   return FASCIA_OK;
 }
 
-// Checks that the checkpoint belongs to this solver's model and time step.
-static fascia_status check_identity(reader *r, const fascia_solver *S) {
+static fascia_status open_checkpoint(reader *r) {
+  FASCIA_TRY(fascia_h5_open_read(r->ctx, "checkpoint", r->path, "expected a checkpoint written by 'fascia run --checkpoint'",
+                                 &r->file));
+  const htri_t has_version = H5Aexists_by_name(r->file, "/", "fascia_checkpoint_version", H5P_DEFAULT);
+  FASCIA_CHECK(has_version > 0, r->ctx, FASCIA_ERR_FORMAT,
+               "checkpoint '%s' /: not a fascia checkpoint (no root attribute 'fascia_checkpoint_version')", r->path);
+  double version = 0;
+  FASCIA_TRY(read_attr(r, "/", "fascia_checkpoint_version", &version));
+  FASCIA_CHECK(version != 1, r->ctx, FASCIA_ERR_FORMAT,
+               "checkpoint '%s' /: format version 1, written by an older fascia without a checksum or the solver "
+               "settings; this fascia (%s) reads version %d only: finish the run with the fascia that wrote it, or "
+               "start it again",
+               r->path, fascia_version(), CHECKPOINT_VERSION);
+  FASCIA_CHECK(version == CHECKPOINT_VERSION, r->ctx, FASCIA_ERR_FORMAT,
+               "checkpoint '%s' /: format version %g, this fascia (%s) reads version %d; resume with the fascia that "
+               "wrote it",
+               r->path, version, fascia_version(), CHECKPOINT_VERSION);
+  return FASCIA_OK;
+}
+
+// The step count and time, checked against each other and the time step.
+static fascia_status read_run(reader *r, double time_step, int64_t *step, double *time) {
+  FASCIA_TRY(read_exact(r, "/run/step", H5T_INTEGER, H5T_NATIVE_INT64, 1, step));
+  FASCIA_TRY(read_exact(r, "/run/time", H5T_FLOAT, H5T_NATIVE_DOUBLE, 1, time));
+  FASCIA_CHECK(*step >= 0 && *step <= MAX_STEP, r->ctx, FASCIA_ERR_FORMAT,
+               "checkpoint '%s' /run/step: step %lld is outside 0..%lld; %s", r->path, (long long)*step,
+               (long long)MAX_STEP, DAMAGED);
+  // a run starts at t = 0 and adds time_step per step, rounding once per
+  // step: the sum drifts from step * time_step by at most ~step^2 * eps / 4 steps
+  const double expected = (double)*step * time_step, n = (double)*step;
+  const double tolerance = time_step * (1e-6 + n * n * DBL_EPSILON);
+  FASCIA_CHECK(isfinite(*time) && fabs(*time - expected) <= tolerance, r->ctx, FASCIA_ERR_FORMAT,
+               "checkpoint '%s' /run/time: t = %.17g s after %lld steps of %.17g s, expected %.17g s; %s", r->path,
+               *time, (long long)*step, time_step, expected, DAMAGED);
+  return FASCIA_OK;
+}
+
+// The settings recorded in /settings, into def (others left as they are).
+static fascia_status read_settings(reader *r, fascia_solver_def *def) {
+  FASCIA_CHECK(fascia_h5_link_exists(r->file, "/settings"), r->ctx, FASCIA_ERR_FORMAT,
+               "checkpoint '%s' /settings: group missing; %s", r->path, DAMAGED);
+  for (int k = 0; k < SETTING_COUNT; ++k) {
+    double value = 0;
+    FASCIA_TRY(read_attr(r, "/settings", settings[k].name, &value));
+    FASCIA_CHECK(isfinite(value) && (settings[k].kind == SETTING_REAL || (value == floor(value) && fabs(value) < 1e9)),
+                 r->ctx, FASCIA_ERR_FORMAT, "checkpoint '%s' /settings: %s = %g is not a valid value; %s", r->path,
+                 settings[k].name, value, DAMAGED);
+    fascia_checkpoint_setting_set(def, k, value);
+  }
+  double time_step = 0;
+  FASCIA_TRY(read_exact(r, "/run/time_step", H5T_FLOAT, H5T_NATIVE_DOUBLE, 1, &time_step));
+  FASCIA_CHECK(time_step == def->time_step && time_step > 0, r->ctx, FASCIA_ERR_FORMAT,
+               "checkpoint '%s' /run/time_step: %.17g s, but /settings says %.17g s; %s", r->path, time_step,
+               def->time_step, DAMAGED);
+  return FASCIA_OK;
+}
+
+// Checks that the checkpoint belongs to this model.
+static fascia_status check_model(reader *r, const fascia_model *m) {
   static const char *const size_names[SIZE_COUNT] = {"frames", "samples", "pairs", "materials", "motions",
                                                      "probes", "probe pairs", "organs", "couplings"};
   int64_t sizes[SIZE_COUNT], expected[SIZE_COUNT];
   uint64_t print = 0;
-  double time_step = 0;
   FASCIA_TRY(read_exact(r, "/model/sizes", H5T_INTEGER, H5T_NATIVE_INT64, SIZE_COUNT, sizes));
   FASCIA_TRY(read_exact(r, "/model/fingerprint", H5T_INTEGER, H5T_NATIVE_UINT64, 1, &print));
-  FASCIA_TRY(read_exact(r, "/run/time_step", H5T_FLOAT, H5T_NATIVE_DOUBLE, 1, &time_step));
-  model_sizes(S->model, expected);
+  model_sizes(m, expected);
   for (int k = 0; k < SIZE_COUNT; ++k)
     FASCIA_CHECK(sizes[k] == expected[k], r->ctx, FASCIA_ERR_ARGUMENT,
-                 "checkpoint '%s' belongs to another model: it has %lld %s, this model %lld (%lld frames and %lld "
-                 "samples there, %lld and %lld here); resume with the model the run started from",
+                 "checkpoint '%s' /model/sizes: belongs to another model: it has %lld %s, this model %lld (%lld frames "
+                 "and %lld samples there, %lld and %lld here); resume with the model the run started from",
                  r->path, (long long)sizes[k], size_names[k], (long long)expected[k], (long long)sizes[0],
                  (long long)sizes[1], (long long)expected[0], (long long)expected[1]);
-  const uint64_t here = fingerprint(S->model);
+  const uint64_t here = fingerprint(m);
   FASCIA_CHECK(print == here, r->ctx, FASCIA_ERR_ARGUMENT,
-               "checkpoint '%s' belongs to another model: same sizes, different contents (fingerprint %016llx, this "
-               "model %016llx); resume with the model the run started from",
+               "checkpoint '%s' /model/fingerprint: belongs to another model: same sizes, different contents "
+               "(fingerprint %016llx, this model %016llx); resume with the model the run started from",
                r->path, (unsigned long long)print, (unsigned long long)here);
-  FASCIA_CHECK(time_step == S->def.time_step, r->ctx, FASCIA_ERR_ARGUMENT,
-               "checkpoint '%s' was written with a time step of %.17g s, this run uses %.17g s; resume with --dt %.17g",
-               r->path, time_step, S->def.time_step, time_step);
   return FASCIA_OK;
 }
 
-// Reads and checks the state into x, q, u ([3N], [4N], [6N]).
+// Checks that the checkpoint was written with this solver's settings.
+static fascia_status check_settings(reader *r, const fascia_solver_def *def) {
+  fascia_solver_def recorded = *def;
+  FASCIA_TRY(read_settings(r, &recorded));
+  for (int k = 0; k < SETTING_COUNT; ++k) {
+    const double there = fascia_checkpoint_setting_get(&recorded, k), mine = fascia_checkpoint_setting_get(def, k);
+    FASCIA_CHECK(there == mine, r->ctx, FASCIA_ERR_ARGUMENT,
+                 "checkpoint '%s' /settings: %s is %.17g there, %.17g in this solver; resume with the settings the run "
+                 "started with (fascia_checkpoint_read_settings; 'fascia run --resume' takes them by default)",
+                 r->path, settings[k].name, there, mine);
+  }
+  return FASCIA_OK;
+}
+
+// Reads and checks the state into x, q, u ([3N], [4N], [6N]) and bodies [B].
 static fascia_status read_state(reader *r, int64_t N, fascia_real *x, fascia_real *q, fascia_real *u,
-                                size_t B, fascia_real *bodies, fascia_real *time, int64_t *step) {
-  FASCIA_TRY(read_exact(r, "/run/step", H5T_INTEGER, H5T_NATIVE_INT64, 1, step));
-  FASCIA_TRY(read_exact(r, "/run/time", H5T_FLOAT, H5T_NATIVE_DOUBLE, 1, time));
-  FASCIA_CHECK(*step >= 0 && isfinite(*time), r->ctx, FASCIA_ERR_FORMAT,
-               "checkpoint '%s' /run: step %lld at time %g s is impossible; the file is damaged", r->path,
-               (long long)*step, *time);
+                                size_t B, fascia_real *bodies, double time_step, double *time, int64_t *step) {
+  FASCIA_TRY(read_run(r, time_step, step, time));
   FASCIA_TRY(read_exact(r, "/state/position", H5T_FLOAT, H5T_NATIVE_DOUBLE, (hsize_t)(3 * N), x));
   FASCIA_TRY(read_exact(r, "/state/rotation", H5T_FLOAT, H5T_NATIVE_DOUBLE, (hsize_t)(4 * N), q));
   FASCIA_TRY(read_exact(r, "/state/velocity", H5T_FLOAT, H5T_NATIVE_DOUBLE, (hsize_t)(6 * N), u));
   FASCIA_TRY(read_exact(r, "/state/organs", H5T_FLOAT, H5T_NATIVE_DOUBLE, (hsize_t)B, bodies));
+  uint64_t stored = 0;
+  FASCIA_TRY(read_exact(r, "/state/checksum", H5T_INTEGER, H5T_NATIVE_UINT64, 1, &stored));
+  const uint64_t computed = state_checksum(*step, *time, N, x, q, u, B, bodies);
+  FASCIA_CHECK(stored == computed, r->ctx, FASCIA_ERR_FORMAT,
+               "checkpoint '%s' /state/checksum: the state does not match its checksum (stored %016llx, computed "
+               "%016llx); %s",
+               r->path, (unsigned long long)stored, (unsigned long long)computed, DAMAGED);
+  // the checksum vouches for the bits; these catch a state that was wrong when written
   for (size_t k = 0; k < B; ++k)
     FASCIA_CHECK(isfinite(bodies[k]), r->ctx, FASCIA_ERR_FORMAT,
-                 "checkpoint '%s' /state/organs: value %zu is not finite; the file is damaged", r->path, k);
+                 "checkpoint '%s' /state/organs: value %zu is not finite; %s", r->path, k, DAMAGED);
   for (int64_t i = 0; i < N; ++i) {
     int finite = 1;
     for (int c = 0; c < 3; ++c) finite &= isfinite(x[3 * i + c]) != 0;
@@ -300,10 +509,32 @@ static fascia_status read_state(reader *r, int64_t N, fascia_real *x, fascia_rea
     // a unit quaternion to rounding (the solver normalizes after every update)
     FASCIA_CHECK(finite && fabs(norm2 - 1) < 1e-9, r->ctx, FASCIA_ERR_FORMAT,
                  "checkpoint '%s' /state: frame %lld has a non-finite value or a rotation that is not a unit "
-                 "quaternion (|q|^2 = %g); the file is damaged",
-                 r->path, (long long)i, norm2);
+                 "quaternion (|q|^2 = %g); %s",
+                 r->path, (long long)i, norm2, DAMAGED);
   }
   return FASCIA_OK;
+}
+
+fascia_status fascia_checkpoint_read_settings(fascia_ctx *ctx, const char *path, const fascia_model *model,
+                                              fascia_solver_def *def, int64_t *step) {
+  FASCIA_CHECK(path && def && step, ctx, FASCIA_ERR_ARGUMENT, "fascia_checkpoint_read_settings: NULL argument");
+  fascia_h5_quiet quiet;
+  fascia_h5_quiet_begin(&quiet);
+  reader r = {ctx, path, H5I_INVALID_HID};
+  fascia_solver_def read = *def;
+  double time = 0;
+  int64_t steps = 0;
+  fascia_status status = open_checkpoint(&r);
+  if (status == FASCIA_OK && model) status = check_model(&r, model);
+  if (status == FASCIA_OK) status = read_settings(&r, &read);
+  if (status == FASCIA_OK) status = read_run(&r, read.time_step, &steps, &time);
+  if (r.file >= 0) H5Fclose(r.file);
+  fascia_h5_quiet_end(&quiet);
+  if (status == FASCIA_OK) {
+    *def = read;
+    *step = steps;
+  }
+  return status;
 }
 
 fascia_status fascia_checkpoint_load(fascia_ctx *ctx, fascia_solver *solver, const char *path, int64_t *step) {
@@ -315,11 +546,14 @@ fascia_status fascia_checkpoint_load(fascia_ctx *ctx, fascia_solver *solver, con
   fascia_h5_quiet quiet;
   fascia_h5_quiet_begin(&quiet);
   reader r = {ctx, path, H5I_INVALID_HID};
-  fascia_real time = 0;
+  double time = 0;
   int64_t steps = 0;
   fascia_status status = open_checkpoint(&r);
-  if (status == FASCIA_OK) status = check_identity(&r, solver);
-  if (status == FASCIA_OK) status = read_state(&r, N, buffer, buffer + 3 * N, buffer + 7 * N, B, buffer + 13 * N, &time, &steps);
+  if (status == FASCIA_OK) status = check_model(&r, solver->model);
+  if (status == FASCIA_OK) status = check_settings(&r, &solver->def);
+  if (status == FASCIA_OK)
+    status = read_state(&r, N, buffer, buffer + 3 * N, buffer + 7 * N, B, buffer + 13 * N, solver->def.time_step,
+                        &time, &steps);
   if (r.file >= 0) H5Fclose(r.file);
   fascia_h5_quiet_end(&quiet);
   if (status == FASCIA_OK) {

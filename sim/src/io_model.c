@@ -393,7 +393,8 @@ static fascia_status open_checked(reader *r, const char *name, elem kind, int ra
                name, REMEDY);
   hid_t dset = H5Dopen2(r->file, name, H5P_DEFAULT);
   if (dset < 0) return read_failed(r, name, "open it as a dataset");
-  hid_t type = H5Dget_type(dset), space = H5Dget_space(dset);
+  fascia_h5_scope scope = FASCIA_H5_SCOPE_INIT; // all but the dataset, which goes to the caller on success
+  const hid_t type = fascia_h5_keep(&scope, H5Dget_type(dset)), space = fascia_h5_keep(&scope, H5Dget_space(dset));
   fascia_status status = FASCIA_OK;
   if (type < 0 || space < 0) {
     status = read_failed(r, name, "read its type and shape");
@@ -404,6 +405,11 @@ static fascia_status open_checked(reader *r, const char *name, elem kind, int ra
   if (cls != want) {
     status = FASCIA_FAIL(r->ctx, FASCIA_ERR_FORMAT, "model '%s' %s: expected %s, found %s; %s", r->path, name,
                          class_phrase(want), class_phrase(cls), REMEDY);
+    goto cleanup;
+  }
+  if (kind != ELEM_NAME && !fascia_h5_number_type_ok(type)) {
+    status = FASCIA_FAIL(r->ctx, FASCIA_ERR_FORMAT, "model '%s' %s: %s of a damaged or unsupported layout; %s",
+                         r->path, name, class_phrase(cls), REMEDY);
     goto cleanup;
   }
   hsize_t found[H5S_MAX_RANK];
@@ -447,8 +453,7 @@ static fascia_status open_checked(reader *r, const char *name, elem kind, int ra
   *out = dset;
   dset = H5I_INVALID_HID;
 cleanup:
-  if (space >= 0) H5Sclose(space);
-  if (type >= 0) H5Tclose(type);
+  fascia_h5_scope_close(&scope);
   if (dset >= 0) H5Dclose(dset);
   return status;
 }
@@ -487,7 +492,9 @@ static fascia_status read_numbers(reader *r, const char *name, elem kind, int64_
 static fascia_status read_strings(reader *r, const char *name, hid_t dset, int64_t count, char *out, size_t stride,
                                   size_t max_length) {
   fascia_status status = FASCIA_OK;
-  hid_t file_type = H5Dget_type(dset), mem_type = H5Tcopy(H5T_C_S1), space = H5Dget_space(dset);
+  fascia_h5_scope scope = FASCIA_H5_SCOPE_INIT;
+  const hid_t file_type = fascia_h5_keep(&scope, H5Dget_type(dset)), mem_type = fascia_h5_keep(&scope, H5Tcopy(H5T_C_S1)),
+              space = fascia_h5_keep(&scope, H5Dget_space(dset));
   char *fixed = NULL, **variable = NULL;
   if (file_type < 0 || mem_type < 0 || space < 0) goto failed;
   const htri_t is_variable = H5Tis_variable_str(file_type);
@@ -533,9 +540,7 @@ cleanup:
   if (variable) H5Dvlen_reclaim(mem_type, space, H5P_DEFAULT, variable);
   free(variable);
   free(fixed);
-  if (space >= 0) H5Sclose(space);
-  if (mem_type >= 0) H5Tclose(mem_type);
-  if (file_type >= 0) H5Tclose(file_type);
+  fascia_h5_scope_close(&scope);
   return status;
 }
 
@@ -557,7 +562,10 @@ static fascia_status read_provenance(reader *r, char **out) {
   hid_t dset;
   FASCIA_TRY(open_checked(r, "/provenance", ELEM_NAME, 0, dims, &dset));
   fascia_status status = FASCIA_OK;
-  hid_t type = H5Dget_type(dset), mem_type = H5Tcopy(H5T_C_S1), space = H5Dget_space(dset);
+  fascia_h5_scope scope = FASCIA_H5_SCOPE_INIT;
+  fascia_h5_keep(&scope, dset);
+  const hid_t type = fascia_h5_keep(&scope, H5Dget_type(dset)), mem_type = fascia_h5_keep(&scope, H5Tcopy(H5T_C_S1)),
+              space = fascia_h5_keep(&scope, H5Dget_space(dset));
   char *variable = NULL;
   const htri_t is_variable = type >= 0 ? H5Tis_variable_str(type) : -1;
   if (type < 0 || mem_type < 0 || space < 0 || is_variable < 0 || H5Tset_cset(mem_type, H5Tget_cset(type)) < 0)
@@ -587,10 +595,7 @@ failed:
   status = read_failed(r, "/provenance", "read it");
 cleanup:
   if (variable) H5Dvlen_reclaim(mem_type, space, H5P_DEFAULT, &variable);
-  if (space >= 0) H5Sclose(space);
-  if (mem_type >= 0) H5Tclose(mem_type);
-  if (type >= 0) H5Tclose(type);
-  H5Dclose(dset);
+  fascia_h5_scope_close(&scope);
   if (status != FASCIA_OK) {
     free(*out);
     *out = NULL;
@@ -603,20 +608,20 @@ static fascia_status read_int_attr(reader *r, const char *name, const char *attr
   const htri_t exists = H5Aexists_by_name(r->file, name, attr_name, H5P_DEFAULT);
   FASCIA_CHECK(exists > 0, r->ctx, FASCIA_ERR_FORMAT, "model '%s' %s: attribute '%s' missing; %s", r->path, name,
                attr_name, REMEDY);
-  hid_t attr = H5Aopen_by_name(r->file, name, attr_name, H5P_DEFAULT, H5P_DEFAULT);
-  if (attr < 0) return read_failed(r, name, "open an attribute");
-  hid_t type = H5Aget_type(attr), space = H5Aget_space(attr);
+  fascia_h5_scope scope = FASCIA_H5_SCOPE_INIT;
   fascia_status status = FASCIA_OK;
-  if (type < 0 || space < 0)
-    status = read_failed(r, name, "read an attribute");
-  else if (H5Tget_class(type) != H5T_INTEGER || H5Sget_simple_extent_npoints(space) != 1)
+  const hid_t attr = fascia_h5_keep(&scope, H5Aopen_by_name(r->file, name, attr_name, H5P_DEFAULT, H5P_DEFAULT));
+  const hid_t type = attr >= 0 ? fascia_h5_keep(&scope, H5Aget_type(attr)) : H5I_INVALID_HID;
+  const hid_t space = attr >= 0 ? fascia_h5_keep(&scope, H5Aget_space(attr)) : H5I_INVALID_HID;
+  if (attr < 0 || type < 0 || space < 0)
+    status = read_failed(r, name, "open an attribute");
+  else if (H5Tget_class(type) != H5T_INTEGER || !fascia_h5_number_type_ok(type) ||
+           H5Sget_simple_extent_npoints(space) != 1)
     status = FASCIA_FAIL(r->ctx, FASCIA_ERR_FORMAT, "model '%s' %s: attribute '%s' is not one integer (found %s); %s",
                          r->path, name, attr_name, class_phrase(H5Tget_class(type)), REMEDY);
   else if (H5Aread(attr, H5T_NATIVE_INT32, value) < 0)
     status = read_failed(r, name, "read an attribute");
-  if (space >= 0) H5Sclose(space);
-  if (type >= 0) H5Tclose(type);
-  H5Aclose(attr);
+  fascia_h5_scope_close(&scope);
   return status;
 }
 
@@ -637,12 +642,16 @@ static fascia_status read_version(reader *r) {
 static fascia_status count_members(reader *r, const char *name, int64_t *count) {
   FASCIA_CHECK(fascia_h5_link_exists(r->file, name), r->ctx, FASCIA_ERR_FORMAT, "model '%s' %s: group missing; %s", r->path,
                name, REMEDY);
-  hid_t group = H5Gopen2(r->file, name, H5P_DEFAULT);
-  if (group < 0) return read_failed(r, name, "open it as a group");
+  fascia_h5_scope scope = FASCIA_H5_SCOPE_INIT;
+  const hid_t group = fascia_h5_keep(&scope, H5Gopen2(r->file, name, H5P_DEFAULT));
   H5G_info_t info;
-  const herr_t ok = H5Gget_info(group, &info);
-  H5Gclose(group);
-  if (ok < 0) return read_failed(r, name, "list it");
+  const herr_t ok = group >= 0 ? H5Gget_info(group, &info) : -1;
+  if (ok < 0) {
+    const fascia_status status = read_failed(r, name, group < 0 ? "open it as a group" : "list it");
+    fascia_h5_scope_close(&scope);
+    return status;
+  }
+  fascia_h5_scope_close(&scope);
   FASCIA_CHECK(info.nlinks <= (hsize_t)FASCIA_MAX_COUNT, r->ctx, FASCIA_ERR_FORMAT,
                "model '%s' %s: %llu members is beyond fascia's limit; the file is damaged", r->path, name,
                (unsigned long long)info.nlinks);
@@ -686,14 +695,14 @@ static const char *const sized_datasets[] = {
 #define STORED_CHECK_VALUES 65536
 static fascia_status check_stored(reader *r, const char *name) {
   if (!fascia_h5_link_exists(r->file, name)) return FASCIA_OK; // reported as missing where it is read
-  hid_t dset = H5Dopen2(r->file, name, H5P_DEFAULT);
+  fascia_h5_scope scope = FASCIA_H5_SCOPE_INIT;
+  const hid_t dset = fascia_h5_keep(&scope, H5Dopen2(r->file, name, H5P_DEFAULT));
   if (dset < 0) return FASCIA_OK; // reported where it is read
-  hid_t space = H5Dget_space(dset);
+  const hid_t space = fascia_h5_keep(&scope, H5Dget_space(dset));
   const hssize_t values = space >= 0 ? H5Sget_simple_extent_npoints(space) : 0;
   H5D_space_status_t stored = H5D_SPACE_STATUS_ERROR;
   const herr_t ok = H5Dget_space_status(dset, &stored);
-  if (space >= 0) H5Sclose(space);
-  H5Dclose(dset);
+  fascia_h5_scope_close(&scope);
   FASCIA_CHECK(values < STORED_CHECK_VALUES || (ok >= 0 && stored == H5D_SPACE_STATUS_ALLOCATED), r->ctx, FASCIA_ERR_FORMAT,
                "model '%s' %s: declares %lld values but the file stores %s of them; the file is damaged or "
                "truncated, %s",
@@ -902,26 +911,8 @@ static fascia_status read_rest(reader *r, fascia_model *m) {
 
 // Opens path read-only; a missing, unreadable or non-HDF5 file is FASCIA_ERR_IO.
 static fascia_status open_file(reader *r) {
-  FILE *probe = fopen(r->path, "rb");
-  if (!probe) {
-    const int err = errno;
-    return FASCIA_FAIL(r->ctx, FASCIA_ERR_IO, "model '%s': cannot open: %s", r->path, strerror(err));
-  }
-  fclose(probe);
-  char detail[600];
-  const htri_t is_hdf5 = H5Fis_hdf5(r->path);
-  FASCIA_CHECK(is_hdf5 > 0, r->ctx, FASCIA_ERR_IO,
-               "model '%s': not an HDF5 file (%s); expected a model written by 'fascia prep' or 'fascia beam'",
-               r->path, is_hdf5 < 0 ? fascia_h5_error(detail, sizeof detail) : "no HDF5 signature");
-  // strong close: closing the file also closes anything an error path left open
-  hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
-  if (fapl >= 0) H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG);
-  r->file = H5Fopen(r->path, H5F_ACC_RDONLY, fapl >= 0 ? fapl : H5P_DEFAULT);
-  if (r->file < 0) fascia_h5_error(detail, sizeof detail);
-  if (fapl >= 0) H5Pclose(fapl);
-  FASCIA_CHECK(r->file >= 0, r->ctx, FASCIA_ERR_IO, "model '%s': cannot open as HDF5 (%s); the file is damaged or truncated",
-               r->path, detail);
-  return FASCIA_OK;
+  return fascia_h5_open_read(r->ctx, "model", r->path, "expected a model written by 'fascia prep' or 'fascia beam'",
+                             &r->file);
 }
 
 fascia_status fascia_model_load(fascia_ctx *ctx, const char *path, fascia_model **out) {

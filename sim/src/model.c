@@ -431,6 +431,15 @@ static fascia_status validate_organs(fascia_ctx *ctx, const fascia_model *m, con
     FASCIA_CHECK(m->coupling_triangle[c] >= 0 && m->coupling_triangle[c] < m->organs[o].triangle_count, ctx,
                  FASCIA_ERR_FORMAT, "model '%s' /coupling/triangle: entry %d names triangle %d of organ '%s' (%d)",
                  origin, (int)c, (int)m->coupling_triangle[c], m->organs[o].name, (int)m->organs[o].triangle_count);
+    const int32_t i = m->coupling_frame[c];
+    // a rigid organ moves its coupling frames itself: a fixed or prescribed
+    // one would have two masters (a model problem, not a solver setting)
+    FASCIA_CHECK(m->organs[o].kind != FASCIA_ORGAN_RIGID || m->frame_kind[i] == FASCIA_FRAME_FREE, ctx,
+                 FASCIA_ERR_FORMAT,
+                 "model '%s' /coupling/frame: organ '%s' is rigid, but its coupling frame %d is %s in /frames/kind; "
+                 "the frames on a rigid organ must be free: make the frame free, make the organ fixed or "
+                 "prescribed, or re-run 'fascia prep'",
+                 origin, m->organs[o].name, (int)i, m->frame_kind[i] == FASCIA_FRAME_FIXED ? "fixed" : "prescribed");
     const fascia_real *b = m->coupling_barycentric + 3 * c;
     FASCIA_CHECK(isfinite(b[0]) && isfinite(b[1]) && isfinite(b[2]) && fabs(b[0] + b[1] + b[2] - 1) < 1e-6, ctx,
                  FASCIA_ERR_FORMAT, "model '%s' /coupling/barycentric: entry %d does not sum to 1", origin, (int)c);

@@ -192,8 +192,9 @@ static fascia_status setup_bodies(fascia_ctx *ctx, fascia_organs *O) {
     O->free_pose[7 * k + 3] = 1;
     if (m->organs[k].kind != FASCIA_ORGAN_RIGID) continue;
     const fascia_organ *o = m->organs + k;
+    // model problems, not settings: FASCIA_ERR_FORMAT (fascia_model_validate checks what it can with the file's name)
     FASCIA_CHECK(mass_properties(o, FASCIA_ORGAN_DENSITY, O->mass + k, O->centre + 3 * k, O->inertia + 9 * k), ctx,
-                 FASCIA_ERR_ARGUMENT,
+                 FASCIA_ERR_FORMAT,
                  "organ '%s' is rigid but its surface (%d vertices, %d triangles) encloses no volume; give it a "
                  "closed surface or make it fixed or prescribed",
                  o->name, (int)o->vertex_count, (int)o->triangle_count);
@@ -201,11 +202,11 @@ static fascia_status setup_bodies(fascia_ctx *ctx, fascia_organs *O) {
     fascia_real best = INFINITY;
     for (int32_t f = O->frame_offsets[k]; f < O->frame_offsets[k + 1]; ++f) {
       const int32_t i = O->frames[f];
-      FASCIA_CHECK(m->frame_kind[i] == FASCIA_FRAME_FREE, ctx, FASCIA_ERR_ARGUMENT,
+      FASCIA_CHECK(m->frame_kind[i] == FASCIA_FRAME_FREE, ctx, FASCIA_ERR_FORMAT,
                    "organ '%s' is rigid but its coupling frame %d is %s in the model; a frame on a rigid organ "
                    "must be free (re-run 'fascia prep')",
                    o->name, (int)i, m->frame_kind[i] == FASCIA_FRAME_FIXED ? "fixed" : "prescribed");
-      FASCIA_CHECK(O->frame_body[i] < 0, ctx, FASCIA_ERR_ARGUMENT,
+      FASCIA_CHECK(O->frame_body[i] < 0, ctx, FASCIA_ERR_FORMAT,
                    "frame %d is a coupling frame of the rigid organs '%s' and '%s'; it can follow one only", (int)i,
                    m->organs[O->frame_body[i]].name, o->name);
       O->frame_body[i] = k;

@@ -90,9 +90,16 @@ static const char checkpoint_usage[] =
     "                         velocities) to FILE every K steps, after the last step and when\n"
     "                         stopped by SIGINT/SIGTERM; written to a temporary name, then renamed\n"
     "  --checkpoint-every K   steps between checkpoints (default 10)\n"
-    "  --resume FILE          continue from checkpoint FILE (same model, --dt and --threads) up to\n"
-    "                         --steps N in all: the same final state, bit for bit on the CPU, as a\n"
-    "                         run never interrupted; -o then holds the steps from the resumed one on\n";
+    "  --resume FILE          continue from checkpoint FILE (same model) up to --steps N in all\n"
+    "                         (N counts every step from t = 0: below the checkpoint's step it is\n"
+    "                         an error, equal to it the run is complete and nothing is done):\n"
+    "                         the same final state, bit for bit on the CPU, as a run never\n"
+    "                         interrupted; -o then holds the steps from the resumed one on. The run\n"
+    "                         continues with the solver settings stored in FILE (--dt, Newton, CG,\n"
+    "                         preconditioner, linear solver, mass, damping, retries): an option or\n"
+    "                         --preset that asks for another value is refused, naming both values.\n"
+    "                         A damaged or edited checkpoint (its state checksum, its step and\n"
+    "                         time) or one of another model is refused (docs/results-format.md)\n";
 
 typedef struct checkpoint_options {
   const char *path, *resume;
@@ -148,9 +155,9 @@ typedef struct run_options {
 
 // Parses argv into opt. Returns -1 to go on, else the exit status (0 for
 // --help, 2 for a usage error, already reported).
-static int parse_options(int argc, char **argv, run_options *opt) {
+static int parse_options(int argc, char **argv, run_options *opt, const fascia_solver_def *start) {
   memset(opt, 0, sizeof *opt);
-  opt->solver = fascia_solver_def_default();
+  opt->solver = start ? *start : fascia_solver_def_default();
   opt->save_every = 1;
   int dt_given = 0;
   for (int k = 1; k < argc; ++k) {
@@ -480,6 +487,76 @@ static int print_json(const run_options *opt, const fascia_model *m, fascia_solv
   return 0;
 }
 
+// --- resuming: the checkpoint's settings, the command line's --steps --------
+
+// The run option that sets each checkpointed setting (by its name).
+static const char *setting_option(const char *name) {
+  static const char *const table[][2] = {
+      {"time_step", "--dt"},           {"newton_iterations", "--newton-iterations"},
+      {"newton_tolerance", "--newton-tolerance"}, {"cg_iterations", "--cg-iterations"},
+      {"cg_fixed", "--cg-fixed"},      {"cg_tolerance", "--cg-tolerance"},
+      {"precond", "--precond"},        {"linear_solver", "--linear-solver"},
+      {"assembled", "--assembled"},    {"single_precision_matrix", "--single"},
+      {"mass", "--mass"},              {"mass_damping", "--damping"},
+      {"step_retries", "--step-retries"}, {"require_convergence", "--require-convergence"}};
+  for (size_t k = 0; k < sizeof table / sizeof table[0]; ++k)
+    if (!strcmp(table[k][0], name)) return table[k][1];
+  return "no option";
+}
+
+// A setting's value as the option spells it: "block", "lumped", "on", 0.005.
+static const char *setting_text(const char *name, double value, int digits, char *buf, size_t size) {
+  static const char *const precond[] = {"none", "jacobi", "block"}, *const linear[] = {"auto", "cg", "direct"},
+                           *const mass[] = {"consistent", "lumped"};
+  const int i = (int)value;
+  const int flag = !strcmp(name, "cg_fixed") || !strcmp(name, "assembled") || !strcmp(name, "single_precision_matrix") ||
+                   !strcmp(name, "line_search") || !strcmp(name, "require_convergence");
+  if (!strcmp(name, "precond") && i >= 0 && i < 3) return precond[i];
+  if (!strcmp(name, "linear_solver") && i >= 0 && i < 3) return linear[i];
+  if (!strcmp(name, "mass") && i >= 0 && i < 2) return mass[i];
+  if (flag && (i == 0 || i == 1)) return i ? "on" : "off";
+  snprintf(buf, size, "%.*g", digits, value);
+  return buf;
+}
+
+#define SETTING_UNSET 2000000001.0 // beyond every setting's valid range: no option or preset sets it
+
+// Resuming takes the settings stored in the checkpoint; a setting the command
+// line sets itself (an option or --preset, found by parsing argv again over
+// a def of SETTING_UNSET values) must agree with it. Returns -1 to go on with
+// opt->solver holding the checkpoint's settings, else the exit status (2).
+static int take_resume_settings(int argc, char **argv, run_options *opt, const fascia_solver_def *recorded,
+                                const char *checkpoint) {
+  fascia_solver_def unset = opt->solver;
+  const int count = fascia_checkpoint_setting_count();
+  for (int k = 0; k < count; ++k) fascia_checkpoint_setting_set(&unset, k, SETTING_UNSET);
+  run_options given;
+  if (parse_options(argc, argv, &given, &unset) >= 0) return 2; // cannot happen: argv parsed once already
+  int preset = 0;
+  for (int k = 1; k < argc; ++k) preset |= !strcmp(argv[k], "--preset");
+  for (int k = 0; k < count; ++k) {
+    const double asked = fascia_checkpoint_setting_get(&given.solver, k);
+    const double stored = fascia_checkpoint_setting_get(recorded, k);
+    if (asked != SETTING_UNSET && asked != stored) {
+      const char *name = fascia_checkpoint_setting_name(k);
+      char there_buf[32], here_buf[32];
+      const char *there = setting_text(name, stored, 15, there_buf, sizeof there_buf);
+      const char *here = setting_text(name, asked, 15, here_buf, sizeof here_buf);
+      if (!strcmp(there, here)) { // apart beyond 15 digits: show them all
+        there = setting_text(name, stored, 17, there_buf, sizeof there_buf);
+        here = setting_text(name, asked, 17, here_buf, sizeof here_buf);
+      }
+      fprintf(stderr,
+              "fascia run: checkpoint '%s' was written with %s = %s, the command line asks for %s (%s%s); a "
+              "resumed run keeps the settings it started with: leave the option out (see fascia run --help)\n",
+              checkpoint, name, there, here, setting_option(name), preset ? " or --preset" : "");
+      return 2;
+    }
+    fascia_checkpoint_setting_set(&opt->solver, k, stored);
+  }
+  return -1;
+}
+
 int cmd_run(int argc, char **argv) {
   run_options opt;
   checkpoint_options ck;
@@ -488,7 +565,7 @@ int cmd_run(int argc, char **argv) {
   run_outputs outs;
   if ((rc = run_outputs_take(&argc, argv, &outs)) >= 0) return rc;
   run_drive drive;
-  if ((rc = run_drive_take(&argc, argv, &drive)) < 0) rc = parse_options(argc, argv, &opt);
+  if ((rc = run_drive_take(&argc, argv, &drive)) < 0) rc = parse_options(argc, argv, &opt, NULL);
   if (rc == 0 && ck.help) fputs(checkpoint_usage, stdout), fputs("Outputs for people and plots:\n", stdout),
                           fputs(run_outputs_usage, stdout), fputs(run_drive_usage, stdout);
   if (rc < 0 && (ck.path || ck.resume) && !opt.dynamic)
@@ -512,7 +589,33 @@ int cmd_run(int argc, char **argv) {
   memset(&tot, 0, sizeof tot);
   fascia_status st = fascia_model_load(ctx, opt.model_path, &model);
   if (st != FASCIA_OK) goto done;
+  int64_t done_steps = 0;
+  if (ck.resume) { // the settings come from the checkpoint, --steps counts from t = 0
+    fascia_solver_def recorded = opt.solver;
+    if ((st = fascia_checkpoint_read_settings(ctx, ck.resume, model, &recorded, &done_steps)) != FASCIA_OK) goto done;
+    if ((rc = take_resume_settings(argc, argv, &opt, &recorded, ck.resume)) >= 0) goto done;
+    if (done_steps == opt.steps) { // a run resumed after it finished (a script resuming blindly): said, not run
+      fprintf(stderr, "fascia run: checkpoint '%s' is at step %lld of --steps %d: the run is already complete, "
+              "nothing to do\n", ck.resume, (long long)done_steps, opt.steps);
+      rc = 0;
+      goto done;
+    }
+    if (done_steps > opt.steps) {
+      fprintf(stderr,
+              "fascia run: checkpoint '%s' is at step %lld, past --steps %d; --steps counts every step from t = 0: "
+              "give --steps larger than %lld to continue (see fascia run --help)\n",
+              ck.resume, (long long)done_steps, opt.steps, (long long)done_steps);
+      rc = 2;
+      goto done;
+    }
+  }
   st = fascia_solver_create(ctx, model, &opt.solver, &solver);
+  if (st == FASCIA_ERR_FORMAT) { // the model cannot be simulated as it is (an organ, say): not a usage error
+    fprintf(stderr, "fascia run: model '%s': %s\n", opt.model_path, fascia_ctx_message(ctx));
+    rc = 1;
+    st = FASCIA_OK;
+    goto done;
+  }
   if (st != FASCIA_OK) { // an impossible setting (usage error) or no such device
     rc = cli_solver_fail("run", opt.solver.backend, ctx, st);
     st = FASCIA_OK;
@@ -520,9 +623,8 @@ int cmd_run(int argc, char **argv) {
   }
   ck.ctx = ctx;
   if (ck.resume) { // the state, time and step count of the checkpoint
-    int64_t done_steps = 0;
     if ((st = fascia_checkpoint_load(ctx, solver, ck.resume, &done_steps)) != FASCIA_OK) goto done;
-    ck.first_step = done_steps < opt.steps ? (int)done_steps + 1 : opt.steps + 1;
+    ck.first_step = (int)done_steps + 1; // done_steps < opt.steps, checked above
     fprintf(stderr, "fascia run: resumed from '%s' after step %lld (t = %.9g s)\n", ck.resume,
             (long long)done_steps, fascia_solver_time(solver));
   }

@@ -61,6 +61,7 @@ fascia_ctx *cli_ctx(int threads, int progress) {
 }
 
 int main(int argc, char **argv) {
+  fascia_hdf5_quiet(); // every HDF5 failure reaches the user through fascia's own one-line message
   for (int k = 1; k < argc; ++k)
     if (!strcmp(argv[k], "--verbose")) cli_verbose = 1;
   if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h") || !strcmp(argv[1], "help")) {

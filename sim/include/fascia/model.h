@@ -216,6 +216,17 @@ FASCIA_API fascia_status fascia_model_load(fascia_ctx *ctx, const char *path, fa
 /// behind and an older file at path is untouched.
 FASCIA_API fascia_status fascia_model_save(fascia_ctx *ctx, const fascia_model *model, const char *path);
 
+/// Switches the HDF5 library's own error printing off for the rest of the
+/// process. fascia's readers and writers already put every HDF5 failure in
+/// their message (fascia_ctx_message) and silence HDF5 while they run, then
+/// give the caller its printer back; an application that shows fascia's
+/// messages calls this once, at start, so that HDF5 prints nothing besides
+/// them. In particular HDF5 1.10 keeps internal state of an H5Fopen that
+/// failed on some damaged files (no id of it reaches fascia, so nothing can
+/// close it) and, with its printer on, prints "HDF5: infinite loop closing
+/// library" and a line of its internal names at exit.
+FASCIA_API void fascia_hdf5_quiet(void);
+
 /// Probe index by name, -1 if absent.
 FASCIA_API int32_t fascia_model_find_probe(const fascia_model *model, const char *name);
 

@@ -1,0 +1,235 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// A checkpoint is only resumed when it is intact and belongs to the solver:
+// a flipped bit in the state, positions moved through the HDF5 API, a step
+// count or time that cannot be, another model, or a solver with other
+// settings are each refused with the file and the dataset named, and the
+// solver is left unchanged. After every refusal no HDF5 object is left open.
+// The settings read back from a checkpoint are those it was written with.
+#define _POSIX_C_SOURCE 200809L
+#include <hdf5.h>
+
+#include "check.h"
+#include "io_fixture.h"
+#include "scenes.h"
+
+static char dir[] = "t207-XXXXXX";
+static char good[256];
+
+static ssize_t open_ids(void) { return H5Fget_obj_count((hid_t)H5F_OBJ_ALL, H5F_OBJ_ALL); }
+
+// Loads path into solver and expects `want` with a message naming the file
+// and containing part1 and part2; the solver's time must not change.
+static void expect_refused(fascia_ctx *ctx, fascia_solver *solver, const char *path, fascia_status want,
+                           const char *part1, const char *part2) {
+  const double time = fascia_solver_time(solver);
+  int64_t step = -1;
+  fascia_ctx_clear(ctx);
+  const fascia_status st = fascia_checkpoint_load(ctx, solver, path, &step);
+  const char *message = fascia_ctx_message(ctx);
+  if (st != want || !strstr(message, path) || (part1 && !strstr(message, part1)) ||
+      (part2 && !strstr(message, part2)) || step != -1 || fascia_solver_time(solver) != time) {
+    fprintf(stderr, "t207: '%s' gave %s (wanted %s), step %lld, message \"%s\" (wanted '%s', '%s')\n", path,
+            fascia_status_name(st), fascia_status_name(want), (long long)step, message, part1 ? part1 : "",
+            part2 ? part2 : "");
+    ++check_failures_;
+  }
+  if (open_ids() != 0) {
+    fprintf(stderr, "t207: '%s': %ld HDF5 objects left open after the refusal\n", path, (long)open_ids());
+    ++check_failures_;
+  }
+}
+
+static hid_t corrupt_copy(const char *what, char *path, size_t size) {
+  snprintf(path, size, "%s/%s.ck.h5", dir, what);
+  if (fixture_copy(good, path, -1)) return H5I_INVALID_HID;
+  return H5Fopen(path, H5F_ACC_RDWR, H5P_DEFAULT);
+}
+
+// Rewrites element `index` of dataset `name` (read and written as doubles, or
+// as int64 when is_int) through the HDF5 API, adding `delta` or setting `value`.
+static int edit(hid_t file, const char *name, int is_int, size_t index, int add, double value) {
+  hid_t dset = H5Dopen2(file, name, H5P_DEFAULT);
+  if (dset < 0) return 1;
+  hid_t space = H5Dget_space(dset);
+  const hssize_t count = H5Sget_simple_extent_npoints(space);
+  H5Sclose(space);
+  int failed = count <= (hssize_t)index;
+  if (!failed && is_int) {
+    int64_t *v = calloc((size_t)count, sizeof *v);
+    failed = !v || H5Dread(dset, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, v) < 0;
+    if (!failed) v[index] = add ? v[index] + (int64_t)value : (int64_t)value;
+    failed = failed || H5Dwrite(dset, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, v) < 0;
+    free(v);
+  } else if (!failed) {
+    double *v = calloc((size_t)count, sizeof *v);
+    failed = !v || H5Dread(dset, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v) < 0;
+    if (!failed) v[index] = add ? v[index] + value : value;
+    failed = failed || H5Dwrite(dset, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v) < 0;
+    free(v);
+  }
+  H5Dclose(dset);
+  return failed;
+}
+
+// Flips one bit of the stored bytes of dataset `name` (contiguous), under
+// HDF5: the file is patched with stdio at the dataset's offset.
+static int flip_bit(const char *path, const char *name, long byte) {
+  hid_t file = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (file < 0) return 1;
+  hid_t dset = H5Dopen2(file, name, H5P_DEFAULT);
+  const haddr_t offset = dset >= 0 ? H5Dget_offset(dset) : HADDR_UNDEF;
+  if (dset >= 0) H5Dclose(dset);
+  H5Fclose(file);
+  if (offset == HADDR_UNDEF) return 1;
+  FILE *f = fopen(path, "r+b");
+  if (!f) return 1;
+  int failed = fseek(f, (long)offset + byte, SEEK_SET) != 0;
+  const int c = failed ? EOF : fgetc(f);
+  failed = failed || c == EOF || fseek(f, (long)offset + byte, SEEK_SET) != 0 || fputc(c ^ 0x10, f) == EOF;
+  return fclose(f) != 0 || failed;
+}
+
+static int set_version(hid_t file, int32_t version) {
+  hid_t attr = H5Aopen_by_name(file, "/", "fascia_checkpoint_version", H5P_DEFAULT, H5P_DEFAULT);
+  if (attr < 0) return 1;
+  const int failed = H5Awrite(attr, H5T_NATIVE_INT32, &version) < 0;
+  H5Aclose(attr);
+  return failed;
+}
+
+static fascia_model *beam(fascia_ctx *ctx, double youngs_modulus) {
+  fascia_scene_beam_def def = fascia_scene_beam_def_default();
+  def.frames[0] = 5, def.frames[1] = 2, def.frames[2] = 2, def.length = 4;
+  def.youngs_modulus = youngs_modulus;
+  fascia_model *m = NULL;
+  if (fascia_scene_beam_build(ctx, &def, &m) != FASCIA_OK) {
+    fprintf(stderr, "t207: beam: %s\n", fascia_ctx_message(ctx));
+    exit(1);
+  }
+  return m;
+}
+
+// Every recorded setting changed in turn: a solver with it is refused, and
+// the message names the setting.
+static void other_settings(fascia_ctx *ctx, const fascia_model *m, const fascia_solver_def *sd) {
+  const int count = fascia_checkpoint_setting_count();
+  CHECK(count >= 15);
+  for (int k = 0; k < count; ++k) {
+    const char *name = fascia_checkpoint_setting_name(k);
+    fascia_solver_def other = *sd;
+    const double value = fascia_checkpoint_setting_get(sd, k);
+    // another valid value: flags and enumerations flip between 0 and 1 (or 2),
+    // counts and reals double
+    double changed = value == 0 ? 1 : value == 1 ? 0 : 2 * value;
+    if (!strcmp(name, "cg_tolerance") || !strcmp(name, "newton_tolerance")) changed = value / 2;
+    if (!strcmp(name, "precond") || !strcmp(name, "linear_solver")) changed = value == 1 ? 2 : 1;
+    fascia_checkpoint_setting_set(&other, k, changed);
+    fascia_solver *solver = NULL;
+    if (fascia_solver_create(ctx, m, &other, &solver) != FASCIA_OK) {
+      fprintf(stderr, "t207: setting %s = %g: %s\n", name, changed, fascia_ctx_message(ctx));
+      ++check_failures_;
+      continue;
+    }
+    expect_refused(ctx, solver, good, FASCIA_ERR_ARGUMENT, "/settings", name);
+    fascia_solver_destroy(&solver);
+  }
+}
+
+int main(void) {
+  fascia_ctx_def cdef = fascia_ctx_def_default();
+  cdef.threads = 1;
+  fascia_ctx *ctx = NULL;
+  if (fascia_ctx_create(&cdef, &ctx) != FASCIA_OK) return 1;
+  H5Eset_auto2(H5E_DEFAULT, NULL, NULL); // the corrupting helpers report by return value
+  CHECK(mkdtemp(dir) != NULL);
+  snprintf(good, sizeof good, "%s/good.ck.h5", dir);
+
+  fascia_model *m = beam(ctx, 40000), *other_model = beam(ctx, 50000);
+  fascia_solver_def sd = fascia_solver_def_default();
+  sd.time_step = 0.01;
+  sd.backend = "cpu";
+  fascia_solver *solver = NULL;
+  CHECK_OK(fascia_solver_create(ctx, m, &sd, &solver), ctx);
+  for (int n = 0; n < 3; ++n) CHECK_OK(fascia_solver_step(solver, NULL), ctx);
+  CHECK_OK(fascia_checkpoint_save(ctx, solver, 3, good), ctx);
+  fascia_solver_destroy(&solver);
+
+  // a fresh solver (at t = 0) takes the good checkpoint
+  CHECK_OK(fascia_solver_create(ctx, m, &sd, &solver), ctx);
+  int64_t step = 0;
+  CHECK_OK(fascia_checkpoint_load(ctx, solver, good, &step), ctx);
+  CHECK(step == 3 && fascia_solver_time(solver) == 0.01 + 0.01 + 0.01);
+  CHECK(open_ids() == 0);
+  fascia_solver_destroy(&solver);
+  CHECK_OK(fascia_solver_create(ctx, m, &sd, &solver), ctx);
+
+  char path[512];
+  hid_t file;
+  CHECK((file = corrupt_copy("bit-flip", path, sizeof path)) >= 0 && H5Fclose(file) >= 0);
+  CHECK(flip_bit(path, "/state/position", 21) == 0);
+  expect_refused(ctx, solver, path, FASCIA_ERR_FORMAT, "/state/checksum", "does not match");
+
+  CHECK((file = corrupt_copy("moved-1m", path, sizeof path)) >= 0);
+  CHECK(edit(file, "/state/position", 0, 4, 1, 1.0) == 0 && H5Fclose(file) >= 0);
+  expect_refused(ctx, solver, path, FASCIA_ERR_FORMAT, "/state/checksum", "does not match");
+
+  CHECK((file = corrupt_copy("velocity", path, sizeof path)) >= 0);
+  CHECK(edit(file, "/state/velocity", 0, 0, 1, 1e-12) == 0 && H5Fclose(file) >= 0);
+  expect_refused(ctx, solver, path, FASCIA_ERR_FORMAT, "/state/checksum", NULL);
+
+  CHECK((file = corrupt_copy("step-1e15", path, sizeof path)) >= 0);
+  CHECK(edit(file, "/run/step", 1, 0, 0, 1e15) == 0 && H5Fclose(file) >= 0);
+  expect_refused(ctx, solver, path, FASCIA_ERR_FORMAT, "/run/step", "1000000000000000");
+
+  CHECK((file = corrupt_copy("time-negative", path, sizeof path)) >= 0);
+  CHECK(edit(file, "/run/time", 0, 0, 0, -5) == 0 && H5Fclose(file) >= 0);
+  expect_refused(ctx, solver, path, FASCIA_ERR_FORMAT, "/run/time", "-5");
+
+  CHECK((file = corrupt_copy("step-and-time", path, sizeof path)) >= 0);
+  CHECK(edit(file, "/run/step", 1, 0, 1, 1) == 0 && H5Fclose(file) >= 0); // 4 steps, the time of 3
+  expect_refused(ctx, solver, path, FASCIA_ERR_FORMAT, "/run/time", "4 steps");
+
+  CHECK((file = corrupt_copy("no-checksum", path, sizeof path)) >= 0);
+  CHECK(H5Ldelete(file, "/state/checksum", H5P_DEFAULT) >= 0 && H5Fclose(file) >= 0);
+  expect_refused(ctx, solver, path, FASCIA_ERR_FORMAT, "/state/checksum", "missing");
+
+  CHECK((file = corrupt_copy("no-settings", path, sizeof path)) >= 0);
+  CHECK(H5Ldelete(file, "/settings", H5P_DEFAULT) >= 0 && H5Fclose(file) >= 0);
+  expect_refused(ctx, solver, path, FASCIA_ERR_FORMAT, "/settings", "missing");
+
+  CHECK((file = corrupt_copy("version-1", path, sizeof path)) >= 0);
+  CHECK(set_version(file, 1) == 0 && H5Fclose(file) >= 0);
+  expect_refused(ctx, solver, path, FASCIA_ERR_FORMAT, "version 1", "older fascia");
+
+  snprintf(path, sizeof path, "%s/truncated.ck.h5", dir);
+  CHECK(fixture_copy(good, path, 1000) == 0);
+  fascia_ctx_clear(ctx);
+  CHECK(fascia_checkpoint_load(ctx, solver, path, &step) != FASCIA_OK && open_ids() == 0);
+
+  // another model (same sizes, stiffer), another solver setting
+  fascia_solver *other = NULL;
+  CHECK_OK(fascia_solver_create(ctx, other_model, &sd, &other), ctx);
+  expect_refused(ctx, other, good, FASCIA_ERR_ARGUMENT, "/model/fingerprint", "another model");
+  fascia_solver_destroy(&other);
+  other_settings(ctx, m, &sd);
+
+  // the settings read back are those of the run; others stay as they are
+  fascia_solver_def read = fascia_solver_def_default();
+  read.time_step = 0.5, read.mass_damping = 3, read.cg_iterations = 7, read.threads = 5, read.load_steps = 9;
+  step = 0;
+  CHECK_OK(fascia_checkpoint_read_settings(ctx, good, m, &read, &step), ctx);
+  CHECK(step == 3 && read.threads == 5 && read.load_steps == 9);
+  for (int k = 0; k < fascia_checkpoint_setting_count(); ++k)
+    CHECK(fascia_checkpoint_setting_get(&read, k) == fascia_checkpoint_setting_get(&sd, k));
+  fascia_ctx_clear(ctx);
+  CHECK(fascia_checkpoint_read_settings(ctx, good, other_model, &read, &step) == FASCIA_ERR_ARGUMENT);
+  CHECK(open_ids() == 0);
+
+  fascia_solver_destroy(&solver);
+  fascia_model_destroy(&m);
+  fascia_model_destroy(&other_model);
+  if (!check_failures_) fixture_remove_dir(dir);
+  fascia_ctx_destroy(&ctx);
+  return CHECK_RESULT();
+}
