@@ -27,12 +27,15 @@ typedef struct file_key {
   const char *name; ///< exists == 0: the last component of the path
 } file_key;
 
-static void folder_of(const char *path, char *out) {
+const char *cli_folder_of(const char *path, char *out, size_t size) {
   const char *slash = strrchr(path, '/');
-  if (!slash) snprintf(out, PATH_TEXT, ".");
-  else if (slash == path) snprintf(out, PATH_TEXT, "/");
-  else snprintf(out, PATH_TEXT, "%.*s", (int)(slash - path), path);
+  if (!slash) snprintf(out, size, ".");
+  else if (slash == path) snprintf(out, size, "/");
+  else snprintf(out, size, "%.*s", (int)(slash - path), path);
+  return out;
 }
+
+static void folder_of(const char *path, char *out) { cli_folder_of(path, out, PATH_TEXT); }
 
 static int same_key(const file_key *a, const file_key *b) {
   if (a->exists != b->exists || a->dev != b->dev || a->ino != b->ino) return 0;

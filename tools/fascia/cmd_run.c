@@ -67,7 +67,11 @@ static const char run_usage[] =
     "                         'fascia tradeoff' (tools/bench/README.md) for dynamic runs; options\n"
     "                         after it override it; a static solve keeps its Newton limit of 100\n"
     "  --verbose              on failure, also print where the error was found\n"
-    "Progress with the time left goes to stderr when it is a terminal (or FASCIA_PROGRESS=1).\n";
+    "Progress with the time left goes to stderr when it is a terminal (or FASCIA_PROGRESS=1).\n"
+    "Every output is written as NAME.tmp-PID-K and renamed when complete; the next run writing\n"
+    "it removes those a killed run left. SIGINT/SIGTERM (also repeated) stop a dynamic run after\n"
+    "the current step with the outputs written; the exit status is then 1. Exit 2: usage error,\n"
+    "including an output that is an input or another output.\n";
 
 // Set by SIGINT/SIGTERM during a dynamic run; checked after every step.
 static volatile sig_atomic_t run_stop_requested = 0;
@@ -559,10 +563,7 @@ static fascia_status check_results_size(fascia_ctx *ctx, const run_options *opt,
   const double row = 8.0 * (1 + 7.0 * m->frame_count + (opt->samples ? 5.0 * m->sample_count : 0));
   const double bytes = saved * row;
   char folder[4096];
-  const char *slash = strrchr(opt->results_path, '/');
-  if (slash) snprintf(folder, sizeof folder, "%.*s", slash == opt->results_path ? 1 : (int)(slash - opt->results_path),
-                      opt->results_path);
-  else snprintf(folder, sizeof folder, ".");
+  cli_folder_of(opt->results_path, folder, sizeof folder);
   struct statvfs fs;
   if (statvfs(folder, &fs) != 0) return FASCIA_OK;
   const double free_bytes = (double)fs.f_bavail * (double)fs.f_frsize;
