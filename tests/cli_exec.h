@@ -6,6 +6,7 @@
 #ifndef FASCIA_TESTS_CLI_EXEC_H
 #define FASCIA_TESTS_CLI_EXEC_H
 
+#include <dirent.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -45,6 +46,55 @@ static inline int cli_exec(const char *fascia, const char *args, const char *err
     fclose(e);
   }
   return 1;
+}
+
+/// Runs the shell text `command` (it names the fascia binary itself) with
+/// stdout thrown away and stderr captured through a pipe into r->err: for
+/// commands that must not write any file of the test's, such as under
+/// `ulimit -f 0`. Returns 0 when the shell could not be started.
+static inline int cli_shell(const char *command, cli_result *r) {
+  static char full[16384];
+  snprintf(full, sizeof full, "(FASCIA_PROGRESS=0; export FASCIA_PROGRESS; %s) 2>&1 >/dev/null", command);
+  r->out[0] = r->err[0] = '\0';
+  FILE *p = popen(full, "r");
+  if (!p) return 0;
+  cli_read_all_(p, r->err);
+  const int ws = pclose(p);
+  r->status = ws != -1 && WIFEXITED(ws) ? WEXITSTATUS(ws) : -1;
+  return 1;
+}
+
+/// Lines in text (newline characters).
+static inline int cli_lines(const char *text) {
+  int n = 0;
+  for (; *text; ++text) n += *text == '\n';
+  return n;
+}
+
+/// Reads up to size - 1 bytes of path into buffer (NUL-terminated); the
+/// byte count, or -1 when it cannot be opened.
+static inline long cli_read_file(const char *path, char *buffer, size_t size) {
+  FILE *f = fopen(path, "rb");
+  if (!f) return -1;
+  const size_t n = fread(buffer, 1, size - 1, f);
+  buffer[n] = '\0';
+  fclose(f);
+  return (long)n;
+}
+
+/// Entries of folder dir whose name contains `part` ("" for all, "." and
+/// ".." left out); -1 when it cannot be read. Prints them when verbose.
+static inline int cli_dir_count(const char *dir, const char *part, int verbose) {
+  DIR *d = opendir(dir);
+  if (!d) return -1;
+  int n = 0;
+  for (struct dirent *e = readdir(d); e; e = readdir(d)) {
+    if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, "..") || !strstr(e->d_name, part)) continue;
+    if (verbose) fprintf(stderr, "  %s/%s\n", dir, e->d_name);
+    ++n;
+  }
+  closedir(d);
+  return n;
 }
 
 static inline int cli_file_exists(const char *path) {

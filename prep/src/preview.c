@@ -3,7 +3,8 @@
 // A preview for ParaView of what prep built, as legacy VTK files (binary,
 // big-endian, as the legacy format requires): organ surfaces, the region's
 // voxel grid, frames, samples and the shared (coupling) frames. Each file is
-// written to NAME.tmp and renamed, so a reader never sees half a file.
+// written under a temporary name and renamed (fascia/files.h), so a reader
+// never sees half a file.
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -11,6 +12,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include "fascia/files.h"
 #include "prep_util.h"
 
 static void put_be32(FILE *f, const void *value) {
@@ -27,28 +29,24 @@ static void put_int(FILE *f, int32_t v) { put_be32(f, &v); }
 
 typedef struct vtk_file {
   FILE *f;
-  char path[1024], tmp[1040];
+  fascia_file *file; ///< written under a temporary name, renamed when complete
 } vtk_file;
 
 static fascia_status vtk_open(fascia_ctx *ctx, vtk_file *v, const char *dir, const char *name, const char *title,
                               const char *dataset) {
-  snprintf(v->path, sizeof v->path, "%s/%s", dir, name);
-  snprintf(v->tmp, sizeof v->tmp, "%s.tmp", v->path);
-  v->f = fopen(v->tmp, "wb");
-  PREP_CHECK(v->f, ctx, FASCIA_ERR_IO, "preview '%s': cannot write (%s)", v->tmp, strerror(errno));
+  char path[4096];
+  snprintf(path, sizeof path, "%s/%s", dir, name);
+  v->file = NULL;
+  PREP_TRY(fascia_file_open(ctx, "preview", path, &v->file));
+  v->f = fascia_file_stream(v->file);
   fprintf(v->f, "# vtk DataFile Version 3.0\n%s\nBINARY\nDATASET %s\n", title, dataset);
   return FASCIA_OK;
 }
 
 static fascia_status vtk_close(fascia_ctx *ctx, vtk_file *v) {
-  const int failed = ferror(v->f);
-  const int closed = fclose(v->f) == 0;
+  (void)ctx; // the file keeps the ctx it was opened with
   v->f = NULL;
-  if (failed || !closed || rename(v->tmp, v->path) != 0) {
-    remove(v->tmp);
-    return PREP_FAIL(ctx, FASCIA_ERR_IO, "preview '%s': write failed (%s)", v->path, strerror(errno));
-  }
-  return FASCIA_OK;
+  return fascia_file_commit(&v->file);
 }
 
 // Points with one vertex cell each.
@@ -128,6 +126,7 @@ static fascia_status write_points(fascia_ctx *ctx, const char *dir, const fascia
   vtk_int_field(v.f, "inside_organ", pts->frame_count, pts->frame_inside_organ, NULL);
   vtk_int_field(v.f, "on_organ", pts->frame_count, pts->frame_organ, NULL);
   int32_t *shared = prep_calloc(pts->frame_count, sizeof(int32_t));
+  if (!shared) fascia_file_discard(&v.file);
   PREP_CHECK(shared, ctx, FASCIA_ERR_MEMORY, "preview: out of memory");
   for (int32_t i = 0; i < pts->frame_count; ++i) shared[i] = -1;
   for (int32_t c = 0; c < cpl->count; ++c) shared[cpl->frame[c]] = cpl->organ[c];

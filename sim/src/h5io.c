@@ -6,7 +6,11 @@
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <sys/statvfs.h>
 #include <unistd.h>
 
 #include "fascia/model.h"
@@ -25,11 +29,28 @@ typedef struct error_walk {
   char outer[256], inner[256];
 } error_walk;
 
+// HDF5's descriptions can hold line breaks (a write failure embeds ctime()'s
+// text) and a long dump of its write call; a message is one line, so breaks
+// become spaces and a system error is cut down to its errno text.
+static void one_line(char *out, size_t size, const char *desc) {
+  const char *said = strstr(desc, "error message = '");
+  if (said) {
+    const char *head_end = strchr(desc, ':'), *text = said + strlen("error message = '"), *close = strchr(text, '\'');
+    const int head = head_end ? (int)(head_end - desc) : 0;
+    const int length = close ? (int)(close - text) : (int)strlen(text);
+    snprintf(out, size, "%.*s%s%.*s", head, desc, head ? ": " : "", length, text);
+  } else {
+    snprintf(out, size, "%s", desc);
+  }
+  for (char *c = out; *c; ++c)
+    if (*c == '\n' || *c == '\r' || *c == '\t') *c = ' ';
+}
+
 static herr_t walk_error(unsigned n, const H5E_error2_t *err, void *data) {
   error_walk *w = data;
   const char *desc = err->desc && err->desc[0] ? err->desc : "";
-  if (n == 0) snprintf(w->outer, sizeof w->outer, "%s", desc);
-  snprintf(w->inner, sizeof w->inner, "%s", desc);
+  if (n == 0) one_line(w->outer, sizeof w->outer, desc);
+  one_line(w->inner, sizeof w->inner, desc);
   return 0;
 }
 
@@ -47,51 +68,114 @@ const char *fascia_h5_error(char *buf, size_t size) {
   return buf;
 }
 
-// Temporary names are PATH.tmp-PID-K: the pid separates processes, K the
-// writers of one process; creation is exclusive so two writers never share.
-#define TEMP_ATTEMPTS 1000
-
-static int temp_candidate(const char *path, int attempt, char *tmp, size_t tmp_size) {
-  const int n = snprintf(tmp, tmp_size, "%s.tmp-%ld-%d", path, (long)getpid(), attempt);
-  return n > 0 && (size_t)n < tmp_size;
-}
-
-fascia_status fascia_temp_name(fascia_ctx *ctx, const char *what, const char *path, char *tmp, size_t tmp_size) {
-  for (int attempt = 0; attempt < TEMP_ATTEMPTS; ++attempt) {
-    FASCIA_CHECK(temp_candidate(path, attempt, tmp, tmp_size), ctx, FASCIA_ERR_ARGUMENT,
-                 "%s '%s': the path is too long", what, path);
-    if (access(tmp, F_OK) != 0) return FASCIA_OK;
-  }
-  return FASCIA_FAIL(ctx, FASCIA_ERR_IO, "%s '%s': no free temporary name next to it (%s exists); remove stale '*.tmp-*' files",
-                     what, path, tmp);
-}
+// HDF5 1.10 cannot recover from a failed write of its metadata cache: the
+// H5Fclose that follows fails and leaves a dangling file id that crashes the
+// library's exit handler. So an HDF5 write must never fail on a full disk:
+// models and checkpoints are built in memory (the core driver) and written
+// out with plain writes whose failure is ours to handle; the results file,
+// which grows step by step, is flushed after each step and each step checks
+// the free space first (fascia_h5_space_check).
 
 fascia_status fascia_h5_create_temp(fascia_ctx *ctx, const char *what, const char *path, char *tmp, size_t tmp_size,
                                     hid_t *file) {
   *file = H5I_INVALID_HID;
-  for (int attempt = 0; attempt < TEMP_ATTEMPTS; ++attempt) {
-    FASCIA_CHECK(temp_candidate(path, attempt, tmp, tmp_size), ctx, FASCIA_ERR_ARGUMENT,
-                 "%s '%s': the path is too long", what, path);
-    if (access(tmp, F_OK) == 0) continue;
-    *file = H5Fcreate(tmp, H5F_ACC_EXCL, H5P_DEFAULT, H5P_DEFAULT);
-    if (*file >= 0) return FASCIA_OK;
-    char detail[600];
-    fascia_h5_error(detail, sizeof detail);
-    if (access(tmp, F_OK) == 0) continue; // lost a race for this name: try the next one
-    return FASCIA_FAIL(ctx, FASCIA_ERR_IO,
-                       "%s '%s': cannot create '%s' (HDF5: %s); check that the folder exists and is writable", what,
-                       path, tmp, detail);
+  int fd = -1;
+  // the name is reserved with O_EXCL first, so a failing H5Fcreate (no space
+  // for the superblock) is a failure, never mistaken for a name taken
+  FASCIA_TRY(fascia_temp_reserve(ctx, what, path, tmp, tmp_size, &fd));
+  close(fd);
+  // a failed H5Fcreate, too, leaves HDF5 unable to shut down cleanly
+  const fascia_status room = fascia_h5_space_check(ctx, what, path, tmp, 0);
+  if (room != FASCIA_OK) {
+    remove(tmp);
+    return room;
   }
-  return FASCIA_FAIL(ctx, FASCIA_ERR_IO, "%s '%s': no free temporary name next to it (%s exists); remove stale '*.tmp-*' files",
-                     what, path, tmp);
+  *file = H5Fcreate(tmp, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  if (*file >= 0) return FASCIA_OK;
+  char detail[600], folder[4096];
+  fascia_h5_error(detail, sizeof detail);
+  remove(tmp);
+  return FASCIA_FAIL(ctx, FASCIA_ERR_IO, "%s '%s': cannot create an HDF5 file in folder '%s' (HDF5: %s)", what, path,
+                     fascia_path_folder(path, folder, sizeof folder), detail);
 }
 
-fascia_status fascia_commit_temp(fascia_ctx *ctx, const char *what, const char *tmp, const char *path) {
-  if (rename(tmp, path) == 0) return FASCIA_OK;
-  const int err = errno;
-  remove(tmp);
-  return FASCIA_FAIL(ctx, FASCIA_ERR_IO, "%s '%s': cannot move the finished file into place: %s", what, path,
-                     strerror(err));
+fascia_status fascia_h5_create_memory(fascia_ctx *ctx, const char *what, const char *path, hid_t *file) {
+  *file = H5I_INVALID_HID;
+  hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+  // grows in steps of 1 MiB; no backing store: fascia_h5_finish_memory writes the image
+  if (fapl >= 0 && H5Pset_fapl_core(fapl, (size_t)1 << 20, 0) >= 0)
+    *file = H5Fcreate(path, H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
+  if (fapl >= 0) H5Pclose(fapl);
+  if (*file >= 0) return FASCIA_OK;
+  char detail[600];
+  fascia_h5_error(detail, sizeof detail);
+  return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "%s '%s': cannot build the file in memory (HDF5: %s)", what, path,
+                     detail);
+}
+
+// Writes all of data to fd: 0, else errno.
+static int write_all(int fd, const unsigned char *data, size_t size) {
+  while (size > 0) {
+    const ssize_t n = write(fd, data, size);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return n < 0 ? errno : EIO;
+    data += n, size -= (size_t)n;
+  }
+  return 0;
+}
+
+fascia_status fascia_h5_finish_memory(fascia_ctx *ctx, const char *what, hid_t *file, const char *path) {
+  void *image = NULL;
+  ssize_t size = -1;
+  if (H5Fflush(*file, H5F_SCOPE_LOCAL) >= 0) size = H5Fget_file_image(*file, NULL, 0);
+  if (size > 0 && (image = malloc((size_t)size)) && H5Fget_file_image(*file, image, (size_t)size) != size) size = -1;
+  char detail[600];
+  if (size <= 0 || !image) fascia_h5_error(detail, sizeof detail);
+  H5Fclose(*file); // in memory: nothing to write, cannot fail on a full disk
+  *file = H5I_INVALID_HID;
+  if (size <= 0 || !image) {
+    free(image);
+    return FASCIA_FAIL(ctx, size > 0 ? FASCIA_ERR_MEMORY : FASCIA_ERR_IO, "%s '%s': cannot take the file image (%s)",
+                       what, path, size > 0 ? "out of memory" : detail);
+  }
+  char tmp[4200], folder[4096];
+  int fd = -1;
+  fascia_status status = fascia_temp_reserve(ctx, what, path, tmp, sizeof tmp, &fd);
+  if (status == FASCIA_OK) {
+    int err = write_all(fd, image, (size_t)size);
+    if (close(fd) != 0 && !err) err = errno;
+    if (err) {
+      remove(tmp);
+      status = FASCIA_FAIL(ctx, FASCIA_ERR_IO, "%s '%s': cannot write %lld bytes in folder '%s': %s", what, path,
+                           (long long)size, fascia_path_folder(path, folder, sizeof folder), strerror(err));
+    } else {
+      status = fascia_commit_temp(ctx, what, tmp, path);
+    }
+  }
+  free(image);
+  return status;
+}
+
+fascia_status fascia_h5_space_check(fascia_ctx *ctx, const char *what, const char *path, const char *tmp,
+                                    int64_t bytes) {
+  char folder[4096];
+  const double needed = (double)bytes + (double)FASCIA_H5_SPACE_MARGIN;
+  struct rlimit limit;
+  struct stat file;
+  if (getrlimit(RLIMIT_FSIZE, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY && stat(tmp, &file) == 0 &&
+      (double)file.st_size + needed > (double)limit.rlim_cur)
+    return FASCIA_FAIL(ctx, FASCIA_ERR_IO,
+                       "%s '%s': the file would pass this process's file size limit of %.0f KiB (ulimit -f); "
+                       "raise the limit or save fewer steps",
+                       what, path, (double)limit.rlim_cur / 1024);
+  struct statvfs fs;
+  if (statvfs(tmp, &fs) != 0) return FASCIA_OK; // cannot tell: let the write say
+  const double free_bytes = (double)fs.f_bavail * (double)fs.f_frsize;
+  if (free_bytes >= needed) return FASCIA_OK;
+  return FASCIA_FAIL(ctx, FASCIA_ERR_IO,
+                     "%s '%s': the disk holding folder '%s' is full (%.0f KiB free, %.0f KiB needed to go on); "
+                     "free some space or write elsewhere",
+                     what, path, fascia_path_folder(path, folder, sizeof folder), free_bytes / 1024, needed / 1024);
 }
 
 herr_t fascia_h5_attr_string(hid_t loc, const char *name, const char *value) {

@@ -10,6 +10,7 @@
 #include <hdf5.h>
 
 #include "status.h"
+#include "tempfile.h"
 
 /// HDF5's automatic error printer, saved while fascia has it switched off.
 typedef struct fascia_h5_quiet {
@@ -29,21 +30,29 @@ FASCIA_INTERN void fascia_h5_quiet_end(const fascia_h5_quiet *quiet);
 FASCIA_INTERN const char *fascia_h5_error(char *buf, size_t size);
 
 /// Creates an empty HDF5 file next to `path` under a name no other file has
-/// (`path.tmp-PID-K`), exclusively, and writes that name into tmp. `what`
-/// names the kind of file in messages ("model", "results"). On error nothing
-/// is created and the status is FASCIA_ERR_IO (or _ARGUMENT for a path too
-/// long).
+/// (`path.tmp-PID-K`, tempfile.h), and writes that name into tmp. `what`
+/// names the kind of file in messages ("results"). On error nothing is
+/// created and the status is FASCIA_ERR_IO (or _ARGUMENT for a path too
+/// long); the message names the folder and the reason.
 FASCIA_INTERN fascia_status fascia_h5_create_temp(fascia_ctx *ctx, const char *what, const char *path, char *tmp,
                                                   size_t tmp_size, hid_t *file);
 
-/// Finds a free temporary name next to path, as fascia_h5_create_temp does,
-/// for files not written through HDF5 (the XDMF sidecar).
-FASCIA_INTERN fascia_status fascia_temp_name(fascia_ctx *ctx, const char *what, const char *path, char *tmp,
-                                             size_t tmp_size);
+/// Creates an HDF5 file in memory (nothing on disk yet) for a file written
+/// in one go (model, checkpoint); fascia_h5_finish_memory puts it on disk.
+FASCIA_INTERN fascia_status fascia_h5_create_memory(fascia_ctx *ctx, const char *what, const char *path, hid_t *file);
+/// Closes a file of fascia_h5_create_memory (*file becomes invalid) and
+/// writes its bytes to a temporary file next to path, renamed to path when
+/// complete. On error (disk full) no temporary file is left and path is
+/// untouched; the message names the folder and the reason.
+FASCIA_INTERN fascia_status fascia_h5_finish_memory(fascia_ctx *ctx, const char *what, hid_t *file, const char *path);
 
-/// Renames tmp to path (replacing any file there). On error tmp is removed
-/// and the file at path is untouched.
-FASCIA_INTERN fascia_status fascia_commit_temp(fascia_ctx *ctx, const char *what, const char *tmp, const char *path);
+/// Free space, bytes, kept beyond the next write of a growing HDF5 file:
+/// room for the metadata HDF5 writes when it flushes.
+#define FASCIA_H5_SPACE_MARGIN ((int64_t)1 << 20)
+/// FASCIA_ERR_IO with a message naming the folder and the free space when
+/// the disk holding tmp has less than bytes + FASCIA_H5_SPACE_MARGIN free.
+FASCIA_INTERN fascia_status fascia_h5_space_check(fascia_ctx *ctx, const char *what, const char *path,
+                                                  const char *tmp, int64_t bytes);
 
 /// Small attribute writers; each returns a negative value on failure (the
 /// HDF5 error stack tells why).

@@ -310,19 +310,15 @@ fascia_status fascia_checkpoint_save(fascia_ctx *ctx, const fascia_solver *solve
                "fascia_checkpoint_save: NULL solver or empty path");
   FASCIA_CHECK(step >= 0 && step <= MAX_STEP, ctx, FASCIA_ERR_ARGUMENT,
                "checkpoint '%s': step %lld is outside 0..%lld", path, (long long)step, (long long)MAX_STEP);
-  char tmp[4096];
   fascia_h5_quiet quiet;
   fascia_h5_quiet_begin(&quiet);
   hid_t file;
-  fascia_status status = fascia_h5_create_temp(ctx, "checkpoint", path, tmp, sizeof tmp, &file);
+  // built in memory, then written out: a full disk fails the write, not HDF5
+  fascia_status status = fascia_h5_create_memory(ctx, "checkpoint", path, &file);
   if (status == FASCIA_OK) {
     status = write_checkpoint(ctx, file, solver, step, path);
-    // closing flushes: its failure (disk full) is a failed save too
-    if (H5Fclose(file) < 0 && status == FASCIA_OK) status = write_failed(ctx, path, "/");
-    if (status == FASCIA_OK)
-      status = fascia_commit_temp(ctx, "checkpoint", tmp, path);
-    else
-      remove(tmp);
+    if (status == FASCIA_OK) status = fascia_h5_finish_memory(ctx, "checkpoint", &file, path);
+    else H5Fclose(file);
   }
   fascia_h5_quiet_end(&quiet);
   return status;

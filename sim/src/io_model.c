@@ -328,19 +328,15 @@ fascia_status fascia_model_save(fascia_ctx *ctx, const fascia_model *model, cons
     return FASCIA_FAIL(ctx, status, "cannot save: %s", reason);
   }
   FASCIA_TRY(check_names(ctx, model, path));
-  char tmp[4096];
   fascia_h5_quiet quiet;
   fascia_h5_quiet_begin(&quiet);
   writer w = {ctx, path, H5I_INVALID_HID};
-  status = fascia_h5_create_temp(ctx, "model", path, tmp, sizeof tmp, &w.file);
+  // built in memory, then written out: a full disk fails the write, not HDF5
+  status = fascia_h5_create_memory(ctx, "model", path, &w.file);
   if (status == FASCIA_OK) {
     status = write_model(&w, model);
-    // Closing flushes: its failure (disk full) is a failed save too.
-    if (H5Fclose(w.file) < 0 && status == FASCIA_OK) status = write_failed(&w, "/");
-    if (status == FASCIA_OK)
-      status = fascia_commit_temp(ctx, "model", tmp, path);
-    else
-      remove(tmp);
+    if (status == FASCIA_OK) status = fascia_h5_finish_memory(ctx, "model", &w.file, path);
+    else H5Fclose(w.file);
   }
   fascia_h5_quiet_end(&quiet);
   return status;

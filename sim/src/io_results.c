@@ -22,6 +22,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "fascia/files.h"
 #include "fascia/results.h"
 #include "h5io.h"
 
@@ -227,6 +228,8 @@ fascia_status fascia_results_open(fascia_ctx *ctx, const char *path, const fasci
   fascia_h5_quiet_begin(&quiet);
   fascia_status status = fascia_h5_create_temp(ctx, "results", path, r->tmp, sizeof r->tmp, &r->file);
   if (status != FASCIA_OK) r->tmp[0] = 0; // nothing was created
+  if (status == FASCIA_OK) // the static datasets, kinds and sample data
+    status = fascia_h5_space_check(ctx, "results", path, r->tmp, 4 * (int64_t)r->frame_count + 12 * (int64_t)r->sample_count);
   if (status == FASCIA_OK) status = create_layout(r, model);
   fascia_h5_quiet_end(&quiet);
   if (status != FASCIA_OK) {
@@ -256,10 +259,15 @@ fascia_status fascia_results_append(fascia_results *r, fascia_real time, const f
   }
   const int64_t t = r->step_count;
   const hsize_t N = (hsize_t)r->frame_count, S = (hsize_t)r->sample_count;
+  // a step's rows, the per-sample fields included (strain, stress)
+  const int64_t row_bytes = 8 * (1 + 7 * (int64_t)N + (r->write_samples ? 5 * (int64_t)S : 0));
+  FASCIA_TRY(fascia_h5_space_check(r->ctx, "results", r->path, r->tmp, row_bytes));
   fascia_h5_quiet quiet;
   fascia_h5_quiet_begin(&quiet);
-  fascia_status status = FASCIA_OK;
-  if (write_row(r->time, 1, t, 0, 0, &time) < 0)
+  // the previous step goes to disk now, while there is room for it
+  fascia_status status = H5Fflush(r->file, H5F_SCOPE_LOCAL) < 0 ? h5_failed(r, "/", "flush") : FASCIA_OK;
+  if (status != FASCIA_OK) {
+  } else if (write_row(r->time, 1, t, 0, 0, &time) < 0)
     status = h5_failed(r, "/steps/time", "append");
   else if (write_row(r->frame_position, 3, t, N, 3, frame_position) < 0)
     status = h5_failed(r, "/frames/position", "append");
@@ -338,8 +346,7 @@ static herr_t trim_series(fascia_results *r) {
   return status;
 }
 
-// The sidecar's name: path with its .h5 (or .hdf5) suffix replaced by .xdmf.
-static void sidecar_path(const char *path, char *out, size_t size) {
+void fascia_results_sidecar_path(const char *path, char *out, size_t size) {
   size_t length = strlen(path);
   if (length > 3 && !strcmp(path + length - 3, ".h5"))
     length -= 3;
@@ -418,11 +425,11 @@ static void xdmf_grid(FILE *out, const fascia_results *r, const char *h5, int64_
 // Writes the sidecar: a temporal collection with, per step, a spatial
 // collection of the frame grid and (with samples) the sample grid.
 static fascia_status write_xdmf(fascia_results *r) {
-  char xdmf[PATH_SIZE], tmp[PATH_SIZE + 64];
-  sidecar_path(r->path, xdmf, sizeof xdmf);
-  FASCIA_TRY(fascia_temp_name(r->ctx, "results sidecar", xdmf, tmp, sizeof tmp));
-  FILE *out = fopen(tmp, "w");
-  FASCIA_CHECK(out, r->ctx, FASCIA_ERR_IO, "results sidecar '%s': cannot create '%s'", xdmf, tmp);
+  char xdmf[PATH_SIZE];
+  fascia_results_sidecar_path(r->path, xdmf, sizeof xdmf);
+  fascia_file *file = NULL;
+  FASCIA_TRY(fascia_file_open(r->ctx, "results sidecar", xdmf, &file));
+  FILE *out = fascia_file_stream(file);
   // the sidecar sits next to the .h5 file and names it relative to itself
   const char *slash = strrchr(r->path, '/');
   const char *h5 = slash ? slash + 1 : r->path;
@@ -436,12 +443,7 @@ static fascia_status write_xdmf(fascia_results *r) {
     fprintf(out, "      </Grid>\n");
   }
   fprintf(out, "    </Grid>\n  </Domain>\n</Xdmf>\n");
-  const int failed = ferror(out) != 0;
-  if (fclose(out) != 0 || failed) {
-    remove(tmp);
-    return FASCIA_FAIL(r->ctx, FASCIA_ERR_IO, "results sidecar '%s': cannot write (disk full?)", xdmf);
-  }
-  return fascia_commit_temp(r->ctx, "results sidecar", tmp, xdmf);
+  return fascia_file_commit(&file);
 }
 
 fascia_status fascia_results_close(fascia_results **results) {

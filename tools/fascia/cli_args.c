@@ -100,3 +100,27 @@ double cli_peak_mb(void) {
   struct rusage usage; // ru_maxrss is KiB on Linux
   return getrusage(RUSAGE_SELF, &usage) == 0 ? (double)usage.ru_maxrss / 1024.0 : 0;
 }
+
+int cli_parse_threads(const char *text, int *out) {
+  int threads = 0;
+  if (!cli_parse_count(text, &threads, 1) || threads > CLI_MAX_THREADS) return 0;
+  *out = threads;
+  return 1;
+}
+
+int cli_check_omp_threads(const char *command) {
+  const char *env = getenv("OMP_NUM_THREADS");
+  if (!env || !env[0]) return -1;
+  char *end = NULL;
+  errno = 0;
+  const long threads = strtol(env, &end, 10);
+  if (end == env) return -1; // not a number: the OpenMP runtime warns and ignores it
+  if (errno || threads < 1 || threads > CLI_MAX_THREADS) {
+    fprintf(stderr,
+            "fascia %s: OMP_NUM_THREADS=%s is out of range: fascia runs 1 to %d threads; set a smaller value or "
+            "unset it (--threads T overrides it per command)\n",
+            command, env, CLI_MAX_THREADS);
+    return 2;
+  }
+  return -1;
+}

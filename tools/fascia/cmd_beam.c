@@ -138,6 +138,9 @@ int cmd_beam(int argc, char **argv) {
     else
       def.samples_per_cell_dir = samples_per_cell;
   }
+  const cli_path output = {"-o", path, CLI_OUTPUT_FILE, NULL, NULL};
+  const int paths_rc = cli_check_paths("beam", &output, 1);
+  if (paths_rc >= 0) return paths_rc;
   fascia_ctx *ctx = cli_ctx(0, 1);
   fascia_model *model = NULL;
   fascia_status st = fascia_scene_beam_build(ctx, &def, &model);

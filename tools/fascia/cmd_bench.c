@@ -54,7 +54,7 @@ static const char bench_usage[] =
     "                        Beside cuda or emulated each row also runs on the CPU, and the table\n"
     "                        compares with the paper's GPU figure (GTX 570) and this CPU\n"
     "  --no-cpu              beside cuda or emulated: skip the CPU run of each row\n"
-    "  --threads T           worker threads (default: OpenMP's)\n"
+    "  --threads T           worker threads, 1 to 1024 (default: OpenMP's)\n"
     "  --repeats R           repeats, the minimum time is reported (default 3 paper, 1 cantilever)\n"
     "  --steps S             paper: timed steps per repeat, after 2 warm-up steps (default 5)\n"
     "  --json                one JSON array of row objects on stdout\n"
@@ -176,7 +176,7 @@ static int parse_options(int argc, char **argv, bench_options *opt) {
       int ok = 1;
       if (!strcmp(o, "--table")) ok = cli_parse_count(v, &opt->table, 2) && opt->table <= 3;
       else if (!strcmp(o, "--backend")) ok = cli_parse_backend(v, &opt->backend);
-      else if (!strcmp(o, "--threads")) ok = cli_parse_count(v, &opt->threads, 1);
+      else if (!strcmp(o, "--threads")) ok = cli_parse_threads(v, &opt->threads);
       else if (!strcmp(o, "--repeats")) ok = cli_parse_count(v, &opt->repeats, 1);
       else if (!strcmp(o, "--steps")) ok = cli_parse_count(v, &opt->steps, 1);
       else if (!strcmp(o, "--csv")) opt->csv = v;
@@ -196,7 +196,8 @@ static int parse_options(int argc, char **argv, bench_options *opt) {
         else ok = parse_list(v, 'r', &opt->smoothing);
       }
       if (!ok) {
-        fprintf(stderr, "fascia bench: bad value '%s' for %s (see fascia bench --help)\n", v, o);
+        fprintf(stderr, "fascia bench: bad value '%s' for %s%s (see fascia bench --help)\n", v, o,
+                !strcmp(o, "--threads") ? ": expected a whole number from 1 to " CLI_MAX_THREADS_TEXT : "");
         return 2;
       }
     }
@@ -710,24 +711,25 @@ static int select_paper_rows(const bench_options *opt, const fascia_scene_paper_
 
 static int write_csv_file(const char *path, const bench_options *opt, const paper_result *paper, int paper_count,
                           const cantilever_result *cant, int cant_count) {
-  FILE *f = fopen(path, "w");
-  if (!f) {
-    fprintf(stderr, "fascia bench: cannot write '%s': %s\n", path, strerror(errno));
-    return 1;
+  fascia_ctx *ctx = cli_ctx(1, 0);
+  fascia_file *file = NULL;
+  fascia_status st = fascia_file_open(ctx, "--csv", path, &file);
+  if (st == FASCIA_OK) {
+    if (paper_count) paper_csv(fascia_file_stream(file), paper, paper_count, opt);
+    else cantilever_csv(fascia_file_stream(file), cant, cant_count);
+    st = fascia_file_commit(&file);
   }
-  if (paper_count) paper_csv(f, paper, paper_count, opt);
-  else cantilever_csv(f, cant, cant_count);
-  if (fclose(f) != 0) {
-    fprintf(stderr, "fascia bench: cannot write '%s': %s\n", path, strerror(errno));
-    return 1;
-  }
-  return 0;
+  const int rc = st == FASCIA_OK ? 0 : cli_fail("bench", ctx, st);
+  fascia_ctx_destroy(&ctx);
+  return rc;
 }
 
 int cmd_bench(int argc, char **argv) {
   bench_options opt;
   int rc = parse_options(argc, argv, &opt);
   if (rc >= 0) return rc;
+  const cli_path csv = {"--csv", opt.csv, CLI_OUTPUT_FILE, NULL, NULL};
+  if ((rc = cli_check_paths("bench", &csv, 1)) >= 0) return rc; // before hours of timing
   if (opt.list) {
     print_list();
     if (!opt.paper_all && !opt.large_all && !opt.row_count && !opt.cantilever) return 0;

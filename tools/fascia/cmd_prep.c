@@ -18,10 +18,31 @@ static const char prep_usage[] =
     "  -o MODEL.h5     output model file (default: the scene's \"output\" key)\n"
     "  --preview DIR   also write ParaView files (organs, region, frames, samples, coupling) into DIR\n"
     "  --json          print one JSON summary object on stdout\n"
-    "  --threads N     worker threads (default: all)\n"
+    "  --threads N     worker threads, 1 to 1024 (default: all)\n"
     "  --verbose       on failure, also print where the error was found\n";
 
 #ifndef FASCIA_HAVE_PREP
+
+// The model and preview files against the scene and its meshes, and the
+// folders they go to, before the first stage (cli_check_paths).
+static int check_prep_paths(const fascia_prep_scene *scene, const char *output, const char *preview) {
+  static const char *const preview_names[] = {"organs.vtk", "region.vtk", "frames.vtk", "samples.vtk", "coupling.vtk",
+                                              NULL};
+  cli_path *paths = calloc((size_t)scene->organ_count + 3, sizeof *paths);
+  if (!paths) {
+    fprintf(stderr, "fascia prep: out of memory\n");
+    return 1;
+  }
+  int n = 0;
+  paths[n++] = (cli_path){"scene", scene->path, CLI_INPUT, NULL, NULL};
+  for (int32_t o = 0; o < scene->organ_count; ++o)
+    paths[n++] = (cli_path){"organ mesh", scene->organs[o].mesh_path, CLI_INPUT, NULL, NULL};
+  paths[n++] = (cli_path){"-o", output, CLI_OUTPUT_FILE, NULL, NULL};
+  paths[n++] = (cli_path){"--preview", preview, CLI_OUTPUT_DIR, preview_names, NULL};
+  const int rc = cli_check_paths("prep", paths, n);
+  free(paths);
+  return rc;
+}
 
 int cmd_prep(int argc, char **argv) {
   for (int k = 1; k < argc; ++k)
@@ -268,6 +289,27 @@ static void print_json(const prep_run *r, const step_clock *c, const char *outpu
   cJSON_Delete(root);
 }
 
+// The model and preview files against the scene and its meshes, and the
+// folders they go to, before the first stage (cli_check_paths).
+static int check_prep_paths(const fascia_prep_scene *scene, const char *output, const char *preview) {
+  static const char *const preview_names[] = {"organs.vtk", "region.vtk", "frames.vtk", "samples.vtk", "coupling.vtk",
+                                              NULL};
+  cli_path *paths = calloc((size_t)scene->organ_count + 3, sizeof *paths);
+  if (!paths) {
+    fprintf(stderr, "fascia prep: out of memory\n");
+    return 1;
+  }
+  int n = 0;
+  paths[n++] = (cli_path){"scene", scene->path, CLI_INPUT, NULL, NULL};
+  for (int32_t o = 0; o < scene->organ_count; ++o)
+    paths[n++] = (cli_path){"organ mesh", scene->organs[o].mesh_path, CLI_INPUT, NULL, NULL};
+  paths[n++] = (cli_path){"-o", output, CLI_OUTPUT_FILE, NULL, NULL};
+  paths[n++] = (cli_path){"--preview", preview, CLI_OUTPUT_DIR, preview_names, NULL};
+  const int rc = cli_check_paths("prep", paths, n);
+  free(paths);
+  return rc;
+}
+
 int cmd_prep(int argc, char **argv) {
   const char *scene_path = NULL, *output = NULL, *preview = NULL;
   int json = 0, threads = 0;
@@ -283,10 +325,9 @@ int cmd_prep(int argc, char **argv) {
     } else if (!strcmp(argv[k], "--preview") && k + 1 < argc) {
       preview = argv[++k];
     } else if (!strcmp(argv[k], "--threads") && k + 1 < argc) {
-      char *end = NULL;
-      threads = (int)strtol(argv[++k], &end, 10);
-      if (!end || *end || threads < 1) {
-        fprintf(stderr, "fascia prep: --threads expects a positive integer, found '%s'\n", argv[k]);
+      if (!cli_parse_threads(argv[++k], &threads)) {
+        fprintf(stderr, "fascia prep: --threads expects a whole number from 1 to %d, found '%s'\n", CLI_MAX_THREADS,
+                argv[k]);
         return 2;
       }
     } else if (argv[k][0] == '-') {
@@ -324,6 +365,8 @@ int cmd_prep(int argc, char **argv) {
     rc = 2;
     goto done;
   }
+  if ((rc = check_prep_paths(r.scene, output, preview)) >= 0) goto done;
+  rc = 1;
   STEP("import", fascia_prep_import(ctx, r.scene, &r.meshes));
   STEP("check/repair", fascia_prep_repair(ctx, r.scene, r.meshes));
   STEP("voxelize", fascia_prep_voxelize(ctx, r.scene, r.meshes, &r.volume));

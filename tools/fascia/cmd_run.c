@@ -10,11 +10,13 @@
 #define _POSIX_C_SOURCE 200809L
 #include <cjson/cJSON.h>
 #include <errno.h>
+#include <limits.h>
 #include <math.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/statvfs.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -44,7 +46,7 @@ static const char run_usage[] =
     "                         --linear-solver direct or rigid organs); auto (the default: cuda\n"
     "                         where there is a GPU and the settings run there, else cpu); or\n"
     "                         emulated (the GPU solver in host loops: slow, for tests)\n"
-    "  --threads T            worker threads (default: OpenMP's)\n"
+    "  --threads T            worker threads, 1 to 1024 (default: OpenMP's, OMP_NUM_THREADS)\n"
     "  --newton-iterations N  most Newton iterations per solve (default 20; static 100)\n"
     "  --newton-tolerance X   relative gradient tolerance (default 1e-6)\n"
     "  --cg-iterations N      most CG iterations per linear solve (default 200)\n"
@@ -70,7 +72,11 @@ static const char run_usage[] =
     "                         'fascia tradeoff' (tools/bench/README.md) for dynamic runs; options\n"
     "                         after it override it; a static solve keeps its Newton limit of 100\n"
     "  --verbose              on failure, also print where the error was found\n"
-    "Progress with the time left goes to stderr when it is a terminal (or FASCIA_PROGRESS=1).\n";
+    "Progress with the time left goes to stderr when it is a terminal (or FASCIA_PROGRESS=1).\n"
+    "Every output is written as NAME.tmp-PID-K and renamed when complete; the next run writing\n"
+    "it removes those a killed run left. SIGINT/SIGTERM (also repeated) stop a dynamic run after\n"
+    "the current step with the outputs written; the exit status is then 1. Exit 2: usage error,\n"
+    "including an output that is an input or another output.\n";
 
 // Set by SIGINT/SIGTERM during a dynamic run; checked after every step.
 static volatile sig_atomic_t run_stop_requested = 0;
@@ -78,6 +84,23 @@ static volatile sig_atomic_t run_stop_requested = 0;
 static void on_stop_signal(int sig) {
   (void)sig;
   run_stop_requested = 1;
+}
+
+// sigaction, not signal(): in strict C11 mode glibc's signal() resets the
+// handler on delivery, so a second Ctrl-C killed the run with nothing saved.
+// Installed from before the outputs open until they are closed.
+static void catch_stop_signals(struct sigaction old[2]) {
+  struct sigaction sa;
+  memset(&sa, 0, sizeof sa);
+  sa.sa_handler = on_stop_signal;
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, &old[0]);
+  sigaction(SIGTERM, &sa, &old[1]);
+}
+
+static void restore_signals(const struct sigaction old[2]) {
+  sigaction(SIGINT, &old[0], NULL);
+  sigaction(SIGTERM, &old[1], NULL);
 }
 
 // --- checkpoints and restart (issue 7) -------------------------------------
@@ -198,7 +221,7 @@ static int parse_options(int argc, char **argv, run_options *opt, const fascia_s
       else if (!strcmp(o, "-o") || !strcmp(o, "--output")) opt->results_path = v;
       else if (!strcmp(o, "--save-every")) ok = cli_parse_count(v, &opt->save_every, 1);
       else if (!strcmp(o, "--backend")) ok = cli_parse_backend(v, &d->backend);
-      else if (!strcmp(o, "--threads")) ok = cli_parse_count(v, &opt->threads, 1), d->threads = opt->threads;
+      else if (!strcmp(o, "--threads")) ok = cli_parse_threads(v, &opt->threads), d->threads = opt->threads;
       else if (!strcmp(o, "--newton-iterations")) ok = cli_parse_count(v, &d->newton_iterations, 1), opt->newton_given = 1;
       else if (!strcmp(o, "--newton-tolerance")) ok = cli_parse_real(v, &d->newton_tolerance) && d->newton_tolerance >= 0;
       else if (!strcmp(o, "--cg-iterations")) ok = cli_parse_count(v, &d->cg_iterations, 1);
@@ -224,7 +247,8 @@ static int parse_options(int argc, char **argv, run_options *opt, const fascia_s
       else if (!strcmp(o, "--blow-up-strain")) ok = cli_parse_real(v, &d->blow_up_strain) && d->blow_up_strain >= 0;
       else ok = cli_parse_count(v, &d->load_steps, 1); // --load-steps
       if (!ok) {
-        fprintf(stderr, "fascia run: bad value '%s' for %s (see fascia run --help)\n", v, o);
+        fprintf(stderr, "fascia run: bad value '%s' for %s%s (see fascia run --help)\n", v, o,
+                !strcmp(o, "--threads") ? ": expected a whole number from 1 to " CLI_MAX_THREADS_TEXT : "");
         return 2;
       }
     }
@@ -239,13 +263,28 @@ static int parse_options(int argc, char **argv, run_options *opt, const fascia_s
 /// What the run did, for the summary.
 typedef struct run_totals {
   int steps, newton, cg, converged_steps, interrupted, saved, direct_steps;
-  int *newton_per_step, *cg_per_step; ///< [steps requested]
+  int capacity;                       ///< of the per-step arrays, grown as steps are done
+  int *newton_per_step, *cg_per_step; ///< [steps done]
+  fascia_ctx *ctx;                    ///< for the out-of-memory message
   double solve_ms;                    ///< wall time inside the solver
   fascia_profile profile;             ///< summed over steps
   fascia_real energy;                 ///< potential energy at the end, J
 } run_totals;
 
-static void add_report(run_totals *t, const fascia_solve_report *r) {
+// The per-step counts grow with the steps done, not with --steps: a huge
+// --steps must not fail up front for memory it would need only at the end.
+static fascia_status add_report(run_totals *t, const fascia_solve_report *r) {
+  if (t->steps == t->capacity) {
+    const int capacity = t->capacity < 1024 ? 1024 : t->capacity < INT_MAX / 2 ? 2 * t->capacity : INT_MAX;
+    int *newton = realloc(t->newton_per_step, (size_t)capacity * sizeof *newton);
+    if (newton) t->newton_per_step = newton;
+    int *cg = newton ? realloc(t->cg_per_step, (size_t)capacity * sizeof *cg) : NULL;
+    if (cg) t->cg_per_step = cg;
+    if (!newton || !cg || capacity == t->capacity)
+      return fascia_ctx_fail(t->ctx, FASCIA_ERR_MEMORY, __FILE__, __LINE__,
+                             "run: out of memory for the iteration counts of %d steps", t->steps + 1);
+    t->capacity = capacity;
+  }
   t->newton_per_step[t->steps] = r->newton_iterations;
   t->cg_per_step[t->steps] = r->cg_iterations;
   t->newton += r->newton_iterations;
@@ -259,6 +298,7 @@ static void add_report(run_totals *t, const fascia_solve_report *r) {
   t->profile.total_ms += r->profile.total_ms;
   t->energy = r->energy;
   t->steps++;
+  return FASCIA_OK;
 }
 
 static int progress_wanted(void) {
@@ -294,8 +334,6 @@ static fascia_status run_steps(fascia_solver *solver, const run_options *opt,
   const int show = progress_wanted();
   fascia_status st = FASCIA_OK;
   if (res) st = save_state(res, solver, opt->samples, buffers[0], buffers[1], buffers[2]);
-  void (*old_int)(int) = signal(SIGINT, on_stop_signal);
-  void (*old_term)(int) = signal(SIGTERM, on_stop_signal);
   double last_print = -1e30;
   int last_saved = 0;
   for (int n = opt->checkpoint ? opt->checkpoint->first_step : 1; n <= opt->steps && st == FASCIA_OK; ++n) {
@@ -307,8 +345,9 @@ static fascia_status run_steps(fascia_solver *solver, const run_options *opt,
     st = fascia_solver_step(solver, &report);
     tot->solve_ms += cli_now_ms() - t0;
     if (st != FASCIA_OK) break;
-    add_report(tot, &report);
-    const int last = n == opt->steps || run_stop_requested;
+    if ((st = add_report(tot, &report)) != FASCIA_OK) break;
+    const int stop = run_stop_requested != 0; // read once: a signal from here on stops after the next step
+    const int last = n == opt->steps || stop;
     if (res && (n % opt->save_every == 0 || last)) {
       st = save_state(res, solver, opt->samples, buffers[0], buffers[1], buffers[2]);
       last_saved = n;
@@ -320,7 +359,7 @@ static fascia_status run_steps(fascia_solver *solver, const run_options *opt,
       print_step_progress(n, opt->steps, fascia_solver_time(solver), tot->solve_ms, last);
       last_print = cli_now_ms();
     }
-    if (run_stop_requested) {
+    if (stop) {
       tot->interrupted = 1;
       break;
     }
@@ -329,8 +368,6 @@ static fascia_status run_steps(fascia_solver *solver, const run_options *opt,
   if (res && st == FASCIA_ERR_NUMERIC && tot->steps > last_saved)
     (void)save_state(res, solver, opt->samples, buffers[0], buffers[1], buffers[2]);
   if (show && tot->steps < opt->steps && !tot->interrupted) fputc('\n', stderr); // a failed step
-  signal(SIGINT, old_int == SIG_ERR ? SIG_DFL : old_int);
-  signal(SIGTERM, old_term == SIG_ERR ? SIG_DFL : old_term);
   return st;
 }
 
@@ -557,6 +594,73 @@ static int take_resume_settings(int argc, char **argv, run_options *opt, const f
   return -1;
 }
 
+// Every file the run reads or writes, checked before any work
+// (cli_check_paths): -o and its XDMF sidecar, --checkpoint (which may be the
+// --resume file: continuing into it is the normal use), the text outputs
+// and the drive templates against the model, --resume and the drive files.
+static int check_run_paths(const run_options *opt, const checkpoint_options *ck, const run_outputs *outs,
+                           const run_drive *drive) {
+  static const char *const organ_names[] = {"organs.pvd", NULL};
+  static const char *const snapshot_names[] = {"tissue-rest.csv", "tissue-final.csv", "organs-rest.csv",
+                                               "organs-final.csv", NULL};
+  const int most = 8 + drive->count + drive->template_count;
+  cli_path *paths = calloc((size_t)most, sizeof *paths);
+  if (!paths) {
+    fprintf(stderr, "fascia run: out of memory\n");
+    return 1;
+  }
+  char sidecar[4096] = "";
+  if (opt->results_path) fascia_results_sidecar_path(opt->results_path, sidecar, sizeof sidecar);
+  int n = 0;
+  paths[n++] = (cli_path){"model", opt->model_path, CLI_INPUT, NULL, NULL};
+  paths[n++] = (cli_path){"--resume", ck->resume, CLI_INPUT, NULL, NULL};
+  for (int k = 0; k < drive->count; ++k) paths[n++] = (cli_path){"--drive", drive->organs[k].path, CLI_INPUT, NULL, NULL};
+  paths[n++] = (cli_path){"-o", opt->results_path, CLI_OUTPUT_FILE, NULL, NULL};
+  paths[n++] = (cli_path){"-o (its XDMF sidecar)", opt->results_path && opt->results_path[0] ? sidecar : NULL,
+                          CLI_OUTPUT_FILE, NULL, NULL};
+  paths[n++] = (cli_path){"--checkpoint", ck->path, CLI_OUTPUT_FILE, NULL, "--resume"};
+  paths[n++] = (cli_path){"--history", outs->history_path, CLI_OUTPUT_FILE, NULL, NULL};
+  paths[n++] = (cli_path){"--organs", outs->organs_dir, CLI_OUTPUT_DIR, organ_names, NULL};
+  paths[n++] = (cli_path){"--snapshots", outs->snapshots_dir, CLI_OUTPUT_DIR, snapshot_names, NULL};
+  for (int k = 0; k < drive->template_count; ++k)
+    paths[n++] = (cli_path){"--drive-template", drive->templates[k].path, CLI_OUTPUT_FILE, NULL, NULL};
+  const int rc = cli_check_paths("run", paths, n);
+  free(paths);
+  return rc;
+}
+
+// A byte count for people: "3.2 GB", "180 kB".
+static const char *human_bytes(double bytes, char *out, size_t size) {
+  static const char *const units[] = {"bytes", "kB", "MB", "GB", "TB", "PB"};
+  int u = 0;
+  while (bytes >= 1000 && u < 5) bytes /= 1000, ++u;
+  snprintf(out, size, "%.3g %s", bytes, units[u]);
+  return out;
+}
+
+// Refuses a results file the disk cannot hold, before the first step: a
+// huge --steps saves a row per K steps of every frame (and sample).
+static fascia_status check_results_size(fascia_ctx *ctx, const run_options *opt, const checkpoint_options *ck,
+                                        const fascia_model *m) {
+  if (!opt->results_path) return FASCIA_OK;
+  const double steps = opt->dynamic ? (double)opt->steps - ck->first_step + 1 : 1;
+  const double saved = opt->dynamic ? floor(steps / opt->save_every) + 2 : 1; // the rest state and the last too
+  const double row = 8.0 * (1 + 7.0 * m->frame_count + (opt->samples ? 5.0 * m->sample_count : 0));
+  const double bytes = saved * row;
+  char folder[4096];
+  cli_folder_of(opt->results_path, folder, sizeof folder);
+  struct statvfs fs;
+  if (statvfs(folder, &fs) != 0) return FASCIA_OK;
+  const double free_bytes = (double)fs.f_bavail * (double)fs.f_frsize;
+  if (bytes <= free_bytes) return FASCIA_OK;
+  char total[32], room[32];
+  return fascia_ctx_fail(ctx, FASCIA_ERR_ARGUMENT, __FILE__, __LINE__,
+                         "-o '%s': %.0f saved steps of %.0f bytes each (%d frames%s) make %s of results, and folder "
+                         "'%s' has %s free; save fewer steps (--save-every K, fewer --steps) or write elsewhere",
+                         opt->results_path, saved, row, (int)m->frame_count, opt->samples ? " and samples" : "",
+                         human_bytes(bytes, total, sizeof total), folder, human_bytes(free_bytes, room, sizeof room));
+}
+
 int cmd_run(int argc, char **argv) {
   run_options opt;
   checkpoint_options ck;
@@ -572,6 +676,7 @@ int cmd_run(int argc, char **argv) {
     rc = cli_usage_error("run", "%s", "--checkpoint and --resume need a dynamic run (--steps N)");
   if (rc < 0 && drive.count && !opt.dynamic && !drive.template_count)
     rc = cli_usage_error("run", "%s", "--drive needs a dynamic run (--steps N)");
+  if (rc < 0) rc = check_run_paths(&opt, &ck, &outs, &drive);
   if (rc >= 0) {
     run_drive_free(&drive);
     return rc;
@@ -587,6 +692,9 @@ int cmd_run(int argc, char **argv) {
   fascia_real *buffers[3] = {NULL, NULL, NULL}; // sample positions [3S], strain [S], stress [S]
   run_totals tot;
   memset(&tot, 0, sizeof tot);
+  tot.ctx = ctx;
+  struct sigaction old_signals[2];
+  int signals_caught = 0;
   fascia_status st = fascia_model_load(ctx, opt.model_path, &model);
   if (st != FASCIA_OK) goto done;
   int64_t done_steps = 0;
@@ -638,13 +746,12 @@ int cmd_run(int argc, char **argv) {
   }
   // every drive file is read and checked before any output is opened
   if ((st = run_drive_load(&drive, ctx, model, solver)) != FASCIA_OK) goto done;
-  const size_t S = (size_t)model->sample_count + 1, steps = (size_t)(opt.dynamic ? opt.steps : 1);
+  if ((st = check_results_size(ctx, &opt, &ck, model)) != FASCIA_OK) goto done;
+  const size_t S = (size_t)model->sample_count + 1;
   buffers[0] = malloc(3 * S * sizeof(fascia_real));
   buffers[1] = malloc(S * sizeof(fascia_real));
   buffers[2] = malloc(S * sizeof(fascia_real));
-  tot.newton_per_step = malloc(steps * sizeof(int));
-  tot.cg_per_step = malloc(steps * sizeof(int));
-  if (!buffers[0] || !buffers[1] || !buffers[2] || !tot.newton_per_step || !tot.cg_per_step) {
+  if (!buffers[0] || !buffers[1] || !buffers[2]) {
     st = fascia_ctx_fail(ctx, FASCIA_ERR_MEMORY, __FILE__, __LINE__, "run: out of memory for %d samples",
                          (int)model->sample_count);
     goto done;
@@ -652,6 +759,7 @@ int cmd_run(int argc, char **argv) {
   fascia_results_def rdef = fascia_results_def_default();
   rdef.write_samples = opt.samples != 0;
   rdef.every = opt.dynamic ? opt.save_every : 1;
+  if (opt.dynamic) catch_stop_signals(old_signals), signals_caught = 1;
   if ((st = run_outputs_begin(&outs, ctx, model, solver)) != FASCIA_OK) goto done;
   if (opt.dynamic) {
     if (opt.results_path && (st = fascia_results_open(ctx, opt.results_path, model, &rdef, &res)) != FASCIA_OK)
@@ -662,7 +770,10 @@ int cmd_run(int argc, char **argv) {
     const double t0 = cli_now_ms();
     st = fascia_solver_solve_static(solver, &report);
     tot.solve_ms = cli_now_ms() - t0;
-    if (st == FASCIA_OK || st == FASCIA_ERR_NUMERIC) add_report(&tot, &report); // not converged: state kept
+    if (st == FASCIA_OK || st == FASCIA_ERR_NUMERIC) { // not converged: state kept
+      const fascia_status ast = add_report(&tot, &report);
+      if (ast != FASCIA_OK) st = ast;
+    }
     if (st == FASCIA_OK) st = run_outputs_step(&outs, solver, 1, &report, tot.solve_ms, 1);
     // the equilibrium (or the state reached) is written either way
     if ((st == FASCIA_OK || st == FASCIA_ERR_NUMERIC) && opt.results_path) {
@@ -697,6 +808,7 @@ done:
   else if (rc < 0) rc = 0;
   (void)run_outputs_end(&outs, solver, 0); // closes what is still open after an error
   fascia_results_destroy(&res);
+  if (signals_caught) restore_signals(old_signals); // every output is closed or removed
   run_drive_free(&drive);
   free(buffers[0]), free(buffers[1]), free(buffers[2]);
   free(tot.newton_per_step), free(tot.cg_per_step);

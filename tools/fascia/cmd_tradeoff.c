@@ -33,11 +33,13 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
 #include "commands.h"
 #include "fascia/fascia.h"
+#include "fascia/files.h"
 #include "presets.h"
 #include "scenes.h"
 
@@ -52,7 +54,7 @@ static const char tradeoff_usage[] =
     "  --out DIR      output folder (default .; created if absent)\n"
     "  --quick        fewer rows, no 40x5x5 grids (about a minute; the full sweep: about 5 minutes)\n"
     "  --repeats R    timing repeats, the minimum is reported (default 2; rows over 2 s run once)\n"
-    "  --threads T    worker threads (default 1)\n"
+    "  --threads T    worker threads, 1 to 1024 (default 1)\n"
     "  --time T       dynamic rows: simulated time, s (default 0.3)\n"
     "  --json         also print the rows as one JSON array on stdout\n"
     "  --no-plot      write the gnuplot scripts but do not run gnuplot\n"
@@ -91,6 +93,7 @@ typedef struct tradeoff_options {
   const char *out, *backend;
   int quick, repeats, threads, json, plot;
   double time;
+  fascia_ctx *ctx; ///< for the output files' messages
 } tradeoff_options;
 
 static const char *linear_name(const fascia_solver_def *d) {
@@ -414,26 +417,43 @@ static cJSON *json_row(const row *r) {
   return o;
 }
 
-static FILE *open_out(const char *dir, const char *name) {
+// The files of --out DIR, each written under a temporary name and renamed
+// when complete (fascia/files.h); a failure is reported, and nothing left.
+static const char *const out_names[] = {"tradeoff.csv", "tradeoff.json", "convergence.csv", "pareto.gp",
+                                        "convergence.gp", "pareto.png", "convergence.png",
+                                        "points_static_cantilever.dat", "front_static_cantilever.dat",
+                                        "points_static_stiff.dat", "front_static_stiff.dat",
+                                        "points_static_incompressible.dat", "front_static_incompressible.dat",
+                                        "points_dynamic_cantilever.dat", "front_dynamic_cantilever.dat", NULL};
+
+static fascia_file *open_out(const tradeoff_options *opt, const char *name) {
   char path[4096];
-  snprintf(path, sizeof path, "%s/%s", dir, name);
-  FILE *f = fopen(path, "w");
-  if (!f) fprintf(stderr, "fascia tradeoff: cannot write '%s': %s\n", path, strerror(errno));
+  snprintf(path, sizeof path, "%s/%s", opt->out, name);
+  fascia_file *f = NULL;
+  const fascia_status st = fascia_file_open(opt->ctx, "--out", path, &f);
+  if (st != FASCIA_OK) cli_fail("tradeoff", opt->ctx, st);
   return f;
+}
+
+// Finishes f: 0, else 1 after the message (nothing left under its name).
+static int close_out(const tradeoff_options *opt, fascia_file *f) {
+  const fascia_status st = fascia_file_commit(&f);
+  return st == FASCIA_OK ? 0 : cli_fail("tradeoff", opt->ctx, st);
 }
 
 // Point files for gnuplot: all rows of a set, and its front sorted by time.
 static int write_points(const tradeoff_options *opt, const row *rows, int count, int dynamic, int problem) {
   char name[96];
   snprintf(name, sizeof name, "points_%s_%s.dat", dynamic ? "dynamic" : "static", problem_names[problem]);
-  FILE *f = open_out(opt->out, name);
-  if (!f) return 1;
+  fascia_file *ff = open_out(opt, name);
+  if (!ff) return 1;
   snprintf(name, sizeof name, "front_%s_%s.dat", dynamic ? "dynamic" : "static", problem_names[problem]);
-  FILE *g = open_out(opt->out, name);
-  if (!g) {
-    fclose(f);
+  fascia_file *gf = open_out(opt, name);
+  if (!gf) {
+    fascia_file_discard(&ff);
     return 1;
   }
+  FILE *f = fascia_file_stream(ff), *g = fascia_file_stream(gf);
   fprintf(f, "# ms error_percent label\n");
   fprintf(g, "# ms error_percent label (Pareto front, by time)\n");
   int order[MAX_ROWS], n = 0;
@@ -454,9 +474,8 @@ static int write_points(const tradeoff_options *opt, const row *rows, int count,
     row_label(rows + order[k], label, sizeof label);
     fprintf(g, "%.4f %.6g \"%s\"\n", rows[order[k]].ms, fmax(rows[order[k]].error_percent, 1e-6), label);
   }
-  fclose(f);
-  fclose(g);
-  return 0;
+  const int rc = close_out(opt, ff);
+  return close_out(opt, gf) | rc;
 }
 
 // Hexahedral FEM on the same problem (CalculiX C3D8, nonlinear; issue 6).
@@ -469,8 +488,9 @@ static const struct {
 #define C3D8_REFERENCE (-6.5106)
 
 static int write_convergence(const tradeoff_options *opt, const row *rows, int count) {
-  FILE *f = open_out(opt->out, "convergence.csv");
-  if (!f) return 1;
+  fascia_file *file = open_out(opt, "convergence.csv");
+  if (!file) return 1;
+  FILE *f = fascia_file_stream(file);
   fprintf(f, "method,grid,dofs,tip_uz,error_percent\n");
   for (int s = 0; s < FASCIA_SCENE_SHAPE_COUNT_; ++s)
     for (int k = 0; k < count; ++k) {
@@ -484,13 +504,13 @@ static int write_convergence(const tradeoff_options *opt, const row *rows, int c
   for (size_t k = 0; k < sizeof c3d8 / sizeof c3d8[0]; ++k) // error < 0: too stiff, as the issue signs it
     fprintf(f, "calculix-c3d8,%s,%d,%.6f,%.4f\n", c3d8[k].grid, c3d8[k].dofs,
             C3D8_REFERENCE * (1 + c3d8[k].error_percent / 100), -c3d8[k].error_percent);
-  fclose(f);
-  return 0;
+  return close_out(opt, file);
 }
 
 static int write_plot_scripts(const tradeoff_options *opt) {
-  FILE *f = open_out(opt->out, "pareto.gp");
-  if (!f) return 1;
+  fascia_file *file = open_out(opt, "pareto.gp");
+  if (!file) return 1;
+  FILE *f = fascia_file_stream(file);
   fputs("# fascia tradeoff: error against time, log-log, with Pareto fronts (gnuplot pareto.gp)\n"
         "set terminal pngcairo size 1400,600 font ',10'\nset output 'pareto.png'\n"
         "set datafile separator whitespace\nset logscale xy\nset grid\nset key outside bottom center horizontal\n"
@@ -507,9 +527,8 @@ static int write_plot_scripts(const tradeoff_options *opt) {
         "     'front_dynamic_cantilever.dat' u 1:2:3 w labels left offset 0.5,0.3 font ',7' notitle\n"
         "unset multiplot\n",
         f);
-  fclose(f);
-  f = open_out(opt->out, "convergence.gp");
-  if (!f) return 1;
+  if (close_out(opt, file) || !(file = open_out(opt, "convergence.gp"))) return 1;
+  f = fascia_file_stream(file);
   fputs("# tip deflection against DOFs, like Figure 3 of Bosman et al. 2013 (gnuplot convergence.gp)\n"
         "set terminal pngcairo size 900,600 font ',10'\nset output 'convergence.png'\n"
         "set datafile separator ','\nset logscale x\nset grid\nset key bottom right\n"
@@ -519,8 +538,7 @@ static int write_plot_scripts(const tradeoff_options *opt) {
         "  for [m in 'fascia-hex fascia-tet fascia-meshless calculix-c3d8'] 'convergence.csv' "
         "u (strcol(1) eq m ? $3 : NaN):4 w lp pt 7 lw 2 t m\n",
         f);
-  fclose(f);
-  return 0;
+  return close_out(opt, file);
 }
 
 static int run_gnuplot(const tradeoff_options *opt) {
@@ -565,13 +583,15 @@ static int parse_options(int argc, char **argv, tradeoff_options *opt) {
       if (!strcmp(o, "--out")) opt->out = v;
       else if (!strcmp(o, "--backend")) ok = cli_parse_backend(v, &opt->backend);
       else if (!strcmp(o, "--time")) opt->time = strtod(v, &end), ok = *end == 0 && opt->time >= 0.01 && opt->time <= 100;
+      else if (!strcmp(o, "--threads")) ok = cli_parse_threads(v, &opt->threads);
       else {
         const long x = strtol(v, &end, 10);
         ok = *v && *end == 0 && x >= 1 && x <= 1000;
-        *(!strcmp(o, "--repeats") ? &opt->repeats : &opt->threads) = (int)x;
+        opt->repeats = (int)x;
       }
       if (!ok) {
-        fprintf(stderr, "fascia tradeoff: bad value '%s' for %s (see fascia tradeoff --help)\n", v, o);
+        fprintf(stderr, "fascia tradeoff: bad value '%s' for %s%s (see fascia tradeoff --help)\n", v, o,
+                !strcmp(o, "--threads") ? ": expected a whole number from 1 to " CLI_MAX_THREADS_TEXT : "");
         return 2;
       }
     } else {
@@ -603,10 +623,10 @@ int cmd_tradeoff(int argc, char **argv) {
   tradeoff_options opt;
   int rc = parse_options(argc, argv, &opt);
   if (rc >= 0) return rc;
-  char mk[4200];
-  snprintf(mk, sizeof mk, "mkdir -p '%s'", opt.out);
-  if (system(mk) != 0) {
-    fprintf(stderr, "fascia tradeoff: cannot create '%s'\n", opt.out);
+  const cli_path out = {"--out", opt.out, CLI_OUTPUT_DIR, out_names, NULL};
+  if ((rc = cli_check_paths("tradeoff", &out, 1)) >= 0) return rc; // before minutes of rows
+  if (mkdir(opt.out, 0777) != 0 && errno != EEXIST) {
+    fprintf(stderr, "fascia tradeoff: cannot create folder '%s': %s\n", opt.out, strerror(errno));
     return 1;
   }
   row *rows = calloc(MAX_ROWS, sizeof *rows);
@@ -618,6 +638,7 @@ int cmd_tradeoff(int argc, char **argv) {
   for (int p = 0; p < PROBLEM_COUNT; ++p) discretization_rows(rows, &count, p, opt.quick);
   dynamic_rows(rows, &count, opt.quick);
   fascia_ctx *ctx = cli_ctx(opt.threads, 0);
+  opt.ctx = ctx;
   for (int k = 0; k < count; ++k) {
     rows[k].solver.threads = opt.threads;
     rows[k].solver.backend = opt.backend;
@@ -644,25 +665,32 @@ int cmd_tradeoff(int argc, char **argv) {
   printf("%-14s %-14s %-7s %-40s %6s %10s %10s %9s %10s %s\n", "group", "problem", "mode", "row", "dofs", "tip_uz",
          "reference", "error%", "ms", "pareto");
   for (int k = 0; k < count; ++k) print_row(rows + k);
-  FILE *f = open_out(opt.out, "tradeoff.csv");
-  if (!f) {
+  fascia_file *file = open_out(&opt, "tradeoff.csv");
+  if (!file) {
     rc = 1;
     goto done;
   }
-  fputs(csv_header, f);
-  for (int k = 0; k < count; ++k) csv_row(f, rows + k);
-  fclose(f);
+  fputs(csv_header, fascia_file_stream(file));
+  for (int k = 0; k < count; ++k) csv_row(fascia_file_stream(file), rows + k);
+  if (close_out(&opt, file)) {
+    rc = 1;
+    goto done;
+  }
   cJSON *array = cJSON_CreateArray();
   for (int k = 0; k < count && array; ++k) cJSON_AddItemToArray(array, json_row(rows + k));
   char *text = array ? cJSON_Print(array) : NULL;
   cJSON_Delete(array);
-  if (!text || !(f = open_out(opt.out, "tradeoff.json"))) {
+  if (!text || !(file = open_out(&opt, "tradeoff.json"))) {
     cJSON_free(text);
     rc = 1;
     goto done;
   }
-  fprintf(f, "%s\n", text);
-  fclose(f);
+  fprintf(fascia_file_stream(file), "%s\n", text);
+  if (close_out(&opt, file)) {
+    cJSON_free(text);
+    rc = 1;
+    goto done;
+  }
   if (opt.json) printf("%s\n", text);
   cJSON_free(text);
   rc = 0;

@@ -55,6 +55,40 @@ double cli_now_ms(void);
 double cli_resident_mb(void);
 double cli_peak_mb(void);
 
+/// One file argument of a command, for cli_check_paths.
+typedef enum cli_path_kind { CLI_INPUT, CLI_OUTPUT_FILE, CLI_OUTPUT_DIR } cli_path_kind;
+typedef struct cli_path {
+  const char *option; ///< how messages name it: "-o", "--checkpoint", "the model"
+  const char *path;   ///< NULL: not given (skipped); "" is refused
+  cli_path_kind kind;
+  const char *const *names; ///< CLI_OUTPUT_DIR: files it will hold (NULL-terminated; may be NULL)
+  const char *may_be;       ///< option of an input this output may be (--checkpoint may be --resume); NULL
+} cli_path;
+
+/// Before any work: every output can be written (its folder exists and is
+/// writable; it is not a link, FIFO, device or folder that the rename of the
+/// finished file would replace), none is one of the inputs or another output
+/// (same device and inode, or the same name in the same folder), and the
+/// temporary files `NAME.tmp-PID-K` that a killed fascia left next to the
+/// outputs are removed (fascia_file_remove_stale). Returns -1 to go on, else
+/// the exit status after one line on stderr: 2 for a path given wrongly
+/// (empty, an input, a link), 1 for a folder that is missing or read-only.
+int cli_check_paths(const char *command, const cli_path *paths, int count);
+
+/// The folder of path ("." when it names none, "/" for the root), into out.
+const char *cli_folder_of(const char *path, char *out, size_t size);
+
+/// Largest --threads (and OMP_NUM_THREADS) accepted: more threads than this
+/// exhaust the OpenMP runtime (it crashes at about 100000) long before they
+/// help.
+#define CLI_MAX_THREADS 1024
+#define CLI_MAX_THREADS_TEXT "1024"
+/// A --threads value, 1 to CLI_MAX_THREADS: 1, else 0.
+int cli_parse_threads(const char *text, int *out);
+/// OMP_NUM_THREADS, when set, must be a whole number 1 to CLI_MAX_THREADS
+/// (the first of a list). Returns -1 to go on, else 2 after one line on stderr.
+int cli_check_omp_threads(const char *command);
+
 /// 1 when --verbose was given anywhere on the command line.
 extern int cli_verbose;
 

@@ -16,6 +16,7 @@
 // header being row 1; blank lines are skipped but counted.
 #define _POSIX_C_SOURCE 200809L
 #include "drive.h"
+#include "fascia/files.h"
 
 #include <errno.h>
 #include <math.h>
@@ -130,11 +131,10 @@ static fascia_status write_template(fascia_ctx *ctx, drive_organ *d, const fasci
                                     const fascia_solver *solver) {
   int32_t *frames = NULL;
   fascia_status st = find_organ(ctx, d, m, solver, &frames);
-  FILE *f = st == FASCIA_OK ? fopen(d->path, "w") : NULL;
-  if (st == FASCIA_OK && !f)
-    st = fascia_ctx_fail(ctx, FASCIA_ERR_IO, __FILE__, __LINE__, "drive template '%s': cannot write: %s", d->path,
-                         strerror(errno));
+  fascia_file *file = NULL;
+  if (st == FASCIA_OK) st = fascia_file_open(ctx, "--drive-template", d->path, &file);
   if (st != FASCIA_OK) goto cleanup;
+  FILE *f = fascia_file_stream(file);
   const int columns = 1 + 7 * d->frame_count;
   for (int c = 0; c < columns; ++c) {
     char name[64];
@@ -149,9 +149,7 @@ static fascia_status write_template(fascia_ctx *ctx, drive_organ *d, const fasci
             q[4 * i + 1], q[4 * i + 2], q[4 * i + 3]);
   }
   fputc('\n', f);
-  if (fclose(f) != 0)
-    st = fascia_ctx_fail(ctx, FASCIA_ERR_IO, __FILE__, __LINE__, "drive template '%s': cannot finish writing",
-                         d->path);
+  st = fascia_file_commit(&file);
 cleanup:
   free(frames);
   return st;

@@ -30,7 +30,11 @@ static void usage(FILE *out) {
 
 int cli_fail(const char *command, fascia_ctx *ctx, fascia_status status) {
   const char *message = fascia_ctx_message(ctx);
-  fprintf(stderr, "fascia %s: %s\n", command, message && message[0] ? message : fascia_status_name(status));
+  fprintf(stderr, "fascia %s: ", command);
+  // one line, whatever a library put in the message
+  for (const char *c = message && message[0] ? message : fascia_status_name(status); *c; ++c)
+    fputc(*c == '\n' || *c == '\r' ? ' ' : *c, stderr);
+  fputc('\n', stderr);
   if (cli_verbose) fprintf(stderr, "  (%s at %s)\n", fascia_status_name(status), fascia_ctx_where(ctx));
   return 1;
 }
@@ -73,7 +77,11 @@ int main(int argc, char **argv) {
     return 0;
   }
   for (int k = 0; k < command_count; ++k)
-    if (!strcmp(argv[1], commands[k].name)) return commands[k].run(argc - 1, argv + 1);
+    if (!strcmp(argv[1], commands[k].name)) {
+      // before any parallel region: the OpenMP runtime crashes on a huge count
+      const int rc = cli_check_omp_threads(commands[k].name);
+      return rc >= 0 ? rc : commands[k].run(argc - 1, argv + 1);
+    }
   fprintf(stderr, "fascia: unknown command '%s'\n", argv[1]);
   usage(stderr);
   return 2;

@@ -13,6 +13,8 @@
 #define _POSIX_C_SOURCE 200809L
 #include "run_outputs.h"
 
+#include "fascia/files.h"
+
 #include <errno.h>
 #include <math.h>
 #include <stdlib.h>
@@ -54,14 +56,15 @@ static fascia_status make_dir(fascia_ctx *ctx, const char *dir) {
                          strerror(errno));
 }
 
-static FILE *open_file(fascia_ctx *ctx, const char *dir, const char *name, fascia_status *st) {
+// Every text file is written under a temporary name and renamed when
+// complete (fascia/files.h): a failure leaves no truncated file behind.
+static fascia_file *open_file(fascia_ctx *ctx, const char *what, const char *dir, const char *name,
+                              fascia_status *st) {
   char path[4096];
   if (dir) snprintf(path, sizeof path, "%s/%s", dir, name);
   else snprintf(path, sizeof path, "%s", name);
-  FILE *f = fopen(path, "w");
-  if (!f)
-    *st = fascia_ctx_fail(ctx, FASCIA_ERR_IO, __FILE__, __LINE__, "run: cannot write '%s': %s", path,
-                          strerror(errno));
+  fascia_file *f = NULL;
+  *st = fascia_file_open(ctx, what, path, &f);
   return f;
 }
 
@@ -110,12 +113,13 @@ static void base64_block(FILE *f, const void *data, uint32_t bytes) {
 static fascia_status write_vtp(fascia_ctx *ctx, const char *dir, const char *name, const fascia_organ *o,
                                const fascia_real *R, const fascia_real *t) {
   fascia_status st = FASCIA_OK;
-  FILE *f = open_file(ctx, dir, name, &st);
-  if (!f) return st;
+  fascia_file *file = open_file(ctx, "--organs", dir, name, &st);
+  if (!file) return st;
+  FILE *f = fascia_file_stream(file);
   float *points = malloc(3 * sizeof(float) * (size_t)(o->vertex_count + 1));
   int32_t *offsets = malloc(sizeof(int32_t) * (size_t)(o->triangle_count + 1));
   if (!points || !offsets) {
-    free(points), free(offsets), fclose(f);
+    free(points), free(offsets), fascia_file_discard(&file);
     return fascia_ctx_fail(ctx, FASCIA_ERR_MEMORY, __FILE__, __LINE__, "run: out of memory for organ '%s'", o->name);
   }
   for (int32_t v = 0; v < o->vertex_count; ++v) {
@@ -136,9 +140,7 @@ static fascia_status write_vtp(fascia_ctx *ctx, const char *dir, const char *nam
   base64_block(f, offsets, sizeof(int32_t) * (uint32_t)o->triangle_count);
   fprintf(f, "</DataArray></Polys>\n</Piece>\n</PolyData>\n</VTKFile>\n");
   free(points), free(offsets);
-  if (fclose(f) != 0)
-    return fascia_ctx_fail(ctx, FASCIA_ERR_IO, __FILE__, __LINE__, "run: cannot finish '%s/%s'", dir, name);
-  return FASCIA_OK;
+  return fascia_file_commit(&file);
 }
 
 // Every organ at the solver's state, as step k of the PVD collection.
@@ -155,7 +157,7 @@ static fascia_status write_organs(run_outputs *out, fascia_ctx *ctx, const fasci
       fascia_status st = write_vtp(ctx, out->organs_dir, name, m->organs + k, R, t);
       if (st != FASCIA_OK) return st;
     }
-    fprintf(out->pvd, "    <DataSet timestep=\"%.9g\" group=\"\" part=\"%d\" name=\"%s\" file=\"%s\"/>\n",
+    fprintf(fascia_file_stream(out->pvd), "    <DataSet timestep=\"%.9g\" group=\"\" part=\"%d\" name=\"%s\" file=\"%s\"/>\n",
             fascia_solver_time(solver), (int)k, m->organs[k].name, name);
   }
   out->organ_steps++;
@@ -169,17 +171,19 @@ static fascia_status write_snapshot(run_outputs *out, fascia_ctx *ctx, const fas
   fascia_status st = FASCIA_OK;
   char name[64];
   snprintf(name, sizeof name, "tissue-%s.csv", tag);
-  FILE *f = open_file(ctx, out->snapshots_dir, name, &st);
-  if (!f) return st;
+  fascia_file *file = open_file(ctx, "--snapshots", out->snapshots_dir, name, &st);
+  if (!file) return st;
+  FILE *f = fascia_file_stream(file);
   fascia_solver_sample_positions(solver, out->positions);
   fascia_solver_sample_strain(solver, out->strain, out->stress);
   fprintf(f, "x_m,y_m,z_m,strain,stress_pa\n");
   for (int32_t s = 0; s < m->sample_count; ++s)
     fprintf(f, "%.9g,%.9g,%.9g,%.6g,%.6g\n", out->positions[3 * s], out->positions[3 * s + 1],
             out->positions[3 * s + 2], out->strain[s], out->stress[s]);
-  fclose(f);
+  if ((st = fascia_file_commit(&file)) != FASCIA_OK) return st;
   snprintf(name, sizeof name, "organs-%s.csv", tag);
-  if (!(f = open_file(ctx, out->snapshots_dir, name, &st))) return st;
+  if (!(file = open_file(ctx, "--snapshots", out->snapshots_dir, name, &st))) return st;
+  f = fascia_file_stream(file);
   fprintf(f, "organ,x_m,y_m,z_m\n");
   for (int32_t k = 0; k < m->organ_count; ++k) {
     fascia_real R[9], t[3];
@@ -192,8 +196,7 @@ static fascia_status write_snapshot(run_outputs *out, fascia_ctx *ctx, const fas
       fprintf(f, "%d,%.9g,%.9g,%.9g\n", (int)k, p[0], p[1], p[2]);
     }
   }
-  return fclose(f) == 0 ? FASCIA_OK
-                        : fascia_ctx_fail(ctx, FASCIA_ERR_IO, __FILE__, __LINE__, "run: cannot finish '%s'", name);
+  return fascia_file_commit(&file);
 }
 
 static fascia_real largest(const fascia_real *values, int32_t count) {
@@ -216,8 +219,8 @@ fascia_status run_outputs_begin(run_outputs *out, fascia_ctx *ctx, const fascia_
                            (int)m->sample_count);
   fascia_status st = FASCIA_OK;
   if (out->history_path) {
-    if (!(out->history = open_file(ctx, NULL, out->history_path, &st))) return st;
-    fprintf(out->history, "step,time_s,potential_j,kinetic_j,newton,cg,ms,max_strain,max_stress_pa,converged\n");
+    if (!(out->history = open_file(ctx, "--history", NULL, out->history_path, &st))) return st;
+    fprintf(fascia_file_stream(out->history), "step,time_s,potential_j,kinetic_j,newton,cg,ms,max_strain,max_stress_pa,converged\n");
   }
   if (out->snapshots_dir) {
     if ((st = make_dir(ctx, out->snapshots_dir)) != FASCIA_OK) return st;
@@ -225,8 +228,8 @@ fascia_status run_outputs_begin(run_outputs *out, fascia_ctx *ctx, const fascia_
   }
   if (out->organs_dir) {
     if ((st = make_dir(ctx, out->organs_dir)) != FASCIA_OK) return st;
-    if (!(out->pvd = open_file(ctx, out->organs_dir, "organs.pvd", &st))) return st;
-    fprintf(out->pvd, "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n");
+    if (!(out->pvd = open_file(ctx, "--organs", out->organs_dir, "organs.pvd", &st))) return st;
+    fprintf(fascia_file_stream(out->pvd), "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n");
     if ((st = write_organs(out, ctx, m, solver)) != FASCIA_OK) return st;
   }
   return FASCIA_OK;
@@ -240,9 +243,11 @@ fascia_status run_outputs_step(run_outputs *out, fascia_solver *solver, int step
     fascia_real potential = NAN;
     (void)fascia_solver_potential_energy(solver, &potential);
     fascia_solver_sample_strain(solver, out->strain, out->stress);
-    fprintf(out->history, "%d,%.9g,%.9g,%.9g,%d,%d,%.4f,%.6g,%.6g,%d\n", step, fascia_solver_time(solver), potential,
+    FILE *f = fascia_file_stream(out->history);
+    fprintf(f, "%d,%.9g,%.9g,%.9g,%d,%d,%.4f,%.6g,%.6g,%d\n", step, fascia_solver_time(solver), potential,
             fascia_solver_kinetic_energy(solver), report->newton_iterations, report->cg_iterations, ms,
             largest(out->strain, m->sample_count), largest(out->stress, m->sample_count), report->converged);
+    if (ferror(f)) return fascia_file_commit(&out->history); // a write failed: say why now, not at the end
   }
   if (out->pvd && saved) return write_organs(out, ctx, m, solver);
   return FASCIA_OK;
@@ -253,15 +258,11 @@ fascia_status run_outputs_end(run_outputs *out, fascia_solver *solver, int ok) {
   const fascia_model *m = out->model;
   fascia_status st = FASCIA_OK;
   if (ok && out->snapshots_dir && out->positions) st = write_snapshot(out, ctx, m, solver, "final");
-  if (out->history && fclose(out->history) != 0 && st == FASCIA_OK)
-    st = fascia_ctx_fail(ctx, FASCIA_ERR_IO, __FILE__, __LINE__, "run: cannot finish '%s'", out->history_path);
-  if (out->pvd) {
-    fprintf(out->pvd, "  </Collection>\n</VTKFile>\n");
-    if (fclose(out->pvd) != 0 && st == FASCIA_OK)
-      st = fascia_ctx_fail(ctx, FASCIA_ERR_IO, __FILE__, __LINE__, "run: cannot finish '%s/organs.pvd'",
-                           out->organs_dir);
-  }
-  out->history = out->pvd = NULL;
+  // history and organs hold the steps done, also after a failed step: kept
+  fascia_status hst = fascia_file_commit(&out->history);
+  if (out->pvd) fprintf(fascia_file_stream(out->pvd), "  </Collection>\n</VTKFile>\n");
+  fascia_status pst = fascia_file_commit(&out->pvd);
+  if (st == FASCIA_OK) st = hst != FASCIA_OK ? hst : pst;
   free(out->strain), free(out->stress), free(out->positions);
   out->strain = out->stress = out->positions = NULL;
   return st;

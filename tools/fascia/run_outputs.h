@@ -10,6 +10,7 @@
 #include <stdio.h>
 
 #include "fascia/fascia.h"
+#include "fascia/files.h"
 
 typedef struct run_outputs {
   const char *history_path;  ///< --history FILE.csv
@@ -18,8 +19,8 @@ typedef struct run_outputs {
   // state
   fascia_ctx *ctx;
   const fascia_model *model;
-  FILE *history;
-  FILE *pvd;
+  fascia_file *history; ///< written under a temporary name, renamed at the end
+  fascia_file *pvd;
   int organ_steps;
   fascia_real *strain, *stress, *positions; ///< [S], [S], [3S]
 } run_outputs;

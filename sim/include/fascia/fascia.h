@@ -11,5 +11,6 @@
 #include "fascia/solver.h"
 #include "fascia/organs.h"
 #include "fascia/checkpoint.h"
+#include "fascia/files.h"
 
 #endif

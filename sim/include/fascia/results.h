@@ -72,6 +72,9 @@ FASCIA_API fascia_status fascia_results_close(fascia_results **results);
 /// Abandons a results file: removes the temporary file, frees the object,
 /// sets *results to NULL; accepts NULL. Nothing is left at the final path.
 FASCIA_API void fascia_results_destroy(fascia_results **results);
+/// The XDMF sidecar's path for results path `path`: its .h5 (or .hdf5)
+/// suffix replaced by .xdmf, else .xdmf appended. Truncated to size.
+FASCIA_API void fascia_results_sidecar_path(const char *path, char *out, size_t size);
 
 #ifdef __cplusplus
 }
