@@ -11,6 +11,10 @@ if(FASCIA_HAVE_PREP)
   install(EXPORT fasciaPrepTargets NAMESPACE fascia:: DESTINATION ${FASCIA_CMAKE_DIR})
   install(FILES ${PROJECT_SOURCE_DIR}/cmake/fasciaPrepDependencies.cmake DESTINATION ${FASCIA_CMAKE_DIR})
 endif()
+set(FASCIA_CONFIG_OPENMP OFF)
+if(OpenMP_C_FOUND)
+  set(FASCIA_CONFIG_OPENMP ON)
+endif()
 configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/fasciaConfig.cmake.in
                               ${PROJECT_BINARY_DIR}/fasciaConfig.cmake INSTALL_DESTINATION ${FASCIA_CMAKE_DIR})
 # 0.x: a minor version may change the API

@@ -18,17 +18,24 @@
 
 #include <fascia/fascia.h>
 
+// The context's message names the file or the object; `what` (may be NULL)
+// says which step failed.
 static int fail(fascia_ctx *ctx, const char *what) {
-  fprintf(stderr, "drive_organ: %s: %s\n", what, fascia_ctx_message(ctx));
+  fprintf(stderr, "drive_organ: %s%s%s\n", what ? what : "", what ? ": " : "", fascia_ctx_message(ctx));
   return 1;
 }
+
+static double norm3(const double v[3]) { return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
 
 // Sum of the reaction forces (N) over an organ's coupling frames; nonzero on
 // error (the context has the message).
 static int organ_force(fascia_ctx *ctx, fascia_solver *s, int32_t organ, double sum[3]) {
   const int32_t n = fascia_solver_organ_frame_count(s, organ);
   double *f = malloc(sizeof(double) * 3 * (size_t)(n > 0 ? n : 1));
-  if (!f) return fascia_ctx_fail(ctx, FASCIA_ERR_MEMORY, __FILE__, __LINE__, "out of memory"), 1;
+  if (!f) {
+    fascia_ctx_fail(ctx, FASCIA_ERR_MEMORY, __FILE__, __LINE__, "out of memory");
+    return 1;
+  }
   sum[0] = sum[1] = sum[2] = 0;
   const fascia_status st = fascia_solver_organ_reaction(s, organ, f, NULL);
   for (int32_t k = 0; st == FASCIA_OK && k < n; ++k)
@@ -56,7 +63,7 @@ int main(int argc, char **argv) {
   double *target = NULL, *rot = NULL;
   int rc = 1;
   if (fascia_model_load(ctx, argv[1], &m) != FASCIA_OK) {
-    rc = fail(ctx, argv[1]);
+    rc = fail(ctx, NULL);
     goto done;
   }
   if (m->organ_count < 1) {
@@ -97,16 +104,15 @@ int main(int argc, char **argv) {
     }
     for (int c = 0; c < 3; ++c) total[c] += f[c];
   }
-  const double wn = sqrt(weight[0] * weight[0] + weight[1] * weight[1] + weight[2] * weight[2]);
-  const double en = sqrt((total[0] - weight[0]) * (total[0] - weight[0]) + (total[1] - weight[1]) * (total[1] - weight[1]) +
-                         (total[2] - weight[2]) * (total[2] - weight[2]));
+  const double diff[3] = {total[0] - weight[0], total[1] - weight[1], total[2] - weight[2]};
+  const double wn = norm3(weight), en = norm3(diff);
   printf("weight_N: %.9g %.9g %.9g\n", weight[0], weight[1], weight[2]);
   printf("reaction_all_organs_N: %.9g %.9g %.9g\n", total[0], total[1], total[2]);
   printf("balance_error: %.3g\n", wn > 0 ? en / wn : en);
 
   // Drive the organ: its coupling frames move up (against gravity; +y
   // without gravity) from where they are, lift/steps per step.
-  const double gn = sqrt(m->gravity[0] * m->gravity[0] + m->gravity[1] * m->gravity[1] + m->gravity[2] * m->gravity[2]);
+  const double gn = norm3(m->gravity);
   const double up[3] = {gn > 0 ? -m->gravity[0] / gn : 0, gn > 0 ? -m->gravity[1] / gn : 1,
                         gn > 0 ? -m->gravity[2] / gn : 0};
   const int32_t n = fascia_solver_organ_frame_count(s, organ);

@@ -93,9 +93,15 @@ example_output_sane() {
     $1 == "reaction_change_along_lift_N:" { change = $2; seen_c = 1 }
     $1 ~ /^[0-9]+$/ && NF == 6 { rows++; for (k = 2; k <= 6; ++k) if (!finite($k)) bad = 1 }
     END {
-      if (!seen_b || balance + 0 > 1e-6 || !finite(balance)) { print "balance_error missing or above 1e-6: " balance; exit 1 }
-      if (!seen_c || !(change + 0 < 0)) { print "reaction_change_along_lift_N missing or not negative: " change; exit 1 }
-      if (rows != steps || bad) { print "step rows: " rows " (expected " steps "), non-finite values: " bad + 0; exit 1 }
+      if (!seen_b || !finite(balance) || balance + 0 > 1e-6) {
+        print "balance_error missing or above 1e-6: " balance; exit 1
+      }
+      if (!seen_c || !finite(change) || !(change + 0 < 0)) {
+        print "reaction_change_along_lift_N missing or not negative: " change; exit 1
+      }
+      if (rows != steps || bad) {
+        print "step rows: " rows " (expected " steps "), non-finite values: " bad + 0; exit 1
+      }
     }' "$out"
 }
 run_example() { # BINARY MODEL ORGAN LIFT_MM STEPS: runs it, shows and checks its output
