@@ -1,0 +1,86 @@
+# SPDX-License-Identifier: MIT
+# Finds what the preprocessing library links: assimp, CGAL, OpenVDB, cJSON and
+# nettle. Used twice, so the two cannot drift: by prep/CMakeLists.txt when
+# fascia is built, and by the installed fasciaConfig.cmake before it loads
+# fascia::prep (a static archive, whose private libraries its users link).
+# Sets fascia_prep_missing to the list of what was not found, with the Debian
+# package that has it; the callers decide whether that is an error.
+set(fascia_prep_missing "")
+# Debian's FindOpenVDB.cmake lives outside CMake's module path, and sets
+# BUILD_SHARED_LIBS in its caller's scope: keep both as the caller had them.
+set(_fascia_module_path "${CMAKE_MODULE_PATH}")
+list(APPEND CMAKE_MODULE_PATH /usr/lib/x86_64-linux-gnu/cmake/OpenVDB /usr/lib/cmake/OpenVDB
+     /usr/local/lib/cmake/OpenVDB)
+set(_fascia_had_shared OFF)
+if(DEFINED BUILD_SHARED_LIBS)
+  set(_fascia_had_shared ON)
+  set(_fascia_shared "${BUILD_SHARED_LIBS}")
+endif()
+
+find_package(assimp QUIET)
+if(NOT assimp_FOUND)
+  list(APPEND fascia_prep_missing "assimp (libassimp-dev)")
+endif()
+# CGAL prints a warning about the build type unless told it is fine
+set(CGAL_DO_NOT_WARN_ABOUT_CMAKE_BUILD_TYPE TRUE)
+find_package(CGAL QUIET)
+if(NOT CGAL_FOUND)
+  list(APPEND fascia_prep_missing "CGAL (libcgal-dev)")
+endif()
+# Debian's FindOpenVDB.cmake asks for Boost iostreams' CMake files as REQUIRED
+# (a hard configure error without libboost-iostreams-dev). So: use it only
+# when Boost iostreams is findable, else import the library by hand (its
+# runtime needs only the shared libboost_iostreams, which libopenvdb links).
+if(NOT TARGET OpenVDB::openvdb)
+  find_package(Boost QUIET COMPONENTS iostreams)
+  if(Boost_IOSTREAMS_FOUND OR Boost_iostreams_FOUND)
+    find_package(OpenVDB QUIET)
+  endif()
+endif()
+if(NOT TARGET OpenVDB::openvdb)
+  find_path(FASCIA_OPENVDB_INCLUDE_DIR openvdb/openvdb.h)
+  find_library(FASCIA_OPENVDB_LIBRARY openvdb)
+  find_package(TBB QUIET CONFIG)
+  find_package(Imath QUIET CONFIG) # OpenVDB's half type comes from Imath in Debian's build
+  if(FASCIA_OPENVDB_INCLUDE_DIR AND FASCIA_OPENVDB_LIBRARY AND TARGET TBB::tbb)
+    set(_fascia_vdb_deps TBB::tbb)
+    if(TARGET Imath::Imath)
+      list(APPEND _fascia_vdb_deps Imath::Imath)
+    endif()
+    add_library(OpenVDB::openvdb UNKNOWN IMPORTED)
+    set_target_properties(OpenVDB::openvdb PROPERTIES IMPORTED_LOCATION ${FASCIA_OPENVDB_LIBRARY}
+                          INTERFACE_INCLUDE_DIRECTORIES ${FASCIA_OPENVDB_INCLUDE_DIR}
+                          INTERFACE_LINK_LIBRARIES "${_fascia_vdb_deps}")
+    file(STRINGS ${FASCIA_OPENVDB_INCLUDE_DIR}/openvdb/version.h _fascia_vdb_major
+         REGEX "define OPENVDB_LIBRARY_MAJOR_VERSION_NUMBER")
+    string(REGEX MATCH "[0-9]+" OpenVDB_VERSION "${_fascia_vdb_major}")
+  endif()
+endif()
+if(NOT TARGET OpenVDB::openvdb)
+  list(APPEND fascia_prep_missing "OpenVDB (libopenvdb-dev; its FindOpenVDB.cmake folder on CMAKE_MODULE_PATH)")
+endif()
+if(NOT TARGET cjson)
+  find_package(cJSON QUIET)
+endif()
+if(NOT TARGET cjson)
+  list(APPEND fascia_prep_missing "cJSON (libcjson-dev)")
+endif()
+# nettle: SHA-256 of the inputs for the provenance; it ships no CMake files
+if(NOT TARGET fascia::nettle)
+  find_path(FASCIA_NETTLE_INCLUDE_DIR nettle/sha2.h)
+  find_library(FASCIA_NETTLE_LIBRARY nettle)
+  if(FASCIA_NETTLE_INCLUDE_DIR AND FASCIA_NETTLE_LIBRARY)
+    add_library(fascia::nettle UNKNOWN IMPORTED)
+    set_target_properties(fascia::nettle PROPERTIES IMPORTED_LOCATION ${FASCIA_NETTLE_LIBRARY}
+                          INTERFACE_INCLUDE_DIRECTORIES ${FASCIA_NETTLE_INCLUDE_DIR})
+  else()
+    list(APPEND fascia_prep_missing "nettle (nettle-dev)")
+  endif()
+endif()
+
+set(CMAKE_MODULE_PATH "${_fascia_module_path}")
+if(_fascia_had_shared)
+  set(BUILD_SHARED_LIBS "${_fascia_shared}")
+else()
+  unset(BUILD_SHARED_LIBS)
+endif()

@@ -1,0 +1,161 @@
+#!/usr/bin/env bash
+# SPDX-License-Identifier: MIT
+# Checks that an installed fascia can be used by a program of your own: builds
+# (or reuses a build), installs into a temporary prefix, then builds examples/
+# against that prefix only, never the build tree, with find_package(fascia) and
+# with pkg-config, and runs them on a model the installed CLI prepares.
+#
+#   tools/check-install.sh [BUILD_DIR]     (default: $FASCIA_BUILD_DIR, else build/)
+#
+# A BUILD_DIR with a CMakeCache.txt is brought up to date and reused (CI runs
+# this after tools/run-tests.sh); else it is configured and built first.
+# Ends with "check-install: N passed, N failed"; the exit status is 1 when a
+# check failed. Environment: JOBS (default nproc), KEEP=1 keeps the temporary
+# folder and says where.
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+build="${1:-${FASCIA_BUILD_DIR:-$root/build}}"
+jobs="${JOBS:-$(nproc 2>/dev/null || echo 2)}"
+
+if [ -f "$build/CMakeCache.txt" ]; then
+  cmake --build "$build" -j "$jobs" >/dev/null
+else
+  FASCIA_BUILD_DIR="$build" "$root/tools/setup/build.sh"
+fi
+
+build="$(cd "$build" && pwd)"
+work="$(mktemp -d "${TMPDIR:-/tmp}/fascia-install.XXXXXX")"
+if [ "${KEEP:-0}" = 1 ]; then
+  echo "check-install: keeping $work"
+else
+  trap 'rm -rf "$work"' EXIT
+fi
+prefix="$work/prefix"
+passed=0
+failed=0
+skipped=""
+
+# check NAME COMMAND...: runs it with its output in $work/NAME.log, which is
+# shown when it fails
+check() {
+  local name="$1" log="$work/$1.log"
+  shift
+  if "$@" >"$log" 2>&1; then
+    echo "check-install: ok    $name"
+    passed=$((passed + 1))
+  else
+    echo "check-install: FAIL  $name (its output:)"
+    sed 's/^/    /' "$log" | tail -n 30
+    failed=$((failed + 1))
+  fi
+}
+
+# --- the install, and nothing in it that points back at the checkout
+check install cmake --install "$build" --prefix "$prefix"
+no_source_paths() {
+  local found
+  found="$(grep -rlF -e "$root" -e "$build" --include='*.h' --include='*.cmake' --include='*.pc' "$prefix")" || true
+  [ -z "$found" ] || { echo "these name the checkout or the build folder: $found"; return 1; }
+}
+check no-source-paths no_source_paths
+# every public header compiles on its own against the installed include folder
+headers_alone() {
+  local h
+  for h in "$prefix"/include/fascia/*.h; do
+    echo "#include <fascia/$(basename "$h")>" | cc -std=c11 -Wall -Werror -fsyntax-only -x c -I"$prefix/include" - ||
+      { echo "$h does not compile alone"; return 1; }
+  done
+}
+check headers-alone headers_alone
+
+# --- a model with organs, by the installed CLI (prep), for the example to
+# drive; a build without prep can build the examples but not run them here
+cmake_dir="$(dirname "$(find "$prefix" -name fasciaConfig.cmake | head -n 1)")"
+have_prep=0
+if [ -f "$cmake_dir/fasciaPrepTargets.cmake" ]; then have_prep=1; fi
+model="$work/pelvis-female.h5"
+if [ $have_prep = 1 ]; then
+  check model "$prefix/bin/fascia" prep "$root/data/scenes/pelvis-female.json" -o "$model"
+else
+  skipped="$skipped model"
+fi
+
+# drive_organ's output against what the physics says: at the static
+# equilibrium the reactions on the organs carry the tissue's weight
+# (balance_error: relative, the Newton tolerance is 1e-6); lifting an organ,
+# the tissue holds it back (the reaction along the lift drops); every
+# number finite.
+example_output_sane() {
+  local out="$1" steps="$2"
+  awk -v steps="$steps" '
+    function finite(v) { return v ~ /^-?[0-9]+(\.[0-9]*)?([eE][-+]?[0-9]+)?$/ } # awk compares nan as equal
+    $1 == "balance_error:" { balance = $2; seen_b = 1 }
+    $1 == "reaction_change_along_lift_N:" { change = $2; seen_c = 1 }
+    $1 ~ /^[0-9]+$/ && NF == 6 { rows++; for (k = 2; k <= 6; ++k) if (!finite($k)) bad = 1 }
+    END {
+      if (!seen_b || !finite(balance) || balance + 0 > 1e-6) {
+        print "balance_error missing or above 1e-6: " balance; exit 1
+      }
+      if (!seen_c || !finite(change) || !(change + 0 < 0)) {
+        print "reaction_change_along_lift_N missing or not negative: " change; exit 1
+      }
+      if (rows != steps || bad) {
+        print "step rows: " rows " (expected " steps "), non-finite values: " bad + 0; exit 1
+      }
+    }' "$out"
+}
+run_example() { # BINARY MODEL ORGAN LIFT_MM STEPS: runs it, shows and checks its output
+  local steps="$5"
+  "$@" >"$work/run.out" || return 1
+  cat "$work/run.out"
+  example_output_sane "$work/run.out" "$steps"
+}
+
+# --- CMake: examples/ as its own project, fascia found in the prefix only
+# (-Dfascia_DIR, no package registry), and linked from there
+prep_example=OFF
+if [ $have_prep = 1 ]; then prep_example=ON; fi
+cmake_example() {
+  cmake -S "$root/examples" -B "$work/examples" -DCMAKE_BUILD_TYPE=Release -Dfascia_DIR="$cmake_dir" \
+    -DCMAKE_FIND_USE_PACKAGE_REGISTRY=OFF -DFASCIA_EXAMPLES_PREP=$prep_example &&
+    cmake --build "$work/examples" -j "$jobs" &&
+    grep -q -F "$prefix/lib" "$work/examples/CMakeFiles/drive_organ.dir/link.txt" &&
+    ! grep -q -F "$build" "$work/examples/CMakeFiles/drive_organ.dir/link.txt"
+}
+check cmake-build cmake_example
+if [ $have_prep = 1 ]; then
+  check cmake-run run_example "$work/examples/drive_organ" "$model" uterus 2 10
+  cat "$work/cmake-run.log"
+else
+  skipped="$skipped cmake-run"
+fi
+if [ $have_prep = 1 ]; then
+  scene_info_sane() {
+    "$work/examples/scene_info" "$root/data/scenes/pelvis-female.json" >"$work/scene.out" &&
+      cat "$work/scene.out" && grep -qx "organs: 2" "$work/scene.out" && grep -qx "tissues: 1" "$work/scene.out"
+  }
+  check cmake-prep-run scene_info_sane
+fi
+
+# --- pkg-config: the README's one-line build, shared-style and --static
+pc_dir="$(dirname "$(find "$prefix" -name fascia.pc | head -n 1)")"
+pc_build() { # OUTPUT [--static]
+  local out="$1"
+  shift
+  # shellcheck disable=SC2046 # the flags are meant to split
+  cc -std=c11 -Wall -Wextra -Werror "$root/examples/drive_organ.c" -o "$out" \
+    $(PKG_CONFIG_PATH="$pc_dir" pkg-config --cflags --libs "$@" fascia)
+}
+check pkg-config-build pc_build "$work/drive_organ_pc"
+check pkg-config-static-build pc_build "$work/drive_organ_pc_static" --static
+if [ $have_prep = 1 ]; then
+  check pkg-config-run run_example "$work/drive_organ_pc" "$model" bladder 1 3
+else
+  skipped="$skipped pkg-config-run"
+fi
+
+if [ -n "$skipped" ]; then
+  echo "check-install: skipped (this build has no prep to make a model with organs):$skipped"
+fi
+echo "check-install: $passed passed, $failed failed"
+[ "$failed" = 0 ]
