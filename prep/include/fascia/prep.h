@@ -325,7 +325,10 @@ typedef struct fascia_prep_weights {
 /// constant and linear fields exactly. TET: the barycentric weights of the
 /// sample in its own tetrahedron (points->sample_tet_frame), all in [0, 1]
 /// since every sample is a quadrature point inside its tet: nothing is
-/// extrapolated. A shared frame belongs to both regions it touches.
+/// extrapolated. A shared frame belongs to both regions it touches. The MLS
+/// neighbours are found locally (cost with the samples and their
+/// neighbourhoods, not the voxels between) and the progress hook hears of
+/// every percent of the samples.
 FASCIA_API fascia_status fascia_prep_shape_functions(fascia_ctx *ctx, const fascia_prep_scene *scene,
                                                      const fascia_prep_volume *volume,
                                                      const fascia_prep_points *points, fascia_prep_weights **out);
