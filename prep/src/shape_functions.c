@@ -14,6 +14,21 @@
 // FASCIA_SHAPE_SUPPORT_MARGIN times the farthest chosen frame. When the
 // chosen frames are too flat for a linear basis, more are taken.
 //
+// The same neighbours, found locally. The search expands every voxel closer
+// than the farthest neighbour, (distance / h)^3 voxels per sample: most of
+// the region at fine voxels. But its distance between two voxels is at
+// least the length of the shortest path of the whole 26-neighbour lattice,
+// h ((a - b) + (b - c) sqrt 2 + c sqrt 3) for the sorted index differences
+// a >= b >= c, and equal to it when one such path runs inside the region.
+// So each sample first gathers the frames attached within a cube of voxels
+// around it (from a table of frames by cell) and ranks them by that form; it
+// keeps the ranking when a shortest lattice path to each chosen frame stays
+// in the region (O(distance / h) to check), every other frame's bound lies
+// beyond the last chosen one, and no two frames tie within round-off where
+// the choice is made. Otherwise the search decides. Either way the frames
+// are those the search picks, and cost goes with the samples and their
+// neighbourhoods, not with the voxels between.
+//
 // Regions. Tissues and the insides of deformable organs are treated alike,
 // each sample by the region of its voxel. A frame is reached from its own
 // voxel and, when it is shared with a deformable organ, also from the organ's
@@ -49,6 +64,20 @@ void fascia_prep_weights_destroy(fascia_prep_weights **weights) {
   *weights = NULL;
 }
 
+typedef struct candidate {
+  double distance;
+  int32_t frame;
+} candidate;
+
+// A frame gathered by the local search: the lattice form of its distance
+// and the voxel it is attached at.
+typedef struct gathered {
+  double distance;
+  int32_t frame;
+  int32_t exact; // 1: distance is the search's (within round-off), 0: a lower bound
+  int64_t voxel;
+} gathered;
+
 // Per-thread state of the geodesic search.
 typedef struct search {
   double *dist;      // [voxels] INFINITY when untouched (double: the same type as the heap keys)
@@ -56,12 +85,9 @@ typedef struct search {
   int64_t touched_count, touched_capacity;
   prep_heap heap;
   fascia_ctx *ctx;   // private context: fascia_shape_mls writes its message here
+  struct gathered *pool; // frames gathered by the local search
+  int32_t pool_capacity;
 } search;
-
-typedef struct candidate {
-  double distance;
-  int32_t frame;
-} candidate;
 
 // Frames by voxel: attachment a puts frame[a] at a voxel; head[v] is the
 // first attachment at voxel v, next[a] the following one (-1 ends).
@@ -70,6 +96,17 @@ typedef struct frame_index {
   int32_t *next;  // [attachments]
   int32_t *frame; // [attachments]
 } frame_index;
+
+// The distance array of a thread's searches, made on its first search
+// (samples settled locally need none). 0 when out of memory.
+static int search_ready(search *se, const prep_grid *g) {
+  if (se->dist) return 1;
+  const int64_t n = prep_grid_count(g);
+  se->dist = malloc((size_t)n * sizeof(double));
+  if (!se->dist) return 0;
+  for (int64_t k = 0; k < n; ++k) se->dist[k] = INFINITY;
+  return 1;
+}
 
 static int touch(search *se, int64_t v, double d) {
   if (se->dist[v] == INFINITY) {
@@ -101,6 +138,7 @@ static int32_t nearest_frames(search *se, const prep_grid *g, const fascia_prep_
   prep_grid_center(g, start, c);
   const double d0 = sqrt((ps[0] - c[0]) * (ps[0] - c[0]) + (ps[1] - c[1]) * (ps[1] - c[1]) +
                          (ps[2] - c[2]) * (ps[2] - c[2]));
+  if (!search_ready(se, g)) return -1;
   int ok = touch(se, start, d0) && prep_heap_push(&se->heap, d0, start);
   double key;
   int64_t v;
@@ -142,6 +180,255 @@ static int32_t nearest_frames(search *se, const prep_grid *g, const fascia_prep_
   return ok ? found : -1;
 }
 
+// ------------------------------------------------------------ local search
+
+// Frame attachments by cell of cell x cell x cell voxels (CSR).
+typedef struct cell_index {
+  int32_t cell, dims[3];
+  int64_t *start;  // [cells + 1]
+  int32_t *frame;  // [attachments], by cell
+  int64_t *voxel;  // [attachments]
+} cell_index;
+
+// The shared tables of the local search, read-only once built.
+typedef struct local_tables {
+  cell_index cells;
+} local_tables;
+
+// 1 when one shortest 26-neighbour lattice path from voxel a to voxel b,
+// the one that follows the straight segment (its double steps spread evenly
+// among the steps, its triple steps evenly among the double ones), runs
+// through the region's voxels only: then the search's distance between them
+// is the lattice distance.
+static int path_clear(const prep_grid *g, const uint8_t *region, uint8_t label, const int32_t *a, const int32_t *b) {
+  int32_t d[3], sign[3], ax[3] = {0, 1, 2};
+  for (int r = 0; r < 3; ++r) d[r] = b[r] > a[r] ? b[r] - a[r] : a[r] - b[r], sign[r] = b[r] > a[r] ? 1 : -1;
+  for (int i = 0; i < 2; ++i) // axes by descending difference
+    for (int j = 0; j < 2 - i; ++j)
+      if (d[ax[j]] < d[ax[j + 1]]) {
+        const int t = ax[j];
+        ax[j] = ax[j + 1];
+        ax[j + 1] = t;
+      }
+  const int64_t A = d[ax[0]], B = d[ax[1]], C = d[ax[2]];
+  int32_t p[3] = {a[0], a[1], a[2]};
+  for (int64_t t = 1, k = 0; t <= A; ++t) {
+    p[ax[0]] += sign[ax[0]];
+    if ((2 * t * B + A) / (2 * A) != (2 * (t - 1) * B + A) / (2 * A)) {
+      ++k;
+      p[ax[1]] += sign[ax[1]];
+      if ((2 * k * C + B) / (2 * B) != (2 * (k - 1) * C + B) / (2 * B)) p[ax[2]] += sign[ax[2]];
+    }
+    if (region[prep_grid_index(g, p[0], p[1], p[2])] != label) return 0;
+  }
+  return 1;
+}
+
+// Length of the shortest 26-neighbour lattice path between voxels a and b.
+static double lattice_distance(double h, const int32_t *a, const int32_t *b) {
+  int32_t d[3];
+  for (int r = 0; r < 3; ++r) d[r] = a[r] > b[r] ? a[r] - b[r] : b[r] - a[r];
+  for (int i = 0; i < 2; ++i) // sort descending
+    for (int j = 0; j < 2 - i; ++j)
+      if (d[j] < d[j + 1]) {
+        const int32_t t = d[j];
+        d[j] = d[j + 1];
+        d[j + 1] = t;
+      }
+  return h * ((double)(d[0] - d[1]) + (double)(d[1] - d[2]) * sqrt(2.0) + (double)d[2] * sqrt(3.0));
+}
+
+// Distance through the region from voxel start (at d0) to voxel target,
+// by a search aimed at it (A*, the lattice distance to the target as its
+// heuristic, which never overestimates and grows by at most a step per
+// step, so the first time the target leaves the heap its distance is
+// final). A heuristic weighted by 1 + 1e-10 breaks the lattice's many ties
+// towards the target at a cost of at most 1e-10 of the distance. Returns -1
+// when the search would expand more voxels than a plain search around the
+// sample to that distance, or out of memory.
+static double aimed_distance(search *se, const prep_grid *g, const uint8_t *region, uint8_t label, int64_t start,
+                             double d0, int64_t target) {
+  if (!search_ready(se, g)) return -1;
+  const double w = 1 + 1e-10, h = g->h;
+  int32_t t_ijk[3], v_ijk[3];
+  prep_grid_ijk(g, target, t_ijk);
+  prep_grid_ijk(g, start, v_ijk);
+  const double reach = lattice_distance(h, v_ijk, t_ijk) / h + 1;
+  const int64_t budget = (int64_t)(reach * reach * reach) + 64;
+  se->heap.count = 0;
+  double result = -1, key;
+  int64_t v, expanded = 0;
+  int ok = touch(se, start, d0) && prep_heap_push(&se->heap, d0 + w * lattice_distance(h, v_ijk, t_ijk), start);
+  while (ok && prep_heap_pop(&se->heap, &key, &v)) {
+    prep_grid_ijk(g, v, v_ijk);
+    if (key > se->dist[v] + w * lattice_distance(h, v_ijk, t_ijk)) continue; // a stale entry
+    if (v == target) {
+      result = se->dist[v];
+      break;
+    }
+    if (++expanded > budget) break;
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int32_t nb_ijk[3] = {v_ijk[0] + dx, v_ijk[1] + dy, v_ijk[2] + dz};
+          if (nb_ijk[0] < 0 || nb_ijk[1] < 0 || nb_ijk[2] < 0 || nb_ijk[0] >= g->dims[0] ||
+              nb_ijk[1] >= g->dims[1] || nb_ijk[2] >= g->dims[2])
+            continue;
+          const int64_t nb = prep_grid_index(g, nb_ijk[0], nb_ijk[1], nb_ijk[2]);
+          if (region[nb] != label) continue;
+          const double d = se->dist[v] + h * sqrt((double)(dx * dx + dy * dy + dz * dz));
+          if (d < se->dist[nb])
+            ok = ok && touch(se, nb, d) && prep_heap_push(&se->heap, d + w * lattice_distance(h, nb_ijk, t_ijk), nb);
+        }
+  }
+  for (int64_t k = 0; k < se->touched_count; ++k) se->dist[se->touched[k]] = INFINITY;
+  se->touched_count = 0;
+  return ok ? result : -1;
+}
+
+static fascia_status cell_index_build(fascia_ctx *ctx, const prep_grid *g, const frame_index *fi, int32_t frames,
+                                      int32_t attachments, const int64_t *attach_voxel, cell_index *ci) {
+  // about one frame per cell over the grid
+  const double per_frame = (double)prep_grid_count(g) / (frames > 0 ? frames : 1);
+  ci->cell = (int32_t)fmax(1, floor(cbrt(per_frame)));
+  int64_t cells = 1;
+  for (int r = 0; r < 3; ++r) ci->dims[r] = (g->dims[r] + ci->cell - 1) / ci->cell, cells *= ci->dims[r];
+  ci->start = prep_calloc(cells + 1, sizeof(int64_t));
+  ci->frame = prep_calloc(attachments, sizeof(int32_t));
+  ci->voxel = prep_calloc(attachments, sizeof(int64_t));
+  PREP_CHECK(ci->start && ci->frame && ci->voxel, ctx, FASCIA_ERR_MEMORY, "shape functions: out of memory");
+  int64_t *cell_of = prep_calloc(attachments, sizeof(int64_t));
+  PREP_CHECK(cell_of, ctx, FASCIA_ERR_MEMORY, "shape functions: out of memory");
+  for (int32_t a = 0; a < attachments; ++a) {
+    int32_t c[3];
+    prep_grid_ijk(g, attach_voxel[a], c);
+    cell_of[a] = (c[0] / ci->cell) + (int64_t)ci->dims[0] * ((c[1] / ci->cell) + (int64_t)ci->dims[1] * (c[2] / ci->cell));
+    ci->start[cell_of[a] + 1]++;
+  }
+  for (int64_t k = 0; k < cells; ++k) ci->start[k + 1] += ci->start[k];
+  for (int32_t a = 0; a < attachments; ++a) { // stable: ascending attachment order within a cell
+    const int64_t at = ci->start[cell_of[a]]++;
+    ci->frame[at] = fi->frame[a];
+    ci->voxel[at] = attach_voxel[a];
+  }
+  for (int64_t k = cells; k > 0; --k) ci->start[k] = ci->start[k - 1];
+  ci->start[0] = 0;
+  free(cell_of);
+  return FASCIA_OK;
+}
+
+static int by_distance_then_frame(const void *a, const void *b) {
+  const gathered *x = a, *y = b;
+  if (x->distance != y->distance) return x->distance < y->distance ? -1 : 1;
+  return (x->frame > y->frame) - (x->frame < y->frame);
+}
+
+// The `want` frames nearest to sample s through its region without the
+// search, when the closed form settles them (see the note): returns `want`
+// with out filled, or 0 when the search must decide. The choice is made at
+// every count from `first` to `want` (mls_sample tries each), so ties
+// matter only there. se->pool holds the candidates.
+static int32_t local_frames(search *se, const prep_grid *g, const fascia_prep_volume *vol,
+                            const fascia_prep_points *pts, const local_tables *lt, int32_t s, int32_t want,
+                            int32_t first, candidate *out) {
+  const int64_t start = pts->sample_voxel[s];
+  const uint8_t label = vol->region[start];
+  const cell_index *ci = &lt->cells;
+  const double h = g->h, *ps = pts->sample_position + 3 * (int64_t)s;
+  int32_t s_ijk[3];
+  prep_grid_ijk(g, start, s_ijk);
+  double c[3];
+  prep_grid_center(g, start, c);
+  const double d0 = sqrt((ps[0] - c[0]) * (ps[0] - c[0]) + (ps[1] - c[1]) * (ps[1] - c[1]) +
+                         (ps[2] - c[2]) * (ps[2] - c[2]));
+  const int32_t largest = g->dims[0] > g->dims[1] ? (g->dims[0] > g->dims[2] ? g->dims[0] : g->dims[2])
+                                                  : (g->dims[1] > g->dims[2] ? g->dims[1] : g->dims[2]);
+  for (int32_t reach = 2 * ci->cell;; reach *= 2) {
+    // frames attached within `reach` voxels (Chebyshev) of the sample's voxel;
+    // any other lies at least reach h away through the region
+    const int whole = reach >= largest;
+    int32_t lo[3], hi[3];
+    for (int r = 0; r < 3; ++r) {
+      lo[r] = (s_ijk[r] - reach < 0 ? 0 : s_ijk[r] - reach) / ci->cell;
+      hi[r] = (s_ijk[r] + reach >= g->dims[r] ? g->dims[r] - 1 : s_ijk[r] + reach) / ci->cell;
+    }
+    int32_t count = 0;
+    for (int32_t z = lo[2]; z <= hi[2]; ++z)
+      for (int32_t y = lo[1]; y <= hi[1]; ++y)
+        for (int32_t x = lo[0]; x <= hi[0]; ++x) {
+          const int64_t cell = x + (int64_t)ci->dims[0] * (y + (int64_t)ci->dims[1] * z);
+          for (int64_t a = ci->start[cell]; a < ci->start[cell + 1]; ++a) {
+            const int64_t v = ci->voxel[a];
+            if (vol->region[v] != label) continue;
+            int32_t f_ijk[3];
+            prep_grid_ijk(g, v, f_ijk);
+            int outside = 0;
+            for (int r = 0; r < 3; ++r)
+              outside |= f_ijk[r] < s_ijk[r] - reach || f_ijk[r] > s_ijk[r] + reach;
+            if (outside) continue;
+            if (count == se->pool_capacity) {
+              const int32_t cap = se->pool_capacity ? 2 * se->pool_capacity : 256;
+              gathered *grown = realloc(se->pool, (size_t)cap * sizeof *grown);
+              if (!grown) return 0;
+              se->pool = grown;
+              se->pool_capacity = cap;
+            }
+            const int32_t i = ci->frame[a];
+            const double *xf = pts->frame_position + 3 * (int64_t)i;
+            double cv[3];
+            prep_grid_center(g, v, cv);
+            const double e = sqrt((xf[0] - cv[0]) * (xf[0] - cv[0]) + (xf[1] - cv[1]) * (xf[1] - cv[1]) +
+                                  (xf[2] - cv[2]) * (xf[2] - cv[2]));
+            se->pool[count].distance = d0 + lattice_distance(h, s_ijk, f_ijk) + e;
+            se->pool[count].frame = i;
+            se->pool[count].voxel = v;
+            se->pool[count].exact = 0;
+            ++count;
+          }
+        }
+    const double beyond = whole ? INFINITY : reach * h; // bound of the frames not gathered
+    if (count >= want) {
+      qsort(se->pool, (size_t)count, sizeof *se->pool, by_distance_then_frame);
+      for (int32_t j = 0; j < want; ++j) // a frame gathered twice (two attachments): the search decides
+        for (int32_t k = j + 1; k < count; ++k)
+          if (se->pool[k].frame == se->pool[j].frame) return 0;
+      // the chosen frames' forms must be their distances (the others' are
+      // bounds): a frame whose lattice path leaves the region gets its
+      // distance from a search aimed at it, and the ranking is redone
+      int32_t j = 0;
+      while (j < want) {
+        gathered *f = se->pool + j;
+        if (f->exact) {
+          ++j;
+          continue;
+        }
+        int32_t f_ijk[3];
+        prep_grid_ijk(g, f->voxel, f_ijk);
+        f->exact = 1;
+        if (path_clear(g, vol->region, label, s_ijk, f_ijk)) {
+          ++j;
+          continue;
+        }
+        const double e = f->distance - d0 - lattice_distance(h, s_ijk, f_ijk);
+        const double d = aimed_distance(se, g, vol->region, label, start, d0, f->voxel);
+        if (!(d >= 0)) return 0; // too far around, or out of memory: the search decides
+        f->distance = d + e;
+        qsort(se->pool + j, (size_t)(count - j), sizeof *se->pool, by_distance_then_frame);
+      }
+      const double last = se->pool[want - 1].distance, tol = 1e-9 * (h + last);
+      if (last + tol < beyond || whole) {
+        int settled = count == want || se->pool[want].distance > last + tol;
+        for (int32_t m = first > 1 ? first : 1; m < want && settled; ++m)
+          settled = se->pool[m].distance - se->pool[m - 1].distance > tol;
+        if (!settled) return 0;
+        for (int32_t k = 0; k < want; ++k) out[k].distance = se->pool[k].distance, out[k].frame = se->pool[k].frame;
+        return want;
+      }
+    }
+    if (whole) return 0; // fewer frames than wanted in reach: the search says how many
+  }
+}
+
 static int by_frame(const void *a, const void *b) {
   const int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
   return (x > y) - (x < y);
@@ -150,14 +437,15 @@ static int by_frame(const void *a, const void *b) {
 // MLS weights of sample s into frame[0..count), w, grad (ascending frames).
 // Returns 0 ok, 1 no usable frame set (message on se->ctx), -1 out of memory.
 static int mls_sample(search *se, const prep_grid *g, const fascia_prep_volume *vol, const fascia_prep_points *pts,
-                      const frame_index *fi, int32_t s, int32_t k, int32_t *frame, double *w, double *grad,
-                      int32_t *count) {
+                      const frame_index *fi, const local_tables *lt, int32_t s, int32_t k, int32_t *frame, double *w,
+                      double *grad, int32_t *count) {
   candidate cand[MAX_PAIRS];
   const double *p = pts->sample_position + 3 * (int64_t)s;
   const int32_t tries[3] = {k + 4 < MAX_PAIRS ? k + 4 : MAX_PAIRS, 2 * k + 8 < MAX_PAIRS ? 2 * k + 8 : MAX_PAIRS,
                             MAX_PAIRS};
   for (int attempt = 0; attempt < 3; ++attempt) {
-    const int32_t found = nearest_frames(se, g, vol, pts, fi, s, tries[attempt], cand);
+    int32_t found = local_frames(se, g, vol, pts, lt, s, tries[attempt], k, cand);
+    if (found == 0) found = nearest_frames(se, g, vol, pts, fi, s, tries[attempt], cand);
     if (found < 0) return -1;
     for (int32_t m = k < found ? k : found; m <= found; ++m) {
       if (m < 4) continue;
@@ -233,6 +521,8 @@ fascia_status fascia_prep_shape_functions(fascia_ctx *ctx, const fascia_prep_sce
   const int64_t n = prep_grid_count(&g);
   const int32_t S = points->sample_count, N = points->frame_count;
   fascia_status status = FASCIA_OK;
+  local_tables *lt = NULL;
+  int64_t *attach_voxel = NULL;
   fascia_prep_weights *W = calloc(1, sizeof *W);
   int32_t shared = 0;
   for (int32_t i = 0; i < N; ++i) shared += points->frame_organ_voxel[i] >= 0;
@@ -244,32 +534,47 @@ fascia_status fascia_prep_shape_functions(fascia_ctx *ctx, const fascia_prep_sce
   int32_t *pair_count = prep_calloc(S, sizeof(int32_t));
   PREP_CHECK_GOTO(W && fi.head && fi.next && fi.frame && pair_frame && pair_w && pair_g && pair_count, ctx, FASCIA_ERR_MEMORY,
                   "shape functions: out of memory for %d samples", (int)S);
+  attach_voxel = prep_calloc(N + shared, sizeof(int64_t));
+  PREP_CHECK_GOTO(attach_voxel, ctx, FASCIA_ERR_MEMORY, "shape functions: out of memory");
   for (int64_t v = 0; v < n; ++v) fi.head[v] = -1;
   for (int32_t i = N - 1, a = N + shared - 1; i >= 0; --i) { // lists ascend by frame index
     const int64_t at[2] = {points->frame_organ_voxel[i], points->frame_voxel[i]};
     for (int k = 0; k < 2; ++k) {
       if (at[k] < 0) continue;
       fi.frame[a] = i;
+      attach_voxel[a] = at[k];
       fi.next[a] = fi.head[at[k]];
       fi.head[at[k]] = a--;
     }
   }
+  // the local search's table of frames by cell
+  lt = calloc(1, sizeof *lt);
+  PREP_CHECK_GOTO(lt, ctx, FASCIA_ERR_MEMORY, "shape functions: out of memory");
+  PREP_TRY_GOTO(cell_index_build(ctx, &g, &fi, N, N + shared, attach_voxel, &lt->cells));
   // TET samples: barycentric in their own tets; then MLS samples
   fascia_ctx_progress(ctx, "shape functions", 0, "tet");
   PREP_TRY_GOTO(tet_weights(ctx, scene, volume, points, pair_frame, pair_w, pair_g, pair_count));
-  fascia_ctx_progress(ctx, "shape functions", 0, "mls");
   {
+    int64_t mls_count = 0, done = 0, next_report = 1;
+    for (int32_t s = 0; s < S; ++s) {
+      int32_t kind;
+      prep_label_sampling(scene, volume, volume->region[points->sample_voxel[s]], NULL, NULL, &kind, NULL);
+      mls_count += kind == FASCIA_PREP_SHAPE_MLS;
+    }
+    fascia_ctx_progress(ctx, "shape functions", 0, "mls");
     int32_t failed = INT32_MAX, out_of_memory = 0;
     char message[1024] = "";
 #pragma omp parallel num_threads(fascia_ctx_threads(ctx))
     {
-      search se = {0};
+      search se = {0}; // its distance array comes with the first search
       fascia_ctx_def def = fascia_ctx_def_default();
       def.threads = 1;
-      se.dist = malloc((size_t)n * sizeof(double));
-      if (se.dist)
-        for (int64_t v = 0; v < n; ++v) se.dist[v] = INFINITY;
-      const int ready = se.dist && fascia_ctx_create(&def, &se.ctx) == FASCIA_OK;
+      const int ready = fascia_ctx_create(&def, &se.ctx) == FASCIA_OK;
+#ifdef _OPENMP
+      const int reporter = omp_get_thread_num() == 0;
+#else
+      const int reporter = 1;
+#endif
 #pragma omp for schedule(dynamic, 16)
       for (int32_t s = 0; s < S; ++s) {
         int32_t kind, neighbours;
@@ -281,8 +586,18 @@ fascia_status fascia_prep_shape_functions(fascia_ctx *ctx, const fascia_prep_sce
           continue;
         }
         const int64_t base = (int64_t)MAX_PAIRS * s;
-        const int r = mls_sample(&se, &g, volume, points, &fi, s, neighbours, pair_frame + base, pair_w + base,
+        const int r = mls_sample(&se, &g, volume, points, &fi, lt, s, neighbours, pair_frame + base, pair_w + base,
                                  pair_g + 3 * base, pair_count + s);
+        int64_t now;
+#pragma omp atomic capture
+        now = ++done;
+        // one thread reports (the hook need not be thread-safe), about every percent
+        if (reporter && now >= next_report) {
+          char detail[64];
+          snprintf(detail, sizeof detail, "mls: %lld of %lld samples", (long long)now, (long long)mls_count);
+          fascia_ctx_progress(ctx, "shape functions", (double)now / (double)mls_count, detail);
+          next_report = now + (mls_count + 99) / 100;
+        }
         if (r < 0) {
 #pragma omp atomic write
           out_of_memory = 1;
@@ -295,6 +610,7 @@ fascia_status fascia_prep_shape_functions(fascia_ctx *ctx, const fascia_prep_sce
         }
       }
       fascia_ctx_destroy(&se.ctx);
+      free(se.pool);
       free(se.dist);
       free(se.touched);
       prep_heap_free(&se.heap);
@@ -335,6 +651,13 @@ fascia_status fascia_prep_shape_functions(fascia_ctx *ctx, const fascia_prep_sce
   *out = W;
   W = NULL;
 cleanup:
+  if (lt) {
+    free(lt->cells.start);
+    free(lt->cells.frame);
+    free(lt->cells.voxel);
+    free(lt);
+  }
+  free(attach_voxel);
   fascia_prep_weights_destroy(&W);
   free(fi.head);
   free(fi.next);

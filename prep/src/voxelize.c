@@ -26,6 +26,7 @@
 // Overlapping organs: voxels inside two organs are counted and the depth
 // (largest distance to the nearer of the two surfaces) reported; the tissue
 // is built outside both (the rule), the organ surfaces are kept as given.
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -334,12 +335,43 @@ cleanup:
 
 // ------------------------------------------------------------ the tissue domain
 
+// How far from its organs' surfaces tissue td can reach, with two voxels of
+// slack for the voxel centres. The grid is built from it (tissue_box) and an
+// organ's distance band covers it (organ_band), so every organ a tissue
+// connects has a distance field wherever the tissue can be.
+static double tissue_reach(const fascia_prep_scene *scene, const fascia_prep_tissue_def *td) {
+  return td->max_gap + 2 * scene->voxel_size;
+}
+
+// Width of the band around organ o where its distances are exact: the reach
+// of every tissue it belongs to, every tissue's coupling tolerance (sharing
+// frames) and a few voxels for the "outside" test.
+static double organ_band(const fascia_prep_scene *scene, int32_t o) {
+  const double h = scene->voxel_size;
+  double band = 3 * h;
+  for (int32_t t = 0; t < scene->tissue_count; ++t) {
+    const fascia_prep_tissue_def *td = scene->tissues + t;
+    band = fmax(band, td->coupling_tolerance + 2 * h);
+    for (int32_t k = 0; k < td->organ_count; ++k)
+      if (td->organs[k] == o) band = fmax(band, tissue_reach(scene, td));
+  }
+  return band;
+}
+
+// 1 when the box [lo, hi] grown by band meets the voxel centres of g: only
+// then can the organ of that box have a distance below band on g.
+static int box_meets_grid(const prep_grid *g, const double *lo, const double *hi, double band) {
+  for (int r = 0; r < 3; ++r)
+    if (lo[r] - band > g->h * (g->lo[r] + g->dims[r] - 1) || hi[r] + band < g->h * g->lo[r]) return 0;
+  return 1;
+}
+
 // Bounding box of the space tissue t can occupy: the intersection of its
-// organs' boxes grown by max_gap, cut by its box or sphere. 0 if empty.
+// organs' boxes grown by its reach, cut by its box or sphere. 0 if empty.
 static int tissue_box(const fascia_prep_scene *scene, const fascia_prep_meshes *meshes, int32_t t, double *lo,
                       double *hi) {
   const fascia_prep_tissue_def *td = scene->tissues + t;
-  const double grow = td->max_gap + 2 * scene->voxel_size;
+  const double grow = tissue_reach(scene, td);
   for (int r = 0; r < 3; ++r) lo[r] = -INFINITY, hi[r] = INFINITY;
   for (int32_t k = 0; k < td->organ_count; ++k) {
     const double *b = meshes->organs[td->organs[k]].bounds;
@@ -375,6 +407,63 @@ static const char *organ_list(const fascia_prep_scene *scene, const fascia_prep_
     strcat(out, "'");
   }
   return out;
+}
+
+// Distance between the surfaces of organs a and b: the smallest distance of
+// a vertex of either to the other's surface (exact when the closest points
+// include a vertex, as for boxes; else slightly more).
+static fascia_status surface_gap(fascia_ctx *ctx, const fascia_prep_meshes *meshes, int32_t a, int32_t b,
+                                 double *gap) {
+  *gap = INFINITY;
+  for (int pass = 0; pass < 2; ++pass) {
+    const fascia_prep_mesh *from = meshes->organs + (pass ? b : a), *to = meshes->organs + (pass ? a : b);
+    fascia_cgal_tree *tree = NULL;
+    PREP_TRY(fascia_cgal_tree_create(ctx, to->vertex_count, to->vertices, to->triangle_count, to->triangles, &tree));
+    double *closest = prep_calloc(3 * (int64_t)from->vertex_count, sizeof(double));
+    int32_t *triangle = prep_calloc(from->vertex_count, sizeof(int32_t));
+    if (closest && triangle) {
+      fascia_cgal_tree_closest(tree, from->vertex_count, from->vertices, closest, triangle);
+      for (int32_t v = 0; v < from->vertex_count; ++v) {
+        const double *p = from->vertices + 3 * (int64_t)v, *q = closest + 3 * (int64_t)v;
+        *gap = fmin(*gap, sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
+                               (p[2] - q[2]) * (p[2] - q[2])));
+      }
+    }
+    free(closest);
+    free(triangle);
+    fascia_cgal_tree_destroy(&tree);
+    PREP_CHECK(closest && triangle, ctx, FASCIA_ERR_MEMORY, "voxelize: out of memory");
+  }
+  return FASCIA_OK;
+}
+
+// The user's message when no point lies within max_gap of every organ of
+// tissue td: it names the two organs farthest apart, the distance between
+// their surfaces and the max_gap that would bridge them. nearest is the
+// smallest distance of a free voxel to the farthest organ (INFINITY: none
+// within the distance band).
+static fascia_status too_far_apart(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_meshes *meshes,
+                                   const fascia_prep_tissue_def *td, double nearest) {
+  const double h = scene->voxel_size;
+  int32_t a = td->organs[0], b = td->organs[td->organ_count > 1 ? 1 : 0];
+  double gap = -1;
+  for (int32_t i = 0; i < td->organ_count; ++i)
+    for (int32_t j = i + 1; j < td->organ_count; ++j) {
+      double d;
+      PREP_TRY(surface_gap(ctx, meshes, td->organs[i], td->organs[j], &d));
+      if (d > gap) a = td->organs[i], b = td->organs[j], gap = d;
+    }
+  // a point between two organs a gap apart is within max_gap of both when
+  // max_gap >= gap / 2; voxel centres need up to one voxel more
+  double want = fmax(gap, 0) / 2 + h;
+  if (isfinite(nearest)) want = fmax(want, nearest + h);
+  return PREP_FAIL(ctx, FASCIA_ERR_ARGUMENT,
+                   "tissue '%s' (scene '%s'): organs '%s' and '%s' are too far apart for max_gap %g m: their "
+                   "surfaces are %.3g mm apart, and every point of a tissue lies within max_gap of each organ it "
+                   "connects%s; raise max_gap to at least %.3g m, or leave '%s' or '%s' out of this tissue",
+                   td->name, scene->path, scene->organs[a].name, scene->organs[b].name, td->max_gap,
+                   1e3 * fmax(gap, 0), td->region_organ >= 0 ? " (and of the region's parts)" : "", want,
+                   scene->organs[a].name, scene->organs[b].name);
 }
 
 // ------------------------------------------------------------ regions
@@ -486,17 +575,10 @@ static fascia_status build_region(fascia_ctx *ctx, const fascia_prep_scene *scen
     ++cut_voxels;
   }
   if (gap_voxels == 0) {
-    const double band = td->max_gap + g.h;
-    if (nearest < band)
-      PREP_CHECK_GOTO(0, ctx, FASCIA_ERR_ARGUMENT,
-                      "tissue '%s' (scene '%s'): organs %s are too far apart for max_gap %g m: the free point "
-                      "nearest to all of them is %.3g m from the farthest; raise max_gap above %.3g m",
-                      td->name, scene->path, names, td->max_gap, nearest, nearest + g.h);
-    PREP_CHECK_GOTO(0, ctx, FASCIA_ERR_ARGUMENT,
-                    "tissue '%s' (scene '%s'): organs %s are too far apart for max_gap %g m: no free point lies "
-                    "within max_gap of all of them%s",
-                    td->name, scene->path, names, td->max_gap,
-                    td->region_organ >= 0 ? " (and of the region's parts)" : "");
+    double band = INFINITY; // distances are clamped beyond the band: nearest is exact below it
+    for (int32_t k = 0; k < td->organ_count; ++k) band = fmin(band, vol->band[td->organs[k]]);
+    status = too_far_apart(ctx, scene, meshes, td, nearest < 0.999 * band ? nearest : INFINITY);
+    goto cleanup;
   }
   PREP_CHECK_GOTO(cut_voxels > 0, ctx, FASCIA_ERR_ARGUMENT,
                   "tissue '%s' (scene '%s' tissues[%d].region): the region selects nothing of the %.3g cm^3 between "
@@ -545,9 +627,31 @@ static fascia_status build_organ_region(fascia_ctx *ctx, const fascia_prep_scene
   return FASCIA_OK;
 }
 
-// Overlap of organs a and b on the volume grid, and the closest distance
-// between their surfaces there.
-static fascia_status measure_pairs(fascia_ctx *ctx, fascia_prep_volume *vol) {
+// Voxels inside both organs a and b, counted on their own grids (the same
+// inside voxels as their enclosed volumes, so never more than the smaller).
+static int64_t count_both_inside(const uint8_t *in_a, const prep_grid *ga, const uint8_t *in_b,
+                                 const prep_grid *gb) {
+  int32_t lo[3], hi[3];
+  for (int r = 0; r < 3; ++r) {
+    lo[r] = ga->lo[r] > gb->lo[r] ? ga->lo[r] : gb->lo[r];
+    const int32_t ea = ga->lo[r] + ga->dims[r], eb = gb->lo[r] + gb->dims[r];
+    hi[r] = ea < eb ? ea : eb;
+    if (hi[r] <= lo[r]) return 0;
+  }
+  int64_t both = 0;
+  for (int32_t z = lo[2]; z < hi[2]; ++z)
+    for (int32_t y = lo[1]; y < hi[1]; ++y)
+      for (int32_t x = lo[0]; x < hi[0]; ++x)
+        both += in_a[prep_grid_index(ga, x - ga->lo[0], y - ga->lo[1], z - ga->lo[2])] &&
+                in_b[prep_grid_index(gb, x - gb->lo[0], y - gb->lo[1], z - gb->lo[2])];
+  return both;
+}
+
+// Overlap of every pair of organs near the grid: its volume on their own
+// grids, its depth (largest distance to the nearer surface, where the volume
+// grid reaches), and the closest distance between their surfaces there.
+static fascia_status measure_pairs(fascia_ctx *ctx, fascia_prep_volume *vol, uint8_t *const *insides,
+                                   const prep_grid *organ_grids) {
   const prep_grid g = prep_volume_grid(vol);
   const int64_t n = prep_grid_count(&g);
   const int32_t O = vol->organ_count;
@@ -555,15 +659,13 @@ static fascia_status measure_pairs(fascia_ctx *ctx, fascia_prep_volume *vol) {
     for (int32_t b = a + 1; b < O; ++b) {
       const float *da = vol->distance[a], *db = vol->distance[b];
       if (!da || !db) continue;
-      int64_t both = 0;
+      const int64_t both = count_both_inside(insides[a], organ_grids + a, insides[b], organ_grids + b);
       double depth = 0, gap = INFINITY;
       for (int64_t v = 0; v < n; ++v) {
-        if (da[v] <= 0 && db[v] <= 0) {
-          ++both;
+        if (da[v] <= 0 && db[v] <= 0)
           depth = fmax(depth, fmin(-da[v], -db[v]));
-        } else if (da[v] > 0 && db[v] > 0) {
+        else if (da[v] > 0 && db[v] > 0)
           gap = fmin(gap, (double)da[v] + db[v]);
-        }
       }
       if (both > 0) {
         fascia_prep_overlap *grown = realloc(vol->overlaps, (size_t)(vol->overlap_count + 1) * sizeof *grown);
@@ -590,7 +692,8 @@ fascia_status fascia_prep_voxelize(fascia_ctx *ctx, const fascia_prep_scene *sce
   *out = NULL;
   const double h = scene->voxel_size;
   fascia_status status = FASCIA_OK;
-  uint8_t *inside = NULL;
+  uint8_t **insides = NULL; // [organ] inside voxels on the organ's own grid, NULL: not near the grid
+  prep_grid *organ_grids = NULL;
   float *udf = NULL;
   fascia_prep_volume *vol = calloc(1, sizeof *vol);
   PREP_CHECK(vol, ctx, FASCIA_ERR_MEMORY, "voxelize: out of memory");
@@ -610,10 +713,7 @@ fascia_status fascia_prep_voxelize(fascia_ctx *ctx, const fascia_prep_scene *sce
                       "tissue '%s' (scene '%s' tissues[%d].region): the region selects nothing: it does not meet the "
                       "space within max_gap of organs %s; check its coordinates (metres, scene frame)",
                       td->name, scene->path, (int)t, organ_list(scene, td, names, sizeof names));
-      PREP_CHECK_GOTO(0, ctx, FASCIA_ERR_ARGUMENT,
-                      "tissue '%s' (scene '%s'): organs %s are too far apart for max_gap %g m: their bounding boxes "
-                      "grown by max_gap do not meet; raise max_gap or check the organs' units and transforms",
-                      td->name, scene->path, organ_list(scene, td, names, sizeof names), td->max_gap);
+      PREP_TRY_GOTO(too_far_apart(ctx, scene, meshes, td, INFINITY));
     }
     for (int r = 0; r < 3; ++r) lo[r] = fmin(lo[r], a[r]), hi[r] = fmax(hi[r], b[r]);
   }
@@ -658,50 +758,47 @@ fascia_status fascia_prep_voxelize(fascia_ctx *ctx, const fascia_prep_scene *sce
                   "voxelize: out of memory for %lld voxels; raise voxel_size", (long long)n);
   for (int64_t k = 0; k < (int64_t)meshes->count * meshes->count; ++k) vol->closest[k] = -1;
 
-  // 2. every organ that reaches the grid: inside/outside, signed distance
+  // 2. every organ whose distance band reaches the grid (every organ of a
+  // tissue does, by construction): inside/outside on its own grid, kept
+  // for the overlaps, and the signed distance on the volume grid
+  insides = prep_calloc(meshes->count, sizeof(uint8_t *));
+  organ_grids = prep_calloc(meshes->count, sizeof(prep_grid));
+  PREP_CHECK_GOTO(insides && organ_grids, ctx, FASCIA_ERR_MEMORY, "voxelize: out of memory");
   for (int32_t o = 0; o < meshes->count; ++o) {
     fascia_prep_mesh *m = meshes->organs + o;
-    int near = 1;
-    for (int r = 0; r < 3; ++r)
-      if (m->bounds[r] > h * (g.lo[r] + g.dims[r]) + h || m->bounds[3 + r] < h * g.lo[r] - h) near = 0;
-    if (!near) continue;
+    const double band = organ_band(scene, o);
+    if (!box_meets_grid(&g, m->bounds, m->bounds + 3, band)) continue;
     fascia_ctx_progress(ctx, "voxelize", (double)o / meshes->count, m->name);
-    double band = 2 * h + scene->voxel_size; // enough for coupling and the "outside" test
-    for (int32_t t = 0; t < scene->tissue_count; ++t) {
-      const fascia_prep_tissue_def *td = scene->tissues + t;
-      band = fmax(band, td->coupling_tolerance + 2 * h);
-      for (int32_t k = 0; k < td->organ_count; ++k)
-        if (td->organs[k] == o) band = fmax(band, td->max_gap + 2 * h);
-    }
     char what[FASCIA_NAME_SIZE + 16];
     snprintf(what, sizeof what, "organ '%s'", m->name);
     PREP_TRY_GOTO(check_grid(ctx, what, scene->path, h, m->bounds, m->bounds + 3, 2, 1));
-    prep_grid og;
-    prep_grid_cover(&og, h, m->bounds, m->bounds + 3, 2);
-    const int64_t on = prep_grid_count(&og);
+    prep_grid *og = organ_grids + o;
+    prep_grid_cover(og, h, m->bounds, m->bounds + 3, 2);
+    const int64_t on = prep_grid_count(og);
     PREP_CHECK_GOTO(on < MAX_VOXELS, ctx, FASCIA_ERR_ARGUMENT,
                     "organ '%s': voxel_size %g m gives %lld voxels for its box, more than %lld; raise voxel_size",
                     m->name, h, (long long)on, (long long)MAX_VOXELS);
-    inside = prep_calloc(on, 1);
+    uint8_t *inside = insides[o] = prep_calloc(on, 1);
     udf = prep_calloc(n, sizeof(float));
     PREP_CHECK_GOTO(inside && udf, ctx, FASCIA_ERR_MEMORY, "organ '%s': out of memory for %lld voxels", m->name,
                     (long long)on);
-    PREP_TRY_GOTO(organ_inside(ctx, scene, m, &og, inside));
+    PREP_TRY_GOTO(organ_inside(ctx, scene, m, og, inside));
     PREP_TRY_GOTO(fascia_vdb_unsigned_distance(ctx, m->vertex_count, m->vertices, m->triangle_count, m->triangles, h,
                                                (float)(band / h), g.lo, g.dims, udf));
+    // the sign is the inside rule's alone: d <= 0 exactly for its inside
+    // voxels, so a centre on the surface that the rule leaves outside gets
+    // a distance just above 0, not the 0 that would count it inside
     for (int64_t v = 0; v < n; ++v) {
       int32_t c[3];
       prep_grid_ijk(&g, v, c);
-      const int32_t x = c[0] + g.lo[0] - og.lo[0], y = c[1] + g.lo[1] - og.lo[1], z = c[2] + g.lo[2] - og.lo[2];
-      const int in = x >= 0 && y >= 0 && z >= 0 && x < og.dims[0] && y < og.dims[1] && z < og.dims[2] &&
-                     inside[prep_grid_index(&og, x, y, z)];
-      if (in) udf[v] = -udf[v];
+      const int32_t x = c[0] + g.lo[0] - og->lo[0], y = c[1] + g.lo[1] - og->lo[1], z = c[2] + g.lo[2] - og->lo[2];
+      const int in = x >= 0 && y >= 0 && z >= 0 && x < og->dims[0] && y < og->dims[1] && z < og->dims[2] &&
+                     inside[prep_grid_index(og, x, y, z)];
+      udf[v] = in ? -udf[v] : fmaxf(udf[v], FLT_MIN);
     }
     vol->distance[o] = udf;
     vol->band[o] = (float)band;
     udf = NULL;
-    free(inside);
-    inside = NULL;
   }
   for (int32_t t = 0; t < scene->tissue_count; ++t)
     for (int32_t k = 0; k < scene->tissues[t].organ_count; ++k)
@@ -710,7 +807,7 @@ fascia_status fascia_prep_voxelize(fascia_ctx *ctx, const fascia_prep_scene *sce
                       scene->tissues[t].name);
 
   // 3. overlaps and gaps, then each tissue's region
-  PREP_TRY_GOTO(measure_pairs(ctx, vol));
+  PREP_TRY_GOTO(measure_pairs(ctx, vol, insides, organ_grids));
   for (int32_t t = 0; t < scene->tissue_count; ++t) {
     fascia_ctx_progress(ctx, "voxelize", 0.9, scene->tissues[t].name);
     PREP_TRY_GOTO(build_region(ctx, scene, meshes, vol, t));
@@ -724,7 +821,9 @@ fascia_status fascia_prep_voxelize(fascia_ctx *ctx, const fascia_prep_scene *sce
   *out = vol;
   vol = NULL;
 cleanup:
-  free(inside);
+  for (int32_t o = 0; insides && o < meshes->count; ++o) free(insides[o]);
+  free(insides);
+  free(organ_grids);
   free(udf);
   fascia_prep_volume_destroy(&vol);
   return status;

@@ -202,8 +202,8 @@ FASCIA_API void fascia_prep_meshes_destroy(fascia_prep_meshes **meshes);
 /// Two organs that overlap (both claim the same voxels).
 typedef struct fascia_prep_overlap {
   int32_t a, b;          ///< organ indices, a < b
-  fascia_real volume;    ///< m^3
-  fascia_real depth;     ///< largest penetration depth, m
+  fascia_real volume;    ///< m^3, voxels inside both on the organs' own grids (at most the smaller enclosed_volume)
+  fascia_real depth;     ///< largest penetration depth where the volume grid reaches, m
 } fascia_prep_overlap;
 
 /// Per-tissue figures of the region.
@@ -246,9 +246,11 @@ typedef struct fascia_prep_volume {
 /// inside; open meshes whose holes leak get a morphological closing), measures
 /// overlaps, and builds each tissue's region, then each deformable organ's
 /// (its inside voxels that no earlier region holds; pieces smaller than its
-/// min_component dropped). Errors: voxel size too large for a gap, organs
-/// farther apart than the gap, a region that selects nothing, a deformable
-/// organ with no inside left.
+/// min_component dropped). Every organ a tissue connects gets a distance
+/// field wherever the tissue can lie. Errors: voxel size too large for a
+/// gap, organs too far apart for max_gap (the message names the two, their
+/// distance and the max_gap that bridges them), a region that selects
+/// nothing, a deformable organ with no inside left.
 FASCIA_API fascia_status fascia_prep_voxelize(fascia_ctx *ctx, const fascia_prep_scene *scene,
                                               fascia_prep_meshes *meshes, fascia_prep_volume **out);
 FASCIA_API void fascia_prep_volume_destroy(fascia_prep_volume **volume);
@@ -323,7 +325,10 @@ typedef struct fascia_prep_weights {
 /// constant and linear fields exactly. TET: the barycentric weights of the
 /// sample in its own tetrahedron (points->sample_tet_frame), all in [0, 1]
 /// since every sample is a quadrature point inside its tet: nothing is
-/// extrapolated. A shared frame belongs to both regions it touches.
+/// extrapolated. A shared frame belongs to both regions it touches. The MLS
+/// neighbours are found locally (cost with the samples and their
+/// neighbourhoods, not the voxels between) and the progress hook hears of
+/// every percent of the samples.
 FASCIA_API fascia_status fascia_prep_shape_functions(fascia_ctx *ctx, const fascia_prep_scene *scene,
                                                      const fascia_prep_volume *volume,
                                                      const fascia_prep_points *points, fascia_prep_weights **out);
