@@ -23,27 +23,6 @@ static const char prep_usage[] =
 
 #ifndef FASCIA_HAVE_PREP
 
-// The model and preview files against the scene and its meshes, and the
-// folders they go to, before the first stage (cli_check_paths).
-static int check_prep_paths(const fascia_prep_scene *scene, const char *output, const char *preview) {
-  static const char *const preview_names[] = {"organs.vtk", "region.vtk", "frames.vtk", "samples.vtk", "coupling.vtk",
-                                              NULL};
-  cli_path *paths = calloc((size_t)scene->organ_count + 3, sizeof *paths);
-  if (!paths) {
-    fprintf(stderr, "fascia prep: out of memory\n");
-    return 1;
-  }
-  int n = 0;
-  paths[n++] = (cli_path){"scene", scene->path, CLI_INPUT, NULL, NULL};
-  for (int32_t o = 0; o < scene->organ_count; ++o)
-    paths[n++] = (cli_path){"organ mesh", scene->organs[o].mesh_path, CLI_INPUT, NULL, NULL};
-  paths[n++] = (cli_path){"-o", output, CLI_OUTPUT_FILE, NULL, NULL};
-  paths[n++] = (cli_path){"--preview", preview, CLI_OUTPUT_DIR, preview_names, NULL};
-  const int rc = cli_check_paths("prep", paths, n);
-  free(paths);
-  return rc;
-}
-
 int cmd_prep(int argc, char **argv) {
   for (int k = 1; k < argc; ++k)
     if (!strcmp(argv[k], "--help")) {
