@@ -20,6 +20,8 @@ typedef struct reader {
 } reader;
 
 #define PATH_SIZE 256
+// a scene is a few kB; anything this large is not one
+#define MAX_SCENE_BYTES ((int64_t)64 << 20)
 
 static fascia_status key_fail(const reader *rd, const char *path, const char *format, ...)
 #if defined(__GNUC__)
@@ -700,7 +702,7 @@ fascia_status fascia_prep_scene_load(fascia_ctx *ctx, const char *path, fascia_p
   PREP_CHECK(out && path, ctx, FASCIA_ERR_ARGUMENT, "fascia_prep_scene_load: NULL argument");
   *out = NULL;
   char *text = NULL;
-  PREP_TRY(prep_read_file(ctx, path, "scene", &text, NULL));
+  PREP_TRY(prep_read_file(ctx, path, "scene", MAX_SCENE_BYTES, &text, NULL));
   char *dir = prep_strdup(path);
   if (!dir) {
     free(text);
