@@ -5,7 +5,8 @@
 // reading a part of them: a directory, a FIFO or a device as the scene or
 // a mesh, and STL files cut short or garbled (ASCII without "endsolid" or
 // with a facet cut short, binary whose size disagrees with its triangle
-// count). The complete STL files, ASCII and binary, are accepted.
+// count) and PLY files whose body holds less than their header declares.
+// The complete files, ASCII and binary, are accepted.
 #define _POSIX_C_SOURCE 200809L // mkdtemp, mkfifo, WEXITSTATUS
 #include <sys/stat.h>
 
@@ -67,6 +68,43 @@ static int write_binary_stl(const char *name, const char *header, int extra) {
   if (!f) return 0;
   const size_t size = (size_t)(84 + 50 * 12 + extra);
   const int ok = fwrite(data, 1, size, f) == size;
+  return fclose(f) == 0 && ok;
+}
+
+// Box B as a PLY (ASCII or little-endian binary), its body cut by cut bytes.
+static int write_ply(const char *name, int binary, int cut) {
+  float tri[12][3][3];
+  box_triangles(tri);
+  static char data[8192];
+  int n = snprintf(data, sizeof data,
+                   "ply\nformat %s 1.0\ncomment box B, three vertices per triangle\nelement vertex 36\n"
+                   "property float x\nproperty float y\nproperty float z\nelement face 12\n"
+                   "property list uchar int vertex_indices\nend_header\n",
+                   binary ? "binary_little_endian" : "ascii");
+  for (int t = 0; t < 12; ++t)
+    for (int k = 0; k < 3; ++k) {
+      if (binary) {
+        memcpy(data + n, tri[t][k], 12);
+        n += 12;
+      } else {
+        n += snprintf(data + n, sizeof data - (size_t)n, "%g %g %g\n", tri[t][k][0], tri[t][k][1], tri[t][k][2]);
+      }
+    }
+  for (int t = 0; t < 12; ++t) {
+    const int32_t v[3] = {3 * t, 3 * t + 1, 3 * t + 2};
+    if (binary) {
+      data[n++] = 3;
+      memcpy(data + n, v, 12);
+      n += 12;
+    } else {
+      n += snprintf(data + n, sizeof data - (size_t)n, "3 %d %d %d\n", (int)v[0], (int)v[1], (int)v[2]);
+    }
+  }
+  char path[512];
+  snprintf(path, sizeof path, "%s/%s", dir, name);
+  FILE *f = fopen(path, "wb");
+  if (!f) return 0;
+  const int ok = fwrite(data, 1, (size_t)(n - cut), f) == (size_t)(n - cut);
   return fclose(f) == 0 && ok;
 }
 
@@ -135,9 +173,20 @@ int main(int argc, char **argv) {
   CHECK(write_binary_stl("tiny.stl", "", -(50 * 12 + 10)));
   refused(cli, "STL shorter than its header", "tiny.stl", "74 bytes", "84-byte header", 0);
 
+  // PLY: the body must hold what the header declares
+  CHECK(write_ply("b.ply", 0, 0) && write_ply("bin.ply", 1, 0));
+  accepted(cli, "ASCII PLY", "b.ply");
+  accepted(cli, "binary PLY", "bin.ply");
+  CHECK(write_ply("cut.ply", 0, 40)); // the last 4 faces (10 bytes a line)
+  refused(cli, "ASCII PLY cut short", "cut.ply", "declares 12 'face' elements", "ends after 8", "truncated");
+  CHECK(write_ply("cutbin.ply", 1, 20));
+  refused(cli, "binary PLY cut short", "cutbin.ply", "binary PLY", "ends after 10", "truncated");
+  CHECK(fixture_write(dir, "header.ply", "ply\nformat ascii 1.0\nelement vertex eight\nend_header\n"));
+  refused(cli, "PLY header garbled", "header.ply", "PLY header line 3", "element NAME COUNT", 0);
+
   static const char *const files[] = {"a.obj", "b.stl", "bin.stl", "solid.STL", "noend.stl", "cut.stl",
                                       "garbled.stl", "short.stl", "long.stl", "solidshort.stl", "tiny.stl",
-                                      "pipe.obj", "scene.json", "model.h5", "stderr.txt", NULL};
+                                      "pipe.obj", "b.ply", "bin.ply", "cut.ply", "cutbin.ply", "header.ply", "scene.json", "model.h5", "stderr.txt", NULL};
   rmdir(sub);
   fixture_cleanup(dir, files);
   return CHECK_RESULT();

@@ -53,10 +53,10 @@ FASCIA_PREP_INTERN fascia_status prep_read_file(fascia_ctx *ctx, const char *pat
                                                 char **text, size_t *size);
 
 /// Refuses a mesh file that its importer would read leniently though it is
-/// cut short or garbled (an STL, by its extension: a binary one whose size is
-/// not 84 + 50 bytes per triangle its header counts; an ASCII one with a
-/// facet cut short or without "endsolid"). f is the open file at its start,
-/// size its bytes.
+/// cut short or garbled, by its extension: an STL (binary: its size is not
+/// 84 + 50 bytes per triangle its header counts; ASCII: a facet cut short or
+/// no "endsolid"), a PLY (a damaged header, or a body with fewer elements
+/// than the header declares). f is the open file at its start, size its bytes.
 FASCIA_PREP_INTERN fascia_status prep_mesh_precheck(fascia_ctx *ctx, const char *path, FILE *f, int64_t size);
 
 /// Hex SHA-256 of a buffer into hex[65].
