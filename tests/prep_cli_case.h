@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// Helpers of the prep bad-input tests that run the CLI (t53x): a scene text
+// Helpers of the prep bad-input tests that run the CLI (t503, t53x): a scene text
 // around two organs with pieces to replace, and one run of `fascia prep`
 // that must refuse its input cleanly. Needs _POSIX_C_SOURCE (WEXITSTATUS).
 #ifndef FASCIA_TESTS_PREP_CLI_CASE_H
