@@ -82,4 +82,20 @@ static inline int prep_case_accepted(const char *cli, const char *dir, const cha
   return ok;
 }
 
+/// The scene of prep_case_scene with organ B's mesh mesh_b, written as
+/// dir/scene.json and run: refused as prep_case_refused checks when expect
+/// is given (NULL-terminated), accepted when expect is NULL.
+static inline int prep_case_mesh(const char *cli, const char *dir, const char *name, const char *mesh_b,
+                                 const char *const *expect) {
+  char scene[4096], path[512];
+  prep_case_scene(scene, sizeof scene, 0, mesh_b, 0, 0, 0, 0);
+  snprintf(path, sizeof path, "%s/scene.json", dir);
+  if (!fixture_write(dir, "scene.json", scene)) {
+    fprintf(stderr, "case '%s': cannot write %s\n", name, path);
+    ++check_failures_;
+    return 0;
+  }
+  return expect ? prep_case_refused(cli, dir, name, path, expect) : prep_case_accepted(cli, dir, name, path);
+}
+
 #endif

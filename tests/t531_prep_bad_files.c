@@ -3,12 +3,13 @@
 // Input files that `fascia prep` (the CLI, argv[1]) must refuse up front,
 // with one line naming the file and the problem, instead of hanging or
 // reading a part of them: a directory, a FIFO or a device as the scene or
-// a mesh, and STL files cut short or garbled (ASCII without "endsolid" or
+// a mesh, a scene far larger than any scene, and STL files cut short or garbled (ASCII without "endsolid" or
 // with a facet cut short, binary whose size disagrees with its triangle
 // count) and PLY files whose body holds less than their header declares.
 // The complete files, ASCII and binary, are accepted.
 #define _POSIX_C_SOURCE 200809L // mkdtemp, mkfifo, WEXITSTATUS
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "prep_cli_case.h"
 
@@ -110,19 +111,11 @@ static int write_ply(const char *name, int binary, int cut) {
 
 static void refused(const char *cli, const char *name, const char *mesh_b, const char *e1, const char *e2,
                     const char *e3) {
-  char scene[4096], path[512];
-  prep_case_scene(scene, sizeof scene, 0, mesh_b, 0, 0, 0, 0);
-  CHECK(fixture_write(dir, "scene.json", scene));
-  snprintf(path, sizeof path, "%s/scene.json", dir);
-  prep_case_refused(cli, dir, name, path, (const char *const[]){"organs[1].mesh", e1, e2, e3});
+  prep_case_mesh(cli, dir, name, mesh_b, (const char *const[]){"organs[1].mesh", e1, e2, e3, NULL});
 }
 
 static void accepted(const char *cli, const char *name, const char *mesh_b) {
-  char scene[4096], path[512];
-  prep_case_scene(scene, sizeof scene, 0, mesh_b, 0, 0, 0, 0);
-  CHECK(fixture_write(dir, "scene.json", scene));
-  snprintf(path, sizeof path, "%s/scene.json", dir);
-  CHECK(prep_case_accepted(cli, dir, name, path));
+  CHECK(prep_case_mesh(cli, dir, name, mesh_b, NULL));
 }
 
 int main(int argc, char **argv) {
@@ -148,6 +141,13 @@ int main(int argc, char **argv) {
   prep_case_refused(cli, dir, "FIFO as scene", fifo, (const char *const[]){"scene", "named pipe (FIFO)", NULL});
   prep_case_refused(cli, dir, "/dev/zero as scene", "/dev/zero",
                     (const char *const[]){"scene '/dev/zero'", "character device", NULL});
+
+  // a scene larger than a scene can be is not read into memory (a sparse file: no disk used)
+  char big[512];
+  snprintf(big, sizeof big, "%s/big.json", dir);
+  CHECK(fixture_write(dir, "big.json", "{") && truncate(big, (off_t)65 << 20) == 0);
+  prep_case_refused(cli, dir, "scene of 65 MiB", big,
+                    (const char *const[]){"big.json", "68157440 bytes", "more than the 67108864", NULL});
 
   // STL: complete files are read
   CHECK(write_ascii_stl("b.stl", -1, 0, 0, NULL));
@@ -186,7 +186,7 @@ int main(int argc, char **argv) {
 
   static const char *const files[] = {"a.obj", "b.stl", "bin.stl", "solid.STL", "noend.stl", "cut.stl",
                                       "garbled.stl", "short.stl", "long.stl", "solidshort.stl", "tiny.stl",
-                                      "pipe.obj", "b.ply", "bin.ply", "cut.ply", "cutbin.ply", "header.ply", "scene.json", "model.h5", "stderr.txt", NULL};
+                                      "pipe.obj", "b.ply", "bin.ply", "cut.ply", "cutbin.ply", "header.ply", "big.json", "scene.json", "model.h5", "stderr.txt", NULL};
   rmdir(sub);
   fixture_cleanup(dir, files);
   return CHECK_RESULT();

@@ -15,11 +15,7 @@ static char dir[256];
 
 static void check_refused(const char *cli, const char *name, const char *mesh_b, const char *e1, const char *e2,
                           const char *e3) {
-  char scene[4096], path[512];
-  prep_case_scene(scene, sizeof scene, 0, mesh_b, 0, 0, 0, 0);
-  CHECK(fixture_write(dir, "scene.json", scene));
-  snprintf(path, sizeof path, "%s/scene.json", dir);
-  prep_case_refused(cli, dir, name, path, (const char *const[]){"organ 'B'", e1, e2, e3});
+  prep_case_mesh(cli, dir, name, mesh_b, (const char *const[]){"organ 'B'", e1, e2, e3, NULL});
 }
 
 int main(int argc, char **argv) {
@@ -55,11 +51,7 @@ int main(int argc, char **argv) {
   check_refused(cli, "smaller than a voxel", "tiny.obj", "0.3 x 0.3 x 0.3 mm", "smaller or thinner than a voxel",
                 "voxel_size 1 mm");
 
-  char scene[4096], path[512];
-  prep_case_scene(scene, sizeof scene, 0, "openbox.obj", 0, 0, 0, 0);
-  CHECK(fixture_write(dir, "scene.json", scene));
-  snprintf(path, sizeof path, "%s/scene.json", dir);
-  CHECK(prep_case_accepted(cli, dir, "open box", path));
+  CHECK(prep_case_mesh(cli, dir, "open box", "openbox.obj", NULL));
 
   static const char *const files[] = {"a.obj",    "triangle.obj", "square.obj", "flatbox.obj", "small.obj",
                                       "tiny.obj", "openbox.obj",  "scene.json", "model.h5",    "stderr.txt",
