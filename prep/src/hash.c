@@ -16,16 +16,27 @@ static void to_hex(struct sha256_ctx *s, char hex[65]) {
 }
 
 fascia_status fascia_prep_file_sha256(fascia_ctx *ctx, const char *path, char hex[65]) {
-  FILE *f = fopen(path, "rb");
-  PREP_CHECK(f, ctx, FASCIA_ERR_IO, "'%s': cannot open (%s)", path, strerror(errno));
+  FILE *f;
+  int64_t size;
+  PREP_TRY(prep_open_regular(ctx, path, "file", &f, &size));
   struct sha256_ctx s;
   sha256_init(&s);
   uint8_t buf[1 << 15];
-  size_t n;
-  while ((n = fread(buf, 1, sizeof buf, f)) > 0) sha256_update(&s, n, buf);
-  const int failed = ferror(f);
+  // the size the file had when opened, and not a byte more: a file that
+  // grows without end (or is replaced by one) cannot stall the hash
+  int64_t left = size;
+  size_t n = 1;
+  while (left > 0 && (n = fread(buf, 1, left < (int64_t)sizeof buf ? (size_t)left : sizeof buf, f)) > 0) {
+    sha256_update(&s, n, buf);
+    left -= (int64_t)n;
+  }
+  const int failed = ferror(f), err = errno;
+  const int longer = left == 0 && fgetc(f) != EOF;
   fclose(f);
-  PREP_CHECK(!failed, ctx, FASCIA_ERR_IO, "'%s': read error", path);
+  PREP_CHECK(!failed, ctx, FASCIA_ERR_IO, "file '%s': read error (%s)", path, strerror(err));
+  PREP_CHECK(left == 0 && !longer, ctx, FASCIA_ERR_IO,
+             "file '%s': changed while it was read (%lld bytes expected); read it again once it is complete", path,
+             (long long)size);
   to_hex(&s, hex);
   return FASCIA_OK;
 }

@@ -133,6 +133,19 @@ static void mesh_bounds(fascia_prep_mesh *o) {
     }
 }
 
+// The mesh file: a regular file (a directory, FIFO or device is refused
+// before any read), complete where its format can tell, hashed, then read.
+static fascia_status check_and_read(fascia_ctx *ctx, const char *path, char sha256[65], fascia_assimp_file **file) {
+  FILE *f;
+  int64_t size;
+  PREP_TRY(prep_open_regular(ctx, path, "mesh", &f, &size));
+  const fascia_status status = prep_mesh_precheck(ctx, path, f, size);
+  fclose(f);
+  PREP_TRY(status);
+  PREP_TRY(fascia_prep_file_sha256(ctx, path, sha256));
+  return fascia_assimp_read(ctx, path, file);
+}
+
 fascia_status fascia_prep_import(fascia_ctx *ctx, const fascia_prep_scene *scene, fascia_prep_meshes **out) {
   PREP_CHECK(ctx && scene && out, ctx, FASCIA_ERR_ARGUMENT, "fascia_prep_import: NULL argument");
   *out = NULL;
@@ -150,12 +163,7 @@ fascia_status fascia_prep_import(fascia_ctx *ctx, const fascia_prep_scene *scene
     char detail[160];
     snprintf(detail, sizeof detail, "%s (%s)", def->name, def->mesh);
     fascia_ctx_progress(ctx, "import", (double)k / scene->organ_count, detail);
-    FILE *probe = fopen(def->mesh_path, "rb");
-    PREP_CHECK_GOTO(probe, ctx, FASCIA_ERR_IO, "organ '%s' (scene '%s' organs[%d].mesh): cannot open '%s' (%s)",
-                    def->name, scene->path, (int)k, def->mesh_path, strerror(errno));
-    fclose(probe);
-    PREP_TRY_GOTO(fascia_prep_file_sha256(ctx, def->mesh_path, o->sha256));
-    status = fascia_assimp_read(ctx, def->mesh_path, &file);
+    status = check_and_read(ctx, def->mesh_path, o->sha256, &file);
     if (status != FASCIA_OK) {
       char reason[1024];
       snprintf(reason, sizeof reason, "%s", fascia_ctx_message(ctx));

@@ -1,9 +1,13 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
 // Private helpers of the prep stages (see prep_util.h).
+#define _POSIX_C_SOURCE 200809L // open, fstat, fdopen
 #include "prep_util.h"
 
 #include <errno.h>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -23,33 +27,68 @@ char *prep_strdup(const char *s) {
   return p;
 }
 
-fascia_status prep_read_file(fascia_ctx *ctx, const char *path, const char *what, char **text, size_t *size) {
-  *text = NULL;
-  FILE *f = fopen(path, "rb");
-  PREP_CHECK(f, ctx, FASCIA_ERR_IO, "%s '%s': cannot open (%s)", what, path, strerror(errno));
-  size_t cap = 1 << 16, n = 0;
-  char *buf = malloc(cap);
-  while (buf) {
-    const size_t got = fread(buf + n, 1, cap - n - 1, f);
-    n += got;
-    if (got == 0) break;
-    if (n + 1 == cap) {
-      char *bigger = realloc(buf, cap * 2);
-      if (!bigger) {
-        free(buf);
-        buf = NULL;
-        break;
-      }
-      buf = bigger;
-      cap *= 2;
-    }
+// Why path cannot be read as a file ("is a directory", ...), NULL for a regular file.
+static const char *not_regular(mode_t mode) {
+  if (S_ISREG(mode)) return NULL;
+  if (S_ISDIR(mode)) return "is a directory, not a file";
+  if (S_ISFIFO(mode)) return "is a named pipe (FIFO), not a regular file";
+  if (S_ISCHR(mode)) return "is a character device, not a regular file";
+  if (S_ISBLK(mode)) return "is a block device, not a regular file";
+  if (S_ISSOCK(mode)) return "is a socket, not a regular file";
+  return "is not a regular file";
+}
+
+fascia_status prep_open_regular(fascia_ctx *ctx, const char *path, const char *what, FILE **out, int64_t *size) {
+  *out = NULL;
+  struct stat st;
+  PREP_CHECK(stat(path, &st) == 0, ctx, FASCIA_ERR_IO, "%s '%s': cannot open (%s)", what, path, strerror(errno));
+  const char *why = not_regular(st.st_mode);
+  PREP_CHECK(!why, ctx, FASCIA_ERR_IO, "%s '%s': %s; give the path of a %s file", what, path, why, what);
+  // non-blocking: a FIFO swapped in after the stat must not stall the open
+  const int fd = open(path, O_RDONLY | O_NONBLOCK);
+  PREP_CHECK(fd >= 0, ctx, FASCIA_ERR_IO, "%s '%s': cannot open (%s)", what, path, strerror(errno));
+  if (fstat(fd, &st) != 0 || (why = not_regular(st.st_mode)) != NULL) {
+    close(fd);
+    return PREP_FAIL(ctx, FASCIA_ERR_IO, "%s '%s': %s; give the path of a %s file", what, path,
+                     why ? why : "cannot be examined", what);
   }
+  FILE *f = fdopen(fd, "rb");
+  if (!f) {
+    close(fd);
+    return PREP_FAIL(ctx, FASCIA_ERR_IO, "%s '%s': cannot open (%s)", what, path, strerror(errno));
+  }
+  *out = f;
+  *size = (int64_t)st.st_size;
+  return FASCIA_OK;
+}
+
+fascia_status prep_read_file(fascia_ctx *ctx, const char *path, const char *what, int64_t limit, char **text,
+                             size_t *size) {
+  *text = NULL;
+  FILE *f;
+  int64_t expected;
+  PREP_TRY(prep_open_regular(ctx, path, what, &f, &expected));
+  if (expected > limit) {
+    fclose(f);
+    return PREP_FAIL(ctx, FASCIA_ERR_IO, "%s '%s': %lld bytes, more than the %lld bytes a %s file may have", what,
+                     path, (long long)expected, (long long)limit, what);
+  }
+  // one byte more than the size says: a file that grows while it is read is refused, not read without end
+  char *buf = malloc((size_t)expected + 2);
+  if (!buf) {
+    fclose(f);
+    return PREP_FAIL(ctx, FASCIA_ERR_MEMORY, "%s '%s': out of memory for %lld bytes", what, path,
+                     (long long)expected);
+  }
+  const size_t n = fread(buf, 1, (size_t)expected + 1, f);
   const int failed = ferror(f);
+  const int err = errno;
   fclose(f);
-  PREP_CHECK(buf, ctx, FASCIA_ERR_MEMORY, "%s '%s': out of memory while reading", what, path);
-  if (failed) {
+  if (failed || n != (size_t)expected) {
     free(buf);
-    return PREP_FAIL(ctx, FASCIA_ERR_IO, "%s '%s': read error", what, path);
+    if (failed) return PREP_FAIL(ctx, FASCIA_ERR_IO, "%s '%s': read error (%s)", what, path, strerror(err));
+    return PREP_FAIL(ctx, FASCIA_ERR_IO, "%s '%s': changed while it was read (%lld bytes expected, %s); read it again "
+                     "once it is complete", what, path, (long long)expected, n > (size_t)expected ? "more came" : "fewer came");
   }
   buf[n] = 0;
   *text = buf;

@@ -8,6 +8,7 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #include "adapters.h"
 #include "fascia/prep.h"
@@ -40,9 +41,23 @@
 FASCIA_PREP_INTERN void *prep_calloc(int64_t count, size_t size);
 /// strdup into malloc'ed memory, NULL on failure.
 FASCIA_PREP_INTERN char *prep_strdup(const char *s);
-/// Reads a whole file into a malloc'ed, NUL-terminated buffer.
-FASCIA_PREP_INTERN fascia_status prep_read_file(fascia_ctx *ctx, const char *path, const char *what, char **text,
-                                                size_t *size);
+/// Opens path for reading ("rb") when it is a regular file; a directory,
+/// FIFO, device or socket is refused with a message naming what it is (a
+/// FIFO or /dev/zero would block or never end). *size: its size in bytes.
+/// what names the file in messages ("scene", "mesh").
+FASCIA_PREP_INTERN fascia_status prep_open_regular(fascia_ctx *ctx, const char *path, const char *what, FILE **out,
+                                                   int64_t *size);
+/// Reads a whole regular file (at most limit bytes) into a malloc'ed,
+/// NUL-terminated buffer; a file that changes size while read is refused.
+FASCIA_PREP_INTERN fascia_status prep_read_file(fascia_ctx *ctx, const char *path, const char *what, int64_t limit,
+                                                char **text, size_t *size);
+
+/// Refuses a mesh file that its importer would read leniently though it is
+/// cut short or garbled, by its extension: an STL (binary: its size is not
+/// 84 + 50 bytes per triangle its header counts; ASCII: a facet cut short or
+/// no "endsolid"), a PLY (a damaged header, or a body with fewer elements
+/// than the header declares). f is the open file at its start, size its bytes.
+FASCIA_PREP_INTERN fascia_status prep_mesh_precheck(fascia_ctx *ctx, const char *path, FILE *f, int64_t size);
 
 /// Hex SHA-256 of a buffer into hex[65].
 FASCIA_PREP_INTERN void prep_sha256_buffer(const void *data, size_t size, char hex[65]);

@@ -15,6 +15,81 @@
 // Largest hole filled: at most this many border edges ...
 #define MAX_HOLE_EDGES 64
 
+// Enclosed volume of a surface, open or closed: per connected component,
+// the signed volume of its triangles with every border loop capped by a fan
+// to the component's vertex centroid (the fan triangles themselves add
+// nothing about that point, so they need not be built); |sum| per component,
+// added. Exact for closed components; for an open one, the volume its holes
+// close around. A flat surface (one triangle, a square, a box of zero height)
+// gives 0 however its holes are closed. -1 when out of memory.
+static double enclosed_volume(const fascia_prep_mesh *o) {
+  const int32_t NV = o->vertex_count;
+  int32_t *root = prep_calloc(NV, sizeof(int32_t));
+  double *sum = prep_calloc(4 * (int64_t)NV, sizeof(double)); // per root: x, y, z sums, vertex count
+  double *volume = prep_calloc(NV, sizeof(double));
+  if (!root || !sum || !volume) {
+    free(root);
+    free(sum);
+    free(volume);
+    return -1;
+  }
+  for (int32_t v = 0; v < NV; ++v) root[v] = v;
+#define FIND(x)                                                                                                       \
+  do {                                                                                                                \
+    while (root[x] != x) x = root[x] = root[root[x]];                                                                 \
+  } while (0)
+  for (int32_t t = 0; t < o->triangle_count; ++t)
+    for (int r = 1; r < 3; ++r) {
+      int32_t a = o->triangles[3 * (int64_t)t], b = o->triangles[3 * (int64_t)t + r];
+      FIND(a);
+      FIND(b);
+      if (a != b) root[a > b ? a : b] = a < b ? a : b;
+    }
+  for (int32_t v = 0; v < NV; ++v) {
+    int32_t c = v;
+    FIND(c);
+    root[v] = c;
+    for (int r = 0; r < 3; ++r) sum[4 * (int64_t)c + r] += o->vertices[3 * (int64_t)v + r];
+    sum[4 * (int64_t)c + 3] += 1;
+  }
+#undef FIND
+  for (int32_t t = 0; t < o->triangle_count; ++t) {
+    const int32_t *tri = o->triangles + 3 * (int64_t)t;
+    const int32_t c = root[tri[0]];
+    double e[3][3];
+    for (int k = 0; k < 3; ++k)
+      for (int r = 0; r < 3; ++r)
+        e[k][r] = o->vertices[3 * (int64_t)tri[k] + r] - sum[4 * (int64_t)c + r] / sum[4 * (int64_t)c + 3];
+    volume[c] += (e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) - e[0][1] * (e[1][0] * e[2][2] - e[1][2] * e[2][0]) +
+                  e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0])) / 6;
+  }
+  double total = 0;
+  for (int32_t v = 0; v < NV; ++v) total += fabs(volume[v]);
+  free(root);
+  free(sum);
+  free(volume);
+  return total;
+}
+
+// An organ must enclose something: a flat or otherwise empty surface would
+// become, by the hole closing of the inside/outside rules, a slab that is
+// not in the mesh. "No volume" is relative to the organ's size (rounding).
+static fascia_status check_encloses(fascia_ctx *ctx, const fascia_prep_scene *scene, int32_t k,
+                                    const fascia_prep_mesh *o) {
+  const double volume = enclosed_volume(o);
+  PREP_CHECK(volume >= 0, ctx, FASCIA_ERR_MEMORY, "organ '%s': out of memory", o->name);
+  double diagonal = 0;
+  for (int r = 0; r < 3; ++r) diagonal += (o->bounds[3 + r] - o->bounds[r]) * (o->bounds[3 + r] - o->bounds[r]);
+  diagonal = sqrt(diagonal);
+  PREP_CHECK(volume > 1e-9 * diagonal * diagonal * diagonal, ctx, FASCIA_ERR_FORMAT,
+             "organ '%s' (scene '%s' organs[%d].mesh '%s'): its surface encloses no volume (%.3g m^3 inside %.3g "
+             "cm^2 of surface, %d border edges: flat, or an open patch); closing its holes would only make a slab. "
+             "Give a closed surface, or choose the parts that enclose the organ",
+             o->name, scene->path, (int)k, scene->organs[k].mesh, volume, 1e4 * o->report.area,
+             (int)o->report.border_edges);
+  return FASCIA_OK;
+}
+
 static fascia_status repair_organ(fascia_ctx *ctx, const fascia_prep_scene *scene, fascia_prep_mesh *o) {
   fascia_status status = FASCIA_OK;
   const int32_t NV = o->vertex_count, NT = o->triangle_count;
@@ -123,6 +198,7 @@ fascia_status fascia_prep_repair(fascia_ctx *ctx, const fascia_prep_scene *scene
   for (int32_t k = 0; k < meshes->count; ++k) {
     fascia_ctx_progress(ctx, "check and repair", (double)k / meshes->count, meshes->organs[k].name);
     PREP_TRY(repair_organ(ctx, scene, meshes->organs + k));
+    PREP_TRY(check_encloses(ctx, scene, k, meshes->organs + k));
   }
   fascia_ctx_progress(ctx, "check and repair", 1, "done");
   return FASCIA_OK;

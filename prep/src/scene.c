@@ -20,6 +20,8 @@ typedef struct reader {
 } reader;
 
 #define PATH_SIZE 256
+// a scene is a few kB; anything this large is not one
+#define MAX_SCENE_BYTES ((int64_t)64 << 20)
 
 static fascia_status key_fail(const reader *rd, const char *path, const char *format, ...)
 #if defined(__GNUC__)
@@ -70,7 +72,61 @@ static const char *type_name(const cJSON *item) {
   return "an invalid value";
 }
 
-// Every key of obj must be in known (NULL-terminated), and appear once.
+// Repeated names in a list, in n log n (a hostile file may list many).
+typedef struct named {
+  const char *name;
+  int index;
+} named;
+
+static int compare_named(const void *a, const void *b) {
+  const named *x = a, *y = b;
+  const int c = strcmp(x->name, y->name);
+  return c ? c : (x->index > y->index) - (x->index < y->index);
+}
+
+// Of n names (file order), the repeated pair *first < *second whose second
+// comes earliest: 1 found, 0 none, -1 out of memory.
+static int find_repeat(const char *const *names, int n, int *first, int *second) {
+  if (n < 2) return 0;
+  named *sorted = malloc((size_t)n * sizeof *sorted);
+  if (!sorted) return -1;
+  for (int k = 0; k < n; ++k) sorted[k].name = names[k], sorted[k].index = k;
+  qsort(sorted, (size_t)n, sizeof *sorted, compare_named);
+  int found = 0;
+  for (int k = 1; k < n; ++k)
+    if (!strcmp(sorted[k].name, sorted[k - 1].name) && (k < 2 || strcmp(sorted[k - 2].name, sorted[k].name)) &&
+        (!found || sorted[k].index < *second)) {
+      *first = sorted[k - 1].index; // the run's first two, in file order
+      *second = sorted[k].index;
+      found = 1;
+    }
+  free(sorted);
+  return found;
+}
+
+// A table whose entries are named (organs, tissues, parts, ...): each name
+// once; a repeat names both places, at(k) being entry k's key path.
+static fascia_status check_unique(const reader *rd, const char *table, const char *const *names, int n,
+                                  void (*at)(char *out, const char *table, int k)) {
+  int first, second;
+  const int r = find_repeat(names, n, &first, &second);
+  PREP_CHECK(r >= 0, rd->ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", rd->file);
+  if (!r) return FASCIA_OK;
+  char a[PATH_SIZE], b[PATH_SIZE];
+  at(a, table, first);
+  at(b, table, second);
+  return key_fail(rd, b, "'%s' is given twice (first as %s); each name must be unique here", names[second], a);
+}
+
+static void at_index(char *out, const char *table, int k) { sub_index(out, table, k); }
+static void at_name(char *out, const char *table, int k) {
+  char item[PATH_SIZE];
+  sub_index(item, table, k);
+  sub_key(out, item, "name");
+}
+
+// Every key of obj must be in known (NULL-terminated); that none appears
+// twice was checked for every object of the file (check_repeated_keys).
 static fascia_status check_keys(const reader *rd, const cJSON *obj, const char *path, const char *const *known) {
   if (!cJSON_IsObject(obj)) return key_fail(rd, path, "expected an object, found %s", type_name(obj));
   const cJSON *item;
@@ -88,12 +144,6 @@ static fascia_status check_keys(const reader *rd, const cJSON *obj, const char *
       sub_key(at, path, item->string);
       return key_fail(rd, at, "unknown key (known keys here: %s)", list);
     }
-    for (const cJSON *other = item->next; other; other = other->next)
-      if (!strcmp(other->string, item->string)) {
-        char at[PATH_SIZE];
-        sub_key(at, path, item->string);
-        return key_fail(rd, at, "the key appears twice");
-      }
   }
   return FASCIA_OK;
 }
@@ -111,9 +161,11 @@ static fascia_status get_number(const reader *rd, const cJSON *obj, const char *
   }
   if (!cJSON_IsNumber(item)) return key_fail(rd, at, "expected a number, found %s", type_name(item));
   const double v = item->valuedouble;
-  if (!isfinite(v) || (inclusive ? v < lo : v <= lo) || v >= hi)
-    return key_fail(rd, at, "%g is out of range (expected %s %g%s%s)", v, inclusive ? ">=" : ">", lo,
-                    isfinite(hi) ? " and below " : "", isfinite(hi) ? "the limit" : "");
+  if (!isfinite(v) || (inclusive ? v < lo : v <= lo) || v >= hi) {
+    char upper[48] = "";
+    if (isfinite(hi)) snprintf(upper, sizeof upper, " and < %g", hi);
+    return key_fail(rd, at, "%g is out of range (expected %s %g%s)", v, inclusive ? ">=" : ">", lo, upper);
+  }
   *out = v;
   return FASCIA_OK;
 }
@@ -128,10 +180,13 @@ static fascia_status get_int(const reader *rd, const cJSON *obj, const char *pat
     *out = fallback;
     return FASCIA_OK;
   }
-  if (!cJSON_IsNumber(item) || item->valuedouble != floor(item->valuedouble))
-    return key_fail(rd, at, "expected an integer, found %s", type_name(item));
-  if (item->valuedouble < lo || item->valuedouble > hi)
+  if (!cJSON_IsNumber(item)) return key_fail(rd, at, "expected an integer, found %s", type_name(item));
+  if (item->valuedouble != floor(item->valuedouble))
+    return key_fail(rd, at, "expected an integer, found %g", item->valuedouble);
+  if (item->valuedouble < lo || item->valuedouble > hi) {
+    if (lo == hi) return key_fail(rd, at, "%g is not supported (expected %d)", item->valuedouble, lo);
     return key_fail(rd, at, "%g is out of range (expected %d .. %d)", item->valuedouble, lo, hi);
+  }
   *out = (int)item->valuedouble;
   return FASCIA_OK;
 }
@@ -175,9 +230,9 @@ static fascia_status get_vector(const reader *rd, const cJSON *obj, const char *
     if (required) return key_fail(rd, at, "missing (an array of %d numbers is required)", n);
     return FASCIA_OK;
   }
-  if (!cJSON_IsArray(item) || cJSON_GetArraySize(item) != n)
-    return key_fail(rd, at, "expected an array of %d numbers, found %s%s", n, type_name(item),
-                    cJSON_IsArray(item) ? " of another length" : "");
+  if (!cJSON_IsArray(item)) return key_fail(rd, at, "expected an array of %d numbers, found %s", n, type_name(item));
+  if (cJSON_GetArraySize(item) != n)
+    return key_fail(rd, at, "expected an array of %d numbers, found an array of %d", n, cJSON_GetArraySize(item));
   int k = 0;
   const cJSON *e;
   cJSON_ArrayForEach(e, item) {
@@ -209,13 +264,13 @@ static fascia_status get_parts(const reader *rd, const cJSON *obj, const char *p
   cJSON_ArrayForEach(e, item) {
     char ek[PATH_SIZE];
     sub_index(ek, at, out->count);
-    if (!cJSON_IsString(e) || !e->valuestring[0])
-      return key_fail(rd, ek, "expected a part name (string), found %s", type_name(e));
+    if (!cJSON_IsString(e)) return key_fail(rd, ek, "expected a part name (a string), found %s", type_name(e));
+    if (!e->valuestring[0]) return key_fail(rd, ek, "is an empty string; give a node or mesh name of the file");
     out->names[out->count] = prep_strdup(e->valuestring);
     PREP_CHECK(out->names[out->count], rd->ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", rd->file);
     out->count++;
   }
-  return FASCIA_OK;
+  return check_unique(rd, at, (const char *const *)out->names, out->count, at_index);
 }
 
 static int organ_index(const fascia_prep_scene *scene, const char *name) {
@@ -258,7 +313,9 @@ static fascia_status get_shape_region(const reader *rd, const cJSON *item, const
     PREP_TRY(get_vector(rd, box, at, "min", 1, 3, out->min));
     PREP_TRY(get_vector(rd, box, at, "max", 1, 3, out->max));
     for (int r = 0; r < 3; ++r)
-      if (!(out->max[r] > out->min[r])) return key_fail(rd, at, "max must exceed min on every axis");
+      if (!(out->max[r] > out->min[r]))
+        return key_fail(rd, at, "max must exceed min on every axis (axis %d: min %g, max %g)", r, out->min[r],
+                        out->max[r]);
   } else if (sphere) {
     sub_key(at, path, "sphere");
     static const char *const known[] = {"center", "radius", NULL};
@@ -274,7 +331,8 @@ static fascia_status parse_material(const reader *rd, const cJSON *item, const c
   static const char *const known[] = {"law", "youngs_modulus", "poisson_ratio", "density", "rotation_coupling",
                                       "description", NULL};
   PREP_TRY(check_keys(rd, item, path, known));
-  if (strlen(item->string) >= FASCIA_NAME_SIZE) return key_fail(rd, path, "material name is too long");
+  if (strlen(item->string) >= FASCIA_NAME_SIZE)
+    return key_fail(rd, path, "the material name is longer than %d characters", FASCIA_NAME_SIZE - 1);
   strcpy(m->name, item->string);
   const char *law = NULL, *description = NULL;
   PREP_TRY(get_string(rd, item, path, "description", 0, &description));
@@ -318,13 +376,15 @@ static fascia_status parse_motion(const reader *rd, const cJSON *organ, const ch
     PREP_TRY(check_keys(rd, key, ek, known_key));
     PREP_TRY(get_number(rd, key, ek, "time", 1, 0, 0, 1, INFINITY, &motion->key_time[k]));
     if (k > 0 && !(motion->key_time[k] > motion->key_time[k - 1]))
-      return key_fail(rd, ek, "key times must increase strictly");
+      return key_fail(rd, ek, "time %g is not after the previous key's %g; key times must increase strictly",
+                      motion->key_time[k], motion->key_time[k - 1]);
     PREP_TRY(get_vector(rd, key, ek, "translation", 0, 3, motion->key_translation + 3 * k));
     double *q = motion->key_rotation + 4 * k;
     PREP_TRY(get_vector(rd, key, ek, "rotation", 0, 4, q));
     const double norm = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
     if (!(norm > 0.5 && norm < 2))
-      return key_fail(rd, ek, "rotation must be a unit quaternion (w, x, y, z); its norm is %g", norm);
+      return key_fail(rd, ek, "rotation must be a unit quaternion (w, x, y, z); its norm is %g (expected > 0.5 and < "
+                      "2; it is then normalised)", norm);
     for (int r = 0; r < 4; ++r) q[r] /= norm;
     ++k;
   }
@@ -429,7 +489,9 @@ static fascia_status parse_organ(const reader *rd, fascia_prep_scene *scene, con
     PREP_TRY(get_vector(rd, tr, at, "rotation", 0, 4, q));
     PREP_TRY(get_number(rd, tr, at, "scale", 0, 1, 0, 0, INFINITY, &s));
     const double norm = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    if (!(norm > 0.5 && norm < 2)) return key_fail(rd, at, "rotation must be a unit quaternion (w, x, y, z)");
+    if (!(norm > 0.5 && norm < 2))
+      return key_fail(rd, at, "rotation must be a unit quaternion (w, x, y, z); its norm is %g (expected > 0.5 and < "
+                      "2; it is then normalised)", norm);
     const double w = q[0] / norm, x = q[1] / norm, y = q[2] / norm, z = q[3] / norm;
     const double R[9] = {1 - 2 * (y * y + z * z), 2 * (x * y - w * z),     2 * (x * z + w * y),
                          2 * (x * y + w * z),     1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
@@ -548,7 +610,11 @@ static fascia_status parse_tissue(const reader *rd, const fascia_prep_scene *sce
     if (!cJSON_IsString(e)) return key_fail(rd, ek, "expected an organ name, found %s", type_name(e));
     PREP_TRY(need_organ(rd, scene, ek, e->valuestring, &t->organs[t->organ_count]));
     for (int32_t k = 0; k < t->organ_count; ++k)
-      if (t->organs[k] == t->organs[t->organ_count]) return key_fail(rd, ek, "organ '%s' is named twice", e->valuestring);
+      if (t->organs[k] == t->organs[t->organ_count]) {
+        char first[PATH_SIZE];
+        sub_index(first, at, k);
+        return key_fail(rd, ek, "organ '%s' is given twice (first as %s); each organ once", e->valuestring, first);
+      }
     t->organ_count++;
   }
   PREP_TRY(get_number(rd, item, path, "max_gap", 1, 0, 0, 0, INFINITY, &t->max_gap));
@@ -591,6 +657,16 @@ static fascia_status parse_tissue(const reader *rd, const fascia_prep_scene *sce
     PREP_TRY(parse_coupling(rd, scene, coupling, at, t));
   }
   return FASCIA_OK;
+}
+
+// The name fields of n structs stride bytes apart, first at name: unique.
+static fascia_status unique_names(const reader *rd, const char *table, int32_t n, const char *name, size_t stride) {
+  const char **names = prep_calloc(n, sizeof *names);
+  PREP_CHECK(names, rd->ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", rd->file);
+  for (int32_t k = 0; k < n; ++k) names[k] = name + (size_t)k * stride;
+  const fascia_status status = check_unique(rd, table, names, n, at_name);
+  free(names);
+  return status;
 }
 
 static fascia_status parse_root(const reader *rd, const cJSON *root, const char *base_dir, fascia_prep_scene *s) {
@@ -641,14 +717,14 @@ static fascia_status parse_root(const reader *rd, const cJSON *root, const char 
     fascia_prep_organ_def *o = s->organs + s->organ_count;
     s->organ_count++; // counted first so that destroy frees what was parsed
     PREP_TRY(parse_organ(rd, s, e, at, base_dir, o));
-    for (int32_t k = 0; k + 1 < s->organ_count; ++k)
-      if (!strcmp(s->organs[k].name, o->name)) return key_fail(rd, at, "organ name '%s' is used twice", o->name);
   }
+  PREP_TRY(unique_names(rd, "organs", s->organ_count, s->organs[0].name, sizeof *s->organs));
 
   const cJSON *tissues = cJSON_GetObjectItemCaseSensitive(root, "tissues");
   if (!cJSON_IsArray(tissues) || cJSON_GetArraySize(tissues) < 1)
     return key_fail(rd, "tissues", "expected a non-empty array of tissues, found %s", type_name(tissues));
-  if (cJSON_GetArraySize(tissues) > 250) return key_fail(rd, "tissues", "more than 250 tissues");
+  if (cJSON_GetArraySize(tissues) > 250)
+    return key_fail(rd, "tissues", "%d tissues, more than the 250 a model can label", cJSON_GetArraySize(tissues));
   s->tissues = prep_calloc(cJSON_GetArraySize(tissues), sizeof *s->tissues);
   PREP_CHECK(s->tissues, rd->ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", rd->file);
   cJSON_ArrayForEach(e, tissues) {
@@ -658,7 +734,124 @@ static fascia_status parse_root(const reader *rd, const cJSON *root, const char 
     s->tissue_count++;
     PREP_TRY(parse_tissue(rd, s, e, at, t));
   }
+  PREP_TRY(unique_names(rd, "tissues", s->tissue_count, s->tissues[0].name, sizeof *s->tissues));
   return FASCIA_OK;
+}
+
+// ------------------------------------------------ repeated keys, with places
+// cJSON keeps every member of an object, repeats included, and its lookups
+// return the first: a key given twice would silently take the first value.
+// So every object of the file is checked, walking the text beside the tree
+// (cJSON has validated it) to know where each key stands.
+
+static const char *skip_space(const char *p) {
+  while (*p && (unsigned char)*p <= 32) ++p; // what cJSON skips
+  return p;
+}
+
+static const char *skip_string(const char *p) { // p at the opening quote
+  for (++p; *p && *p != '"'; ++p)
+    if (*p == '\\' && p[1]) ++p;
+  return *p ? p + 1 : p;
+}
+
+static void line_column(const char *text, const char *at, int *line, int *column) {
+  *line = 1, *column = 1;
+  for (const char *c = text; c < at && *c; ++c) {
+    if (*c == '\n')
+      ++*line, *column = 1;
+    else
+      ++*column;
+  }
+}
+
+// Checks item (whose text starts at or after *p) and everything in it;
+// *p is left after its text.
+static fascia_status check_repeated_keys(const reader *rd, const char *text, const cJSON *item, const char *path,
+                                         const char **p) {
+  const char *c = skip_space(*p);
+  if (cJSON_IsString(item)) {
+    *p = skip_string(c);
+    return FASCIA_OK;
+  }
+  if (!cJSON_IsObject(item) && !cJSON_IsArray(item)) { // number, true, false, null
+    while (*c && (unsigned char)*c > 32 && *c != ',' && *c != ']' && *c != '}') ++c;
+    *p = c;
+    return FASCIA_OK;
+  }
+  const int object = cJSON_IsObject(item), n = cJSON_GetArraySize(item);
+  const char **keys = NULL, **places = NULL;
+  if (object && n > 1) {
+    keys = prep_calloc(n, sizeof *keys);
+    places = prep_calloc(n, sizeof *places);
+    if (!keys || !places) {
+      free(keys);
+      free(places);
+      return PREP_FAIL(rd->ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", rd->file);
+    }
+  }
+  fascia_status status = FASCIA_OK;
+  ++c; // '{' or '['
+  int k = 0;
+  const cJSON *e;
+  cJSON_ArrayForEach(e, item) {
+    char at[PATH_SIZE];
+    c = skip_space(c);
+    if (object) {
+      if (keys) keys[k] = e->string, places[k] = c;
+      c = skip_space(skip_string(c)) + 1; // the key and its ':'
+      sub_key(at, path, e->string);
+    } else {
+      sub_index(at, path, k);
+    }
+    PREP_TRY_GOTO(check_repeated_keys(rd, text, e, at, &c));
+    c = skip_space(c);
+    if (*c == ',') ++c;
+    ++k;
+  }
+  c = skip_space(c);
+  if (*c) ++c; // '}' or ']'
+  *p = c;
+  if (keys) {
+    int first, second;
+    const int r = find_repeat(keys, n, &first, &second);
+    PREP_CHECK_GOTO(r >= 0, rd->ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", rd->file);
+    if (r) {
+      int l1, c1, l2, c2;
+      line_column(text, places[first], &l1, &c1);
+      line_column(text, places[second], &l2, &c2);
+      char at[PATH_SIZE];
+      sub_key(at, path, keys[second]);
+      status = key_fail(rd, at, "the key is given twice, at line %d, column %d and at line %d, column %d; keep one",
+                        l1, c1, l2, c2);
+    }
+  }
+cleanup:
+  free(keys);
+  free(places);
+  return status;
+}
+
+// Why text failed to parse at end: its nesting beyond cJSON's limit, or
+// other damage.
+static fascia_status json_error(fascia_ctx *ctx, const char *origin, const char *text, const char *end) {
+  int depth = 0; // of the arrays and objects open before end
+  for (const char *c = text; end && c < end && *c; ++c) {
+    if (*c == '"')
+      c = skip_string(c) - 1;
+    else if (*c == '[' || *c == '{')
+      ++depth;
+    else if (*c == ']' || *c == '}')
+      --depth;
+  }
+  int line, column;
+  line_column(text, end ? end : text, &line, &column);
+  if (end && (*end == '[' || *end == '{') && depth >= CJSON_NESTING_LIMIT)
+    return PREP_FAIL(ctx, FASCIA_ERR_FORMAT,
+                     "scene '%s': arrays and objects are nested too deeply at line %d, column %d (more than %d "
+                     "levels, the reader's limit; a scene needs fewer than 10)",
+                     origin, line, column, CJSON_NESTING_LIMIT);
+  return PREP_FAIL(ctx, FASCIA_ERR_FORMAT, "scene '%s': not valid JSON near line %d, column %d", origin, line, column);
 }
 
 fascia_status fascia_prep_scene_parse(fascia_ctx *ctx, const char *text, const char *origin, const char *base_dir,
@@ -670,23 +863,16 @@ fascia_status fascia_prep_scene_parse(fascia_ctx *ctx, const char *text, const c
   const reader rd = {ctx, origin};
   const char *end = NULL;
   cJSON *root = cJSON_ParseWithOpts(text, &end, 1);
-  if (!root) {
-    int line = 1, column = 1;
-    for (const char *c = text; end && c < end && *c; ++c) {
-      if (*c == '\n')
-        ++line, column = 1;
-      else
-        ++column;
-    }
-    return PREP_FAIL(ctx, FASCIA_ERR_FORMAT, "scene '%s': not valid JSON near line %d, column %d", origin, line,
-                     column);
-  }
+  if (!root) return json_error(ctx, origin, text, end);
   fascia_prep_scene *s = calloc(1, sizeof *s);
   fascia_status status = FASCIA_OK;
   PREP_CHECK_GOTO(s, ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", origin);
   s->path = prep_strdup(origin);
   s->text = prep_strdup(text);
   PREP_CHECK_GOTO(s->path && s->text, ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", origin);
+  const char *cursor = text;
+  if (!strncmp(cursor, "\xEF\xBB\xBF", 3)) cursor += 3; // a UTF-8 byte order mark, which cJSON skips
+  PREP_TRY_GOTO(check_repeated_keys(&rd, text, root, "", &cursor));
   PREP_TRY_GOTO(parse_root(&rd, root, base_dir, s));
   *out = s;
   s = NULL;
@@ -700,7 +886,7 @@ fascia_status fascia_prep_scene_load(fascia_ctx *ctx, const char *path, fascia_p
   PREP_CHECK(out && path, ctx, FASCIA_ERR_ARGUMENT, "fascia_prep_scene_load: NULL argument");
   *out = NULL;
   char *text = NULL;
-  PREP_TRY(prep_read_file(ctx, path, "scene", &text, NULL));
+  PREP_TRY(prep_read_file(ctx, path, "scene", MAX_SCENE_BYTES, &text, NULL));
   char *dir = prep_strdup(path);
   if (!dir) {
     free(text);

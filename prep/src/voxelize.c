@@ -319,10 +319,12 @@ static fascia_status organ_inside(fascia_ctx *ctx, const fascia_prep_scene *scen
                (int)o->report.border_edges);
     }
   }
+  // the surface encloses a volume (checked at the repair), but no voxel centre lies in it
+  const double *b = o->bounds, thinnest = fmin(fmin(b[3] - b[0], b[4] - b[1]), b[5] - b[2]);
   PREP_CHECK_GOTO(chosen > 0, ctx, FASCIA_ERR_FORMAT,
-                  "organ '%s': the surface encloses no volume at voxel size %g m (%d border edges: an open patch?); "
-                  "close the mesh, choose closed parts, or raise close_holes",
-                  o->name, g->h, (int)o->report.border_edges);
+                  "organ '%s': no voxel lies inside it: it is %.3g x %.3g x %.3g mm, smaller or thinner than a voxel "
+                  "(voxel_size %.3g mm); lower voxel_size to %.3g m or less, or leave the organ out",
+                  o->name, 1e3 * (b[3] - b[0]), 1e3 * (b[4] - b[1]), 1e3 * (b[5] - b[2]), 1e3 * g->h, thinnest / 2);
   o->report.enclosed_volume = (double)chosen * g->h * g->h * g->h;
 cleanup:
   free(blocked);
