@@ -8,7 +8,8 @@
 // that is never negative and a bounded strain. Meshless weights can be
 // negative; before the lumped mass split sample masses by their positive
 // parts, the pelvis tissue blew up at dt = 1e-4 s (strain 1e4, exit 0).
-// Arguments: the scene files.
+// The abdomen scene has five organs and three tissues (a deformable
+// gallbladder, a rigid spleen). Arguments: the scene files.
 #define _POSIX_C_SOURCE 200809L // mkdtemp in prep_fixture.h
 #include "point/block6.h"
 #include "prep_fixture.h"
