@@ -164,7 +164,7 @@ static const setting settings[] = {
     {"assembled", SETTING_INT},       {"single_precision_matrix", SETTING_INT},
     {"mass", SETTING_INT},            {"mass_damping", SETTING_REAL},
     {"line_search", SETTING_INT},     {"step_retries", SETTING_INT},
-    {"require_convergence", SETTING_INT},
+    {"require_convergence", SETTING_INT}, {"blow_up_strain", SETTING_REAL},
 };
 #define SETTING_COUNT ((int)(sizeof settings / sizeof settings[0]))
 
@@ -189,6 +189,7 @@ double fascia_checkpoint_setting_get(const fascia_solver_def *d, int k) {
   case 12: return d->line_search;
   case 13: return d->step_retries;
   case 14: return d->require_convergence;
+  case 15: return d->blow_up_strain;
   default: return NAN;
   }
 }
@@ -211,6 +212,7 @@ void fascia_checkpoint_setting_set(fascia_solver_def *d, int k, double v) {
   case 12: d->line_search = i; break;
   case 13: d->step_retries = i; break;
   case 14: d->require_convergence = i; break;
+  case 15: d->blow_up_strain = v; break;
   default: break;
   }
 }

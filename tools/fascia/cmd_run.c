@@ -535,7 +535,8 @@ static const char *setting_option(const char *name) {
       {"precond", "--precond"},        {"linear_solver", "--linear-solver"},
       {"assembled", "--assembled"},    {"single_precision_matrix", "--single"},
       {"mass", "--mass"},              {"mass_damping", "--damping"},
-      {"step_retries", "--step-retries"}, {"require_convergence", "--require-convergence"}};
+      {"step_retries", "--step-retries"}, {"require_convergence", "--require-convergence"},
+      {"blow_up_strain", "--blow-up-strain"}};
   for (size_t k = 0; k < sizeof table / sizeof table[0]; ++k)
     if (!strcmp(table[k][0], name)) return table[k][1];
   return "no option";
