@@ -27,9 +27,11 @@ posix="-D_POSIX_C_SOURCE=200809L"
 case "$mode" in
 asan)
   core=0
-  exclude=gpu
+  # hdf5-damage: tests that feed damaged files to HDF5, whose own memory
+  # errors on them ASan reports (tests/CMakeLists.txt); they run unsanitized
+  exclude="gpu|hdf5-damage"
   if [ "${1:-}" = "--core" ]; then core=1; fi
-  if [ "${2:-}" = "--quick" ]; then exclude="gpu|slow"; fi
+  if [ "${2:-}" = "--quick" ]; then exclude="gpu|slow|hdf5-damage"; fi
   build="${FASCIA_SANITIZE_BUILD:-$root/build-sanitize$([ $core = 1 ] && echo -core || true)}"
   prep=ON
   if [ $core = 1 ]; then prep=OFF; fi
@@ -37,8 +39,11 @@ asan)
     -DFASCIA_CUDA=OFF -DFASCIA_WERROR=ON -DCMAKE_C_FLAGS="$posix" >"$build.configure.log" 2>&1 ||
     { cat "$build.configure.log" >&2; exit 1; }
   cmake --build "$build" -j "$jobs"
-  # leaks are errors; UBSan stops the test at its first report
-  export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:strict_string_checks=1}"
+  # leaks are errors; UBSan stops the test at its first report. A malloc too
+  # large to satisfy returns NULL, as the C library's does: HDF5 asks for
+  # petabytes when a damaged file names a wild address, and must get its
+  # failure back to report it (t208, t915), not an abort
+  export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:strict_string_checks=1:allocator_may_return_null=1}"
   export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
   export LSAN_OPTIONS="${LSAN_OPTIONS:-suppressions=$root/tests/fuzz/lsan-third-party.supp:print_suppressions=0}"
   cd "$build"
