@@ -675,12 +675,21 @@ static int64_t count_both_inside(const uint8_t *in_a, const prep_grid *ga, const
 // vertex is inside `to` when its voxel on the organ grid of `to` is; within
 // half a voxel diagonal of the surface the voxel may lie on the other side,
 // so there the outward normal of the closest triangle must agree.
-static void vertices_against(const fascia_prep_mesh *from, const fascia_prep_mesh *to, const uint8_t *to_inside,
-                             const prep_grid *to_grid, const double *closest, const int32_t *tri, double *gap,
-                             double *depth) {
+static void vertices_against(const fascia_prep_mesh *from, const fascia_prep_mesh *to, const fascia_cgal_tree *tree,
+                             const uint8_t *to_inside, const prep_grid *to_grid, double band, double *points,
+                             double *closest, int32_t *tri, double *gap, double *depth) {
   const double sure = 0.8661 * to_grid->h;
+  // only vertices within the band around the other organ's box can matter
+  int32_t count = 0;
   for (int32_t v = 0; v < from->vertex_count; ++v) {
-    const double *p = from->vertices + 3 * (int64_t)v, *q = closest + 3 * (int64_t)v;
+    const double *p = from->vertices + 3 * (int64_t)v;
+    int near = 1;
+    for (int r = 0; r < 3; ++r) near &= p[r] >= to->bounds[r] - band && p[r] <= to->bounds[3 + r] + band;
+    if (near) memcpy(points + 3 * (int64_t)count++, p, 3 * sizeof(double));
+  }
+  fascia_cgal_tree_closest(tree, count, points, closest, tri);
+  for (int32_t v = 0; v < count; ++v) {
+    const double *p = points + 3 * (int64_t)v, *q = closest + 3 * (int64_t)v;
     const double e[3] = {p[0] - q[0], p[1] - q[1], p[2] - q[2]};
     const double u = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
     const int64_t k = prep_grid_locate(to_grid, p);
@@ -713,19 +722,17 @@ static fascia_status measure_pairs(fascia_ctx *ctx, const fascia_prep_meshes *me
   const int32_t O = vol->organ_count;
   fascia_status status = FASCIA_OK;
   fascia_cgal_tree **trees = prep_calloc(O, sizeof *trees);
-  double **closest = prep_calloc(O, sizeof *closest); // [organ] closest points of its vertices, reused per pair
-  int32_t *triangle = NULL;
-  int32_t most = 0;
+  int32_t most = 1;
   for (int32_t o = 0; o < O; ++o) most = meshes->organs[o].vertex_count > most ? meshes->organs[o].vertex_count : most;
-  triangle = prep_calloc(most > 0 ? most : 1, sizeof(int32_t));
-  PREP_CHECK_GOTO(trees && closest && triangle, ctx, FASCIA_ERR_MEMORY, "voxelize: out of memory");
+  // work arrays of one pass: the vertices queried, their closest points and triangles
+  double *points = prep_calloc(3 * (int64_t)most, sizeof(double)), *closest = prep_calloc(3 * (int64_t)most, sizeof(double));
+  int32_t *triangle = prep_calloc(most, sizeof(int32_t));
+  PREP_CHECK_GOTO(trees && points && closest && triangle, ctx, FASCIA_ERR_MEMORY, "voxelize: out of memory");
   for (int32_t o = 0; o < O; ++o) {
     if (!vol->distance[o]) continue;
     const fascia_prep_mesh *m = meshes->organs + o;
     PREP_TRY_GOTO(fascia_cgal_tree_create(ctx, m->vertex_count, m->vertices, m->triangle_count, m->triangles,
                                           trees + o));
-    closest[o] = prep_calloc(3 * (int64_t)(most > 0 ? most : 1), sizeof(double));
-    PREP_CHECK_GOTO(closest[o], ctx, FASCIA_ERR_MEMORY, "voxelize: out of memory");
   }
   for (int32_t a = 0; a < O; ++a)
     for (int32_t b = a + 1; b < O; ++b) {
@@ -738,10 +745,8 @@ static fascia_status measure_pairs(fascia_ctx *ctx, const fascia_prep_meshes *me
       const int64_t both = count_both_inside(insides[a], organ_grids + a, insides[b], organ_grids + b);
       double depth = 0, gap = INFINITY;
       const fascia_prep_mesh *ma = meshes->organs + a, *mb = meshes->organs + b;
-      fascia_cgal_tree_closest(trees[b], ma->vertex_count, ma->vertices, closest[a], triangle);
-      vertices_against(ma, mb, insides[b], organ_grids + b, closest[a], triangle, &gap, &depth);
-      fascia_cgal_tree_closest(trees[a], mb->vertex_count, mb->vertices, closest[b], triangle);
-      vertices_against(mb, ma, insides[a], organ_grids + a, closest[b], triangle, &gap, &depth);
+      vertices_against(ma, mb, trees[b], insides[b], organ_grids + b, band, points, closest, triangle, &gap, &depth);
+      vertices_against(mb, ma, trees[a], insides[a], organ_grids + a, band, points, closest, triangle, &gap, &depth);
       if (both > 0 || depth > 0) gap = 0;
       if (both > 0) {
         fascia_prep_overlap *grown = realloc(vol->overlaps, (size_t)(vol->overlap_count + 1) * sizeof *grown);
@@ -757,8 +762,8 @@ static fascia_status measure_pairs(fascia_ctx *ctx, const fascia_prep_meshes *me
     }
 cleanup:
   for (int32_t o = 0; trees && o < O; ++o) fascia_cgal_tree_destroy(trees + o);
-  for (int32_t o = 0; closest && o < O; ++o) free(closest[o]);
   free(trees);
+  free(points);
   free(closest);
   free(triangle);
   return status;
