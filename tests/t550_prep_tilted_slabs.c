@@ -39,46 +39,6 @@ static int write_hex(const char *dir, const char *name, double c[8][3]) {
   return fixture_write(dir, name, text);
 }
 
-// 1 when every 26-connected piece of tissue 1 has a voxel next to (26
-// neighbours) an inside voxel of organ A and one next to organ B.
-static int pieces_touch_both(const fascia_prep_volume *v, int32_t a, int32_t b, int *pieces) {
-  const int32_t nx = v->dims[0], ny = v->dims[1], nz = v->dims[2];
-  const int64_t n = (int64_t)nx * ny * nz;
-  int64_t *queue = malloc((size_t)n * sizeof *queue);
-  uint8_t *seen = calloc((size_t)n, 1);
-  int ok = queue && seen;
-  *pieces = 0;
-  for (int64_t s = 0; ok && s < n; ++s) {
-    if (v->region[s] != 1 || seen[s]) continue;
-    int64_t head = 0, tail = 0;
-    int touch_a = 0, touch_b = 0;
-    queue[tail++] = s, seen[s] = 1;
-    ++*pieces;
-    while (head < tail) {
-      const int64_t w = queue[head++];
-      const int32_t x = (int32_t)(w % nx), y = (int32_t)(w / nx % ny), z = (int32_t)(w / ((int64_t)nx * ny));
-      for (int dz = -1; dz <= 1; ++dz)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dx = -1; dx <= 1; ++dx) {
-            const int32_t X = x + dx, Y = y + dy, Z = z + dz;
-            if (X < 0 || Y < 0 || Z < 0 || X >= nx || Y >= ny || Z >= nz) continue;
-            const int64_t m = X + (int64_t)nx * (Y + (int64_t)ny * Z);
-            touch_a |= v->distance[a][m] <= 0;
-            touch_b |= v->distance[b][m] <= 0;
-            if (v->region[m] == 1 && !seen[m]) seen[m] = 1, queue[tail++] = m;
-          }
-    }
-    if (!touch_a || !touch_b) {
-      fprintf(stderr, "a piece of %lld voxels touches %s\n", (long long)tail,
-              touch_a ? "only A" : touch_b ? "only B" : "neither organ");
-      ok = 0;
-    }
-  }
-  free(queue);
-  free(seen);
-  return ok;
-}
-
 static fascia_status voxelize(const char *path, fascia_ctx *ctx, fixture_run *r) {
   memset(r, 0, sizeof *r);
   fascia_status st = fascia_prep_scene_load(ctx, path, &r->scene);
@@ -122,7 +82,7 @@ static int tilted(const char *dir, double h, double shift) {
             1e3 * h, 1e3 * shift, 1e6 * got, 1e6 * exact, 100 * (got / exact - 1), 1e6 * layer);
     CHECK_NEAR(got, exact, 0, layer);
     int pieces = 0;
-    CHECK(pieces_touch_both(r.volume, 0, 1, &pieces));
+    CHECK(fixture_pieces_touch(r.volume, 1, 2, &pieces));
     CHECK(pieces >= 1);
     // the slabs touch along x = 0: a contact, reported as a zero gap
     CHECK_NEAR(r.volume->closest[1], 0, 0, 1e-9);
@@ -154,7 +114,7 @@ static int parallel(const char *dir, double h, double gap) {
   if (gap <= MAX_GAP && st != FASCIA_OK) CHECK_OK(st, ctx);
   if (st == FASCIA_OK) {
     int pieces = 0;
-    CHECK(pieces_touch_both(r.volume, 0, 1, &pieces));
+    CHECK(fixture_pieces_touch(r.volume, 1, 2, &pieces));
     CHECK_NEAR(r.volume->closest[1], gap, 0, 1e-9);
   } else {
     CHECK(st == FASCIA_ERR_ARGUMENT && strstr(fascia_ctx_message(ctx), "too far apart"));

@@ -7,7 +7,7 @@
 //     them: the gaps are reported exactly, the two thinner than three voxels
 //     warned about (text and --json), the tissue volume matches an
 //     independent integration of d_i + d_j <= max_gap over exact box
-//     distances within one voxel layer, and every piece touches two organs;
+//     distances within one voxel layer, and every piece touches two boxes;
 //   - a 1.75 mm gap at 1 mm voxels and a 0.75 mm gap at 2 mm voxels are gaps
 //     (warned about), not contacts; touching boxes are a contact;
 //   - boxes overlapping by 4.5 mm report a 4.5 mm depth at 1 and 0.5 mm voxels.
@@ -161,6 +161,17 @@ static int row(double h) {
           1e3 * h, 1e6 * got, 1e6 * vol, 100 * (got / vol - 1), 1e6 * 0.5 * h * area / sqrt(3.0));
   CHECK_NEAR(got, vol, 0, 0.5 * h * area / sqrt(3.0));
   cJSON_Delete(root);
+  // the same scene through the API: every piece of tissue bridges two boxes
+  char path[512];
+  snprintf(path, sizeof path, "%s/scene.json", dir);
+  fascia_ctx *ctx = fixture_ctx();
+  fixture_run run;
+  CHECK_OK(fixture_prep(ctx, path, &run), ctx);
+  int pieces = 0;
+  CHECK(fixture_pieces_touch(run.volume, 1, 2, &pieces));
+  fprintf(stderr, "row: %d pieces of tissue, each touching two boxes\n", pieces);
+  fixture_free(&run);
+  fascia_ctx_destroy(&ctx);
   return 0;
 }
 
