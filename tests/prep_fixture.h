@@ -105,6 +105,49 @@ typedef struct fixture_run {
   fascia_model *model;
 } fixture_run;
 
+/// 1 when every 26-connected piece of the region with this label has voxels
+/// next to (26 neighbours) the insides of at least `need` different organs
+/// (of at most 64); *pieces counts them. A tissue piece that bridges two
+/// organs touches both; a sheet floating between them touches neither.
+static inline int fixture_pieces_touch(const fascia_prep_volume *v, int label, int need, int *pieces) {
+  const int32_t nx = v->dims[0], ny = v->dims[1], nz = v->dims[2];
+  const int64_t n = (int64_t)nx * ny * nz;
+  int64_t *queue = (int64_t *)malloc((size_t)n * sizeof *queue);
+  uint8_t *seen = (uint8_t *)calloc((size_t)n, 1);
+  int ok = queue && seen && v->organ_count <= 64;
+  *pieces = 0;
+  for (int64_t s = 0; ok && s < n; ++s) {
+    if (v->region[s] != label || seen[s]) continue;
+    int64_t head = 0, tail = 0;
+    uint64_t touched = 0;
+    queue[tail++] = s, seen[s] = 1;
+    ++*pieces;
+    while (head < tail) {
+      const int64_t w = queue[head++];
+      const int32_t x = (int32_t)(w % nx), y = (int32_t)(w / nx % ny), z = (int32_t)(w / ((int64_t)nx * ny));
+      for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const int32_t X = x + dx, Y = y + dy, Z = z + dz;
+            if (X < 0 || Y < 0 || Z < 0 || X >= nx || Y >= ny || Z >= nz) continue;
+            const int64_t m = X + (int64_t)nx * (Y + (int64_t)ny * Z);
+            for (int32_t o = 0; o < v->organ_count; ++o)
+              if (v->distance[o] && v->distance[o][m] <= 0) touched |= (uint64_t)1 << o;
+            if (v->region[m] == label && !seen[m]) seen[m] = 1, queue[tail++] = m;
+          }
+    }
+    int count = 0;
+    for (int32_t o = 0; o < v->organ_count; ++o) count += (int)((touched >> o) & 1);
+    if (count < need) {
+      fprintf(stderr, "a piece of %lld voxels touches %d organ(s), fewer than %d\n", (long long)tail, count, need);
+      ok = 0;
+    }
+  }
+  free(queue);
+  free(seen);
+  return ok;
+}
+
 /// Runs every stage on the scene file at path; stops at the first error.
 static inline fascia_status fixture_prep(fascia_ctx *ctx, const char *path, fixture_run *r) {
   memset(r, 0, sizeof *r);

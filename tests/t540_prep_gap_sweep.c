@@ -1,11 +1,11 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// Two boxes 10 mm wide, 10 to 20 mm apart in 0.5 mm steps, max_gap 8 mm, at
+// Two boxes 10 mm wide, 3 to 13 mm apart in 0.5 mm steps, max_gap 8 mm, at
 // several voxel sizes and offsets of the boxes against the voxel lattice:
-// voxelize either builds the tissue (always when the gap leaves two voxels
-// of room under 2 max_gap) or refuses with the user's message naming the
-// tissue, both organs, the gap between them and the max_gap to use (always
-// beyond 2 max_gap); never an internal error. A few runs go through the
+// voxelize either builds the tissue (always when the gap is at most
+// max_gap: the tissue bridges it) or refuses with the user's message naming
+// the tissue, both organs, the gap between them and the max_gap to use
+// (always beyond max_gap); never an internal error. A few runs go through the
 // whole pipeline, which must end in a model or a user-level error.
 #define _POSIX_C_SOURCE 200809L // mkdtemp
 #include "check.h"
@@ -55,11 +55,11 @@ static int run(const char *dir, double gap, double h, double shift, int whole) {
     bad |= !strstr(message, "tissue 'gap'") || !strstr(message, "'A' and 'B'") || !strstr(message, found) ||
            !strstr(message, "max_gap 0.008 m") || !strstr(message, "raise max_gap to at least");
   }
-  // within 2 max_gap less two voxels there is a layer of voxel centres
-  // within max_gap of both boxes: voxelize must build it
-  if (gap <= 2 * MAX_GAP - 2 * h && !r.volume) bad = 1;
-  // beyond 2 max_gap no point is within max_gap of both: the user's message
-  if (gap > 2 * MAX_GAP + 1e-9 && (st != FASCIA_ERR_ARGUMENT || !strstr(message, "too far apart"))) bad = 1;
+  // up to max_gap the voxel centres between the faces lie on bridges of
+  // length gap (d_A + d_B = gap there): voxelize must build them
+  if (gap <= MAX_GAP - 0.01 * h && !r.volume) bad = 1;
+  // beyond max_gap no path of at most max_gap joins the boxes: the user's message
+  if (gap > MAX_GAP + 1e-9 && (st != FASCIA_ERR_ARGUMENT || !strstr(message, "too far apart"))) bad = 1;
   if (bad)
     fprintf(stderr, "gap %g mm, voxel %g mm, shift %g mm%s: %s: %s\n", 1e3 * gap, 1e3 * h, 1e3 * shift,
             whole ? " (whole pipeline)" : "", fascia_status_name(st), message);
@@ -79,11 +79,11 @@ int main(void) {
     for (int s = 0; s < 4; ++s)
       for (int k = 0; k <= 20; ++k) {
         if (v == 0 && s % 2) continue; // the finest voxels: two offsets keep the test short
-        const double gap = 0.010 + 0.0005 * k, h = voxels[v];
+        const double gap = 0.003 + 0.0005 * k, h = voxels[v];
         failed |= run(dir, gap, h, shifts[s] * h, 0);
       }
   // the whole pipeline near the limit
-  for (int k = 8; k <= 14; ++k) failed |= run(dir, 0.010 + 0.0005 * k, 0.001, 0.0003, 1);
+  for (int k = 7; k <= 13; ++k) failed |= run(dir, 0.003 + 0.0005 * k, 0.001, 0.0003, 1);
   static const char *const files[] = {"a.obj", "b.obj", "scene.json", NULL};
   fixture_cleanup(dir, files);
   return failed || CHECK_RESULT();

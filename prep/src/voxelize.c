@@ -20,12 +20,18 @@
 //
 // The report of each organ says which rule was used.
 //
-// Tissue region of tissue t (voxel centre x): outside every organ, within
-// max_gap of each organ t connects (or of the named parts), inside the
-// optional box or sphere; pieces smaller than min_component are dropped.
+// Tissue region of tissue t (voxel centre x): outside every organ, on a
+// bridge of length at most max_gap between two organs t connects,
+// d_A(x) + d_B(x) <= max_gap for some pair (A, B) of them (the distance to the
+// named parts standing in for their organ's), inside the optional box or
+// sphere; pieces smaller than min_component are dropped. Such a point and
+// the two segments that join it to its closest points on A and on B all pass
+// the test (the sum only shrinks along them), so each piece of tissue
+// reaches both organs it bridges.
 // Overlapping organs: voxels inside two organs are counted and the depth
-// (largest distance to the nearer of the two surfaces) reported; the tissue
-// is built outside both (the rule), the organ surfaces are kept as given.
+// (largest penetration of one surface into the other, on the surfaces)
+// reported; the tissue is built outside both, the organ surfaces are kept as
+// given. Gaps are measured on the surfaces too (measure_pairs).
 #include <float.h>
 #include <math.h>
 #include <stdio.h>
@@ -368,20 +374,27 @@ static int box_meets_grid(const prep_grid *g, const double *lo, const double *hi
   return 1;
 }
 
-// Bounding box of the space tissue t can occupy: the intersection of its
-// organs' boxes grown by its reach, cut by its box or sphere. 0 if empty.
+// Bounding box of the space tissue t can occupy: the union over pairs of its
+// organs of the two boxes' intersection, grown by its reach, cut by its box or
+// sphere. 0 if empty.
 static int tissue_box(const fascia_prep_scene *scene, const fascia_prep_meshes *meshes, int32_t t, double *lo,
                       double *hi) {
   const fascia_prep_tissue_def *td = scene->tissues + t;
   const double grow = tissue_reach(scene, td);
-  for (int r = 0; r < 3; ++r) lo[r] = -INFINITY, hi[r] = INFINITY;
-  for (int32_t k = 0; k < td->organ_count; ++k) {
-    const double *b = meshes->organs[td->organs[k]].bounds;
-    for (int r = 0; r < 3; ++r) {
-      lo[r] = fmax(lo[r], b[r] - grow);
-      hi[r] = fmin(hi[r], b[3 + r] + grow);
+  for (int r = 0; r < 3; ++r) lo[r] = INFINITY, hi[r] = -INFINITY;
+  for (int32_t i = 0; i < td->organ_count; ++i)
+    for (int32_t j = i + 1; j < td->organ_count; ++j) {
+      const double *a = meshes->organs[td->organs[i]].bounds, *b = meshes->organs[td->organs[j]].bounds;
+      double plo[3], phi[3];
+      int empty = 0;
+      for (int r = 0; r < 3; ++r) {
+        plo[r] = fmax(a[r], b[r]) - grow;
+        phi[r] = fmin(a[3 + r], b[3 + r]) + grow;
+        empty |= !(phi[r] > plo[r]);
+      }
+      if (empty) continue;
+      for (int r = 0; r < 3; ++r) lo[r] = fmin(lo[r], plo[r]), hi[r] = fmax(hi[r], phi[r]);
     }
-  }
   if (td->region.kind == FASCIA_PREP_REGION_BOX)
     for (int r = 0; r < 3; ++r) {
       lo[r] = fmax(lo[r], td->region.min[r]);
@@ -439,32 +452,34 @@ static fascia_status surface_gap(fascia_ctx *ctx, const fascia_prep_meshes *mesh
   return FASCIA_OK;
 }
 
-// The user's message when no point lies within max_gap of every organ of
-// tissue td: it names the two organs farthest apart, the distance between
+// The user's message when no path of at most max_gap joins two organs of
+// tissue td: it names the two organs closest together, the distance between
 // their surfaces and the max_gap that would bridge them. nearest is the
-// smallest distance of a free voxel to the farthest organ (INFINITY: none
-// within the distance band).
+// shortest bridge d_A + d_B through a free voxel (INFINITY: none within the
+// distance band).
 static fascia_status too_far_apart(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_meshes *meshes,
                                    const fascia_prep_tissue_def *td, double nearest) {
   const double h = scene->voxel_size;
   int32_t a = td->organs[0], b = td->organs[td->organ_count > 1 ? 1 : 0];
-  double gap = -1;
+  double gap = INFINITY;
   for (int32_t i = 0; i < td->organ_count; ++i)
     for (int32_t j = i + 1; j < td->organ_count; ++j) {
       double d;
       PREP_TRY(surface_gap(ctx, meshes, td->organs[i], td->organs[j], &d));
-      if (d > gap) a = td->organs[i], b = td->organs[j], gap = d;
+      if (d < gap) a = td->organs[i], b = td->organs[j], gap = d;
     }
-  // a point between two organs a gap apart is within max_gap of both when
-  // max_gap >= gap / 2; voxel centres need up to one voxel more
-  double want = fmax(gap, 0) / 2 + h;
-  if (isfinite(nearest)) want = fmax(want, nearest + h);
+  // voxel centres between two organs a gap apart lie on bridges of length
+  // gap; nearest is the shortest bridge through a voxel centre
+  double want = fmax(gap, 0);
+  if (isfinite(nearest)) want = fmax(want, nearest);
+  want = want * (1 + 1e-3) + 1e-3 * h;
   return PREP_FAIL(ctx, FASCIA_ERR_ARGUMENT,
                    "tissue '%s' (scene '%s'): organs '%s' and '%s' are too far apart for max_gap %g m: their "
-                   "surfaces are %.3g mm apart, and every point of a tissue lies within max_gap of each organ it "
-                   "connects%s; raise max_gap to at least %.3g m, or leave '%s' or '%s' out of this tissue",
+                   "surfaces are %.3g mm apart, and every point of a tissue lies on a path of at most max_gap "
+                   "between two organs it connects%s; raise max_gap to at least %.3g m, or leave '%s' or '%s' out "
+                   "of this tissue",
                    td->name, scene->path, scene->organs[a].name, scene->organs[b].name, td->max_gap,
-                   1e3 * fmax(gap, 0), td->region_organ >= 0 ? " (and of the region's parts)" : "", want,
+                   1e3 * fmax(gap, 0), td->region_organ >= 0 ? " (ending on the region's parts)" : "", want,
                    scene->organs[a].name, scene->organs[b].name);
 }
 
@@ -553,21 +568,28 @@ static fascia_status build_region(fascia_ctx *ctx, const fascia_prep_scene *scen
     if (status != FASCIA_OK) goto cleanup;
   }
   int64_t gap_voxels = 0, cut_voxels = 0;
-  double nearest = INFINITY; // smallest max-distance to the connected organs among free voxels
+  double nearest = INFINITY; // shortest bridge (d_A + d_B over the pairs) through a free voxel
+  const int32_t K = td->organ_count;
   for (int64_t v = 0; v < n; ++v) {
     int outside = 1;
     for (int32_t o = 0; o < vol->organ_count && outside; ++o)
       if (vol->distance[o] && vol->distance[o][v] <= 0) outside = 0;
     if (!outside) continue;
-    double worst = 0;
-    for (int32_t k = 0; k < td->organ_count; ++k) {
-      const int32_t o = td->organs[k];
-      double d = vol->distance[o][v];
-      if (parts && o == td->region_organ) d = parts[v];
-      worst = fmax(worst, d);
-    }
-    if (worst < nearest) nearest = worst;
-    if (worst > td->max_gap) continue;
+    // the voxel lies on a path from organ A to organ B no longer than
+    // max_gap when d_A + d_B <= max_gap: the tissue is the union of such
+    // bridges over every pair of its organs, so each piece touches both
+    double shortest = INFINITY;
+    for (int32_t i = 0; i < K; ++i)
+      for (int32_t j = i + 1; j < K; ++j) {
+        double d[2];
+        for (int e = 0; e < 2; ++e) {
+          const int32_t o = td->organs[e ? j : i];
+          d[e] = parts && o == td->region_organ ? parts[v] : vol->distance[o][v];
+        }
+        shortest = fmin(shortest, d[0] + d[1]);
+      }
+    if (shortest < nearest) nearest = shortest;
+    if (shortest > td->max_gap) continue;
     ++gap_voxels;
     double x[3];
     prep_grid_center(&g, v, x);
@@ -649,43 +671,104 @@ static int64_t count_both_inside(const uint8_t *in_a, const prep_grid *ga, const
   return both;
 }
 
-// Overlap of every pair of organs near the grid: its volume on their own
-// grids, its depth (largest distance to the nearer surface, where the volume
-// grid reaches), and the closest distance between their surfaces there.
-static fascia_status measure_pairs(fascia_ctx *ctx, fascia_prep_volume *vol, uint8_t *const *insides,
-                                   const prep_grid *organ_grids) {
+// How far the vertices of organ `from` reach into organ `to` and how close
+// they come to it from outside, on the surfaces: u is the exact distance of a
+// vertex to the surface of `to` (closest point q on triangle `tri`). The
+// vertex is inside `to` when its voxel on the organ grid of `to` is; within
+// half a voxel diagonal of the surface the voxel may lie on the other side,
+// so there the outward normal of the closest triangle must agree.
+static void vertices_against(const fascia_prep_mesh *from, const fascia_prep_mesh *to, const fascia_cgal_tree *tree,
+                             const uint8_t *to_inside, const prep_grid *to_grid, double band, double *points,
+                             double *closest, int32_t *tri, double *gap, double *depth) {
+  const double sure = 0.8661 * to_grid->h;
+  // only vertices within the band around the other organ's box can matter
+  int32_t count = 0;
+  for (int32_t v = 0; v < from->vertex_count; ++v) {
+    const double *p = from->vertices + 3 * (int64_t)v;
+    int near = 1;
+    for (int r = 0; r < 3; ++r) near &= p[r] >= to->bounds[r] - band && p[r] <= to->bounds[3 + r] + band;
+    if (near) memcpy(points + 3 * (int64_t)count++, p, 3 * sizeof(double));
+  }
+  fascia_cgal_tree_closest(tree, count, points, closest, tri);
+  for (int32_t v = 0; v < count; ++v) {
+    const double *p = points + 3 * (int64_t)v, *q = closest + 3 * (int64_t)v;
+    const double e[3] = {p[0] - q[0], p[1] - q[1], p[2] - q[2]};
+    const double u = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+    const int64_t k = prep_grid_locate(to_grid, p);
+    int inside = k >= 0 && to_inside[k];
+    if (inside && u <= sure && tri[v] >= 0) {
+      const int32_t *t = to->triangles + 3 * (int64_t)tri[v];
+      const double *a = to->vertices + 3 * (int64_t)t[0], *b = to->vertices + 3 * (int64_t)t[1],
+                   *c = to->vertices + 3 * (int64_t)t[2];
+      const double ab[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, ac[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+      const double n[3] = {ab[1] * ac[2] - ab[2] * ac[1], ab[2] * ac[0] - ab[0] * ac[2], ab[0] * ac[1] - ab[1] * ac[0]};
+      inside = e[0] * n[0] + e[1] * n[1] + e[2] * n[2] < 0;
+    }
+    if (inside)
+      *depth = fmax(*depth, u);
+    else
+      *gap = fmin(*gap, u);
+  }
+}
+
+// Overlap and gap of every pair of organs near the grid, measured on the
+// surfaces so that neither depends on the voxel size: the gap is the
+// smallest distance of a vertex of either organ to the other's surface (exact
+// when the closest points include a vertex, as for boxes), the overlap depth
+// the largest distance of a vertex inside the other organ to its surface
+// (the penetration), and the overlap volume the voxels inside both on the
+// organs' own grids.
+static fascia_status measure_pairs(fascia_ctx *ctx, const fascia_prep_meshes *meshes, fascia_prep_volume *vol,
+                                   uint8_t *const *insides, const prep_grid *organ_grids) {
   const prep_grid g = prep_volume_grid(vol);
-  const int64_t n = prep_grid_count(&g);
   const int32_t O = vol->organ_count;
+  fascia_status status = FASCIA_OK;
+  fascia_cgal_tree **trees = prep_calloc(O, sizeof *trees);
+  int32_t most = 1;
+  for (int32_t o = 0; o < O; ++o) most = meshes->organs[o].vertex_count > most ? meshes->organs[o].vertex_count : most;
+  // work arrays of one pass: the vertices queried, their closest points and triangles
+  double *points = prep_calloc(3 * (int64_t)most, sizeof(double)), *closest = prep_calloc(3 * (int64_t)most, sizeof(double));
+  int32_t *triangle = prep_calloc(most, sizeof(int32_t));
+  PREP_CHECK_GOTO(trees && points && closest && triangle, ctx, FASCIA_ERR_MEMORY, "voxelize: out of memory");
+  for (int32_t o = 0; o < O; ++o) {
+    if (!vol->distance[o]) continue;
+    const fascia_prep_mesh *m = meshes->organs + o;
+    PREP_TRY_GOTO(fascia_cgal_tree_create(ctx, m->vertex_count, m->vertices, m->triangle_count, m->triangles,
+                                          trees + o));
+  }
   for (int32_t a = 0; a < O; ++a)
     for (int32_t b = a + 1; b < O; ++b) {
-      const float *da = vol->distance[a], *db = vol->distance[b];
-      if (!da || !db) continue;
+      if (!vol->distance[a] || !vol->distance[b]) continue;
+      const double band = fmin(vol->band[a], vol->band[b]);
+      const double *ba = meshes->organs[a].bounds, *bb = meshes->organs[b].bounds;
+      int apart = 0; // boxes farther apart than the band: nothing to measure
+      for (int r = 0; r < 3; ++r) apart |= ba[r] > bb[3 + r] + band || bb[r] > ba[3 + r] + band;
+      if (apart) continue;
       const int64_t both = count_both_inside(insides[a], organ_grids + a, insides[b], organ_grids + b);
       double depth = 0, gap = INFINITY;
-      for (int64_t v = 0; v < n; ++v) {
-        if (da[v] <= 0 && db[v] <= 0)
-          depth = fmax(depth, fmin(-da[v], -db[v]));
-        else if (da[v] > 0 && db[v] > 0)
-          gap = fmin(gap, (double)da[v] + db[v]);
-      }
+      const fascia_prep_mesh *ma = meshes->organs + a, *mb = meshes->organs + b;
+      vertices_against(ma, mb, trees[b], insides[b], organ_grids + b, band, points, closest, triangle, &gap, &depth);
+      vertices_against(mb, ma, trees[a], insides[a], organ_grids + a, band, points, closest, triangle, &gap, &depth);
+      if (both > 0 || depth > 0) gap = 0;
       if (both > 0) {
         fascia_prep_overlap *grown = realloc(vol->overlaps, (size_t)(vol->overlap_count + 1) * sizeof *grown);
-        PREP_CHECK(grown, ctx, FASCIA_ERR_MEMORY, "voxelize: out of memory");
+        PREP_CHECK_GOTO(grown, ctx, FASCIA_ERR_MEMORY, "voxelize: out of memory");
         vol->overlaps = grown;
         fascia_prep_overlap *ov = vol->overlaps + vol->overlap_count++;
         ov->a = a;
         ov->b = b;
         ov->volume = (double)both * g.h * g.h * g.h;
         ov->depth = depth;
-        gap = 0;
       }
-      // free voxel centres lie at least h/2 from a surface on each side: the
-      // sum overestimates the gap by up to about h
-      const double band = fmin(vol->band[a], vol->band[b]);
-      vol->closest[a * O + b] = vol->closest[b * O + a] = gap < band ? fmax(0, gap - g.h) : -1;
+      vol->closest[a * O + b] = vol->closest[b * O + a] = gap < band ? gap : -1;
     }
-  return FASCIA_OK;
+cleanup:
+  for (int32_t o = 0; trees && o < O; ++o) fascia_cgal_tree_destroy(trees + o);
+  free(trees);
+  free(points);
+  free(closest);
+  free(triangle);
+  return status;
 }
 
 fascia_status fascia_prep_voxelize(fascia_ctx *ctx, const fascia_prep_scene *scene, fascia_prep_meshes *meshes,
@@ -809,7 +892,7 @@ fascia_status fascia_prep_voxelize(fascia_ctx *ctx, const fascia_prep_scene *sce
                       scene->tissues[t].name);
 
   // 3. overlaps and gaps, then each tissue's region
-  PREP_TRY_GOTO(measure_pairs(ctx, vol, insides, organ_grids));
+  PREP_TRY_GOTO(measure_pairs(ctx, meshes, vol, insides, organ_grids));
   for (int32_t t = 0; t < scene->tissue_count; ++t) {
     fascia_ctx_progress(ctx, "voxelize", 0.9, scene->tissues[t].name);
     PREP_TRY_GOTO(build_region(ctx, scene, meshes, vol, t));

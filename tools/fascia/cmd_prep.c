@@ -124,6 +124,31 @@ static void run_free(prep_run *r) {
   fascia_prep_scene_destroy(&r->scene);
 }
 
+enum { GAP_NONE, GAP_OVERLAP, GAP_CONTACT, GAP_THIN, GAP_OPEN };
+
+// What lies between organs a and b: not measured, an overlap, a contact
+// (surfaces closer than a tenth of a voxel, which no voxel centre can lie
+// between), a real gap thinner than three
+// voxels between two organs of one tissue (a warning: the tissue across it
+// has fewer than three voxels), or a gap.
+static int gap_kind(const prep_run *r, int32_t a, int32_t b) {
+  const fascia_prep_volume *v = r->volume;
+  const double d = v->closest[a * v->organ_count + b], h = v->voxel_size;
+  if (d < 0) return GAP_NONE;
+  for (int32_t k = 0; k < v->overlap_count; ++k)
+    if ((v->overlaps[k].a == a && v->overlaps[k].b == b) || (v->overlaps[k].a == b && v->overlaps[k].b == a))
+      return GAP_OVERLAP;
+  if (d < 0.1 * h) return GAP_CONTACT;
+  if (d >= 3 * h * (1 - 1e-6)) return GAP_OPEN; // three voxels up to the round-off of mesh files
+  for (int32_t t = 0; t < r->scene->tissue_count; ++t) {
+    const fascia_prep_tissue_def *td = r->scene->tissues + t;
+    int found = 0;
+    for (int32_t k = 0; k < td->organ_count; ++k) found += td->organs[k] == a || td->organs[k] == b;
+    if (found == 2) return GAP_THIN;
+  }
+  return GAP_OPEN;
+}
+
 static void print_summary(const prep_run *r, const step_clock *c, const char *output, const char *preview) {
   const fascia_prep_scene *sc = r->scene;
   const fascia_prep_volume *v = r->volume;
@@ -150,16 +175,28 @@ static void print_summary(const prep_run *r, const step_clock *c, const char *ou
             r->meshes->organs[v->overlaps[k].a].name, r->meshes->organs[v->overlaps[k].b].name,
             1e6 * v->overlaps[k].volume, 1e3 * v->overlaps[k].depth);
   for (int32_t a = 0; a < v->organ_count; ++a)
-    for (int32_t b = a + 1; b < v->organ_count; ++b)
-      if (v->closest[a * v->organ_count + b] >= h)
-        fprintf(stderr, "gap: '%s' to '%s' about %.3g mm at the closest (voxel estimate, +- %.2g mm)\n",
-                r->meshes->organs[a].name, r->meshes->organs[b].name, 1e3 * v->closest[a * v->organ_count + b],
-                1e3 * h);
-      else if (v->closest[a * v->organ_count + b] >= 0)
+    for (int32_t b = a + 1; b < v->organ_count; ++b) {
+      const double d = v->closest[a * v->organ_count + b];
+      const char *na = r->meshes->organs[a].name, *nb = r->meshes->organs[b].name;
+      switch (gap_kind(r, a, b)) {
+      case GAP_NONE:
+      case GAP_OVERLAP: break;
+      case GAP_CONTACT:
         fprintf(stderr,
-                "contact: '%s' and '%s' touch (gap below the %.2g mm voxel): the tissue fills the space around the "
-                "contact that lies within max_gap of both; none is built where the surfaces touch\n",
-                r->meshes->organs[a].name, r->meshes->organs[b].name, 1e3 * h);
+                "contact: '%s' and '%s' touch (%.3g mm at the closest, on the surfaces): the tissue bridges the space "
+                "around the contact where their surfaces are at most max_gap apart\n",
+                na, nb, 1e3 * d);
+        break;
+      case GAP_THIN:
+        fprintf(stderr, "gap: '%s' to '%s' %.3g mm at the closest (on the surfaces)\n", na, nb, 1e3 * d);
+        fprintf(stderr,
+                "warning: the gap between '%s' and '%s' (%.3g mm) is thinner than three voxels of %.3g mm: the "
+                "tissue across it is poorly resolved; set voxel_size to %.3g m or less\n",
+                na, nb, 1e3 * d, 1e3 * h, d / 3);
+        break;
+      case GAP_OPEN: fprintf(stderr, "gap: '%s' to '%s' %.3g mm at the closest (on the surfaces)\n", na, nb, 1e3 * d);
+      }
+    }
   int64_t voxels = 0;
   for (int32_t t = 0; t < sc->tissue_count; ++t) {
     const fascia_prep_tissue_report *tr = v->tissues + t;
@@ -251,6 +288,29 @@ static void print_json(const prep_run *r, const step_clock *c, const char *outpu
     cJSON_AddNumberToObject(e, "depth", v->overlaps[k].depth);
     cJSON_AddItemToArray(overlaps, e);
   }
+  cJSON *gaps = cJSON_AddArrayToObject(root, "gaps");
+  cJSON *warnings = cJSON_AddArrayToObject(root, "warnings");
+  static const char *const kinds[] = {"", "overlap", "contact", "thin", "gap"};
+  for (int32_t a = 0; a < v->organ_count; ++a)
+    for (int32_t b = a + 1; b < v->organ_count; ++b) {
+      const int kind = gap_kind(r, a, b);
+      if (kind == GAP_NONE) continue;
+      const double d = v->closest[a * v->organ_count + b];
+      cJSON *e = cJSON_CreateObject();
+      cJSON_AddStringToObject(e, "a", r->meshes->organs[a].name);
+      cJSON_AddStringToObject(e, "b", r->meshes->organs[b].name);
+      cJSON_AddNumberToObject(e, "distance", d);
+      cJSON_AddStringToObject(e, "kind", kinds[kind]);
+      cJSON_AddItemToArray(gaps, e);
+      if (kind == GAP_THIN) {
+        char line[512];
+        snprintf(line, sizeof line,
+                 "the gap between '%s' and '%s' (%.3g mm) is thinner than three voxels of %.3g mm; set voxel_size "
+                 "to %.3g m or less",
+                 r->meshes->organs[a].name, r->meshes->organs[b].name, 1e3 * d, 1e3 * v->voxel_size, d / 3);
+        cJSON_AddItemToArray(warnings, cJSON_CreateString(line));
+      }
+    }
   cJSON *steps = cJSON_AddArrayToObject(root, "steps");
   double total = 0;
   for (int k = 0; k < c->count; ++k) {

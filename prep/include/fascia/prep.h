@@ -10,7 +10,7 @@
 //        │ fascia_prep_repair           CGAL: check, repair what is safe, report
 //        │ fascia_prep_voxelize         inside/outside per organ, OpenVDB distances,
 //        │                              the tissue region (outside every organ,
-//        │                              within max_gap of each connected organ)
+//        │                              d_A + d_B <= max_gap for two of its organs)
 //        │ fascia_prep_sample           Poisson-disk frames (surface + interior)
 //        │                              and samples: Voronoi volumes (mls), or
 //        │                              tet quadrature points (tet)
@@ -203,7 +203,7 @@ FASCIA_API void fascia_prep_meshes_destroy(fascia_prep_meshes **meshes);
 typedef struct fascia_prep_overlap {
   int32_t a, b;          ///< organ indices, a < b
   fascia_real volume;    ///< m^3, voxels inside both on the organs' own grids (at most the smaller enclosed_volume)
-  fascia_real depth;     ///< largest penetration depth where the volume grid reaches, m
+  fascia_real depth;     ///< largest penetration of one surface into the other (vertices inside the other organ), m
 } fascia_prep_overlap;
 
 /// Per-tissue figures of the region.
@@ -236,7 +236,7 @@ typedef struct fascia_prep_volume {
   fascia_prep_tissue_report *tissues; ///< [tissue_count]
   int32_t overlap_count;
   fascia_prep_overlap *overlaps;      ///< [overlap_count]
-  fascia_real *closest;     ///< [organ_count^2] closest surface distance between organs near a tissue, m (-1: not measured)
+  fascia_real *closest;     ///< [organ_count^2] closest surface distance between organs near a tissue, measured on the surfaces (0: overlap), m (-1: not measured)
   int32_t *organ_label;     ///< [organ_count] region label of a deformable organ's inside, 0 for other organs
   fascia_prep_tissue_report *organ_regions; ///< [organ_count] figures of each deformable organ's inside (zeros for others)
 } fascia_prep_volume;
