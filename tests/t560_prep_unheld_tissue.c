@@ -1,0 +1,58 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// Tissue that nothing holds: boxes A (fixed) and B (rigid) with tissue 'web'
+// between them, boxes C and D (both rigid) with tissue 'loose' between them,
+// far from A and B. 'loose' and the two bodies it joins would fall for ever:
+// prep refuses the scene naming the tissue and its volume. Without 'loose'
+// the model is built, holds no unheld piece and reports none dropped.
+#define _POSIX_C_SOURCE 200809L // mkdtemp
+#include "check.h"
+#include "prep_fixture.h"
+
+static const char scene_format[] =
+    "{\"fascia_scene\": 1, \"voxel_size\": 0.001, \"seed\": 3,\n"
+    " \"materials\": {\"soft\": {\"youngs_modulus\": 3000, \"poisson_ratio\": 0.3}},\n"
+    " \"organs\": [{\"name\": \"A\", \"mesh\": \"a.obj\", \"model\": \"fixed\"},\n"
+    "   {\"name\": \"B\", \"mesh\": \"b.obj\", \"model\": \"rigid\"},\n"
+    "   {\"name\": \"C\", \"mesh\": \"c.obj\", \"model\": \"rigid\"},\n"
+    "   {\"name\": \"D\", \"mesh\": \"d.obj\", \"model\": \"rigid\"}],\n"
+    " \"tissues\": [{\"name\": \"web\", \"connects\": [\"A\", \"B\"], \"max_gap\": 0.005, \"material\": \"soft\",\n"
+    "   \"frame_spacing\": 0.002, \"sample_spacing\": 0.0015}%s]}\n";
+static const char loose[] = ",\n  {\"name\": \"loose\", \"connects\": [\"C\", \"D\"], \"max_gap\": 0.005, "
+                            "\"material\": \"soft\", \"frame_spacing\": 0.002, \"sample_spacing\": 0.0015}";
+
+int main(void) {
+  char dir[256], path[512], text[2048];
+  if (!fixture_tmpdir(dir)) return 1;
+  const double lo[4][3] = {{-0.03, -0.01, -0.01}, {0.002, -0.01, -0.01}, {-0.03, -0.01, 0.06}, {0.002, -0.01, 0.06}};
+  const double hi[4][3] = {{-0.002, 0.01, 0.01}, {0.03, 0.01, 0.01}, {-0.002, 0.01, 0.08}, {0.03, 0.01, 0.08}};
+  const char *names[] = {"a.obj", "b.obj", "c.obj", "d.obj", "scene.json", NULL};
+  for (int k = 0; k < 4; ++k) CHECK(fixture_box(dir, names[k], lo[k], hi[k]));
+  snprintf(path, sizeof path, "%s/scene.json", dir);
+
+  fascia_ctx *ctx = fixture_ctx();
+  fixture_run r;
+  snprintf(text, sizeof text, scene_format, loose);
+  CHECK(fixture_write(dir, "scene.json", text));
+  const fascia_status st = fixture_prep(ctx, path, &r);
+  const char *msg = fascia_ctx_message(ctx);
+  fprintf(stderr, "with 'loose': %s: %s\n", fascia_status_name(st), msg);
+  CHECK(st == FASCIA_ERR_ARGUMENT);
+  CHECK(r.model == NULL);
+  CHECK(strstr(msg, "tissue 'loose'") && strstr(msg, "cm^3") && strstr(msg, "nothing holds it") &&
+        strstr(msg, "scene.json"));
+  fixture_free(&r);
+
+  snprintf(text, sizeof text, scene_format, "");
+  CHECK(fixture_write(dir, "scene.json", text));
+  CHECK_OK(fixture_prep(ctx, path, &r), ctx);
+  int32_t count = -1;
+  CHECK_OK(fascia_model_floating_components(ctx, r.model, NULL, NULL, 0, &count), ctx);
+  CHECK(count == 0);
+  CHECK(r.model->provenance && strstr(r.model->provenance, "\"unheld_pieces_dropped\":[]"));
+  fixture_free(&r);
+
+  fascia_ctx_destroy(&ctx);
+  fixture_cleanup(dir, names);
+  return check_failures_ != 0;
+}
