@@ -187,6 +187,7 @@ static inline fascia_model *stab_copy_model(fascia_ctx *ctx, const fascia_model 
   memcpy(m->pair_gradient, src->pair_gradient, 3 * P * sizeof(fascia_real));
   memcpy(m->materials, src->materials, (size_t)src->material_count * sizeof(fascia_material));
   memcpy(m->gravity, src->gravity, sizeof m->gravity);
+  m->allow_floating = src->allow_floating;
   const size_t Q = (size_t)src->probe_count, QP = (size_t)src->probe_pair_count;
   memcpy(m->probe_name, src->probe_name, Q * sizeof *m->probe_name);
   memcpy(m->probe_position, src->probe_position, 3 * Q * sizeof(fascia_real));

@@ -53,6 +53,7 @@ static fascia_model *single_neighbour_model(fascia_ctx *ctx, int law, int32_t *d
     m->sample_offsets[s] = p;
   }
   fascia_model_destroy(&src);
+  m->allow_floating = 1; // the dangling frame's lump is held by nothing, on purpose
   if (fascia_model_build_reverse(ctx, m) != FASCIA_OK || fascia_model_validate(ctx, m, "single neighbours") != FASCIA_OK) {
     fprintf(stderr, "single-neighbour model: %s\n", fascia_ctx_message(ctx));
     fascia_model_destroy(&m);

@@ -267,6 +267,124 @@ static cJSON *provenance(const fascia_prep_scene *scene, const fascia_prep_meshe
   return root;
 }
 
+// The model without the frames of unheld pieces (frame_piece >= 0), their
+// samples and pairs and their coupling entries; organs, motions and materials
+// move over from *mp, which is replaced.
+static fascia_status compact(fascia_ctx *ctx, fascia_model **mp, const int32_t *frame_piece) {
+  fascia_model *m = *mp, *n = NULL;
+  const int32_t N = m->frame_count, S = m->sample_count;
+  int32_t *map = malloc(((size_t)N + 1) * sizeof *map);
+  PREP_CHECK(map, ctx, FASCIA_ERR_MEMORY, "package: out of memory");
+  fascia_model_sizes z;
+  memset(&z, 0, sizeof z);
+  for (int32_t i = 0; i < N; ++i) map[i] = frame_piece[i] < 0 ? z.frames++ : -1;
+  for (int32_t s = 0; s < S; ++s)
+    if (map[m->pair_frame[m->sample_offsets[s]]] >= 0)
+      ++z.samples, z.pairs += m->sample_offsets[s + 1] - m->sample_offsets[s];
+  for (int32_t c = 0; c < m->coupling_count; ++c) z.couplings += map[m->coupling_frame[c]] >= 0;
+  z.materials = m->material_count;
+  z.motions = m->motion_count;
+  z.organs = m->organ_count;
+  fascia_status status = fascia_model_alloc(ctx, &z, &n);
+  if (status != FASCIA_OK) {
+    free(map);
+    return status;
+  }
+  for (int32_t i = 0; i < N; ++i) {
+    const int32_t j = map[i];
+    if (j < 0) continue;
+    memcpy(n->frame_position + 3 * j, m->frame_position + 3 * i, 3 * sizeof(double));
+    memcpy(n->frame_rotation + 4 * j, m->frame_rotation + 4 * i, 4 * sizeof(double));
+    memcpy(n->frame_load + 6 * j, m->frame_load + 6 * i, 6 * sizeof(double));
+    n->frame_kind[j] = m->frame_kind[i];
+    n->frame_motion[j] = m->frame_motion[i];
+    n->frame_organ[j] = m->frame_organ[i];
+  }
+  for (int32_t s = 0, t = 0, q = 0; s < S; ++s) {
+    if (map[m->pair_frame[m->sample_offsets[s]]] < 0) continue;
+    memcpy(n->sample_position + 3 * t, m->sample_position + 3 * s, 3 * sizeof(double));
+    n->sample_volume[t] = m->sample_volume[s];
+    n->sample_material[t] = m->sample_material[s];
+    n->sample_organ[t] = m->sample_organ[s];
+    for (int32_t p = m->sample_offsets[s]; p < m->sample_offsets[s + 1]; ++p, ++q) {
+      n->pair_frame[q] = map[m->pair_frame[p]]; // the order of frames is kept: still ascending
+      n->pair_weight[q] = m->pair_weight[p];
+      memcpy(n->pair_gradient + 3 * q, m->pair_gradient + 3 * p, 3 * sizeof(double));
+    }
+    n->sample_offsets[++t] = q;
+  }
+  for (int32_t c = 0, d = 0; c < m->coupling_count; ++c) {
+    if (map[m->coupling_frame[c]] < 0) continue;
+    n->coupling_organ[d] = m->coupling_organ[c];
+    n->coupling_frame[d] = map[m->coupling_frame[c]];
+    n->coupling_triangle[d] = m->coupling_triangle[c];
+    memcpy(n->coupling_barycentric + 3 * d, m->coupling_barycentric + 3 * c, 3 * sizeof(double));
+    ++d;
+  }
+  free(map);
+  memcpy(n->gravity, m->gravity, sizeof n->gravity);
+  memcpy(n->materials, m->materials, (size_t)m->material_count * sizeof *n->materials);
+  // hand the organs' meshes and the motions' keys over instead of copying them
+  fascia_organ *organs = n->organs;
+  fascia_motion *motions = n->motions;
+  n->organs = m->organs, n->motions = m->motions;
+  m->organs = organs, m->motions = motions;
+  fascia_model_destroy(mp);
+  *mp = n;
+  return fascia_model_build_reverse(ctx, n);
+}
+
+// Tissue that no fixed or prescribed organ holds, directly or through other
+// tissue, a deformable or a rigid organ, would fall for ever in the simulation
+// (the model loader refuses it). Such pieces are dropped and listed in
+// `dropped` (one object each); a tissue left with nothing is refused.
+static fascia_status drop_unheld(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_points *pts,
+                                 fascia_model **mp, cJSON *dropped) {
+  fascia_model *m = *mp;
+  const int32_t N = m->frame_count;
+  int32_t *frame_piece = malloc(((size_t)N + 1) * sizeof *frame_piece);
+  fascia_model_piece *pieces = malloc(((size_t)N + 1) * sizeof *pieces);
+  double *kept = calloc((size_t)scene->tissue_count + 1, sizeof *kept);
+  double *lost = calloc((size_t)scene->tissue_count + 1, sizeof *lost);
+  fascia_status status = FASCIA_OK;
+  int32_t count = 0;
+  PREP_CHECK_GOTO(frame_piece && pieces && kept && lost, ctx, FASCIA_ERR_MEMORY, "package: out of memory");
+  PREP_TRY_GOTO(fascia_model_floating_components(ctx, m, frame_piece, pieces, N, &count));
+  if (count == 0) goto cleanup;
+  for (int32_t s = 0; s < m->sample_count; ++s) {
+    const int32_t t = pts->sample_tissue[s];
+    if (t < 0) continue;
+    if (frame_piece[m->pair_frame[m->sample_offsets[s]]] < 0) kept[t] += m->sample_volume[s];
+    else lost[t] += m->sample_volume[s];
+  }
+  for (int32_t t = 0; t < scene->tissue_count; ++t)
+    PREP_CHECK_GOTO(kept[t] > 0 || lost[t] == 0, ctx, FASCIA_ERR_ARGUMENT, // the scene's problem, as voxelize's
+                    "scene '%s': no part of tissue '%s' (%.3g cm^3) touches a fixed or prescribed organ, directly or "
+                    "through other tissue or organs: nothing holds it and it would fall for ever; make one of the "
+                    "organs it touches fixed or prescribed, or widen its region (max_gap) to reach one",
+                    scene->path, scene->tissues[t].name, 1e6 * lost[t]);
+  for (int32_t k = 0; k < count; ++k) {
+    const fascia_model_piece *q = pieces + k;
+    const int32_t t = pts->frame_tissue[q->first_frame], o = pts->frame_inside_organ[q->first_frame];
+    cJSON *e = cJSON_CreateObject();
+    PREP_CHECK_GOTO(e, ctx, FASCIA_ERR_MEMORY, "package: out of memory");
+    cJSON_AddItemToArray(dropped, e);
+    if (t >= 0) cJSON_AddStringToObject(e, "tissue", scene->tissues[t].name);
+    else if (o >= 0) cJSON_AddStringToObject(e, "organ", scene->organs[o].name);
+    cJSON_AddNumberToObject(e, "volume_m3", q->volume);
+    cJSON_AddNumberToObject(e, "frames", q->frames);
+    cJSON_AddNumberToObject(e, "samples", q->samples);
+    cJSON_AddItemToObject(e, "position_m", vector(q->position, 3));
+  }
+  PREP_TRY_GOTO(compact(ctx, mp, frame_piece));
+cleanup:
+  free(frame_piece);
+  free(pieces);
+  free(kept);
+  free(lost);
+  return status;
+}
+
 fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_meshes *meshes,
                                   const fascia_prep_volume *volume, const fascia_prep_points *points,
                                   const fascia_prep_weights *weights, const fascia_prep_coupling *coupling,
@@ -276,7 +394,7 @@ fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_scene *scen
   *out = NULL;
   fascia_status status = FASCIA_OK;
   fascia_model *m = NULL;
-  cJSON *prov = NULL;
+  cJSON *prov = NULL, *dropped = NULL;
   char *prov_text = NULL;
   int32_t motions = 0;
   for (int32_t o = 0; o < scene->organ_count; ++o) motions += scene->organs[o].kind == FASCIA_ORGAN_PRESCRIBED;
@@ -347,8 +465,15 @@ fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_scene *scen
   memcpy(m->pair_weight, weights->pair_weight, (size_t)weights->pair_count * sizeof(double));
   memcpy(m->pair_gradient, weights->pair_gradient, 3 * (size_t)weights->pair_count * sizeof(double));
   PREP_TRY_GOTO(fascia_model_build_reverse(ctx, m));
-  // provenance
+  dropped = cJSON_CreateArray();
+  PREP_CHECK_GOTO(dropped, ctx, FASCIA_ERR_MEMORY, "package: out of memory");
+  PREP_TRY_GOTO(drop_unheld(ctx, scene, points, &m, dropped));
+  // provenance (its counts are those before the unheld pieces were dropped)
   prov = provenance(scene, meshes, volume, points, weights, coupling, info);
+  cJSON *reports = prov ? cJSON_GetObjectItem(prov, "reports") : NULL;
+  PREP_CHECK_GOTO(reports, ctx, FASCIA_ERR_MEMORY, "package: out of memory for the provenance");
+  cJSON_AddItemToObject(reports, "unheld_pieces_dropped", dropped);
+  dropped = NULL;
   prov_text = prov ? cJSON_PrintUnformatted(prov) : NULL;
   PREP_CHECK_GOTO(prov_text, ctx, FASCIA_ERR_MEMORY, "package: out of memory for the provenance");
   PREP_TRY_GOTO(fascia_model_set_provenance(ctx, m, prov_text));
@@ -357,6 +482,7 @@ fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_scene *scen
   m = NULL;
 cleanup:
   cJSON_Delete(prov);
+  cJSON_Delete(dropped);
   free(prov_text);
   fascia_model_destroy(&m);
   return status;

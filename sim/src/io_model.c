@@ -13,7 +13,9 @@
 // present, also when it has 0 rows.
 //
 //   /                     attributes: fascia_model_version (int32, = 1),
-//                         units ("SI: m, kg, s, Pa"), creator ("fascia X.Y.Z")
+//                         units ("SI: m, kg, s, Pa"), creator ("fascia X.Y.Z"),
+//                         allow_floating (int32 1, optional: pieces held by
+//                         nothing are meant; absent = 0, such pieces refused)
 //   /frames/position      [N,3]  f64  m     rest position x_i, world
 //   /frames/rotation      [N,4]  f64  1     rest rotation, unit quaternion w,x,y,z
 //   /frames/kind          [N]    i32        0 free, 1 fixed, 2 prescribed
@@ -277,7 +279,8 @@ static fascia_status write_model(writer *w, const fascia_model *m) {
   hid_t root = H5Gopen2(w->file, "/", H5P_DEFAULT);
   const int ok = root >= 0 && fascia_h5_attr_int(root, "fascia_model_version", MODEL_VERSION) >= 0 &&
                  fascia_h5_attr_string(root, "units", MODEL_UNITS) >= 0 &&
-                 fascia_h5_attr_string(root, "creator", creator) >= 0;
+                 fascia_h5_attr_string(root, "creator", creator) >= 0 &&
+                 (!m->allow_floating || fascia_h5_attr_int(root, "allow_floating", 1) >= 0);
   if (root >= 0) H5Gclose(root);
   if (!ok) return write_failed(w, "/");
   FASCIA_TRY(write_frames(w, m));
@@ -902,6 +905,14 @@ static fascia_status read_rest(reader *r, fascia_model *m) {
   READ(r, "/coupling/triangle", ELEM_INT, C, 0, m->coupling_triangle);
   READ(r, "/coupling/barycentric", ELEM_REAL, C, 3, m->coupling_barycentric);
   READ(r, "/gravity", ELEM_REAL, 3, 0, m->gravity);
+  // optional: absent in files of models that must be held everywhere
+  const htri_t floating = H5Aexists_by_name(r->file, "/", "allow_floating", H5P_DEFAULT);
+  if (floating > 0) {
+    FASCIA_TRY(read_int_attr(r, "/", "allow_floating", &m->allow_floating));
+    FASCIA_CHECK(m->allow_floating == 0 || m->allow_floating == 1, r->ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' /: attribute 'allow_floating' is %d, not 0 or 1; %s", r->path, (int)m->allow_floating,
+                 REMEDY);
+  }
   return read_provenance(r, &m->provenance);
 }
 

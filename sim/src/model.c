@@ -447,6 +447,36 @@ static fascia_status validate_organs(fascia_ctx *ctx, const fascia_model *m, con
   return FASCIA_OK;
 }
 
+// A piece that nothing holds falls for ever: the static solve has no
+// equilibrium and a dynamic run only tracks the fall. Refused unless the model
+// says it is meant to float; the message names the largest such piece.
+static fascia_status validate_held(fascia_ctx *ctx, const fascia_model *m, const char *origin) {
+  if (m->allow_floating) return FASCIA_OK;
+  fascia_model_piece *pieces = fascia_calloc(m->frame_count, sizeof *pieces);
+  FASCIA_CHECK(pieces, ctx, FASCIA_ERR_MEMORY, "model '%s': out of memory for its connectivity", origin);
+  int32_t count = 0;
+  const fascia_status status = fascia_model_floating_components(ctx, m, NULL, pieces, m->frame_count, &count);
+  if (status != FASCIA_OK || count == 0) {
+    free(pieces);
+    return status;
+  }
+  int32_t big = 0;
+  fascia_real volume = 0;
+  for (int32_t k = 0; k < count; ++k) {
+    volume += pieces[k].volume;
+    if (pieces[k].volume > pieces[big].volume) big = k;
+  }
+  const fascia_model_piece q = pieces[big];
+  free(pieces);
+  return FASCIA_FAIL(ctx, FASCIA_ERR_FORMAT,
+                     "model '%s': %d piece(s) (%.3g cm^3 in all) are held by nothing (no fixed or prescribed frame, "
+                     "no organ that is): the largest, %d frames and %d samples (%.3g cm^3) around frame %d at "
+                     "(%.4g, %.4g, %.4g) m, would fall for ever; re-run 'fascia prep' (it drops such pieces), attach "
+                     "it, or mark the model as meant to float (allow_floating)",
+                     origin, (int)count, volume * 1e6, (int)q.frames, (int)q.samples, q.volume * 1e6,
+                     (int)q.first_frame, q.position[0], q.position[1], q.position[2]);
+}
+
 fascia_status fascia_model_validate(fascia_ctx *ctx, const fascia_model *m, const char *origin) {
   FASCIA_CHECK(m, ctx, FASCIA_ERR_ARGUMENT, "fascia_model_validate: NULL model");
   if (!origin) origin = "(memory)";
@@ -461,6 +491,7 @@ fascia_status fascia_model_validate(fascia_ctx *ctx, const fascia_model *m, cons
   FASCIA_TRY(validate_reverse(ctx, m, origin));
   FASCIA_TRY(validate_probes(ctx, m, origin));
   FASCIA_TRY(validate_organs(ctx, m, origin));
+  FASCIA_TRY(validate_held(ctx, m, origin));
   return FASCIA_OK;
 }
 

@@ -51,3 +51,12 @@ void fascia_motion_frame(const fascia_model *m, int32_t i, fascia_real t, fascia
   fascia_pt_quat_mul(Q, m->frame_rotation + 4 * i, q);
   fascia_pt_quat_normalize(q);
 }
+
+fascia_real fascia_model_motion_end(const fascia_model *m) {
+  fascia_real end = 0;
+  for (int32_t k = 0; m && k < m->motion_count; ++k) {
+    const fascia_motion *mo = m->motions + k;
+    if (mo->key_count > 0 && mo->key_time[mo->key_count - 1] > end) end = mo->key_time[mo->key_count - 1];
+  }
+  return end;
+}

@@ -576,6 +576,14 @@ fascia_status fascia_solver_step(fascia_solver *S, fascia_solve_report *report) 
 }
 
 fascia_real fascia_solver_time(const fascia_solver *S) { return S->time; }
+
+fascia_status fascia_solver_set_time(fascia_solver *S, fascia_real time) {
+  FASCIA_CHECK(S, NULL, FASCIA_ERR_ARGUMENT, "NULL solver");
+  FASCIA_CHECK(isfinite(time) && time >= 0, S->ctx, FASCIA_ERR_ARGUMENT,
+               "fascia_solver_set_time: time %g s is not a finite number >= 0", time);
+  S->time = time;
+  return FASCIA_OK;
+}
 const char *fascia_solver_backend(const fascia_solver *S) { return S->backend_name; }
 const char *fascia_solver_device(const fascia_solver *S) { return S->device_text; }
 const fascia_real *fascia_solver_frame_positions(const fascia_solver *S) { return S->x; }

@@ -217,6 +217,22 @@ static void print_summary(const prep_run *r, const step_clock *c, const char *ou
               (int)(samples / sc->tissues[t].samples_per_tet), 1e6 * sample_volume,
               tr->volume > 0 ? 100 * sample_volume / tr->volume : 0, (int)sc->tissues[t].samples_per_tet);
   }
+  cJSON *prov = r->model->provenance ? cJSON_Parse(r->model->provenance) : NULL;
+  const cJSON *dropped = cJSON_GetObjectItem(cJSON_GetObjectItem(prov, "reports"), "unheld_pieces_dropped");
+  const cJSON *e;
+  cJSON_ArrayForEach(e, dropped) {
+    const cJSON *t = cJSON_GetObjectItem(e, "tissue"), *o = cJSON_GetObjectItem(e, "organ");
+    const cJSON *x = cJSON_GetObjectItem(e, "position_m");
+    fprintf(stderr,
+            "dropped: a piece of %s '%s' that nothing holds (no fixed or prescribed organ, directly or through "
+            "other tissue or organs): %.3g cm^3, %d frames, %d samples, near (%.4g, %.4g, %.4g) m\n",
+            cJSON_IsString(t) ? "tissue" : "organ", cJSON_IsString(t) ? t->valuestring : cJSON_IsString(o) ? o->valuestring : "?",
+            1e6 * cJSON_GetNumberValue(cJSON_GetObjectItem(e, "volume_m3")),
+            (int)cJSON_GetNumberValue(cJSON_GetObjectItem(e, "frames")),
+            (int)cJSON_GetNumberValue(cJSON_GetObjectItem(e, "samples")), cJSON_GetNumberValue(cJSON_GetArrayItem(x, 0)),
+            cJSON_GetNumberValue(cJSON_GetArrayItem(x, 1)), cJSON_GetNumberValue(cJSON_GetArrayItem(x, 2)));
+  }
+  cJSON_Delete(prov);
   fprintf(stderr, "model: %d frames (%d shared), %d samples, %d pairs, tissue volume %.6g m^3, linear reproduction "
                   "error %.2g m\n",
           (int)r->model->frame_count, (int)r->coupling->count, (int)r->model->sample_count,
@@ -251,6 +267,11 @@ static void print_json(const prep_run *r, const step_clock *c, const char *outpu
   for (int32_t o = 0; o < r->meshes->count; ++o)
     cJSON_AddNumberToObject(coupling, r->meshes->organs[o].name, r->coupling->per_organ[o]);
   cJSON_AddNumberToObject(root, "max_linear_reproduction_error", r->weights->max_linear_error);
+  // pieces that nothing held, dropped by prep (its provenance lists them)
+  cJSON *prov = r->model->provenance ? cJSON_Parse(r->model->provenance) : NULL;
+  cJSON *dropped = cJSON_DetachItemFromObject(cJSON_GetObjectItem(prov, "reports"), "unheld_pieces_dropped");
+  cJSON_AddItemToObject(root, "unheld_pieces_dropped", dropped ? dropped : cJSON_CreateArray());
+  cJSON_Delete(prov);
   cJSON *tissues = cJSON_AddArrayToObject(root, "tissues");
   for (int32_t t = 0; t < v->tissue_count; ++t) {
     cJSON *e = cJSON_CreateObject();

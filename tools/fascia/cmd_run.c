@@ -36,6 +36,8 @@ static const char run_usage[] =
     "\n"
     "Solves a model file: static equilibrium (default) or N implicit Euler steps.\n"
     "  --static               static equilibrium under gravity and loads (the default)\n"
+    "  --static-time T        the time (s) the equilibrium is for: prescribed organs stand where\n"
+    "                         their motions put them then (default: the end of the motions)\n"
     "  --steps N              N implicit (backward) Euler steps instead\n"
     "  --dt S                 time step, s (default 0.01; needs --steps)\n"
     "  -o RESULTS.h5          write frame states (HDF5) and RESULTS.xdmf for ParaView\n"
@@ -71,7 +73,9 @@ static const char run_usage[] =
     "  --preset NAME          interactive, balanced or accurate: solver settings measured by\n"
     "                         'fascia tradeoff' (tools/bench/README.md) for dynamic runs; options\n"
     "                         after it override it; a static solve keeps its Newton limit of 100\n"
-    "  --verbose              on failure, also print where the error was found\n"
+    "  --verbose              on failure, also print where the error was found\n";
+// the rest of the help, split off: C99 guarantees string literals of 4095 bytes only
+static const char run_usage_notes[] =
     "Progress with the time left goes to stderr when it is a terminal (or FASCIA_PROGRESS=1).\n"
     "Every output is written as NAME.tmp-PID-K and renamed when complete; the next run writing\n"
     "it removes those a killed run left. SIGINT/SIGTERM (also repeated) stop a dynamic run after\n"
@@ -170,6 +174,9 @@ typedef struct run_options {
   const char *model_path, *results_path;
   int dynamic, static_given, steps, save_every, samples, json, threads;
   int newton_given;
+  int static_time_given;  ///< --static-time T
+  fascia_real static_time; ///< s: the time the static equilibrium is for
+  const char *static_time_why; ///< where static_time came from, in words
   fascia_solver_def solver;
   const checkpoint_options *checkpoint; ///< --checkpoint, --resume (issue 7); NULL: none
   run_outputs *outputs;                 ///< --history, --organs, --snapshots (issue 5); NULL: none
@@ -187,6 +194,7 @@ static int parse_options(int argc, char **argv, run_options *opt, const fascia_s
     const char *o = argv[k];
     if (!strcmp(o, "--help") || !strcmp(o, "-h")) {
       fputs(run_usage, stdout);
+      fputs(run_usage_notes, stdout);
       return 0;
     }
     if (o[0] != '-' || !o[1]) {
@@ -208,7 +216,7 @@ static int parse_options(int argc, char **argv, run_options *opt, const fascia_s
                                            "--threads", "--newton-iterations", "--newton-tolerance",
                                            "--cg-iterations", "--cg-tolerance", "--precond", "--mass", "--damping",
                                            "--load-steps", "--linear-solver", "--preset", "--step-retries",
-                                           "--blow-up-strain"};
+                                           "--blow-up-strain", "--static-time"};
       int known = 0;
       for (size_t j = 0; j < sizeof valued / sizeof valued[0]; ++j) known |= !strcmp(o, valued[j]);
       if (!known) return cli_usage_error("run", "unknown option '%s'", o);
@@ -244,6 +252,8 @@ static int parse_options(int argc, char **argv, run_options *opt, const fascia_s
         ok = cli_preset_apply(v, d); // a static solve keeps its own Newton limit (100)
       } else if (!strcmp(o, "--damping")) ok = cli_parse_real(v, &d->mass_damping) && d->mass_damping >= 0;
       else if (!strcmp(o, "--step-retries")) ok = cli_parse_count(v, &d->step_retries, 0);
+      else if (!strcmp(o, "--static-time"))
+        ok = cli_parse_real(v, &opt->static_time) && opt->static_time >= 0, opt->static_time_given = 1;
       else if (!strcmp(o, "--blow-up-strain")) ok = cli_parse_real(v, &d->blow_up_strain) && d->blow_up_strain >= 0;
       else ok = cli_parse_count(v, &d->load_steps, 1); // --load-steps
       if (!ok) {
@@ -255,6 +265,8 @@ static int parse_options(int argc, char **argv, run_options *opt, const fascia_s
   }
   if (!opt->model_path) return cli_usage_error("run", "%s", "missing MODEL.h5, the model file to run");
   if (opt->static_given && opt->dynamic) return cli_usage_error("run", "%s", "--static and --steps exclude each other");
+  if (opt->static_time_given && opt->dynamic)
+    return cli_usage_error("run", "%s", "--static-time is for a static solve; it excludes --steps");
   if (dt_given && !opt->dynamic) return cli_usage_error("run", "%s", "--dt needs --steps N (a dynamic run)");
   if (!opt->dynamic && !opt->newton_given) opt->solver.newton_iterations = 100;
   return -1;
@@ -397,7 +409,8 @@ static void print_text(const run_options *opt, const fascia_model *m, fascia_sol
     printf("run         %d of %d implicit Euler steps of %g s%s, t = %g s\n", t->steps, opt->steps,
            opt->solver.time_step, t->interrupted ? " (interrupted)" : "", fascia_solver_time(solver));
   else
-    printf("run         static equilibrium, %s\n", t->converged_steps == t->steps ? "converged" : "NOT converged");
+    printf("run         static equilibrium at t = %g s (%s), %s\n", opt->static_time, opt->static_time_why,
+           t->converged_steps == t->steps ? "converged" : "NOT converged");
   printf("backend     %s\n", fascia_solver_backend(solver));
   printf("device      %s\n", fascia_solver_device(solver));
   printf("linear      %s\n", linear_name(t));
@@ -462,6 +475,10 @@ static int print_json(const run_options *opt, const fascia_model *m, fascia_solv
   cJSON *root = cJSON_CreateObject();
   cJSON_AddStringToObject(root, "model", opt->model_path);
   cJSON_AddStringToObject(root, "mode", opt->dynamic ? "dynamic" : "static");
+  if (!opt->dynamic) {
+    cJSON_AddNumberToObject(root, "static_time", opt->static_time);
+    cJSON_AddStringToObject(root, "static_time_of", opt->static_time_why);
+  }
   cJSON_AddStringToObject(root, "backend", fascia_solver_backend(solver));
   cJSON_AddStringToObject(root, "device", fascia_solver_device(solver));
   cJSON_AddStringToObject(root, "linear_solver", linear_name(t));
@@ -768,6 +785,14 @@ int cmd_run(int argc, char **argv) {
     st = run_steps(solver, &opt, res, buffers, &tot);
   } else {
     fascia_solve_report report;
+    // prescribed organs stand where their motions end, unless told otherwise:
+    // the equilibrium at t = 0 would ignore the motion altogether
+    const fascia_real end = fascia_model_motion_end(model);
+    if (!opt.static_time_given) opt.static_time = end;
+    opt.static_time_why = opt.static_time_given ? "given by --static-time"
+                          : model->motion_count > 0 ? "the end of the prescribed motions"
+                                                    : "no prescribed motion";
+    if ((st = fascia_solver_set_time(solver, opt.static_time)) != FASCIA_OK) goto done;
     const double t0 = cli_now_ms();
     st = fascia_solver_solve_static(solver, &report);
     tot.solve_ms = cli_now_ms() - t0;

@@ -163,6 +163,10 @@ typedef struct fascia_model {
   fascia_real *coupling_barycentric; ///< [3 couplings]
 
   fascia_real gravity[3]; ///< m/s^2, world
+  /// 1: the model may hold pieces that nothing fixes or prescribes (a body in
+  /// free fall, a rigid organ tossed with its tissue); 0, the default: such a
+  /// piece is a model error (fascia_model_validate refuses it).
+  int32_t allow_floating;
   char *provenance;       ///< JSON text: what made this model, from what (may be NULL)
 } fascia_model;
 
@@ -190,6 +194,29 @@ FASCIA_API fascia_status fascia_model_build_reverse(fascia_ctx *ctx, fascia_mode
 /// forward one, materials in range. `origin` names the model in messages
 /// (file path, or "beam generator"). Nothing is changed.
 FASCIA_API fascia_status fascia_model_validate(fascia_ctx *ctx, const fascia_model *model, const char *origin);
+
+/// A connected piece of a model (frames joined by the samples on them and by
+/// the rigid organ they follow) that no fixed or prescribed frame holds.
+typedef struct fascia_model_piece {
+  int32_t frames, samples;
+  fascia_real volume;      ///< m^3, its samples'
+  int32_t first_frame;     ///< its lowest frame index
+  fascia_real position[3]; ///< rest position of that frame, m
+} fascia_model_piece;
+
+/// Finds the pieces of the model that nothing holds: a piece is held when one
+/// of its frames is fixed or prescribed (the coupling frames of fixed and
+/// prescribed organs are), or when no sample weighs on it (a lone frame
+/// carries no mass); a deformable organ's frames and the tissue's form
+/// one graph through the samples, and a rigid organ's coupling frames are one
+/// piece with the body. *count is the number of unheld pieces, numbered by
+/// their lowest frame; the first `capacity` are described in `pieces`.
+/// frame_piece, if not NULL, receives for each frame its piece number, -1 for
+/// held frames. The model must be valid in its indices (fascia_model_validate
+/// calls this last).
+FASCIA_API fascia_status fascia_model_floating_components(fascia_ctx *ctx, const fascia_model *model,
+                                                          int32_t *frame_piece, fascia_model_piece *pieces,
+                                                          int32_t capacity, int32_t *count);
 
 /// Total sample volume (m^3) and mass (kg).
 FASCIA_API fascia_real fascia_model_volume(const fascia_model *model);
@@ -226,6 +253,10 @@ FASCIA_API fascia_status fascia_model_save(fascia_ctx *ctx, const fascia_model *
 /// close it) and, with its printer on, prints "HDF5: infinite loop closing
 /// library" and a line of its internal names at exit.
 FASCIA_API void fascia_hdf5_quiet(void);
+
+/// Time of the last key of the model's motions (s): from then on every
+/// prescribed frame stays where it is. 0 without motions.
+FASCIA_API fascia_real fascia_model_motion_end(const fascia_model *model);
 
 /// Probe index by name, -1 if absent.
 FASCIA_API int32_t fascia_model_find_probe(const fascia_model *model, const char *name);

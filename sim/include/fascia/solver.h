@@ -131,6 +131,11 @@ FASCIA_API fascia_status fascia_solver_step(fascia_solver *solver, fascia_solve_
 FASCIA_API fascia_status fascia_solver_solve_static(fascia_solver *solver, fascia_solve_report *report);
 
 FASCIA_API fascia_real fascia_solver_time(const fascia_solver *solver);
+/// Sets the solver's time (s, finite, >= 0) without moving anything: the next
+/// static solve places the prescribed frames on their motions at that time
+/// (say, fascia_model_motion_end, for the equilibrium once the organs have
+/// moved), the next step starts there.
+FASCIA_API fascia_status fascia_solver_set_time(fascia_solver *solver, fascia_real time);
 /// The backend the solver runs on: "cpu", "cuda" or "emulated".
 FASCIA_API const char *fascia_solver_backend(const fascia_solver *solver);
 /// What it runs on, in words: the GPU's name, or the CPU threads; for a
