@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// C-only interface of the three C++ adapters (STYLE.md sec. 9): assimp reads
+// C-only interface of the three C++ adapters: assimp reads
 // mesh files, CGAL checks and repairs surfaces and answers closest-point
 // queries, OpenVDB computes unsigned distances. No C++ type crosses; every
 // function catches all exceptions into a status and a message on the ctx.

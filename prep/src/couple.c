@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
 // Stage 6, coupling: which tissue frames are shared with which organ, and
-// where each sits on the organ's surface (DESIGN.md "Coupling"). Surface
+// where each sits on the organ's surface (docs/organs.md). Surface
 // frames were placed exactly on an organ surface by the sampling (closest
 // point, so the triangle is known); interior frames keep farther than the
 // tissue's coupling tolerance from every organ, so the shared frames are

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
 // Stage 5, shape functions: the weights and rest-space gradients that tie
-// each sample to its frames (DESIGN.md "The mechanics"; paper sec. 2.1).
+// each sample to its frames (docs/mechanics.md; paper sec. 2.1).
 //
 // MLS (meshless). The neighbours of a sample are the frames nearest to it
 // *through the region*: a Dijkstra search over the tissue's voxels

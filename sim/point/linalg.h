@@ -153,7 +153,7 @@ static inline FASCIA_HD void fascia_pt_quat_normalize(fascia_real *q) {
 }
 
 /// q <- exp(t) q : rotates frame rotation q by the world-space angle t (the
-/// solver's rotation update, DESIGN.md "a rotation variation").
+/// solver's rotation update, docs/mechanics.md).
 static inline FASCIA_HD void fascia_pt_quat_rotate_by(const fascia_real *t, fascia_real *q) {
   fascia_real e[4], r[4];
   fascia_pt_quat_exp(t, e);

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// Per-sample mechanics of the frame scheme (paper sec. 2.1-2.2, DESIGN.md
-// "The mechanics"): deformation gradient, energy, partial forces on each
+// Per-sample mechanics of the frame scheme (paper sec. 2.1-2.2,
+// docs/mechanics.md): deformation gradient, energy, partial forces on each
 // neighbour frame, and partial stiffness products. One call handles one
 // sample and writes one 6-vector per sample-frame pair; the per-frame sums go
 // through the reverse table elsewhere (no atomics, deterministic).

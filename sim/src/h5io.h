@@ -3,7 +3,7 @@
 // HDF5 plumbing shared by the model and results files (io_model.c,
 // io_results.c): silencing HDF5's own error printing, turning its error stack
 // into one readable phrase, and writing a file under a temporary name that is
-// renamed into place only once it is complete (STYLE.md sec. 10).
+// renamed into place only once it is complete.
 #ifndef FASCIA_SRC_H5IO_H
 #define FASCIA_SRC_H5IO_H
 

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
 // Newton minimization of a step's objective over the free DOFs, the solver's
-// one nonlinear loop (DESIGN.md "implicit (backward) Euler with Newton
-// iterations"; the static solve is the same loop without inertia).
+// one nonlinear loop (implicit backward Euler with Newton
+// iterations, docs/mechanics.md; the static solve is the same loop without inertia).
 //
 //   static:  Phi(d) = E(q (+) d), re-anchored at every accepted iterate, so
 //            the Hessian used is exact.

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// Organ models in the solver (DESIGN.md "Coupling", paper sec. 4.2 "coupling
+// Organ models in the solver (docs/organs.md, paper sec. 4.2 "coupling
 // with a rigid object": the frames of the tissue that lie on the rigid
 // surface have a rigid motion with respect to the body), and the C API of
 // fascia/organs.h for an outside simulator.

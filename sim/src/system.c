@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// CPU operators of the frame scheme (paper sec. 2 and 3.2, DESIGN.md "The
-// mechanics"): per-sample work in parallel into a pair buffer, then one
+// CPU operators of the frame scheme (paper sec. 2 and 3.2,
+// docs/mechanics.md): per-sample work in parallel into a pair buffer, then one
 // per-frame gather through the reverse table, as the paper's two GPU kernels
 // do. See system.h for the contract.
 #include <stdlib.h>

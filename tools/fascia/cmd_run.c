@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
 // `fascia run MODEL.h5`: loads a model, solves it statically or with
-// implicit Euler steps (DESIGN.md "The mechanics"), optionally writes the
+// implicit Euler steps (docs/mechanics.md), optionally writes the
 // results file (HDF5 + XDMF), and prints a summary: steps, ms per step,
 // Newton and CG iterations, each probe's displacement, the largest strain;
 // as text or as one JSON object on stdout (the CLI contract of issue 2).

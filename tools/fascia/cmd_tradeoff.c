@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// `fascia tradeoff`: speed against accuracy, measured (issue 6; DESIGN.md
-// "Speed against accuracy"). Three groups of rows, each error against
+// `fascia tradeoff`: speed against accuracy, measured (tools/bench/README.md). Three groups of rows, each error against
 // milliseconds and memory:
 //   discretization  static tip deflection of the paper's cantilever (sec. 4.1)
 //                   over shape kinds, frame grids, samples and neighbours, for

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// The paper's cantilever (Bosman et al. 2013 sec. 4.1; DESIGN.md "Reference
-// figures"): a 16 x 1 x 1 m beam along x, clamped at x = 0, 5 kg,
+// The paper's cantilever (Bosman et al. 2013 sec. 4.1;
+// docs/mechanics.md): a 16 x 1 x 1 m beam along x, clamped at x = 0, 5 kg,
 // E = 40000 Pa, nu = 0.3, under its own weight, with frames on a regular grid
 // and hexahedral, tetrahedral or meshless shape functions.
 //

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
 // Preprocessing: from organ surface meshes and a scene file to a packaged
-// connective-tissue model (DESIGN.md "The two stages", issue 3). One function
+// connective-tissue model (README.md). One function
 // per stage, each taking the context, the scene (the def), its inputs and its
 // outputs:
 //

@@ -3,7 +3,7 @@
 // The model: frames (6 DOF), samples (integration points), the two neighbour
 // tables, materials, boundary conditions, probes, organs and coupling. This is
 // what the model file holds (schema in docs/model-format.md) and what prep
-// builds. DESIGN.md "The mechanics" gives the notation.
+// builds. docs/mechanics.md gives the notation.
 //
 // Unlike most fascia objects the model is a plain structure of arrays: prep,
 // scene generators and the file reader fill it directly, and every backend

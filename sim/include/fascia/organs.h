@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// Organs in the solver (DESIGN.md "Coupling", paper sec. 4.2): the pose of
+// Organs in the solver (docs/organs.md, paper sec. 4.2): the pose of
 // fixed, prescribed and rigid organs, and the C API through which an outside
 // simulator drives the coupling frames of an organ and reads back the forces
 // the tissue applies on them.
