@@ -103,4 +103,26 @@ static inline int cli_file_exists(const char *path) {
   return f != NULL;
 }
 
+/// Writes the smallest prep scene into dir: a tetrahedron mesh a.obj used
+/// by two organs A and B, one tissue between them (scene and mesh get the
+/// paths, each of 1024 bytes). 1 on success.
+static inline int cli_write_tiny_scene(const char *dir, char *scene, char *mesh) {
+  snprintf(mesh, 1024, "%s/a.obj", dir);
+  snprintf(scene, 1024, "%s/s.json", dir);
+  FILE *f = fopen(mesh, "w");
+  if (!f) return 0;
+  fputs("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n", f);
+  fclose(f);
+  f = fopen(scene, "w");
+  if (!f) return 0;
+  fputs("{\"fascia_scene\": 1, \"voxel_size\": 0.02,\n"
+        " \"materials\": {\"soft\": {\"youngs_modulus\": 3000, \"poisson_ratio\": 0.3}},\n"
+        " \"organs\": [{\"name\": \"A\", \"mesh\": \"a.obj\"}, {\"name\": \"B\", \"mesh\": \"a.obj\"}],\n"
+        " \"tissues\": [{\"name\": \"gap\", \"connects\": [\"A\", \"B\"], \"max_gap\": 0.1,\n"
+        "  \"material\": \"soft\", \"frame_spacing\": 0.1, \"sample_spacing\": 0.05}]}\n",
+        f);
+  fclose(f);
+  return 1;
+}
+
 #endif

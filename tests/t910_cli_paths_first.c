@@ -78,21 +78,7 @@ int main(int argc, char **argv) {
 #ifdef FASCIA_HAVE_PREP
   // prep: the whole pipeline used to run before the missing folder showed
   char scene[1024], mesh[1024];
-  snprintf(scene, sizeof scene, "%s/s.json", dir);
-  snprintf(mesh, sizeof mesh, "%s/a.obj", dir);
-  FILE *f = fopen(mesh, "w");
-  CHECK(f);
-  fputs("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n", f);
-  fclose(f);
-  f = fopen(scene, "w");
-  CHECK(f);
-  fputs("{\"fascia_scene\": 1, \"voxel_size\": 0.02,\n"
-        " \"materials\": {\"soft\": {\"youngs_modulus\": 3000, \"poisson_ratio\": 0.3}},\n"
-        " \"organs\": [{\"name\": \"A\", \"mesh\": \"a.obj\"}, {\"name\": \"B\", \"mesh\": \"a.obj\"}],\n"
-        " \"tissues\": [{\"name\": \"gap\", \"connects\": [\"A\", \"B\"], \"max_gap\": 0.1,\n"
-        "  \"material\": \"soft\", \"frame_spacing\": 0.1, \"sample_spacing\": 0.05}]}\n",
-        f);
-  fclose(f);
+  CHECK(cli_write_tiny_scene(dir, scene, mesh));
   snprintf(args, sizeof args, "prep '%s' -o '%s/m.h5'", scene, missing);
   failures += refused_early(fascia, args, 1, missing, "does not exist", err);
   snprintf(args, sizeof args, "prep '%s' -o ''", scene);
