@@ -834,7 +834,10 @@ done:
   else if (rc < 0) rc = 0;
   (void)run_outputs_end(&outs, solver, 0); // closes what is still open after an error
   fascia_results_destroy(&res);
-  if (signals_caught) restore_signals(old_signals); // every output is closed or removed
+  // Every output is closed or removed. A run a signal stopped keeps catching
+  // them until it exits: a repeated Ctrl-C that lands after the outputs are
+  // closed must not turn "exit 1, steps saved" into "killed by a signal".
+  if (signals_caught && !run_stop_requested) restore_signals(old_signals);
   run_drive_free(&drive);
   free(buffers[0]), free(buffers[1]), free(buffers[2]);
   free(tot.newton_per_step), free(tot.cg_per_step);
