@@ -1,17 +1,18 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// The solver on the device: the model's arrays uploaded once, and the Newton
-// loop of newton.c driving the device through a launcher (launch.h). The
-// loop reads a few scalars per Newton iteration (energy, slope, gradient
-// norm); conjugate gradients run entirely on the device, their scalar logic
-// in kernels (items.h), as recorded launch sequences (CUDA graphs): a fixed
+// The device backend of the core's Newton loop (sim/src/backend.h): the
+// model's arrays uploaded once, and every operation of the loop run on the
+// device through a launcher (launch.h), on a GPU or in the host emulation.
+// The loop reads a few scalars per operation (energy, slope, gradient norm);
+// conjugate gradients run entirely on the device, their scalar logic in
+// kernels (items.h), as recorded launch sequences (CUDA graphs): a fixed
 // count in one sequence, a tolerance in chunks whose end the host checks.
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "device.h"
-#include "organs.h"
+#include "backend.h"
+#include "launch.h"
 
 #define CG_CHUNK 8 // CG iterations per recorded chunk in tolerance mode
 #define MAX_BUFFERS 64
@@ -19,8 +20,11 @@
 
 enum { SLOT_CG_FIXED = 0, SLOT_CG_CHUNK = 1 };
 
-struct fascia_device {
+typedef struct fascia_device {
+  fascia_backend base;
   fascia_ctx *ctx;
+  fascia_system *sys;            ///< the host system: its energies and inversions follow the device's
+  int32_t frame_count;
   const fascia_launcher_ops *ops;
   fascia_launcher *L;
   fascia_dev D;                  ///< device pointers, passed to every launch
@@ -37,20 +41,12 @@ struct fascia_device {
   int pinned_count;
   fascia_real *zeros;            ///< host [6N]
   char name[256];
-};
+} fascia_device;
 
-const fascia_launcher_ops *fascia_device_ops(const char *backend) {
-  if (backend && !strcmp(backend, "emulated")) return &fascia_launcher_emulated;
-#ifdef FASCIA_HAVE_CUDA
-  if (backend && !strcmp(backend, "cuda")) return &fascia_launcher_cuda;
-#endif
-  return NULL;
-}
-
-int fascia_device_supports(const fascia_solver *S, char *why, size_t size) {
-  const fascia_solver_def *def = &S->def;
+static int device_supports(const fascia_backend_setup *setup, char *why, size_t size) {
+  const fascia_solver_def *def = setup->def;
   const char *reason = NULL;
-  if (fascia_organs_body_count(S->organs) > 0) reason = "rigid organs are solved on the CPU only";
+  if (setup->rigid_bodies > 0) reason = "rigid organs are solved on the CPU only";
   else if (def->linear_solver == FASCIA_LINEAR_DIRECT) reason = "the direct linear solver runs on the CPU only";
   else if (def->assembled) reason = "the assembled matrix runs on the CPU only (the device is matrix-free)";
   else if (def->single_precision_matrix) reason = "the float matrix runs on the CPU only";
@@ -76,9 +72,9 @@ static fascia_status put(fascia_device *dev, const void *host, size_t bytes, voi
 #define MAKE(field, count, type) FASCIA_TRY(make(dev, (size_t)(count) * sizeof(type), (void **)&D->field))
 #define PUT(field, host, count, type) FASCIA_TRY(put(dev, (host), (size_t)(count) * sizeof(type), (void **)&D->field))
 
-static fascia_status upload_model(fascia_device *dev, const fascia_solver *S) {
-  const fascia_system *sys = S->sys;
-  const fascia_model *m = S->model;
+static fascia_status upload_model(fascia_device *dev, const fascia_backend_setup *setup) {
+  const fascia_system *sys = setup->sys;
+  const fascia_model *m = setup->model;
   const int64_t N = m->frame_count, Sn = m->sample_count, P = m->pair_count;
   fascia_dev *D = &dev->D;
   D->frame_count = m->frame_count;
@@ -116,7 +112,7 @@ static fascia_status upload_model(fascia_device *dev, const fascia_solver *S) {
   PUT(frame_moment, sys->frame_moment, 3 * N, fascia_real);
   PUT(frame_load, m->frame_load, 6 * N, fascia_real);
   PUT(rest_rotation, m->frame_rotation, 4 * N, fascia_real);
-  PUT(mask, S->mask, 6 * N, unsigned char);
+  PUT(mask, setup->mask, 6 * N, unsigned char);
   // state and work
   MAKE(x_base, 3 * N, fascia_real);
   MAKE(q_base, 4 * N, fascia_real);
@@ -143,7 +139,7 @@ static fascia_status upload_model(fascia_device *dev, const fascia_solver *S) {
   MAKE(frame_terms, 4 * N, fascia_real);
   MAKE(pair_buffer, 6 * P, fascia_real);
   MAKE(pair_mass, 6 * P, fascia_real);
-  if (S->def.precond != FASCIA_PRECOND_NONE) MAKE(pair_blocks, 36 * P, fascia_real);
+  if (setup->def->precond != FASCIA_PRECOND_NONE) MAKE(pair_blocks, 36 * P, fascia_real);
   MAKE(cache, Sn * FASCIA_PT_CACHE_SIZE, fascia_real);
   MAKE(sample_energy, Sn, fascia_real);
   MAKE(sample_flags, Sn, int);
@@ -157,57 +153,57 @@ static fascia_status upload_model(fascia_device *dev, const fascia_solver *S) {
 #undef MAKE
 #undef PUT
 
-void fascia_device_destroy(fascia_device **out) {
-  if (!out || !*out) return;
-  fascia_device *dev = *out;
+static void device_destroy(fascia_backend *backend) {
+  fascia_device *dev = (fascia_device *)backend;
+  if (!dev) return;
   for (int k = 0; k < dev->buffer_count; ++k) dev->ops->release(dev->L, dev->buffers[k]);
   for (int k = 0; k < dev->pinned_count; ++k) dev->ops->unpin(dev->L, dev->pinned[k]);
   if (dev->L) dev->ops->destroy(dev->L);
   free(dev->zeros);
   free(dev);
-  *out = NULL;
 }
 
-fascia_status fascia_device_create(fascia_solver *S, const fascia_launcher_ops *ops, fascia_device **out) {
+static fascia_status device_create(const fascia_backend_setup *setup, const fascia_backend_ops *backend,
+                                   const fascia_launcher_ops *ops, fascia_backend **out) {
   *out = NULL;
   fascia_device *dev = calloc(1, sizeof *dev);
-  FASCIA_CHECK(dev, S->ctx, FASCIA_ERR_MEMORY, "device: out of memory");
-  dev->ctx = S->ctx;
+  FASCIA_CHECK(dev, setup->ctx, FASCIA_ERR_MEMORY, "device: out of memory");
+  dev->base.ops = backend;
+  dev->ctx = setup->ctx;
+  dev->sys = setup->sys;
+  dev->frame_count = setup->model->frame_count;
   dev->ops = ops;
-  dev->zeros = calloc(6 * (size_t)S->frame_count + 1, sizeof(fascia_real));
-  fascia_status status = dev->zeros ? FASCIA_OK : FASCIA_FAIL(S->ctx, FASCIA_ERR_MEMORY, "device: out of memory");
-  if (status == FASCIA_OK) status = ops->create(S->ctx, S->sys->threads, &dev->L);
-  if (status == FASCIA_OK) status = upload_model(dev, S);
+  dev->zeros = calloc(6 * (size_t)dev->frame_count + 1, sizeof(fascia_real));
+  fascia_status status = dev->zeros ? FASCIA_OK : FASCIA_FAIL(setup->ctx, FASCIA_ERR_MEMORY, "device: out of memory");
+  if (status == FASCIA_OK) status = ops->create(setup->ctx, setup->sys->threads, &dev->L);
+  if (status == FASCIA_OK) status = upload_model(dev, setup);
   if (status == FASCIA_OK) status = ops->finish(dev->L);
   if (status != FASCIA_OK) {
-    fascia_device_destroy(&dev);
+    device_destroy(&dev->base);
     return status;
   }
   // the state crosses every step: page-locked, it copies at the link's rate
   // and without the runtime's staging copy (where locking fails, it still
   // copies, only slower)
-  const size_t N = (size_t)S->frame_count, real = sizeof(fascia_real);
-  void *const crossing[] = {S->x_base, S->q_base, S->d, S->inertia_target, S->x, S->q, S->gradient};
-  const size_t sizes[] = {3 * N * real, 4 * N * real, 6 * N * real, 6 * N * real, 3 * N * real, 4 * N * real,
-                          6 * N * real};
-  for (size_t k = 0; k < sizeof crossing / sizeof crossing[0] && dev->pinned_count < MAX_PINNED; ++k)
-    if (ops->pin(dev->L, crossing[k], sizes[k])) dev->pinned[dev->pinned_count++] = crossing[k];
-  dev->set.cg_max = S->def.cg_iterations;
-  dev->set.cg_fixed = S->def.cg_fixed;
-  dev->set.cg_tolerance = S->def.cg_tolerance;
-  dev->set.consistent_mass = S->def.mass == FASCIA_MASS_CONSISTENT;
-  dev->set.precond = (int32_t)S->def.precond;
+  for (int k = 0; k < setup->crossing_count && dev->pinned_count < MAX_PINNED; ++k)
+    if (ops->pin(dev->L, setup->crossing[k], setup->crossing_bytes[k])) dev->pinned[dev->pinned_count++] = setup->crossing[k];
+  const fascia_solver_def *def = setup->def;
+  dev->set.cg_max = def->cg_iterations;
+  dev->set.cg_fixed = def->cg_fixed;
+  dev->set.cg_tolerance = def->cg_tolerance;
+  dev->set.consistent_mass = def->mass == FASCIA_MASS_CONSISTENT;
+  dev->set.precond = (int32_t)def->precond;
   dev->set.gravity_scale = 1;
   const char *terms = dev->stiffness == FASCIA_K_SAMPLE_STIFFNESS_PAPER       ? "the paper's terms"
                       : dev->stiffness == FASCIA_K_SAMPLE_STIFFNESS_SMOOTHING ? "no rotation coupling"
                                                                               : "all terms";
   snprintf(dev->name, sizeof dev->name, "%s, %.1f MB of device memory for the model, stiffness kernel: %s",
            ops->device_name(dev->L), (double)dev->bytes / (1 << 20), terms);
-  *out = dev;
+  *out = &dev->base;
   return FASCIA_OK;
 }
 
-const char *fascia_device_name(const fascia_device *dev) { return dev->name; }
+static const char *device_describe(const fascia_backend *backend) { return ((const fascia_device *)backend)->name; }
 
 // ------------------------------------------------------------ launches --
 
@@ -338,45 +334,30 @@ static fascia_status slope(fascia_device *dev, fascia_real *out) {
   return FASCIA_OK;
 }
 
-// The state of the last objective back to the host, as the CPU loop leaves
-// it: S->x, S->q, S->d, S->gradient, the energies and inversions.
-static fascia_status download_state(fascia_solver *S, fascia_device *dev) {
-  const size_t N = (size_t)S->frame_count;
-  const fascia_launcher_ops *ops = dev->ops;
-  ops->receive(dev->L, S->x, dev->D.x, 3 * N * sizeof(fascia_real));
-  ops->receive(dev->L, S->q, dev->D.q, 4 * N * sizeof(fascia_real));
-  ops->receive(dev->L, S->d, dev->D.d, 6 * N * sizeof(fascia_real));
-  ops->receive(dev->L, S->gradient, dev->D.g_trial, 6 * N * sizeof(fascia_real));
-  FASCIA_TRY(ops->finish(dev->L)); // one wait for the four
-  // the host system's own state is set where it is read (probes, strain)
-  S->sys->energy_internal = dev->sc.energy_internal;
-  S->sys->energy_external = dev->sc.energy_external;
-  S->sys->inverted_count = (int32_t)dev->sc.inverted;
-  S->sys->first_inverted = dev->sc.inverted > 0 ? first_flagged(dev, FASCIA_PT_FLAG_INVERTED) : -1;
-  return FASCIA_OK;
-}
+// ------------------------------------------------------ the Newton loop --
 
 // Anchor, increments and step terms up; the mass at the anchor for a
-// dynamic step (solver.c step_once does this on the host for the CPU).
-static fascia_status begin(fascia_solver *S, fascia_device *dev, int dynamic) {
+// dynamic step.
+static fascia_status device_begin(fascia_backend *backend, const fascia_step_values *v, fascia_solve_report *rep) {
+  fascia_device *dev = (fascia_device *)backend;
   fascia_dev *D = &dev->D;
-  const size_t N = (size_t)S->frame_count, n = 6 * N;
+  const size_t N = (size_t)dev->frame_count, n = 6 * N;
   const fascia_launcher_ops *ops = dev->ops;
+  rep->direct = 0;
   // no waits: the host leaves these arrays alone until the step's first
-  // objective() waits for its scalars
-  ops->send(dev->L, D->x_base, S->x_base, 3 * N * sizeof(fascia_real));
-  ops->send(dev->L, D->q_base, S->q_base, 4 * N * sizeof(fascia_real));
-  ops->send(dev->L, D->d, S->d, n * sizeof(fascia_real));
-  const fascia_real h = S->def.time_step;
-  dev->set.c1 = dynamic ? 1 / (h * h) : 0;
-  dev->set.c2 = dynamic ? S->def.mass_damping / h : 0;
-  dev->set.mass_coefficient = dev->set.c1 + dev->set.c2;
+  // evaluation waits for its scalars
+  ops->send(dev->L, D->x_base, v->x_base, 3 * N * sizeof(fascia_real));
+  ops->send(dev->L, D->q_base, v->q_base, 4 * N * sizeof(fascia_real));
+  ops->send(dev->L, D->d, v->d, n * sizeof(fascia_real));
+  dev->set.c1 = v->c1;
+  dev->set.c2 = v->c2;
+  dev->set.mass_coefficient = v->c1 + v->c2;
   dev->set.shift = 0;
-  dev->set.gravity_scale = S->sys->gravity_scale;
-  dev->set.jacobian = dynamic;
+  dev->set.gravity_scale = v->gravity_scale;
+  dev->set.jacobian = v->dynamic;
   FASCIA_TRY(push_settings(dev));
-  if (!dynamic) return FASCIA_OK;
-  ops->send(dev->L, D->target, S->inertia_target, n * sizeof(fascia_real));
+  if (!v->dynamic) return FASCIA_OK;
+  ops->send(dev->L, D->target, v->inertia_target, n * sizeof(fascia_real));
   kernel(dev, FASCIA_K_MASS_SNAPSHOT, (int64_t)N, NULL, NULL, 0);
   kernel(dev, FASCIA_K_LUMPED_MASS, (int64_t)N, NULL, NULL, 0);
   if (dev->set.consistent_mass) kernel(dev, FASCIA_K_SAMPLE_MASS, D->sample_count, D->target, NULL, 0);
@@ -385,132 +366,81 @@ static fascia_status begin(fascia_solver *S, fascia_device *dev, int dynamic) {
   return FASCIA_OK;
 }
 
-// The Newton loop of newton.c, step for step, with the device doing the
-// vector work. Rigid organs never come here (fascia_device_supports).
-fascia_status fascia_device_minimize(fascia_solver *S, int dynamic, int max_iterations, fascia_solve_report *rep) {
-  fascia_device *dev = S->device;
-  const fascia_solver_def *def = &S->def;
-  const int64_t n = 6 * (int64_t)S->frame_count;
-  const double t0 = fascia_now_ms();
-  double t = t0;
-  rep->direct = 0;
-  FASCIA_TRY(begin(S, dev, dynamic));
-  fascia_real phi, gg;
-  FASCIA_TRY(objective(dev, 0, &phi, &gg));
-  kernel(dev, FASCIA_K_COPY_GRADIENT, n, NULL, NULL, 0);
-  rep->profile.evaluate_ms += fascia_now_ms() - t;
-  const fascia_real g0 = sqrt(gg);
-  fascia_real reference = fascia_newton_load_norm(S);
-  if (dynamic || reference == 0) reference = reference > g0 ? reference : g0;
-  if (reference == 0) reference = 1;
-  rep->reference_norm = reference;
-  FASCIA_TRY(fascia_newton_check_range(S, phi, g0, reference));
-  const fascia_real material_roundoff = fascia_newton_energy_roundoff(S);
-  const fascia_real force_roundoff = material_roundoff / S->model_size; // a residual no iteration can lower
-  int iteration = 0, converged = 0;
-  fascia_real gnorm = g0;
-  fascia_status status = FASCIA_OK;
-  for (; iteration <= max_iterations; ++iteration) {
-    gnorm = sqrt(gg);
-    if (gnorm <= def->newton_tolerance * reference || gnorm <= force_roundoff) {
-      converged = 1;
-      break;
-    }
-    if (iteration == max_iterations) break;
-    t = fascia_now_ms();
-    build_precond(dev);
-    build_damping(dev);
-    FASCIA_TRY(dev->ops->finish(dev->L));
-    rep->profile.precond_ms += fascia_now_ms() - t;
-    int accepted = 0;
-    fascia_real phi_trial = phi, gg_trial = gg;
-    while (!accepted) {
-      t = fascia_now_ms();
-      FASCIA_TRY(cg_solve(dev, rep));
-      rep->profile.cg_ms += fascia_now_ms() - t;
-      fascia_real sl;
-      FASCIA_TRY(slope(dev, &sl));
-      if (!(sl < 0)) { // not a descent direction: preconditioned gradient
-        kernel(dev, FASCIA_K_PRECOND_DESCENT, S->frame_count, NULL, NULL, 0);
-        FASCIA_TRY(slope(dev, &sl));
-      }
-      // backtracking line search on Phi
-      fascia_real alpha = 1;
-      for (int cut = 0; cut <= (def->line_search ? FASCIA_NEWTON_MAX_CUTS : 0); ++cut) {
-        t = fascia_now_ms();
-        const fascia_status st = objective(dev, alpha, &phi_trial, &gg_trial);
-        rep->profile.evaluate_ms += fascia_now_ms() - t;
-        if (st == FASCIA_OK &&
-            fascia_newton_accepts(def, phi, phi_trial, alpha, sl, gnorm, gg_trial,
-                                  fabs(dev->sc.energy_internal) + fabs(dev->sc.energy_external), material_roundoff)) {
-          accepted = 1;
-          break;
-        }
-        if (st != FASCIA_OK && st != FASCIA_ERR_NUMERIC) return st;
-        ++rep->line_search_cuts;
-        alpha *= FASCIA_R(0.5);
-      }
-      if (!accepted) {
-        // even tiny steps fail: damp the tangent (Levenberg) and try again
-        dev->set.shift = dev->set.shift == 0 ? FASCIA_R(1e-4) : 10 * dev->set.shift;
-        if (dev->set.shift > FASCIA_NEWTON_MAX_SHIFT) {
-          fascia_real restore, restore_gg;
-          (void)objective(dev, 0, &restore, &restore_gg);
-          status = fascia_newton_no_decrease(S, iteration, gnorm, def->newton_tolerance * reference);
-          break;
-        }
-        FASCIA_TRY(push_settings(dev));
-        t = fascia_now_ms();
-        FASCIA_TRY(objective(dev, 0, &phi, &gg)); // restores the cache of the current iterate
-        kernel(dev, FASCIA_K_COPY_GRADIENT, n, NULL, NULL, 0);
-        rep->profile.evaluate_ms += fascia_now_ms() - t;
-        build_precond(dev);
-        continue;
-      }
-      if (alpha == 1 && dev->set.shift > 0) {
-        dev->set.shift = dev->set.shift < FASCIA_R(1e-3) ? 0 : dev->set.shift / 10;
-        FASCIA_TRY(push_settings(dev));
-      }
-    }
-    if (status != FASCIA_OK) break;
-    // static: re-anchor at the accepted state, so d = 0 and the Hessian of
-    // the next iteration is exact; dynamic: keep the increments
-    kernel(dev, dynamic ? FASCIA_K_ACCEPT_DYNAMIC : FASCIA_K_ACCEPT_STATIC, dynamic ? n : S->frame_count, NULL, NULL,
-           0);
-    phi = phi_trial;
-    gg = gg_trial;
-  }
-  t = fascia_now_ms();
-  const fascia_status down = download_state(S, dev);
-  if (!dynamic && down == FASCIA_OK) { // the host's anchor follows the device's
-    memcpy(S->x_base, S->x, 3 * (size_t)S->frame_count * sizeof(fascia_real));
-    memcpy(S->q_base, S->q, 4 * (size_t)S->frame_count * sizeof(fascia_real));
-  }
-  rep->profile.evaluate_ms += fascia_now_ms() - t;
-  rep->newton_iterations += iteration;
-  rep->gradient_norm = gnorm;
-  rep->energy = phi;
-  if (status != FASCIA_OK) return status;
-  FASCIA_TRY(down);
-  rep->converged = converged;
-  rep->inverted_samples = S->sys->inverted_count;
-  rep->profile.total_ms += fascia_now_ms() - t0;
+static fascia_status device_evaluate(fascia_backend *backend, fascia_real alpha, int current,
+                                     fascia_trial_values *out) {
+  fascia_device *dev = (fascia_device *)backend;
+  FASCIA_TRY(objective(dev, current ? 0 : alpha, &out->phi, &out->gradient_norm2));
+  out->energy_size = fabs(dev->sc.energy_internal) + fabs(dev->sc.energy_external);
+  if (current) kernel(dev, FASCIA_K_COPY_GRADIENT, 6 * (int64_t)dev->frame_count, NULL, NULL, 0);
   return FASCIA_OK;
 }
 
-// ---------------------------------------------------------------- tests --
+static fascia_status device_prepare(fascia_backend *backend, fascia_solve_report *rep) {
+  fascia_device *dev = (fascia_device *)backend;
+  const double t = fascia_now_ms();
+  build_precond(dev);
+  build_damping(dev);
+  FASCIA_TRY(dev->ops->finish(dev->L));
+  rep->profile.precond_ms += fascia_now_ms() - t;
+  return FASCIA_OK;
+}
 
-fascia_status fascia_device_gradient(fascia_solver *S, const fascia_real *x, const fascia_real *q,
+static fascia_status device_direction(fascia_backend *backend, fascia_real *shift, fascia_real *out,
+                                      fascia_solve_report *rep) {
+  fascia_device *dev = (fascia_device *)backend;
+  if (dev->set.shift != *shift) {
+    dev->set.shift = *shift;
+    FASCIA_TRY(push_settings(dev));
+  }
+  FASCIA_TRY(cg_solve(dev, rep));
+  FASCIA_TRY(slope(dev, out));
+  if (!(*out < 0)) { // not a descent direction: preconditioned gradient
+    kernel(dev, FASCIA_K_PRECOND_DESCENT, dev->frame_count, NULL, NULL, 0);
+    FASCIA_TRY(slope(dev, out));
+  }
+  return FASCIA_OK;
+}
+
+// static: re-anchor at the accepted state, so d = 0 and the Hessian of the
+// next iteration is exact; dynamic: keep the increments
+static void device_accept(fascia_backend *backend) {
+  fascia_device *dev = (fascia_device *)backend;
+  const int64_t N = dev->frame_count;
+  if (dev->set.jacobian) kernel(dev, FASCIA_K_ACCEPT_DYNAMIC, 6 * N, NULL, NULL, 0);
+  else kernel(dev, FASCIA_K_ACCEPT_STATIC, N, NULL, NULL, 0);
+}
+
+// The state of the last evaluation back to the host, with the host system's
+// energies and inversions.
+static fascia_status device_finish(fascia_backend *backend, const fascia_step_result *result) {
+  fascia_device *dev = (fascia_device *)backend;
+  const size_t N = (size_t)dev->frame_count;
+  const fascia_launcher_ops *ops = dev->ops;
+  ops->receive(dev->L, result->x, dev->D.x, 3 * N * sizeof(fascia_real));
+  ops->receive(dev->L, result->q, dev->D.q, 4 * N * sizeof(fascia_real));
+  ops->receive(dev->L, result->d, dev->D.d, 6 * N * sizeof(fascia_real));
+  ops->receive(dev->L, result->gradient, dev->D.g_trial, 6 * N * sizeof(fascia_real));
+  FASCIA_TRY(ops->finish(dev->L)); // one wait for the four
+  // the host system's own state is set where it is read (probes, strain)
+  dev->sys->energy_internal = dev->sc.energy_internal;
+  dev->sys->energy_external = dev->sc.energy_external;
+  dev->sys->inverted_count = (int32_t)dev->sc.inverted;
+  dev->sys->first_inverted = dev->sc.inverted > 0 ? first_flagged(dev, FASCIA_PT_FLAG_INVERTED) : -1;
+  return FASCIA_OK;
+}
+
+// ------------------------------------------------------------ operators --
+
+static fascia_status device_gradient(fascia_backend *backend, const fascia_real *x, const fascia_real *q,
                                      fascia_real *gradient, fascia_real *energy) {
-  fascia_device *dev = S->device;
-  FASCIA_CHECK(dev, S->ctx, FASCIA_ERR_ARGUMENT, "device: the solver runs on the CPU");
-  const size_t N = (size_t)S->frame_count;
+  fascia_device *dev = (fascia_device *)backend;
+  const size_t N = (size_t)dev->frame_count;
   FASCIA_TRY(dev->ops->upload(dev->L, dev->D.x_base, x, 3 * N * sizeof(fascia_real)));
   FASCIA_TRY(dev->ops->upload(dev->L, dev->D.q_base, q, 4 * N * sizeof(fascia_real)));
   FASCIA_TRY(dev->ops->upload(dev->L, dev->D.d, dev->zeros, 6 * N * sizeof(fascia_real)));
   dev->set.c1 = dev->set.c2 = dev->set.mass_coefficient = dev->set.shift = 0;
   dev->set.jacobian = 0;
-  dev->set.gravity_scale = S->sys->gravity_scale;
+  dev->set.gravity_scale = dev->sys->gravity_scale;
   FASCIA_TRY(push_settings(dev));
   fascia_real phi, gg;
   FASCIA_TRY(objective(dev, 0, &phi, &gg));
@@ -518,10 +448,9 @@ fascia_status fascia_device_gradient(fascia_solver *S, const fascia_real *x, con
   return dev->ops->download(dev->L, gradient, dev->D.g_trial, 6 * N * sizeof(fascia_real));
 }
 
-fascia_status fascia_device_hessian_apply(fascia_solver *S, const fascia_real *v, fascia_real *out) {
-  fascia_device *dev = S->device;
-  FASCIA_CHECK(dev, S->ctx, FASCIA_ERR_ARGUMENT, "device: the solver runs on the CPU");
-  const size_t N = (size_t)S->frame_count;
+static fascia_status device_hessian_apply(fascia_backend *backend, const fascia_real *v, fascia_real *out) {
+  fascia_device *dev = (fascia_device *)backend;
+  const size_t N = (size_t)dev->frame_count;
   fascia_dev_scalars sc = dev->sc;
   sc.running = 1; // the operator kernels run only inside CG
   sc.action = FASCIA_CG_NONE; // as in CG's first iteration: Ad = A z
@@ -532,11 +461,51 @@ fascia_status fascia_device_hessian_apply(fascia_solver *S, const fascia_real *v
   return dev->ops->download(dev->L, out, dev->D.Ad, 6 * N * sizeof(fascia_real));
 }
 
-fascia_status fascia_device_hessian_diagonal(fascia_solver *S, fascia_real *blocks) {
-  fascia_device *dev = S->device;
-  FASCIA_CHECK(dev, S->ctx, FASCIA_ERR_ARGUMENT, "device: the solver runs on the CPU");
-  FASCIA_CHECK(dev->set.precond != FASCIA_PRECOND_NONE, S->ctx, FASCIA_ERR_ARGUMENT,
+static fascia_status device_hessian_diagonal(fascia_backend *backend, fascia_real *blocks) {
+  fascia_device *dev = (fascia_device *)backend;
+  FASCIA_CHECK(dev->set.precond != FASCIA_PRECOND_NONE, dev->ctx, FASCIA_ERR_ARGUMENT,
                "device: no diagonal blocks without a preconditioner");
   build_precond(dev);
-  return dev->ops->download(dev->L, blocks, dev->D.blocks, 36 * (size_t)S->frame_count * sizeof(fascia_real));
+  return dev->ops->download(dev->L, blocks, dev->D.blocks, 36 * (size_t)dev->frame_count * sizeof(fascia_real));
 }
+
+// ------------------------------------------------------------- backends --
+
+// 1 when the launcher opens a device here, with its name; else why not
+static int launcher_available(const fascia_launcher_ops *ops, char *detail, size_t size) {
+  fascia_ctx *ctx = NULL;
+  fascia_ctx_def def = fascia_ctx_def_default();
+  def.threads = 1;
+  if (fascia_ctx_create(&def, &ctx) != FASCIA_OK) return 0;
+  fascia_launcher *L = NULL;
+  const fascia_status st = ops->create(ctx, 1, &L);
+  if (detail) snprintf(detail, size, "%s", st == FASCIA_OK ? ops->device_name(L) : fascia_ctx_message(ctx));
+  if (L) ops->destroy(L);
+  fascia_ctx_destroy(&ctx);
+  return st == FASCIA_OK;
+}
+
+#define DEVICE_BACKEND_OPS                                                                                            \
+  .supports = device_supports, .destroy = device_destroy, .describe = device_describe, .host_evaluates = 0,            \
+  .begin = device_begin, .evaluate = device_evaluate, .prepare = device_prepare, .direction = device_direction,        \
+  .accept = device_accept, .finish = device_finish, .gradient = device_gradient,                                       \
+  .hessian_apply = device_hessian_apply, .hessian_diagonal = device_hessian_diagonal
+
+static int emulated_available(char *detail, size_t size) {
+  return launcher_available(&fascia_launcher_emulated, detail, size);
+}
+static fascia_status emulated_create(const fascia_backend_setup *setup, fascia_backend **out) {
+  return device_create(setup, &fascia_backend_emulated, &fascia_launcher_emulated, out);
+}
+const fascia_backend_ops fascia_backend_emulated = {
+    .name = "emulated", .automatic = 0, .available = emulated_available, .create = emulated_create,
+    DEVICE_BACKEND_OPS};
+
+#ifdef FASCIA_HAVE_CUDA
+static int cuda_available(char *detail, size_t size) { return launcher_available(&fascia_launcher_cuda, detail, size); }
+static fascia_status cuda_create(const fascia_backend_setup *setup, fascia_backend **out) {
+  return device_create(setup, &fascia_backend_cuda, &fascia_launcher_cuda, out);
+}
+const fascia_backend_ops fascia_backend_cuda = {
+    .name = "cuda", .automatic = 1, .available = cuda_available, .create = cuda_create, DEVICE_BACKEND_OPS};
+#endif

@@ -11,7 +11,8 @@
 #include <string.h>
 
 #include "check.h"
-#include "device.h"
+#include "backend.h"
+#include "solver_internal.h"
 #include "random_model.h"
 
 static const char *backend = "emulated"; // --backend
@@ -89,18 +90,18 @@ static inline int check_operators(fascia_ctx *ctx, const char *name, const fasci
   CHECK_OK(fascia_system_evaluate(cpu->sys, a, &e_cpu), ctx);
   for (int64_t k = 0; k < n; ++k)
     if (!cpu->mask[k]) a[k] = 0;
-  CHECK_OK(fascia_device_gradient(dev, x, q, b, &e_dev), ctx);
+  CHECK_OK(fascia_solver_backend_gradient(dev, x, q, b, &e_dev), ctx);
   CHECK(relative_difference("gradient", b, a, n) <= TOL_OPERATOR);
   CHECK(relative_difference("energy", &e_dev, &e_cpu, 1) <= TOL_OPERATOR);
   // stiffness product (symmetric Hessian), free DOFs
   fascia_system_hessian_apply(cpu->sys, v, a);
   for (int64_t k = 0; k < n; ++k)
     if (!cpu->mask[k]) a[k] = 0;
-  CHECK_OK(fascia_device_hessian_apply(dev, v, b), ctx);
+  CHECK_OK(fascia_solver_backend_hessian_apply(dev, v, b), ctx);
   CHECK(relative_difference("stiffness product", b, a, n) <= TOL_OPERATOR);
   // diagonal blocks (the block-Jacobi preconditioner's)
   fascia_system_hessian_diagonal(cpu->sys, a);
-  CHECK_OK(fascia_device_hessian_diagonal(dev, b), ctx);
+  CHECK_OK(fascia_solver_backend_hessian_diagonal(dev, b), ctx);
   CHECK(relative_difference("diagonal blocks", b, a, 36 * N) <= TOL_OPERATOR);
   free(x), free(q), free(v), free(a), free(b);
   fascia_solver_destroy(&cpu);

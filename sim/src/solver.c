@@ -7,7 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "device.h"
+#include "backend.h"
 #include "organs.h"
 #include "solver_internal.h"
 
@@ -63,101 +63,6 @@ static fascia_status check_def(fascia_ctx *ctx, const fascia_solver_def *d) {
   FASCIA_CHECK(d->step_retries >= 0 && d->step_retries <= 30, ctx, FASCIA_ERR_ARGUMENT,
                "solver: %d step retries; give 0 to 30 (each halves the time step)", d->step_retries);
   FASCIA_CHECK(d->threads >= 0, ctx, FASCIA_ERR_ARGUMENT, "solver: %d threads", d->threads);
-  return FASCIA_OK;
-}
-
-// The backend: the CPU, or the device solver (cuda/) on a GPU or in the host
-// emulation. "auto" takes the GPU when there is one and the settings run on
-// it, and records why not otherwise.
-static fascia_status pick_backend(fascia_solver *S) {
-  const char *name = S->def.backend ? S->def.backend : "auto";
-  const int automatic = !strcmp(name, "auto");
-  const int threads = S->sys->threads;
-  snprintf(S->device_text, sizeof S->device_text, "cpu, %d thread%s", threads, threads == 1 ? "" : "s");
-  strcpy(S->backend_name, "cpu");
-  if (!strcmp(name, "cpu")) return FASCIA_OK;
-  FASCIA_CHECK(automatic || !strcmp(name, "cuda") || !strcmp(name, "emulated"), S->ctx, FASCIA_ERR_ARGUMENT,
-               "unknown backend '%s'; valid: auto, cpu, cuda, emulated", name);
-  const char *device = automatic ? "cuda" : name;
-  const fascia_launcher_ops *ops = fascia_device_ops(device);
-  char why[256] = "";
-  if (!ops) {
-    snprintf(why, sizeof why, "this build has no CUDA backend (built without the CUDA toolkit)");
-  } else if (fascia_device_supports(S, why, sizeof why)) {
-    const fascia_status st = fascia_device_create(S, ops, &S->device);
-    if (st == FASCIA_OK) {
-      snprintf(S->backend_name, sizeof S->backend_name, "%s", device);
-      snprintf(S->device_text, sizeof S->device_text, "%s", fascia_device_name(S->device));
-      return FASCIA_OK;
-    }
-    if (!automatic) return st;
-    snprintf(why, sizeof why, "%s", fascia_ctx_message(S->ctx));
-    fascia_ctx_clear(S->ctx);
-  }
-  if (!automatic)
-    return FASCIA_FAIL(S->ctx, ops ? FASCIA_ERR_ARGUMENT : FASCIA_ERR_UNSUPPORTED,
-                       "backend '%s' cannot run this: %s; use --backend cpu (or auto)", name, why);
-  const size_t used = strlen(S->device_text);
-  snprintf(S->device_text + used, sizeof S->device_text - used, " (auto: not on a GPU: %s)", why);
-  return FASCIA_OK;
-}
-
-int fascia_backend_available(const char *backend, char *detail, size_t size) {
-  if (detail && size) detail[0] = 0;
-  if (backend && !strcmp(backend, "cpu")) {
-    if (detail) snprintf(detail, size, "the CPU reference backend");
-    return 1;
-  }
-  const fascia_launcher_ops *ops = fascia_device_ops(backend);
-  if (!ops) {
-    if (detail) snprintf(detail, size, "%s", backend && !strcmp(backend, "cuda") ? "built without the CUDA toolkit"
-                                                                                   : "unknown backend");
-    return 0;
-  }
-  fascia_ctx *ctx = NULL;
-  fascia_ctx_def def = fascia_ctx_def_default();
-  def.threads = 1;
-  if (fascia_ctx_create(&def, &ctx) != FASCIA_OK) return 0;
-  fascia_launcher *L = NULL;
-  const fascia_status st = ops->create(ctx, 1, &L);
-  if (detail) snprintf(detail, size, "%s", st == FASCIA_OK ? ops->device_name(L) : fascia_ctx_message(ctx));
-  if (L) ops->destroy(L);
-  fascia_ctx_destroy(&ctx);
-  return st == FASCIA_OK;
-}
-
-// Largest band the automatic choice accepts, and its factorization cost:
-// beyond about a second per factorization CG is the better deal.
-#define AUTO_MAX_BAND_BYTES ((int64_t)256 << 20)
-#define AUTO_MAX_FLOPS 2e9
-#define DIRECT_MAX_BAND_BYTES ((int64_t)4 << 30)
-
-static fascia_status choose_linear_solver(fascia_solver *S) {
-  fascia_linear_solver kind = S->def.linear_solver;
-  if (fascia_organs_body_count(S->organs) > 0) { // no banded P^T K P for rigid organs yet (organs.c): CG
-    FASCIA_CHECK(kind != FASCIA_LINEAR_DIRECT, S->ctx, FASCIA_ERR_ARGUMENT,
-                 "solver: the direct linear solver does not handle rigid organs; use cg or auto");
-    kind = FASCIA_LINEAR_CG;
-  }
-  if (kind == FASCIA_LINEAR_CG && !S->def.assembled) return FASCIA_OK;
-  FASCIA_TRY(fascia_bsr_create(S->ctx, S->model, &S->K));
-  S->use_assembled = 1;
-  if (kind == FASCIA_LINEAR_CG) return FASCIA_OK;
-  const int automatic = kind == FASCIA_LINEAR_AUTO;
-  fascia_status st =
-      fascia_banded_create(S->ctx, &S->K, automatic ? AUTO_MAX_BAND_BYTES : DIRECT_MAX_BAND_BYTES, &S->band);
-  if (st == FASCIA_OK && (!automatic || fascia_banded_cost(&S->band) <= AUTO_MAX_FLOPS)) {
-    S->use_direct = 1;
-    return FASCIA_OK;
-  }
-  if (!automatic) return st;
-  // automatic: CG, matrix-free unless asked otherwise
-  fascia_ctx_clear(S->ctx);
-  fascia_banded_destroy(&S->band);
-  if (!S->def.assembled) {
-    fascia_bsr_destroy(&S->K);
-    S->use_assembled = 0;
-  }
   return FASCIA_OK;
 }
 
@@ -224,22 +129,12 @@ fascia_status fascia_solver_create(fascia_ctx *ctx, const fascia_model *model, c
   S->x_base = fascia_calloc_pages(3 * N, sizeof(fascia_real));
   S->q_base = fascia_calloc_pages(4 * N, sizeof(fascia_real));
   S->d = fascia_calloc_pages(n, sizeof(fascia_real));
-  S->d_trial = fascia_calloc(n, sizeof(fascia_real));
-  S->inertia_target = fascia_calloc_pages(2 * n, sizeof(fascia_real));
+  S->inertia_target = fascia_calloc_pages(n, sizeof(fascia_real));
   S->gradient = fascia_calloc_pages(n, sizeof(fascia_real));
-  S->direction = fascia_calloc(n, sizeof(fascia_real));
-  S->rhs = fascia_calloc(n, sizeof(fascia_real));
-  S->work = fascia_calloc(6 * n, sizeof(fascia_real));
-  S->blocks = fascia_calloc(36 * N, sizeof(fascia_real));
-  S->mass_blocks = fascia_calloc(36 * N, sizeof(fascia_real));
-  S->damping_diagonal = fascia_calloc(n, sizeof(fascia_real));
-  S->scratch = fascia_calloc(2 * n, sizeof(fascia_real));
-  S->pc.kind = def->precond;
-  S->pc.frame_count = model->frame_count;
-  S->pc.inverse = fascia_calloc(36 * N, sizeof(fascia_real));
-  if (!S->x || !S->q || !S->u || !S->mask || !S->x_base || !S->q_base || !S->d || !S->d_trial ||
-      !S->inertia_target || !S->gradient || !S->direction || !S->rhs || !S->work || !S->blocks || !S->mass_blocks ||
-      !S->damping_diagonal || !S->scratch || !S->pc.inverse) {
+  S->kinetic_blocks = fascia_calloc(36 * N, sizeof(fascia_real));
+  S->scratch = fascia_calloc(n, sizeof(fascia_real));
+  if (!S->x || !S->q || !S->u || !S->mask || !S->x_base || !S->q_base || !S->d || !S->inertia_target ||
+      !S->gradient || !S->kinetic_blocks || !S->scratch) {
     status = FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "solver: out of memory for %lld frames", (long long)N);
     goto cleanup;
   }
@@ -251,8 +146,17 @@ fascia_status fascia_solver_create(fascia_ctx *ctx, const fascia_model *model, c
   if (S->organs) fascia_organs_masks(S->organs, S->mask);
   FASCIA_TRY_GOTO(check_mass(S));
   energy_scale(S);
-  FASCIA_TRY_GOTO(pick_backend(S));
-  if (!S->device) FASCIA_TRY_GOTO(choose_linear_solver(S)); // the device solver is matrix-free CG
+  fascia_backend_setup setup = {ctx,      model, S->sys, S->mask, &S->def, S, S->organs, fascia_organs_body_count(S->organs),
+                               {0},      {0},   0};
+  void *const crossing[] = {S->x_base, S->q_base, S->d, S->inertia_target, S->x, S->q, S->gradient};
+  const size_t sizes[] = {3, 4, 6, 6, 3, 4, 6};
+  for (size_t k = 0; k < sizeof crossing / sizeof crossing[0]; ++k) {
+    setup.crossing[k] = crossing[k];
+    setup.crossing_bytes[k] = sizes[k] * (size_t)N * sizeof(fascia_real);
+  }
+  setup.crossing_count = (int)(sizeof crossing / sizeof crossing[0]);
+  FASCIA_TRY_GOTO(fascia_backend_pick(&setup, &S->backend, S->device_text, sizeof S->device_text));
+  snprintf(S->backend_name, sizeof S->backend_name, "%s", S->backend->ops->name);
   *out = S;
   return FASCIA_OK;
 cleanup:
@@ -263,14 +167,11 @@ cleanup:
 void fascia_solver_destroy(fascia_solver **solver) {
   if (!solver || !*solver) return;
   fascia_solver *S = *solver;
-  fascia_device_destroy(&S->device);
+  if (S->backend) S->backend->ops->destroy(S->backend); // first: a device unpins the solver's arrays
   fascia_system_destroy(&S->sys);
-  fascia_bsr_destroy(&S->K);
-  fascia_banded_destroy(&S->band);
   fascia_organs_destroy(&S->organs);
   free(S->x), free(S->q), free(S->u), free(S->mask), free(S->x_base), free(S->q_base), free(S->d);
-  free(S->d_trial), free(S->inertia_target), free(S->gradient), free(S->direction), free(S->rhs), free(S->work);
-  free(S->blocks), free(S->mass_blocks), free(S->damping_diagonal), free(S->scratch), free(S->pc.inverse);
+  free(S->inertia_target), free(S->gradient), free(S->kinetic_blocks), free(S->scratch);
   free(S);
   *solver = NULL;
 }
@@ -304,10 +205,12 @@ static void restore_state(fascia_solver *S, fascia_real *backup) {
   fascia_system_set_state(S->sys, S->x, S->q);
 }
 
-// The Newton minimization of a step's objective on the solver's backend
-static fascia_status minimize(fascia_solver *S, int dynamic, fascia_solve_report *report) {
-  if (S->device) return fascia_device_minimize(S, dynamic, S->def.newton_iterations, report);
-  return fascia_newton_minimize(S, dynamic, S->def.newton_iterations, report);
+// The Newton minimization of a step's objective: a static one (h = 0) or
+// an implicit Euler step of length h
+static fascia_status minimize(fascia_solver *S, fascia_real h, fascia_solve_report *report) {
+  const fascia_step_values values = {h > 0, h > 0 ? 1 / (h * h) : 0, h > 0 ? S->def.mass_damping / h : 0,
+                                     S->sys->gravity_scale, S->x_base, S->q_base, S->d, S->inertia_target};
+  return fascia_newton_minimize(S, &values, S->def.newton_iterations, report);
 }
 
 fascia_status fascia_solver_solve_static(fascia_solver *S, fascia_solve_report *report) {
@@ -368,7 +271,7 @@ fascia_status fascia_solver_solve_static(fascia_solver *S, fascia_solve_report *
 // evaluated twice); the device keeps its own, so it is evaluated here.
 static fascia_status total_energy(fascia_solver *S, fascia_real *out) {
   fascia_real potential = 0;
-  if (S->device) FASCIA_TRY(fascia_solver_potential_energy(S, &potential));
+  if (!S->backend->ops->host_evaluates) FASCIA_TRY(fascia_solver_potential_energy(S, &potential));
   else potential = S->sys->energy_internal + S->sys->energy_external + fascia_organs_potential_energy(S->organs, S);
   *out = potential + fascia_solver_kinetic_energy(S);
   return FASCIA_OK;
@@ -434,11 +337,6 @@ static fascia_status step_once(fascia_solver *S, fascia_real h, fascia_solve_rep
   // anchor at q_n, mass at q_n
   memcpy(S->x_base, S->x, 3 * (size_t)N * sizeof(fascia_real));
   memcpy(S->q_base, S->q, 4 * (size_t)N * sizeof(fascia_real));
-  if (!S->device) { // the device takes its mass at the anchor itself
-    fascia_system_set_state(S->sys, S->x, S->q);
-    fascia_system_mass_snapshot(S->sys);
-    fascia_system_mass_lumped(S->sys, S->mass_blocks);
-  }
   // initial increments: the explicit prediction h u for free frames, the
   // motion for prescribed ones, nothing for fixed ones
   const fascia_model *m = S->model;
@@ -456,11 +354,7 @@ static fascia_status step_once(fascia_solver *S, fascia_real h, fascia_solve_rep
     }
   }
   fascia_organs_step_begin(S->organs, S, h); // rigid bodies, frames driven by the caller
-  // newton.c reads the step length from the settings
-  const fascia_real h_def = S->def.time_step;
-  S->def.time_step = h;
-  fascia_status status = minimize(S, 1, report);
-  S->def.time_step = h_def;
+  fascia_status status = minimize(S, h, report);
   if (status == FASCIA_OK && S->def.require_convergence && !report->converged)
     status = FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
                          "Newton solve not converged after %d iterations (|gradient| %.3g, tolerance %.3g)",
@@ -640,12 +534,12 @@ fascia_real fascia_solver_kinetic_energy(fascia_solver *S) {
   fascia_system_set_state(S->sys, S->x, S->q);
   fascia_system_mass_snapshot(S->sys);
   if (S->def.mass == FASCIA_MASS_LUMPED) {
-    fascia_system_mass_lumped(S->sys, S->mass_blocks);
+    fascia_system_mass_lumped(S->sys, S->kinetic_blocks);
     fascia_real e = 0;
     for (int32_t i = 0; i < S->frame_count; ++i)
       for (int r = 0; r < 6; ++r)
         for (int c = 0; c < 6; ++c)
-          e += S->u[6 * i + r] * S->mass_blocks[36 * (int64_t)i + 6 * r + c] * S->u[6 * i + c];
+          e += S->u[6 * i + r] * S->kinetic_blocks[36 * (int64_t)i + 6 * r + c] * S->u[6 * i + c];
     return FASCIA_R(0.5) * e + fascia_organs_kinetic_energy(S->organs, S);
   }
   fascia_system_mass_apply(S->sys, S->u, S->scratch);

@@ -71,6 +71,9 @@ FASCIA_INTERN void fascia_motion_pose(const fascia_motion *motion, fascia_real t
 FASCIA_INTERN void fascia_motion_frame(const fascia_model *model, int32_t i, fascia_real t, fascia_real *x,
                                        fascia_real *q);
 
+struct fascia_backend;
+struct fascia_step_values;
+
 struct fascia_solver {
   fascia_ctx *ctx;
   const fascia_model *model;
@@ -80,18 +83,14 @@ struct fascia_solver {
   fascia_real time;
   fascia_real *x, *q, *u;           ///< state [3N], [4N], velocity [6N]
   unsigned char *mask;              ///< [6N]
-  // Newton work
+  // a step's Newton solve: its anchor and iterate, and the result's gradient
   fascia_real *x_base, *q_base;     ///< anchor of the increments d
-  fascia_real *d, *d_trial, *inertia_target, *gradient, *direction, *rhs, *work, *blocks, *mass_blocks;
-  fascia_real *damping_diagonal, *scratch;
-  fascia_preconditioner pc;
-  int use_direct;     ///< linear systems by banded Cholesky
-  int use_assembled;  ///< the block matrix K is assembled every Newton iteration
-  fascia_bsr K;
-  fascia_banded band;
+  fascia_real *d, *inertia_target;  ///< increments [6N], h u [6N]
+  fascia_real *gradient;            ///< [6N]
+  fascia_real *kinetic_blocks, *scratch; ///< the kinetic energy's lumped blocks [36N] and M u [6N]
+  struct fascia_backend *backend;   ///< where the Newton solve's vector work runs (backend.h)
   char backend_name[16];
   fascia_organs *organs; ///< NULL without organs (organs.c)
-  struct fascia_device *device; ///< the device solver (cuda/), NULL on the CPU backend
   char device_text[320];        ///< fascia_solver_device()
   // the blow-up rule (solver.c, check_blow_up)
   int closed;                   ///< 1: no prescribed frame (only a driven organ can do work)
@@ -103,38 +102,16 @@ struct fascia_solver {
 
 /// Minimizes the step objective (static: potential energy, re-anchored at
 /// every iteration; dynamic: inertia + potential with increments d anchored
-/// at the start state) over the free DOFs. Leaves the result in solver->x/q
-/// (and d).
-FASCIA_INTERN fascia_status fascia_newton_minimize(fascia_solver *solver, int dynamic, int max_iterations,
-                                                   fascia_solve_report *report);
+/// at the start state) over the free DOFs on the solver's backend. Leaves
+/// the result in solver->x/q, d and gradient.
+FASCIA_INTERN fascia_status fascia_newton_minimize(fascia_solver *solver, const struct fascia_step_values *values,
+                                                   int max_iterations, fascia_solve_report *report);
 
-FASCIA_INTERN double fascia_now_ms(void);
 
-// Newton globalization, shared by the CPU loop (newton.c) and the device
-// loop (cuda/device_solver.c)
+// Newton globalization (newton.c; a direct solve raises the shift up to
+// FASCIA_NEWTON_MAX_SHIFT too)
 #define FASCIA_NEWTON_ARMIJO 1e-4    // sufficient decrease of the line search
 #define FASCIA_NEWTON_MAX_CUTS 30    // step halvings before the Levenberg shift grows
 #define FASCIA_NEWTON_MAX_SHIFT 1e12 // relative Levenberg shift beyond which Newton gives up
-
-/// FASCIA_ERR_NUMERIC when the starting energy phi, residual norm g0 or load
-/// norm of a Newton solve is not finite or past any representable use
-/// (an overflow that would make the tolerance test pass vacuously).
-FASCIA_INTERN fascia_status fascia_newton_check_range(fascia_solver *S, fascia_real phi, fascia_real g0,
-                                                      fascia_real reference);
-/// |external load| over free DOFs: the scale of the Newton tolerance.
-FASCIA_INTERN fascia_real fascia_newton_load_norm(const fascia_solver *S);
-/// The line search's verdict on a trial step alpha along a direction of
-/// slope p.g: sufficient (Armijo) decrease of Phi, or, near the minimum where
-/// the decrease drowns in round-off, a lower |gradient| (gg_trial against
-/// gnorm^2) without a rise beyond it. energy_size: |internal| + |external|
-/// energy; material_roundoff: fascia_newton_energy_roundoff.
-FASCIA_INTERN int fascia_newton_accepts(const fascia_solver_def *def, fascia_real phi, fascia_real phi_trial,
-                                        fascia_real alpha, fascia_real slope, fascia_real gnorm, fascia_real gg_trial,
-                                        fascia_real energy_size, fascia_real material_roundoff);
-/// The failure of a Newton iteration that no damping could make descend.
-FASCIA_INTERN fascia_status fascia_newton_no_decrease(const fascia_solver *S, int iteration, fascia_real gnorm,
-                                                      fascia_real tolerance);
-/// Size of the rounding error of one energy evaluation, J (newton.c).
-FASCIA_INTERN fascia_real fascia_newton_energy_roundoff(const fascia_solver *S);
 
 #endif

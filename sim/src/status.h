@@ -37,6 +37,8 @@
 #define FASCIA_MAX_COUNT ((int64_t)1 << 30)
 
 /// calloc of count elements of size bytes, NULL on overflow or failure.
+/// A monotonic clock in milliseconds, for the solvers' profiles (newton.c).
+FASCIA_INTERN double fascia_now_ms(void);
 FASCIA_INTERN void *fascia_calloc(int64_t count, size_t size);
 /// The same on pages of its own (aligned, the size rounded up to whole
 /// pages), for arrays that a GPU backend page-locks: locking works page by

@@ -1,0 +1,380 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// The CPU backend of the Newton loop (backend.h): the step objective on the
+// host system (system.c), the tangent as products or an assembled block
+// matrix (assemble.c), directions by projected PCG (cg.c) or by banded
+// Cholesky (direct.c), and rigid organs as bodies whose frames follow them
+// (organs.c, on the solver's state).
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "backend.h"
+#include "organs.h"
+#include "solver_internal.h"
+
+typedef struct cpu_backend {
+  fascia_backend base;
+  fascia_solver *S; ///< the state the trials write (x, q) and the rigid organs read
+  fascia_system *sys;
+  const fascia_model *model;
+  const fascia_solver_def *def;
+  const unsigned char *mask;
+  int32_t frame_count;
+  int threads;
+  // the step
+  fascia_step_values values;
+  fascia_real *x_base, *q_base, *d; ///< the solver's anchor and iterate (the organs read them there)
+  fascia_real *gradient;            ///< the current gradient: the solver's
+  fascia_real *target_M;            ///< M (h u) [6N]
+  fascia_real target_norm;          ///< (h u).M(h u)
+  // work
+  fascia_real *d_trial, *gradient_trial, *direction, *rhs, *work, *blocks, *mass_blocks, *damping, *scratch;
+  fascia_operator op;
+  fascia_preconditioner pc;
+  int use_direct;    ///< linear systems by banded Cholesky
+  int use_assembled; ///< the block matrix K is assembled every Newton iteration
+  fascia_bsr K;
+  fascia_banded band;
+  char text[96];
+} cpu_backend;
+
+static int cpu_available(char *detail, size_t size) {
+  if (detail) snprintf(detail, size, "the CPU reference backend");
+  return 1;
+}
+
+static int cpu_supports(const fascia_backend_setup *setup, char *why, size_t size) {
+  (void)setup, (void)why, (void)size;
+  return 1;
+}
+
+static void cpu_destroy(fascia_backend *backend) {
+  cpu_backend *B = (cpu_backend *)backend;
+  if (!B) return;
+  fascia_bsr_destroy(&B->K);
+  fascia_banded_destroy(&B->band);
+  free(B->target_M), free(B->d_trial), free(B->gradient_trial), free(B->direction), free(B->rhs), free(B->work);
+  free(B->blocks), free(B->mass_blocks), free(B->damping), free(B->scratch), free(B->pc.inverse);
+  free(B);
+}
+
+// Largest band the automatic choice accepts, and its factorization cost:
+// beyond about a second per factorization CG is the better deal.
+#define AUTO_MAX_BAND_BYTES ((int64_t)256 << 20)
+#define AUTO_MAX_FLOPS 2e9
+#define DIRECT_MAX_BAND_BYTES ((int64_t)4 << 30)
+
+static fascia_status choose_linear_solver(cpu_backend *B, fascia_ctx *ctx, const fascia_organs *organs) {
+  fascia_linear_solver kind = B->def->linear_solver;
+  if (fascia_organs_body_count(organs) > 0) { // no banded P^T K P for rigid organs yet (organs.c): CG
+    FASCIA_CHECK(kind != FASCIA_LINEAR_DIRECT, ctx, FASCIA_ERR_ARGUMENT,
+                 "solver: the direct linear solver does not handle rigid organs; use cg or auto");
+    kind = FASCIA_LINEAR_CG;
+  }
+  if (kind == FASCIA_LINEAR_CG && !B->def->assembled) return FASCIA_OK;
+  FASCIA_TRY(fascia_bsr_create(ctx, B->model, &B->K));
+  B->use_assembled = 1;
+  if (kind == FASCIA_LINEAR_CG) return FASCIA_OK;
+  const int automatic = kind == FASCIA_LINEAR_AUTO;
+  fascia_status st =
+      fascia_banded_create(ctx, &B->K, automatic ? AUTO_MAX_BAND_BYTES : DIRECT_MAX_BAND_BYTES, &B->band);
+  if (st == FASCIA_OK && (!automatic || fascia_banded_cost(&B->band) <= AUTO_MAX_FLOPS)) {
+    B->use_direct = 1;
+    return FASCIA_OK;
+  }
+  if (!automatic) return st;
+  // automatic: CG, matrix-free unless asked otherwise
+  fascia_ctx_clear(ctx);
+  fascia_banded_destroy(&B->band);
+  if (!B->def->assembled) {
+    fascia_bsr_destroy(&B->K);
+    B->use_assembled = 0;
+  }
+  return FASCIA_OK;
+}
+
+static fascia_status cpu_create(const fascia_backend_setup *setup, fascia_backend **out) {
+  *out = NULL;
+  cpu_backend *B = calloc(1, sizeof *B);
+  FASCIA_CHECK(B, setup->ctx, FASCIA_ERR_MEMORY, "solver: out of memory");
+  B->base.ops = &fascia_backend_cpu;
+  B->S = setup->solver;
+  B->sys = setup->sys;
+  B->model = setup->model;
+  B->def = setup->def;
+  B->mask = setup->mask;
+  B->frame_count = setup->model->frame_count;
+  B->threads = setup->sys->threads;
+  const int64_t N = B->frame_count, n = 6 * N;
+  B->target_M = fascia_calloc(n, sizeof(fascia_real));
+  B->d_trial = fascia_calloc(n, sizeof(fascia_real));
+  B->gradient_trial = fascia_calloc(n, sizeof(fascia_real));
+  B->direction = fascia_calloc(n, sizeof(fascia_real));
+  B->rhs = fascia_calloc(n, sizeof(fascia_real));
+  B->work = fascia_calloc(6 * n, sizeof(fascia_real));
+  B->blocks = fascia_calloc(36 * N, sizeof(fascia_real));
+  B->mass_blocks = fascia_calloc(36 * N, sizeof(fascia_real));
+  B->damping = fascia_calloc(n, sizeof(fascia_real));
+  B->scratch = fascia_calloc(2 * n, sizeof(fascia_real));
+  B->pc.kind = setup->def->precond;
+  B->pc.frame_count = B->frame_count;
+  B->pc.inverse = fascia_calloc(36 * N, sizeof(fascia_real));
+  if (!B->target_M || !B->d_trial || !B->gradient_trial || !B->direction || !B->rhs || !B->work || !B->blocks ||
+      !B->mass_blocks || !B->damping || !B->scratch || !B->pc.inverse) {
+    cpu_destroy(&B->base);
+    return FASCIA_FAIL(setup->ctx, FASCIA_ERR_MEMORY, "solver: out of memory for %lld frames", (long long)N);
+  }
+  const fascia_status st = choose_linear_solver(B, setup->ctx, setup->organs);
+  if (st != FASCIA_OK) {
+    cpu_destroy(&B->base);
+    return st;
+  }
+  snprintf(B->text, sizeof B->text, "cpu, %d thread%s", B->threads, B->threads == 1 ? "" : "s");
+  *out = &B->base;
+  return FASCIA_OK;
+}
+
+static const char *cpu_describe(const fascia_backend *backend) { return ((const cpu_backend *)backend)->text; }
+
+static void mass_apply(cpu_backend *B, const fascia_real *v, fascia_real *out) {
+  if (B->def->mass == FASCIA_MASS_LUMPED) {
+    for (int32_t i = 0; i < B->frame_count; ++i) {
+      const fascia_real *M = B->mass_blocks + 36 * (int64_t)i, *vi = v + 6 * (int64_t)i;
+      for (int r = 0; r < 6; ++r) {
+        fascia_real s = 0;
+        for (int c = 0; c < 6; ++c) s += M[6 * r + c] * vi[c];
+        out[6 * (int64_t)i + r] = s;
+      }
+    }
+  } else {
+    fascia_system_mass_apply(B->sys, v, out);
+  }
+}
+
+// Anchor and first iterate are the solver's own arrays (the rigid organs
+// read them there); the mass at the anchor for a dynamic step.
+static fascia_status cpu_begin(fascia_backend *backend, const fascia_step_values *v, fascia_solve_report *report) {
+  cpu_backend *B = (cpu_backend *)backend;
+  fascia_solver *S = B->S;
+  FASCIA_CHECK(v->x_base == S->x_base && v->q_base == S->q_base && v->d == S->d, S->ctx, FASCIA_ERR_INTERNAL,
+               "cpu backend: the step's arrays are not the solver's");
+  B->values = *v;
+  B->x_base = S->x_base, B->q_base = S->q_base, B->d = S->d, B->gradient = S->gradient;
+  B->sys->gravity_scale = v->gravity_scale;
+  const int64_t n = 6 * (int64_t)B->frame_count;
+  B->target_norm = 0;
+  if (v->dynamic) {
+    fascia_system_set_state(B->sys, v->x_base, v->q_base);
+    fascia_system_mass_snapshot(B->sys);
+    fascia_system_mass_lumped(B->sys, B->mass_blocks);
+    mass_apply(B, v->inertia_target, B->target_M);
+    B->target_norm = fascia_dot(v->inertia_target, B->target_M, n, B->threads);
+  }
+  const fascia_real c = v->c1 + v->c2;
+  fascia_operator op = {B->sys,     c,  B->def->mass, B->mass_blocks, B->damping, 0, 1,
+                        B->use_assembled ? &B->K : NULL, B->mask, B->scratch + n, NULL, 0};
+  if (fascia_organs_body_count(S->organs) > 0) op.organs = S->organs;
+  op.single = B->use_assembled && !B->use_direct && B->def->single_precision_matrix;
+  B->op = op;
+  report->direct = B->use_direct;
+  return FASCIA_OK;
+}
+
+// Phi and its projected gradient at increments d (newton.c's header has the
+// objective).
+static fascia_status objective(cpu_backend *B, const fascia_real *d, fascia_real *phi, fascia_real *gradient) {
+  fascia_solver *S = B->S;
+  const fascia_step_values *v = &B->values;
+  const int32_t N = B->frame_count;
+  const int64_t n = 6 * (int64_t)N;
+  for (int32_t i = 0; i < N; ++i) {
+    for (int c = 0; c < 3; ++c) S->x[3 * i + c] = B->x_base[3 * i + c] + d[6 * i + c];
+    memcpy(S->q + 4 * i, B->q_base + 4 * i, 4 * sizeof(fascia_real));
+    fascia_pt_quat_rotate_by(d + 6 * i + 3, S->q + 4 * i);
+  }
+  fascia_system_set_state(B->sys, S->x, S->q);
+  fascia_real energy;
+  FASCIA_TRY(fascia_system_evaluate(B->sys, gradient, &energy));
+  if (v->dynamic)
+    for (int32_t i = 0; i < N; ++i) {
+      fascia_real g[3] = {gradient[6 * i + 3], gradient[6 * i + 4], gradient[6 * i + 5]};
+      fascia_pt_left_jacobian_t(d + 6 * i + 3, g, gradient + 6 * i + 3);
+    }
+  if (v->c1 != 0 || v->c2 != 0) {
+    // c1/2 (d - hu).M(d - hu) + c2/2 d.M d with M(hu) precomputed
+    mass_apply(B, d, B->scratch);
+    const fascia_real dMd = fascia_dot(d, B->scratch, n, B->threads), dz = fascia_dot(d, B->target_M, n, B->threads);
+    energy += FASCIA_R(0.5) * v->c1 * (dMd - 2 * dz + B->target_norm) + FASCIA_R(0.5) * v->c2 * dMd;
+    for (int64_t k = 0; k < n; ++k) gradient[k] += (v->c1 + v->c2) * B->scratch[k] - v->c1 * B->target_M[k];
+  }
+  // rigid organs: the bodies' own terms, gradient restricted to their masters
+  energy += fascia_organs_reduce(S->organs, S, v->c1, v->c2, v->dynamic, d, gradient);
+  for (int64_t k = 0; k < n; ++k)
+    if (!B->mask[k]) gradient[k] = 0;
+  *phi = energy;
+  return isfinite(energy) ? FASCIA_OK
+                          : FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC, "solver: the energy is not finite");
+}
+
+static fascia_status cpu_evaluate(fascia_backend *backend, fascia_real alpha, int current, fascia_trial_values *out) {
+  cpu_backend *B = (cpu_backend *)backend;
+  const int64_t n = 6 * (int64_t)B->frame_count;
+  const fascia_real *d = B->d;
+  fascia_real *g = current ? B->gradient : B->gradient_trial;
+  if (!current) {
+    for (int64_t k = 0; k < n; ++k) B->d_trial[k] = B->d[k] + alpha * B->direction[k];
+    fascia_organs_expand(B->S->organs, B->S, B->d_trial); // slaves of rigid organs follow their master
+    d = B->d_trial;
+  }
+  FASCIA_TRY(objective(B, d, &out->phi, g));
+  out->gradient_norm2 = fascia_dot(g, g, n, B->threads);
+  out->energy_size = fabs(B->sys->energy_internal) + fabs(B->sys->energy_external);
+  return FASCIA_OK;
+}
+
+// K = H (+ (c1 + c2) M for a dynamic step) at the current iterate, and its
+// float copy when the products use one
+static fascia_status assemble(cpu_backend *B) {
+  fascia_system_hessian_assemble(B->sys, &B->K);
+  const fascia_real c = B->values.c1 + B->values.c2;
+  if (c != 0 && B->def->mass == FASCIA_MASS_CONSISTENT) {
+    fascia_system_mass_assemble_add(B->sys, c, &B->K);
+  } else if (c != 0) {
+    for (int32_t i = 0; i < B->frame_count; ++i) {
+      fascia_real *D = B->K.values + 36 * (int64_t)B->K.diagonal[i];
+      for (int q = 0; q < 36; ++q) D[q] += c * B->mass_blocks[36 * (int64_t)i + q];
+    }
+  }
+  if (B->def->single_precision_matrix && !B->use_direct)
+    return fascia_bsr_make_single(B->S->ctx, &B->K, B->threads);
+  return FASCIA_OK;
+}
+
+// The assembled matrix, the preconditioner and the Levenberg scale
+static fascia_status cpu_prepare(fascia_backend *backend, fascia_solve_report *report) {
+  cpu_backend *B = (cpu_backend *)backend;
+  const int32_t N = B->frame_count;
+  const int64_t n = 6 * (int64_t)N;
+  double t = fascia_now_ms();
+  if (B->use_assembled) {
+    FASCIA_TRY(assemble(B));
+    report->profile.assemble_ms += fascia_now_ms() - t;
+    t = fascia_now_ms();
+  }
+  if (!B->use_direct) fascia_precond_build(&B->pc, &B->op, B->blocks);
+  if (B->op.organs) fascia_organs_precond(B->S->organs, &B->op, &B->pc, B->blocks);
+  fascia_real scale = 0;
+  for (int32_t i = 0; i < N; ++i)
+    for (int c = 0; c < 6; ++c) {
+      const fascia_real diag = B->use_direct ? fabs(B->K.values[36 * (int64_t)B->K.diagonal[i] + 7 * c])
+                                             : fabs(B->blocks[36 * (int64_t)i + 7 * c]);
+      B->damping[6 * (int64_t)i + c] = diag;
+      scale += diag;
+    }
+  B->op.scale = scale > 0 ? scale / (fascia_real)n : 1;
+  for (int64_t k = 0; k < n; ++k)
+    if (B->damping[k] < 1e-8 * B->op.scale) B->damping[k] = 1e-8 * B->op.scale;
+  report->profile.precond_ms += fascia_now_ms() - t;
+  return FASCIA_OK;
+}
+
+static fascia_status cpu_direction(fascia_backend *backend, fascia_real *shift, fascia_real *slope,
+                                   fascia_solve_report *report) {
+  cpu_backend *B = (cpu_backend *)backend;
+  const int64_t n = 6 * (int64_t)B->frame_count;
+  fascia_real *p = B->direction, *g = B->gradient;
+  for (int64_t k = 0; k < n; ++k) B->rhs[k] = -g[k];
+  B->op.shift = *shift;
+  if (B->use_direct) {
+    // not positive definite: raise the Levenberg shift until it is
+    while (!fascia_banded_factor(&B->band, &B->K, B->mask, B->damping, B->op.shift)) {
+      ++report->negative_curvature;
+      B->op.shift = B->op.shift == 0 ? FASCIA_R(1e-8) : 10 * B->op.shift;
+      if (B->op.shift > FASCIA_NEWTON_MAX_SHIFT)
+        return FASCIA_FAIL(B->S->ctx, FASCIA_ERR_NUMERIC,
+                           "solver: the tangent stays singular under any damping (a NaN, or a frame with no sample?)");
+    }
+    *shift = B->op.shift;
+    fascia_banded_solve(&B->band, B->rhs, p, B->work + 2 * n);
+  } else {
+    const fascia_cg_result cg = fascia_cg_solve(&B->op, &B->pc, B->rhs, p, B->def->cg_iterations,
+                                                B->def->cg_fixed, B->def->cg_tolerance, B->work + 2 * n);
+    report->cg_iterations += cg.iterations;
+    report->negative_curvature += cg.negative_curvature;
+  }
+  *slope = fascia_dot(p, g, n, B->threads);
+  if (!(*slope < 0)) { // not a descent direction: preconditioned gradient
+    fascia_precond_apply(&B->pc, B->mask, g, p);
+    for (int64_t k = 0; k < n; ++k) p[k] = -p[k];
+    *slope = fascia_dot(p, g, n, B->threads);
+  }
+  return FASCIA_OK;
+}
+
+static void cpu_accept(fascia_backend *backend) {
+  cpu_backend *B = (cpu_backend *)backend;
+  const int32_t N = B->frame_count;
+  const size_t n = 6 * (size_t)N;
+  memcpy(B->gradient, B->gradient_trial, n * sizeof(fascia_real));
+  if (B->values.dynamic) {
+    memcpy(B->d, B->d_trial, n * sizeof(fascia_real));
+  } else {
+    // static: re-anchor at the accepted state, so d = 0 and the Hessian
+    // of the next iteration is exact (no Jacobian of the rotation map)
+    memcpy(B->x_base, B->S->x, 3 * (size_t)N * sizeof(fascia_real));
+    memcpy(B->q_base, B->S->q, 4 * (size_t)N * sizeof(fascia_real));
+    memset(B->d, 0, n * sizeof(fascia_real));
+  }
+}
+
+// The trials wrote the solver's own arrays: nothing to copy
+static fascia_status cpu_finish(fascia_backend *backend, const fascia_step_result *result) {
+  cpu_backend *B = (cpu_backend *)backend;
+  FASCIA_CHECK(result->x == B->S->x && result->q == B->S->q && result->d == B->d && result->gradient == B->gradient,
+               B->S->ctx, FASCIA_ERR_INTERNAL, "cpu backend: the result's arrays are not the solver's");
+  return FASCIA_OK;
+}
+
+static fascia_status cpu_gradient(fascia_backend *backend, const fascia_real *x, const fascia_real *q,
+                                  fascia_real *gradient, fascia_real *energy) {
+  cpu_backend *B = (cpu_backend *)backend;
+  fascia_system_set_state(B->sys, x, q);
+  FASCIA_TRY(fascia_system_evaluate(B->sys, gradient, energy));
+  for (int64_t k = 0; k < 6 * (int64_t)B->frame_count; ++k)
+    if (!B->mask[k]) gradient[k] = 0;
+  return FASCIA_OK;
+}
+
+static fascia_status cpu_hessian_apply(fascia_backend *backend, const fascia_real *v, fascia_real *out) {
+  cpu_backend *B = (cpu_backend *)backend;
+  fascia_system_hessian_apply(B->sys, v, out);
+  for (int64_t k = 0; k < 6 * (int64_t)B->frame_count; ++k)
+    if (!B->mask[k]) out[k] = 0;
+  return FASCIA_OK;
+}
+
+static fascia_status cpu_hessian_diagonal(fascia_backend *backend, fascia_real *blocks) {
+  fascia_system_hessian_diagonal(((cpu_backend *)backend)->sys, blocks);
+  return FASCIA_OK;
+}
+
+const fascia_backend_ops fascia_backend_cpu = {
+    .name = "cpu",
+    .automatic = 1,
+    .available = cpu_available,
+    .supports = cpu_supports,
+    .create = cpu_create,
+    .destroy = cpu_destroy,
+    .describe = cpu_describe,
+    .host_evaluates = 1,
+    .begin = cpu_begin,
+    .evaluate = cpu_evaluate,
+    .prepare = cpu_prepare,
+    .direction = cpu_direction,
+    .accept = cpu_accept,
+    .finish = cpu_finish,
+    .gradient = cpu_gradient,
+    .hessian_apply = cpu_hessian_apply,
+    .hessian_diagonal = cpu_hessian_diagonal,
+};

@@ -1,0 +1,171 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// The Newton loop (newton.c) runs on any backend that keeps the contract of
+// backend.h, with nothing of the CPU's behind it: a toy backend minimizing a
+// quadratic of its own, Phi(d) = sum_k a_k (d_k - t_k)^2 / 2, in its own
+// storage, is solved in one Newton iteration, with the operations called in
+// the contract's order. A backend that never finds a descent ends in the
+// loop's "no decrease" failure, adding its iterations to the report (the
+// device loop added, the CPU loop overwrote). And the registry: unknown
+// names list the valid ones; a backend this build lacks says how to build it.
+#include <stdlib.h>
+#include <string.h>
+
+#include "backend.h"
+#include "check.h"
+#include "scenes.h"
+#include "solver_internal.h"
+
+typedef struct toy {
+  fascia_backend base;
+  int64_t n;
+  int descends; ///< 0: directions point uphill
+  double *a, *t, *d, *d_trial, *p, *g, *g_trial;
+  char calls[4096]; ///< the operations, a letter each
+  int call_count;
+} toy;
+
+static void called(toy *T, char c) {
+  if (T->call_count + 1 < (int)sizeof T->calls) T->calls[T->call_count++] = c, T->calls[T->call_count] = 0;
+}
+
+static fascia_status toy_begin(fascia_backend *b, const fascia_step_values *v, fascia_solve_report *r) {
+  toy *T = (toy *)b;
+  (void)r;
+  called(T, 'B');
+  memcpy(T->d, v->d, (size_t)T->n * sizeof(double));
+  return FASCIA_OK;
+}
+
+static fascia_status toy_evaluate(fascia_backend *b, double alpha, int current, fascia_trial_values *out) {
+  toy *T = (toy *)b;
+  called(T, current ? 'C' : 'E');
+  double phi = 0, gg = 0, *g = current ? T->g : T->g_trial;
+  for (int64_t k = 0; k < T->n; ++k) {
+    T->d_trial[k] = current ? T->d[k] : T->d[k] + alpha * T->p[k];
+    const double e = T->d_trial[k] - T->t[k];
+    phi += 0.5 * T->a[k] * e * e;
+    g[k] = T->a[k] * e;
+    gg += g[k] * g[k];
+  }
+  out->phi = phi, out->gradient_norm2 = gg, out->energy_size = phi;
+  return FASCIA_OK;
+}
+
+static fascia_status toy_prepare(fascia_backend *b, fascia_solve_report *r) {
+  (void)r;
+  called((toy *)b, 'P');
+  return FASCIA_OK;
+}
+
+static fascia_status toy_direction(fascia_backend *b, double *shift, double *slope, fascia_solve_report *r) {
+  toy *T = (toy *)b;
+  (void)r;
+  called(T, 'D');
+  double s = 0;
+  for (int64_t k = 0; k < T->n; ++k) {
+    T->p[k] = (T->descends ? -1 : 1) * T->g[k] / (T->a[k] * (1 + *shift));
+    s += T->p[k] * T->g[k];
+  }
+  *slope = s;
+  return FASCIA_OK;
+}
+
+static void toy_accept(fascia_backend *b) {
+  toy *T = (toy *)b;
+  called(T, 'A');
+  memcpy(T->d, T->d_trial, (size_t)T->n * sizeof(double));
+  memcpy(T->g, T->g_trial, (size_t)T->n * sizeof(double));
+}
+
+static fascia_status toy_finish(fascia_backend *b, const fascia_step_result *result) {
+  toy *T = (toy *)b;
+  called(T, 'F');
+  memcpy(result->d, T->d, (size_t)T->n * sizeof(double));
+  memcpy(result->gradient, T->g, (size_t)T->n * sizeof(double));
+  return FASCIA_OK;
+}
+
+static const fascia_backend_ops toy_ops = {.name = "toy",
+                                           .begin = toy_begin,
+                                           .evaluate = toy_evaluate,
+                                           .prepare = toy_prepare,
+                                           .direction = toy_direction,
+                                           .accept = toy_accept,
+                                           .finish = toy_finish};
+
+// One Newton solve of the toy on solver S (its model gives only the sizes
+// and the load scale); 0 when it behaved as the contract says.
+static int toy_solve(fascia_ctx *ctx, fascia_solver *S, int descends) {
+  toy T = {.base = {&toy_ops}, .n = 6 * (int64_t)S->frame_count, .descends = descends};
+  double *buffers[7];
+  for (int k = 0; k < 7; ++k) buffers[k] = calloc((size_t)T.n, sizeof(double));
+  T.a = buffers[0], T.t = buffers[1], T.d = buffers[2], T.d_trial = buffers[3], T.p = buffers[4], T.g = buffers[5];
+  T.g_trial = buffers[6];
+  for (int64_t k = 0; k < T.n; ++k) T.a[k] = 1 + (double)(k % 7), T.t[k] = 0.01 * (double)((k % 5) - 2);
+  fascia_backend *cpu = S->backend;
+  S->backend = &T.base;
+  memset(S->d, 0, (size_t)T.n * sizeof(double));
+  fascia_solve_report report;
+  memset(&report, 0, sizeof report);
+  report.newton_iterations = 5; // what earlier solves of the step did
+  const fascia_step_values values = {0, 0, 0, 1, S->x_base, S->q_base, S->d, NULL};
+  const fascia_status st = fascia_newton_minimize(S, &values, 20, &report);
+  S->backend = cpu;
+  printf("%s toy: status %s, calls %.80s%s (%d), %d Newton iterations in the report\n",
+         descends ? "descending" : "uphill", fascia_status_name(st), T.calls, T.call_count > 80 ? "..." : "",
+         T.call_count, report.newton_iterations);
+  if (descends) {
+    CHECK_OK(st, ctx);
+    CHECK(report.converged && report.newton_iterations == 6);
+    CHECK(!strcmp(T.calls, "BCPDEAF")); // begin, current, prepare, direction, trial, accept, finish
+    double err = 0;
+    for (int64_t k = 0; k < T.n; ++k) err = fmax(err, fabs(S->d[k] - T.t[k]));
+    CHECK(err < 1e-15);
+  } else {
+    CHECK(st == FASCIA_ERR_NUMERIC && strstr(fascia_ctx_message(ctx), "found no decrease"));
+    CHECK(report.newton_iterations == 5); // added to, not replaced
+    CHECK(T.calls[T.call_count - 1] == 'F'); // the state goes back to the host even on failure
+    fascia_ctx_clear(ctx);
+  }
+  for (int k = 0; k < 7; ++k) free(buffers[k]);
+  return 0;
+}
+
+int main(void) {
+  fascia_ctx_def cd = fascia_ctx_def_default();
+  fascia_ctx *ctx = NULL;
+  if (fascia_ctx_create(&cd, &ctx) != FASCIA_OK) return 1;
+  fascia_scene_beam_def bd = fascia_scene_beam_def_default();
+  bd.frames[0] = 4, bd.frames[1] = 2, bd.frames[2] = 2;
+  fascia_model *m = NULL;
+  CHECK_OK(fascia_scene_beam_build(ctx, &bd, &m), ctx);
+  fascia_solver_def sd = fascia_solver_def_default();
+  sd.backend = "cpu";
+  fascia_solver *S = NULL;
+  CHECK_OK(fascia_solver_create(ctx, m, &sd, &S), ctx);
+  int failed = toy_solve(ctx, S, 1);
+  failed |= toy_solve(ctx, S, 0);
+  fascia_solver_destroy(&S);
+
+  // the registry
+  sd.backend = "vulkan";
+  CHECK(fascia_solver_create(ctx, m, &sd, &S) == FASCIA_ERR_ARGUMENT);
+  printf("unknown backend: %s\n", fascia_ctx_message(ctx));
+  CHECK(strstr(fascia_ctx_message(ctx), "valid: auto, cuda, cpu, emulated"));
+  char detail[256];
+  if (!fascia_backend_available("cuda", detail, sizeof detail)) {
+    printf("cuda: %s\n", detail);
+    // built without CUDA: how to build it; with CUDA but no GPU: why not
+    CHECK(strstr(detail, "CUDA toolkit") || strstr(detail, "device") || strstr(detail, "driver"));
+    sd.backend = "auto";
+    CHECK_OK(fascia_solver_create(ctx, m, &sd, &S), ctx);
+    printf("auto: %s\n", fascia_solver_device(S));
+    CHECK(!strcmp(fascia_solver_backend(S), "cpu") && strstr(fascia_solver_device(S), "(auto: not on a GPU: "));
+    fascia_solver_destroy(&S);
+  }
+  CHECK(fascia_backend_available("emulated", detail, sizeof detail) && fascia_backend_available("cpu", NULL, 0));
+  fascia_model_destroy(&m);
+  fascia_ctx_destroy(&ctx);
+  return failed | CHECK_RESULT();
+}
