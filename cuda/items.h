@@ -18,6 +18,7 @@
 #define FASCIA_CUDA_ITEMS_H
 
 #include "point/block6.h"
+#include "point/frame.h"
 #include "point/sample.h"
 
 /// A relative CG residual at which CG has converged as far as doubles go
@@ -150,11 +151,7 @@ static inline FASCIA_HD fascia_pt_state fascia_dev_mass_state(const fascia_dev *
 // sum over the reverse table of frame i of a pair buffer of width 6
 static inline FASCIA_HD void fascia_dev_gather6(const fascia_dev *D, const fascia_real *buffer, int32_t i,
                                                 fascia_real *sum) {
-  for (int c = 0; c < 6; ++c) sum[c] = 0;
-  for (int32_t r = D->frame_offsets[i]; r < D->frame_offsets[i + 1]; ++r) {
-    const fascia_real *b = buffer + 6 * (int64_t)D->frame_pairs[r];
-    for (int c = 0; c < 6; ++c) sum[c] += b[c];
-  }
+  fascia_pt_frame_gather(D->frame_offsets, D->frame_pairs, buffer, i, sum);
 }
 
 // out = B v for a 6x6 block
@@ -174,10 +171,7 @@ static inline FASCIA_HD void fascia_dev_frame_mass(const fascia_dev *D, int32_t 
 }
 
 static inline FASCIA_HD void fascia_dev_rest_A(const fascia_dev *D, int32_t i, const fascia_real *q, fascia_real *A) {
-  fascia_real R[9], Rr[9];
-  fascia_pt_quat_to_mat(q, R);
-  fascia_pt_quat_to_mat(D->rest_rotation + 4 * (int64_t)i, Rr);
-  fascia_pt_mat_mult(R, Rr, A);
+  fascia_pt_frame_A(q, D->rest_rotation + 4 * (int64_t)i, A);
 }
 
 // ------------------------------------------------------------------ items --
@@ -193,13 +187,8 @@ static inline FASCIA_HD void fascia_dev_state_item(const fascia_dev *D, int32_t 
 
 // lumped 6x6 mass block of frame i at A_mass (as system.c)
 static inline FASCIA_HD void fascia_dev_lumped_mass_item(const fascia_dev *D, int32_t i) {
-  fascia_real *B = D->mass_blocks + 36 * (int64_t)i;
-  for (int c = 0; c < 36; ++c) B[c] = 0;
-  for (int32_t r = D->frame_offsets[i]; r < D->frame_offsets[i + 1]; ++r) {
-    const int32_t k = D->frame_pairs[r];
-    fascia_pt_lumped_mass_add(D->A_mass + 9 * (int64_t)i, D->pm.pair_offset + 3 * (int64_t)k,
-                              D->pair_lumped_mass[k], B);
-  }
+  fascia_pt_frame_lumped_mass(D->frame_offsets, D->frame_pairs, D->A_mass + 9 * (int64_t)i, D->pm.pair_offset,
+                              D->pair_lumped_mass, i, D->mass_blocks + 36 * (int64_t)i);
 }
 
 static inline FASCIA_HD void fascia_dev_sample_gradient_item(const fascia_dev *D, int32_t s) {
@@ -237,21 +226,12 @@ FASCIA_STATIC_FORCE_INLINE FASCIA_HD void fascia_dev_sample_stiffness_item(const
 static inline FASCIA_HD void fascia_dev_frame_gradient_item(const fascia_dev *D, int32_t i) {
   const fascia_dev_settings *set = D->set;
   const int64_t i6 = 6 * (int64_t)i;
-  fascia_real gi[6], b[3], bg[3];
+  fascia_real gi[6];
   fascia_dev_gather6(D, D->pair_buffer, i, gi);
   // gravity and frame loads, scaled by the load factor
-  const fascia_real gs = set->gravity_scale, *grav = D->gravity, *x = D->x + 3 * (int64_t)i;
-  const fascia_real *load = D->frame_load + i6;
-  fascia_pt_mat_vec(D->A + 9 * (int64_t)i, D->frame_moment + 3 * (int64_t)i, b);
-  fascia_real external = -gs * (D->frame_mass[i] * fascia_pt_dot3(grav, x) + fascia_pt_dot3(grav, b));
-  external -= gs * fascia_pt_dot3(load, x);
-  fascia_pt_cross(b, grav, bg);
-  for (int c = 0; c < 3; ++c) {
-    gi[c] -= gs * (D->frame_mass[i] * grav[c] + load[c]);
-    gi[3 + c] -= gs * bg[c];
-    D->torque[3 * (int64_t)i + c] = gi[3 + c];
-    gi[3 + c] -= gs * load[3 + c];
-  }
+  const fascia_real external = fascia_pt_frame_external(
+      D->A + 9 * (int64_t)i, D->frame_moment + 3 * (int64_t)i, D->frame_mass[i], D->gravity, set->gravity_scale,
+      D->x + 3 * (int64_t)i, D->frame_load + i6, gi, D->torque + 3 * (int64_t)i);
   const fascia_real *d = D->d_trial + i6;
   if (set->jacobian) {
     const fascia_real t[3] = {gi[3], gi[4], gi[5]};
@@ -300,20 +280,8 @@ static inline FASCIA_HD void fascia_dev_frame_precond_item(const fascia_dev *D, 
     const fascia_real *P = D->pair_blocks + 36 * (int64_t)D->frame_pairs[r];
     for (int c = 0; c < 36; ++c) B[c] += P[c];
   }
-  // gravity block (theta-theta): -s (b g^T - (b.g) I), plus 1/2 [g_theta]x
-  fascia_real b[3];
-  fascia_pt_mat_vec(D->A + 9 * (int64_t)i, D->frame_moment + 3 * (int64_t)i, b);
-  const fascia_real gs = set->gravity_scale, *grav = D->gravity, bg = fascia_pt_dot3(b, grav);
-  const fascia_real *t = D->torque + 3 * (int64_t)i;
-  const fascia_real half_skew[9] = {0, -t[2], t[1], t[2], 0, -t[0], -t[1], t[0], 0};
-  for (int a = 0; a < 3; ++a)
-    for (int c = 0; c < 3; ++c)
-      B[6 * (3 + a) + 3 + c] += -gs * (b[a] * grav[c] - (a == c ? bg : 0)) + FASCIA_R(0.5) * half_skew[3 * a + c];
-  for (int a = 0; a < 6; ++a) // the exact H is symmetric; average away rounding
-    for (int c = a + 1; c < 6; ++c) {
-      const fascia_real avg = FASCIA_R(0.5) * (B[6 * a + c] + B[6 * c + a]);
-      B[6 * a + c] = B[6 * c + a] = avg;
-    }
+  fascia_pt_frame_diagonal_finish(D->A + 9 * (int64_t)i, D->frame_moment + 3 * (int64_t)i, D->gravity,
+                                  set->gravity_scale, D->torque + 3 * (int64_t)i, B);
   if (set->mass_coefficient != 0) // lumped blocks stand in for consistent ones (precond.c)
     for (int c = 0; c < 36; ++c) B[c] += set->mass_coefficient * D->mass_blocks[36 * (int64_t)i + c];
   for (int c = 0; c < 6; ++c) B[7 * c] += set->shift * D->damping[6 * (int64_t)i + c];
@@ -393,16 +361,11 @@ static inline FASCIA_HD void fascia_dev_operator_term(const fascia_dev *D, int32
   const fascia_dev_settings *set = D->set;
   const int64_t i6 = 6 * (int64_t)i;
   const fascia_real *v = D->z + i6;
-  fascia_real out[6], b[3], vb[3], vbg[3], tv[3];
+  fascia_real out[6];
   fascia_dev_gather6(D, D->pair_buffer, i, out);
-  // gravity's own stiffness, frame-local: -s ((v x b) x g)
-  fascia_pt_mat_vec(D->A + 9 * (int64_t)i, D->frame_moment + 3 * (int64_t)i, b);
-  fascia_pt_cross(v + 3, b, vb);
-  fascia_pt_cross(vb, D->gravity, vbg);
-  for (int c = 0; c < 3; ++c) out[3 + c] -= set->gravity_scale * vbg[c];
-  // symmetrizing term of the rotation update: + 1/2 g_theta x v_theta
-  fascia_pt_cross(D->torque + 3 * (int64_t)i, v + 3, tv);
-  for (int c = 0; c < 3; ++c) out[3 + c] += FASCIA_R(0.5) * tv[c];
+  fascia_pt_frame_gravity_product(D->A + 9 * (int64_t)i, D->frame_moment + 3 * (int64_t)i, D->gravity,
+                                  set->gravity_scale, v, out);
+  fascia_pt_frame_symmetrizing_product(D->torque + 3 * (int64_t)i, v, out);
   if (set->mass_coefficient != 0) {
     fascia_real Mv[6];
     fascia_dev_frame_mass(D, i, D->z, Mv);

@@ -36,6 +36,10 @@ const fascia_backend_ops *fascia_backend_find(const char *name) {
   return NULL;
 }
 
+const char *fascia_backend_name(int k) {
+  return k >= 0 && k < (int)(sizeof registry / sizeof registry[0]) ? registry[k]->name : NULL;
+}
+
 int fascia_backend_available(const char *name, char *detail, size_t size) {
   if (detail && size) detail[0] = 0;
   const fascia_backend_ops *ops = fascia_backend_find(name);

@@ -8,12 +8,9 @@
 #include <string.h>
 
 #include "system.h"
+#include "point/frame.h"
 
 #define DOT_BLOCK 2048 // entries per partial sum of fascia_dot (fixed: determinism)
-
-static void rest_rotation(const fascia_model *m, int32_t i, fascia_real *R) {
-  fascia_pt_quat_to_mat(m->frame_rotation + 4 * i, R);
-}
 
 // The lumped mass splits each sample's mass among its frames as point masses
 // at the sample, which the frames carry rigidly. The row sum of the
@@ -178,12 +175,8 @@ void fascia_system_set_state(fascia_system *sys, const fascia_real *x, const fas
   if (x != sys->x) memcpy(sys->x, x, 3 * (size_t)N * sizeof(fascia_real));
   if (q != sys->q) memcpy(sys->q, q, 4 * (size_t)N * sizeof(fascia_real));
 #pragma omp parallel for num_threads(sys->threads) schedule(static)
-  for (int32_t i = 0; i < N; ++i) {
-    fascia_real R[9], Rr[9];
-    fascia_pt_quat_to_mat(sys->q + 4 * i, R);
-    rest_rotation(sys->model, i, Rr);
-    fascia_pt_mat_mult(R, Rr, sys->A + 9 * i);
-  }
+  for (int32_t i = 0; i < N; ++i)
+    fascia_pt_frame_A(sys->q + 4 * (int64_t)i, sys->model->frame_rotation + 4 * (int64_t)i, sys->A + 9 * (int64_t)i);
 }
 
 void fascia_system_set_rest(fascia_system *sys) {
@@ -195,14 +188,8 @@ static void gather(const fascia_system *sys, fascia_real *out) {
   const fascia_model *m = sys->model;
   const fascia_real *buffer = sys->pair_buffer;
 #pragma omp parallel for num_threads(sys->threads) schedule(static)
-  for (int32_t i = 0; i < sys->frame_count; ++i) {
-    fascia_real sum[6] = {0, 0, 0, 0, 0, 0};
-    for (int32_t r = m->frame_offsets[i]; r < m->frame_offsets[i + 1]; ++r) {
-      const fascia_real *b = buffer + 6 * m->frame_pairs[r];
-      for (int c = 0; c < 6; ++c) sum[c] += b[c];
-    }
-    for (int c = 0; c < 6; ++c) out[6 * i + c] = sum[c];
-  }
+  for (int32_t i = 0; i < sys->frame_count; ++i)
+    fascia_pt_frame_gather(m->frame_offsets, m->frame_pairs, buffer, i, out + 6 * (int64_t)i);
 }
 
 fascia_real fascia_dot(const fascia_real *a, const fascia_real *b, int64_t n, int threads) {
@@ -264,20 +251,11 @@ fascia_status fascia_system_evaluate(fascia_system *sys, fascia_real *gradient, 
   // gravity and frame loads, scaled by the load factor
   const fascia_real gs = sys->gravity_scale, *g = sys->gravity;
   fascia_real external = 0;
-  for (int32_t i = 0; i < sys->frame_count; ++i) {
-    fascia_real b[3], bg[3];
-    fascia_pt_mat_vec(sys->A + 9 * i, sys->frame_moment + 3 * i, b);
-    external -= gs * (sys->frame_mass[i] * fascia_pt_dot3(g, sys->x + 3 * i) + fascia_pt_dot3(g, b));
-    const fascia_real *load = m->frame_load + 6 * i;
-    external -= gs * fascia_pt_dot3(load, sys->x + 3 * i);
-    fascia_pt_cross(b, g, bg);
-    for (int c = 0; c < 3; ++c) {
-      gradient[6 * i + c] -= gs * (sys->frame_mass[i] * g[c] + load[c]);
-      gradient[6 * i + 3 + c] -= gs * bg[c];
-      sys->conservative_torque[3 * i + c] = gradient[6 * i + 3 + c];
-      gradient[6 * i + 3 + c] -= gs * load[3 + c];
-    }
-  }
+  for (int32_t i = 0; i < sys->frame_count; ++i)
+    external += fascia_pt_frame_external(sys->A + 9 * (int64_t)i, sys->frame_moment + 3 * (int64_t)i,
+                                         sys->frame_mass[i], g, gs, sys->x + 3 * (int64_t)i,
+                                         m->frame_load + 6 * (int64_t)i, gradient + 6 * (int64_t)i,
+                                         sys->conservative_torque + 3 * (int64_t)i);
   sys->energy_external = external;
   if (energy) *energy = internal + external;
   if (first_nonfinite >= 0 || !isfinite(internal + external))
@@ -286,18 +264,6 @@ fascia_status fascia_system_evaluate(fascia_system *sys, fascia_real *gradient, 
                        "model is unstable",
                        (int)(first_nonfinite >= 0 ? first_nonfinite : 0));
   return FASCIA_OK;
-}
-
-// K_exact v for the external (gravity) energy, frame-local: -s ((v x b) x g)
-static void gravity_derivative(const fascia_system *sys, const fascia_real *v, fascia_real *out) {
-  const fascia_real gs = sys->gravity_scale, *g = sys->gravity;
-  for (int32_t i = 0; i < sys->frame_count; ++i) {
-    fascia_real b[3], vb[3], vbg[3];
-    fascia_pt_mat_vec(sys->A + 9 * i, sys->frame_moment + 3 * i, b);
-    fascia_pt_cross(v + 6 * i + 3, b, vb);
-    fascia_pt_cross(vb, g, vbg);
-    for (int c = 0; c < 3; ++c) out[6 * i + 3 + c] -= gs * vbg[c];
-  }
 }
 
 void fascia_system_gradient_derivative(fascia_system *sys, const fascia_real *v, fascia_real *out) {
@@ -310,17 +276,16 @@ void fascia_system_gradient_derivative(fascia_system *sys, const fascia_real *v,
                                m->pair_frame + begin, sys->pair_buffer + 6 * (int64_t)begin);
   }
   gather(sys, out);
-  gravity_derivative(sys, v, out);
+  for (int32_t i = 0; i < sys->frame_count; ++i)
+    fascia_pt_frame_gravity_product(sys->A + 9 * (int64_t)i, sys->frame_moment + 3 * (int64_t)i, sys->gravity,
+                                    sys->gravity_scale, v + 6 * (int64_t)i, out + 6 * (int64_t)i);
 }
 
 void fascia_system_hessian_apply(fascia_system *sys, const fascia_real *v, fascia_real *out) {
   fascia_system_gradient_derivative(sys, v, out);
-  // symmetrizing term of the rotation update: + 1/2 g_theta x v_theta
-  for (int32_t i = 0; i < sys->frame_count; ++i) {
-    fascia_real t[3];
-    fascia_pt_cross(sys->conservative_torque + 3 * i, v + 6 * i + 3, t);
-    for (int c = 0; c < 3; ++c) out[6 * i + 3 + c] += FASCIA_R(0.5) * t[c];
-  }
+  for (int32_t i = 0; i < sys->frame_count; ++i)
+    fascia_pt_frame_symmetrizing_product(sys->conservative_torque + 3 * (int64_t)i, v + 6 * (int64_t)i,
+                                         out + 6 * (int64_t)i);
 }
 
 void fascia_system_hessian_diagonal(fascia_system *sys, fascia_real *blocks) {
@@ -337,21 +302,8 @@ void fascia_system_hessian_diagonal(fascia_system *sys, fascia_real *blocks) {
                                   k - m->sample_offsets[s], P);
       for (int c = 0; c < 36; ++c) B[c] += P[c];
     }
-    // gravity block (theta-theta): -s (b g^T - (b.g) I), plus 1/2 [g_theta]x
-    fascia_real b[3];
-    fascia_pt_mat_vec(sys->A + 9 * i, sys->frame_moment + 3 * i, b);
-    const fascia_real gs = sys->gravity_scale, *g = sys->gravity, bg = fascia_pt_dot3(b, g);
-    const fascia_real *t = sys->conservative_torque + 3 * i;
-    const fascia_real half_skew[9] = {0, -t[2], t[1], t[2], 0, -t[0], -t[1], t[0], 0};
-    for (int a = 0; a < 3; ++a)
-      for (int c = 0; c < 3; ++c)
-        B[6 * (3 + a) + 3 + c] += -gs * (b[a] * g[c] - (a == c ? bg : 0)) + FASCIA_R(0.5) * half_skew[3 * a + c];
-    // the exact H is symmetric; average away rounding
-    for (int a = 0; a < 6; ++a)
-      for (int c = a + 1; c < 6; ++c) {
-        const fascia_real avg = FASCIA_R(0.5) * (B[6 * a + c] + B[6 * c + a]);
-        B[6 * a + c] = B[6 * c + a] = avg;
-      }
+    fascia_pt_frame_diagonal_finish(sys->A + 9 * (int64_t)i, sys->frame_moment + 3 * (int64_t)i, sys->gravity,
+                                    sys->gravity_scale, sys->conservative_torque + 3 * (int64_t)i, B);
   }
 }
 
@@ -374,14 +326,9 @@ void fascia_system_mass_apply(fascia_system *sys, const fascia_real *v, fascia_r
 void fascia_system_mass_lumped(fascia_system *sys, fascia_real *blocks) {
   const fascia_model *m = sys->model;
 #pragma omp parallel for num_threads(sys->threads) schedule(static)
-  for (int32_t i = 0; i < sys->frame_count; ++i) {
-    fascia_real *B = blocks + 36 * (int64_t)i;
-    for (int c = 0; c < 36; ++c) B[c] = 0;
-    for (int32_t r = m->frame_offsets[i]; r < m->frame_offsets[i + 1]; ++r) {
-      const int32_t k = m->frame_pairs[r];
-      fascia_pt_lumped_mass_add(sys->A_mass + 9 * i, sys->pair_offset + 3 * k, sys->pair_lumped_mass[k], B);
-    }
-  }
+  for (int32_t i = 0; i < sys->frame_count; ++i)
+    fascia_pt_frame_lumped_mass(m->frame_offsets, m->frame_pairs, sys->A_mass + 9 * (int64_t)i, sys->pair_offset,
+                                sys->pair_lumped_mass, i, blocks + 36 * (int64_t)i);
 }
 
 void fascia_system_sample_positions(const fascia_system *sys, fascia_real *out) {

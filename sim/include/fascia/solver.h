@@ -145,6 +145,9 @@ FASCIA_API const char *fascia_solver_device(const fascia_solver *solver);
 /// Whether backend ("cpu", "cuda", "emulated") can run here; detail (may
 /// be NULL) gets the device in words, or why it cannot.
 FASCIA_API int fascia_backend_available(const char *backend, char *detail, size_t size);
+/// The name of backend k of this build's registry in priority order
+/// (0, 1, ...; NULL past the last): what `--backend` takes besides "auto".
+FASCIA_API const char *fascia_backend_name(int k);
 /// Current frame positions [3N] (m) and rotations [4N] (unit quaternions).
 FASCIA_API const fascia_real *fascia_solver_frame_positions(const fascia_solver *solver);
 FASCIA_API const fascia_real *fascia_solver_frame_rotations(const fascia_solver *solver);

@@ -1,0 +1,109 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// The per-frame math, shared by the CPU (sim/src/system.c) and the device
+// kernels (cuda/items.h): a frame's sum over its pairs, its orientation
+// relative to rest, the gravity and load terms of its gradient and tangent,
+// the symmetrizing term of the rotation update, and its lumped mass block.
+// Written once, so both sides do the same operations in the same order.
+#ifndef FASCIA_POINT_FRAME_H
+#define FASCIA_POINT_FRAME_H
+
+#include "sample.h"
+
+/// sum[6] = the pair buffer (width 6) over frame i's pairs, in the reverse
+/// table's order.
+static inline FASCIA_HD void fascia_pt_frame_gather(const int32_t *frame_offsets, const int32_t *frame_pairs,
+                                                    const fascia_real *buffer, int32_t i, fascia_real *sum) {
+  for (int c = 0; c < 6; ++c) sum[c] = 0;
+  for (int32_t r = frame_offsets[i]; r < frame_offsets[i + 1]; ++r) {
+    const fascia_real *b = buffer + 6 * (int64_t)frame_pairs[r];
+    for (int c = 0; c < 6; ++c) sum[c] += b[c];
+  }
+}
+
+/// A = R(q) R(q_rest): the frame's rotation since rest.
+static inline FASCIA_HD void fascia_pt_frame_A(const fascia_real *q, const fascia_real *q_rest, fascia_real *A) {
+  fascia_real R[9], Rr[9];
+  fascia_pt_quat_to_mat(q, R);
+  fascia_pt_quat_to_mat(q_rest, Rr);
+  fascia_pt_mat_mult(R, Rr, A);
+}
+
+/// Gravity g and the frame's load (force, torque [6]) at load factor gs on
+/// a frame of mass M and mass moment D at x: E = -gs (g.(M x + A D) +
+/// f.x). Subtracts the gradient from gi[6], puts the conservative torque
+/// (internal + gravity) in torque[3], returns E.
+static inline FASCIA_HD fascia_real fascia_pt_frame_external(const fascia_real *A, const fascia_real *moment,
+                                                             fascia_real mass, const fascia_real *g, fascia_real gs,
+                                                             const fascia_real *x, const fascia_real *load,
+                                                             fascia_real *gi, fascia_real *torque) {
+  fascia_real b[3], bg[3];
+  fascia_pt_mat_vec(A, moment, b);
+  fascia_real external = -gs * (mass * fascia_pt_dot3(g, x) + fascia_pt_dot3(g, b));
+  external -= gs * fascia_pt_dot3(load, x);
+  fascia_pt_cross(b, g, bg);
+  for (int c = 0; c < 3; ++c) {
+    gi[c] -= gs * (mass * g[c] + load[c]);
+    gi[3 + c] -= gs * bg[c];
+    torque[c] = gi[3 + c];
+    gi[3 + c] -= gs * load[3 + c];
+  }
+  return external;
+}
+
+/// Gravity's own stiffness on a variation v[6], frame-local:
+/// out[3..5] -= gs ((v_theta x A D) x g).
+static inline FASCIA_HD void fascia_pt_frame_gravity_product(const fascia_real *A, const fascia_real *moment,
+                                                             const fascia_real *g, fascia_real gs,
+                                                             const fascia_real *v, fascia_real *out) {
+  fascia_real b[3], vb[3], vbg[3];
+  fascia_pt_mat_vec(A, moment, b);
+  fascia_pt_cross(v + 3, b, vb);
+  fascia_pt_cross(vb, g, vbg);
+  for (int c = 0; c < 3; ++c) out[3 + c] -= gs * vbg[c];
+}
+
+/// The symmetrizing term of the rotation update (docs/mechanics.md):
+/// out[3..5] += 1/2 torque x v_theta.
+static inline FASCIA_HD void fascia_pt_frame_symmetrizing_product(const fascia_real *torque, const fascia_real *v,
+                                                                  fascia_real *out) {
+  fascia_real t[3];
+  fascia_pt_cross(torque, v + 3, t);
+  for (int c = 0; c < 3; ++c) out[3 + c] += FASCIA_R(0.5) * t[c];
+}
+
+/// Completes a frame's diagonal block B[36] of the tangent from the sum of
+/// its pairs' blocks: gravity's theta-theta block -gs (b g^T - (b.g) I) with
+/// b = A D, plus the symmetrizing 1/2 [torque]x; then averages the two
+/// triangles (the exact tangent is symmetric: away with the rounding).
+static inline FASCIA_HD void fascia_pt_frame_diagonal_finish(const fascia_real *A, const fascia_real *moment,
+                                                             const fascia_real *g, fascia_real gs,
+                                                             const fascia_real *torque, fascia_real *B) {
+  fascia_real b[3];
+  fascia_pt_mat_vec(A, moment, b);
+  const fascia_real bg = fascia_pt_dot3(b, g), *t = torque;
+  const fascia_real half_skew[9] = {0, -t[2], t[1], t[2], 0, -t[0], -t[1], t[0], 0};
+  for (int a = 0; a < 3; ++a)
+    for (int c = 0; c < 3; ++c)
+      B[6 * (3 + a) + 3 + c] += -gs * (b[a] * g[c] - (a == c ? bg : 0)) + FASCIA_R(0.5) * half_skew[3 * a + c];
+  for (int a = 0; a < 6; ++a)
+    for (int c = a + 1; c < 6; ++c) {
+      const fascia_real avg = FASCIA_R(0.5) * (B[6 * a + c] + B[6 * c + a]);
+      B[6 * a + c] = B[6 * c + a] = avg;
+    }
+}
+
+/// Frame i's lumped 6x6 mass block B at orientation A (the mass snapshot):
+/// its pairs' point masses (pair_lumped_mass, at pair_offset from the frame).
+static inline FASCIA_HD void fascia_pt_frame_lumped_mass(const int32_t *frame_offsets, const int32_t *frame_pairs,
+                                                         const fascia_real *A, const fascia_real *pair_offset,
+                                                         const fascia_real *pair_lumped_mass, int32_t i,
+                                                         fascia_real *B) {
+  for (int c = 0; c < 36; ++c) B[c] = 0;
+  for (int32_t r = frame_offsets[i]; r < frame_offsets[i + 1]; ++r) {
+    const int32_t k = frame_pairs[r];
+    fascia_pt_lumped_mass_add(A, pair_offset + 3 * (int64_t)k, pair_lumped_mass[k], B);
+  }
+}
+
+#endif
