@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "commands.h"
+#include "fascia/solver.h"
 
 int cli_usage_error(const char *command, const char *format, const char *what) {
   fprintf(stderr, "fascia %s: ", command);
@@ -49,10 +50,13 @@ int cli_parse_grid(const char *text, int32_t grid[3], int minimum) {
 }
 
 int cli_parse_backend(const char *text, const char **out) {
-  static const char *const names[] = {"cpu", "cuda", "auto", "emulated"};
-  for (size_t k = 0; k < sizeof names / sizeof names[0]; ++k)
-    if (!strcmp(text, names[k])) {
-      *out = names[k]; // static: outlives argv edits
+  if (!strcmp(text, "auto")) {
+    *out = "auto";
+    return 1;
+  }
+  for (int k = 0; fascia_backend_name(k); ++k)
+    if (!strcmp(text, fascia_backend_name(k))) {
+      *out = fascia_backend_name(k); // static: outlives argv edits
       return 1;
     }
   return 0;

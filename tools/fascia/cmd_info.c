@@ -22,14 +22,15 @@ int cmd_info(int argc, char **argv) {
   fascia_ctx *ctx = cli_ctx(0, 0);
   printf("threads: %d\n", fascia_ctx_threads(ctx));
   fascia_ctx_destroy(&ctx);
-  // "auto" is not listed: it is cuda where that is available, else cpu
-  static const char *const backends[] = {"cpu", "cuda", "emulated"};
-  for (size_t k = 0; k < sizeof backends / sizeof backends[0]; ++k) {
+  // "auto" is not listed: it is the first of these that is available and
+  // runs the model (the emulation is never chosen by itself)
+  for (int k = 0; fascia_backend_name(k); ++k) {
+    const char *name = fascia_backend_name(k);
     char detail[512];
-    if (fascia_backend_available(backends[k], detail, sizeof detail))
-      printf("backend %s: available (%s)\n", backends[k], detail);
+    if (fascia_backend_available(name, detail, sizeof detail))
+      printf("backend %s: available (%s)\n", name, detail);
     else
-      printf("backend %s: not available: %s\n", backends[k], detail);
+      printf("backend %s: not available: %s\n", name, detail);
   }
   return 0;
 }
