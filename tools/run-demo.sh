@@ -47,7 +47,7 @@ demo summary: female pelvis, bladder fixed, uterus under traction
   tissue       largest strain $strain (Green-Lagrange norm), largest stress $stress Pa
   wall time    ${seconds} s to prepare and simulate
   files        $out/
-    results.h5 + results.xdmf   tissue frames and samples with strain and stress per saved step (ParaView: XDMF Reader)
+    results.h5 + results.xdmf   tissue frames and samples with displacement, strain and stress per saved step (ParaView)
     organs/organs.pvd           organ surfaces moved by the simulation (ParaView)
     scene-rest.png, scene-deformed.png   tissue coloured by strain between the organs
     energy.png, iterations.png, ms-per-step.png   the run over time

@@ -327,10 +327,31 @@ static void print_step_progress(int done, int total, fascia_real t, double elaps
   fflush(stderr);
 }
 
-// Appends the solver's current state (and sample data) to the results.
-static fascia_status save_state(fascia_results *res, const fascia_solver *solver, int samples, fascia_real *sample_buffer, fascia_real *strain, fascia_real *stress) {
+// The time of solver step n, as every output writes it: n dt from t = 0 (a
+// resumed run counts its steps from t = 0 too). The solver's own clock sums
+// the steps and drifts from it by rounding, which gave ParaView two times
+// per step when the results and the organs were loaded together.
+static fascia_real step_time(const run_options *opt, int n) { return (fascia_real)n * opt->solver.time_step; }
+
+// Opens the results file, its fields described (docs/results-format.md).
+static fascia_status open_results(fascia_ctx *ctx, const run_options *opt, const fascia_model *model,
+                                  const fascia_results_def *def, fascia_results **res) {
+  fascia_status st = fascia_results_open(ctx, opt->results_path, model, def, res);
+  if (st == FASCIA_OK && !opt->dynamic)
+    st = fascia_results_set_time_meaning(*res, "load factor of a static run: 0 the rest state, 1 the equilibrium");
+  if (st == FASCIA_OK && opt->samples)
+    st = fascia_results_describe_field(*res, "strain", "1",
+                                       "Frobenius norm of the Green-Lagrange strain E = (F^T F - I) / 2");
+  if (st == FASCIA_OK && opt->samples)
+    st = fascia_results_describe_field(*res, "stress", "Pa", "Frobenius norm of the first Piola-Kirchhoff stress P");
+  return st;
+}
+
+// Appends the solver's current state (and sample data) to the results at `time`.
+static fascia_status save_state(fascia_results *res, const fascia_solver *solver, fascia_real time, int samples,
+                                fascia_real *sample_buffer, fascia_real *strain, fascia_real *stress) {
   if (samples) fascia_solver_sample_positions(solver, sample_buffer);
-  fascia_status st = fascia_results_append(res, fascia_solver_time(solver), fascia_solver_frame_positions(solver),
+  fascia_status st = fascia_results_append(res, time, fascia_solver_frame_positions(solver),
                                            fascia_solver_frame_rotations(solver), samples ? sample_buffer : NULL);
   if (st != FASCIA_OK || !samples) return st;
   fascia_solver_sample_strain(solver, strain, stress);
@@ -345,10 +366,11 @@ static fascia_status run_steps(fascia_solver *solver, const run_options *opt,
                                fascia_results *res, fascia_real *buffers[3], run_totals *tot) {
   const int show = progress_wanted();
   fascia_status st = FASCIA_OK;
-  if (res) st = save_state(res, solver, opt->samples, buffers[0], buffers[1], buffers[2]);
+  const int first = opt->checkpoint ? opt->checkpoint->first_step : 1;
+  if (res) st = save_state(res, solver, step_time(opt, first - 1), opt->samples, buffers[0], buffers[1], buffers[2]);
   double last_print = -1e30;
   int last_saved = 0;
-  for (int n = opt->checkpoint ? opt->checkpoint->first_step : 1; n <= opt->steps && st == FASCIA_OK; ++n) {
+  for (int n = first; n <= opt->steps && st == FASCIA_OK; ++n) {
     fascia_solve_report report;
     const double t0 = cli_now_ms();
     if (opt->drive && opt->drive->count) // driven organs: their frames at this step's end
@@ -361,11 +383,12 @@ static fascia_status run_steps(fascia_solver *solver, const run_options *opt,
     const int stop = run_stop_requested != 0; // read once: a signal from here on stops after the next step
     const int last = n == opt->steps || stop;
     if (res && (n % opt->save_every == 0 || last)) {
-      st = save_state(res, solver, opt->samples, buffers[0], buffers[1], buffers[2]);
+      st = save_state(res, solver, step_time(opt, n), opt->samples, buffers[0], buffers[1], buffers[2]);
       last_saved = n;
     }
     if (st == FASCIA_OK && opt->outputs)
-      st = run_outputs_step(opt->outputs, solver, n, &report, cli_now_ms() - t0, n % opt->save_every == 0 || last);
+      st = run_outputs_step(opt->outputs, solver, n, &report, cli_now_ms() - t0, n % opt->save_every == 0 || last,
+                            step_time(opt, n));
     if (st == FASCIA_OK) st = checkpoint_after(opt->checkpoint, solver, n, last);
     if (show && (cli_now_ms() - last_print > 200 || last)) {
       print_step_progress(n, opt->steps, fascia_solver_time(solver), tot->solve_ms, last);
@@ -377,8 +400,9 @@ static fascia_status run_steps(fascia_solver *solver, const run_options *opt,
     }
   }
   // a failed step: keep the last good state in the file
-  if (res && st == FASCIA_ERR_NUMERIC && tot->steps > last_saved)
-    (void)save_state(res, solver, opt->samples, buffers[0], buffers[1], buffers[2]);
+  if (res && st == FASCIA_ERR_NUMERIC && first - 1 + tot->steps > last_saved)
+    (void)save_state(res, solver, step_time(opt, first - 1 + tot->steps), opt->samples, buffers[0], buffers[1],
+                     buffers[2]);
   if (show && tot->steps < opt->steps && !tot->interrupted) fputc('\n', stderr); // a failed step
   return st;
 }
@@ -662,7 +686,7 @@ static fascia_status check_results_size(fascia_ctx *ctx, const run_options *opt,
                                         const fascia_model *m) {
   if (!opt->results_path) return FASCIA_OK;
   const double steps = opt->dynamic ? (double)opt->steps - ck->first_step + 1 : 1;
-  const double saved = opt->dynamic ? floor(steps / opt->save_every) + 2 : 1; // the rest state and the last too
+  const double saved = opt->dynamic ? floor(steps / opt->save_every) + 2 : 2; // the rest state and the last too
   const double row = 8.0 * (1 + 7.0 * m->frame_count + (opt->samples ? 5.0 * m->sample_count : 0));
   const double bytes = saved * row;
   char folder[4096];
@@ -778,10 +802,12 @@ int cmd_run(int argc, char **argv) {
   rdef.write_samples = opt.samples != 0;
   rdef.every = opt.dynamic ? opt.save_every : 1;
   if (opt.dynamic) catch_stop_signals(old_signals), signals_caught = 1;
-  if ((st = run_outputs_begin(&outs, ctx, model, solver)) != FASCIA_OK) goto done;
+  // a static run saves two steps, the rest state (0) and the equilibrium (1)
+  if ((st = run_outputs_begin(&outs, ctx, model, solver, opt.dynamic ? step_time(&opt, ck.first_step - 1) : 0)) !=
+      FASCIA_OK)
+    goto done;
+  if (opt.results_path && (st = open_results(ctx, &opt, model, &rdef, &res)) != FASCIA_OK) goto done;
   if (opt.dynamic) {
-    if (opt.results_path && (st = fascia_results_open(ctx, opt.results_path, model, &rdef, &res)) != FASCIA_OK)
-      goto done;
     st = run_steps(solver, &opt, res, buffers, &tot);
   } else {
     fascia_solve_report report;
@@ -792,6 +818,7 @@ int cmd_run(int argc, char **argv) {
     opt.static_time_why = opt.static_time_given ? "given by --static-time"
                           : model->motion_count > 0 ? "the end of the prescribed motions"
                                                     : "no prescribed motion";
+    if (res && (st = save_state(res, solver, 0, opt.samples, buffers[0], buffers[1], buffers[2])) != FASCIA_OK) goto done;
     if ((st = fascia_solver_set_time(solver, opt.static_time)) != FASCIA_OK) goto done;
     const double t0 = cli_now_ms();
     st = fascia_solver_solve_static(solver, &report);
@@ -800,11 +827,10 @@ int cmd_run(int argc, char **argv) {
       const fascia_status ast = add_report(&tot, &report);
       if (ast != FASCIA_OK) st = ast;
     }
-    if (st == FASCIA_OK) st = run_outputs_step(&outs, solver, 1, &report, tot.solve_ms, 1);
+    if (st == FASCIA_OK) st = run_outputs_step(&outs, solver, 1, &report, tot.solve_ms, 1, 1);
     // the equilibrium (or the state reached) is written either way
-    if ((st == FASCIA_OK || st == FASCIA_ERR_NUMERIC) && opt.results_path) {
-      fascia_status wst = fascia_results_open(ctx, opt.results_path, model, &rdef, &res);
-      if (wst == FASCIA_OK) wst = save_state(res, solver, opt.samples, buffers[0], buffers[1], buffers[2]);
+    if ((st == FASCIA_OK || st == FASCIA_ERR_NUMERIC) && res) {
+      const fascia_status wst = save_state(res, solver, 1, opt.samples, buffers[0], buffers[1], buffers[2]);
       if (wst != FASCIA_OK) st = wst;
     }
   }

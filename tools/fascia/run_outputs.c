@@ -4,7 +4,8 @@
 //   --history FILE.csv  one row per step: time, energies, Newton and CG
 //                       iterations, ms, largest strain and stress;
 //   --organs DIR        each organ's surface moved by its pose (fixed,
-//                       prescribed, rigid) as VTK XML PolyData per saved
+//                       prescribed, rigid; a driven organ follows its first
+//                       coupling frame) as VTK XML PolyData per saved
 //                       step, with DIR/organs.pvd that ParaView opens as a
 //                       time series next to the results' XDMF;
 //   --snapshots DIR     CSV of the tissue samples (position, strain, stress)
@@ -68,15 +69,35 @@ static fascia_file *open_file(fascia_ctx *ctx, const char *what, const char *dir
   return f;
 }
 
-// Organ vertex v at the organ's current pose; 0 when the organ has none
-// (driven by an outside simulator).
-static int organ_pose(const fascia_solver *solver, int32_t k, fascia_real *R, fascia_real *t) {
-  fascia_real q[4];
-  if (fascia_solver_organ_pose(solver, k, t, q) != FASCIA_OK) return 0;
+static void quat_to_matrix(const fascia_real *q, fascia_real *R) {
   const fascia_real w = q[0], x = q[1], y = q[2], z = q[3];
   R[0] = 1 - 2 * (y * y + z * z), R[1] = 2 * (x * y - w * z), R[2] = 2 * (x * z + w * y);
   R[3] = 2 * (x * y + w * z), R[4] = 1 - 2 * (x * x + z * z), R[5] = 2 * (y * z - w * x);
   R[6] = 2 * (x * z - w * y), R[7] = 2 * (y * z + w * x), R[8] = 1 - 2 * (x * x + y * y);
+}
+
+// The organ's current pose x = R x_rest + t. An organ driven from outside
+// (--drive) has no pose of its own: it follows its first coupling frame,
+// R = R_f R_f,rest^T (exact when the drive moves the organ rigidly). 0 when
+// there is neither.
+static int organ_pose(const fascia_model *m, const fascia_solver *solver, int32_t k, fascia_real *R, fascia_real *t) {
+  fascia_real q[4];
+  if (fascia_solver_organ_pose(solver, k, t, q) == FASCIA_OK) {
+    quat_to_matrix(q, R);
+    return 1;
+  }
+  int32_t frames[1];
+  if (fascia_solver_organ_frame_count(solver, k) < 1 || fascia_solver_organ_frames(solver, k, frames) != FASCIA_OK)
+    return 0;
+  const int32_t f = frames[0];
+  fascia_real now[9], rest[9];
+  quat_to_matrix(fascia_solver_frame_rotations(solver) + 4 * f, now);
+  quat_to_matrix(m->frame_rotation + 4 * f, rest);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      R[3 * r + c] = now[3 * r] * rest[3 * c] + now[3 * r + 1] * rest[3 * c + 1] + now[3 * r + 2] * rest[3 * c + 2];
+  const fascia_real *x = fascia_solver_frame_positions(solver) + 3 * f, *x0 = m->frame_position + 3 * f;
+  for (int r = 0; r < 3; ++r) t[r] = x[r] - (R[3 * r] * x0[0] + R[3 * r + 1] * x0[1] + R[3 * r + 2] * x0[2]);
   return 1;
 }
 
@@ -145,10 +166,10 @@ static fascia_status write_vtp(fascia_ctx *ctx, const char *dir, const char *nam
 
 // Every organ at the solver's state, as step k of the PVD collection.
 static fascia_status write_organs(run_outputs *out, fascia_ctx *ctx, const fascia_model *m,
-                                  const fascia_solver *solver) {
+                                  const fascia_solver *solver, fascia_real time) {
   for (int32_t k = 0; k < m->organ_count; ++k) {
     fascia_real R[9], t[3];
-    if (!organ_pose(solver, k, R, t)) continue;
+    if (!organ_pose(m, solver, k, R, t)) continue;
     char name[FASCIA_NAME_SIZE + 32];
     // a fixed organ never moves: its first file serves every step
     const int fixed = m->organs[k].kind == FASCIA_ORGAN_FIXED;
@@ -157,8 +178,9 @@ static fascia_status write_organs(run_outputs *out, fascia_ctx *ctx, const fasci
       fascia_status st = write_vtp(ctx, out->organs_dir, name, m->organs + k, R, t);
       if (st != FASCIA_OK) return st;
     }
-    fprintf(fascia_file_stream(out->pvd), "    <DataSet timestep=\"%.9g\" group=\"\" part=\"%d\" name=\"%s\" file=\"%s\"/>\n",
-            fascia_solver_time(solver), (int)k, m->organs[k].name, name);
+    // the time as the results' XDMF writes it: one time per saved step in ParaView
+    fprintf(fascia_file_stream(out->pvd), "    <DataSet timestep=\"%.17g\" group=\"\" part=\"%d\" name=\"%s\" file=\"%s\"/>\n",
+            time, (int)k, m->organs[k].name, name);
   }
   out->organ_steps++;
   return FASCIA_OK;
@@ -187,7 +209,7 @@ static fascia_status write_snapshot(run_outputs *out, fascia_ctx *ctx, const fas
   fprintf(f, "organ,x_m,y_m,z_m\n");
   for (int32_t k = 0; k < m->organ_count; ++k) {
     fascia_real R[9], t[3];
-    if (!organ_pose(solver, k, R, t)) continue;
+    if (!organ_pose(m, solver, k, R, t)) continue;
     const fascia_organ *o = m->organs + k;
     const int32_t stride = o->vertex_count > 3000 ? o->vertex_count / 3000 : 1;
     for (int32_t v = 0; v < o->vertex_count; v += stride) {
@@ -206,7 +228,8 @@ static fascia_real largest(const fascia_real *values, int32_t count) {
   return x;
 }
 
-fascia_status run_outputs_begin(run_outputs *out, fascia_ctx *ctx, const fascia_model *m, fascia_solver *solver) {
+fascia_status run_outputs_begin(run_outputs *out, fascia_ctx *ctx, const fascia_model *m, fascia_solver *solver,
+                                fascia_real time) {
   out->ctx = ctx;
   out->model = m;
   if (!out->history_path && !out->organs_dir && !out->snapshots_dir) return FASCIA_OK;
@@ -230,13 +253,13 @@ fascia_status run_outputs_begin(run_outputs *out, fascia_ctx *ctx, const fascia_
     if ((st = make_dir(ctx, out->organs_dir)) != FASCIA_OK) return st;
     if (!(out->pvd = open_file(ctx, "--organs", out->organs_dir, "organs.pvd", &st))) return st;
     fprintf(fascia_file_stream(out->pvd), "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n");
-    if ((st = write_organs(out, ctx, m, solver)) != FASCIA_OK) return st;
+    if ((st = write_organs(out, ctx, m, solver, time)) != FASCIA_OK) return st;
   }
   return FASCIA_OK;
 }
 
 fascia_status run_outputs_step(run_outputs *out, fascia_solver *solver, int step, const fascia_solve_report *report,
-                               double ms, int saved) {
+                               double ms, int saved, fascia_real time) {
   fascia_ctx *ctx = out->ctx;
   const fascia_model *m = out->model;
   if (out->history) {
@@ -249,7 +272,7 @@ fascia_status run_outputs_step(run_outputs *out, fascia_solver *solver, int step
             largest(out->strain, m->sample_count), largest(out->stress, m->sample_count), report->converged);
     if (ferror(f)) return fascia_file_commit(&out->history); // a write failed: say why now, not at the end
   }
-  if (out->pvd && saved) return write_organs(out, ctx, m, solver);
+  if (out->pvd && saved) return write_organs(out, ctx, m, solver, time);
   return FASCIA_OK;
 }
 

@@ -32,12 +32,13 @@ int run_outputs_take(int *argc, char **argv, run_outputs *out);
 extern const char run_outputs_usage[];
 
 /// Before the first step: opens the files, writes the rest snapshot and the
-/// organs at the current state. On error the ctx holds the message.
-fascia_status run_outputs_begin(run_outputs *out, fascia_ctx *ctx, const fascia_model *model, fascia_solver *solver);
+/// organs at the current state, labelled `time` (s). On error the ctx holds the message.
+fascia_status run_outputs_begin(run_outputs *out, fascia_ctx *ctx, const fascia_model *model, fascia_solver *solver,
+                                fascia_real time);
 /// After step `step` (1-based) that took `ms`: a history row; the organs
-/// too when `saved`.
+/// too when `saved`; both at `time` (s), the results' time of the step.
 fascia_status run_outputs_step(run_outputs *out, fascia_solver *solver, int step, const fascia_solve_report *report,
-                               double ms, int saved);
+                               double ms, int saved, fascia_real time);
 /// After the last step: the final snapshot; closes everything (also after
 /// an error, then with status ignored).
 fascia_status run_outputs_end(run_outputs *out, fascia_solver *solver, int ok);

@@ -60,6 +60,18 @@ FASCIA_API fascia_status fascia_results_append(fascia_results *results, fascia_r
 FASCIA_API fascia_status fascia_results_append_field(fascia_results *results, const char *name,
                                                      const fascia_real *values);
 
+/// Records the unit and the meaning of per-sample field `name` (as the
+/// field's attributes `unit` and `meaning`), e.g. "1" and "Frobenius norm of
+/// the Green-Lagrange strain E = (F^T F - I) / 2"; the field is created if it
+/// was not given yet. A field never described reads unit "unknown".
+FASCIA_API fascia_status fascia_results_describe_field(fascia_results *results, const char *name, const char *unit,
+                                                       const char *meaning);
+
+/// What /steps/time means, stored as its attribute `time_meaning` (default
+/// "simulation time"); a static run, say, saves rest and equilibrium as two
+/// steps of a load factor. At most 255 characters.
+FASCIA_API fascia_status fascia_results_set_time_meaning(fascia_results *results, const char *meaning);
+
 /// Steps appended so far.
 FASCIA_API int32_t fascia_results_step_count(const fascia_results *results);
 
