@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// Shared driver of the stability suite (t31x, issue 6 "Stability at the
-// extremes"): runs implicit Euler steps on a small model and checks, step by
+// Shared driver of the stability suite (t31x, stability at the
+// extremes): runs implicit Euler steps on a small model and checks, step by
 // step, what every extreme case must satisfy: the state stays finite; the
 // total energy E_kin + E_pot does not grow once nothing from outside does
 // work (implicit Euler dissipates); a step the solver cannot take comes back

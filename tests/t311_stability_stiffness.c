@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// Stable over Young's moduli from 1e2 to 1e8 Pa (issue 6), both laws: a
+// Stable over Young's moduli from 1e2 to 1e8 Pa, both laws: a
 // clamped beam under its own weight takes every step, finite, without energy
 // growth, and its Newton solves converge (a stiff Neo-Hookean beam once
 // could not: its energy's rounding hid the decrease near the minimum). A

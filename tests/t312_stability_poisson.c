@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
 // Stable over Poisson ratios from 0 to 0.49 with both laws, and to 0.499
-// with the stable Neo-Hookean (issue 6): a clamped beam under its own weight
+// with the stable Neo-Hookean: a clamped beam under its own weight
 // takes every step, finite, without energy growth, its static solve
 // converges, and near incompressibility the deflection only shrinks (the
 // frame scheme locks as nu -> 0.5; docs/mechanics.md) but never flips sign.

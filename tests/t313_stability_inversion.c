@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// Large compression and inversion (issue 6). Prescribed frames are pushed
+// Large compression and inversion. Prescribed frames are pushed
 // through a 4 m beam clamped at x = 0: (a) its free end by 3 m along the
 // axis (75 % compression, the beam buckles), (b) an inner plane of frames
 // from x = 2.4 to x = 0.4, past its neighbours, so the cells between are

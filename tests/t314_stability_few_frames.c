@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// Degenerate discretizations stay stable (issue 6): the fewest frames a body
+// Degenerate discretizations stay stable: the fewest frames a body
 // can have (2 x 2 x 2: one cell) with hexahedral, tetrahedral and meshless
 // weights; flat tetrahedra (a 16 m x 1 m x 1 cm plate, cells 2.3 m x 1 m x
 // 1 cm); samples with a single neighbour frame (w = 1, grad w = 0: they follow

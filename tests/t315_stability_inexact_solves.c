@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// Inexact solves stay stable (issue 6): CG stopped after 2 iterations, one
+// Inexact solves stay stable: CG stopped after 2 iterations, one
 // Newton iteration per step, the paper's fixed-cost mode (one Newton
 // iteration, exactly 60 CG iterations, no line search), and the crudest mix
 // (one Newton iteration of 2 CG iterations, with and without line search).

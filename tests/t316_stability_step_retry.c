@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
 // A step the solver cannot take is rejected and redone as shorter steps
-// (fascia_solver_def.step_retries, require_convergence; issue 6 "detect it,
-// say so, and recover"): on a Neo-Hookean beam whose end is pushed 3 m into
+// (fascia_solver_def.step_retries, require_convergence: detect it,
+// say so, and recover): on a Neo-Hookean beam whose end is pushed 3 m into
 // it, steps of 0.05 s do not converge while it buckles. Without retries the
 // first such step is refused with FASCIA_ERR_NUMERIC, a message, and the
 // state and time exactly as before; with the default retries every step is

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// The device solver against the CPU backend (issue 4), for the backend named
+// The device solver against the CPU backend, for the backend named
 // by --backend: "cuda" on an NVIDIA GPU (skipped, exit 77, where there is
 // none), "emulated" (the same device code in host loops) anywhere.
 //   - forces, energy, stiffness products and diagonal blocks at a random

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// The device solver against the CPU on a prepared tissue model (issue 4):
+// The device solver against the CPU on a prepared tissue model:
 // the README's demo scene, vesicouterine tissue between the HRA uterus and
 // bladder (MLS shape functions, 8 neighbours; fixed bladder frames, uterus
 // frames on a prescribed motion). Forces, products and diagonal blocks at a

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: MIT
 # The test suite under AddressSanitizer + UndefinedBehaviorSanitizer, and the
-# simulator core under valgrind with no leaks (issue 7).
+# simulator core under valgrind with no leaks.
 #
 #   tools/check-sanitizers.sh asan [--core [--quick]]
 #                                             ASan+UBSan build (FASCIA_SANITIZE=ON) in its own

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: MIT
-# The CUDA backend's check on a GPU (issue 4, docs/gpu.md), in two halves,
+# The CUDA backend's check on a GPU (docs/gpu.md), in two halves,
 # because a GPU machine may have the CUDA driver and toolkit but none of the
 # Debian packages fascia builds with:
 #

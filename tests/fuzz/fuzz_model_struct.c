@@ -6,8 +6,8 @@
 // overwrite values (indices, offsets, NaN, huge numbers), resize, delete or
 // retype a dataset, declare a huge unwritten one, change an attribute. The
 // edited file is loaded; a model that loads is then run for two short
-// implicit steps, which drives its prescribed motions (the motion input of
-// issue 7) through motion.c and the solver. Any refusal must carry a message.
+// implicit steps, which drives its prescribed motions (their motion
+// input) through motion.c and the solver. Any refusal must carry a message.
 #define _POSIX_C_SOURCE 200809L
 #include <hdf5.h>
 #include <math.h>

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: MIT
-# Speed against accuracy on a prepared tissue model (issue 6): the shipped
+# Speed against accuracy on a prepared tissue model: the shipped
 # female pelvis scene (uterus + bladder fixed, tissue sagging under gravity)
 # prepared at several frame spacings (samples at 1/RATIO of it, default 3:
 # at 1/2 the thin tissue is under-integrated, measured),

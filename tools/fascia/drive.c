@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// Organs driven from a CSV file (issue 5: "per-frame positions read from a
-// file, for an organ driven by another simulator"); the format is specified
+// Organs driven from a CSV file (per-frame positions read from a
+// file, for an organ driven by another simulator); the format is specified
 // in docs/drive-format.md:
 //
 //   time,f12_x,f12_y,f12_z,f12_qw,f12_qx,f12_qy,f12_qz,f40_x,...   row 1: header

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// `fascia run --drive ORGAN=FILE.csv` (issue 5, "per-frame positions read
-// from a file, for an organ driven by another simulator"): reads one CSV per
+// `fascia run --drive ORGAN=FILE.csv` (per-frame positions read
+// from a file, for an organ driven by another simulator): reads one CSV per
 // driven organ, and before each step sets the organ's coupling frames to the
 // rows interpolated at the step's end time (fascia_solver_organ_set_frames).
 // `--drive-template ORGAN=FILE.csv` writes the header and the rest row, so a

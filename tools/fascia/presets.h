@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// Named solver presets (issue 6): bundles of the settings that trade time
+// Named solver presets: bundles of the settings that trade time
 // for accuracy, chosen from the sweep of `fascia tradeoff` and measured there
 // on the cantilever (tools/bench/README.md). `fascia run --preset NAME`.
 #ifndef FASCIA_TOOLS_PRESETS_H

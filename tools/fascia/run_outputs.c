@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// Extra outputs of `fascia run` (issue 5, "results a person can see"):
+// Extra outputs of `fascia run`:
 //   --history FILE.csv  one row per step: time, energies, Newton and CG
 //                       iterations, ms, largest strain and stress;
 //   --organs DIR        each organ's surface moved by its pose (fixed,

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// Extra outputs of `fascia run` for people and plotting scripts (issue 5):
+// Extra outputs of `fascia run` for people and plotting scripts:
 // a per-step history CSV, the organ surfaces moved by the simulation as
 // ParaView files per saved step, and CSV snapshots of the scene at rest and
 // at the end for tools/plots/.
