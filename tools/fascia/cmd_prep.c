@@ -149,6 +149,16 @@ static int gap_kind(const prep_run *r, int32_t a, int32_t b) {
   return GAP_OPEN;
 }
 
+// The warning of a GAP_THIN pair, naming the scene file.
+static void thin_gap_warning(const prep_run *r, int32_t a, int32_t b, char *line, size_t size) {
+  const fascia_prep_volume *v = r->volume;
+  const double d = v->closest[a * v->organ_count + b];
+  snprintf(line, size,
+           "the gap between '%s' and '%s' (%.3g mm) is thinner than three voxels of %.3g mm: the tissue across it "
+           "is poorly resolved; set voxel_size (scene '%s') to %.3g m or less",
+           r->meshes->organs[a].name, r->meshes->organs[b].name, 1e3 * d, 1e3 * v->voxel_size, r->scene->path, d / 3);
+}
+
 // Sizes import found off anatomy's (fascia_prep_meshes.warnings).
 static void print_warnings(const fascia_prep_meshes *meshes) {
   for (int32_t k = 0; meshes && k < meshes->warning_count; ++k) fprintf(stderr, "warning: %s\n", meshes->warnings[k]);
@@ -195,10 +205,11 @@ static void print_summary(const prep_run *r, const step_clock *c, const char *ou
         break;
       case GAP_THIN:
         fprintf(stderr, "gap: '%s' to '%s' %.3g mm at the closest (on the surfaces)\n", na, nb, 1e3 * d);
-        fprintf(stderr,
-                "warning: the gap between '%s' and '%s' (%.3g mm) is thinner than three voxels of %.3g mm: the "
-                "tissue across it is poorly resolved; set voxel_size to %.3g m or less\n",
-                na, nb, 1e3 * d, 1e3 * h, d / 3);
+        {
+          char line[512];
+          thin_gap_warning(r, a, b, line, sizeof line);
+          fprintf(stderr, "warning: %s\n", line);
+        }
         break;
       case GAP_OPEN: fprintf(stderr, "gap: '%s' to '%s' %.3g mm at the closest (on the surfaces)\n", na, nb, 1e3 * d);
       }
@@ -351,10 +362,7 @@ static void print_json(const prep_run *r, const step_clock *c, const char *outpu
       cJSON_AddItemToArray(gaps, e);
       if (kind == GAP_THIN) {
         char line[512];
-        snprintf(line, sizeof line,
-                 "the gap between '%s' and '%s' (%.3g mm) is thinner than three voxels of %.3g mm; set voxel_size "
-                 "to %.3g m or less",
-                 r->meshes->organs[a].name, r->meshes->organs[b].name, 1e3 * d, 1e3 * v->voxel_size, d / 3);
+        thin_gap_warning(r, a, b, line, sizeof line);
         cJSON_AddItemToArray(warnings, cJSON_CreateString(line));
       }
     }
