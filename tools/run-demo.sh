@@ -5,14 +5,34 @@
 # vesicouterine connective tissue, data/scenes/pelvis-female-demo.json: the
 # bladder fixed, the uterus pulled by a prescribed traction), simulates 1.5 s
 # with progress, and writes results and pictures into out/demo/ with a
-# closing summary. Extra arguments go to cmake's configure step.
+# closing summary.
+#   --scene abdomen-female   the five-organ upper abdomen instead
+#                            (data/scenes/abdomen-female.json), into out/abdomen-female/
+# Other arguments go to cmake's configure step.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
+name=pelvis-female-demo
+if [[ "${1:-}" == "--scene" ]]; then
+  name="${2:?--scene needs a name: pelvis-female-demo or abdomen-female}"
+  shift 2
+fi
+case "$name" in
+pelvis-female-demo)
+  out="$root/out/demo" view=sagittal
+  what="female pelvis, bladder fixed, uterus under traction"
+  motion="bladder fixed, uterus pulled 3 mm up and back, tilted 4 deg" ;;
+abdomen-female)
+  out="$root/out/abdomen-female" view=coronal
+  what="female upper abdomen, liver and kidney fixed, spleen rigid, gallbladder deformable, colon pulled"
+  motion="liver and left kidney fixed, spleen rigid, gallbladder deformable, colon pulled 3 mm down and 2 mm forward" ;;
+*)
+  echo "run-demo.sh: unknown scene '$name' (known: pelvis-female-demo, abdomen-female)" >&2
+  exit 2 ;;
+esac
 "$root/tools/setup/debian-packages.sh"
 "$root/tools/setup/build.sh" "$@"
 fascia="${FASCIA_BUILD_DIR:-$root/build}/tools/fascia"
-scene="$root/data/scenes/pelvis-female-demo.json"
-out="$root/out/demo"
+scene="$root/data/scenes/$name.json"
 steps=30 dt=0.05 save_every=3
 rm -rf "$out"
 mkdir -p "$out"
@@ -20,16 +40,16 @@ export FASCIA_PROGRESS="${FASCIA_PROGRESS:-1}" # progress lines with the time le
 
 t0=$(date +%s.%N)
 echo "demo: 1/3 preparing $(basename "$scene") (meshes -> tissue model)"
-"$fascia" prep "$scene" -o "$out/pelvis-female-demo.h5" >"$out/prep.txt"
-"$fascia" inspect "$out/pelvis-female-demo.h5" >"$out/model.txt"
-echo "demo: 2/3 simulating $steps implicit steps of $dt s (bladder fixed, uterus pulled 3 mm up and back, tilted 4 deg)"
-"$fascia" run "$out/pelvis-female-demo.h5" --steps "$steps" --dt "$dt" --save-every "$save_every" --samples \
+"$fascia" prep "$scene" -o "$out/$name.h5" >"$out/prep.txt"
+"$fascia" inspect "$out/$name.h5" >"$out/model.txt"
+echo "demo: 2/3 simulating $steps implicit steps of $dt s ($motion)"
+"$fascia" run "$out/$name.h5" --steps "$steps" --dt "$dt" --save-every "$save_every" --samples \
   -o "$out/results.h5" --history "$out/history.csv" --organs "$out/organs" --snapshots "$out/data" \
   | tee "$out/run.txt"
 t1=$(date +%s.%N)
 echo "demo: 3/3 drawing pictures (gnuplot)"
 organs=$(awk '/^organs/{on=1; next} on && /^  [^ ]/{print $1} on && !/^  /{on=0}' "$out/model.txt" | tr '\n' ' ')
-gnuplot -e "dir='$out'; title='pelvis-female-demo'; organs='${organs% }'" "$root/tools/plots/demo.gp"
+gnuplot -e "dir='$out'; title='$name'; organs='${organs% }'; view='$view'" "$root/tools/plots/demo.gp"
 
 # closing summary
 field() { sed -n "s/^$1 *//p" "$out/run.txt" | head -1; }
@@ -41,7 +61,7 @@ stress=$(field strain | sed 's/.*largest stress \([^ ]*\) Pa.*/\1/')
 seconds=$(awk -v a="$t0" -v b="$t1" 'BEGIN{printf "%.1f", b - a}')
 cat <<EOF
 
-demo summary: female pelvis, bladder fixed, uterus under traction
+demo summary: $what
   model        $frames frames ($(sed -n 's/^frames *[0-9]* (\(.*\))/\1/p' "$out/model.txt")), $samples samples
   simulation   $steps steps of $dt s, $ms ms per step, backend $(field backend), linear solver $(field linear)
   tissue       largest strain $strain (Green-Lagrange norm), largest stress $stress Pa

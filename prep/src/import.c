@@ -23,25 +23,37 @@ void fascia_prep_meshes_destroy(fascia_prep_meshes **meshes) {
     free(o->part_names);
   }
   free(m->organs);
+  for (int32_t k = 0; m->warnings && k < m->warning_count; ++k) free(m->warnings[k]);
+  free(m->warnings);
   free(m);
   *meshes = NULL;
 }
 
-static void list_parts(const fascia_assimp_file *f, char *out, size_t size) {
+// The file's part names into out ("a, b, c", unnamed parts counted); 0 when
+// no part has a name (an STL, an OBJ without groups).
+static int list_parts(const fascia_assimp_file *f, char *out, size_t size) {
   out[0] = 0;
+  int named = 0, unnamed = 0;
   for (int32_t p = 0; p < f->part_count; ++p) {
-    if (strlen(out) + strlen(f->node_names[p]) + 8 >= size) {
-      strncat(out, ", ...", size - strlen(out) - 1);
-      break;
+    const char *name = f->node_names[p][0] ? f->node_names[p] : f->mesh_names[p];
+    if (!name[0]) {
+      ++unnamed;
+      continue;
     }
-    if (p) strcat(out, ", ");
-    strcat(out, f->node_names[p][0] ? f->node_names[p] : f->mesh_names[p]);
+    if (strlen(out) + strlen(name) + 8 >= size) {
+      strncat(out, ", ...", size - strlen(out) - 1);
+      return 1;
+    }
+    if (named++) strcat(out, ", ");
+    strcat(out, name);
   }
+  if (named && unnamed) snprintf(out + strlen(out), size - strlen(out), " (and %d unnamed)", unnamed);
+  return named > 0;
 }
 
 // Picks parts from the file into o; each requested name must match a node or mesh name.
-static fascia_status pick_parts(fascia_ctx *ctx, const fascia_prep_organ_def *def, const fascia_assimp_file *f,
-                                int32_t organ_index, fascia_prep_mesh *o) {
+static fascia_status pick_parts(fascia_ctx *ctx, const char *scene_path, const fascia_prep_organ_def *def,
+                                const fascia_assimp_file *f, int32_t organ_index, fascia_prep_mesh *o) {
   const int32_t P = f->part_count;
   int32_t *use = prep_calloc(P, sizeof(int32_t)); // part index in o + 1, 0: unused
   PREP_CHECK(use, ctx, FASCIA_ERR_MEMORY, "organ '%s': out of memory", def->name);
@@ -66,10 +78,15 @@ static fascia_status pick_parts(fascia_ctx *ctx, const fascia_prep_organ_def *de
         }
       if (!found) {
         char list[1024];
-        list_parts(f, list, sizeof list);
+        if (list_parts(f, list, sizeof list))
+          PREP_CHECK_GOTO(0, ctx, FASCIA_ERR_FORMAT,
+                          "organ '%s' (scene '%s' organs[%d].parts): mesh '%s' has no part named '%s'; its parts are: %s",
+                          def->name, scene_path, (int)organ_index, def->mesh_path, def->parts.names[n], list);
         PREP_CHECK_GOTO(0, ctx, FASCIA_ERR_FORMAT,
-                        "organ '%s' (organs[%d].parts): mesh '%s' has no part named '%s'; its parts are: %s",
-                        def->name, (int)organ_index, def->mesh_path, def->parts.names[n], list);
+                        "organ '%s' (scene '%s' organs[%d].parts): mesh '%s' has no named parts (%d unnamed), so "
+                        "none named '%s'; leave \"parts\" out to take the whole file, or export it with named "
+                        "parts (glTF nodes, OBJ groups)",
+                        def->name, scene_path, (int)organ_index, def->mesh_path, (int)f->part_count, def->parts.names[n]);
       }
       o->part_names[n] = prep_strdup(def->parts.names[n]);
       PREP_CHECK_GOTO(o->part_names[n], ctx, FASCIA_ERR_MEMORY, "organ '%s': out of memory", def->name);
@@ -170,11 +187,12 @@ fascia_status fascia_prep_import(fascia_ctx *ctx, const fascia_prep_scene *scene
       PREP_FAIL(ctx, status, "organ '%s' (scene '%s' organs[%d].mesh): %s", def->name, scene->path, (int)k, reason);
       goto cleanup;
     }
-    PREP_TRY_GOTO(pick_parts(ctx, def, file, k, o));
+    PREP_TRY_GOTO(pick_parts(ctx, scene->path, def, file, k, o));
     fascia_assimp_free(&file);
     mesh_bounds(o);
     o->report.parts_used = o->part_count;
   }
+  PREP_TRY_GOTO(prep_check_magnitudes(ctx, scene, m));
   fascia_ctx_progress(ctx, "import", 1, "done");
   *out = m;
   m = NULL;

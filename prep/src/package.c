@@ -254,6 +254,9 @@ static cJSON *provenance(const fascia_prep_scene *scene, const fascia_prep_meshe
       cJSON_AddItemToArray(gaps, e);
     }
   cJSON_AddNumberToObject(rep, "max_linear_reproduction_error_m", W->max_linear_error);
+  cJSON *warnings = cJSON_AddArrayToObject(rep, "warnings");
+  for (int32_t k = 0; k < meshes->warning_count; ++k)
+    cJSON_AddItemToArray(warnings, cJSON_CreateString(meshes->warnings[k]));
   if (info && info->step_count > 0) {
     cJSON *steps = cJSON_AddArrayToObject(root, "steps");
     for (int32_t k = 0; k < info->step_count; ++k) {

@@ -314,3 +314,11 @@ void prep_heap_free(prep_heap *heap) {
   heap->value = NULL;
   heap->count = heap->capacity = 0;
 }
+
+void prep_quat_matrix(const double *q, double *R) {
+  const double w = q[0], x = q[1], y = q[2], z = q[3];
+  const double m[9] = {1 - 2 * (y * y + z * z), 2 * (x * y - w * z),     2 * (x * z + w * y),
+                       2 * (x * y + w * z),     1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
+                       2 * (x * z - w * y),     2 * (y * z + w * x),     1 - 2 * (x * x + y * y)};
+  for (int k = 0; k < 9; ++k) R[k] = m[k];
+}

@@ -125,6 +125,26 @@ FASCIA_PREP_INTERN int32_t prep_mesh_part(const fascia_prep_mesh *mesh, const ch
 FASCIA_PREP_INTERN void prep_triangle_barycentric(const double *a, const double *b, const double *c, const double *p,
                                                   double *bary);
 
+/// Largest edge of a mesh's bounding box, m.
+FASCIA_PREP_INTERN double prep_mesh_extent(const fascia_prep_mesh *mesh);
+/// Judges the scene's lengths against anatomy's once the meshes are read
+/// (magnitudes.c): refuses what cannot be simulated, adds to
+/// meshes->warnings what looks like a units mistake but may be meant.
+FASCIA_PREP_INTERN fascia_status prep_check_magnitudes(fascia_ctx *ctx, const fascia_prep_scene *scene,
+                                                       fascia_prep_meshes *meshes);
+/// For a message about organ k, extent (m) across: when no organ is that
+/// large or small, "; the units look wrong: ..." with how its file is read
+/// and which units would fit, else "".
+FASCIA_PREP_INTERN void prep_units_hint_organ(const fascia_prep_scene *scene, int32_t k, double extent, char *out,
+                                              size_t size);
+/// "; the units look wrong: ..." when voxel_size is coarser than anatomy allows, else "".
+FASCIA_PREP_INTERN void prep_units_hint_voxel(const fascia_prep_scene *scene, char *out, size_t size);
+/// "; a box larger than a body ..." when a grid's box (extent m) is, else "".
+FASCIA_PREP_INTERN void prep_units_hint_box(double extent, char *out, size_t size);
+
+/// Rotation matrix R (row-major) of the unit quaternion q = (w, x, y, z).
+FASCIA_PREP_INTERN void prep_quat_matrix(const double *q, double *R);
+
 /// Heap of (distance, voxel) for Dijkstra over voxels.
 typedef struct prep_heap {
   int64_t count, capacity;

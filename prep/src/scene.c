@@ -407,9 +407,11 @@ static fascia_status parse_sampling(const reader *rd, const fascia_prep_scene *s
                     *sample_spacing, *frame_spacing);
   }
   if (*sample_spacing < scene->voxel_size) {
+    char hint[512];
+    prep_units_hint_voxel(scene, hint, sizeof hint);
     sub_key(at, path, "sample_spacing");
-    return key_fail(rd, at, "%g m is finer than the voxel size %g m; raise it or lower voxel_size", *sample_spacing,
-                    scene->voxel_size);
+    return key_fail(rd, at, "%g m is finer than the voxel size %g m; raise it or lower voxel_size%s", *sample_spacing,
+                    scene->voxel_size, hint);
   }
   *shape_kind = FASCIA_PREP_SHAPE_MLS;
   *neighbours = 8;
@@ -467,6 +469,7 @@ static fascia_status parse_organ(const reader *rd, fascia_prep_scene *scene, con
   char at[PATH_SIZE];
   PREP_TRY(get_string(rd, item, path, "units", 0, &units));
   snprintf(o->units, sizeof o->units, "%s", units ? units : "m");
+  o->units_given = units != NULL;
   if (!units || !strcmp(units, "m"))
     o->scale = 1;
   else if (!strcmp(units, "cm"))
@@ -492,10 +495,9 @@ static fascia_status parse_organ(const reader *rd, fascia_prep_scene *scene, con
     if (!(norm > 0.5 && norm < 2))
       return key_fail(rd, at, "rotation must be a unit quaternion (w, x, y, z); its norm is %g (expected > 0.5 and < "
                       "2; it is then normalised)", norm);
-    const double w = q[0] / norm, x = q[1] / norm, y = q[2] / norm, z = q[3] / norm;
-    const double R[9] = {1 - 2 * (y * y + z * z), 2 * (x * y - w * z),     2 * (x * z + w * y),
-                         2 * (x * y + w * z),     1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
-                         2 * (x * z - w * y),     2 * (y * z + w * x),     1 - 2 * (x * x + y * y)};
+    for (int r = 0; r < 4; ++r) q[r] /= norm;
+    double R[9];
+    prep_quat_matrix(q, R);
     for (int r = 0; r < 3; ++r) {
       for (int c = 0; c < 3; ++c) o->transform[4 * r + c] = s * R[3 * r + c];
       o->transform[4 * r + 3] = t[r];

@@ -67,14 +67,16 @@ static fascia_status check_grid(fascia_ctx *ctx, const char *what, const char *s
   if (pages > 0 && page > 0) memory = (double)pages * (double)page;
 #endif
   const double bytes = voxels * bytes_per_voxel;
+  char hint[256];
+  prep_units_hint_box(fmax(fmax(extent[0], extent[1]), extent[2]), hint, sizeof hint);
   const double limit = memory > 0 ? fmin((double)MAX_VOXELS, memory / bytes_per_voxel) : (double)MAX_VOXELS;
   PREP_CHECK(voxels <= limit, ctx, FASCIA_ERR_ARGUMENT,
              "%s (scene '%s' voxel_size): a box of %.3g x %.3g x %.3g m at voxel_size %g m needs %.3g voxels "
              "(%.1f GiB), more than the limit of %.3g voxels (%lld at most%s%.1f GiB of memory here); set voxel_size "
-             "to at least %.3g m",
+             "to at least %.3g m%s",
              what, scene_path, extent[0], extent[1], extent[2], h, voxels, bytes / 1073741824.0, limit,
              (long long)MAX_VOXELS, memory > 0 ? ", and " : ", memory unknown: ", memory / 1073741824.0,
-             h * cbrt(voxels / limit) * 1.01);
+             h * cbrt(voxels / limit) * 1.01, hint);
   return FASCIA_OK;
 }
 
@@ -327,10 +329,19 @@ static fascia_status organ_inside(fascia_ctx *ctx, const fascia_prep_scene *scen
   }
   // the surface encloses a volume (checked at the repair), but no voxel centre lies in it
   const double *b = o->bounds, thinnest = fmin(fmin(b[3] - b[0], b[4] - b[1]), b[5] - b[2]);
-  PREP_CHECK_GOTO(chosen > 0, ctx, FASCIA_ERR_FORMAT,
-                  "organ '%s': no voxel lies inside it: it is %.3g x %.3g x %.3g mm, smaller or thinner than a voxel "
-                  "(voxel_size %.3g mm); lower voxel_size to %.3g m or less, or leave the organ out",
-                  o->name, 1e3 * (b[3] - b[0]), 1e3 * (b[4] - b[1]), 1e3 * (b[5] - b[2]), 1e3 * g->h, thinnest / 2);
+  if (chosen == 0) {
+    char hint[512];
+    int32_t k = 0;
+    while (k + 1 < scene->organ_count && strcmp(scene->organs[k].name, o->name)) ++k;
+    prep_units_hint_organ(scene, k, prep_mesh_extent(o), hint, sizeof hint);
+    if (!hint[0]) prep_units_hint_voxel(scene, hint, sizeof hint);
+    PREP_CHECK_GOTO(0, ctx, FASCIA_ERR_FORMAT,
+                    "organ '%s' (scene '%s' organs[%d].mesh): no voxel lies inside it: it is %.3g x %.3g x %.3g mm, "
+                    "smaller or thinner than a voxel (voxel_size %.3g mm); lower voxel_size to %.3g m or less, or "
+                    "leave the organ out%s",
+                    o->name, scene->path, (int)k, 1e3 * (b[3] - b[0]), 1e3 * (b[4] - b[1]), 1e3 * (b[5] - b[2]),
+                    1e3 * g->h, thinnest / 2, hint);
+  }
   o->report.enclosed_volume = (double)chosen * g->h * g->h * g->h;
 cleanup:
   free(blocked);
@@ -787,11 +798,12 @@ fascia_status fascia_prep_voxelize(fascia_ctx *ctx, const fascia_prep_scene *sce
   double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
   for (int32_t t = 0; t < scene->tissue_count; ++t) {
     const fascia_prep_tissue_def *td = scene->tissues + t;
-    char names[256];
+    char names[256], hint[512];
+    prep_units_hint_voxel(scene, hint, sizeof hint);
     PREP_CHECK_GOTO(td->max_gap >= 3 * h, ctx, FASCIA_ERR_ARGUMENT,
                     "scene '%s' voxel_size: %g m is too large for tissue '%s' (max_gap %g m): a gap needs at least 3 "
-                    "voxels across; set voxel_size to %g m or less",
-                    scene->path, h, td->name, td->max_gap, td->max_gap / 3);
+                    "voxels across; set voxel_size to %g m or less%s",
+                    scene->path, h, td->name, td->max_gap, td->max_gap / 3, hint);
     double a[3], b[3];
     if (!tissue_box(scene, meshes, t, a, b)) {
       PREP_CHECK_GOTO(td->region.kind == FASCIA_PREP_REGION_NONE, ctx, FASCIA_ERR_ARGUMENT,

@@ -149,11 +149,27 @@ static int gap_kind(const prep_run *r, int32_t a, int32_t b) {
   return GAP_OPEN;
 }
 
+// The warning of a GAP_THIN pair, naming the scene file.
+static void thin_gap_warning(const prep_run *r, int32_t a, int32_t b, char *line, size_t size) {
+  const fascia_prep_volume *v = r->volume;
+  const double d = v->closest[a * v->organ_count + b];
+  snprintf(line, size,
+           "the gap between '%s' and '%s' (%.3g mm) is thinner than three voxels of %.3g mm: the tissue across it "
+           "is poorly resolved; set voxel_size (scene '%s') to %.3g m or less",
+           r->meshes->organs[a].name, r->meshes->organs[b].name, 1e3 * d, 1e3 * v->voxel_size, r->scene->path, d / 3);
+}
+
+// Sizes import found off anatomy's (fascia_prep_meshes.warnings).
+static void print_warnings(const fascia_prep_meshes *meshes) {
+  for (int32_t k = 0; meshes && k < meshes->warning_count; ++k) fprintf(stderr, "warning: %s\n", meshes->warnings[k]);
+}
+
 static void print_summary(const prep_run *r, const step_clock *c, const char *output, const char *preview) {
   const fascia_prep_scene *sc = r->scene;
   const fascia_prep_volume *v = r->volume;
   const double h = v->voxel_size;
   fprintf(stderr, "\nfascia prep: %s -> %s\n", sc->path, output);
+  print_warnings(r->meshes);
   fprintf(stderr, "organs\n");
   for (int32_t o = 0; o < r->meshes->count; ++o) {
     const fascia_prep_mesh *m = r->meshes->organs + o;
@@ -189,10 +205,11 @@ static void print_summary(const prep_run *r, const step_clock *c, const char *ou
         break;
       case GAP_THIN:
         fprintf(stderr, "gap: '%s' to '%s' %.3g mm at the closest (on the surfaces)\n", na, nb, 1e3 * d);
-        fprintf(stderr,
-                "warning: the gap between '%s' and '%s' (%.3g mm) is thinner than three voxels of %.3g mm: the "
-                "tissue across it is poorly resolved; set voxel_size to %.3g m or less\n",
-                na, nb, 1e3 * d, 1e3 * h, d / 3);
+        {
+          char line[512];
+          thin_gap_warning(r, a, b, line, sizeof line);
+          fprintf(stderr, "warning: %s\n", line);
+        }
         break;
       case GAP_OPEN: fprintf(stderr, "gap: '%s' to '%s' %.3g mm at the closest (on the surfaces)\n", na, nb, 1e3 * d);
       }
@@ -217,6 +234,20 @@ static void print_summary(const prep_run *r, const step_clock *c, const char *ou
               (int)(samples / sc->tissues[t].samples_per_tet), 1e6 * sample_volume,
               tr->volume > 0 ? 100 * sample_volume / tr->volume : 0, (int)sc->tissues[t].samples_per_tet);
   }
+  // a deformable organ's own frames and samples (beside the tissue frames it shares)
+  for (int32_t o = 0; o < sc->organ_count; ++o) {
+    if (sc->organs[o].kind != FASCIA_ORGAN_DEFORMABLE) continue;
+    const fascia_prep_tissue_report *dr = v->organ_regions + o;
+    int32_t frames = 0, samples = 0;
+    for (int32_t i = 0; i < r->points->frame_count; ++i) frames += r->points->frame_inside_organ[i] == o;
+    for (int32_t s = 0; s < r->points->sample_count; ++s) samples += r->points->sample_inside_organ[s] == o;
+    fprintf(stderr,
+            "deformable organ '%s': %lld voxels of %.3g mm, %.4g cm^3 in %d piece(s) (%d smaller pieces, %.3g cm^3, "
+            "dropped); %d frames of its own and %d shared with tissues, %d samples\n",
+            sc->organs[o].name, (long long)dr->voxels, 1e3 * h, 1e6 * dr->volume, (int)dr->components,
+            (int)dr->dropped_components, 1e6 * dr->dropped_volume, (int)frames, (int)r->coupling->per_organ[o],
+            (int)samples);
+  }
   cJSON *prov = r->model->provenance ? cJSON_Parse(r->model->provenance) : NULL;
   const cJSON *dropped = cJSON_GetObjectItem(cJSON_GetObjectItem(prov, "reports"), "unheld_pieces_dropped");
   const cJSON *e;
@@ -233,10 +264,14 @@ static void print_summary(const prep_run *r, const step_clock *c, const char *ou
             cJSON_GetNumberValue(cJSON_GetArrayItem(x, 1)), cJSON_GetNumberValue(cJSON_GetArrayItem(x, 2)));
   }
   cJSON_Delete(prov);
-  fprintf(stderr, "model: %d frames (%d shared), %d samples, %d pairs, tissue volume %.6g m^3, linear reproduction "
+  const double tissue_volume = fascia_model_tissue_volume(r->model);
+  const double organ_volume = fascia_model_volume(r->model) - tissue_volume;
+  char organs_part[96] = "";
+  if (organ_volume > 0) snprintf(organs_part, sizeof organs_part, " (+ %.6g m^3 of deformable organs)", organ_volume);
+  fprintf(stderr, "model: %d frames (%d shared), %d samples, %d pairs, tissue volume %.6g m^3%s, linear reproduction "
                   "error %.2g m\n",
           (int)r->model->frame_count, (int)r->coupling->count, (int)r->model->sample_count,
-          (int)r->model->pair_count, fascia_model_volume(r->model), r->weights->max_linear_error);
+          (int)r->model->pair_count, tissue_volume, organs_part, r->weights->max_linear_error);
   if (preview) fprintf(stderr, "preview: %s/{organs,region,frames,samples,coupling}.vtk\n", preview);
   double total = 0;
   fprintf(stderr, "steps (peak resident memory %s)\n", c->resettable ? "per step" : "since start");
@@ -311,6 +346,8 @@ static void print_json(const prep_run *r, const step_clock *c, const char *outpu
   }
   cJSON *gaps = cJSON_AddArrayToObject(root, "gaps");
   cJSON *warnings = cJSON_AddArrayToObject(root, "warnings");
+  for (int32_t k = 0; k < r->meshes->warning_count; ++k)
+    cJSON_AddItemToArray(warnings, cJSON_CreateString(r->meshes->warnings[k]));
   static const char *const kinds[] = {"", "overlap", "contact", "thin", "gap"};
   for (int32_t a = 0; a < v->organ_count; ++a)
     for (int32_t b = a + 1; b < v->organ_count; ++b) {
@@ -325,10 +362,7 @@ static void print_json(const prep_run *r, const step_clock *c, const char *outpu
       cJSON_AddItemToArray(gaps, e);
       if (kind == GAP_THIN) {
         char line[512];
-        snprintf(line, sizeof line,
-                 "the gap between '%s' and '%s' (%.3g mm) is thinner than three voxels of %.3g mm; set voxel_size "
-                 "to %.3g m or less",
-                 r->meshes->organs[a].name, r->meshes->organs[b].name, 1e3 * d, 1e3 * v->voxel_size, d / 3);
+        thin_gap_warning(r, a, b, line, sizeof line);
         cJSON_AddItemToArray(warnings, cJSON_CreateString(line));
       }
     }
@@ -461,6 +495,8 @@ int cmd_prep(int argc, char **argv) {
   rc = 0;
   goto done;
 fail:
+  // the sizes that look wrong may be why it failed; the error line says so itself when it found them
+  if (!strstr(fascia_ctx_message(ctx), "units look wrong")) print_warnings(r.meshes);
   rc = cli_fail("prep", ctx, st);
 done:
   run_free(&r);

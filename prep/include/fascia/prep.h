@@ -71,6 +71,7 @@ typedef struct fascia_prep_organ_def {
   fascia_prep_parts parts; ///< which parts of the file (0: all)
   fascia_real scale;       ///< file units to metres (1, 0.01, 0.001)
   char units[8];           ///< "m", "cm", "mm"
+  int32_t units_given;     ///< 1 when the scene gives "units", 0 when it is left out (metres)
   /// affine map applied after scaling: x' = A x + t, row-major 3x4 [A | t]
   fascia_real transform[12];
   int32_t kind;            ///< fascia_organ_kind
@@ -181,11 +182,17 @@ typedef struct fascia_prep_mesh {
 typedef struct fascia_prep_meshes {
   int32_t count; ///< = scene organ_count, same order
   fascia_prep_mesh *organs;
+  int32_t warning_count;
+  char **warnings; ///< [warning_count] one line each: sizes that look like a units mistake (set by import)
 } fascia_prep_meshes;
 
 /// Reads every organ's mesh file with assimp, keeps the named parts (error
-/// lists the parts the file has), applies units and transform, refuses NaN
-/// coordinates and empty meshes. On error *out is NULL.
+/// lists the parts the file has, or says it has no named parts), applies
+/// units and transform, refuses NaN coordinates and empty meshes. Then
+/// judges the scene's sizes against anatomy's (data/scenes/README.md, "Units
+/// and sizes"): refuses what cannot be simulated (an organ larger than a
+/// body, a motion larger than the whole scene) and lists in warnings what
+/// looks like a units mistake but may be meant. On error *out is NULL.
 FASCIA_API fascia_status fascia_prep_import(fascia_ctx *ctx, const fascia_prep_scene *scene,
                                             fascia_prep_meshes **out);
 /// Checks and repairs every mesh in place with CGAL, part by part: merges
