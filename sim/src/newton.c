@@ -239,7 +239,9 @@ fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iter
       for (int64_t k = 0; k < n; ++k) g_trial[k] = -g[k];
       if (S->use_direct) {
         // not positive definite: raise the Levenberg shift until it is
-        while (!fascia_banded_factor(&S->band, &S->K, S->mask, S->damping_diagonal, op.shift)) {
+        int factored;
+        while ((factored = fascia_direct_factor(S->direct, S->ctx, &S->K, S->mask, S->damping_diagonal, op.shift)) ==
+               0) {
           ++rep->negative_curvature;
           op.shift = op.shift == 0 ? FASCIA_R(1e-8) : 10 * op.shift;
           if (op.shift > FASCIA_NEWTON_MAX_SHIFT)
@@ -248,7 +250,8 @@ fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iter
                                "or a frame with no sample?)",
                                iteration);
         }
-        fascia_banded_solve(&S->band, g_trial, p, S->work + 2 * n);
+        if (factored < 0) return FASCIA_ERR_MEMORY; // the new analysis failed; the message says why
+        fascia_direct_solve(S->direct, g_trial, p);
       } else {
         const fascia_cg_result cg = fascia_cg_solve(&op, &S->pc, g_trial, p, def->cg_iterations, def->cg_fixed,
                                                     def->cg_tolerance, S->work + 2 * n);

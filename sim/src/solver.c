@@ -126,15 +126,13 @@ int fascia_backend_available(const char *backend, char *detail, size_t size) {
   return st == FASCIA_OK;
 }
 
-// Largest band the automatic choice accepts, and its factorization cost:
-// beyond about a second per factorization CG is the better deal.
-#define AUTO_MAX_BAND_BYTES ((int64_t)256 << 20)
+// The automatic choice takes the direct solver up to this factorization
+// cost: beyond about a second per factorization CG is the better deal.
 #define AUTO_MAX_FLOPS 2e9
-#define DIRECT_MAX_BAND_BYTES ((int64_t)4 << 30)
 
 static fascia_status choose_linear_solver(fascia_solver *S) {
   fascia_linear_solver kind = S->def.linear_solver;
-  if (fascia_organs_body_count(S->organs) > 0) { // no banded P^T K P for rigid organs yet (organs.c): CG
+  if (fascia_organs_body_count(S->organs) > 0) { // no direct P^T K P for rigid organs yet (organs.c): CG
     FASCIA_CHECK(kind != FASCIA_LINEAR_DIRECT, S->ctx, FASCIA_ERR_ARGUMENT,
                  "solver: the direct linear solver does not handle rigid organs; use cg or auto");
     kind = FASCIA_LINEAR_CG;
@@ -144,16 +142,15 @@ static fascia_status choose_linear_solver(fascia_solver *S) {
   S->use_assembled = 1;
   if (kind == FASCIA_LINEAR_CG) return FASCIA_OK;
   const int automatic = kind == FASCIA_LINEAR_AUTO;
-  fascia_status st =
-      fascia_banded_create(S->ctx, &S->K, automatic ? AUTO_MAX_BAND_BYTES : DIRECT_MAX_BAND_BYTES, &S->band);
-  if (st == FASCIA_OK && (!automatic || fascia_banded_cost(&S->band) <= AUTO_MAX_FLOPS)) {
+  fascia_status st = fascia_direct_create(S->ctx, &S->K, S->mask, &S->direct);
+  if (st == FASCIA_OK && (!automatic || fascia_direct_flops(S->direct) <= AUTO_MAX_FLOPS)) {
     S->use_direct = 1;
     return FASCIA_OK;
   }
   if (!automatic) return st;
   // automatic: CG, matrix-free unless asked otherwise
   fascia_ctx_clear(S->ctx);
-  fascia_banded_destroy(&S->band);
+  fascia_direct_destroy(&S->direct);
   if (!S->def.assembled) {
     fascia_bsr_destroy(&S->K);
     S->use_assembled = 0;
@@ -266,7 +263,7 @@ void fascia_solver_destroy(fascia_solver **solver) {
   fascia_device_destroy(&S->device);
   fascia_system_destroy(&S->sys);
   fascia_bsr_destroy(&S->K);
-  fascia_banded_destroy(&S->band);
+  fascia_direct_destroy(&S->direct);
   fascia_organs_destroy(&S->organs);
   free(S->x), free(S->q), free(S->u), free(S->mask), free(S->x_base), free(S->q_base), free(S->d);
   free(S->d_trial), free(S->inertia_target), free(S->gradient), free(S->direction), free(S->rhs), free(S->work);

@@ -85,10 +85,10 @@ struct fascia_solver {
   fascia_real *d, *d_trial, *inertia_target, *gradient, *direction, *rhs, *work, *blocks, *mass_blocks;
   fascia_real *damping_diagonal, *scratch;
   fascia_preconditioner pc;
-  int use_direct;     ///< linear systems by banded Cholesky
+  int use_direct;     ///< linear systems by sparse Cholesky (direct.h)
   int use_assembled;  ///< the block matrix K is assembled every Newton iteration
   fascia_bsr K;
-  fascia_banded band;
+  fascia_direct *direct;
   char backend_name[16];
   fascia_organs *organs; ///< NULL without organs (organs.c)
   struct fascia_device *device; ///< the device solver (cuda/), NULL on the CPU backend
