@@ -189,6 +189,7 @@ fascia_status fascia_newton_minimize(fascia_solver *S, int dynamic, int max_iter
   if (fascia_organs_body_count(S->organs) > 0) op.organs = S->organs;
   op.single = S->use_assembled && !S->use_direct && def->single_precision_matrix;
   rep->direct = S->use_direct;
+  rep->assembled = S->use_assembled;
   fascia_real phi, *g = S->gradient, *p = S->direction, *g_trial = S->rhs;
   t = fascia_now_ms();
   FASCIA_TRY(objective(S, &terms, S->d, &phi, g));

@@ -22,6 +22,7 @@ fascia_solver_def fascia_solver_def_default(void) {
   d.cg_tolerance = FASCIA_R(1e-3);
   d.precond = FASCIA_PRECOND_BLOCK_JACOBI;
   d.linear_solver = FASCIA_LINEAR_AUTO;
+  d.assembled = FASCIA_ASSEMBLED_AUTO;
   d.mass = FASCIA_MASS_LUMPED;
   d.line_search = 1;
   d.load_steps = 1;
@@ -54,6 +55,8 @@ static fascia_status check_def(fascia_ctx *ctx, const fascia_solver_def *d) {
                FASCIA_ERR_ARGUMENT, "solver: unknown preconditioner %d", (int)d->precond);
   FASCIA_CHECK(d->linear_solver >= FASCIA_LINEAR_AUTO && d->linear_solver <= FASCIA_LINEAR_DIRECT, ctx,
                FASCIA_ERR_ARGUMENT, "solver: unknown linear solver %d", (int)d->linear_solver);
+  FASCIA_CHECK(d->assembled >= FASCIA_ASSEMBLED_AUTO && d->assembled <= 1, ctx, FASCIA_ERR_ARGUMENT,
+               "solver: assembled %d; give 0 (matrix-free), 1 or FASCIA_ASSEMBLED_AUTO", d->assembled);
   FASCIA_CHECK(d->mass == FASCIA_MASS_CONSISTENT || d->mass == FASCIA_MASS_LUMPED, ctx, FASCIA_ERR_ARGUMENT,
                "solver: unknown mass kind %d", (int)d->mass);
   FASCIA_CHECK(isfinite(d->mass_damping) && d->mass_damping >= 0, ctx, FASCIA_ERR_ARGUMENT,
@@ -126,9 +129,23 @@ int fascia_backend_available(const char *backend, char *detail, size_t size) {
   return st == FASCIA_OK;
 }
 
-// The automatic choice takes the direct solver up to this factorization
-// cost: beyond about a second per factorization CG is the better deal.
+// The automatic choices, by measured cost (docs/mechanics.md, "Choosing the
+// linear solver"): the direct solver up to this factorization cost (about
+// 0.1-0.2 s on one core); CG's products on the assembled matrix where it
+// fits FASCIA_AUTO_MAX_MATRIX_BYTES.
 #define AUTO_MAX_FLOPS 2e9
+
+// Bytes of the assembled matrix and its assembly plan, bounded from the
+// model: per local block (one per pair of frames of a sample) 36 values,
+// an index into the matrix and one into the plan.
+static double assembled_bytes(const fascia_model *m) {
+  double local_blocks = 0;
+  for (int32_t s = 0; s < m->sample_count; ++s) {
+    const double n = m->sample_offsets[s + 1] - m->sample_offsets[s];
+    local_blocks += n * n;
+  }
+  return local_blocks * (36 * sizeof(fascia_real) + sizeof(int32_t) + sizeof(int64_t));
+}
 
 static fascia_status choose_linear_solver(fascia_solver *S) {
   fascia_linear_solver kind = S->def.linear_solver;
@@ -137,7 +154,10 @@ static fascia_status choose_linear_solver(fascia_solver *S) {
                  "solver: the direct linear solver does not handle rigid organs; use cg or auto");
     kind = FASCIA_LINEAR_CG;
   }
-  if (kind == FASCIA_LINEAR_CG && !S->def.assembled) return FASCIA_OK;
+  const int assembled = S->def.assembled == FASCIA_ASSEMBLED_AUTO
+                            ? assembled_bytes(S->model) <= FASCIA_AUTO_MAX_MATRIX_BYTES
+                            : S->def.assembled;
+  if (kind == FASCIA_LINEAR_CG && !assembled) return FASCIA_OK;
   FASCIA_TRY(fascia_bsr_create(S->ctx, S->model, &S->K));
   S->use_assembled = 1;
   if (kind == FASCIA_LINEAR_CG) return FASCIA_OK;
@@ -148,10 +168,10 @@ static fascia_status choose_linear_solver(fascia_solver *S) {
     return FASCIA_OK;
   }
   if (!automatic) return st;
-  // automatic: CG, matrix-free unless asked otherwise
+  // automatic: CG, with the product chosen above
   fascia_ctx_clear(S->ctx);
   fascia_direct_destroy(&S->direct);
-  if (!S->def.assembled) {
+  if (!assembled) {
     fascia_bsr_destroy(&S->K);
     S->use_assembled = 0;
   }
@@ -489,6 +509,7 @@ static void merge_report(fascia_solve_report *sum, const fascia_solve_report *r)
   sum->line_search_cuts += r->line_search_cuts;
   sum->negative_curvature += r->negative_curvature;
   sum->direct = r->direct;
+  sum->assembled = r->assembled;
   sum->gradient_norm = r->gradient_norm;
   sum->reference_norm = r->reference_norm;
   sum->energy = r->energy;
