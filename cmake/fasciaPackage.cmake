@@ -20,7 +20,7 @@ configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/fasciaConfig.cmake.in
 # 0.x: a minor version may change the API
 write_basic_package_version_file(${PROJECT_BINARY_DIR}/fasciaConfigVersion.cmake COMPATIBILITY SameMinorVersion)
 install(FILES ${PROJECT_BINARY_DIR}/fasciaConfig.cmake ${PROJECT_BINARY_DIR}/fasciaConfigVersion.cmake
-        DESTINATION ${FASCIA_CMAKE_DIR})
+              ${PROJECT_SOURCE_DIR}/cmake/FindCHOLMOD.cmake DESTINATION ${FASCIA_CMAKE_DIR})
 
 # Link flags for pkg-config from a CMake library list: a file path becomes
 # -L<dir> -l<name> (no -L for the compiler's own folders), a name -l<name>,
@@ -48,15 +48,16 @@ function(fascia_pc_flags out)
   set(${out} "${flags}" PARENT_SCOPE)
 endfunction()
 
-# what libfascia_sim.a calls directly: libhdf5, OpenMP's runtime, the CUDA
-# runtime (static, with what it needs) and the C++ runtime for the launcher, libm
+# what libfascia_sim.a calls directly: libhdf5, libcholmod and OpenBLAS, OpenMP's
+# runtime, the CUDA runtime (static, with what it needs) and the C++ runtime for
+# the launcher, libm
 set(hdf5_direct ${HDF5_C_LIBRARY_hdf5})
 if(NOT hdf5_direct)
   list(GET HDF5_C_LIBRARIES 0 hdf5_direct)
 endif()
 set(hdf5_rest ${HDF5_C_LIBRARIES})
 list(REMOVE_ITEM hdf5_rest ${hdf5_direct})
-set(direct ${hdf5_direct})
+set(direct ${hdf5_direct} ${CHOLMOD_LIBRARY} ${CHOLMOD_OPENBLAS_LIBRARY})
 if(OpenMP_C_FOUND)
   list(APPEND direct ${OpenMP_C_FLAGS})
 endif()
@@ -65,7 +66,7 @@ if(FASCIA_HAVE_CUDA)
 endif()
 list(APPEND direct m)
 fascia_pc_flags(FASCIA_PC_LIBS ${direct})
-fascia_pc_flags(FASCIA_PC_LIBS_PRIVATE ${hdf5_rest})
+fascia_pc_flags(FASCIA_PC_LIBS_PRIVATE ${hdf5_rest} ${CHOLMOD_LIBRARIES_PRIVATE})
 # relative to the .pc file, so that the file is right wherever the tree is
 # installed (cmake --install --prefix, DESTDIR)
 set(pc_dir ${CMAKE_INSTALL_LIBDIR}/pkgconfig)

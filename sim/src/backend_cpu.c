@@ -32,10 +32,10 @@ typedef struct cpu_backend {
   fascia_real *d_trial, *gradient_trial, *direction, *rhs, *work, *blocks, *mass_blocks, *damping, *scratch;
   fascia_operator op;
   fascia_preconditioner pc;
-  int use_direct;    ///< linear systems by banded Cholesky
+  int use_direct;    ///< linear systems by sparse Cholesky (direct.h)
   int use_assembled; ///< the block matrix K is assembled every Newton iteration
   fascia_bsr K;
-  fascia_banded band;
+  fascia_direct *direct;
   char text[96];
 } cpu_backend;
 
@@ -53,41 +53,55 @@ static void cpu_destroy(fascia_backend *backend) {
   cpu_backend *B = (cpu_backend *)backend;
   if (!B) return;
   fascia_bsr_destroy(&B->K);
-  fascia_banded_destroy(&B->band);
+  fascia_direct_destroy(&B->direct);
   free(B->target_M), free(B->d_trial), free(B->gradient_trial), free(B->direction), free(B->rhs), free(B->work);
   free(B->blocks), free(B->mass_blocks), free(B->damping), free(B->scratch), free(B->pc.inverse);
   free(B);
 }
 
-// Largest band the automatic choice accepts, and its factorization cost:
-// beyond about a second per factorization CG is the better deal.
-#define AUTO_MAX_BAND_BYTES ((int64_t)256 << 20)
+// The automatic choices, by measured cost (docs/mechanics.md, "Choosing the
+// linear solver"): the direct solver up to this factorization cost (about
+// 0.1-0.2 s on one core); CG's products on the assembled matrix where it
+// fits FASCIA_AUTO_MAX_MATRIX_BYTES.
 #define AUTO_MAX_FLOPS 2e9
-#define DIRECT_MAX_BAND_BYTES ((int64_t)4 << 30)
+
+// Bytes of the assembled matrix and its assembly plan, bounded from the
+// model: per local block (one per pair of frames of a sample) 36 values,
+// an index into the matrix and one into the plan.
+static double assembled_bytes(const fascia_model *m) {
+  double local_blocks = 0;
+  for (int32_t s = 0; s < m->sample_count; ++s) {
+    const double n = m->sample_offsets[s + 1] - m->sample_offsets[s];
+    local_blocks += n * n;
+  }
+  return local_blocks * (36 * sizeof(fascia_real) + sizeof(int32_t) + sizeof(int64_t));
+}
 
 static fascia_status choose_linear_solver(cpu_backend *B, fascia_ctx *ctx, const fascia_organs *organs) {
   fascia_linear_solver kind = B->def->linear_solver;
-  if (fascia_organs_body_count(organs) > 0) { // no banded P^T K P for rigid organs yet (organs.c): CG
+  if (fascia_organs_body_count(organs) > 0) { // no direct P^T K P for rigid organs yet (organs.c): CG
     FASCIA_CHECK(kind != FASCIA_LINEAR_DIRECT, ctx, FASCIA_ERR_ARGUMENT,
                  "solver: the direct linear solver does not handle rigid organs; use cg or auto");
     kind = FASCIA_LINEAR_CG;
   }
-  if (kind == FASCIA_LINEAR_CG && !B->def->assembled) return FASCIA_OK;
+  const int assembled = B->def->assembled == FASCIA_ASSEMBLED_AUTO
+                            ? assembled_bytes(B->model) <= FASCIA_AUTO_MAX_MATRIX_BYTES
+                            : B->def->assembled;
+  if (kind == FASCIA_LINEAR_CG && !assembled) return FASCIA_OK;
   FASCIA_TRY(fascia_bsr_create(ctx, B->model, &B->K));
   B->use_assembled = 1;
   if (kind == FASCIA_LINEAR_CG) return FASCIA_OK;
   const int automatic = kind == FASCIA_LINEAR_AUTO;
-  fascia_status st =
-      fascia_banded_create(ctx, &B->K, automatic ? AUTO_MAX_BAND_BYTES : DIRECT_MAX_BAND_BYTES, &B->band);
-  if (st == FASCIA_OK && (!automatic || fascia_banded_cost(&B->band) <= AUTO_MAX_FLOPS)) {
+  fascia_status st = fascia_direct_create(ctx, &B->K, B->mask, &B->direct);
+  if (st == FASCIA_OK && (!automatic || fascia_direct_flops(B->direct) <= AUTO_MAX_FLOPS)) {
     B->use_direct = 1;
     return FASCIA_OK;
   }
   if (!automatic) return st;
-  // automatic: CG, matrix-free unless asked otherwise
+  // automatic: CG, with the product chosen above
   fascia_ctx_clear(ctx);
-  fascia_banded_destroy(&B->band);
-  if (!B->def->assembled) {
+  fascia_direct_destroy(&B->direct);
+  if (!assembled) {
     fascia_bsr_destroy(&B->K);
     B->use_assembled = 0;
   }
@@ -178,6 +192,7 @@ static fascia_status cpu_begin(fascia_backend *backend, const fascia_step_values
   op.single = B->use_assembled && !B->use_direct && B->def->single_precision_matrix;
   B->op = op;
   report->direct = B->use_direct;
+  report->assembled = B->use_assembled;
   return FASCIA_OK;
 }
 
@@ -288,15 +303,17 @@ static fascia_status cpu_direction(fascia_backend *backend, fascia_real *shift, 
   B->op.shift = *shift;
   if (B->use_direct) {
     // not positive definite: raise the Levenberg shift until it is
-    while (!fascia_banded_factor(&B->band, &B->K, B->mask, B->damping, B->op.shift)) {
+    int factored;
+    while ((factored = fascia_direct_factor(B->direct, B->S->ctx, &B->K, B->mask, B->damping, B->op.shift)) == 0) {
       ++report->negative_curvature;
       B->op.shift = B->op.shift == 0 ? FASCIA_R(1e-8) : 10 * B->op.shift;
       if (B->op.shift > FASCIA_NEWTON_MAX_SHIFT)
         return FASCIA_FAIL(B->S->ctx, FASCIA_ERR_NUMERIC,
                            "solver: the tangent stays singular under any damping (a NaN, or a frame with no sample?)");
     }
+    if (factored < 0) return FASCIA_ERR_MEMORY; // the new analysis failed; the message says why
     *shift = B->op.shift;
-    fascia_banded_solve(&B->band, B->rhs, p, B->work + 2 * n);
+    fascia_direct_solve(B->direct, B->rhs, p);
   } else {
     const fascia_cg_result cg = fascia_cg_solve(&B->op, &B->pc, B->rhs, p, B->def->cg_iterations,
                                                 B->def->cg_fixed, B->def->cg_tolerance, B->work + 2 * n);

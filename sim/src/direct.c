@@ -1,162 +1,237 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// Banded Cholesky under a reverse Cuthill-McKee frame ordering (see
-// direct.h). Band storage keeps the code short and the memory predictable:
-// for the elongated bodies of this project (beams, tissue sheets between
-// organs) the bandwidth stays a small multiple of a cross-section.
+// The direct solver on CHOLMOD (see direct.h). The fill-reducing ordering is
+// computed on the frame graph (6 times smaller than the unknowns': AMD, or
+// METIS where CHOLMOD finds AMD's fill large) and expanded to each frame's
+// free unknowns, which keeps a frame's 6 unknowns together in the
+// supernodes. The matrix is CHOLMOD's lower triangle in compressed columns:
+// column 6i+a holds row a of frame i's blocks with frames j >= i, so the
+// values are copied from the block rows in storage order, the order the
+// pattern was built in.
 #include <stdlib.h>
 #include <string.h>
 
+#include <cholmod.h>
+
 #include "direct.h"
 
-// Reverse Cuthill-McKee on the frame graph; start from a frame of least
-// degree in each connected component (a cheap pseudo-peripheral choice).
-static fascia_status rcm(fascia_ctx *ctx, const fascia_bsr *B, int32_t *order) {
-  const int32_t N = B->rows;
-  char *seen = calloc((size_t)N, 1);
-  int32_t *degree = fascia_calloc(N, sizeof(int32_t));
-  FASCIA_CHECK(seen && degree, ctx, FASCIA_ERR_MEMORY, "direct solver: out of memory for the ordering");
-  for (int32_t i = 0; i < N; ++i) degree[i] = B->row_offsets[i + 1] - B->row_offsets[i];
-  int32_t head = 0, tail = 0;
-  while (tail < N) {
-    int32_t start = -1;
-    for (int32_t i = 0; i < N; ++i)
-      if (!seen[i] && (start < 0 || degree[i] < degree[start])) start = i;
-    seen[start] = 1;
-    order[tail++] = start;
-    while (head < tail) {
-      const int32_t i = order[head++], first = tail;
-      for (int32_t b = B->row_offsets[i]; b < B->row_offsets[i + 1]; ++b) {
-        const int32_t j = B->cols[b];
-        if (!seen[j]) {
-          seen[j] = 1;
-          order[tail++] = j;
-        }
-      }
-      // neighbours by increasing degree (insertion sort: rows are short)
-      for (int32_t a = first + 1; a < tail; ++a)
-        for (int32_t c = a; c > first && degree[order[c]] < degree[order[c - 1]]; --c) {
-          const int32_t t = order[c];
-          order[c] = order[c - 1];
-          order[c - 1] = t;
-        }
-    }
-  }
-  for (int32_t a = 0, c = N - 1; a < c; ++a, --c) {
-    const int32_t t = order[a];
-    order[a] = order[c];
-    order[c] = t;
-  }
-  free(seen);
-  free(degree);
-  return FASCIA_OK;
-}
+// OpenBLAS's thread count (CMake links it by name, cmake/FindCHOLMOD.cmake).
+void openblas_set_num_threads(int threads);
 
-fascia_status fascia_banded_create(fascia_ctx *ctx, const fascia_bsr *B, int64_t max_bytes, fascia_banded *out) {
-  memset(out, 0, sizeof *out);
+struct fascia_direct {
+  int64_t unknowns;     // 6N
+  int64_t free_count;   // unknowns of the systems
+  int64_t *free_index;  // [6N] index among the free unknowns, -1 for a fixed one
+  unsigned char *mask;  // [6N] the mask the analysis is for
+  cholmod_common common;
+  cholmod_sparse *matrix; // [free_count^2] lower triangle, pattern fixed at creation
+  cholmod_factor *factor;
+  cholmod_dense *rhs, *solution, *work_y, *work_e;
+};
+
+// Runs BODY for every stored entry (column, row, value_index into B's
+// values) in storage order: the pattern and the values take the same walk.
+#define FOR_EACH_ENTRY(d, B, BODY)                                                                                   \
+  for (int32_t i = 0; i < (B)->rows; ++i)                                                                            \
+    for (int a = 0; a < 6; ++a) {                                                                                    \
+      const int64_t column = (d)->free_index[6 * (int64_t)i + a];                                                    \
+      if (column < 0) continue;                                                                                      \
+      for (int32_t blk = (B)->diagonal[i]; blk < (B)->row_offsets[i + 1]; ++blk)                                     \
+        for (int c = (B)->cols[blk] == i ? a : 0; c < 6; ++c) {                                                      \
+          const int64_t row = (d)->free_index[6 * (int64_t)(B)->cols[blk] + c];                                      \
+          if (row < 0) continue;                                                                                     \
+          const int64_t value_index = 36 * (int64_t)blk + 6 * a + c;                                                 \
+          (void)value_index;                                                                                         \
+          BODY;                                                                                                      \
+        }                                                                                                            \
+    }
+
+// Fill-reducing order of the frames that have a free unknown, as frame
+// indices in *order (count in *frames).
+static fascia_status order_frames(fascia_ctx *ctx, fascia_direct *d, const fascia_bsr *B, int64_t *order,
+                                  int64_t *frames) {
   const int32_t N = B->rows;
-  out->order = fascia_calloc(N, sizeof(int32_t));
-  out->position = fascia_calloc(N, sizeof(int32_t));
-  if (!out->order || !out->position) {
-    fascia_banded_destroy(out);
+  int64_t *graph_index = fascia_calloc(N, sizeof(int64_t)), F = 0, entries = 0;
+  FASCIA_CHECK(graph_index, ctx, FASCIA_ERR_MEMORY, "direct solver: out of memory for %d frames", (int)N);
+  for (int32_t i = 0; i < N; ++i) {
+    int free_unknowns = 0;
+    for (int a = 0; a < 6; ++a) free_unknowns += d->free_index[6 * (int64_t)i + a] >= 0;
+    graph_index[i] = free_unknowns ? F++ : -1;
+  }
+  for (int32_t i = 0; i < N; ++i)
+    if (graph_index[i] >= 0)
+      for (int32_t blk = B->diagonal[i]; blk < B->row_offsets[i + 1]; ++blk) entries += graph_index[B->cols[blk]] >= 0;
+  cholmod_sparse *G = cholmod_l_allocate_sparse((size_t)F, (size_t)F, (size_t)entries, 1, 1, -1, CHOLMOD_PATTERN,
+                                                &d->common);
+  if (!G) {
+    free(graph_index);
+    return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "direct solver: out of memory for the frame graph (%lld entries)",
+                       (long long)entries);
+  }
+  SuiteSparse_long *p = G->p, *rows = G->i, k = 0;
+  for (int32_t i = 0; i < N; ++i) {
+    if (graph_index[i] < 0) continue;
+    p[graph_index[i]] = k;
+    for (int32_t blk = B->diagonal[i]; blk < B->row_offsets[i + 1]; ++blk)
+      if (graph_index[B->cols[blk]] >= 0) rows[k++] = graph_index[B->cols[blk]];
+  }
+  p[F] = k;
+  d->common.nmethods = 0;                    // CHOLMOD's choice: AMD, or METIS where AMD fills much
+  d->common.supernodal = CHOLMOD_SIMPLICIAL; // only the ordering is wanted here
+  cholmod_factor *L = cholmod_l_analyze(G, &d->common);
+  cholmod_l_free_sparse(&G, &d->common);
+  if (!L) {
+    free(graph_index);
+    return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "direct solver: the ordering of %lld frames failed (CHOLMOD status %d)",
+                       (long long)F, d->common.status);
+  }
+  int64_t *frame_of = fascia_calloc(F > 0 ? F : 1, sizeof(int64_t));
+  if (!frame_of) {
+    cholmod_l_free_factor(&L, &d->common);
+    free(graph_index);
     return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "direct solver: out of memory for %d frames", (int)N);
   }
-  fascia_status st = rcm(ctx, B, out->order);
-  if (st != FASCIA_OK) {
-    fascia_banded_destroy(out);
-    return st;
-  }
-  for (int32_t p = 0; p < N; ++p) out->position[out->order[p]] = p;
-  int32_t frame_band = 0;
   for (int32_t i = 0; i < N; ++i)
-    for (int32_t b = B->row_offsets[i]; b < B->row_offsets[i + 1]; ++b) {
-      const int32_t d = out->position[i] - out->position[B->cols[b]];
-      if (d > frame_band) frame_band = d;
-    }
-  out->n = 6 * (int64_t)N;
-  out->bandwidth = 6 * (int64_t)frame_band + 5;
-  const double bytes = (double)out->n * (double)(out->bandwidth + 1) * sizeof(fascia_real);
-  if (bytes > (double)max_bytes) {
-    const int64_t bw = out->bandwidth;
-    fascia_banded_destroy(out);
-    return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY,
-                       "direct solver: the band would take %.0f MB (%d frames, bandwidth %lld); use the CG solver",
-                       bytes / 1048576.0, (int)N, (long long)bw);
-  }
-  out->band = fascia_calloc(out->n * (out->bandwidth + 1), sizeof(fascia_real));
-  if (!out->band) {
-    fascia_banded_destroy(out);
-    return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "direct solver: out of memory for a %.0f MB band", bytes / 1048576.0);
-  }
+    if (graph_index[i] >= 0) frame_of[graph_index[i]] = i;
+  const SuiteSparse_long *perm = L->Perm;
+  for (int64_t q = 0; q < F; ++q) order[q] = frame_of[perm[q]];
+  *frames = F;
+  cholmod_l_free_factor(&L, &d->common);
+  free(frame_of);
+  free(graph_index);
   return FASCIA_OK;
 }
 
-void fascia_banded_destroy(fascia_banded *b) {
-  free(b->order);
-  free(b->position);
-  free(b->band);
-  memset(b, 0, sizeof *b);
+static void release(fascia_direct *d) {
+  cholmod_l_free_sparse(&d->matrix, &d->common);
+  cholmod_l_free_factor(&d->factor, &d->common);
+  cholmod_l_free_dense(&d->rhs, &d->common);
+  cholmod_l_free_dense(&d->solution, &d->common);
+  cholmod_l_free_dense(&d->work_y, &d->common);
+  cholmod_l_free_dense(&d->work_e, &d->common);
+  free(d->free_index);
+  free(d->mask);
+  d->free_index = NULL;
+  d->mask = NULL;
+  d->free_count = 0;
 }
 
-double fascia_banded_cost(const fascia_banded *b) { return (double)b->n * (double)b->bandwidth * (double)b->bandwidth; }
-
-#define BAND(b, r, c) ((b)->band[(r) * ((b)->bandwidth + 1) + ((c) - (r) + (b)->bandwidth)])
-
-int fascia_banded_factor(fascia_banded *b, const fascia_bsr *K, const unsigned char *mask, const fascia_real *damping,
-                         fascia_real shift) {
-  const int64_t n = b->n, w = b->bandwidth;
-  memset(b->band, 0, (size_t)(n * (w + 1)) * sizeof(fascia_real));
-  // lower triangle of the permuted matrix; masked unknowns become identity
-  for (int32_t i = 0; i < K->rows; ++i)
-    for (int32_t blk = K->row_offsets[i]; blk < K->row_offsets[i + 1]; ++blk) {
-      const int32_t j = K->cols[blk];
-      const fascia_real *v = K->values + 36 * (int64_t)blk;
-      for (int a = 0; a < 6; ++a)
-        for (int c = 0; c < 6; ++c) {
-          const int64_t gi = 6 * (int64_t)i + a, gj = 6 * (int64_t)j + c;
-          const int64_t r = 6 * (int64_t)b->position[i] + a, col = 6 * (int64_t)b->position[j] + c;
-          if (col > r || !mask[gi] || !mask[gj]) continue;
-          BAND(b, r, col) += v[6 * a + c];
-        }
-    }
-  for (int32_t i = 0; i < K->rows; ++i)
-    for (int a = 0; a < 6; ++a) {
-      const int64_t gi = 6 * (int64_t)i + a, r = 6 * (int64_t)b->position[i] + a;
-      BAND(b, r, r) = mask[gi] ? BAND(b, r, r) + shift * damping[gi] : 1;
-    }
-  // Cholesky, row by row within the band (left-looking)
-  for (int64_t r = 0; r < n; ++r) {
-    const int64_t c0 = r - w > 0 ? r - w : 0;
-    for (int64_t c = c0; c <= r; ++c) {
-      const int64_t k0 = (c - w > c0 ? c - w : c0);
-      fascia_real s = BAND(b, r, c);
-      for (int64_t k = k0; k < c; ++k) s -= BAND(b, r, k) * BAND(b, c, k);
-      if (c < r) {
-        BAND(b, r, c) = s / BAND(b, c, c);
-      } else {
-        if (!(s > 0) || !isfinite(s)) return 0;
-        BAND(b, r, r) = sqrt(s);
-      }
-    }
+static fascia_status create(fascia_ctx *ctx, const fascia_bsr *B, const unsigned char *mask, fascia_direct *d) {
+  const int32_t N = B->rows;
+  d->unknowns = 6 * (int64_t)N;
+  d->free_index = fascia_calloc(d->unknowns, sizeof(int64_t));
+  d->mask = fascia_calloc(d->unknowns, 1);
+  int64_t *order = fascia_calloc(N, sizeof(int64_t)), frames = 0;
+  SuiteSparse_long *perm = fascia_calloc(d->unknowns, sizeof(SuiteSparse_long));
+  fascia_status st = FASCIA_OK;
+  if (!d->free_index || !d->mask || !order || !perm) {
+    st = FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "direct solver: out of memory for %d frames", (int)N);
+    goto done;
   }
-  return 1;
+  memcpy(d->mask, mask, (size_t)d->unknowns);
+  for (int64_t k = 0; k < d->unknowns; ++k) d->free_index[k] = mask[k] ? d->free_count++ : -1;
+  if ((st = order_frames(ctx, d, B, order, &frames)) != FASCIA_OK) goto done;
+  int64_t count = 0;
+  for (int64_t q = 0; q < frames; ++q)
+    for (int a = 0; a < 6; ++a)
+      if (d->free_index[6 * order[q] + a] >= 0) perm[count++] = d->free_index[6 * order[q] + a];
+
+  int64_t entries = 0;
+  FOR_EACH_ENTRY(d, B, ++entries);
+  const size_t n = (size_t)d->free_count;
+  d->matrix = cholmod_l_allocate_sparse(n, n, (size_t)entries, 1, 1, -1, CHOLMOD_REAL, &d->common);
+  d->rhs = cholmod_l_zeros(n, 1, CHOLMOD_REAL, &d->common);
+  if (!d->matrix || !d->rhs) {
+    st = FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "direct solver: out of memory for a matrix of %lld entries",
+                     (long long)entries);
+    goto done;
+  }
+  SuiteSparse_long *p = d->matrix->p, *rows = d->matrix->i, k = 0, previous = -1;
+  FOR_EACH_ENTRY(d, B, {
+    if (column != previous) {
+      p[column] = k;
+      previous = column;
+    }
+    rows[k++] = row;
+  });
+  p[n] = k;
+  // the given frame order, postordered, and the supernodal symbolic factor
+  d->common.nmethods = 1;
+  d->common.method[0].ordering = CHOLMOD_GIVEN;
+  d->common.postorder = 1;
+  d->common.supernodal = CHOLMOD_AUTO; // supernodal where the fronts are dense enough, else simplicial
+  d->common.final_ll = 1;              // LL^T, not LDL^T, so that a system not positive definite fails
+  d->factor = cholmod_l_analyze_p(d->matrix, perm, NULL, 0, &d->common);
+  if (!d->factor)
+    st = FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY,
+                     "direct solver: the analysis of %lld unknowns (%lld entries) failed (CHOLMOD status %d); use the "
+                     "CG solver",
+                     (long long)n, (long long)entries, d->common.status);
+done:
+  free(order);
+  free(perm);
+  return st;
 }
 
-void fascia_banded_solve(const fascia_banded *b, const fascia_real *rhs, fascia_real *x, fascia_real *y) {
-  const int64_t n = b->n, w = b->bandwidth;
-  const int32_t N = (int32_t)(n / 6);
-  for (int32_t i = 0; i < N; ++i)
-    for (int a = 0; a < 6; ++a) y[6 * (int64_t)b->position[i] + a] = rhs[6 * (int64_t)i + a];
-  for (int64_t r = 0; r < n; ++r) { // L z = y
-    fascia_real s = y[r];
-    for (int64_t k = (r - w > 0 ? r - w : 0); k < r; ++k) s -= BAND(b, r, k) * y[k];
-    y[r] = s / BAND(b, r, r);
+fascia_status fascia_direct_create(fascia_ctx *ctx, const fascia_bsr *pattern, const unsigned char *mask,
+                                   fascia_direct **out) {
+  *out = NULL;
+  fascia_direct *d = calloc(1, sizeof *d);
+  FASCIA_CHECK(d, ctx, FASCIA_ERR_MEMORY, "direct solver: out of memory");
+  cholmod_l_start(&d->common);
+  d->common.print = 0;          // failures are reported by the caller, in its words
+  d->common.error_handler = NULL;
+  // one BLAS thread: the factorization then gives the same bits whatever the
+  // solver's thread count, and no BLAS thread spins beside the solver's
+  openblas_set_num_threads(1);
+  const fascia_status st = create(ctx, pattern, mask, d);
+  if (st != FASCIA_OK) {
+    fascia_direct_destroy(&d);
+    return st;
   }
-  for (int64_t r = n - 1; r >= 0; --r) { // L^T x = z
-    fascia_real s = y[r];
-    for (int64_t k = r + 1; k <= (r + w < n - 1 ? r + w : n - 1); ++k) s -= BAND(b, k, r) * y[k];
-    y[r] = s / BAND(b, r, r);
+  *out = d;
+  return FASCIA_OK;
+}
+
+void fascia_direct_destroy(fascia_direct **dp) {
+  fascia_direct *d = *dp;
+  if (!d) return;
+  release(d);
+  cholmod_l_finish(&d->common);
+  free(d);
+  *dp = NULL;
+}
+
+double fascia_direct_flops(const fascia_direct *d) { return d->common.fl; }
+
+double fascia_direct_factor_nonzeros(const fascia_direct *d) { return d->common.lnz; }
+
+int fascia_direct_factor(fascia_direct *d, fascia_ctx *ctx, const fascia_bsr *K, const unsigned char *mask,
+                         const fascia_real *damping, fascia_real shift) {
+  if (memcmp(mask, d->mask, (size_t)d->unknowns)) { // other unknowns fixed: analyse again
+    release(d);
+    if (create(ctx, K, mask, d) != FASCIA_OK) return -1;
   }
-  for (int32_t i = 0; i < N; ++i)
-    for (int a = 0; a < 6; ++a) x[6 * (int64_t)i + a] = y[6 * (int64_t)b->position[i] + a];
+  double *x = d->matrix->x;
+  const SuiteSparse_long *p = d->matrix->p;
+  int64_t k = 0;
+  FOR_EACH_ENTRY(d, K, x[k++] = K->values[value_index]);
+  for (int64_t u = 0; u < d->unknowns; ++u) {
+    const int64_t column = d->free_index[u];
+    if (column >= 0) x[p[column]] += shift * damping[u]; // the diagonal leads its column
+  }
+  // OpenBLAS's Cholesky lets a NaN through: look at the numbers first
+  for (int64_t e = 0; e < k; ++e)
+    if (!isfinite(x[e])) return 0;
+  if (!cholmod_l_factorize(d->matrix, d->factor, &d->common)) return 0;
+  return d->common.status == CHOLMOD_OK && d->factor->minor == d->factor->n;
+}
+
+void fascia_direct_solve(fascia_direct *d, const fascia_real *rhs, fascia_real *x) {
+  double *b = d->rhs->x;
+  for (int64_t u = 0; u < d->unknowns; ++u)
+    if (d->free_index[u] >= 0) b[d->free_index[u]] = rhs[u];
+  cholmod_l_solve2(CHOLMOD_A, d->factor, d->rhs, NULL, &d->solution, NULL, &d->work_y, &d->work_e, &d->common);
+  const double *s = d->solution->x;
+  for (int64_t u = 0; u < d->unknowns; ++u) x[u] = d->free_index[u] >= 0 ? s[d->free_index[u]] : 0;
 }

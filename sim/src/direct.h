@@ -1,36 +1,38 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// Direct solution of the Newton systems: the assembled tangent (plus mass and
-// Levenberg shift) copied into a band under a reverse Cuthill-McKee ordering
-// of the frames, factored by Cholesky. A failed factorization means the
-// system is not positive definite; the caller raises the shift and retries.
+// Direct solution of the Newton systems by CHOLMOD's supernodal sparse
+// Cholesky (SuiteSparse) on OpenBLAS. The pattern of the assembled tangent
+// and the free unknowns are fixed for a run, so the ordering and the
+// symbolic factorization are done once, at creation; every Newton iteration
+// then only refactors the numbers. A failed factorization means the system
+// (K + mass + Levenberg shift) is not positive definite; the caller raises
+// the shift and retries.
 #ifndef FASCIA_SRC_DIRECT_H
 #define FASCIA_SRC_DIRECT_H
 
 #include "assemble.h"
 
-typedef struct fascia_banded {
-  int64_t n;          ///< unknowns (6 per frame)
-  int64_t bandwidth;  ///< lower bandwidth in unknowns
-  int32_t *order;     ///< [N] frame at each position of the ordering
-  int32_t *position;  ///< [N] position of each frame
-  fascia_real *band;  ///< [n (bandwidth + 1)]: row r holds columns r-bandwidth .. r
-} fascia_banded;
+typedef struct fascia_direct fascia_direct;
 
-/// Ordering and band size for a block pattern; fails with FASCIA_ERR_MEMORY
-/// naming the size when the band would exceed max_bytes.
-FASCIA_INTERN fascia_status fascia_banded_create(fascia_ctx *ctx, const fascia_bsr *pattern, int64_t max_bytes,
-                                                 fascia_banded *out);
-FASCIA_INTERN void fascia_banded_destroy(fascia_banded *b);
-/// Estimated factorization cost (flops) of a band: n b^2.
-FASCIA_INTERN double fascia_banded_cost(const fascia_banded *b);
-/// Loads K + diag(shift * damping) with masked unknowns replaced by identity
-/// rows, and factors it in place. Returns 1 on success, 0 if not positive
-/// definite.
-FASCIA_INTERN int fascia_banded_factor(fascia_banded *b, const fascia_bsr *K, const unsigned char *mask,
-                                       const fascia_real *damping, fascia_real shift);
-/// Solves the factored system: x = A^-1 rhs (x may alias rhs), [n].
-FASCIA_INTERN void fascia_banded_solve(const fascia_banded *b, const fascia_real *rhs, fascia_real *x,
-                                       fascia_real *work);
+/// Orders the free unknowns (mask[k] != 0; the rest are kept at zero) of a
+/// block pattern, AMD or METIS on the frame graph, and analyses the
+/// factorization. FASCIA_ERR_MEMORY naming the size when it cannot be done.
+FASCIA_INTERN fascia_status fascia_direct_create(fascia_ctx *ctx, const fascia_bsr *pattern,
+                                                 const unsigned char *mask, fascia_direct **out);
+FASCIA_INTERN void fascia_direct_destroy(fascia_direct **d);
+/// Floating-point operations of one factorization, from the analysis.
+FASCIA_INTERN double fascia_direct_flops(const fascia_direct *d);
+/// Nonzeros of the factor.
+FASCIA_INTERN double fascia_direct_factor_nonzeros(const fascia_direct *d);
+/// Factors K + diag(shift * damping) over the unknowns with mask set (K of
+/// the creation's pattern; one triangle of it is read; a mask other than the
+/// analysed one is analysed first). Returns 1 on success, 0 when it is not
+/// positive definite (or not finite), -1 when the new analysis failed (the
+/// message is in ctx).
+FASCIA_INTERN int fascia_direct_factor(fascia_direct *d, fascia_ctx *ctx, const fascia_bsr *K,
+                                       const unsigned char *mask, const fascia_real *damping, fascia_real shift);
+/// x = A^-1 rhs on the free unknowns of the last successful factorization,
+/// 0 on the others; x may alias rhs. [6N]
+FASCIA_INTERN void fascia_direct_solve(fascia_direct *d, const fascia_real *rhs, fascia_real *x);
 
 #endif

@@ -38,8 +38,8 @@
 //   step's start, so its momentum balance is exact to the Newton tolerance.
 //
 //   Linear solvers: the matrix-free and the assembled CG both work (the
-//   assembled block matrix of all frames sits inside P^T . P); the banded
-//   Cholesky would need P^T K P assembled with its new fill, so a model with
+//   assembled block matrix of all frames sits inside P^T . P); the direct
+//   solver would need P^T K P assembled with its new fill, so a model with
 //   rigid organs solves by CG (solver.c: auto takes CG, direct is refused).
 //
 //   A rigid organ without coupling frames flies freely under gravity.

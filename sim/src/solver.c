@@ -22,6 +22,7 @@ fascia_solver_def fascia_solver_def_default(void) {
   d.cg_tolerance = FASCIA_R(1e-3);
   d.precond = FASCIA_PRECOND_BLOCK_JACOBI;
   d.linear_solver = FASCIA_LINEAR_AUTO;
+  d.assembled = FASCIA_ASSEMBLED_AUTO;
   d.mass = FASCIA_MASS_LUMPED;
   d.line_search = 1;
   d.load_steps = 1;
@@ -54,6 +55,8 @@ static fascia_status check_def(fascia_ctx *ctx, const fascia_solver_def *d) {
                FASCIA_ERR_ARGUMENT, "solver: unknown preconditioner %d", (int)d->precond);
   FASCIA_CHECK(d->linear_solver >= FASCIA_LINEAR_AUTO && d->linear_solver <= FASCIA_LINEAR_DIRECT, ctx,
                FASCIA_ERR_ARGUMENT, "solver: unknown linear solver %d", (int)d->linear_solver);
+  FASCIA_CHECK(d->assembled >= FASCIA_ASSEMBLED_AUTO && d->assembled <= 1, ctx, FASCIA_ERR_ARGUMENT,
+               "solver: assembled %d; give 0 (matrix-free), 1 or FASCIA_ASSEMBLED_AUTO", d->assembled);
   FASCIA_CHECK(d->mass == FASCIA_MASS_CONSISTENT || d->mass == FASCIA_MASS_LUMPED, ctx, FASCIA_ERR_ARGUMENT,
                "solver: unknown mass kind %d", (int)d->mass);
   FASCIA_CHECK(isfinite(d->mass_damping) && d->mass_damping >= 0, ctx, FASCIA_ERR_ARGUMENT,
@@ -386,6 +389,7 @@ static void merge_report(fascia_solve_report *sum, const fascia_solve_report *r)
   sum->line_search_cuts += r->line_search_cuts;
   sum->negative_curvature += r->negative_curvature;
   sum->direct = r->direct;
+  sum->assembled = r->assembled;
   sum->gradient_norm = r->gradient_norm;
   sum->reference_norm = r->reference_norm;
   sum->energy = r->energy;

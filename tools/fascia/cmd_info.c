@@ -3,6 +3,7 @@
 // `fascia info`: version, build options, which parts were built and which
 // solver backends can run here (fascia_backend_available).
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "commands.h"
@@ -11,8 +12,9 @@
 int cmd_info(int argc, char **argv) {
   for (int k = 1; k < argc; ++k)
     if (!strcmp(argv[k], "--help")) {
-      printf("usage: fascia info\n\nPrints the version, the worker threads and, one line each, whether the solver\n"
-             "backends cpu, cuda and emulated can run here (and on what, or why not).\n");
+      printf("usage: fascia info\n\nPrints the version, the worker threads, OpenMP's wait policy and, one line\n"
+             "each, whether the solver backends cpu, cuda and emulated can run here (and on what,\n"
+             "or why not).\n");
       return 0;
     } else if (strcmp(argv[k], "--verbose")) {
       fprintf(stderr, "fascia info: unknown option '%s'\n", argv[k]);
@@ -21,6 +23,8 @@ int cmd_info(int argc, char **argv) {
   printf("fascia %s\n", fascia_version());
   fascia_ctx *ctx = cli_ctx(0, 0);
   printf("threads: %d\n", fascia_ctx_threads(ctx));
+  const char *policy = getenv("OMP_WAIT_POLICY"); // main.c sets PASSIVE unless the user chose
+  printf("openmp wait policy: %s\n", policy ? policy : "the runtime's default (spinning)");
   fascia_ctx_destroy(&ctx);
   // "auto" is not listed: it is the first of these that is available and
   // runs the model (the emulation is never chosen by itself)

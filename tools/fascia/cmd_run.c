@@ -32,7 +32,7 @@ static const char run_usage[] =
     "                  [--newton-iterations N] [--newton-tolerance X] [--cg-iterations N]\n"
     "                  [--cg-tolerance X] [--cg-fixed] [--precond none|jacobi|block]\n"
     "                  [--mass consistent|lumped] [--damping ALPHA] [--load-steps N]\n"
-    "                  [--linear-solver cg|direct|auto] [--assembled] [--preset NAME]\n"
+    "                  [--linear-solver cg|direct|auto] [--assembled|--matrix-free] [--preset NAME]\n"
     "\n"
     "Solves a model file: static equilibrium (default) or N implicit Euler steps.\n"
     "  --static               static equilibrium under gravity and loads (the default)\n"
@@ -66,9 +66,12 @@ static const char run_usage[] =
     "  --blow-up-strain E     a step after which a sample's strain passes E has blown up and fails\n"
     "                         (default 10; 0: off). Blown-up steps, overflow and diverging Newton\n"
     "                         solves end the run with exit 1 (docs/mechanics.md)\n"
-    "  --linear-solver KIND   cg, direct (banded Cholesky of the assembled tangent) or auto\n"
-    "                         (direct where the band is small enough, else CG; the default)\n"
-    "  --assembled            CG multiplies by the assembled block matrix (default matrix-free)\n"
+    "  --linear-solver KIND   cg, direct (sparse Cholesky of the assembled tangent) or auto\n"
+    "                         (the default: direct up to 2e9 flops per factorization, else CG;\n"
+    "                         docs/mechanics.md)\n"
+    "  --assembled            CG multiplies by the assembled block matrix (the default on the CPU\n"
+    "                         up to a 2 GiB matrix)\n"
+    "  --matrix-free          CG multiplies without a matrix (the default beyond that and on a GPU)\n"
     "  --single               ... stored in float for the products (half their memory traffic)\n"
     "  --preset NAME          interactive, balanced or accurate: solver settings measured by\n"
     "                         'fascia tradeoff' (tools/bench/README.md) for dynamic runs; options\n"
@@ -208,6 +211,7 @@ static int parse_options(int argc, char **argv, run_options *opt, const fascia_s
     else if (!strcmp(o, "--json")) opt->json = 1;
     else if (!strcmp(o, "--cg-fixed")) opt->solver.cg_fixed = 1;
     else if (!strcmp(o, "--assembled")) opt->solver.assembled = 1;
+    else if (!strcmp(o, "--matrix-free")) opt->solver.assembled = 0;
     else if (!strcmp(o, "--single")) opt->solver.single_precision_matrix = 1;
     else if (!strcmp(o, "--require-convergence")) opt->solver.require_convergence = 1;
     else if (!strcmp(o, "--accept-unconverged")) opt->solver.require_convergence = 0;
@@ -274,7 +278,7 @@ static int parse_options(int argc, char **argv, run_options *opt, const fascia_s
 
 /// What the run did, for the summary.
 typedef struct run_totals {
-  int steps, newton, cg, converged_steps, interrupted, saved, direct_steps;
+  int steps, newton, cg, converged_steps, interrupted, saved, direct_steps, assembled_steps;
   int capacity;                       ///< of the per-step arrays, grown as steps are done
   int *newton_per_step, *cg_per_step; ///< [steps done]
   fascia_ctx *ctx;                    ///< for the out-of-memory message
@@ -303,6 +307,7 @@ static fascia_status add_report(run_totals *t, const fascia_solve_report *r) {
   t->cg += r->cg_iterations;
   t->converged_steps += r->converged != 0;
   t->direct_steps += r->direct != 0;
+  t->assembled_steps += r->assembled != 0;
   t->profile.assemble_ms += r->profile.assemble_ms;
   t->profile.evaluate_ms += r->profile.evaluate_ms;
   t->profile.precond_ms += r->profile.precond_ms;
@@ -437,7 +442,8 @@ static void print_text(const run_options *opt, const fascia_model *m, fascia_sol
            t->converged_steps == t->steps ? "converged" : "NOT converged");
   printf("backend     %s\n", fascia_solver_backend(solver));
   printf("device      %s\n", fascia_solver_device(solver));
-  printf("linear      %s\n", linear_name(t));
+  printf("linear      %s%s\n", linear_name(t),
+         t->direct_steps > 0 ? "" : t->assembled_steps == 0 ? " (matrix-free)" : " (assembled matrix)");
   printf("time        %.3f ms per step (evaluate %.3f, preconditioner %.3f, assembly %.3f, linear solves %.3f)\n",
          t->solve_ms / steps, t->profile.evaluate_ms / steps, t->profile.precond_ms / steps,
          t->profile.assemble_ms / steps, t->profile.cg_ms / steps);

@@ -2,6 +2,7 @@
 // SPDX-FileCopyrightText: fascia developers
 // The fascia command-line program: dispatches to one subcommand per file
 // (cmd_<name>.c) through the table below. Only the CLI prints or exits.
+#define _POSIX_C_SOURCE 200809L // setenv
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -64,7 +65,18 @@ fascia_ctx *cli_ctx(int threads, int progress) {
   return ctx;
 }
 
+// OpenMP threads that spin while they wait for a core they do not get make
+// a run on a busy machine 10-30 times slower (README.md, "Speed"); with the
+// passive wait policy it degrades with the cores it gets. libgomp reads the
+// policy once, as it loads, so the program sets it and starts itself again,
+// unless the user chose a policy. If that fails the run goes on as it is.
+static void passive_omp_wait(char **argv) {
+  if (getenv("OMP_WAIT_POLICY") || setenv("OMP_WAIT_POLICY", "PASSIVE", 1) != 0) return;
+  execv("/proc/self/exe", argv);
+}
+
 int main(int argc, char **argv) {
+  passive_omp_wait(argv);
   fascia_hdf5_quiet(); // every HDF5 failure reaches the user through fascia's own one-line message
   for (int k = 1; k < argc; ++k)
     if (!strcmp(argv[k], "--verbose")) cli_verbose = 1;

@@ -21,9 +21,9 @@ typedef enum fascia_precond {
 } fascia_precond;
 
 typedef enum fascia_linear_solver {
-  FASCIA_LINEAR_AUTO = 0,   ///< direct where the band is small enough, else CG
+  FASCIA_LINEAR_AUTO = 0,   ///< direct where its factorization is cheap enough, else CG (docs/mechanics.md)
   FASCIA_LINEAR_CG = 1,     ///< preconditioned conjugate gradients
-  FASCIA_LINEAR_DIRECT = 2, ///< banded Cholesky of the assembled tangent (RCM ordering)
+  FASCIA_LINEAR_DIRECT = 2, ///< sparse Cholesky of the assembled tangent (CHOLMOD)
 } fascia_linear_solver;
 
 typedef enum fascia_mass_kind {
@@ -35,6 +35,12 @@ typedef enum fascia_mass_kind {
 /// (mass / dt^2) swamps the stiffness by more than double precision can
 /// resolve for any tissue, and the step would compute nothing.
 #define FASCIA_MIN_TIME_STEP 1e-8
+
+/// fascia_solver_def.assembled: the product chosen by its measured cost.
+#define FASCIA_ASSEMBLED_AUTO (-1)
+/// The largest assembled matrix (with its assembly plan) the automatic choice
+/// takes, bytes: beyond it the products go matrix-free.
+#define FASCIA_AUTO_MAX_MATRIX_BYTES ((double)(2LL << 30))
 
 /// Solver options; start from fascia_solver_def_default().
 typedef struct fascia_solver_def {
@@ -51,7 +57,11 @@ typedef struct fascia_solver_def {
   fascia_real cg_tolerance;      ///< relative residual of each linear solve (default 1e-3)
   fascia_precond precond;        ///< default block Jacobi
   fascia_linear_solver linear_solver; ///< default auto
-  int assembled;                 ///< CG: 1 multiplies by the assembled 6x6-block matrix, 0 matrix-free (default)
+  /// CG: 1 multiplies by the assembled 6x6-block matrix, 0 matrix-free,
+  /// FASCIA_ASSEMBLED_AUTO (default) assembled on the CPU where the matrix
+  /// takes at most FASCIA_AUTO_MAX_MATRIX_BYTES, else matrix-free (the
+  /// fastest product: docs/mechanics.md)
+  int assembled;
   /// Assembled CG: 1 stores the matrix in float for the products (half the
   /// memory traffic; each product then carries ~1e-7 relative error, which
   /// only changes the linear solve, not the energy or forces); default 0.
@@ -100,6 +110,7 @@ typedef struct fascia_solve_report {
   int line_search_cuts;        ///< step halvings summed over iterations
   int negative_curvature;      ///< CG solves that met negative curvature, or failed factorizations
   int direct;                  ///< 1 when the linear systems were solved directly
+  int assembled;               ///< 1 when the tangent was assembled (direct solver or assembled CG)
   fascia_real gradient_norm;   ///< final |gradient| over free DOFs
   fascia_real reference_norm;  ///< |external load|, the tolerance's scale
   fascia_real energy;          ///< final potential energy, J
