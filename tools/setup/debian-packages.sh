@@ -10,6 +10,7 @@ packages=(
   libcjson-dev                         # JSON for scene files and --json output
   libassimp-dev libcgal-dev libopenvdb-dev libboost-iostreams-dev libtbb-dev libeigen3-dev nettle-dev  # prep stage
   gnuplot-nox                          # pictures and plots without a display
+  calculix-ccx                         # the cantilever's FE reference and bench's peer (data/reference/)
 )
 
 missing=()
