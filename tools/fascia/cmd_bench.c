@@ -10,9 +10,10 @@
 //   large       rows of Table 3's density beyond the paper (100k to 2M samples)
 //               in the same mode, for the issue's GPU goals.
 //   cantilever  accuracy against cost on the paper's cantilever (sec. 4.1):
-//               static tip deflection against the converged FE reference
-//               (CalculiX C3D20R / FEniCS P2: u = (-1.599, 0, -6.511) m) over
-//               shape kinds, frame grids, samples, neighbours, rotation smoothing.
+//               static tip deflection against the converged CalculiX reference
+//               (data/reference/) over shape kinds, frame grids, samples,
+//               neighbours, rotation smoothing; where ccx is installed, beside
+//               each row CalculiX's time to the same error (C3D8I, C3D20R).
 // Rows are printed as a text table, one JSON array (--json) or CSV (--csv).
 #define _POSIX_C_SOURCE 200809L
 #include <cjson/cJSON.h>
@@ -25,6 +26,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "bench_calculix.h"
 #include "commands.h"
 #include "fascia/fascia.h"
 #include "scenes.h"
@@ -33,7 +35,7 @@ static const char bench_usage[] =
     "usage: fascia bench [--list] [paper | large | cantilever | ROW ...] [--table 2|3]\n"
     "                    [--backend cpu|cuda|auto|emulated [--no-cpu]]\n"
     "                    [--threads T] [--repeats R] [--steps S] [--json] [--csv FILE]\n"
-    "                    [--assembled [--single]] [--linear-solver cg|direct|auto]\n"
+    "                    [--assembled [--single]] [--linear-solver cg|direct|auto] [--no-calculix]\n"
     "                    [--shapes hex,tet,meshless] [--frames 10x2x2,20x3x3,...]\n"
     "                    [--samples-per-cell N,...] [--neighbours K,...] [--rotation-smoothing R,...]\n"
     "\n"
@@ -44,8 +46,10 @@ static const char bench_usage[] =
     "                        per five samples): 100k, 300k, 1M and 2M samples, the same mode;\n"
     "                        on cuda the goals of the issue are checked: t3-s34610 in <= 1 ms per\n"
     "                        step, the 1M row at >= 60 steps per second\n"
-    "  cantilever            static cantilever: tip deflection error against the FE reference\n"
-    "                        u = (-1.599, 0, -6.511) m, Newton and CG iterations, time\n"
+    "  cantilever            static cantilever: tip deflection error against the converged\n"
+    "                        CalculiX reference, Newton and CG iterations, time; where ccx\n"
+    "                        (calculix-ccx) is installed, CalculiX's time to the same error\n"
+    "                        (C3D8I, C3D20R, NLGEOM) measured in the same run\n"
     "  --list                print the benchmarks and rows\n"
     "  --table 2|3           paper: only the rows of this table\n"
     "  --backend NAME        cpu (default), cuda (the GPU), auto (cuda where there is a GPU, else\n"
@@ -62,6 +66,7 @@ static const char bench_usage[] =
     "  --assembled           CG multiplies by the assembled block matrix (default: where it fits)\n"
     "  --single              ... stored in float (half the memory traffic of the products)\n"
     "  --linear-solver KIND  cantilever: cg, direct or auto (default: the solver's default)\n"
+    "  --no-calculix         cantilever: no CalculiX peer figures\n"
     "cantilever sweep (any of these replaces the default rows by the product of the lists):\n"
     "  --shapes LIST              hex, tet, meshless (default hex)\n"
     "  --frames LIST              frame grids NXxNYxNZ (default 20x3x3)\n"
@@ -69,9 +74,6 @@ static const char bench_usage[] =
     "  --neighbours LIST          meshless: frames per sample (default 8)\n"
     "  --rotation-smoothing LIST  0 is the paper's scheme (default 0.1, the beam's default)\n";
 
-// Converged nonlinear FE reference of the cantilever tip (issue 2).
-#define REFERENCE_UX (-1.599)
-#define REFERENCE_UZ (-6.511)
 #define PAPER_WARMUP_STEPS 2
 #define PAPER_CG_ITERATIONS 60
 #define PAPER_TIME_STEP 0.01
@@ -120,7 +122,8 @@ static int parse_list(const char *text, char kind, value_list *out) {
 /// Everything the command line sets.
 typedef struct bench_options {
   int list, json, threads, repeats, steps, table, paper_all, large_all, cantilever, assembled, single;
-  int no_cpu; ///< beside a device backend: no CPU run of each row
+  int no_cpu;      ///< beside a device backend: no CPU run of each row
+  int no_calculix; ///< cantilever: no CalculiX peer
   int linear_given;
   fascia_linear_solver linear;
   const char *backend, *csv;
@@ -164,6 +167,7 @@ static int parse_options(int argc, char **argv, bench_options *opt) {
     else if (!strcmp(o, "--assembled")) opt->assembled = 1;
     else if (!strcmp(o, "--single")) opt->single = 1;
     else if (!strcmp(o, "--no-cpu")) opt->no_cpu = 1;
+    else if (!strcmp(o, "--no-calculix")) opt->no_calculix = 1;
     else {
       static const char *const valued[] = {"--table", "--backend", "--threads", "--repeats", "--steps", "--csv",
                                            "--scene", "--linear-solver", "--shapes", "--frames",
@@ -502,7 +506,14 @@ typedef struct cantilever_result {
   int frames, samples, neighbours, newton, cg, converged, direct, threads;
   double tip[3], error_uz_percent, error_ux_percent, twist, ms;
   char backend[16], device[256]; ///< where it ran (fascia_solver_backend, _device)
+  const bench_peer *peer[FASCIA_CCX_ELEMENT_COUNT_]; ///< CalculiX at the same error, NULL: none or not run
 } cantilever_result;
+
+// The converged reference of the default cantilever (data/reference/).
+static const fascia_ccx_reference *cantilever_reference(void) {
+  const fascia_scene_beam_def def = fascia_scene_beam_def_default();
+  return fascia_ccx_reference_find(&def);
+}
 
 // The default sweep (about 1 to 2 minutes on 2 cores): grids per shape
 // kind, then one knob at a time on the 20 x 3 x 3 hexahedral beam: samples,
@@ -617,8 +628,9 @@ static fascia_status bench_cantilever_case(fascia_ctx *ctx, const bench_options 
   fascia_real position[3] = {0, 0, 0};
   if (tip >= 0) fascia_solver_probe_position(solver, tip, position);
   for (int k = 0; k < 3; ++k) out->tip[k] = tip >= 0 ? position[k] - model->probe_position[3 * tip + k] : NAN;
-  out->error_uz_percent = 100 * (out->tip[2] - REFERENCE_UZ) / fabs(REFERENCE_UZ);
-  out->error_ux_percent = 100 * (out->tip[0] - REFERENCE_UX) / fabs(REFERENCE_UX);
+  const fascia_ccx_reference *ref = cantilever_reference();
+  out->error_uz_percent = 100 * (out->tip[2] - ref->tip_uz) / fabs(ref->tip_uz);
+  out->error_ux_percent = 100 * (out->tip[0] - ref->tip_ux) / fabs(ref->tip_ux);
   out->twist = max_twist(fascia_solver_frame_rotations(solver), model->frame_count);
 cleanup:
   fascia_solver_destroy(&solver);
@@ -662,7 +674,7 @@ static cJSON *cantilever_json(const cantilever_result *r) {
   cJSON_AddItemToObject(o, "tip_displacement", cJSON_CreateDoubleArray(r->tip, 3));
   cJSON_AddNumberToObject(o, "tip_ux", r->tip[0]);
   cJSON_AddNumberToObject(o, "tip_uz", r->tip[2]);
-  cJSON_AddNumberToObject(o, "reference_uz", REFERENCE_UZ);
+  cJSON_AddNumberToObject(o, "reference_uz", cantilever_reference()->tip_uz);
   cJSON_AddNumberToObject(o, "error_uz_percent", r->error_uz_percent);
   cJSON_AddNumberToObject(o, "error_ux_percent", r->error_ux_percent);
   cJSON_AddNumberToObject(o, "twist_rad", r->twist);
@@ -673,24 +685,121 @@ static cJSON *cantilever_json(const cantilever_result *r) {
   cJSON_AddNumberToObject(o, "threads", r->threads);
   cJSON_AddStringToObject(o, "backend", r->backend);
   cJSON_AddStringToObject(o, "device", r->device);
+  // CalculiX at the same error: null where ccx did not run or no mesh of its ladder reached it
+  cJSON *peers = cJSON_AddObjectToObject(o, "calculix");
+  for (int e = 0; e < FASCIA_CCX_ELEMENT_COUNT_; ++e) {
+    const bench_peer *p = r->peer[e];
+    if (!p) {
+      cJSON_AddNullToObject(peers, fascia_ccx_element_name(e));
+      continue;
+    }
+    char mesh[64];
+    bench_calculix_mesh_text(p, mesh, sizeof mesh);
+    cJSON *x = cJSON_AddObjectToObject(peers, fascia_ccx_element_name(e));
+    cJSON_AddStringToObject(x, "mesh", mesh);
+    cJSON_AddNumberToObject(x, "dofs", p->result.dofs);
+    cJSON_AddNumberToObject(x, "tip_uz", p->result.tip[2]);
+    cJSON_AddNumberToObject(x, "error_uz_percent", p->error_uz_percent);
+    cJSON_AddNumberToObject(x, "newton_iterations", p->result.iterations);
+    cJSON_AddNumberToObject(x, "ms", p->result.ms);
+  }
   return o;
 }
 
 static void cantilever_csv(FILE *f, const cantilever_result *rows, int count) {
   fprintf(f, "shape,grid,frames,samples,neighbours,samples_per_cell,rotation_smoothing,linear_solver,tip_ux,tip_uy,"
              "tip_uz,reference_uz,error_uz_percent,error_ux_percent,twist_rad,newton_iterations,cg_iterations,"
-             "converged,ms,threads,backend,device\n");
+             "converged,ms,threads,backend,device,calculix_c3d20r_mesh,calculix_c3d20r_error_uz_percent,"
+             "calculix_c3d20r_ms,calculix_c3d8i_mesh,calculix_c3d8i_error_uz_percent,calculix_c3d8i_ms\n");
   for (int k = 0; k < count; ++k) {
     const cantilever_result *r = rows + k;
     char grid[48];
     grid_text(r->c.grid, grid, sizeof grid);
     fprintf(f, "%s,%s,%d,%d,%d,%d,%g,%s,%.6f,%.3e,%.6f,%.3f,%.3f,%.3f,%.3e,%d,%d,%d,%.1f,%d,%s,",
             fascia_scene_shape_name(r->c.shape), grid, r->frames, r->samples, r->neighbours, r->c.spc, r->c.smoothing,
-            r->direct ? "direct" : "cg", r->tip[0], r->tip[1], r->tip[2], REFERENCE_UZ, r->error_uz_percent,
-            r->error_ux_percent, r->twist, r->newton, r->cg, r->converged, r->ms, r->threads, r->backend);
+            r->direct ? "direct" : "cg", r->tip[0], r->tip[1], r->tip[2], cantilever_reference()->tip_uz,
+            r->error_uz_percent, r->error_ux_percent, r->twist, r->newton, r->cg, r->converged, r->ms, r->threads,
+            r->backend);
     cli_csv_text(f, r->device);
+    for (int e = 0; e < FASCIA_CCX_ELEMENT_COUNT_; ++e) {
+      char mesh[64] = "";
+      if (r->peer[e]) bench_calculix_mesh_text(r->peer[e], mesh, sizeof mesh);
+      fprintf(f, ",%s,", mesh);
+      if (r->peer[e]) fprintf(f, "%.3f,%.1f", r->peer[e]->error_uz_percent, r->peer[e]->result.ms);
+      else fputc(',', f);
+    }
     fputc('\n', f);
   }
+}
+
+// ------------------------------------------------------- CalculiX peer --
+
+static void peer_ladder_text(const bench_peer *p, int count) {
+  for (int k = 0; k < count; ++k, ++p) {
+    char mesh[64];
+    bench_calculix_mesh_text(p, mesh, sizeof mesh);
+    printf("%-7s %-16s %7d %9.4f %8.3f %6d %10.1f\n", fascia_ccx_element_name(p->element), mesh, p->result.dofs,
+           p->result.tip[2], p->error_uz_percent, p->result.iterations, p->result.ms);
+  }
+}
+
+// fascia's rows against CalculiX's cheapest mesh at least as accurate.
+static void peer_match_text(const cantilever_result *rows, int count) {
+  printf("\ntime to the same error: each row against CalculiX's fastest mesh at least as accurate\n"
+         "%-8s %-8s %8s %10s", "shape", "grid", "err_uz%", "ms");
+  for (int e = 0; e < FASCIA_CCX_ELEMENT_COUNT_; ++e)
+    printf(" | %-6s %-9s %8s %10s %7s", fascia_ccx_element_name(e), "mesh", "err_uz%", "ms", "ratio");
+  printf("\n");
+  for (int k = 0; k < count; ++k) {
+    const cantilever_result *r = rows + k;
+    char grid[48];
+    grid_text(r->c.grid, grid, sizeof grid);
+    printf("%-8s %-8s %8.3f %10.1f", fascia_scene_shape_name(r->c.shape), grid, r->error_uz_percent, r->ms);
+    for (int e = 0; e < FASCIA_CCX_ELEMENT_COUNT_; ++e) {
+      const bench_peer *p = r->peer[e];
+      char mesh[64] = "not reached";
+      if (p) bench_calculix_mesh_text(p, mesh, sizeof mesh);
+      if (p) printf(" | %-16s %8.3f %10.1f %7.2f", mesh, p->error_uz_percent, p->result.ms, r->ms / p->result.ms);
+      else printf(" | %-16s %8s %10s %7s", mesh, "-", "-", "-");
+    }
+    printf("\n");
+  }
+  printf("ratio: fascia's ms over CalculiX's (< 1: fascia faster at that error)\n");
+}
+
+// CalculiX on the same cantilever, each element's ladder solved until it is
+// as accurate as the most accurate converged row; each row then gets the
+// fastest mesh at least as accurate as itself. Without ccx: a line saying so.
+static int cantilever_peers(fascia_ctx *ctx, const bench_options *opt, cantilever_result *rows, int count, int show,
+                            bench_peer (*peers)[BENCH_PEER_MAX]) {
+  const char *program = fascia_ccx_program();
+  if (!program) {
+    if (!opt->json) printf("\nCalculiX: not installed (apt-get install calculix-ccx), no peer figures\n");
+    return 0;
+  }
+  double target = INFINITY;
+  for (int k = 0; k < count; ++k)
+    if (rows[k].converged && fabs(rows[k].error_uz_percent) < target) target = fabs(rows[k].error_uz_percent);
+  if (!isfinite(target)) return 0;
+  const int threads = opt->threads > 0 ? opt->threads : fascia_ctx_threads(ctx);
+  const double reference = cantilever_reference()->tip_uz;
+  int solved[FASCIA_CCX_ELEMENT_COUNT_] = {0};
+  for (int e = 0; e < FASCIA_CCX_ELEMENT_COUNT_; ++e) {
+    if (show) progress_line("calculix", e + 1, FASCIA_CCX_ELEMENT_COUNT_, fascia_ccx_element_name(e));
+    const fascia_status st = bench_calculix_ladder(ctx, program, e, reference, target, threads, peers[e], solved + e);
+    if (show) fprintf(stderr, "\r\033[K");
+    if (st != FASCIA_OK) return cli_fail("bench", ctx, st);
+    for (int k = 0; k < count; ++k)
+      if (rows[k].converged) rows[k].peer[e] = bench_calculix_match(peers[e], solved[e], rows[k].error_uz_percent);
+  }
+  if (opt->json) return 0;
+  printf("\nCalculiX (%s) on the same cantilever: NLGEOM, St. Venant-Kirchhoff, its default controls, %d thread(s),\n"
+         "meshes graded towards the clamp (g: largest over smallest element along x); ms: wall time, deck and\n"
+         "files included\n%-7s %-16s %7s %9s %8s %6s %10s\n",
+         program, threads, "element", "mesh", "dofs", "uz_m", "err_uz%", "newton", "ms");
+  for (int e = 0; e < FASCIA_CCX_ELEMENT_COUNT_; ++e) peer_ladder_text(peers[e], solved[e]);
+  peer_match_text(rows, count);
+  return 0;
 }
 
 // ----------------------------------------------------------------- main --
@@ -745,6 +854,7 @@ int cmd_bench(int argc, char **argv) {
   }
   paper_result *paper = calloc((size_t)paper_count + 1, sizeof *paper);
   cantilever_result *cant = calloc((size_t)case_count + 1, sizeof *cant);
+  bench_peer peers[FASCIA_CCX_ELEMENT_COUNT_][BENCH_PEER_MAX];
   cJSON *array = opt.json ? cJSON_CreateArray() : NULL;
   fascia_ctx *ctx = cli_ctx(opt.threads, 0);
   const int show = progress_wanted();
@@ -780,15 +890,12 @@ int cmd_bench(int argc, char **argv) {
     st = bench_cantilever_case(ctx, &opt, cases + k, cant + k);
     if (show) fprintf(stderr, "\r\033[K");
     if (st != FASCIA_OK) break;
-    if (opt.json) {
-      cJSON_AddItemToArray(array, cantilever_json(cant + k));
-      continue;
-    }
+    if (opt.json) continue;
     if (k == 0) {
       if (paper_count) printf("\n");
-      printf("cantilever 16 x 1 x 1 m, static; reference tip u = (%.3f, 0, %.3f) m (CalculiX C3D20R / FEniCS P2);\n"
-             "err_uz%% > 0: too stiff; twist: largest |rotation about x| over frames\n",
-             REFERENCE_UX, REFERENCE_UZ);
+      printf("cantilever 16 x 1 x 1 m, static; reference tip u = (%.4f, 0, %.4f) m (CalculiX, converged:\n"
+             "data/reference/); err_uz%% > 0: too stiff; twist: largest |rotation about x| over frames\n",
+             cantilever_reference()->tip_ux, cantilever_reference()->tip_uz);
       shown[0] = '\0';
     }
     text_device_line(shown, sizeof shown, cant[k].backend, cant[k].device);
@@ -799,6 +906,9 @@ int cmd_bench(int argc, char **argv) {
     rc = cli_solver_fail("bench", opt.backend, ctx, st);
     goto done;
   }
+  if (case_count && !opt.no_calculix && (rc = cantilever_peers(ctx, &opt, cant, case_count, show, peers)) != 0)
+    goto done;
+  for (int k = 0; opt.json && k < case_count; ++k) cJSON_AddItemToArray(array, cantilever_json(cant + k));
   if (opt.json) {
     char *text = cJSON_PrintUnformatted(array);
     if (!text) {

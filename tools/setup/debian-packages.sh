@@ -12,6 +12,7 @@ packages=(
   libassimp-dev libcgal-dev libopenvdb-dev libboost-iostreams-dev libtbb-dev libeigen3-dev nettle-dev  # prep stage
   gnuplot-nox                          # pictures and plots without a display
   paraview python3-paraview python3-h5py  # tests open the results with ParaView's readers (pvbatch)
+  calculix-ccx                         # the cantilever's FE reference and bench's peer (data/reference/)
 )
 
 missing=()

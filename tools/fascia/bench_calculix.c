@@ -1,0 +1,59 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// CalculiX's ladder for `fascia bench cantilever` (bench_calculix.h).
+#include "bench_calculix.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+// Meshes of the whole beam graded towards the clamp (ratio up to 16 from the
+// free end's element to the clamped one), the way an analyst meshes a clamp,
+// coarsest first (data/reference/README.md).
+typedef struct rung {
+  int32_t cells[3];
+  double grading;
+} rung;
+
+static const rung c3d8i_ladder[] = {{{4, 2, 2}, 4},    {{8, 2, 2}, 8},    {{16, 2, 2}, 16},  {{32, 2, 2}, 16},
+                                    {{64, 2, 2}, 16},  {{64, 4, 4}, 16},  {{128, 4, 4}, 16}, {{128, 8, 8}, 16}};
+static const rung c3d20r_ladder[] = {{{2, 2, 2}, 2},   {{4, 2, 2}, 4},   {{8, 2, 2}, 16},  {{16, 2, 2}, 16},
+                                     {{32, 2, 2}, 16}, {{32, 4, 4}, 16}, {{64, 4, 4}, 16}, {{64, 8, 8}, 16}};
+
+fascia_status bench_calculix_ladder(fascia_ctx *ctx, const char *program, int element, double reference_uz,
+                                    double target_percent, int threads, bench_peer *peers, int *count) {
+  const rung *ladder = element == FASCIA_CCX_C3D8I ? c3d8i_ladder : c3d20r_ladder;
+  const int n = element == FASCIA_CCX_C3D8I ? (int)(sizeof c3d8i_ladder / sizeof c3d8i_ladder[0])
+                                            : (int)(sizeof c3d20r_ladder / sizeof c3d20r_ladder[0]);
+  *count = 0;
+  for (int k = 0; k < n && k < BENCH_PEER_MAX; ++k) {
+    fascia_ccx_beam_def def = fascia_ccx_beam_def_default();
+    def.element = element;
+    memcpy(def.cells, ladder[k].cells, sizeof def.cells);
+    def.grading[0] = ladder[k].grading;
+    def.tight = 0; // as a user runs it: ccx's own tolerances
+    bench_peer *p = peers + k;
+    memset(p, 0, sizeof *p);
+    p->element = element;
+    memcpy(p->cells, def.cells, sizeof p->cells);
+    p->grading = def.grading[0];
+    const fascia_status st = fascia_ccx_beam_solve(ctx, &def, program, threads, &p->result);
+    if (st != FASCIA_OK) return st;
+    p->error_uz_percent = 100 * (p->result.tip[2] - reference_uz) / fabs(reference_uz);
+    *count = k + 1;
+    if (fabs(p->error_uz_percent) <= target_percent) break;
+  }
+  return FASCIA_OK;
+}
+
+const bench_peer *bench_calculix_match(const bench_peer *peers, int count, double error_percent) {
+  const bench_peer *best = NULL;
+  for (int k = 0; k < count; ++k)
+    if (fabs(peers[k].error_uz_percent) <= fabs(error_percent) && (!best || peers[k].result.ms < best->result.ms))
+      best = peers + k;
+  return best;
+}
+
+void bench_calculix_mesh_text(const bench_peer *p, char *out, size_t size) {
+  snprintf(out, size, "%dx%dx%d g%g", (int)p->cells[0], (int)p->cells[1], (int)p->cells[2], p->grading);
+}
