@@ -314,3 +314,13 @@ void prep_heap_free(prep_heap *heap) {
   heap->value = NULL;
   heap->count = heap->capacity = 0;
 }
+
+void prep_mesh_bounds(fascia_prep_mesh *mesh) {
+  for (int r = 0; r < 3; ++r) mesh->bounds[r] = INFINITY, mesh->bounds[3 + r] = -INFINITY;
+  for (int32_t v = 0; v < mesh->vertex_count; ++v)
+    for (int r = 0; r < 3; ++r) {
+      const double x = mesh->vertices[3 * (int64_t)v + r];
+      if (x < mesh->bounds[r]) mesh->bounds[r] = x;
+      if (x > mesh->bounds[3 + r]) mesh->bounds[3 + r] = x;
+    }
+}

@@ -9,6 +9,7 @@ packages=(
   libhdf5-dev                          # model and result files (simulator core)
   libcjson-dev                         # JSON for scene files and --json output
   libassimp-dev libcgal-dev libopenvdb-dev libboost-iostreams-dev libtbb-dev libeigen3-dev nettle-dev  # prep stage
+  libnifti2-dev libteem-dev            # prep: label maps (NIfTI, NRRD); optional, prep reads meshes without them
   gnuplot-nox                          # pictures and plots without a display
 )
 
