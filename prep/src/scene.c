@@ -541,11 +541,10 @@ static fascia_status parse_organ_labels(const reader *rd, fascia_prep_scene *sce
   return FASCIA_OK;
 }
 
-// "segmentation": {"file", "labels", "frame", "smoothing", "interface_layer", "connective"}
+// "segmentation": {"file", "labels", "frame", "smoothing", "interface_layer"}
 static fascia_status parse_segmentation(const reader *rd, fascia_prep_scene *scene, const cJSON *item,
                                         const char *base_dir) {
-  static const char *const known[] = {"file",      "labels",          "frame",       "smoothing",
-                                      "interface_layer", "connective", "description", NULL};
+  static const char *const known[] = {"file", "labels", "frame", "smoothing", "interface_layer", "description", NULL};
   const char *path = "segmentation";
   PREP_TRY(check_keys(rd, item, path, known));
   fascia_prep_segmentation *seg = &scene->segmentation;
@@ -592,17 +591,6 @@ static fascia_status parse_segmentation(const reader *rd, fascia_prep_scene *sce
   PREP_TRY(get_int(rd, item, path, "smoothing", 0, 1, 0, 10, &smoothing));
   seg->smoothing = smoothing;
   PREP_TRY(get_number(rd, item, path, "interface_layer", 0, 0, 0, 1, 0.1, &seg->interface_layer));
-  const cJSON *connective = cJSON_GetObjectItemCaseSensitive(item, "connective");
-  if (connective) {
-    sub_key(at, path, "connective");
-    prep_label_table table;
-    scene_table(seg, &table);
-    uint8_t *by_name = NULL;
-    const fascia_status status =
-        get_labels(rd, seg, &table, connective, at, &seg->connective, &by_name, &seg->connective_count);
-    free(by_name);
-    PREP_TRY(status);
-  }
   return FASCIA_OK;
 }
 
@@ -1111,7 +1099,6 @@ void fascia_prep_scene_destroy(fascia_prep_scene **scene) {
   free(seg->file);
   free(seg->file_path);
   free(seg->table);
-  free(seg->connective);
   free(s->organs);
   free(s->tissues);
   free(s->materials);

@@ -136,8 +136,6 @@ typedef struct fascia_prep_segmentation {
   int32_t frame;              ///< fascia_prep_frame the image is placed in
   int32_t smoothing;          ///< smoothing passes of each label's indicator before its surface is taken
   fascia_real interface_layer; ///< organs closer than this (touching included) each give up half of it at their interface, m
-  int32_t connective_count;   ///< labels the tissue may take (besides background), ascending
-  int32_t *connective;        ///< [connective_count]
 } fascia_prep_segmentation;
 
 /// A parsed scene file (the def of every stage). Built by
