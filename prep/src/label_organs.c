@@ -197,9 +197,9 @@ static int bounds_near(const double *a, const double *b, double reach) {
 // gives up half the interface layer.
 static fascia_status carve(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_meshes *original,
                            int32_t o, fascia_prep_mesh *mesh) {
-  // at least four voxels across the layer, so its faces keep their place up to the rim
+  // at least two voxels across the layer, so its faces keep their place
   const double depth = 0.5 * scene->segmentation.interface_layer;
-  const double h = fmin(scene->voxel_size, 0.5 * depth);
+  const double h = fmin(scene->voxel_size, depth);
   const fascia_prep_mesh *self = original->organs + o;
   int64_t nv = 0, nt = 0;
   for (int32_t k = 0; k < scene->organ_count; ++k)
