@@ -4,7 +4,8 @@
 # fascia is built, and by the installed fasciaConfig.cmake before it loads
 # fascia::prep (a static archive, whose private libraries its users link).
 # Sets fascia_prep_missing to the list of what was not found, with the Debian
-# package that has it; the callers decide whether that is an error.
+# package that has it; the callers decide whether that is an error; and
+# fascia_prep_labelmap_missing to what label-map reading lacks.
 set(fascia_prep_missing "")
 # Debian's FindOpenVDB.cmake lives outside CMake's module path, and sets
 # BUILD_SHARED_LIBS in its caller's scope: keep both as the caller had them.
@@ -75,6 +76,35 @@ if(NOT TARGET fascia::nettle)
                           INTERFACE_INCLUDE_DIRECTORIES ${FASCIA_NETTLE_INCLUDE_DIR})
   else()
     list(APPEND fascia_prep_missing "nettle (nettle-dev)")
+  endif()
+endif()
+
+# Label maps (optional: without them prep reads meshes only and says so):
+# NIfTI's reference library and teem's nrrd. Imported by hand like nettle:
+# teem's own CMake files are not on CMake's search path in Debian.
+set(fascia_prep_labelmap_missing "")
+if(NOT TARGET fascia::nifti2)
+  find_path(FASCIA_NIFTI_INCLUDE_DIR nifti2_io.h PATH_SUFFIXES nifti)
+  find_library(FASCIA_NIFTI_LIBRARY nifti2)
+  find_library(FASCIA_ZNZ_LIBRARY znz)
+  if(FASCIA_NIFTI_INCLUDE_DIR AND FASCIA_NIFTI_LIBRARY AND FASCIA_ZNZ_LIBRARY)
+    add_library(fascia::nifti2 UNKNOWN IMPORTED GLOBAL)
+    set_target_properties(fascia::nifti2 PROPERTIES IMPORTED_LOCATION ${FASCIA_NIFTI_LIBRARY}
+                          INTERFACE_INCLUDE_DIRECTORIES ${FASCIA_NIFTI_INCLUDE_DIR}
+                          INTERFACE_LINK_LIBRARIES "${FASCIA_ZNZ_LIBRARY};m")
+  else()
+    list(APPEND fascia_prep_labelmap_missing "NIfTI (libnifti2-dev)")
+  endif()
+endif()
+if(NOT TARGET fascia::teem)
+  find_path(FASCIA_TEEM_INCLUDE_DIR teem/nrrd.h)
+  find_library(FASCIA_TEEM_LIBRARY teem)
+  if(FASCIA_TEEM_INCLUDE_DIR AND FASCIA_TEEM_LIBRARY)
+    add_library(fascia::teem UNKNOWN IMPORTED)
+    set_target_properties(fascia::teem PROPERTIES IMPORTED_LOCATION ${FASCIA_TEEM_LIBRARY}
+                          INTERFACE_INCLUDE_DIRECTORIES ${FASCIA_TEEM_INCLUDE_DIR})
+  else()
+    list(APPEND fascia_prep_labelmap_missing "teem (libteem-dev)")
   endif()
 endif()
 

@@ -2,7 +2,7 @@
 // SPDX-FileCopyrightText: fascia developers
 // C-only interface of the three C++ adapters: assimp reads
 // mesh files, CGAL checks and repairs surfaces and answers closest-point
-// queries, OpenVDB computes unsigned distances. No C++ type crosses; every
+// queries, OpenVDB computes distances and surfaces of voxel fields. No C++ type crosses; every
 // function catches all exceptions into a status and a message on the ctx.
 // Arrays returned by the adapters are malloc'ed: free them with free().
 #ifndef FASCIA_PREP_ADAPTERS_H
@@ -85,6 +85,25 @@ FASCIA_PREP_INTERN fascia_status fascia_vdb_unsigned_distance(fascia_ctx *ctx, i
                                                               const int32_t *triangles, double h,
                                                               float band_voxels, const int32_t lo[3],
                                                               const int32_t dims[3], float *out);
+
+/// The surface of a dense indicator (x fastest; 1 inside, 0 outside, the
+/// box padded by smoothing + 2 empty voxels): the level midway between inside
+/// and outside voxel centres after smoothing passes of a 3x3x3 mean filter.
+/// Vertices in the box's index coordinates, triangles wound outward.
+FASCIA_PREP_INTERN fascia_status fascia_vdb_indicator_surface(fascia_ctx *ctx, const int32_t dims[3],
+                                                              const float *inside, int32_t smoothing,
+                                                              double **out_vertices, int32_t *out_vertex_count,
+                                                              int32_t **out_triangles, int32_t *out_triangle_count);
+/// The closed surface (m) less everything within depth (m) of the other
+/// closed surface, as level sets at voxel size h: max(d, depth - d_other),
+/// meshed again.
+FASCIA_PREP_INTERN fascia_status fascia_vdb_carve(fascia_ctx *ctx, int32_t vertex_count, const double *vertices,
+                                                  int32_t triangle_count, const int32_t *triangles,
+                                                  int32_t other_vertex_count, const double *other_vertices,
+                                                  int32_t other_triangle_count, const int32_t *other_triangles,
+                                                  double h, double depth, double **out_vertices,
+                                                  int32_t *out_vertex_count, int32_t **out_triangles,
+                                                  int32_t *out_triangle_count);
 
 #ifdef __cplusplus
 }

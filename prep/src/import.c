@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "labels.h"
 #include "prep_util.h"
 
 void fascia_prep_meshes_destroy(fascia_prep_meshes **meshes) {
@@ -25,6 +26,7 @@ void fascia_prep_meshes_destroy(fascia_prep_meshes **meshes) {
   free(m->organs);
   for (int32_t k = 0; m->warnings && k < m->warning_count; ++k) free(m->warnings[k]);
   free(m->warnings);
+  free(m->contacts);
   free(m);
   *meshes = NULL;
 }
@@ -140,16 +142,6 @@ cleanup:
   return status;
 }
 
-static void mesh_bounds(fascia_prep_mesh *o) {
-  for (int r = 0; r < 3; ++r) o->bounds[r] = INFINITY, o->bounds[3 + r] = -INFINITY;
-  for (int32_t v = 0; v < o->vertex_count; ++v)
-    for (int r = 0; r < 3; ++r) {
-      const double x = o->vertices[3 * (int64_t)v + r];
-      if (x < o->bounds[r]) o->bounds[r] = x;
-      if (x > o->bounds[3 + r]) o->bounds[3 + r] = x;
-    }
-}
-
 // The mesh file: a regular file (a directory, FIFO or device is refused
 // before any read), complete where its format can tell, hashed, then read.
 static fascia_status check_and_read(fascia_ctx *ctx, const char *path, char sha256[65], fascia_assimp_file **file) {
@@ -177,6 +169,7 @@ fascia_status fascia_prep_import(fascia_ctx *ctx, const fascia_prep_scene *scene
     const fascia_prep_organ_def *def = scene->organs + k;
     fascia_prep_mesh *o = m->organs + k;
     snprintf(o->name, sizeof o->name, "%s", def->name);
+    if (def->label_count) continue; // made of labels: below, all from one read of the label map
     char detail[160];
     snprintf(detail, sizeof detail, "%s (%s)", def->name, def->mesh);
     fascia_ctx_progress(ctx, "import", (double)k / scene->organ_count, detail);
@@ -189,9 +182,10 @@ fascia_status fascia_prep_import(fascia_ctx *ctx, const fascia_prep_scene *scene
     }
     PREP_TRY_GOTO(pick_parts(ctx, scene->path, def, file, k, o));
     fascia_assimp_free(&file);
-    mesh_bounds(o);
+    prep_mesh_bounds(o);
     o->report.parts_used = o->part_count;
   }
+  PREP_TRY_GOTO(prep_label_organs(ctx, scene, m));
   PREP_TRY_GOTO(prep_check_magnitudes(ctx, scene, m));
   fascia_ctx_progress(ctx, "import", 1, "done");
   *out = m;

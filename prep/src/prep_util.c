@@ -322,3 +322,13 @@ void prep_quat_matrix(const double *q, double *R) {
                        2 * (x * z - w * y),     2 * (y * z + w * x),     1 - 2 * (x * x + y * y)};
   for (int k = 0; k < 9; ++k) R[k] = m[k];
 }
+
+void prep_mesh_bounds(fascia_prep_mesh *mesh) {
+  for (int r = 0; r < 3; ++r) mesh->bounds[r] = INFINITY, mesh->bounds[3 + r] = -INFINITY;
+  for (int32_t v = 0; v < mesh->vertex_count; ++v)
+    for (int r = 0; r < 3; ++r) {
+      const double x = mesh->vertices[3 * (int64_t)v + r];
+      if (x < mesh->bounds[r]) mesh->bounds[r] = x;
+      if (x > mesh->bounds[3 + r]) mesh->bounds[3 + r] = x;
+    }
+}

@@ -119,6 +119,8 @@ FASCIA_PREP_INTERN void prep_label_sampling(const fascia_prep_scene *scene, cons
 /// "tissue 'name'" or "deformable organ 'name'" into out.
 FASCIA_PREP_INTERN const char *prep_label_name(const fascia_prep_scene *scene, const fascia_prep_volume *volume,
                                                uint8_t label, char *out, size_t size);
+/// mesh->bounds from its vertices.
+FASCIA_PREP_INTERN void prep_mesh_bounds(fascia_prep_mesh *mesh);
 /// Index of name among parts names of mesh, -1 if absent.
 FASCIA_PREP_INTERN int32_t prep_mesh_part(const fascia_prep_mesh *mesh, const char *name);
 /// Closest point on triangle (a, b, c) to p: barycentric coordinates in bary.

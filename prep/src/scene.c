@@ -12,6 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "labels.h"
 #include "prep_util.h"
 
 typedef struct reader {
@@ -446,25 +447,182 @@ static fascia_status parse_sampling(const reader *rd, const fascia_prep_scene *s
   return FASCIA_OK;
 }
 
+// name resolved against the scene's folder (an absolute name as it is), malloc'ed.
+static char *resolve_path(const char *base_dir, const char *name) {
+  const size_t n = strlen(base_dir) + strlen(name) + 2;
+  char *out = malloc(n);
+  if (!out) return NULL;
+  if (name[0] == '/' || !base_dir[0])
+    snprintf(out, n, "%s", name);
+  else
+    snprintf(out, n, "%s/%s", base_dir, name);
+  return out;
+}
+
+// Adds the labels spec names to *list (sorted, each once): a label value, a
+// name of the table, or a pattern over its names ("vertebrae_*").
+static fascia_status add_labels(const reader *rd, const fascia_prep_segmentation *seg, const prep_label_table *table,
+                                const cJSON *spec, const char *at, int32_t **list, uint8_t **by_name, int32_t *count) {
+  int32_t found[4096];
+  int32_t n = 0;
+  if (cJSON_IsNumber(spec)) {
+    const double v = spec->valuedouble;
+    if (v != floor(v) || v < 1 || v > PREP_MAX_LABEL)
+      return key_fail(rd, at, "%g is not a label (expected an integer 1 .. %d)", v, PREP_MAX_LABEL);
+    found[n++] = (int32_t)v;
+  } else if (cJSON_IsString(spec) && spec->valuestring[0]) {
+    if (!seg->table)
+      return key_fail(rd, at, "'%s' is a label name, but the segmentation has no label table (give "
+                      "segmentation.labels, or label values)", spec->valuestring);
+    n = prep_label_match(table, spec->valuestring, found, (int32_t)(sizeof found / sizeof *found));
+    if (n > (int32_t)(sizeof found / sizeof *found)) return key_fail(rd, at, "'%s' matches too many labels", spec->valuestring);
+    if (n == 0)
+      return key_fail(rd, at, "no label of table '%s' is named '%s'%s", seg->table, spec->valuestring,
+                      strpbrk(spec->valuestring, "*?[") ? " (the pattern matches nothing)" : "");
+  } else {
+    return key_fail(rd, at, "expected a label value, a label name or a pattern, found %s", type_name(spec));
+  }
+  const uint8_t is_named = !cJSON_IsString(spec) || !strpbrk(spec->valuestring, "*?[");
+  int32_t *grown = realloc(*list, (size_t)(*count + n) * sizeof *grown);
+  if (grown) *list = grown;
+  uint8_t *grown_named = realloc(*by_name, (size_t)(*count + n));
+  if (grown_named) *by_name = grown_named;
+  PREP_CHECK(grown && grown_named, rd->ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", rd->file);
+  for (int32_t k = 0; k < n; ++k) {
+    int32_t at_k = 0;
+    while (at_k < *count && grown[at_k] < found[k]) ++at_k;
+    if (at_k < *count && grown[at_k] == found[k]) {
+      grown_named[at_k] |= is_named;
+      continue;
+    }
+    memmove(grown + at_k + 1, grown + at_k, (size_t)(*count - at_k) * sizeof *grown);
+    memmove(grown_named + at_k + 1, grown_named + at_k, (size_t)(*count - at_k));
+    grown[at_k] = found[k];
+    grown_named[at_k] = is_named;
+    ++*count;
+  }
+  return FASCIA_OK;
+}
+
+// One spec or an array of them.
+static fascia_status get_labels(const reader *rd, const fascia_prep_segmentation *seg, const prep_label_table *table,
+                                const cJSON *item, const char *at, int32_t **list, uint8_t **by_name, int32_t *count) {
+  if (!cJSON_IsArray(item)) return add_labels(rd, seg, table, item, at, list, by_name, count);
+  if (cJSON_GetArraySize(item) == 0) return key_fail(rd, at, "is empty; name at least one label");
+  int k = 0;
+  const cJSON *e;
+  cJSON_ArrayForEach(e, item) {
+    char ek[PATH_SIZE];
+    sub_index(ek, at, k++);
+    PREP_TRY(add_labels(rd, seg, table, e, ek, list, by_name, count));
+  }
+  return FASCIA_OK;
+}
+
+static void scene_table(const fascia_prep_segmentation *seg, prep_label_table *table) {
+  table->count = seg->table_count;
+  table->label = seg->table_label;
+  table->name = seg->table_name;
+}
+
+static fascia_status parse_organ_labels(const reader *rd, fascia_prep_scene *scene, const cJSON *labels,
+                                        const char *path, fascia_prep_organ_def *o) {
+  char at[PATH_SIZE];
+  sub_key(at, path, "labels");
+  if (!scene->segmentation.file)
+    return key_fail(rd, at, "the organ is made of labels, but the scene has no \"segmentation\"");
+  prep_label_table table;
+  scene_table(&scene->segmentation, &table);
+  PREP_TRY(get_labels(rd, &scene->segmentation, &table, labels, at, &o->labels, &o->label_named, &o->label_count));
+  for (int32_t k = 0; k < scene->organ_count - 1; ++k) // the organs parsed before this one
+    for (int32_t a = 0; a < scene->organs[k].label_count; ++a)
+      for (int32_t b = 0; b < o->label_count; ++b)
+        if (scene->organs[k].labels[a] == o->labels[b])
+          return key_fail(rd, at, "label %d is already organ '%s''s; a label belongs to one organ", (int)o->labels[b],
+                          scene->organs[k].name);
+  return FASCIA_OK;
+}
+
+// "segmentation": {"file", "labels", "frame", "smoothing", "interface_layer"}
+static fascia_status parse_segmentation(const reader *rd, fascia_prep_scene *scene, const cJSON *item,
+                                        const char *base_dir) {
+  static const char *const known[] = {"file", "labels", "frame", "smoothing", "interface_layer", "description", NULL};
+  const char *path = "segmentation";
+  PREP_TRY(check_keys(rd, item, path, known));
+  fascia_prep_segmentation *seg = &scene->segmentation;
+  const char *file, *labels, *frame, *description;
+  PREP_TRY(get_string(rd, item, path, "description", 0, &description));
+  PREP_TRY(get_string(rd, item, path, "file", 1, &file));
+  seg->file = prep_strdup(file);
+  seg->file_path = resolve_path(base_dir, file);
+  PREP_CHECK(seg->file && seg->file_path, rd->ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", rd->file);
+  char at[PATH_SIZE];
+  PREP_TRY(get_string(rd, item, path, "labels", 0, &labels));
+  if (labels) {
+    seg->table = prep_strdup(labels);
+    PREP_CHECK(seg->table, rd->ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", rd->file);
+    prep_label_table table;
+    fascia_status status;
+    sub_key(at, path, "labels");
+    if (!strncmp(labels, "totalsegmentator:", 17)) {
+      status = prep_label_table_builtin(rd->ctx, labels, &table);
+    } else {
+      char *table_path = resolve_path(base_dir, labels);
+      PREP_CHECK(table_path, rd->ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", rd->file);
+      status = prep_label_table_load(rd->ctx, table_path, &table);
+      free(table_path);
+    }
+    if (status != FASCIA_OK) {
+      char reason[768];
+      snprintf(reason, sizeof reason, "%s", fascia_ctx_message(rd->ctx));
+      return key_fail(rd, at, "%s", reason);
+    }
+    seg->table_count = table.count;
+    seg->table_label = table.label;
+    seg->table_name = table.name;
+  }
+  PREP_TRY(get_string(rd, item, path, "frame", 0, &frame));
+  seg->frame = FASCIA_PREP_FRAME_RAS;
+  if (frame && !strcmp(frame, "LPS"))
+    seg->frame = FASCIA_PREP_FRAME_LPS;
+  else if (frame && strcmp(frame, "RAS")) {
+    sub_key(at, path, "frame");
+    return key_fail(rd, at, "unknown frame '%s' (known: RAS, LPS)", frame);
+  }
+  int smoothing;
+  PREP_TRY(get_int(rd, item, path, "smoothing", 0, 1, 0, 10, &smoothing));
+  seg->smoothing = smoothing;
+  PREP_TRY(get_number(rd, item, path, "interface_layer", 0, 0, 0, 1, 0.1, &seg->interface_layer));
+  return FASCIA_OK;
+}
+
 static fascia_status parse_organ(const reader *rd, fascia_prep_scene *scene, const cJSON *item, const char *path,
                                  const char *base_dir, fascia_prep_organ_def *o) {
-  static const char *const known[] = {"name",          "mesh",           "parts",           "units",
-                                      "transform",     "model",          "motion",          "material",
-                                      "frame_spacing", "sample_spacing", "shape_functions", "min_component",
-                                      "description",   NULL};
+  static const char *const known[] = {"name",          "mesh",           "labels",          "parts",
+                                      "units",         "transform",      "model",           "motion",
+                                      "material",      "frame_spacing",  "sample_spacing",  "shape_functions",
+                                      "min_component", "description",    NULL};
   PREP_TRY(check_keys(rd, item, path, known));
   PREP_TRY(get_name(rd, item, path, "name", o->name));
   const char *mesh, *units, *model, *description;
   PREP_TRY(get_string(rd, item, path, "description", 0, &description));
-  PREP_TRY(get_string(rd, item, path, "mesh", 1, &mesh));
+  const cJSON *labels = cJSON_GetObjectItemCaseSensitive(item, "labels");
+  PREP_TRY(get_string(rd, item, path, "mesh", !labels, &mesh));
+  if (labels) {
+    if (mesh) return key_fail(rd, path, "give either \"mesh\" or \"labels\", not both");
+    static const char *const mesh_only[] = {"parts", "units", "transform", NULL};
+    for (int k = 0; mesh_only[k]; ++k)
+      if (cJSON_GetObjectItemCaseSensitive(item, mesh_only[k])) {
+        char mk[PATH_SIZE];
+        sub_key(mk, path, mesh_only[k]);
+        return key_fail(rd, mk, "applies to a mesh; an organ made of labels is placed by the segmentation's affine");
+      }
+    PREP_TRY(parse_organ_labels(rd, scene, labels, path, o));
+    mesh = scene->segmentation.file;
+  }
   o->mesh = prep_strdup(mesh);
-  const size_t n = strlen(base_dir) + strlen(mesh) + 2;
-  o->mesh_path = malloc(n);
+  o->mesh_path = labels ? prep_strdup(scene->segmentation.file_path) : resolve_path(base_dir, mesh);
   PREP_CHECK(o->mesh && o->mesh_path, rd->ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", rd->file);
-  if (mesh[0] == '/' || !base_dir[0])
-    snprintf(o->mesh_path, n, "%s", mesh);
-  else
-    snprintf(o->mesh_path, n, "%s/%s", base_dir, mesh);
   PREP_TRY(get_parts(rd, item, path, "parts", &o->parts));
   char at[PATH_SIZE];
   PREP_TRY(get_string(rd, item, path, "units", 0, &units));
@@ -674,7 +832,7 @@ static fascia_status unique_names(const reader *rd, const char *table, int32_t n
 static fascia_status parse_root(const reader *rd, const cJSON *root, const char *base_dir, fascia_prep_scene *s) {
   static const char *const known[] = {"fascia_scene", "name",      "description", "voxel_size", "seed",
                                       "gravity",      "output",    "close_holes", "materials",  "organs",
-                                      "tissues",      NULL};
+                                      "tissues",      "segmentation", NULL};
   PREP_TRY(check_keys(rd, root, "", known));
   int version;
   PREP_TRY(get_int(rd, root, "", "fascia_scene", 1, 1, 1, 1, &version));
@@ -707,6 +865,9 @@ static fascia_status parse_root(const reader *rd, const cJSON *root, const char 
     PREP_TRY(parse_material(rd, e, at, s->materials + s->material_count));
     s->material_count++;
   }
+
+  const cJSON *segmentation = cJSON_GetObjectItemCaseSensitive(root, "segmentation");
+  if (segmentation) PREP_TRY(parse_segmentation(rd, s, segmentation, base_dir));
 
   const cJSON *organs = cJSON_GetObjectItemCaseSensitive(root, "organs");
   if (!cJSON_IsArray(organs) || cJSON_GetArraySize(organs) < 1)
@@ -920,6 +1081,8 @@ void fascia_prep_scene_destroy(fascia_prep_scene **scene) {
     free(o->mesh);
     free(o->mesh_path);
     free_parts(&o->parts);
+    free(o->labels);
+    free(o->label_named);
     free(o->motion.key_time);
     free(o->motion.key_translation);
     free(o->motion.key_rotation);
@@ -931,6 +1094,13 @@ void fascia_prep_scene_destroy(fascia_prep_scene **scene) {
     for (int32_t c = 0; t->coupling && c < t->coupling_count; ++c) free_parts(&t->coupling[c].parts);
     free(t->coupling);
   }
+  fascia_prep_segmentation *seg = &s->segmentation;
+  prep_label_table table;
+  scene_table(seg, &table);
+  prep_label_table_free(&table);
+  free(seg->file);
+  free(seg->file_path);
+  free(seg->table);
   free(s->organs);
   free(s->tissues);
   free(s->materials);

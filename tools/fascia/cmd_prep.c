@@ -214,6 +214,13 @@ static void print_summary(const prep_run *r, const step_clock *c, const char *ou
       case GAP_OPEN: fprintf(stderr, "gap: '%s' to '%s' %.3g mm at the closest (on the surfaces)\n", na, nb, 1e3 * d);
       }
     }
+  for (int32_t k = 0; k < r->meshes->contact_count; ++k) {
+    const fascia_prep_label_contact *lc = r->meshes->contacts + k;
+    fprintf(stderr,
+            "labels touch: '%s' and '%s' share %lld voxel faces (%.4g cm^2) in the label map; %s\n",
+            r->meshes->organs[lc->a].name, r->meshes->organs[lc->b].name, (long long)lc->faces, 1e4 * lc->area,
+            lc->layer > 0 ? "each gave up half the interface layer there" : "no interface layer: no tissue between them there");
+  }
   int64_t voxels = 0;
   for (int32_t t = 0; t < sc->tissue_count; ++t) {
     const fascia_prep_tissue_report *tr = v->tissues + t;
@@ -343,6 +350,17 @@ static void print_json(const prep_run *r, const step_clock *c, const char *outpu
     cJSON_AddNumberToObject(e, "volume", v->overlaps[k].volume);
     cJSON_AddNumberToObject(e, "depth", v->overlaps[k].depth);
     cJSON_AddItemToArray(overlaps, e);
+  }
+  cJSON *contacts = cJSON_AddArrayToObject(root, "label_contacts");
+  for (int32_t k = 0; k < r->meshes->contact_count; ++k) {
+    const fascia_prep_label_contact *lc = r->meshes->contacts + k;
+    cJSON *e = cJSON_CreateObject();
+    cJSON_AddStringToObject(e, "a", r->meshes->organs[lc->a].name);
+    cJSON_AddStringToObject(e, "b", r->meshes->organs[lc->b].name);
+    cJSON_AddNumberToObject(e, "faces", (double)lc->faces);
+    cJSON_AddNumberToObject(e, "area", lc->area);
+    cJSON_AddNumberToObject(e, "layer", lc->layer);
+    cJSON_AddItemToArray(contacts, e);
   }
   cJSON *gaps = cJSON_AddArrayToObject(root, "gaps");
   cJSON *warnings = cJSON_AddArrayToObject(root, "warnings");

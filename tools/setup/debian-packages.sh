@@ -10,6 +10,7 @@ packages=(
   libsuitesparse-dev libopenblas-dev   # the direct linear solver: CHOLMOD on an optimized BLAS (simulator core)
   libcjson-dev                         # JSON for scene files and --json output
   libassimp-dev libcgal-dev libopenvdb-dev libboost-iostreams-dev libtbb-dev libeigen3-dev nettle-dev  # prep stage
+  libnifti2-dev libteem-dev            # prep: label maps (NIfTI, NRRD); optional, prep reads meshes without them
   gnuplot-nox                          # pictures and plots without a display
   paraview python3-paraview python3-h5py  # tests open the results with ParaView's readers (pvbatch)
   calculix-ccx                         # the cantilever's FE reference and bench's peer (data/reference/)

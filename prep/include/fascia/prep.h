@@ -63,11 +63,15 @@ typedef struct fascia_prep_parts {
   char **names;  ///< [count]
 } fascia_prep_parts;
 
-/// One organ of the scene.
+/// One organ of the scene: a surface mesh file, or labels of the scene's
+/// segmentation (docs/labelmaps.md).
 typedef struct fascia_prep_organ_def {
   char name[FASCIA_NAME_SIZE];
-  char *mesh;              ///< path as written in the scene
+  char *mesh;              ///< path as written in the scene (a label organ: the segmentation's)
   char *mesh_path;         ///< path resolved against the scene's folder
+  int32_t label_count;     ///< > 0: the organ is these labels of the segmentation, not a mesh
+  int32_t *labels;         ///< [label_count] label values, ascending
+  uint8_t *label_named;    ///< [label_count] 1: named by value or name (must be in the image), 0: by a pattern only
   fascia_prep_parts parts; ///< which parts of the file (0: all)
   fascia_real scale;       ///< file units to metres (1, 0.01, 0.001)
   char units[8];           ///< "m", "cm", "mm"
@@ -116,6 +120,25 @@ typedef struct fascia_prep_tissue_def {
   fascia_real min_component;  ///< pieces of region smaller than this are dropped, m^3
 } fascia_prep_tissue_def;
 
+/// World frames a label map can be placed in (docs/labelmaps.md).
+typedef enum fascia_prep_frame {
+  FASCIA_PREP_FRAME_RAS = 0, ///< +x toward the patient's right, +y anterior, +z superior (NIfTI)
+  FASCIA_PREP_FRAME_LPS = 1  ///< +x left, +y posterior, +z superior (DICOM, ITK)
+} fascia_prep_frame;
+
+/// The scene's segmentation: a label map (NIfTI or NRRD) and its label table.
+typedef struct fascia_prep_segmentation {
+  char *file;                 ///< as written in the scene (NULL: the scene has none)
+  char *file_path;            ///< resolved against the scene's folder
+  char *table;                ///< the label table as written: a TSV path or "totalsegmentator:total" (NULL: none)
+  int32_t table_count;        ///< entries of the table
+  int32_t *table_label;       ///< [table_count]
+  char **table_name;          ///< [table_count]
+  int32_t frame;              ///< fascia_prep_frame the image is placed in
+  int32_t smoothing;          ///< smoothing passes of each label's indicator before its surface is taken
+  fascia_real interface_layer; ///< organs closer than this (touching included) each give up half of it at their interface, m
+} fascia_prep_segmentation;
+
 /// A parsed scene file (the def of every stage). Built by
 /// fascia_prep_scene_load or _parse; owned, freed by _destroy.
 typedef struct fascia_prep_scene {
@@ -132,6 +155,7 @@ typedef struct fascia_prep_scene {
   fascia_prep_organ_def *organs; ///< [organ_count]
   int32_t tissue_count;
   fascia_prep_tissue_def *tissues; ///< [tissue_count]
+  fascia_prep_segmentation segmentation; ///< file NULL when no organ comes from labels
 } fascia_prep_scene;
 
 /// Reads and checks a scene file. Unknown keys, wrong types, missing
@@ -179,20 +203,34 @@ typedef struct fascia_prep_mesh {
   fascia_prep_mesh_report report;
 } fascia_prep_mesh;
 
+/// Two organs built from labels that meet in the label map.
+typedef struct fascia_prep_label_contact {
+  int32_t a, b;           ///< organ indices, a < b
+  int64_t faces;          ///< voxel faces where a label of a meets one of b
+  fascia_real area;       ///< m^2 of those faces
+  fascia_real layer;      ///< thickness carved at their interface (the segmentation's interface_layer), m
+} fascia_prep_label_contact;
+
 typedef struct fascia_prep_meshes {
   int32_t count; ///< = scene organ_count, same order
   fascia_prep_mesh *organs;
   int32_t warning_count;
   char **warnings; ///< [warning_count] one line each: sizes that look like a units mistake (set by import)
+  int32_t contact_count;               ///< pairs of label organs that touch in the label map
+  fascia_prep_label_contact *contacts; ///< [contact_count]
 } fascia_prep_meshes;
 
 /// Reads every organ's mesh file with assimp, keeps the named parts (error
 /// lists the parts the file has, or says it has no named parts), applies
-/// units and transform, refuses NaN coordinates and empty meshes. Then
-/// judges the scene's sizes against anatomy's (data/scenes/README.md, "Units
-/// and sizes"): refuses what cannot be simulated (an organ larger than a
-/// body, a motion larger than the whole scene) and lists in warnings what
-/// looks like a units mistake but may be meant. On error *out is NULL.
+/// units and transform, refuses NaN coordinates and empty meshes. Organs
+/// made of labels get their surface from the segmentation instead: the
+/// labels' smoothed indicator, meshed (OpenVDB), placed in the world by the
+/// image's affine, carved at touching interfaces by the interface layer
+/// (docs/labelmaps.md). Then judges the scene's sizes against anatomy's
+/// (data/scenes/README.md, "Units and sizes"): refuses what cannot be
+/// simulated (an organ larger than a body, a motion larger than the whole
+/// scene) and lists in warnings what looks like a units mistake but may be
+/// meant. On error *out is NULL.
 FASCIA_API fascia_status fascia_prep_import(fascia_ctx *ctx, const fascia_prep_scene *scene,
                                             fascia_prep_meshes **out);
 /// Checks and repairs every mesh in place with CGAL, part by part: merges

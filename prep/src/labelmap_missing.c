@@ -1,0 +1,18 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// prep built without its label-map libraries: a scene with a segmentation
+// is refused with what to install (the configure summary says so too).
+#include "labels.h"
+
+void prep_labelmap_destroy(prep_labelmap **map) {
+  if (map) *map = NULL;
+}
+
+fascia_status prep_labelmap_read(fascia_ctx *ctx, const char *path, int32_t frame, prep_labelmap **out) {
+  (void)frame;
+  *out = NULL;
+  return PREP_FAIL(ctx, FASCIA_ERR_UNSUPPORTED,
+                   "label map '%s': this fascia was built without label-map support (missing " FASCIA_LABELMAP_MISSING
+                   "); install it and rebuild",
+                   path);
+}
