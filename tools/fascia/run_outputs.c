@@ -86,10 +86,11 @@ static int organ_pose(const fascia_model *m, const fascia_solver *solver, int32_
     quat_to_matrix(q, R);
     return 1;
   }
-  int32_t frames[1];
-  if (fascia_solver_organ_frame_count(solver, k) < 1 || fascia_solver_organ_frames(solver, k, frames) != FASCIA_OK)
-    return 0;
-  const int32_t f = frames[0];
+  // the first of its coupling frames, in the model's coupling table
+  int32_t f = -1;
+  for (int32_t c = 0; c < m->coupling_count && f < 0; ++c)
+    if (m->coupling_organ[c] == k) f = m->coupling_frame[c];
+  if (f < 0) return 0;
   fascia_real now[9], rest[9];
   quat_to_matrix(fascia_solver_frame_rotations(solver) + 4 * f, now);
   quat_to_matrix(m->frame_rotation + 4 * f, rest);
