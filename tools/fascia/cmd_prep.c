@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
 // `fascia prep SCENE.json -o MODEL.h5`: runs the preprocessing stages of
-// prep/ (issue 3) one by one with progress on stderr, times each step and its
+// prep/ one by one with progress on stderr, times each step and its
 // peak memory, writes the model (atomically: no partial file on error) and
 // an optional ParaView preview, and ends with a summary, as text on stderr or
 // (--json) as one JSON object on stdout.

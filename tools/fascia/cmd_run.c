@@ -4,7 +4,7 @@
 // implicit Euler steps (docs/mechanics.md), optionally writes the
 // results file (HDF5 + XDMF), and prints a summary: steps, ms per step,
 // Newton and CG iterations, each probe's displacement, the largest strain;
-// as text or as one JSON object on stdout (the CLI contract of issue 2).
+// as text or as one JSON object on stdout (the CLI contract of README.md).
 // SIGINT/SIGTERM during a dynamic run stop it after the current step; the
 // results file is then closed cleanly with the steps done.
 #define _POSIX_C_SOURCE 200809L
@@ -110,7 +110,7 @@ static void restore_signals(const struct sigaction old[2]) {
   sigaction(SIGTERM, &old[1], NULL);
 }
 
-// --- checkpoints and restart (issue 7) -------------------------------------
+// --- checkpoints and restart ---------------------------------------------
 // Taken out of argv before parse_options, so they stay apart from the
 // solver options; the hooks are in run_steps and cmd_run.
 
@@ -181,9 +181,9 @@ typedef struct run_options {
   fascia_real static_time; ///< s: the time the static equilibrium is for
   const char *static_time_why; ///< where static_time came from, in words
   fascia_solver_def solver;
-  const checkpoint_options *checkpoint; ///< --checkpoint, --resume (issue 7); NULL: none
-  run_outputs *outputs;                 ///< --history, --organs, --snapshots (issue 5); NULL: none
-  run_drive *drive;                     ///< --drive ORGAN=FILE.csv (issue 5); NULL: none
+  const checkpoint_options *checkpoint; ///< --checkpoint, --resume; NULL: none
+  run_outputs *outputs;                 ///< --history, --organs, --snapshots; NULL: none
+  run_drive *drive;                     ///< --drive ORGAN=FILE.csv; NULL: none
 } run_options;
 
 // Parses argv into opt. Returns -1 to go on, else the exit status (0 for

@@ -21,7 +21,7 @@
 // Every row runs on the CPU unless --backend says otherwise (its times are
 // CPU figures); the backend and device of each row are in the CSV and JSON.
 // Writes tradeoff.csv/.json, convergence.csv (paper Figure 3, with the
-// CalculiX C3D8 figures of issue 6), gnuplot scripts and, when gnuplot is on
+// CalculiX C3D8 figures), gnuplot scripts and, when gnuplot is on
 // the PATH, pareto.png and convergence.png into --out DIR.
 #define _POSIX_C_SOURCE 200809L
 #include <cjson/cJSON.h>
@@ -478,7 +478,7 @@ static int write_points(const tradeoff_options *opt, const row *rows, int count,
   return close_out(opt, gf) | rc;
 }
 
-// Hexahedral FEM on the same problem (CalculiX C3D8, nonlinear; issue 6).
+// Hexahedral FEM on the same problem (CalculiX C3D8, nonlinear).
 static const struct {
   const char *grid;
   int dofs;
