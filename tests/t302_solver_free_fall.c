@@ -6,9 +6,12 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "backend_arg.h"
 #include "check.h"
 #include "scenes.h"
 #include "fascia/solver.h"
+
+static const char *backend = "cpu";
 
 static int fall(fascia_ctx *ctx, fascia_mass_kind mass, int shape) {
   fascia_scene_beam_def def = fascia_scene_beam_def_default();
@@ -22,6 +25,7 @@ static int fall(fascia_ctx *ctx, fascia_mass_kind mass, int shape) {
   for (int i = 0; i < m->frame_count; ++i) m->frame_kind[i] = FASCIA_FRAME_FREE; // unclamp
   fascia_solver_def sd = fascia_solver_def_default();
   sd.mass = mass;
+  sd.backend = backend;
   sd.time_step = 0.01;
   sd.newton_tolerance = 1e-10;
   fascia_solver *s = NULL;
@@ -44,7 +48,9 @@ static int fall(fascia_ctx *ctx, fascia_mass_kind mass, int shape) {
   return 0;
 }
 
-int main(void) {
+int main(int argc, char **argv) {
+  backend = backend_arg(argc, argv);
+  backend_skip_unless_available(backend);
   fascia_ctx_def cd = fascia_ctx_def_default();
   fascia_ctx *ctx = NULL;
   if (fascia_ctx_create(&cd, &ctx) != FASCIA_OK) return 1;

@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "backend_arg.h"
 #include "check.h"
 #include "fascia/solver.h"
 #include "point/linalg.h"
@@ -15,7 +16,9 @@
 #define ANGLE 0.6 // rad about x at t = 1 s
 #define LIFT 0.4  // m along z at t = 1 s
 
-int main(void) {
+int main(int argc, char **argv) {
+  const char *backend = backend_arg(argc, argv);
+  backend_skip_unless_available(backend);
   fascia_ctx_def cd = fascia_ctx_def_default();
   fascia_ctx *ctx = NULL;
   if (fascia_ctx_create(&cd, &ctx) != FASCIA_OK) return 1;
@@ -54,6 +57,7 @@ int main(void) {
   CHECK_OK(fascia_model_validate(ctx, m, "prescribed test"), ctx);
   fascia_solver_def sd = fascia_solver_def_default();
   sd.time_step = 0.1;
+  sd.backend = backend;
   fascia_solver *s = NULL;
   CHECK_OK(fascia_solver_create(ctx, m, &sd, &s), ctx);
   for (int step = 1; step <= 13; ++step) { // past the last key: the pose holds

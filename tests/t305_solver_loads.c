@@ -7,11 +7,14 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "backend_arg.h"
 #include "check.h"
 #include "scenes.h"
 #include "solver_internal.h"
 
-int main(void) {
+int main(int argc, char **argv) {
+  const char *backend = backend_arg(argc, argv);
+  backend_skip_unless_available(backend);
   fascia_ctx_def cd = fascia_ctx_def_default();
   fascia_ctx *ctx = NULL;
   if (fascia_ctx_create(&cd, &ctx) != FASCIA_OK) return 1;
@@ -29,6 +32,7 @@ int main(void) {
       for (int c = 0; c < 3; ++c) m->frame_load[6 * i + c] = load[c] / loaded;
   fascia_solver_def sd = fascia_solver_def_default();
   sd.newton_tolerance = 1e-10;
+  sd.backend = backend;
   fascia_solver *s = NULL;
   CHECK_OK(fascia_solver_create(ctx, m, &sd, &s), ctx);
   CHECK_OK(fascia_solver_solve_static(s, NULL), ctx);

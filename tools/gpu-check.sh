@@ -28,11 +28,13 @@ pack)
   mkdir -p "$root/build-gpu"
   cmake -S "$root" -B "$root/build-gpu" -DCMAKE_BUILD_TYPE=Release -DFASCIA_CUDA=ON -DFASCIA_PREP=OFF \
     -DFASCIA_TESTS=ON >"$root/build-gpu/configure.log" 2>&1 || { cat "$root/build-gpu/configure.log" >&2; exit 1; }
-  cmake --build "$root/build-gpu" -j "$jobs" --target fascia t330_device_against_cpu t331_device_tissue
+  cmake --build "$root/build-gpu" -j "$jobs" --target fascia t330_device_against_cpu t331_device_tissue \
+    t302_solver_free_fall t304_solver_prescribed t305_solver_loads
   rm -rf "$pack"
   mkdir -p "$pack/bin" "$pack/lib"
   cp "$root/build-gpu/tools/fascia" "$root/build-gpu/tests/t330_device_against_cpu" \
-    "$root/build-gpu/tests/t331_device_tissue" "$pack/bin/"
+    "$root/build-gpu/tests/t331_device_tissue" "$root/build-gpu/tests/t302_solver_free_fall" \
+    "$root/build-gpu/tests/t304_solver_prescribed" "$root/build-gpu/tests/t305_solver_loads" "$pack/bin/"
   # every shared library but the C library's own (the GPU machine has those)
   for program in "$pack"/bin/*; do
     ldd "$program" | awk '$3 ~ /^\// {print $3}'
@@ -53,6 +55,10 @@ run)
   "$pack/bin/t330_device_against_cpu" --backend cuda 2>&1 | tee "$out/tests.log" || status=1
   echo "== t331: device against CPU on the demo tissue"
   "$pack/bin/t331_device_tissue" --backend cuda "$pack/demo.h5" 2>&1 | tee -a "$out/tests.log" || status=1
+  echo "== the solver suite on the GPU: free fall, prescribed motion, loads"
+  for t in t302_solver_free_fall t304_solver_prescribed t305_solver_loads; do
+    "$pack/bin/$t" --backend cuda 2>&1 | tee -a "$out/tests.log" || status=1
+  done
   echo "== the paper's Table 2 and 3 rows on the GPU and the CPU"
   "$pack/bin/fascia" bench paper --backend cuda --csv "$out/bench-paper.csv" 2>&1 | tee "$out/bench-paper.txt" || status=1
   echo "== larger rows on the GPU"
