@@ -270,6 +270,8 @@ int fascia_organs_any_driven(const fascia_organs *O) {
   return 0;
 }
 
+int fascia_organs_driven(const fascia_organs *O, int32_t organ) { return O && O->driven[organ]; }
+
 int32_t fascia_organs_frame_body(const fascia_organs *O, int32_t i) { return O ? O->frame_body[i] : -1; }
 
 // A body is simulated when it is rigid, has a master and is not driven.

@@ -70,6 +70,8 @@ FASCIA_INTERN int32_t fascia_organs_frame_body(const fascia_organs *O, int32_t i
 /// 1 when the caller drives some organ now (its work on the tissue is not
 /// known to the solver); O may be NULL.
 FASCIA_INTERN int fascia_organs_any_driven(const fascia_organs *O);
+/// 1 when the caller drives organ's coupling frames.
+FASCIA_INTERN int fascia_organs_driven(const fascia_organs *O, int32_t organ);
 
 /// Number of rigid organs simulated as bodies with coupling frames (0: the
 /// reduced and full coordinates coincide).

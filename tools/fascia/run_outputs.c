@@ -69,41 +69,14 @@ static fascia_file *open_file(fascia_ctx *ctx, const char *what, const char *dir
   return f;
 }
 
-static void quat_to_matrix(const fascia_real *q, fascia_real *R) {
-  const fascia_real w = q[0], x = q[1], y = q[2], z = q[3];
-  R[0] = 1 - 2 * (y * y + z * z), R[1] = 2 * (x * y - w * z), R[2] = 2 * (x * z + w * y);
-  R[3] = 2 * (x * y + w * z), R[4] = 1 - 2 * (x * x + z * z), R[5] = 2 * (y * z - w * x);
-  R[6] = 2 * (x * z - w * y), R[7] = 2 * (y * z + w * x), R[8] = 1 - 2 * (x * x + y * y);
-}
-
-// The organ's current pose x = R x_rest + t. An organ driven from outside
-// (--drive) has no pose of its own: it follows its first coupling frame,
-// R = R_f R_f,rest^T (exact when the drive moves the organ rigidly). 0 when
-// there is neither.
-static int organ_pose(const fascia_model *m, const fascia_solver *solver, int32_t k, fascia_real *R, fascia_real *t) {
-  fascia_real q[4];
-  if (fascia_solver_organ_pose(solver, k, t, q) == FASCIA_OK) {
-    quat_to_matrix(q, R);
-    return 1;
-  }
-  // the first of its coupling frames, in the model's coupling table
-  int32_t f = -1;
-  for (int32_t c = 0; c < m->coupling_count && f < 0; ++c)
-    if (m->coupling_organ[c] == k) f = m->coupling_frame[c];
-  if (f < 0) return 0;
-  fascia_real now[9], rest[9];
-  quat_to_matrix(fascia_solver_frame_rotations(solver) + 4 * f, now);
-  quat_to_matrix(m->frame_rotation + 4 * f, rest);
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c)
-      R[3 * r + c] = now[3 * r] * rest[3 * c] + now[3 * r + 1] * rest[3 * c + 1] + now[3 * r + 2] * rest[3 * c + 2];
-  const fascia_real *x = fascia_solver_frame_positions(solver) + 3 * f, *x0 = m->frame_position + 3 * f;
-  for (int r = 0; r < 3; ++r) t[r] = x[r] - (R[3 * r] * x0[0] + R[3 * r + 1] * x0[1] + R[3 * r + 2] * x0[2]);
-  return 1;
-}
-
-static void transform(const fascia_real *R, const fascia_real *t, const fascia_real *p, fascia_real *out) {
-  for (int r = 0; r < 3; ++r) out[r] = R[3 * r] * p[0] + R[3 * r + 1] * p[1] + R[3 * r + 2] * p[2] + t[r];
+// The organ's surface where the simulation has put it
+// (fascia_solver_organ_surface: deformable organs carried by their frames,
+// driven ones by their first coupling frame), [3 vertex_count] to free;
+// NULL when there is none.
+static fascia_real *organ_now(const fascia_model *m, const fascia_solver *solver, int32_t k) {
+  fascia_real *p = malloc(3 * sizeof(fascia_real) * ((size_t)m->organs[k].vertex_count + 1));
+  if (p && fascia_solver_organ_surface(solver, k, p) != FASCIA_OK) free(p), p = NULL;
+  return p;
 }
 
 static int little_endian(void) {
@@ -133,7 +106,7 @@ static void base64_block(FILE *f, const void *data, uint32_t bytes) {
 
 // One organ surface at its current pose as VTK XML PolyData (binary inline).
 static fascia_status write_vtp(fascia_ctx *ctx, const char *dir, const char *name, const fascia_organ *o,
-                               const fascia_real *R, const fascia_real *t) {
+                               const fascia_real *positions) {
   fascia_status st = FASCIA_OK;
   fascia_file *file = open_file(ctx, "--organs", dir, name, &st);
   if (!file) return st;
@@ -144,11 +117,7 @@ static fascia_status write_vtp(fascia_ctx *ctx, const char *dir, const char *nam
     free(points), free(offsets), fascia_file_discard(&file);
     return fascia_ctx_fail(ctx, FASCIA_ERR_MEMORY, __FILE__, __LINE__, "run: out of memory for organ '%s'", o->name);
   }
-  for (int32_t v = 0; v < o->vertex_count; ++v) {
-    fascia_real p[3];
-    transform(R, t, o->vertices + 3 * v, p);
-    for (int c = 0; c < 3; ++c) points[3 * v + c] = (float)p[c];
-  }
+  for (int32_t v = 0; v < 3 * o->vertex_count; ++v) points[v] = (float)positions[v];
   for (int32_t k = 0; k < o->triangle_count; ++k) offsets[k] = 3 * (k + 1);
   fprintf(f, "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"0.1\" byte_order=\"%s\" "
              "header_type=\"UInt32\">\n<PolyData>\n<Piece NumberOfPoints=\"%d\" NumberOfPolys=\"%d\">\n",
@@ -169,16 +138,17 @@ static fascia_status write_vtp(fascia_ctx *ctx, const char *dir, const char *nam
 static fascia_status write_organs(run_outputs *out, fascia_ctx *ctx, const fascia_model *m,
                                   const fascia_solver *solver, fascia_real time) {
   for (int32_t k = 0; k < m->organ_count; ++k) {
-    fascia_real R[9], t[3];
-    if (!organ_pose(m, solver, k, R, t)) continue;
+    fascia_real *now = organ_now(m, solver, k);
+    if (!now) continue;
     char name[FASCIA_NAME_SIZE + 32];
     // a fixed organ never moves: its first file serves every step
     const int fixed = m->organs[k].kind == FASCIA_ORGAN_FIXED;
     snprintf(name, sizeof name, "%s-%04d.vtp", m->organs[k].name, fixed ? 0 : out->organ_steps);
     if (!fixed || out->organ_steps == 0) {
-      fascia_status st = write_vtp(ctx, out->organs_dir, name, m->organs + k, R, t);
-      if (st != FASCIA_OK) return st;
+      fascia_status st = write_vtp(ctx, out->organs_dir, name, m->organs + k, now);
+      if (st != FASCIA_OK) return free(now), st;
     }
+    free(now);
     // the time as the results' XDMF writes it: one time per saved step in ParaView
     fprintf(fascia_file_stream(out->pvd), "    <DataSet timestep=\"%.17g\" group=\"\" part=\"%d\" name=\"%s\" file=\"%s\"/>\n",
             time, (int)k, m->organs[k].name, name);
@@ -209,15 +179,15 @@ static fascia_status write_snapshot(run_outputs *out, fascia_ctx *ctx, const fas
   f = fascia_file_stream(file);
   fprintf(f, "organ,x_m,y_m,z_m\n");
   for (int32_t k = 0; k < m->organ_count; ++k) {
-    fascia_real R[9], t[3];
-    if (!organ_pose(m, solver, k, R, t)) continue;
+    fascia_real *now = organ_now(m, solver, k);
+    if (!now) continue;
     const fascia_organ *o = m->organs + k;
     const int32_t stride = o->vertex_count > 3000 ? o->vertex_count / 3000 : 1;
     for (int32_t v = 0; v < o->vertex_count; v += stride) {
-      fascia_real p[3];
-      transform(R, t, o->vertices + 3 * v, p);
+      const fascia_real *p = now + 3 * (int64_t)v;
       fprintf(f, "%d,%.9g,%.9g,%.9g\n", (int)k, p[0], p[1], p[2]);
     }
+    free(now);
   }
   return fascia_file_commit(&file);
 }

@@ -32,6 +32,14 @@ FASCIA_API int32_t fascia_model_find_organ(const fascia_model *model, const char
 FASCIA_API fascia_status fascia_solver_organ_mass(const fascia_solver *solver, int32_t organ, fascia_real *mass,
                                                   fascia_real *centre, fascia_real *inertia);
 
+/// Where an organ's surface vertices are now ([3 vertex_count] m, world),
+/// for drawing it: fixed, prescribed and rigid organs by their pose; a
+/// deformable organ carried by its own frames (and its coupling frames) the
+/// way samples are, each vertex by the few frames nearest it at rest with
+/// positive kernel weights (exact for any rigid motion); an organ driven by
+/// the caller following its first coupling frame rigidly.
+FASCIA_API fascia_status fascia_solver_organ_surface(const fascia_solver *solver, int32_t organ,
+                                                     fascia_real *positions);
 /// Current pose of an organ as the rigid map from its rest surface to the
 /// world: p_world = R p_rest + translation, R the rotation of `rotation`.
 /// Fixed organs: identity. Prescribed: their motion at the solver's time.
