@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
 // The solver tests that run on every backend (registered with BACKENDS in
-// tests/CMakeLists.txt): `--backend NAME` picks it ("cpu" without one), and
+// tests/CMakeLists.txt): `--backend NAME` picks it, and
 // a backend that cannot run here makes the test skip (exit 77) with a line
 // that says why.
 #ifndef FASCIA_TESTS_BACKEND_ARG_H
@@ -13,11 +13,11 @@
 #include "check.h"
 #include "fascia/solver.h"
 
-/// The value of --backend, or "cpu".
-static inline const char *backend_arg(int argc, char **argv) {
+/// The value of --backend, or fallback.
+static inline const char *backend_arg(int argc, char **argv, const char *fallback) {
   for (int k = 1; k + 1 < argc; ++k)
     if (!strcmp(argv[k], "--backend")) return argv[k + 1];
-  return "cpu";
+  return fallback;
 }
 
 /// Exits with TEST_SKIP, saying why, when backend cannot run on this machine.

@@ -12,6 +12,7 @@
 
 #include "check.h"
 #include "backend.h"
+#include "backend_arg.h"
 #include "solver_internal.h"
 #include "random_model.h"
 
@@ -171,11 +172,8 @@ static inline int check_run(fascia_ctx *ctx, const char *name, const fascia_mode
   return 0;
 }
 
-/// Reads --backend NAME from the command line.
-static inline void compare_parse_args(int argc, char **argv) {
-  for (int k = 1; k + 1 < argc; ++k)
-    if (!strcmp(argv[k], "--backend")) backend = argv[k + 1];
-}
+/// Reads --backend NAME from the command line ("emulated" without one).
+static inline void compare_parse_args(int argc, char **argv) { backend = backend_arg(argc, argv, "emulated"); }
 
 #define RUN(expr)                                                                                                     \
   do {                                                                                                                \

@@ -49,7 +49,7 @@ static int fall(fascia_ctx *ctx, fascia_mass_kind mass, int shape) {
 }
 
 int main(int argc, char **argv) {
-  backend = backend_arg(argc, argv);
+  backend = backend_arg(argc, argv, "cpu");
   backend_skip_unless_available(backend);
   fascia_ctx_def cd = fascia_ctx_def_default();
   fascia_ctx *ctx = NULL;

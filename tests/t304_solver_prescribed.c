@@ -17,7 +17,7 @@
 #define LIFT 0.4  // m along z at t = 1 s
 
 int main(int argc, char **argv) {
-  const char *backend = backend_arg(argc, argv);
+  const char *backend = backend_arg(argc, argv, "cpu");
   backend_skip_unless_available(backend);
   fascia_ctx_def cd = fascia_ctx_def_default();
   fascia_ctx *ctx = NULL;

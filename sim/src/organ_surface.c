@@ -22,14 +22,14 @@ static void place_rigidly(const fascia_organ *o, const fascia_real *R, const fas
 }
 
 // The frames that carry a deformable organ: its own and its coupling frames.
+// frames: [N] work space, the list on return (ascending).
 static int32_t organ_frames(const fascia_model *m, int32_t organ, int32_t *frames) {
+  for (int32_t i = 0; i < m->frame_count; ++i) frames[i] = m->frame_organ[i] == organ;
+  for (int32_t c = 0; c < m->coupling_count; ++c)
+    if (m->coupling_organ[c] == organ) frames[m->coupling_frame[c]] = 1;
   int32_t n = 0;
-  for (int32_t i = 0; i < m->frame_count; ++i) {
-    int carries = m->frame_organ[i] == organ;
-    for (int32_t c = 0; !carries && c < m->coupling_count; ++c)
-      carries = m->coupling_organ[c] == organ && m->coupling_frame[c] == i;
-    if (carries) frames[n++] = i;
-  }
+  for (int32_t i = 0; i < m->frame_count; ++i)
+    if (frames[i]) frames[n++] = i;
   return n;
 }
 

@@ -138,17 +138,17 @@ static fascia_status write_vtp(fascia_ctx *ctx, const char *dir, const char *nam
 static fascia_status write_organs(run_outputs *out, fascia_ctx *ctx, const fascia_model *m,
                                   const fascia_solver *solver, fascia_real time) {
   for (int32_t k = 0; k < m->organ_count; ++k) {
-    fascia_real *now = organ_now(m, solver, k);
-    if (!now) continue;
     char name[FASCIA_NAME_SIZE + 32];
     // a fixed organ never moves: its first file serves every step
     const int fixed = m->organs[k].kind == FASCIA_ORGAN_FIXED;
     snprintf(name, sizeof name, "%s-%04d.vtp", m->organs[k].name, fixed ? 0 : out->organ_steps);
     if (!fixed || out->organ_steps == 0) {
-      fascia_status st = write_vtp(ctx, out->organs_dir, name, m->organs + k, now);
-      if (st != FASCIA_OK) return free(now), st;
+      fascia_real *now = organ_now(m, solver, k);
+      if (!now) continue;
+      const fascia_status st = write_vtp(ctx, out->organs_dir, name, m->organs + k, now);
+      free(now);
+      if (st != FASCIA_OK) return st;
     }
-    free(now);
     // the time as the results' XDMF writes it: one time per saved step in ParaView
     fprintf(fascia_file_stream(out->pvd), "    <DataSet timestep=\"%.17g\" group=\"\" part=\"%d\" name=\"%s\" file=\"%s\"/>\n",
             time, (int)k, m->organs[k].name, name);
