@@ -5,8 +5,8 @@
 // moved by the solver's update R <- exp([t]x) R, geometric part included),
 // and the symmetrized Hessian is symmetric and matches the second difference
 // of the energy along the update: for both laws, with and without the
-// rotation coupling and the rotation smoothness term, at random deformed and
-// rotated states.
+// rotation coupling and the rotation smoothness term, with and without
+// volumetric patches (mean dilatation), at random deformed and rotated states.
 #include <stdlib.h>
 #include <string.h>
 
@@ -37,10 +37,12 @@ static double max_abs(const double *a, int n) {
   return m;
 }
 
-static int run_case(fascia_ctx *ctx, unsigned long long seed, int law, double coupling, double curvature) {
+static int run_case(fascia_ctx *ctx, unsigned long long seed, int law, double coupling, double curvature,
+                    int patches) {
   fascia_model *m = random_model(ctx, seed, 7, 9, law, coupling, curvature);
   CHECK(m != NULL);
   if (!m) return 1;
+  if (patches) random_model_patches(m);
   fascia_system *sys = NULL;
   CHECK_OK(fascia_system_create(ctx, m, 1, &sys), ctx);
   const int N = m->frame_count, n = 6 * N;
@@ -134,12 +136,15 @@ int main(void) {
   if (fascia_ctx_create(&def, &ctx) != FASCIA_OK) return 1;
   int failed = 0;
   for (unsigned long long seed = 1; seed <= 3; ++seed) {
-    failed |= run_case(ctx, seed, FASCIA_LAW_STVK, 0.0, 0.0);
-    failed |= run_case(ctx, seed, FASCIA_LAW_NEOHOOKEAN, 0.0, 0.0);
-    failed |= run_case(ctx, seed, FASCIA_LAW_STVK, 0.7, 0.0);
-    failed |= run_case(ctx, seed, FASCIA_LAW_NEOHOOKEAN, 0.7, 0.0);
-    failed |= run_case(ctx, seed, FASCIA_LAW_STVK, 0.0, 0.3);
-    failed |= run_case(ctx, seed, FASCIA_LAW_NEOHOOKEAN, 0.4, 0.3);
+    failed |= run_case(ctx, seed, FASCIA_LAW_STVK, 0.0, 0.0, 0);
+    failed |= run_case(ctx, seed, FASCIA_LAW_NEOHOOKEAN, 0.0, 0.0, 0);
+    failed |= run_case(ctx, seed, FASCIA_LAW_STVK, 0.7, 0.0, 0);
+    failed |= run_case(ctx, seed, FASCIA_LAW_NEOHOOKEAN, 0.7, 0.0, 0);
+    failed |= run_case(ctx, seed, FASCIA_LAW_STVK, 0.0, 0.3, 0);
+    failed |= run_case(ctx, seed, FASCIA_LAW_NEOHOOKEAN, 0.4, 0.3, 0);
+    failed |= run_case(ctx, seed, FASCIA_LAW_STVK, 0.0, 0.0, 1);
+    failed |= run_case(ctx, seed, FASCIA_LAW_NEOHOOKEAN, 0.0, 0.0, 1);
+    failed |= run_case(ctx, seed, FASCIA_LAW_NEOHOOKEAN, 0.4, 0.3, 1);
   }
   fascia_ctx_destroy(&ctx);
   return failed | CHECK_RESULT();

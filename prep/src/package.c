@@ -71,6 +71,42 @@ static void sample_volume_json(cJSON *e, const fascia_prep_points *pts, int32_t 
   if (tet) cJSON_AddNumberToObject(e, "tetrahedra", samples_per_tet > 0 ? samples / samples_per_tet : 0);
 }
 
+// The volumetric patch rule (docs/mechanics.md, "Volumetric locking"):
+// patches from FASCIA_PATCH_MIN_POISSON on, of this radius per frame
+// spacing (measured on the prepared pelvis tissue and the cantilever).
+#define PATCH_RADIUS_PER_FRAME_SPACING 1.0
+
+fascia_real fascia_prep_patch_radius(fascia_real poisson_ratio, fascia_real frame_spacing) {
+  return poisson_ratio >= FASCIA_PATCH_MIN_POISSON ? PATCH_RADIUS_PER_FRAME_SPACING * frame_spacing : 0;
+}
+
+// A region's patch radius: its own, or the rule's for its material.
+static fascia_real region_patch_radius(const fascia_prep_scene *scene, int32_t material, fascia_real radius,
+                                       fascia_real frame_spacing) {
+  return radius == FASCIA_PREP_PATCH_AUTO ? fascia_prep_patch_radius(scene->materials[material].poisson_ratio, frame_spacing)
+                                          : radius;
+}
+
+// Patches per material: the largest radius among the regions made of it.
+static fascia_status make_patches(fascia_ctx *ctx, const fascia_prep_scene *scene, fascia_model *m) {
+  fascia_real *radius = calloc((size_t)m->material_count + 1, sizeof *radius);
+  PREP_CHECK(radius, ctx, FASCIA_ERR_MEMORY, "package: out of memory");
+  for (int32_t t = 0; t < scene->tissue_count; ++t) {
+    const fascia_prep_tissue_def *d = scene->tissues + t;
+    const fascia_real r = region_patch_radius(scene, d->material, d->patch_radius, d->frame_spacing);
+    if (r > radius[d->material]) radius[d->material] = r;
+  }
+  for (int32_t o = 0; o < scene->organ_count; ++o) {
+    const fascia_prep_organ_def *d = scene->organs + o;
+    if (d->kind != FASCIA_ORGAN_DEFORMABLE) continue;
+    const fascia_real r = region_patch_radius(scene, d->material, d->patch_radius, d->frame_spacing);
+    if (r > radius[d->material]) radius[d->material] = r;
+  }
+  const fascia_status status = fascia_model_make_patches(ctx, m, radius);
+  free(radius);
+  return status;
+}
+
 static cJSON *provenance(const fascia_prep_scene *scene, const fascia_prep_meshes *meshes,
                          const fascia_prep_volume *vol, const fascia_prep_points *pts, const fascia_prep_weights *W,
                          const fascia_prep_coupling *cpl, const fascia_prep_run_info *info) {
@@ -107,6 +143,7 @@ static cJSON *provenance(const fascia_prep_scene *scene, const fascia_prep_meshe
       cJSON_AddNumberToObject(e, "neighbours", d->neighbours);
       if (d->shape_kind == FASCIA_PREP_SHAPE_TET) cJSON_AddNumberToObject(e, "samples_per_tet", d->samples_per_tet);
       cJSON_AddNumberToObject(e, "min_component", d->min_component);
+      cJSON_AddNumberToObject(e, "patch_radius", region_patch_radius(scene, d->material, d->patch_radius, d->frame_spacing));
     }
     cJSON_AddItemToArray(inputs, e);
   }
@@ -152,6 +189,7 @@ static cJSON *provenance(const fascia_prep_scene *scene, const fascia_prep_meshe
     if (td->shape_kind == FASCIA_PREP_SHAPE_TET) cJSON_AddNumberToObject(e, "samples_per_tet", td->samples_per_tet);
     cJSON_AddNumberToObject(e, "coupling_tolerance", td->coupling_tolerance);
     cJSON_AddNumberToObject(e, "min_component", td->min_component);
+    cJSON_AddNumberToObject(e, "patch_radius", region_patch_radius(scene, td->material, td->patch_radius, td->frame_spacing));
     cJSON *rules = cJSON_AddArrayToObject(e, "coupling_rules");
     for (int32_t k = 0; k < td->coupling_count; ++k) {
       const fascia_prep_coupling_def *c = td->coupling + k;
@@ -309,6 +347,7 @@ static fascia_status compact(fascia_ctx *ctx, fascia_model **mp, const int32_t *
     n->sample_volume[t] = m->sample_volume[s];
     n->sample_material[t] = m->sample_material[s];
     n->sample_organ[t] = m->sample_organ[s];
+    n->sample_patch[t] = m->sample_patch[s];
     for (int32_t p = m->sample_offsets[s]; p < m->sample_offsets[s + 1]; ++p, ++q) {
       n->pair_frame[q] = map[m->pair_frame[p]]; // the order of frames is kept: still ascending
       n->pair_weight[q] = m->pair_weight[p];
@@ -471,6 +510,7 @@ fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_scene *scen
   dropped = cJSON_CreateArray();
   PREP_CHECK_GOTO(dropped, ctx, FASCIA_ERR_MEMORY, "package: out of memory");
   PREP_TRY_GOTO(drop_unheld(ctx, scene, points, &m, dropped));
+  PREP_TRY_GOTO(make_patches(ctx, scene, m));
   // provenance (its counts are those before the unheld pieces were dropped)
   prov = provenance(scene, meshes, volume, points, weights, coupling, info);
   cJSON *reports = prov ? cJSON_GetObjectItem(prov, "reports") : NULL;

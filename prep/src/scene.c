@@ -398,7 +398,7 @@ static fascia_status parse_motion(const reader *rd, const cJSON *organ, const ch
 static fascia_status parse_sampling(const reader *rd, const fascia_prep_scene *scene, const cJSON *item,
                                     const char *path, double *frame_spacing, double *sample_spacing,
                                     int32_t *shape_kind, int32_t *neighbours, int32_t *samples_per_tet,
-                                    double *min_component) {
+                                    double *min_component, double *patch_radius) {
   char at[PATH_SIZE];
   PREP_TRY(get_number(rd, item, path, "frame_spacing", 1, 0, 0, 0, INFINITY, frame_spacing));
   PREP_TRY(get_number(rd, item, path, "sample_spacing", 1, 0, 0, 0, INFINITY, sample_spacing));
@@ -444,6 +444,12 @@ static fascia_status parse_sampling(const reader *rd, const fascia_prep_scene *s
   }
   const double fs = *frame_spacing;
   PREP_TRY(get_number(rd, item, path, "min_component", 0, fs * fs * fs, 0, 1, INFINITY, min_component));
+  PREP_TRY(get_number(rd, item, path, "patch_radius", 0, FASCIA_PREP_PATCH_AUTO, 0, 1, INFINITY, patch_radius));
+  if (*patch_radius > 0 && *patch_radius < *sample_spacing) {
+    sub_key(at, path, "patch_radius");
+    return key_fail(rd, at, "%g m is finer than sample_spacing %g m: a patch of one sample locks like no patch; "
+                    "use 0 (no patches) or a radius of about the frame spacing", *patch_radius, *sample_spacing);
+  }
   return FASCIA_OK;
 }
 
@@ -601,7 +607,7 @@ static fascia_status parse_organ(const reader *rd, fascia_prep_scene *scene, con
   static const char *const known[] = {"name",          "mesh",           "labels",          "parts",
                                       "units",         "transform",      "model",           "motion",
                                       "material",      "frame_spacing",  "sample_spacing",  "shape_functions",
-                                      "min_component", "description",    NULL};
+                                      "min_component", "patch_radius",   "description",    NULL};
   PREP_TRY(check_keys(rd, item, path, known));
   PREP_TRY(get_name(rd, item, path, "name", o->name));
   const char *mesh, *units, *model, *description;
@@ -689,11 +695,11 @@ static fascia_status parse_organ(const reader *rd, fascia_prep_scene *scene, con
     o->material = material_index(scene, material);
     if (o->material < 0) return key_fail(rd, at, "no material is named '%s' in \"materials\"", material);
     return parse_sampling(rd, scene, item, path, &o->frame_spacing, &o->sample_spacing, &o->shape_kind,
-                          &o->neighbours, &o->samples_per_tet, &o->min_component);
+                          &o->neighbours, &o->samples_per_tet, &o->min_component, &o->patch_radius);
   }
   if (material) return key_fail(rd, at, "only a \"deformable\" organ takes a material");
   static const char *const sampling_keys[] = {"frame_spacing", "sample_spacing", "shape_functions", "min_component",
-                                              NULL};
+                                              "patch_radius",  NULL};
   for (int k = 0; sampling_keys[k]; ++k)
     if (cJSON_GetObjectItemCaseSensitive(item, sampling_keys[k])) {
       sub_key(at, path, sampling_keys[k]);
@@ -750,7 +756,7 @@ static fascia_status parse_tissue(const reader *rd, const fascia_prep_scene *sce
                                   const char *path, fascia_prep_tissue_def *t) {
   static const char *const known[] = {"name",           "connects", "max_gap",         "region",
                                       "material",       "frame_spacing", "sample_spacing", "shape_functions",
-                                      "coupling",       "min_component", "description",   NULL};
+                                      "coupling",       "min_component", "patch_radius",  "description", NULL};
   PREP_TRY(check_keys(rd, item, path, known));
   PREP_TRY(get_name(rd, item, path, "name", t->name));
   const char *description;
@@ -809,7 +815,7 @@ static fascia_status parse_tissue(const reader *rd, const fascia_prep_scene *sce
   sub_key(at, path, "material");
   if (t->material < 0) return key_fail(rd, at, "no material is named '%s' in \"materials\"", material);
   PREP_TRY(parse_sampling(rd, scene, item, path, &t->frame_spacing, &t->sample_spacing, &t->shape_kind,
-                          &t->neighbours, &t->samples_per_tet, &t->min_component));
+                          &t->neighbours, &t->samples_per_tet, &t->min_component, &t->patch_radius));
   t->coupling_tolerance = scene->voxel_size;
   const cJSON *coupling = cJSON_GetObjectItemCaseSensitive(item, "coupling");
   if (coupling) {

@@ -25,6 +25,51 @@ enum { FASCIA_PT_LAW_STVK = 0, FASCIA_PT_LAW_NEOHOOKEAN = 1 };
 /// (Neo-Hookean).
 #define FASCIA_PT_AUX_SIZE 10
 
+/// The volumetric measure theta of a law, the one its lambda term is built
+/// on: psi_lambda = lambda/2 theta^2 with theta = tr E (StVK) or J - 1 (the
+/// stable Neo-Hookean; its mu part keeps the rest, docs/mechanics.md). Mean
+/// dilatation replaces theta per sample by its average over a patch of
+/// samples (sim/src/dilatation.c). Writes dtheta/dF into dtheta[9].
+static inline FASCIA_HD fascia_real fascia_pt_dilatation(int law, const fascia_real *F, fascia_real *dtheta) {
+  if (law == FASCIA_PT_LAW_NEOHOOKEAN) {
+    fascia_pt_cofactor(F, dtheta);
+    // J - 1 written in H = F - I, free of cancellation near rest
+    fascia_real H[9];
+    for (int k = 0; k < 9; ++k) H[k] = F[k] - (k % 4 == 0);
+    const fascia_real trH = H[0] + H[4] + H[8];
+    const fascia_real trHH = H[0] * H[0] + H[4] * H[4] + H[8] * H[8] + 2 * (H[1] * H[3] + H[2] * H[6] + H[5] * H[7]);
+    return trH + FASCIA_R(0.5) * (trH * trH - trHH) + fascia_pt_det(H);
+  }
+  for (int k = 0; k < 9; ++k) dtheta[k] = F[k];
+  // tr E = (|F|^2 - 3)/2 = tr H + |H|^2/2
+  fascia_real trH = 0, HH = 0;
+  for (int k = 0; k < 9; ++k) {
+    const fascia_real h = F[k] - (k % 4 == 0);
+    HH += h * h;
+    if (k % 4 == 0) trH += h;
+  }
+  return trH + FASCIA_R(0.5) * HH;
+}
+
+/// out += scale (d^2 theta/dF^2)[dF], the derivative of dtheta/dF along dF.
+static inline FASCIA_HD void fascia_pt_dilatation_diff_add(int law, fascia_real scale, const fascia_real *F,
+                                                           const fascia_real *dF, fascia_real *out) {
+  if (law == FASCIA_PT_LAW_NEOHOOKEAN) {
+    // column c of cof(F) is f_{c+1} x f_{c+2}; differentiate each product
+    for (int c = 0; c < 3; ++c) {
+      const int c1 = (c + 1) % 3, c2 = (c + 2) % 3;
+      const fascia_real f1[3] = {F[c1], F[3 + c1], F[6 + c1]}, f2[3] = {F[c2], F[3 + c2], F[6 + c2]};
+      const fascia_real d1[3] = {dF[c1], dF[3 + c1], dF[6 + c1]}, d2[3] = {dF[c2], dF[3 + c2], dF[6 + c2]};
+      fascia_real dc[3];
+      fascia_pt_cross(d1, f2, dc);
+      fascia_pt_cross_add(f1, d2, dc);
+      for (int r = 0; r < 3; ++r) out[3 * r + c] += scale * dc[r];
+    }
+    return;
+  }
+  for (int k = 0; k < 9; ++k) out[k] += scale * dF[k];
+}
+
 /// Energy density (J/m^3); writes P[9] and aux[FASCIA_PT_AUX_SIZE].
 static inline FASCIA_HD fascia_real fascia_pt_stress(int law, fascia_real lambda, fascia_real mu,
                                                      const fascia_real *F, fascia_real *P, fascia_real *aux) {
@@ -69,17 +114,9 @@ static inline FASCIA_HD void fascia_pt_stress_diff(int law, fascia_real lambda, 
   if (law == FASCIA_PT_LAW_NEOHOOKEAN) {
     // l = 0 only for the volumetric part of a nu = 0 material: no energy at all
     fascia_real l = lambda + mu, a = l > 0 ? 1 + mu / l : 1;
-    fascia_real dJ = fascia_pt_ddot(aux, dF), s = l * (aux[9] - a);
-    // d cof: column c of cof is f_{c+1} x f_{c+2}; differentiate each product
-    for (int c = 0; c < 3; ++c) {
-      int c1 = (c + 1) % 3, c2 = (c + 2) % 3;
-      fascia_real f1[3] = {F[c1], F[3 + c1], F[6 + c1]}, f2[3] = {F[c2], F[3 + c2], F[6 + c2]};
-      fascia_real d1[3] = {dF[c1], dF[3 + c1], dF[6 + c1]}, d2[3] = {dF[c2], dF[3 + c2], dF[6 + c2]};
-      fascia_real dc[3];
-      fascia_pt_cross(d1, f2, dc);
-      fascia_pt_cross_add(f1, d2, dc);
-      for (int r = 0; r < 3; ++r) dP[3 * r + c] = mu * dF[3 * r + c] + l * dJ * aux[3 * r + c] + s * dc[r];
-    }
+    const fascia_real dJ = fascia_pt_ddot(aux, dF);
+    for (int k = 0; k < 9; ++k) dP[k] = mu * dF[k] + l * dJ * aux[k];
+    fascia_pt_dilatation_diff_add(law, l * (aux[9] - a), F, dF, dP); // + l (J - a) d cof(F)
     return;
   }
   fascia_real FtdF[9], dS[9];

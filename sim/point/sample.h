@@ -52,6 +52,11 @@ typedef struct fascia_pt_model {
   const fascia_real *sample_coupling; ///< [S] mu_c, Pa
   const fascia_real *sample_curvature; ///< [S] k_c = mu l^2, Pa m^2 (rotation smoothness)
   const int32_t *sample_law;        ///< [S] FASCIA_PT_LAW_*
+  /// [S] the pressure a sample's volumetric patch puts on it (Pa: lambda
+  /// times the patch's mean dilatation, sim/src/dilatation.h), or NULL
+  /// without patches: the stress gains pressure * dtheta/dF, the energy
+  /// nothing (the patch holds it).
+  const fascia_real *sample_pressure;
 } fascia_pt_model;
 
 /// Current frame state: positions [3N] and A_i = R_i R_rest_i^T [9N].
@@ -133,6 +138,12 @@ static inline FASCIA_HD fascia_real fascia_pt_sample_gradient(const fascia_pt_mo
   const fascia_real v = m->sample_volume[s], muc = m->sample_coupling[s];
   fascia_real psi = fascia_pt_stress(m->sample_law[s], m->sample_lambda[s], m->sample_mu[s], F, P, aux);
   const int32_t begin = m->sample_offsets[s], end = m->sample_offsets[s + 1];
+  const fascia_real pressure = m->sample_pressure ? m->sample_pressure[s] : 0;
+  if (pressure != 0) {
+    fascia_real dtheta[9];
+    fascia_pt_dilatation(m->sample_law[s], F, dtheta);
+    for (int q = 0; q < 9; ++q) P[q] += pressure * dtheta[q];
+  }
   if (muc > 0) {
     for (int32_t k = begin; k < end; ++k) {
       const fascia_real *A = st->frame_A + 9 * m->pair_frame[k], w = m->pair_weight[k];
@@ -242,7 +253,11 @@ fascia_pt_stiffness_core(const fascia_pt_model *m, const fascia_pt_state *st, in
   }
   fascia_real dP[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
   const int base = parts & FASCIA_PT_PART_BASE, coupling = parts & FASCIA_PT_PART_COUPLING;
-  if (base) fascia_pt_stress_diff(m->sample_law[s], m->sample_lambda[s], m->sample_mu[s], F, aux, dF, dP);
+  if (base) {
+    fascia_pt_stress_diff(m->sample_law[s], m->sample_lambda[s], m->sample_mu[s], F, aux, dF, dP);
+    if (m->sample_pressure && m->sample_pressure[s] != 0)
+      fascia_pt_dilatation_diff_add(m->sample_law[s], m->sample_pressure[s], F, dF, dP);
+  }
   if (coupling && muc > 0) {
     // dPt += sum_j 2 mu_c w_j (dA_j K_j + A_j dK_j), dA_j = [dtheta_j]x A_j,
     // dK_j = skew(A_j^T dF - A_j^T [dtheta_j]x F)
@@ -381,6 +396,8 @@ static inline FASCIA_HD void fascia_pt_sample_local_stiffness(const fascia_pt_mo
     fascia_real e[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, dP[9];
     e[col] = 1;
     fascia_pt_stress_diff(m->sample_law[s], m->sample_lambda[s], m->sample_mu[s], F, aux, e, dP);
+    if (m->sample_pressure && m->sample_pressure[s] != 0)
+      fascia_pt_dilatation_diff_add(m->sample_law[s], m->sample_pressure[s], F, e, dP);
     for (int r = 0; r < 9; ++r) D[9 * r + col] = dP[r];
   }
   for (int a = 0; a < n; ++a) {

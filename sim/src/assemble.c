@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "assemble.h"
+#include "dilatation.h"
 
 static int compare_int32(const void *a, const void *b) {
   const int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
@@ -55,18 +56,28 @@ static fascia_status plan(fascia_ctx *ctx, const fascia_model *m, fascia_bsr *B)
 fascia_status fascia_bsr_create(fascia_ctx *ctx, const fascia_model *m, fascia_bsr *out) {
   memset(out, 0, sizeof *out);
   const int32_t N = m->frame_count;
+  // a volumetric patch couples every two frames of its support
+  fascia_patch_table patches;
+  FASCIA_TRY(fascia_patch_table_build(ctx, m, &patches));
   // count with duplicates, then sort and unique each row
   int64_t total = 0;
-  for (int32_t i = 0; i < N; ++i)
+  for (int32_t i = 0; i < N; ++i) {
     for (int32_t r = m->frame_offsets[i]; r < m->frame_offsets[i + 1]; ++r) {
       const int32_t s = fascia_model_pair_owner(m, m->frame_pairs[r]);
       total += m->sample_offsets[s + 1] - m->sample_offsets[s];
     }
+    for (int32_t r = patches.patch_count ? patches.frame_entry_offsets[i] : 0;
+         patches.patch_count && r < patches.frame_entry_offsets[i + 1]; ++r) {
+      const int32_t p = patches.entry_patch[patches.frame_entries[r]];
+      total += patches.support_offsets[p + 1] - patches.support_offsets[p];
+    }
+  }
   int32_t *scratch = fascia_calloc(total + N, sizeof(int32_t));
   out->row_offsets = fascia_calloc((int64_t)N + 1, sizeof(int32_t));
   out->diagonal = fascia_calloc(N, sizeof(int32_t));
   if (!scratch || !out->row_offsets || !out->diagonal) {
     free(scratch);
+    fascia_patch_table_free(&patches);
     fascia_bsr_destroy(out);
     return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "assembly: out of memory for the block pattern (%lld entries)",
                        (long long)total);
@@ -79,6 +90,12 @@ fascia_status fascia_bsr_create(fascia_ctx *ctx, const fascia_model *m, fascia_b
       const int32_t s = fascia_model_pair_owner(m, m->frame_pairs[r]);
       for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k) row[len++] = m->pair_frame[k];
     }
+    for (int32_t r = patches.patch_count ? patches.frame_entry_offsets[i] : 0;
+         patches.patch_count && r < patches.frame_entry_offsets[i + 1]; ++r) {
+      const int32_t p = patches.entry_patch[patches.frame_entries[r]];
+      for (int32_t e = patches.support_offsets[p]; e < patches.support_offsets[p + 1]; ++e)
+        row[len++] = patches.entry_frame[e];
+    }
     qsort(row, (size_t)len, sizeof(int32_t), compare_int32);
     int32_t unique = 0;
     for (int32_t k = 0; k < len; ++k)
@@ -86,6 +103,7 @@ fascia_status fascia_bsr_create(fascia_ctx *ctx, const fascia_model *m, fascia_b
     count += unique;
     out->row_offsets[i + 1] = (int32_t)count;
   }
+  fascia_patch_table_free(&patches);
   out->rows = N;
   out->blocks = count;
   out->cols = fascia_calloc(count, sizeof(int32_t));
@@ -222,6 +240,24 @@ static void local_stiffness(const fascia_system *sys, const fascia_pt_state *st,
     }
 }
 
+// The volumetric patches' rank-one terms lambda_p / V_p G_p G_p^T, row by row.
+static void dilatation_rows(const fascia_system *sys, fascia_bsr *B) {
+  const fascia_dilatation *d = sys->dilatation;
+  const fascia_patch_table *t = &d->table;
+#pragma omp parallel for num_threads(sys->threads) schedule(static)
+  for (int32_t i = 0; i < sys->frame_count; ++i)
+    for (int32_t r = t->frame_entry_offsets[i]; r < t->frame_entry_offsets[i + 1]; ++r) {
+      const int32_t e = t->frame_entries[r], p = t->entry_patch[e];
+      const fascia_real c = d->patch_lambda[p] / d->patch_volume[p], *Gi = d->entry_gradient + 6 * (int64_t)e;
+      for (int32_t f = t->support_offsets[p]; f < t->support_offsets[p + 1]; ++f) {
+        const fascia_real *Gj = d->entry_gradient + 6 * (int64_t)f;
+        fascia_real *blk = B->values + 36 * (int64_t)find_block(B, i, t->entry_frame[f]);
+        for (int a = 0; a < 6; ++a)
+          for (int b = 0; b < 6; ++b) blk[6 * a + b] += c * Gi[a] * Gj[b];
+      }
+    }
+}
+
 void fascia_system_hessian_assemble(fascia_system *sys, fascia_bsr *B) {
   const fascia_pt_state st = {sys->x, sys->A};
   memset(B->values, 0, 36 * (size_t)B->blocks * sizeof(fascia_real));
@@ -253,6 +289,7 @@ void fascia_system_hessian_assemble(fascia_system *sys, fascia_bsr *B) {
     }
     s0 = s1;
   }
+  if (sys->dilatation) dilatation_rows(sys, B);
   // frame-local terms: gravity (theta-theta) and the symmetrizing 1/2 [g_theta]x
   const fascia_real gs = sys->gravity_scale, *g = sys->gravity;
   for (int32_t i = 0; i < sys->frame_count; ++i) {

@@ -96,6 +96,11 @@ static uint64_t fingerprint(const fascia_model *m) {
   h = fnv(h, m->sample_volume, S * R);
   h = fnv(h, m->sample_material, S * I);
   h = fnv(h, m->sample_organ, S * I);
+  for (size_t s = 0; s < S; ++s) // models without patches keep the hash they had before patches existed
+    if (m->sample_patch[s] >= 0) {
+      h = fnv(h, m->sample_patch, S * I);
+      break;
+    }
   h = fnv(h, m->sample_offsets, (S + 1) * I);
   h = fnv(h, m->pair_frame, P * I);
   h = fnv(h, m->pair_weight, P * R);

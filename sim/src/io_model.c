@@ -2,10 +2,12 @@
 // SPDX-FileCopyrightText: fascia developers
 // The model file: fascia_model_save and fascia_model_load over HDF5. The full
 // specification, with units and meanings, is docs/model-format.md; this
-// summary must stay in step with it. Bump MODEL_VERSION (and the reader's
+// summary must stay in step with it. Bump the version (and the reader's
 // range) whenever a reader of the previous version would misread a new file.
 //
-// Schema, version 1. N frames, S samples, P sample-frame pairs, M materials,
+// Schema, version 2 (version 1: the same without /samples/patch; a model
+// without patches is still written as version 1, which older readers read
+// the same way). N frames, S samples, P sample-frame pairs, M materials,
 // Q probes, R probe-frame pairs, C coupling entries, K keys of a motion,
 // V vertices and T triangles of an organ. Reals are IEEE f64 little endian,
 // indices int32 (-1 = none), names fixed strings of 64 bytes (NUL-terminated,
@@ -26,6 +28,7 @@
 //   /samples/position     [S,3]  f64  m     rest position, world
 //   /samples/volume       [S]    f64  m^3   > 0
 //   /samples/material     [S]    i32        material index
+//   /samples/patch        [S]    i32        volumetric patch, -1 none (version 2)
 //   /samples/offsets      [S+1]  i32        CSR into /pairs
 //   /pairs/frame          [P]    i32        frame index, ascending per sample
 //   /pairs/weight         [P]    f64  1     w_is, sum per sample = 1
@@ -63,10 +66,12 @@
 #include "fascia/model.h"
 #include "h5io.h"
 
-#define MODEL_VERSION 1
+// A model with volumetric patches is version 2: a version 1 reader would
+// drop the patches and compute a locking answer without a word.
+#define MODEL_VERSION_PATCHES 2
 // Versions this reader understands.
 #define MODEL_VERSION_MIN 1
-#define MODEL_VERSION_MAX 1
+#define MODEL_VERSION_MAX 2
 #define MODEL_UNITS "SI: m, kg, s, Pa"
 #define REMEDY "re-run 'fascia prep' or 'fascia beam' with this version"
 #define PATH_SIZE 256
@@ -167,6 +172,12 @@ static fascia_status write_frames(writer *w, const fascia_model *m) {
   return FASCIA_OK;
 }
 
+static int model_has_patches(const fascia_model *m) {
+  for (int32_t s = 0; s < m->sample_count; ++s)
+    if (m->sample_patch[s] >= 0) return 1;
+  return 0;
+}
+
 static fascia_status write_samples_pairs(writer *w, const fascia_model *m) {
   const int64_t S = m->sample_count, P = m->pair_count;
   FASCIA_TRY(write_group(w, "/samples", -1, -1, -1));
@@ -174,6 +185,7 @@ static fascia_status write_samples_pairs(writer *w, const fascia_model *m) {
   WRITE1(w, "/samples/volume", ELEM_REAL, S, m->sample_volume, "m^3");
   WRITE1(w, "/samples/material", ELEM_INT, S, m->sample_material, NULL);
   WRITE1(w, "/samples/organ", ELEM_INT, S, m->sample_organ, NULL);
+  if (model_has_patches(m)) WRITE1(w, "/samples/patch", ELEM_INT, S, m->sample_patch, NULL);
   WRITE1(w, "/samples/offsets", ELEM_INT, S + 1, m->sample_offsets, NULL);
   FASCIA_TRY(write_group(w, "/pairs", -1, -1, -1));
   WRITE1(w, "/pairs/frame", ELEM_INT, P, m->pair_frame, NULL);
@@ -277,7 +289,8 @@ static fascia_status write_model(writer *w, const fascia_model *m) {
   char creator[64];
   snprintf(creator, sizeof creator, "fascia %s", fascia_version());
   hid_t root = H5Gopen2(w->file, "/", H5P_DEFAULT);
-  const int ok = root >= 0 && fascia_h5_attr_int(root, "fascia_model_version", MODEL_VERSION) >= 0 &&
+  const int version = model_has_patches(m) ? MODEL_VERSION_PATCHES : 1;
+  const int ok = root >= 0 && fascia_h5_attr_int(root, "fascia_model_version", version) >= 0 &&
                  fascia_h5_attr_string(root, "units", MODEL_UNITS) >= 0 &&
                  fascia_h5_attr_string(root, "creator", creator) >= 0 &&
                  (!m->allow_floating || fascia_h5_attr_int(root, "allow_floating", 1) >= 0);
@@ -352,6 +365,7 @@ typedef struct reader {
   fascia_ctx *ctx;
   const char *path;
   hid_t file;
+  int32_t version; ///< the file's fascia_model_version
 } reader;
 
 static const char *class_phrase(H5T_class_t cls) {
@@ -630,6 +644,7 @@ static fascia_status read_version(reader *r) {
                "model '%s' /: not a fascia model file (no root attribute 'fascia_model_version'); %s", r->path, REMEDY);
   int32_t version = 0;
   FASCIA_TRY(read_int_attr(r, "/", "fascia_model_version", &version));
+  r->version = version;
   FASCIA_CHECK(version >= MODEL_VERSION_MIN && version <= MODEL_VERSION_MAX, r->ctx, FASCIA_ERR_FORMAT,
                "model '%s' /: format version %d is not supported, this fascia (%s) reads versions %d to %d; %s",
                r->path, (int)version, fascia_version(), MODEL_VERSION_MIN, MODEL_VERSION_MAX,
@@ -783,6 +798,7 @@ static fascia_status read_frames_samples(reader *r, fascia_model *m) {
   // organ owners came with deformable organs: files without them are all tissue
   if (fascia_h5_link_exists(r->file, "/frames/organ")) READ(r, "/frames/organ", ELEM_INT, N, 0, m->frame_organ);
   if (fascia_h5_link_exists(r->file, "/samples/organ")) READ(r, "/samples/organ", ELEM_INT, S, 0, m->sample_organ);
+  if (r->version >= MODEL_VERSION_PATCHES) READ(r, "/samples/patch", ELEM_INT, S, 0, m->sample_patch);
   READ(r, "/samples/offsets", ELEM_INT, S + 1, 0, m->sample_offsets);
   READ(r, "/pairs/frame", ELEM_INT, P, 0, m->pair_frame);
   READ(r, "/pairs/weight", ELEM_REAL, P, 0, m->pair_weight);
@@ -927,7 +943,7 @@ fascia_status fascia_model_load(fascia_ctx *ctx, const char *path, fascia_model 
   *out = NULL;
   fascia_h5_quiet quiet;
   fascia_h5_quiet_begin(&quiet);
-  reader r = {ctx, path, H5I_INVALID_HID};
+  reader r = {ctx, path, H5I_INVALID_HID, 0};
   fascia_model *m = NULL;
   fascia_model_sizes sizes;
   fascia_status status = FASCIA_OK;

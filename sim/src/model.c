@@ -45,6 +45,7 @@ fascia_status fascia_model_alloc(fascia_ctx *ctx, const fascia_model_sizes *z, f
   m->frame_load = fascia_calloc(6 * N, sizeof(fascia_real));
   m->frame_organ = fascia_calloc(N, sizeof(int32_t));
   m->sample_organ = fascia_calloc(S, sizeof(int32_t));
+  m->sample_patch = fascia_calloc(S, sizeof(int32_t));
   m->sample_position = fascia_calloc(3 * S, sizeof(fascia_real));
   m->sample_volume = fascia_calloc(S, sizeof(fascia_real));
   m->sample_material = fascia_calloc(S, sizeof(int32_t));
@@ -66,7 +67,7 @@ fascia_status fascia_model_alloc(fascia_ctx *ctx, const fascia_model_sizes *z, f
   m->coupling_frame = fascia_calloc(C, sizeof(int32_t));
   m->coupling_triangle = fascia_calloc(C, sizeof(int32_t));
   m->coupling_barycentric = fascia_calloc(3 * C, sizeof(fascia_real));
-  if (!m->frame_organ || !m->sample_organ || !m->frame_position || !m->frame_rotation || !m->frame_kind || !m->frame_motion || !m->frame_load ||
+  if (!m->frame_organ || !m->sample_organ || !m->sample_patch || !m->frame_position || !m->frame_rotation || !m->frame_kind || !m->frame_motion || !m->frame_load ||
       !m->sample_position || !m->sample_volume || !m->sample_material || !m->sample_offsets || !m->pair_frame ||
       !m->pair_weight || !m->pair_gradient || !m->frame_offsets || !m->frame_pairs || !m->materials || !m->motions ||
       !m->probe_name || !m->probe_position || !m->probe_offsets || !m->probe_frame || !m->probe_weight ||
@@ -80,7 +81,7 @@ fascia_status fascia_model_alloc(fascia_ctx *ctx, const fascia_model_sizes *z, f
     m->frame_motion[i] = -1;
     m->frame_organ[i] = -1;
   }
-  for (int64_t s = 0; s < S; ++s) m->sample_organ[s] = -1;
+  for (int64_t s = 0; s < S; ++s) m->sample_organ[s] = m->sample_patch[s] = -1;
   for (int32_t k = 0; k < z->organs; ++k) m->organs[k].motion = -1;
   *out = m;
   return FASCIA_OK;
@@ -96,6 +97,7 @@ void fascia_model_destroy(fascia_model **model) {
   free(m->frame_load);
   free(m->frame_organ);
   free(m->sample_organ);
+  free(m->sample_patch);
   free(m->sample_position);
   free(m->sample_volume);
   free(m->sample_material);
@@ -477,6 +479,41 @@ static fascia_status validate_held(fascia_ctx *ctx, const fascia_model *m, const
                      (int)q.first_frame, q.position[0], q.position[1], q.position[2]);
 }
 
+// Volumetric patches: indices in range, and one material per patch whose
+// energy is whole (a deviatoric or volumetric part is the other cure).
+static fascia_status validate_patches(fascia_ctx *ctx, const fascia_model *m, const char *origin) {
+  const int32_t S = m->sample_count;
+  int32_t *first = NULL; // first sample of each patch, -1 until seen
+  for (int32_t s = 0; s < S; ++s) {
+    const int32_t p = m->sample_patch[s];
+    if (p == -1) continue;
+    FASCIA_CHECK(p >= 0 && p < S, ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' /samples/patch: sample %d names patch %d, expected -1 (none) or 0 .. %d", origin, (int)s,
+                 (int)p, (int)S - 1);
+    const fascia_material *mat = m->materials + m->sample_material[s];
+    FASCIA_CHECK(mat->part == FASCIA_PART_FULL, ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' /samples/patch: sample %d is in patch %d but its material '%s' integrates only part of "
+                 "its energy (part %d); patches need whole materials (part 0)",
+                 origin, (int)s, (int)p, mat->name, (int)mat->part);
+    if (!first) {
+      first = malloc((size_t)S * sizeof *first);
+      FASCIA_CHECK(first, ctx, FASCIA_ERR_MEMORY, "model '%s': out of memory checking patches", origin);
+      for (int32_t k = 0; k < S; ++k) first[k] = -1;
+    }
+    if (first[p] < 0) first[p] = s;
+    else if (m->sample_material[first[p]] != m->sample_material[s]) {
+      const int32_t a = first[p];
+      free(first);
+      return FASCIA_FAIL(ctx, FASCIA_ERR_FORMAT,
+                         "model '%s' /samples/patch: patch %d holds samples %d and %d of different materials (%d, %d); "
+                         "a patch averages one material's dilatation",
+                         origin, (int)p, (int)a, (int)s, (int)m->sample_material[a], (int)m->sample_material[s]);
+    }
+  }
+  free(first);
+  return FASCIA_OK;
+}
+
 fascia_status fascia_model_validate(fascia_ctx *ctx, const fascia_model *m, const char *origin) {
   FASCIA_CHECK(m, ctx, FASCIA_ERR_ARGUMENT, "fascia_model_validate: NULL model");
   if (!origin) origin = "(memory)";
@@ -488,6 +525,7 @@ fascia_status fascia_model_validate(fascia_ctx *ctx, const fascia_model *m, cons
   FASCIA_TRY(validate_motions(ctx, m, origin));
   FASCIA_TRY(validate_frames(ctx, m, origin));
   FASCIA_TRY(validate_samples(ctx, m, origin));
+  FASCIA_TRY(validate_patches(ctx, m, origin));
   FASCIA_TRY(validate_reverse(ctx, m, origin));
   FASCIA_TRY(validate_probes(ctx, m, origin));
   FASCIA_TRY(validate_organs(ctx, m, origin));

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "system.h"
+#include "dilatation.h"
 #include "point/frame.h"
 
 #define DOT_BLOCK 2048 // entries per partial sum of fascia_dot (fixed: determinism)
@@ -126,6 +127,11 @@ fascia_status fascia_system_create(fascia_ctx *ctx, const fascia_model *m, int t
   pm->sample_coupling = sys->sample_coupling;
   pm->sample_curvature = sys->sample_curvature;
   pm->sample_law = sys->sample_law;
+  const fascia_status status = fascia_dilatation_create(sys, &sys->dilatation);
+  if (status != FASCIA_OK) {
+    fascia_system_destroy(&sys);
+    return status;
+  }
   fascia_system_set_rest(sys);
   fascia_system_mass_snapshot(sys);
   *out = sys;
@@ -145,6 +151,7 @@ int32_t fascia_model_pair_owner(const fascia_model *m, int32_t k) {
 void fascia_system_destroy(fascia_system **sys) {
   if (!sys || !*sys) return;
   fascia_system *s = *sys;
+  fascia_dilatation_destroy(&s->dilatation);
   free(s->pair_offset);
   free(s->sample_lambda);
   free(s->sample_mu);
@@ -218,7 +225,8 @@ fascia_status fascia_system_evaluate(fascia_system *sys, fascia_real *gradient, 
   const fascia_pt_state st = {sys->x, sys->A};
   const int32_t S = sys->sample_count;
   // sample energies are summed in fixed blocks of samples (determinism)
-  fascia_real internal = 0;
+  // the patches' pressures first: the samples' stresses read them
+  fascia_real internal = sys->dilatation ? fascia_dilatation_evaluate(sys, sys->dilatation) : 0;
   int32_t inverted = 0, first_inverted = -1, first_nonfinite = -1;
   const int64_t blocks = ((int64_t)S + DOT_BLOCK - 1) / DOT_BLOCK;
   fascia_real partial_stack[64], *partial = blocks <= 64 ? partial_stack : malloc((size_t)blocks * sizeof *partial);
@@ -276,6 +284,7 @@ void fascia_system_gradient_derivative(fascia_system *sys, const fascia_real *v,
                                m->pair_frame + begin, sys->pair_buffer + 6 * (int64_t)begin);
   }
   gather(sys, out);
+  if (sys->dilatation) fascia_dilatation_apply_add(sys, sys->dilatation, v, out);
   for (int32_t i = 0; i < sys->frame_count; ++i)
     fascia_pt_frame_gravity_product(sys->A + 9 * (int64_t)i, sys->frame_moment + 3 * (int64_t)i, sys->gravity,
                                     sys->gravity_scale, v + 6 * (int64_t)i, out + 6 * (int64_t)i);
@@ -305,6 +314,7 @@ void fascia_system_hessian_diagonal(fascia_system *sys, fascia_real *blocks) {
     fascia_pt_frame_diagonal_finish(sys->A + 9 * (int64_t)i, sys->frame_moment + 3 * (int64_t)i, sys->gravity,
                                     sys->gravity_scale, sys->conservative_torque + 3 * (int64_t)i, B);
   }
+  if (sys->dilatation) fascia_dilatation_diagonal_add(sys, sys->dilatation, blocks);
 }
 
 void fascia_system_mass_snapshot(fascia_system *sys) {
@@ -390,6 +400,11 @@ void fascia_system_sample_strain(const fascia_system *sys, fascia_real *strain, 
     strain[s] = strain_norm(sys, &st, s, F);
     if (stress) {
       fascia_pt_stress(sys->sample_law[s], sys->sample_lambda[s], sys->sample_mu[s], F, P, aux);
+      if (sys->pm.sample_pressure) { // the patch's pressure, as of the last evaluation
+        fascia_real dtheta[9];
+        fascia_pt_dilatation(sys->sample_law[s], F, dtheta);
+        for (int q = 0; q < 9; ++q) P[q] += sys->pm.sample_pressure[s] * dtheta[q];
+      }
       stress[s] = sqrt(fascia_pt_ddot(P, P));
     }
   }

@@ -16,6 +16,8 @@
 #include "point/sample.h"
 #include "status.h"
 
+struct fascia_dilatation;
+
 typedef struct fascia_system {
   fascia_ctx *ctx;
   const fascia_model *model; ///< borrowed, outlives the system
@@ -33,6 +35,7 @@ typedef struct fascia_system {
   int32_t *local_slot;          ///< [max neighbours] 0, 1, 2, ..
   int32_t *pair_sample;         ///< [P] the sample each pair belongs to
   fascia_real *pair_lumped_mass; ///< [P] kg: the share of its sample's mass the lumped mass puts on the pair's frame
+  struct fascia_dilatation *dilatation; ///< the volumetric patches' term (dilatation.h), NULL without patches
 
   // gravity as frame moments: E_g = -sum_i g.(M_i x_i + A_i D_i)
   fascia_real *frame_mass;   ///< [N] M_i = sum_s m_s w_is
@@ -52,7 +55,7 @@ typedef struct fascia_system {
   int *sample_flags;         ///< [S]
   fascia_real *conservative_torque; ///< [3N] theta-gradient of internal+gravity energy
   fascia_real *gradient_scratch;    ///< [6N] gradient when the caller asks for none (the Hessian needs the torques)
-  fascia_real energy_internal, energy_external;
+  fascia_real energy_internal, energy_external; ///< internal includes the patches' volumetric energy
   int32_t max_neighbours;
   int32_t inverted_count;
   int32_t first_inverted, first_nonfinite;

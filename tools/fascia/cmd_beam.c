@@ -18,7 +18,8 @@ static const char beam_usage[] =
     "usage: fascia beam [--frames NXxNYxNZ] [--shape hex|tet|meshless] [--samples-per-cell N]\n"
     "                   [--neighbours K] [--E PA --nu V | --lambda PA --mu PA] [--law stvk|neohookean]\n"
     "                   [--mass KG] [--density KG_M3] [--rotation-coupling R]\n"
-    "                   [--rotation-smoothing R] [--volumetric full|reduced] -o BEAM.h5 [--json]\n"
+    "                   [--rotation-smoothing R] [--volumetric auto|full|cell|frame|poisson|reduced]\n"
+    "                   [--patch-radius M] -o BEAM.h5 [--json]\n"
     "\n"
     "The cantilever of Bosman et al. 2013 sec. 4.1: 16 x 1 x 1 m along x, clamped at x = 0,\n"
     "loaded by gravity, probe 'tip' at (16, 0, 0).\n"
@@ -33,9 +34,13 @@ static const char beam_usage[] =
     "  --law NAME              stvk (default) or neohookean\n"
     "  --mass KG               total mass (default 5); --density KG_M3 overrides it\n"
     "  --rotation-coupling R   Cosserat coupling as a fraction of mu (default 0)\n"
-    "  --volumetric reduced    selective reduced integration: the volumetric energy at one sample\n"
-    "                          per cell (per tetrahedron), the rest at the others; cures locking\n"
-    "                          as nu -> 0.5 (default full)\n"
+    "  --volumetric KIND       how the volumetric energy is integrated (docs/mechanics.md):\n"
+    "                          auto (default): cell for nu >= 0.3, else full; full: at every sample;\n"
+    "                          cell: mean dilatation over each cell's samples (cures locking as\n"
+    "                          nu -> 0.5); frame: over the samples nearest each frame; poisson:\n"
+    "                          over Poisson-disk patches of --patch-radius (as fascia prep makes\n"
+    "                          them); reduced: one extra sample per cell (per tetrahedron)\n"
+    "  --patch-radius M        radius of the poisson patches, m (default 0.5)\n"
     "  --rotation-smoothing R  rotation smoothing, relative to the frame spacing (default 0.1;\n"
     "                          0 is the paper's scheme, which has zero-energy twist modes)\n"
     "  -o PATH                 model file to write (required)\n"
@@ -72,6 +77,7 @@ int cmd_beam(int argc, char **argv) {
   int json = 0, samples_given = 0, young_given = 0;
   double lambda = -1, mu = -1;
   int32_t samples_per_cell = 0;
+  int volumetric = 5; // auto: cell patches from FASCIA_PATCH_MIN_POISSON on
   for (int k = 1; k < argc; ++k) {
     const char *opt = argv[k];
     if (!strcmp(opt, "--help") || !strcmp(opt, "-h")) {
@@ -84,7 +90,7 @@ int cmd_beam(int argc, char **argv) {
     }
     if (!strcmp(opt, "--verbose")) continue;
     static const char *const valued[] = {"--frames", "--shape", "--samples-per-cell", "--neighbours", "--E", "--nu", "--lambda", "--mu",
-                                         "--law", "--mass", "--density", "--rotation-coupling", "--rotation-smoothing", "--volumetric", "-o", "--output"};
+                                         "--law", "--mass", "--density", "--rotation-coupling", "--rotation-smoothing", "--volumetric", "--patch-radius", "-o", "--output"};
     int known = 0;
     for (size_t j = 0; j < sizeof valued / sizeof valued[0]; ++j) known |= !strcmp(opt, valued[j]);
     if (!known) return cli_usage_error("beam", "unknown option '%s'", opt);
@@ -117,8 +123,14 @@ int cmd_beam(int argc, char **argv) {
       ok = cli_parse_real(value, &def.rotation_coupling);
     else if (!strcmp(opt, "--rotation-smoothing"))
       ok = cli_parse_real(value, &def.rotation_smoothing);
-    else if (!strcmp(opt, "--volumetric"))
-      ok = (def.reduced_volumetric = !strcmp(value, "reduced")) || !strcmp(value, "full");
+    else if (!strcmp(opt, "--patch-radius"))
+      ok = cli_parse_real(value, &def.patch_radius);
+    else if (!strcmp(opt, "--volumetric")) {
+      static const char *const kinds[] = {"full", "cell", "frame", "poisson", "reduced", "auto"};
+      ok = 0;
+      for (int j = 0; j < 6; ++j)
+        if (!strcmp(value, kinds[j])) ok = 1, volumetric = j;
+    }
     else
       path = value;
     if (!ok) {
@@ -132,6 +144,12 @@ int cmd_beam(int argc, char **argv) {
     if (!(lambda >= 0 && mu > 0)) return cli_usage_error("beam", "%s", "--lambda needs a value >= 0 and --mu one > 0, both given");
     fascia_lame_to_young(lambda, mu, &def.youngs_modulus, &def.poisson_ratio);
   }
+  if (volumetric == 5)
+    def.volumetric_patch = def.poisson_ratio >= FASCIA_PATCH_MIN_POISSON ? FASCIA_SCENE_PATCH_CELL : FASCIA_SCENE_PATCH_NONE;
+  else if (volumetric == 4)
+    def.reduced_volumetric = 1;
+  else
+    def.volumetric_patch = volumetric; // the FASCIA_SCENE_PATCH_ values in the order of kinds
   if (samples_given) {
     if (def.shape == FASCIA_SCENE_TET)
       def.samples_per_tet = samples_per_cell;

@@ -86,6 +86,11 @@ static void print_text(const char *path, const fascia_model *m, const summary *z
   printf("frames      %d (free %d, fixed %d, prescribed %d)\n", (int)m->frame_count, (int)z->frames_by_kind[0],
          (int)z->frames_by_kind[1], (int)z->frames_by_kind[2]);
   printf("samples     %d\n", (int)m->sample_count);
+  int32_t patched = 0;
+  const int32_t patches = fascia_model_patch_count(m, &patched);
+  if (patches > 0)
+    printf("patches     %d volumetric patches over %d samples (mean dilatation: %.2f samples per patch)\n",
+           (int)patches, (int)patched, (double)patched / patches);
   printf("pairs       %d (neighbours per sample: min %d, mean %.2f, max %d)\n", (int)m->pair_count,
          (int)z->neighbours_min, z->neighbours_mean, (int)z->neighbours_max);
   printf("volume      %.6g m^3 (tissue %.6g m^3, deformable organs %.6g m^3), mass %.6g kg\n", z->volume,
@@ -128,6 +133,9 @@ static char *make_json(const char *path, const fascia_model *m, const summary *z
   for (int k = 0; k < FASCIA_FRAME_KIND_COUNT_; ++k)
     cJSON_AddNumberToObject(kinds, frame_kind_names[k], z->frames_by_kind[k]);
   cJSON_AddNumberToObject(root, "samples", m->sample_count);
+  int32_t patched = 0;
+  cJSON_AddNumberToObject(root, "volumetric_patches", fascia_model_patch_count(m, &patched));
+  cJSON_AddNumberToObject(root, "patched_samples", patched);
   cJSON_AddNumberToObject(root, "pairs", m->pair_count);
   cJSON *neighbours = cJSON_AddObjectToObject(root, "neighbours");
   cJSON_AddNumberToObject(neighbours, "min", z->neighbours_min);

@@ -58,6 +58,8 @@ fascia_scene_beam_def fascia_scene_beam_def_default(void) {
   def.rotation_coupling = 0;
   def.rotation_smoothing = 0.1;
   def.reduced_volumetric = 0;
+  def.volumetric_patch = FASCIA_SCENE_PATCH_NONE;
+  def.patch_radius = 0.5;
   def.gravity[2] = -9.81;
   def.cookie_ = FASCIA_SCENE_BEAM_COOKIE_;
   return def;
@@ -107,6 +109,12 @@ static fascia_status check_beam(fascia_ctx *ctx, const fascia_scene_beam_def *de
               (long long)(cells * per_cell * *per_sample), (long long)BEAM_MAX_PAIRS);
   SCENE_CHECK(def->reduced_volumetric == 0 || def->reduced_volumetric == 1, ctx, FASCIA_ERR_ARGUMENT,
               "%s: reduced_volumetric %d, expected 0 or 1", who, (int)def->reduced_volumetric);
+  SCENE_CHECK(def->volumetric_patch >= FASCIA_SCENE_PATCH_NONE && def->volumetric_patch <= FASCIA_SCENE_PATCH_POISSON,
+              ctx, FASCIA_ERR_ARGUMENT, "%s: volumetric_patch %d, expected 0 (none), 1 (cell), 2 (frame) or 3 (poisson)", who,
+              (int)def->volumetric_patch);
+  SCENE_CHECK(!def->reduced_volumetric || def->volumetric_patch == FASCIA_SCENE_PATCH_NONE, ctx,
+              FASCIA_ERR_ARGUMENT, "%s: reduced_volumetric and volumetric_patch are two cures of locking: choose one",
+              who);
   // reduced volumetric integration: one more sample per cell (per tetrahedron)
   if (def->reduced_volumetric) per_cell += def->shape == FASCIA_SCENE_TET ? 6 : 1;
   *samples = (int32_t)(cells * per_cell);
@@ -220,6 +228,34 @@ static fascia_status fill_tet_samples(fascia_ctx *ctx, const scene_grid *g, fasc
   return FASCIA_OK;
 }
 
+// Volumetric patches: samples are written cell by cell, the same number per
+// cell; a frame's patch takes the samples whose nearest frame it is (the
+// nearest corner of their cell: the grid is regular).
+static void assign_patches(const fascia_scene_beam_def *def, const scene_grid *g, fascia_model *m) {
+  const int32_t cells = scene_grid_cell_count(g), per_cell = m->sample_count / cells;
+  for (int32_t s = 0; s < m->sample_count; ++s) {
+    const int32_t c = s / per_cell;
+    if (def->volumetric_patch == FASCIA_SCENE_PATCH_CELL) {
+      m->sample_patch[s] = c;
+      continue;
+    }
+    int32_t cell[3], corner[8];
+    fascia_real lo[3], hi[3];
+    scene_grid_cell_unflatten(g, c, cell);
+    scene_grid_cell_corners(g, cell, corner, lo, hi);
+    const fascia_real *p = m->sample_position + 3 * (int64_t)s;
+    fascia_real best = INFINITY;
+    for (int k = 0; k < 8; ++k) {
+      const fascia_real *x = m->frame_position + 3 * (int64_t)corner[k];
+      const fascia_real d2 = (p[0] - x[0]) * (p[0] - x[0]) + (p[1] - x[1]) * (p[1] - x[1]) + (p[2] - x[2]) * (p[2] - x[2]);
+      if (d2 < best || (d2 == best && corner[k] < m->sample_patch[s])) {
+        best = d2;
+        m->sample_patch[s] = corner[k];
+      }
+    }
+  }
+}
+
 static void beam_provenance(char *buf, size_t size, const fascia_scene_beam_def *def, const fascia_model *m) {
   buf[0] = 0;
   scene_append(buf, size,
@@ -279,6 +315,8 @@ fascia_status fascia_scene_beam_build(fascia_ctx *ctx, const fascia_scene_beam_d
     SCENE_TRY_GOTO(fill_gauss_samples(ctx, def, &g, grid, m, def->samples_per_cell_dir, 0, &next));
     if (def->reduced_volumetric) SCENE_TRY_GOTO(fill_gauss_samples(ctx, def, &g, grid, m, 1, 1, &next));
   }
+  if (def->volumetric_patch == FASCIA_SCENE_PATCH_POISSON) SCENE_TRY_GOTO(fascia_model_make_patches(ctx, m, &def->patch_radius));
+  else if (def->volumetric_patch != FASCIA_SCENE_PATCH_NONE) assign_patches(def, &g, m);
   beam_provenance(provenance, PROVENANCE_SIZE, def, m);
   SCENE_TRY_GOTO(scene_finish(ctx, m, def, &probe, provenance, "beam generator"));
   *out = m;

@@ -32,6 +32,9 @@ int fascia_scene_shape_from_name(const char *name);
 /// x [-height/2, height/2] (m), frames on a regular nx x ny x nz grid that
 /// includes the faces, frames at x == 0 FIXED (clamped), all others FREE,
 /// loaded by gravity. Start from fascia_scene_beam_def_default().
+/// How the beam groups samples into volumetric patches.
+enum { FASCIA_SCENE_PATCH_NONE = 0, FASCIA_SCENE_PATCH_CELL = 1, FASCIA_SCENE_PATCH_FRAME = 2, FASCIA_SCENE_PATCH_POISSON = 3 };
+
 typedef struct fascia_scene_beam_def {
   fascia_real length, width, height; ///< m; defaults 16, 1, 1
   int32_t frames[3];                 ///< frames along x, y, z, each >= 2; default 20 x 3 x 3
@@ -54,6 +57,14 @@ typedef struct fascia_scene_beam_def {
   /// TET) at its centre carries the volumetric energy over the whole cell:
   /// cures locking as nu -> 1/2 (docs/mechanics.md). Default 0.
   int32_t reduced_volumetric;
+  /// Mean dilatation (docs/mechanics.md): the volumetric energy evaluated on
+  /// the volume-averaged dilatation of a patch of samples. PATCH_NONE (the
+  /// samples integrate all of it), PATCH_CELL (the samples of each grid
+  /// cell), PATCH_FRAME (the samples nearest each frame: its Voronoi cell),
+  /// PATCH_POISSON (fascia_model_make_patches, as prep makes them).
+  /// Not with reduced_volumetric. Default PATCH_NONE.
+  int32_t volumetric_patch;
+  fascia_real patch_radius; ///< PATCH_POISSON: radius of the patches, m (default 0.5)
   fascia_real gravity[3];         ///< m/s^2; default (0, 0, -9.81)
   int cookie_;                    ///< private: set by fascia_scene_beam_def_default
 } fascia_scene_beam_def;

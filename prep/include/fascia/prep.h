@@ -63,6 +63,15 @@ typedef struct fascia_prep_parts {
   char **names;  ///< [count]
 } fascia_prep_parts;
 
+/// patch_radius of a tissue or deformable organ left to the rule.
+#define FASCIA_PREP_PATCH_AUTO (-1.0)
+
+/// The volumetric patch radius (m) a region gets by default: 0 (none) below
+/// the Poisson ratio where patches pay, else a multiple of its frame spacing
+/// (docs/mechanics.md, "Volumetric locking", states the rule and its
+/// measurements).
+FASCIA_API fascia_real fascia_prep_patch_radius(fascia_real poisson_ratio, fascia_real frame_spacing);
+
 /// One organ of the scene: a surface mesh file, or labels of the scene's
 /// segmentation (docs/labelmaps.md).
 typedef struct fascia_prep_organ_def {
@@ -89,6 +98,9 @@ typedef struct fascia_prep_organ_def {
   int32_t neighbours;         ///< frames per sample (MLS), >= 4
   int32_t samples_per_tet;    ///< TET: quadrature points per tetrahedron, 4 (degree 2) or 1 (centroid)
   fascia_real min_component;  ///< pieces of the inside smaller than this are dropped, m^3
+  /// Radius of the volumetric patches (mean dilatation, docs/mechanics.md), m;
+  /// 0: none; FASCIA_PREP_PATCH_AUTO: by the rule of fascia_prep_patch_radius.
+  fascia_real patch_radius;
 } fascia_prep_organ_def;
 
 /// Coupling rule of a tissue for one organ.
@@ -118,6 +130,7 @@ typedef struct fascia_prep_tissue_def {
   int32_t coupling_count;
   fascia_prep_coupling_def *coupling; ///< [coupling_count] per-organ rules (absent organs: share everywhere)
   fascia_real min_component;  ///< pieces of region smaller than this are dropped, m^3
+  fascia_real patch_radius;   ///< as for a deformable organ
 } fascia_prep_tissue_def;
 
 /// World frames a label map can be placed in (docs/labelmaps.md).

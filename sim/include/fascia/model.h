@@ -130,6 +130,12 @@ typedef struct fascia_model {
   fascia_real *sample_volume;   ///< [S] m^3, > 0
   int32_t *sample_material;     ///< [S] material index
   int32_t *sample_organ;        ///< [S] the deformable organ a sample belongs to, -1 for tissue samples
+  /// [S] the volumetric patch of a sample, -1 for none. The samples of one
+  /// patch (same material) share the volumetric part of their energy: it is
+  /// evaluated on the patch's volume-averaged dilatation (mean dilatation),
+  /// which cures volumetric locking as nu approaches 1/2 (docs/mechanics.md).
+  /// A sample with -1 integrates its whole energy itself.
+  int32_t *sample_patch;
 
   // Sample -> frames (CSR): pairs of sample s are sample_offsets[s] ..
   // sample_offsets[s+1]-1, frames ascending within a sample.
@@ -217,6 +223,27 @@ typedef struct fascia_model_piece {
 FASCIA_API fascia_status fascia_model_floating_components(fascia_ctx *ctx, const fascia_model *model,
                                                           int32_t *frame_piece, fascia_model_piece *pieces,
                                                           int32_t capacity, int32_t *count);
+
+/// The Poisson ratio from which fascia's generators (fascia prep, fascia
+/// beam) put samples into volumetric patches by default: below it the
+/// volumetric energy is small and full integration is as accurate
+/// (docs/mechanics.md, "Volumetric locking").
+#define FASCIA_PATCH_MIN_POISSON 0.3
+
+/// Groups the samples into volumetric patches (sample_patch) for models
+/// without cells: patch centres are a Poisson-disk subset of the samples
+/// radius[material] apart (m), chosen in sample order, and each sample joins
+/// the nearest centre of its own material and organ; the samples of a
+/// material whose radius is <= 0 stay in no patch (-1). A patch then holds
+/// the samples of about one ball of that radius (docs/mechanics.md says how
+/// the radius is chosen). Materials with a radius must be whole (part
+/// FASCIA_PART_FULL). Errors: FASCIA_ERR_ARGUMENT, FASCIA_ERR_MEMORY (the
+/// model unchanged).
+FASCIA_API fascia_status fascia_model_make_patches(fascia_ctx *ctx, fascia_model *model, const fascia_real *radius);
+
+/// Number of volumetric patches (distinct sample_patch values >= 0) and of
+/// the samples in them (*patched, may be NULL).
+FASCIA_API int32_t fascia_model_patch_count(const fascia_model *model, int32_t *patched);
 
 /// Total sample volume (m^3) and mass (kg).
 FASCIA_API fascia_real fascia_model_volume(const fascia_model *model);

@@ -1,0 +1,263 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// Mean dilatation over volumetric patches (see dilatation.h). Every sum runs
+// in a fixed order (patch by patch, entries ascending), so the results are
+// bit-identical for any thread count.
+#include <stdlib.h>
+#include <string.h>
+
+#include "dilatation.h"
+
+static int compare_int32(const void *a, const void *b) {
+  const int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
+  return (x > y) - (x < y);
+}
+
+void fascia_patch_table_free(fascia_patch_table *t) {
+  free(t->patch_offsets);
+  free(t->patch_samples);
+  free(t->support_offsets);
+  free(t->entry_frame);
+  free(t->entry_patch);
+  free(t->pair_entry);
+  free(t->frame_entry_offsets);
+  free(t->frame_entries);
+  memset(t, 0, sizeof *t);
+}
+
+// Entry of frame i in patch p's support (ascending frames: bisection).
+static int32_t find_entry(const fascia_patch_table *t, int32_t p, int32_t i) {
+  int32_t lo = t->support_offsets[p], hi = t->support_offsets[p + 1] - 1;
+  while (lo < hi) {
+    const int32_t mid = (lo + hi) / 2;
+    if (t->entry_frame[mid] < i) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo;
+}
+
+fascia_status fascia_patch_table_build(fascia_ctx *ctx, const fascia_model *m, fascia_patch_table *t) {
+  memset(t, 0, sizeof *t);
+  const int32_t S = m->sample_count, N = m->frame_count;
+  int32_t *compact = fascia_calloc(S, sizeof(int32_t)), patched = 0;
+  FASCIA_CHECK(compact, ctx, FASCIA_ERR_MEMORY, "patches: out of memory");
+  // compact numbers, ascending in the model's patch numbers
+  for (int32_t s = 0; s < S; ++s)
+    if (m->sample_patch[s] >= 0) {
+      compact[m->sample_patch[s]] = 1;
+      ++patched;
+    }
+  int32_t P = 0;
+  for (int32_t p = 0; p < S; ++p) compact[p] = compact[p] ? P++ : -1;
+  if (P == 0) {
+    free(compact);
+    return FASCIA_OK;
+  }
+  t->patch_count = P;
+  t->patch_offsets = fascia_calloc((int64_t)P + 1, sizeof(int32_t));
+  t->patch_samples = fascia_calloc(patched, sizeof(int32_t));
+  t->support_offsets = fascia_calloc((int64_t)P + 1, sizeof(int32_t));
+  t->pair_entry = fascia_calloc(m->pair_count, sizeof(int32_t));
+  t->frame_entry_offsets = fascia_calloc((int64_t)N + 1, sizeof(int32_t));
+  int64_t pair_total = 0;
+  for (int32_t s = 0; s < S; ++s)
+    if (m->sample_patch[s] >= 0) pair_total += m->sample_offsets[s + 1] - m->sample_offsets[s];
+  int32_t *frames = fascia_calloc(pair_total, sizeof(int32_t));
+  if (!t->patch_offsets || !t->patch_samples || !t->support_offsets || !t->pair_entry || !t->frame_entry_offsets ||
+      !frames) {
+    free(compact);
+    free(frames);
+    fascia_patch_table_free(t);
+    return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "patches: out of memory for %d patches", (int)P);
+  }
+  for (int32_t s = 0; s < S; ++s)
+    if (m->sample_patch[s] >= 0) t->patch_offsets[compact[m->sample_patch[s]] + 1]++;
+  for (int32_t p = 0; p < P; ++p) t->patch_offsets[p + 1] += t->patch_offsets[p];
+  {
+    int32_t *cursor = t->support_offsets; // borrowed as scratch until the supports are counted
+    memcpy(cursor, t->patch_offsets, (size_t)P * sizeof(int32_t));
+    for (int32_t s = 0; s < S; ++s)
+      if (m->sample_patch[s] >= 0) t->patch_samples[cursor[compact[m->sample_patch[s]]]++] = s;
+  }
+  // each patch's distinct frames, sorted, packed in place
+  int64_t count = 0;
+  t->support_offsets[0] = 0;
+  for (int32_t p = 0; p < P; ++p) {
+    int32_t *row = frames + count, len = 0;
+    for (int32_t q = t->patch_offsets[p]; q < t->patch_offsets[p + 1]; ++q) {
+      const int32_t s = t->patch_samples[q];
+      for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k) row[len++] = m->pair_frame[k];
+    }
+    qsort(row, (size_t)len, sizeof(int32_t), compare_int32);
+    int32_t unique = 0;
+    for (int32_t k = 0; k < len; ++k)
+      if (k == 0 || row[k] != row[k - 1]) row[unique++] = row[k];
+    count += unique;
+    t->support_offsets[p + 1] = (int32_t)count;
+  }
+  t->entry_count = (int32_t)count;
+  t->entry_frame = fascia_calloc(count, sizeof(int32_t));
+  t->entry_patch = fascia_calloc(count, sizeof(int32_t));
+  t->frame_entries = fascia_calloc(count, sizeof(int32_t));
+  if (!t->entry_frame || !t->entry_patch || !t->frame_entries) {
+    free(compact);
+    free(frames);
+    fascia_patch_table_free(t);
+    return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "patches: out of memory for %lld support entries", (long long)count);
+  }
+  memcpy(t->entry_frame, frames, (size_t)count * sizeof(int32_t));
+  free(frames);
+  for (int32_t p = 0; p < P; ++p)
+    for (int32_t e = t->support_offsets[p]; e < t->support_offsets[p + 1]; ++e) t->entry_patch[e] = p;
+  for (int32_t k = 0; k < m->pair_count; ++k) t->pair_entry[k] = -1;
+  for (int32_t s = 0; s < S; ++s)
+    if (m->sample_patch[s] >= 0)
+      for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k)
+        t->pair_entry[k] = find_entry(t, compact[m->sample_patch[s]], m->pair_frame[k]);
+  free(compact);
+  // frame -> entries, ascending
+  for (int32_t e = 0; e < t->entry_count; ++e) t->frame_entry_offsets[t->entry_frame[e] + 1]++;
+  for (int32_t i = 0; i < N; ++i) t->frame_entry_offsets[i + 1] += t->frame_entry_offsets[i];
+  int32_t *cursor = fascia_calloc(N, sizeof(int32_t));
+  if (!cursor) {
+    fascia_patch_table_free(t);
+    return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "patches: out of memory");
+  }
+  memcpy(cursor, t->frame_entry_offsets, (size_t)N * sizeof(int32_t));
+  for (int32_t e = 0; e < t->entry_count; ++e) t->frame_entries[cursor[t->entry_frame[e]]++] = e;
+  free(cursor);
+  return FASCIA_OK;
+}
+
+fascia_status fascia_dilatation_create(fascia_system *sys, fascia_dilatation **out) {
+  *out = NULL;
+  const fascia_model *m = sys->model;
+  fascia_patch_table table;
+  FASCIA_TRY(fascia_patch_table_build(sys->ctx, m, &table));
+  if (table.patch_count == 0) return FASCIA_OK;
+  fascia_dilatation *d = calloc(1, sizeof *d);
+  if (!d) {
+    fascia_patch_table_free(&table);
+    return FASCIA_FAIL(sys->ctx, FASCIA_ERR_MEMORY, "patches: out of memory");
+  }
+  d->table = table;
+  const int32_t P = table.patch_count;
+  d->patch_lambda = fascia_calloc(P, sizeof(fascia_real));
+  d->patch_volume = fascia_calloc(P, sizeof(fascia_real));
+  d->patch_law = fascia_calloc(P, sizeof(int32_t));
+  d->patch_theta = fascia_calloc(P, sizeof(fascia_real));
+  d->patch_energy = fascia_calloc(P, sizeof(fascia_real));
+  d->patch_rate = fascia_calloc(P, sizeof(fascia_real));
+  d->entry_gradient = fascia_calloc(6 * (int64_t)table.entry_count, sizeof(fascia_real));
+  d->sample_pressure = fascia_calloc(m->sample_count, sizeof(fascia_real));
+  if (!d->patch_lambda || !d->patch_volume || !d->patch_law || !d->patch_theta || !d->patch_energy || !d->patch_rate ||
+      !d->entry_gradient || !d->sample_pressure) {
+    fascia_dilatation_destroy(&d);
+    return FASCIA_FAIL(sys->ctx, FASCIA_ERR_MEMORY, "patches: out of memory for %d patches", (int)P);
+  }
+  for (int32_t p = 0; p < P; ++p) {
+    // validation guarantees one material per patch
+    const int32_t first = table.patch_samples[table.patch_offsets[p]];
+    d->patch_lambda[p] = sys->sample_lambda[first];
+    d->patch_law[p] = sys->sample_law[first];
+    for (int32_t q = table.patch_offsets[p]; q < table.patch_offsets[p + 1]; ++q) {
+      const int32_t s = table.patch_samples[q];
+      d->patch_volume[p] += m->sample_volume[s];
+      sys->sample_lambda[s] = 0; // the patch carries it
+    }
+  }
+  sys->pm.sample_pressure = d->sample_pressure;
+  *out = d;
+  return FASCIA_OK;
+}
+
+void fascia_dilatation_destroy(fascia_dilatation **dilatation) {
+  if (!dilatation || !*dilatation) return;
+  fascia_dilatation *d = *dilatation;
+  fascia_patch_table_free(&d->table);
+  free(d->patch_lambda);
+  free(d->patch_volume);
+  free(d->patch_law);
+  free(d->patch_theta);
+  free(d->patch_energy);
+  free(d->patch_rate);
+  free(d->entry_gradient);
+  free(d->sample_pressure);
+  free(d);
+  *dilatation = NULL;
+}
+
+fascia_real fascia_dilatation_evaluate(fascia_system *sys, fascia_dilatation *d) {
+  const fascia_model *m = sys->model;
+  const fascia_patch_table *t = &d->table;
+  const fascia_pt_state st = {sys->x, sys->A};
+#pragma omp parallel for num_threads(sys->threads) schedule(static)
+  for (int32_t p = 0; p < t->patch_count; ++p) {
+    for (int64_t q = 6 * (int64_t)t->support_offsets[p]; q < 6 * (int64_t)t->support_offsets[p + 1]; ++q)
+      d->entry_gradient[q] = 0;
+    fascia_real sum = 0;
+    for (int32_t q = t->patch_offsets[p]; q < t->patch_offsets[p + 1]; ++q) {
+      const int32_t s = t->patch_samples[q];
+      const fascia_real v = m->sample_volume[s];
+      fascia_real F[9], dtheta[9];
+      fascia_pt_sample_F(&sys->pm, &st, s, F);
+      sum += v * fascia_pt_dilatation(d->patch_law[p], F, dtheta);
+      // v grad theta_s on each frame of s: (dtheta g, axial(C dtheta^T)), as the stress gradient
+      for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k) {
+        const fascia_real *A = sys->A + 9 * (int64_t)m->pair_frame[k], *g = m->pair_gradient + 3 * (int64_t)k;
+        fascia_real a[3], C[9], M[9], gx[3], gt[3];
+        fascia_pt_pair_C(A, sys->pair_offset + 3 * (int64_t)k, g, m->pair_weight[k], a, C);
+        fascia_pt_mat_vec(dtheta, g, gx);
+        fascia_pt_mat_mult(C, dtheta, M);
+        fascia_pt_axial(M, gt);
+        fascia_real *G = d->entry_gradient + 6 * (int64_t)t->pair_entry[k];
+        for (int r = 0; r < 3; ++r) {
+          G[r] += v * gx[r];
+          G[3 + r] += v * gt[r];
+        }
+      }
+    }
+    const fascia_real theta = sum / d->patch_volume[p], pressure = d->patch_lambda[p] * theta;
+    d->patch_theta[p] = theta;
+    d->patch_energy[p] = FASCIA_R(0.5) * d->patch_volume[p] * pressure * theta;
+    for (int32_t q = t->patch_offsets[p]; q < t->patch_offsets[p + 1]; ++q)
+      d->sample_pressure[t->patch_samples[q]] = pressure;
+  }
+  fascia_real energy = 0;
+  for (int32_t p = 0; p < t->patch_count; ++p) energy += d->patch_energy[p];
+  return energy;
+}
+
+void fascia_dilatation_apply_add(const fascia_system *sys, fascia_dilatation *d, const fascia_real *v,
+                                 fascia_real *out) {
+  const fascia_patch_table *t = &d->table;
+#pragma omp parallel for num_threads(sys->threads) schedule(static)
+  for (int32_t p = 0; p < t->patch_count; ++p) {
+    fascia_real rate = 0;
+    for (int32_t e = t->support_offsets[p]; e < t->support_offsets[p + 1]; ++e) {
+      const fascia_real *G = d->entry_gradient + 6 * (int64_t)e, *x = v + 6 * (int64_t)t->entry_frame[e];
+      for (int r = 0; r < 6; ++r) rate += G[r] * x[r];
+    }
+    d->patch_rate[p] = d->patch_lambda[p] / d->patch_volume[p] * rate;
+  }
+#pragma omp parallel for num_threads(sys->threads) schedule(static)
+  for (int32_t i = 0; i < sys->frame_count; ++i)
+    for (int32_t r = t->frame_entry_offsets[i]; r < t->frame_entry_offsets[i + 1]; ++r) {
+      const int32_t e = t->frame_entries[r];
+      const fascia_real c = d->patch_rate[t->entry_patch[e]], *G = d->entry_gradient + 6 * (int64_t)e;
+      for (int k = 0; k < 6; ++k) out[6 * (int64_t)i + k] += c * G[k];
+    }
+}
+
+void fascia_dilatation_diagonal_add(const fascia_system *sys, const fascia_dilatation *d, fascia_real *blocks) {
+  const fascia_patch_table *t = &d->table;
+#pragma omp parallel for num_threads(sys->threads) schedule(static)
+  for (int32_t i = 0; i < sys->frame_count; ++i)
+    for (int32_t r = t->frame_entry_offsets[i]; r < t->frame_entry_offsets[i + 1]; ++r) {
+      const int32_t e = t->frame_entries[r], p = t->entry_patch[e];
+      const fascia_real c = d->patch_lambda[p] / d->patch_volume[p], *G = d->entry_gradient + 6 * (int64_t)e;
+      fascia_real *B = blocks + 36 * (int64_t)i;
+      for (int a = 0; a < 6; ++a)
+        for (int b = 0; b < 6; ++b) B[6 * a + b] += c * G[a] * G[b];
+    }
+}

@@ -1,0 +1,76 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// Mean dilatation over volumetric patches, the cure of volumetric locking
+// (docs/mechanics.md, "Volumetric locking"). The samples of a patch keep the
+// deviatoric part of their energy; the volumetric part lambda/2 theta^2
+// (theta = tr E for StVK, J - 1 for the stable Neo-Hookean) is evaluated once
+// per patch, on the volume average of theta over its samples:
+//
+//   E_vol = sum_p V_p lambda_p/2 thetabar_p^2,  thetabar_p = sum_{s in p} v_s theta_s / V_p
+//   grad  = sum_p lambda_p thetabar_p G_p,      G_p = sum_{s in p} v_s grad theta_s
+//   H     = sum_p lambda_p / V_p G_p G_p^T  +  lambda_p thetabar_p sum_{s in p} v_s hess theta_s
+//
+// The second Hessian term is per sample: each sample of p carries the
+// pressure lambda_p thetabar_p (fascia_pt_model.sample_pressure), which the
+// per-sample math adds to its stress and stress derivative, geometric part
+// included. The first is one rank-one term per patch, applied here on the
+// patch's support (the distinct frames its samples hang on). One constraint
+// per patch instead of one per sample is what frees the locked modes.
+#ifndef FASCIA_SRC_DILATATION_H
+#define FASCIA_SRC_DILATATION_H
+
+#include "system.h"
+
+/// The patches of a model as tables: which samples each holds, and the
+/// distinct frames its samples hang on (its support); a support entry is one
+/// (patch, frame) pair. Patches are numbered by ascending model patch number,
+/// empty ones left out. Built from the model alone (the assembled matrix's
+/// pattern needs it too).
+typedef struct fascia_patch_table {
+  int32_t patch_count, entry_count;
+  int32_t *patch_offsets;       ///< [patches+1] CSR into patch_samples
+  int32_t *patch_samples;       ///< samples of each patch, ascending
+  int32_t *support_offsets;     ///< [patches+1] CSR into entry_frame
+  int32_t *entry_frame;         ///< [entries] frames of each patch's support, ascending
+  int32_t *entry_patch;         ///< [entries]
+  int32_t *pair_entry;          ///< [P] the support entry of pair k's frame, -1 for samples in no patch
+  int32_t *frame_entry_offsets; ///< [N+1] CSR into frame_entries
+  int32_t *frame_entries;       ///< the entries of each frame, ascending
+} fascia_patch_table;
+
+/// Builds the tables; a model without patches gives patch_count 0 and no
+/// arrays. On error the table is empty.
+FASCIA_INTERN fascia_status fascia_patch_table_build(fascia_ctx *ctx, const fascia_model *model,
+                                                     fascia_patch_table *table);
+FASCIA_INTERN void fascia_patch_table_free(fascia_patch_table *table);
+
+/// The mean-dilatation term of a system: its tables and what each
+/// evaluation leaves for the Hessian.
+typedef struct fascia_dilatation {
+  fascia_patch_table table;
+  fascia_real *patch_lambda;     ///< [patches] Pa
+  fascia_real *patch_volume;     ///< [patches] V_p, m^3
+  int32_t *patch_law;            ///< [patches] FASCIA_PT_LAW_*
+  fascia_real *patch_theta;      ///< [patches] thetabar_p at the last evaluation
+  fascia_real *patch_energy;     ///< [patches] J
+  fascia_real *patch_rate;       ///< [patches] scratch of the Hessian product: G_p . v
+  fascia_real *entry_gradient;   ///< [6 entries] G_p restricted to the entry's frame (x then theta)
+  fascia_real *sample_pressure;  ///< [S] lambda_p thetabar_p on the samples of p, 0 elsewhere
+} fascia_dilatation;
+
+/// Makes the term for sys (NULL in *out when the model has no patch): the
+/// samples in patches lose their own lambda, and sys->pm reads the pressures.
+FASCIA_INTERN fascia_status fascia_dilatation_create(fascia_system *sys, fascia_dilatation **out);
+FASCIA_INTERN void fascia_dilatation_destroy(fascia_dilatation **dilatation);
+
+/// At the system's current state: every patch's mean dilatation, pressure
+/// and gradient G_p; returns E_vol (J), not finite when a patch's is not.
+FASCIA_INTERN fascia_real fascia_dilatation_evaluate(fascia_system *sys, fascia_dilatation *d);
+/// out += sum_p lambda_p / V_p G_p (G_p . v): the rank-one terms.
+FASCIA_INTERN void fascia_dilatation_apply_add(const fascia_system *sys, fascia_dilatation *d, const fascia_real *v,
+                                               fascia_real *out);
+/// Adds the rank-one terms' 6x6 diagonal blocks [36N].
+FASCIA_INTERN void fascia_dilatation_diagonal_add(const fascia_system *sys, const fascia_dilatation *d,
+                                                  fascia_real *blocks);
+
+#endif
