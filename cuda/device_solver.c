@@ -15,7 +15,7 @@
 #include "launch.h"
 
 #define CG_CHUNK 8 // CG iterations per recorded chunk in tolerance mode
-#define MAX_BUFFERS 64
+#define MAX_BUFFERS 96 // the model, the state and work (about 50), the patches (16)
 #define MAX_PINNED 8
 
 enum { SLOT_CG_FIXED = 0, SLOT_CG_CHUNK = 1 };
@@ -50,7 +50,6 @@ static int device_supports(const fascia_backend_setup *setup, char *why, size_t 
   else if (def->linear_solver == FASCIA_LINEAR_DIRECT) reason = "the direct linear solver runs on the CPU only";
   else if (def->assembled == 1) reason = "the assembled matrix runs on the CPU only (the device is matrix-free)";
   else if (def->single_precision_matrix) reason = "the float matrix runs on the CPU only";
-  else if (setup->sys->dilatation) reason = "volumetric patches (mean dilatation) are solved on the CPU only";
   if (reason && why) snprintf(why, size, "%s", reason);
   return reason == NULL;
 }
@@ -72,6 +71,32 @@ static fascia_status put(fascia_device *dev, const void *host, size_t bytes, voi
 
 #define MAKE(field, count, type) FASCIA_TRY(make(dev, (size_t)(count) * sizeof(type), (void **)&D->field))
 #define PUT(field, host, count, type) FASCIA_TRY(put(dev, (host), (size_t)(count) * sizeof(type), (void **)&D->field))
+
+// The volumetric patches' tables and work (sim/point/patch.h), and the
+// samples' pressures the per-sample math reads.
+static fascia_status upload_patches(fascia_device *dev, const fascia_pt_patches *h, int64_t E) {
+  fascia_dev *D = &dev->D;
+  const int64_t P = h->count, N = D->frame_count, S = D->sample_count;
+  D->patches.count = h->count;
+  PUT(patches.patch_offsets, h->patch_offsets, P + 1, int32_t);
+  PUT(patches.patch_samples, h->patch_samples, h->patch_offsets[P], int32_t);
+  PUT(patches.support_offsets, h->support_offsets, P + 1, int32_t);
+  PUT(patches.entry_frame, h->entry_frame, E, int32_t);
+  PUT(patches.entry_patch, h->entry_patch, E, int32_t);
+  PUT(patches.pair_entry, h->pair_entry, D->pair_count, int32_t);
+  PUT(patches.frame_entry_offsets, h->frame_entry_offsets, N + 1, int32_t);
+  PUT(patches.frame_entries, h->frame_entries, E, int32_t);
+  PUT(patches.lambda, h->lambda, P, fascia_real);
+  PUT(patches.volume, h->volume, P, fascia_real);
+  PUT(patches.law, h->law, P, int32_t);
+  MAKE(patches.theta, P, fascia_real);
+  MAKE(patches.energy, P, fascia_real);
+  MAKE(patches.rate, P, fascia_real);
+  MAKE(patches.entry_gradient, 6 * E, fascia_real);
+  MAKE(patches.sample_pressure, S, fascia_real);
+  D->pm.sample_pressure = D->patches.sample_pressure;
+  return FASCIA_OK;
+}
 
 static fascia_status upload_model(fascia_device *dev, const fascia_backend_setup *setup) {
   const fascia_system *sys = setup->sys;
@@ -114,6 +139,7 @@ static fascia_status upload_model(fascia_device *dev, const fascia_backend_setup
   PUT(frame_load, m->frame_load, 6 * N, fascia_real);
   PUT(rest_rotation, m->frame_rotation, 4 * N, fascia_real);
   PUT(mask, setup->mask, 6 * N, unsigned char);
+  if (setup->patches->count > 0) FASCIA_TRY(upload_patches(dev, setup->patches, setup->patch_entries));
   // state and work
   MAKE(x_base, 3 * N, fascia_real);
   MAKE(q_base, 4 * N, fascia_real);
@@ -246,11 +272,13 @@ static fascia_status objective(fascia_device *dev, fascia_real alpha, fascia_rea
   const int64_t N = D->frame_count, n = 6 * N, S = D->sample_count;
   kernel(dev, FASCIA_K_TRIAL, n, NULL, NULL, alpha);
   kernel(dev, FASCIA_K_STATE, N, NULL, NULL, 0);
+  if (D->patches.count > 0) kernel(dev, FASCIA_K_PATCH_EVALUATE, D->patches.count, NULL, NULL, 0);
   kernel(dev, FASCIA_K_SAMPLE_GRADIENT, S, NULL, NULL, 0);
   if (dev->set.consistent_mass && (dev->set.c1 != 0 || dev->set.c2 != 0))
     kernel(dev, FASCIA_K_SAMPLE_MASS, S, D->d_trial, NULL, 0);
   kernel(dev, FASCIA_K_FRAME_GRADIENT, N, NULL, NULL, 0);
   reduce(dev, FASCIA_T_SAMPLES, S, NULL, NULL, FASCIA_S_SAMPLES);
+  if (D->patches.count > 0) reduce(dev, FASCIA_T_PATCHES, D->patches.count, NULL, NULL, FASCIA_S_PATCHES);
   reduce(dev, FASCIA_T_FRAMES, N, NULL, NULL, FASCIA_S_OBJECTIVE);
   FASCIA_TRY(pull_scalars(dev));
   *phi = dev->sc.phi;
@@ -297,6 +325,7 @@ static void cg_body(void *argument) {
   for (int it = 0; it < arg->iterations; ++it) {
     // products of z; the operator's reduction makes dir and A dir of them
     kernel(dev, dev->stiffness, S, D->z, NULL, 0);
+    if (D->patches.count > 0) kernel(dev, FASCIA_K_PATCH_RATE, D->patches.count, D->z, NULL, 0);
     if (dev->set.consistent_mass) kernel(dev, FASCIA_K_CG_SAMPLE_MASS, S, D->z, NULL, 0); // lumped: per frame
     reduce(dev, FASCIA_T_OPERATOR, N, NULL, NULL, FASCIA_S_CG_CURVATURE);
     reduce(dev, FASCIA_T_CG_UPDATE, N, NULL, NULL, FASCIA_S_CG_RESIDUAL);
@@ -458,6 +487,7 @@ static fascia_status device_hessian_apply(fascia_backend *backend, const fascia_
   FASCIA_TRY(dev->ops->upload(dev->L, dev->sc_dev, &sc, sizeof sc));
   FASCIA_TRY(dev->ops->upload(dev->L, dev->D.z, v, 6 * N * sizeof(fascia_real)));
   kernel(dev, dev->stiffness, dev->D.sample_count, dev->D.z, NULL, 0);
+  if (dev->D.patches.count > 0) kernel(dev, FASCIA_K_PATCH_RATE, dev->D.patches.count, dev->D.z, NULL, 0);
   reduce(dev, FASCIA_T_OPERATOR, (int64_t)N, NULL, NULL, FASCIA_S_STORE);
   return dev->ops->download(dev->L, out, dev->D.Ad, 6 * N * sizeof(fascia_real));
 }

@@ -19,6 +19,7 @@
 
 #include "point/block6.h"
 #include "point/frame.h"
+#include "point/patch.h"
 #include "point/sample.h"
 
 /// A relative CG residual at which CG has converged as far as doubles go
@@ -79,6 +80,7 @@ typedef struct fascia_dev {
   fascia_real *pair_buffer, *pair_mass, *pair_blocks; ///< [6P] [6P] [36P]
   fascia_real *cache, *sample_energy;               ///< [S * FASCIA_PT_CACHE_SIZE], [S]
   int *sample_flags;                                ///< [S]
+  fascia_pt_patches patches;                        ///< volumetric patches (count 0: none); pm.sample_pressure is theirs
   const fascia_dev_settings *set;
   fascia_dev_scalars *sc;
 } fascia_dev;
@@ -105,6 +107,8 @@ typedef enum fascia_dev_kernel {
   FASCIA_K_COPY_GRADIENT,    ///< 6N: g = g_trial
   FASCIA_K_ACCEPT_STATIC,    ///< N: re-anchor at the iterate, d = 0, g = g_trial
   FASCIA_K_ACCEPT_DYNAMIC,   ///< 6N: d = d_trial, g = g_trial
+  FASCIA_K_PATCH_EVALUATE,   ///< patches: mean dilatation, energy, pressures, G_e (before the samples' gradient)
+  FASCIA_K_PATCH_RATE,       ///< patches: rank-one coefficients of in (skipped when CG is not running)
   FASCIA_K_COUNT
 } fascia_dev_kernel;
 
@@ -117,6 +121,7 @@ typedef enum fascia_dev_terms {
   FASCIA_T_CG_START,    ///< N: r = -g, p = 0, z = P^-1 r, dir = z; gives r.r, r.z
   FASCIA_T_OPERATOR,    ///< N: dir = z + beta dir, Ad = A dir (skipped unless CG runs); gives dir.Ad, dir.dir
   FASCIA_T_CG_UPDATE,   ///< N: p, r, z by the step's action; gives r.r, r.z
+  FASCIA_T_PATCHES,     ///< patches: their volumetric energy
   FASCIA_T_COUNT
 } fascia_dev_terms;
 
@@ -130,6 +135,7 @@ typedef enum fascia_dev_step {
   FASCIA_S_CG_START,
   FASCIA_S_CG_CURVATURE,
   FASCIA_S_CG_RESIDUAL,
+  FASCIA_S_PATCHES,      ///< internal energy += the patches' (after FASCIA_S_SAMPLES)
   FASCIA_S_COUNT
 } fascia_dev_step;
 
@@ -282,6 +288,7 @@ static inline FASCIA_HD void fascia_dev_frame_precond_item(const fascia_dev *D, 
   }
   fascia_pt_frame_diagonal_finish(D->A + 9 * (int64_t)i, D->frame_moment + 3 * (int64_t)i, D->gravity,
                                   set->gravity_scale, D->torque + 3 * (int64_t)i, B);
+  if (D->patches.count > 0) fascia_pt_patch_frame_diagonal_add(&D->patches, i, B);
   if (set->mass_coefficient != 0) // lumped blocks stand in for consistent ones (precond.c)
     for (int c = 0; c < 36; ++c) B[c] += set->mass_coefficient * D->mass_blocks[36 * (int64_t)i + c];
   for (int c = 0; c < 6; ++c) B[7 * c] += set->shift * D->damping[6 * (int64_t)i + c];
@@ -345,6 +352,14 @@ static inline FASCIA_HD void fascia_dev_item(const fascia_dev *D, int kernel, in
     D->d[i] = D->d_trial[i];
     D->g[i] = D->g_trial[i];
     break;
+  case FASCIA_K_PATCH_EVALUATE: {
+    const fascia_pt_state st = fascia_dev_state(D);
+    fascia_pt_patch_evaluate(&D->pm, &st, &D->patches, i32);
+    break;
+  }
+  case FASCIA_K_PATCH_RATE:
+    if (D->sc->running) fascia_pt_patch_rate(&D->patches, i32, in);
+    break;
   default: break;
   }
 }
@@ -363,6 +378,7 @@ static inline FASCIA_HD void fascia_dev_operator_term(const fascia_dev *D, int32
   const fascia_real *v = D->z + i6;
   fascia_real out[6];
   fascia_dev_gather6(D, D->pair_buffer, i, out);
+  if (D->patches.count > 0) fascia_pt_patch_frame_add(&D->patches, i, out);
   fascia_pt_frame_gravity_product(D->A + 9 * (int64_t)i, D->frame_moment + 3 * (int64_t)i, D->gravity,
                                   set->gravity_scale, v, out);
   fascia_pt_frame_symmetrizing_product(D->torque + 3 * (int64_t)i, v, out);
@@ -441,6 +457,7 @@ static inline FASCIA_HD void fascia_dev_term(const fascia_dev *D, int terms, int
     if (D->sc->running) fascia_dev_operator_term(D, (int32_t)i, t);
     break;
   case FASCIA_T_CG_UPDATE: fascia_dev_cg_update_term(D, (int32_t)i, t); break;
+  case FASCIA_T_PATCHES: t[0] = D->patches.energy[i]; break;
   default: break;
   }
 }
@@ -469,6 +486,7 @@ static inline FASCIA_HD void fascia_dev_scalar_step(const fascia_dev *D, int ste
     break;
   }
   case FASCIA_S_TARGET: sc->target_norm = sum[0]; break;
+  case FASCIA_S_PATCHES: sc->energy_internal += sum[0]; break;
   case FASCIA_S_SCALE: {
     const fascia_real n = 6 * (fascia_real)D->frame_count;
     sc->scale = sum[0] > 0 ? sum[0] / n : 1;

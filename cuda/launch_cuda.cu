@@ -51,7 +51,7 @@ static constexpr __host__ __device__ int item_threads(int kernel) {
   return kernel == FASCIA_K_SAMPLE_GRADIENT || kernel == FASCIA_K_SAMPLE_STIFFNESS ||
                  kernel == FASCIA_K_SAMPLE_STIFFNESS_SMOOTHING || kernel == FASCIA_K_SAMPLE_STIFFNESS_PAPER ||
                  kernel == FASCIA_K_PAIR_DIAGONAL || kernel == FASCIA_K_CG_SAMPLE_MASS ||
-                 kernel == FASCIA_K_SAMPLE_MASS
+                 kernel == FASCIA_K_SAMPLE_MASS || kernel == FASCIA_K_PATCH_EVALUATE
              ? 128
              : 256;
 }
@@ -365,6 +365,8 @@ static void cuda_kernel(fascia_launcher *L, const fascia_dev *D, fascia_dev_kern
   case FASCIA_K_COPY_GRADIENT: launch_items<FASCIA_K_COPY_GRADIENT>(L, D, n, in, out, value); break;
   case FASCIA_K_ACCEPT_STATIC: launch_items<FASCIA_K_ACCEPT_STATIC>(L, D, n, in, out, value); break;
   case FASCIA_K_ACCEPT_DYNAMIC: launch_items<FASCIA_K_ACCEPT_DYNAMIC>(L, D, n, in, out, value); break;
+  case FASCIA_K_PATCH_EVALUATE: launch_items<FASCIA_K_PATCH_EVALUATE>(L, D, n, in, out, value); break;
+  case FASCIA_K_PATCH_RATE: launch_items<FASCIA_K_PATCH_RATE>(L, D, n, in, out, value); break;
   default: remember_error(L, cudaErrorInvalidValue, "kernel %d (no such kernel)", (int)kernel); break;
   }
 }
@@ -391,6 +393,7 @@ static void cuda_reduce(fascia_launcher *L, const fascia_dev *D, fascia_dev_term
   case FASCIA_T_CG_START: launch_reduce<FASCIA_T_CG_START>(L, D, n, a, b, step); break;
   case FASCIA_T_OPERATOR: launch_reduce<FASCIA_T_OPERATOR>(L, D, n, a, b, step); break;
   case FASCIA_T_CG_UPDATE: launch_reduce<FASCIA_T_CG_UPDATE>(L, D, n, a, b, step); break;
+  case FASCIA_T_PATCHES: launch_reduce<FASCIA_T_PATCHES>(L, D, n, a, b, step); break;
   default: remember_error(L, cudaErrorInvalidValue, "reduction %d (no such terms)", (int)terms); break;
   }
 }

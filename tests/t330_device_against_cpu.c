@@ -13,6 +13,8 @@
 //   - each stiffness kernel: all terms, no coupling, the paper's terms alone;
 //   - a model larger than one block (320 frames), a frame with no samples,
 //     no fixed frame at all (free fall);
+//   - volumetric patches (mean dilatation): random models, and the cantilever
+//     at nu = 0.49 in cell patches;
 //   - a run repeated gives bit-identical states (no atomics in any sum).
 // Tolerances are relative to the largest entry of the CPU's result; the
 // figures each case reached are printed.
@@ -35,6 +37,9 @@ int main(int argc, char **argv) {
     if (!m) return 1;
     m->frame_kind[0] = m->frame_kind[5] = FASCIA_FRAME_FIXED;
     RUN(check_operators(ctx, law ? "random model, Neo-Hookean" : "random model, StVK", m, 99 + law));
+    random_model_patches(m); // the same in volumetric patches (mean dilatation)
+    RUN(check_operators(ctx, law ? "random model in patches, Neo-Hookean" : "random model in patches, StVK", m,
+                        97 + law));
     fascia_model_destroy(&m);
   }
   // many neighbours: meshless beams, 20 and 80 frames per sample (no
@@ -87,6 +92,16 @@ int main(int argc, char **argv) {
   for (int32_t i = 0; i < m->frame_count; ++i) m->frame_kind[i] = FASCIA_FRAME_FREE;
   RUN(check_run(ctx, "free beam (no fixed frame)", m, def, 3, TOL_STEP, 0));
   fascia_model_destroy(&m);
+
+  // nearly incompressible, in cell patches (mean dilatation): a few steps
+  bd.volumetric_patch = FASCIA_SCENE_PATCH_CELL;
+  bd.poisson_ratio = 0.49;
+  CHECK_OK(fascia_scene_beam_build(ctx, &bd, &m), ctx);
+  RUN(check_operators(ctx, "cantilever in cell patches, nu 0.49", m, 4));
+  RUN(check_run(ctx, "cantilever in cell patches, nu 0.49, 3 steps", m, def, 3, TOL_STEP, 0));
+  fascia_model_destroy(&m);
+  bd = fascia_scene_beam_def_default();
+  bd.frames[0] = 10, bd.frames[1] = 2, bd.frames[2] = 2;
 
   // the paper's scheme (no rotation smoothing or coupling): the device's
   // lean stiffness kernel

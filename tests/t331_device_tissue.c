@@ -2,8 +2,8 @@
 // SPDX-FileCopyrightText: fascia developers
 // The device solver against the CPU on a prepared tissue model:
 // the README's demo scene, vesicouterine tissue between the HRA uterus and
-// bladder (MLS shape functions, 8 neighbours; fixed bladder frames, uterus
-// frames on a prescribed motion). Forces, products and diagonal blocks at a
+// bladder (MLS shape functions, 8 neighbours, volumetric patches; fixed
+// bladder frames, uterus frames on a prescribed motion). Forces, products and diagonal blocks at a
 // random deformed state; one step, and 100 steps of the demo's traction.
 // Arguments: --backend NAME and the scene file, or a model file prepared
 // from it (`fascia prep`: how the GPU check carries it to a GPU machine
@@ -44,9 +44,6 @@ int main(int argc, char **argv) {
   } else {
     CHECK_OK(fascia_model_load(ctx, scene, &m), ctx);
   }
-  // the device does not run volumetric patches yet (its backend says so and
-  // auto takes the CPU): compare on the same tissue with full integration
-  for (int32_t s = 0; s < m->sample_count; ++s) m->sample_patch[s] = -1;
   int kinds[3] = {0, 0, 0};
   for (int32_t i = 0; i < m->frame_count; ++i) ++kinds[m->frame_kind[i]];
   printf("prepared tissue: %d frames (%d free, %d fixed, %d prescribed), %d samples\n", (int)m->frame_count, kinds[0],

@@ -12,6 +12,7 @@
 #define FASCIA_SRC_BACKEND_H
 
 #include "fascia/solver.h"
+#include "point/patch.h"
 #include "system.h"
 
 typedef struct fascia_backend_ops fascia_backend_ops;
@@ -36,6 +37,10 @@ typedef struct fascia_backend_setup {
   struct fascia_solver *solver;
   fascia_organs *organs;
   int32_t rigid_bodies; ///< rigid organs in the model
+  /// the volumetric patches as the per-patch math reads them (host arrays;
+  /// count 0: none), and their support entries (the length of entry_frame)
+  const fascia_pt_patches *patches;
+  int32_t patch_entries;
   /// host arrays that cross to a device every step (the step's and the
   /// result's below), for page-locking; count entries
   void *crossing[8];

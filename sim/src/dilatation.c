@@ -167,6 +167,24 @@ fascia_status fascia_dilatation_create(fascia_system *sys, fascia_dilatation **o
     }
   }
   sys->pm.sample_pressure = d->sample_pressure;
+  fascia_pt_patches *v = &d->view;
+  v->count = P;
+  v->patch_offsets = table.patch_offsets;
+  v->patch_samples = table.patch_samples;
+  v->support_offsets = table.support_offsets;
+  v->entry_frame = table.entry_frame;
+  v->entry_patch = table.entry_patch;
+  v->pair_entry = table.pair_entry;
+  v->frame_entry_offsets = table.frame_entry_offsets;
+  v->frame_entries = table.frame_entries;
+  v->lambda = d->patch_lambda;
+  v->volume = d->patch_volume;
+  v->law = d->patch_law;
+  v->theta = d->patch_theta;
+  v->energy = d->patch_energy;
+  v->rate = d->patch_rate;
+  v->entry_gradient = d->entry_gradient;
+  v->sample_pressure = d->sample_pressure;
   *out = d;
   return FASCIA_OK;
 }
@@ -188,76 +206,24 @@ void fascia_dilatation_destroy(fascia_dilatation **dilatation) {
 }
 
 fascia_real fascia_dilatation_evaluate(fascia_system *sys, fascia_dilatation *d) {
-  const fascia_model *m = sys->model;
-  const fascia_patch_table *t = &d->table;
   const fascia_pt_state st = {sys->x, sys->A};
 #pragma omp parallel for num_threads(sys->threads) schedule(static)
-  for (int32_t p = 0; p < t->patch_count; ++p) {
-    for (int64_t q = 6 * (int64_t)t->support_offsets[p]; q < 6 * (int64_t)t->support_offsets[p + 1]; ++q)
-      d->entry_gradient[q] = 0;
-    fascia_real sum = 0;
-    for (int32_t q = t->patch_offsets[p]; q < t->patch_offsets[p + 1]; ++q) {
-      const int32_t s = t->patch_samples[q];
-      const fascia_real v = m->sample_volume[s];
-      fascia_real F[9], dtheta[9];
-      fascia_pt_sample_F(&sys->pm, &st, s, F);
-      sum += v * fascia_pt_dilatation(d->patch_law[p], F, dtheta);
-      // v grad theta_s on each frame of s: (dtheta g, axial(C dtheta^T)), as the stress gradient
-      for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k) {
-        const fascia_real *A = sys->A + 9 * (int64_t)m->pair_frame[k], *g = m->pair_gradient + 3 * (int64_t)k;
-        fascia_real a[3], C[9], M[9], gx[3], gt[3];
-        fascia_pt_pair_C(A, sys->pair_offset + 3 * (int64_t)k, g, m->pair_weight[k], a, C);
-        fascia_pt_mat_vec(dtheta, g, gx);
-        fascia_pt_mat_mult(C, dtheta, M);
-        fascia_pt_axial(M, gt);
-        fascia_real *G = d->entry_gradient + 6 * (int64_t)t->pair_entry[k];
-        for (int r = 0; r < 3; ++r) {
-          G[r] += v * gx[r];
-          G[3 + r] += v * gt[r];
-        }
-      }
-    }
-    const fascia_real theta = sum / d->patch_volume[p], pressure = d->patch_lambda[p] * theta;
-    d->patch_theta[p] = theta;
-    d->patch_energy[p] = FASCIA_R(0.5) * d->patch_volume[p] * pressure * theta;
-    for (int32_t q = t->patch_offsets[p]; q < t->patch_offsets[p + 1]; ++q)
-      d->sample_pressure[t->patch_samples[q]] = pressure;
-  }
+  for (int32_t p = 0; p < d->view.count; ++p) fascia_pt_patch_evaluate(&sys->pm, &st, &d->view, p);
   fascia_real energy = 0;
-  for (int32_t p = 0; p < t->patch_count; ++p) energy += d->patch_energy[p];
+  for (int32_t p = 0; p < d->view.count; ++p) energy += d->patch_energy[p];
   return energy;
 }
 
 void fascia_dilatation_apply_add(const fascia_system *sys, fascia_dilatation *d, const fascia_real *v,
                                  fascia_real *out) {
-  const fascia_patch_table *t = &d->table;
 #pragma omp parallel for num_threads(sys->threads) schedule(static)
-  for (int32_t p = 0; p < t->patch_count; ++p) {
-    fascia_real rate = 0;
-    for (int32_t e = t->support_offsets[p]; e < t->support_offsets[p + 1]; ++e) {
-      const fascia_real *G = d->entry_gradient + 6 * (int64_t)e, *x = v + 6 * (int64_t)t->entry_frame[e];
-      for (int r = 0; r < 6; ++r) rate += G[r] * x[r];
-    }
-    d->patch_rate[p] = d->patch_lambda[p] / d->patch_volume[p] * rate;
-  }
+  for (int32_t p = 0; p < d->view.count; ++p) fascia_pt_patch_rate(&d->view, p, v);
 #pragma omp parallel for num_threads(sys->threads) schedule(static)
-  for (int32_t i = 0; i < sys->frame_count; ++i)
-    for (int32_t r = t->frame_entry_offsets[i]; r < t->frame_entry_offsets[i + 1]; ++r) {
-      const int32_t e = t->frame_entries[r];
-      const fascia_real c = d->patch_rate[t->entry_patch[e]], *G = d->entry_gradient + 6 * (int64_t)e;
-      for (int k = 0; k < 6; ++k) out[6 * (int64_t)i + k] += c * G[k];
-    }
+  for (int32_t i = 0; i < sys->frame_count; ++i) fascia_pt_patch_frame_add(&d->view, i, out + 6 * (int64_t)i);
 }
 
 void fascia_dilatation_diagonal_add(const fascia_system *sys, const fascia_dilatation *d, fascia_real *blocks) {
-  const fascia_patch_table *t = &d->table;
 #pragma omp parallel for num_threads(sys->threads) schedule(static)
   for (int32_t i = 0; i < sys->frame_count; ++i)
-    for (int32_t r = t->frame_entry_offsets[i]; r < t->frame_entry_offsets[i + 1]; ++r) {
-      const int32_t e = t->frame_entries[r], p = t->entry_patch[e];
-      const fascia_real c = d->patch_lambda[p] / d->patch_volume[p], *G = d->entry_gradient + 6 * (int64_t)e;
-      fascia_real *B = blocks + 36 * (int64_t)i;
-      for (int a = 0; a < 6; ++a)
-        for (int b = 0; b < 6; ++b) B[6 * a + b] += c * G[a] * G[b];
-    }
+    fascia_pt_patch_frame_diagonal_add(&d->view, i, blocks + 36 * (int64_t)i);
 }

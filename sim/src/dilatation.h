@@ -19,6 +19,7 @@
 #ifndef FASCIA_SRC_DILATATION_H
 #define FASCIA_SRC_DILATATION_H
 
+#include "point/patch.h"
 #include "system.h"
 
 /// The patches of a model as tables: which samples each holds, and the
@@ -44,18 +45,19 @@ FASCIA_INTERN fascia_status fascia_patch_table_build(fascia_ctx *ctx, const fasc
                                                      fascia_patch_table *table);
 FASCIA_INTERN void fascia_patch_table_free(fascia_patch_table *table);
 
-/// The mean-dilatation term of a system: its tables and what each
-/// evaluation leaves for the Hessian.
+/// The mean-dilatation term of a system: its tables, the arrays it owns,
+/// and the view of both the per-patch math reads (sim/point/patch.h).
 typedef struct fascia_dilatation {
   fascia_patch_table table;
-  fascia_real *patch_lambda;     ///< [patches] Pa
-  fascia_real *patch_volume;     ///< [patches] V_p, m^3
-  int32_t *patch_law;            ///< [patches] FASCIA_PT_LAW_*
-  fascia_real *patch_theta;      ///< [patches] thetabar_p at the last evaluation
-  fascia_real *patch_energy;     ///< [patches] J
-  fascia_real *patch_rate;       ///< [patches] scratch of the Hessian product: G_p . v
-  fascia_real *entry_gradient;   ///< [6 entries] G_p restricted to the entry's frame (x then theta)
-  fascia_real *sample_pressure;  ///< [S] lambda_p thetabar_p on the samples of p, 0 elsewhere
+  fascia_real *patch_lambda;    ///< [patches] Pa
+  fascia_real *patch_volume;    ///< [patches] V_p, m^3
+  int32_t *patch_law;           ///< [patches] FASCIA_PT_LAW_*
+  fascia_real *patch_theta;     ///< [patches] thetabar_p at the last evaluation
+  fascia_real *patch_energy;    ///< [patches] J
+  fascia_real *patch_rate;      ///< [patches] scratch of the Hessian product
+  fascia_real *entry_gradient;  ///< [6 entries] G_p restricted to the entry's frame (x then theta)
+  fascia_real *sample_pressure; ///< [S] lambda_p thetabar_p on the samples of p, 0 elsewhere
+  fascia_pt_patches view;       ///< all of the above, as the per-patch math reads them
 } fascia_dilatation;
 
 /// Makes the term for sys (NULL in *out when the model has no patch): the

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "backend.h"
+#include "dilatation.h"
 #include "organs.h"
 #include "solver_internal.h"
 
@@ -149,8 +150,21 @@ fascia_status fascia_solver_create(fascia_ctx *ctx, const fascia_model *model, c
   if (S->organs) fascia_organs_masks(S->organs, S->mask);
   FASCIA_TRY_GOTO(check_mass(S));
   energy_scale(S);
-  fascia_backend_setup setup = {ctx,      model, S->sys, S->mask, &S->def, S, S->organs, fascia_organs_body_count(S->organs),
-                               {0},      {0},   0};
+  static const fascia_pt_patches no_patches;
+  const fascia_dilatation *patches = S->sys->dilatation;
+  fascia_backend_setup setup = {ctx,
+                                model,
+                                S->sys,
+                                S->mask,
+                                &S->def,
+                                S,
+                                S->organs,
+                                fascia_organs_body_count(S->organs),
+                                patches ? &patches->view : &no_patches,
+                                patches ? patches->table.entry_count : 0,
+                                {0},
+                                {0},
+                                0};
   void *const crossing[] = {S->x_base, S->q_base, S->d, S->inertia_target, S->x, S->q, S->gradient};
   const size_t sizes[] = {3, 4, 6, 6, 3, 4, 6};
   for (size_t k = 0; k < sizeof crossing / sizeof crossing[0]; ++k) {
