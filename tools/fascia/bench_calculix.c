@@ -20,8 +20,9 @@ static const rung c3d8i_ladder[] = {{{4, 2, 2}, 4},    {{8, 2, 2}, 8},    {{16, 
 static const rung c3d20r_ladder[] = {{{2, 2, 2}, 2},   {{4, 2, 2}, 4},   {{8, 2, 2}, 16},  {{16, 2, 2}, 16},
                                      {{32, 2, 2}, 16}, {{32, 4, 4}, 16}, {{64, 4, 4}, 16}, {{64, 8, 8}, 16}};
 
-fascia_status bench_calculix_ladder(fascia_ctx *ctx, const char *program, int element, double reference_uz,
-                                    double target_percent, int threads, bench_peer *peers, int *count) {
+fascia_status bench_calculix_ladder(fascia_ctx *ctx, const char *program, int element,
+                                    const fascia_scene_beam_def *beam, double reference_uz, double target_percent,
+                                    int threads, bench_peer *peers, int *count) {
   const rung *ladder = element == FASCIA_CCX_C3D8I ? c3d8i_ladder : c3d20r_ladder;
   const int n = element == FASCIA_CCX_C3D8I ? (int)(sizeof c3d8i_ladder / sizeof c3d8i_ladder[0])
                                             : (int)(sizeof c3d20r_ladder / sizeof c3d20r_ladder[0]);
@@ -29,6 +30,9 @@ fascia_status bench_calculix_ladder(fascia_ctx *ctx, const char *program, int el
   for (int k = 0; k < n && k < BENCH_PEER_MAX; ++k) {
     fascia_ccx_beam_def def = fascia_ccx_beam_def_default();
     def.element = element;
+    def.beam.law = beam->law;
+    def.beam.youngs_modulus = beam->youngs_modulus;
+    def.beam.poisson_ratio = beam->poisson_ratio;
     memcpy(def.cells, ladder[k].cells, sizeof def.cells);
     def.grading[0] = ladder[k].grading;
     def.tight = 0; // as a user runs it: ccx's own tolerances

@@ -72,13 +72,17 @@ static const char bench_usage[] =
     "  --frames LIST              frame grids NXxNYxNZ (default 20x3x3)\n"
     "  --samples-per-cell LIST    hex, meshless: N^3 per cell; tet: per tetrahedron (default 2; tet 4)\n"
     "  --neighbours LIST          meshless: frames per sample (default 8)\n"
-    "  --rotation-smoothing LIST  0 is the paper's scheme (default 0.1, the beam's default)\n";
+    "  --rotation-smoothing LIST  0 is the paper's scheme (default 0.1, the beam's default)\n"
+    "  --nu LIST                  Poisson ratios with a converged reference: 0.3, 0.45, 0.49 (default 0.3)\n"
+    "  --volumetric LIST          auto (cell patches from nu = 0.3, as fascia beam), full, cell, frame\n"
+    "                             (default auto; docs/mechanics.md, \"Volumetric locking\")\n";
 
 #define PAPER_WARMUP_STEPS 2
 #define PAPER_CG_ITERATIONS 60
 #define PAPER_TIME_STEP 0.01
 #define MAX_LIST 16
 #define MAX_ROWS 64
+#define BENCH_MAX_NU 4 // Poisson ratios with CalculiX peers in one run
 
 /// A comma-separated list option of the cantilever sweep.
 typedef struct value_list {
@@ -87,7 +91,14 @@ typedef struct value_list {
   int32_t grid[MAX_LIST][3];
 } value_list;
 
-// kind: 's' shape name, 'g' grid, 'i' integer >= 1, 'r' real >= 0.
+// The volumetric integration of a cantilever row: fascia beam's choice, or a patch kind.
+#define VOLUMETRIC_AUTO (-1)
+
+static const char *volumetric_name(int v) {
+  return v == VOLUMETRIC_AUTO ? "auto" : v == FASCIA_SCENE_PATCH_CELL ? "cell" : v == FASCIA_SCENE_PATCH_FRAME ? "frame" : "full";
+}
+
+// kind: 's' shape name, 'g' grid, 'i' integer >= 1, 'r' real >= 0, 'v' volumetric integration.
 static int parse_list(const char *text, char kind, value_list *out) {
   char buffer[1024];
   if (strlen(text) >= sizeof buffer) return 0;
@@ -106,6 +117,13 @@ static int parse_list(const char *text, char kind, value_list *out) {
       *v = shape;
     } else if (kind == 'g') {
       if (!cli_parse_grid(item, out->grid[out->count], 2)) return 0;
+    } else if (kind == 'v') {
+      *v = !strcmp(item, "auto")    ? VOLUMETRIC_AUTO
+           : !strcmp(item, "full")  ? FASCIA_SCENE_PATCH_NONE
+           : !strcmp(item, "cell")  ? FASCIA_SCENE_PATCH_CELL
+           : !strcmp(item, "frame") ? FASCIA_SCENE_PATCH_FRAME
+                                    : -2;
+      if (*v == -2) return 0;
     } else if (kind == 'i') {
       if (!cli_parse_count(item, &n, 1)) return 0;
       *v = n;
@@ -129,7 +147,7 @@ typedef struct bench_options {
   const char *backend, *csv;
   int row_count;
   const fascia_scene_paper_row *rows[MAX_ROWS];
-  value_list shapes, grids, spc, neighbours, smoothing;
+  value_list shapes, grids, spc, neighbours, smoothing, nus, volumetric;
   int sweep; ///< a cantilever list option was given
 } bench_options;
 
@@ -171,7 +189,8 @@ static int parse_options(int argc, char **argv, bench_options *opt) {
     else {
       static const char *const valued[] = {"--table", "--backend", "--threads", "--repeats", "--steps", "--csv",
                                            "--scene", "--linear-solver", "--shapes", "--frames",
-                                           "--samples-per-cell", "--neighbours", "--rotation-smoothing"};
+                                           "--samples-per-cell", "--neighbours", "--rotation-smoothing", "--nu",
+                                           "--volumetric"};
       int known = 0;
       for (size_t j = 0; j < sizeof valued / sizeof valued[0]; ++j) known |= !strcmp(o, valued[j]);
       if (!known) return cli_usage_error("bench", "unknown option '%s'", o);
@@ -197,6 +216,8 @@ static int parse_options(int argc, char **argv, bench_options *opt) {
         else if (!strcmp(o, "--frames")) ok = parse_list(v, 'g', &opt->grids);
         else if (!strcmp(o, "--samples-per-cell")) ok = parse_list(v, 'i', &opt->spc);
         else if (!strcmp(o, "--neighbours")) ok = parse_list(v, 'i', &opt->neighbours);
+        else if (!strcmp(o, "--nu")) ok = parse_list(v, 'r', &opt->nus);
+        else if (!strcmp(o, "--volumetric")) ok = parse_list(v, 'v', &opt->volumetric);
         else ok = parse_list(v, 'r', &opt->smoothing);
       }
       if (!ok) {
@@ -499,12 +520,16 @@ typedef struct cantilever_case {
   int32_t grid[3];
   double smoothing;
   int linear; ///< fascia_linear_solver for this row, -1: --linear-solver or the solver's default
+  double nu;
+  int volumetric; ///< VOLUMETRIC_AUTO or a FASCIA_SCENE_PATCH_* kind
 } cantilever_case;
 
 typedef struct cantilever_result {
   cantilever_case c;
   int frames, samples, neighbours, newton, cg, converged, direct, threads;
   double tip[3], error_uz_percent, error_ux_percent, twist, ms;
+  double reference_uz; ///< the converged reference for this row's law, E and nu
+  int patches;         ///< volumetric patches of the model (0: full integration)
   char backend[16], device[256]; ///< where it ran (fascia_solver_backend, _device)
   const bench_peer *peer[FASCIA_CCX_ELEMENT_COUNT_]; ///< CalculiX at the same error, NULL: none or not run
 } cantilever_result;
@@ -515,20 +540,29 @@ static const fascia_ccx_reference *cantilever_reference(void) {
   return fascia_ccx_reference_find(&def);
 }
 
-// The default sweep (about 1 to 2 minutes on 2 cores): grids per shape
+// The default sweep (about 2 to 3 minutes on 2 cores): grids per shape
 // kind, then one knob at a time on the 20 x 3 x 3 hexahedral beam: samples,
 // the paper's scheme (rotation smoothing 0), CG instead of the default
-// linear solver. The paper's scheme on 40 x 5 x 5 is left out: minutes.
+// linear solver; full integration against the default volumetric patches;
+// and the nearly incompressible beam (nu = 0.49). The paper's scheme on
+// 40 x 5 x 5 is left out: minutes.
 static int default_cases(cantilever_case *cases) {
-  static const cantilever_case table[] = {
-      {FASCIA_SCENE_HEX, 2, 0, {10, 2, 2}, 0.1, -1},       {FASCIA_SCENE_HEX, 2, 0, {20, 3, 3}, 0.1, -1},
-      {FASCIA_SCENE_HEX, 2, 0, {40, 5, 5}, 0.1, -1},       {FASCIA_SCENE_HEX, 1, 0, {20, 3, 3}, 0.1, -1},
-      {FASCIA_SCENE_HEX, 3, 0, {20, 3, 3}, 0.1, -1},       {FASCIA_SCENE_HEX, 2, 0, {10, 2, 2}, 0, -1},
-      {FASCIA_SCENE_HEX, 2, 0, {20, 3, 3}, 0, -1},         {FASCIA_SCENE_HEX, 2, 0, {20, 3, 3}, 0.1, FASCIA_LINEAR_CG},
-      {FASCIA_SCENE_TET, 4, 0, {10, 2, 2}, 0.1, -1},       {FASCIA_SCENE_TET, 4, 0, {20, 3, 3}, 0.1, -1},
-      {FASCIA_SCENE_TET, 4, 0, {40, 5, 5}, 0.1, -1},       {FASCIA_SCENE_TET, 1, 0, {20, 3, 3}, 0.1, -1},
-      {FASCIA_SCENE_MESHLESS, 2, 8, {10, 2, 2}, 0.1, -1},  {FASCIA_SCENE_MESHLESS, 2, 8, {20, 3, 3}, 0.1, -1},
-      {FASCIA_SCENE_MESHLESS, 2, 16, {20, 3, 3}, 0.1, -1}, {FASCIA_SCENE_MESHLESS, 2, 8, {40, 5, 5}, 0.1, -1},
+  const int H = FASCIA_SCENE_HEX, T = FASCIA_SCENE_TET, M = FASCIA_SCENE_MESHLESS, A = VOLUMETRIC_AUTO,
+            F = FASCIA_SCENE_PATCH_NONE;
+  const cantilever_case table[] = {
+      {H, 2, 0, {10, 2, 2}, 0.1, -1, 0.3, A},  {H, 2, 0, {20, 3, 3}, 0.1, -1, 0.3, A},
+      {H, 2, 0, {40, 5, 5}, 0.1, -1, 0.3, A},  {H, 1, 0, {20, 3, 3}, 0.1, -1, 0.3, A},
+      {H, 3, 0, {20, 3, 3}, 0.1, -1, 0.3, A},  {H, 2, 0, {10, 2, 2}, 0, -1, 0.3, A},
+      {H, 2, 0, {20, 3, 3}, 0, -1, 0.3, A},    {H, 2, 0, {20, 3, 3}, 0.1, FASCIA_LINEAR_CG, 0.3, A},
+      {T, 4, 0, {10, 2, 2}, 0.1, -1, 0.3, A},  {T, 4, 0, {20, 3, 3}, 0.1, -1, 0.3, A},
+      {T, 4, 0, {40, 5, 5}, 0.1, -1, 0.3, A},  {T, 1, 0, {20, 3, 3}, 0.1, -1, 0.3, A},
+      {M, 2, 8, {10, 2, 2}, 0.1, -1, 0.3, A},  {M, 2, 8, {20, 3, 3}, 0.1, -1, 0.3, A},
+      {M, 2, 16, {20, 3, 3}, 0.1, -1, 0.3, A}, {M, 2, 8, {40, 5, 5}, 0.1, -1, 0.3, A},
+      {H, 2, 0, {20, 3, 3}, 0.1, -1, 0.3, F},  {T, 4, 0, {20, 3, 3}, 0.1, -1, 0.3, F},
+      {M, 2, 8, {20, 3, 3}, 0.1, -1, 0.3, F},  {M, 2, 16, {20, 3, 3}, 0.1, -1, 0.3, F},
+      {H, 2, 0, {20, 3, 3}, 0.1, -1, 0.49, A}, {T, 4, 0, {20, 3, 3}, 0.1, -1, 0.49, A},
+      {M, 2, 8, {20, 3, 3}, 0.1, -1, 0.49, A}, {M, 2, 16, {20, 3, 3}, 0.1, -1, 0.49, A},
+      {H, 2, 0, {20, 3, 3}, 0.1, -1, 0.49, F},
   };
   const int count = (int)(sizeof table / sizeof table[0]);
   memcpy(cases, table, sizeof table);
@@ -538,6 +572,9 @@ static int default_cases(cantilever_case *cases) {
 // The product of the list options, defaults filling the lists not given.
 static int sweep_cases(const bench_options *opt, cantilever_case *cases, int capacity) {
   value_list shapes = opt->shapes, grids = opt->grids, spc = opt->spc, kn = opt->neighbours, sm = opt->smoothing;
+  value_list nus = opt->nus, vol = opt->volumetric;
+  if (!nus.count) nus.count = 1, nus.real[0] = 0.3;
+  if (!vol.count) vol.count = 1, vol.real[0] = VOLUMETRIC_AUTO;
   if (!shapes.count) shapes.count = 1, shapes.real[0] = FASCIA_SCENE_HEX;
   if (!grids.count) grids.count = 1, grids.grid[0][0] = 20, grids.grid[0][1] = 3, grids.grid[0][2] = 3;
   if (!kn.count) kn.count = 1, kn.real[0] = 8;
@@ -547,16 +584,20 @@ static int sweep_cases(const bench_options *opt, cantilever_case *cases, int cap
     for (int b = 0; b < grids.count; ++b)
       for (int c = 0; c < (spc.count ? spc.count : 1); ++c)
         for (int d = 0; d < (shapes.real[a] == FASCIA_SCENE_MESHLESS ? kn.count : 1); ++d)
-          for (int e = 0; e < sm.count; ++e) {
-            if (count == capacity) return -1;
-            cantilever_case *x = cases + count++;
-            x->shape = (int)shapes.real[a];
-            memcpy(x->grid, grids.grid[b], sizeof x->grid);
-            x->spc = spc.count ? (int)spc.real[c] : x->shape == FASCIA_SCENE_TET ? 4 : 2;
-            x->neighbours = x->shape == FASCIA_SCENE_MESHLESS ? (int)kn.real[d] : 0;
-            x->smoothing = sm.real[e];
-            x->linear = -1;
-          }
+          for (int e = 0; e < sm.count; ++e)
+            for (int f = 0; f < nus.count; ++f)
+              for (int g = 0; g < vol.count; ++g) {
+                if (count == capacity) return -1;
+                cantilever_case *x = cases + count++;
+                x->shape = (int)shapes.real[a];
+                memcpy(x->grid, grids.grid[b], sizeof x->grid);
+                x->spc = spc.count ? (int)spc.real[c] : x->shape == FASCIA_SCENE_TET ? 4 : 2;
+                x->neighbours = x->shape == FASCIA_SCENE_MESHLESS ? (int)kn.real[d] : 0;
+                x->smoothing = sm.real[e];
+                x->linear = -1;
+                x->nu = nus.real[f];
+                x->volumetric = (int)vol.real[g];
+              }
   return count;
 }
 
@@ -589,10 +630,21 @@ static fascia_status bench_cantilever_case(fascia_ctx *ctx, const bench_options 
   else bdef.samples_per_cell_dir = c->spc;
   if (c->shape == FASCIA_SCENE_MESHLESS) bdef.neighbours = c->neighbours;
   bdef.rotation_smoothing = c->smoothing;
+  bdef.poisson_ratio = c->nu;
+  bdef.volumetric_patch = c->volumetric != VOLUMETRIC_AUTO         ? c->volumetric
+                          : c->nu >= FASCIA_PATCH_MIN_POISSON ? FASCIA_SCENE_PATCH_CELL
+                                                              : FASCIA_SCENE_PATCH_NONE;
+  const fascia_ccx_reference *ref = fascia_ccx_reference_find(&bdef);
+  if (!ref)
+    return fascia_ctx_fail(ctx, FASCIA_ERR_ARGUMENT, __FILE__, __LINE__,
+                       "cantilever: no converged reference for nu = %g (data/reference/ has 0.3, 0.45 and 0.49)",
+                       c->nu);
+  out->reference_uz = ref->tip_uz;
   fascia_model *model = NULL;
   fascia_solver *solver = NULL;
   fascia_status st = fascia_scene_beam_build(ctx, &bdef, &model);
   if (st != FASCIA_OK) goto cleanup;
+  out->patches = fascia_model_patch_count(model, NULL);
   fascia_solver_def def = fascia_solver_def_default();
   def.backend = opt->backend;
   def.threads = opt->threads;
@@ -628,7 +680,6 @@ static fascia_status bench_cantilever_case(fascia_ctx *ctx, const bench_options 
   fascia_real position[3] = {0, 0, 0};
   if (tip >= 0) fascia_solver_probe_position(solver, tip, position);
   for (int k = 0; k < 3; ++k) out->tip[k] = tip >= 0 ? position[k] - model->probe_position[3 * tip + k] : NAN;
-  const fascia_ccx_reference *ref = cantilever_reference();
   out->error_uz_percent = 100 * (out->tip[2] - ref->tip_uz) / fabs(ref->tip_uz);
   out->error_ux_percent = 100 * (out->tip[0] - ref->tip_ux) / fabs(ref->tip_ux);
   out->twist = max_twist(fascia_solver_frame_rotations(solver), model->frame_count);
@@ -643,17 +694,23 @@ static void grid_text(const int32_t grid[3], char *out, size_t size) {
 }
 
 static void cantilever_text_header(void) {
-  printf("%-8s %-8s %6s %7s %3s %4s %6s %-6s %9s %9s %9s %8s %9s %6s %6s %4s %10s\n", "shape", "grid", "frames",
-         "samples", "k", "spc", "smooth", "linear", "ux_m", "uy_m", "uz_m", "err_uz%", "twist_rad", "newton", "cg",
-         "conv", "ms");
+  printf("%-8s %-8s %6s %7s %3s %4s %6s %4s %-5s %-6s %9s %9s %9s %8s %9s %6s %6s %4s %10s\n", "shape", "grid", "frames",
+         "samples", "k", "spc", "smooth", "nu", "vol", "linear", "ux_m", "uy_m", "uz_m", "err_uz%", "twist_rad", "newton",
+         "cg", "conv", "ms");
+}
+
+// The row's volumetric integration as run: full, or the patch kind.
+static const char *row_volumetric(const cantilever_result *r) {
+  const int v = r->c.volumetric;
+  return r->patches <= 0 ? "full" : v == VOLUMETRIC_AUTO ? "cell" : volumetric_name(v);
 }
 
 static void cantilever_text_row(const cantilever_result *r) {
   char grid[48];
   grid_text(r->c.grid, grid, sizeof grid);
-  printf("%-8s %-8s %6d %7d %3d %4d %6.3g %-6s %9.4f %9.2e %9.4f %8.2f %9.2e %6d %6d %4s %10.1f\n",
+  printf("%-8s %-8s %6d %7d %3d %4d %6.3g %4.2f %-5s %-6s %9.4f %9.2e %9.4f %8.2f %9.2e %6d %6d %4s %10.1f\n",
          fascia_scene_shape_name(r->c.shape), grid, r->frames, r->samples, r->neighbours, r->c.spc, r->c.smoothing,
-         r->direct ? "direct" : "cg", r->tip[0], r->tip[1], r->tip[2], r->error_uz_percent, r->twist, r->newton, r->cg,
+         r->c.nu, row_volumetric(r), r->direct ? "direct" : "cg", r->tip[0], r->tip[1], r->tip[2], r->error_uz_percent, r->twist, r->newton, r->cg,
          r->converged ? "yes" : "NO", r->ms);
   fflush(stdout);
 }
@@ -670,11 +727,14 @@ static cJSON *cantilever_json(const cantilever_result *r) {
   cJSON_AddNumberToObject(o, "neighbours", r->neighbours);
   cJSON_AddNumberToObject(o, "samples_per_cell", r->c.spc);
   cJSON_AddNumberToObject(o, "rotation_smoothing", r->c.smoothing);
+  cJSON_AddNumberToObject(o, "poisson_ratio", r->c.nu);
+  cJSON_AddStringToObject(o, "volumetric", row_volumetric(r));
+  cJSON_AddNumberToObject(o, "volumetric_patches", r->patches);
   cJSON_AddStringToObject(o, "linear_solver", r->direct ? "direct" : "cg");
   cJSON_AddItemToObject(o, "tip_displacement", cJSON_CreateDoubleArray(r->tip, 3));
   cJSON_AddNumberToObject(o, "tip_ux", r->tip[0]);
   cJSON_AddNumberToObject(o, "tip_uz", r->tip[2]);
-  cJSON_AddNumberToObject(o, "reference_uz", cantilever_reference()->tip_uz);
+  cJSON_AddNumberToObject(o, "reference_uz", r->reference_uz);
   cJSON_AddNumberToObject(o, "error_uz_percent", r->error_uz_percent);
   cJSON_AddNumberToObject(o, "error_ux_percent", r->error_ux_percent);
   cJSON_AddNumberToObject(o, "twist_rad", r->twist);
@@ -707,7 +767,8 @@ static cJSON *cantilever_json(const cantilever_result *r) {
 }
 
 static void cantilever_csv(FILE *f, const cantilever_result *rows, int count) {
-  fprintf(f, "shape,grid,frames,samples,neighbours,samples_per_cell,rotation_smoothing,linear_solver,tip_ux,tip_uy,"
+  fprintf(f, "shape,grid,frames,samples,neighbours,samples_per_cell,rotation_smoothing,poisson_ratio,volumetric,"
+             "linear_solver,tip_ux,tip_uy,"
              "tip_uz,reference_uz,error_uz_percent,error_ux_percent,twist_rad,newton_iterations,cg_iterations,"
              "converged,ms,threads,backend,device,calculix_c3d20r_mesh,calculix_c3d20r_error_uz_percent,"
              "calculix_c3d20r_ms,calculix_c3d8i_mesh,calculix_c3d8i_error_uz_percent,calculix_c3d8i_ms\n");
@@ -715,9 +776,9 @@ static void cantilever_csv(FILE *f, const cantilever_result *rows, int count) {
     const cantilever_result *r = rows + k;
     char grid[48];
     grid_text(r->c.grid, grid, sizeof grid);
-    fprintf(f, "%s,%s,%d,%d,%d,%d,%g,%s,%.6f,%.3e,%.6f,%.3f,%.3f,%.3f,%.3e,%d,%d,%d,%.1f,%d,%s,",
+    fprintf(f, "%s,%s,%d,%d,%d,%d,%g,%g,%s,%s,%.6f,%.3e,%.6f,%.3f,%.3f,%.3f,%.3e,%d,%d,%d,%.1f,%d,%s,",
             fascia_scene_shape_name(r->c.shape), grid, r->frames, r->samples, r->neighbours, r->c.spc, r->c.smoothing,
-            r->direct ? "direct" : "cg", r->tip[0], r->tip[1], r->tip[2], cantilever_reference()->tip_uz,
+            r->c.nu, row_volumetric(r), r->direct ? "direct" : "cg", r->tip[0], r->tip[1], r->tip[2], r->reference_uz,
             r->error_uz_percent, r->error_ux_percent, r->twist, r->newton, r->cg, r->converged, r->ms, r->threads,
             r->backend);
     cli_csv_text(f, r->device);
@@ -734,11 +795,11 @@ static void cantilever_csv(FILE *f, const cantilever_result *rows, int count) {
 
 // ------------------------------------------------------- CalculiX peer --
 
-static void peer_ladder_text(const bench_peer *p, int count) {
+static void peer_ladder_text(double nu, const bench_peer *p, int count) {
   for (int k = 0; k < count; ++k, ++p) {
     char mesh[64];
     bench_calculix_mesh_text(p, mesh, sizeof mesh);
-    printf("%-7s %-16s %7d %9.4f %8.3f %6d %10.1f\n", fascia_ccx_element_name(p->element), mesh, p->result.dofs,
+    printf("%-4.2f %-7s %-16s %7d %9.4f %8.3f %6d %10.1f\n", nu, fascia_ccx_element_name(p->element), mesh, p->result.dofs,
            p->result.tip[2], p->error_uz_percent, p->result.iterations, p->result.ms);
   }
 }
@@ -746,7 +807,7 @@ static void peer_ladder_text(const bench_peer *p, int count) {
 // fascia's rows against CalculiX's cheapest mesh at least as accurate.
 static void peer_match_text(const cantilever_result *rows, int count) {
   printf("\ntime to the same error: each row against CalculiX's fastest mesh at least as accurate\n"
-         "%-8s %-8s %8s %10s", "shape", "grid", "err_uz%", "ms");
+         "%-8s %-8s %4s %-5s %8s %10s", "shape", "grid", "nu", "vol", "err_uz%", "ms");
   for (int e = 0; e < FASCIA_CCX_ELEMENT_COUNT_; ++e)
     printf(" | %-6s %-9s %8s %10s %7s", fascia_ccx_element_name(e), "mesh", "err_uz%", "ms", "ratio");
   printf("\n");
@@ -754,7 +815,8 @@ static void peer_match_text(const cantilever_result *rows, int count) {
     const cantilever_result *r = rows + k;
     char grid[48];
     grid_text(r->c.grid, grid, sizeof grid);
-    printf("%-8s %-8s %8.3f %10.1f", fascia_scene_shape_name(r->c.shape), grid, r->error_uz_percent, r->ms);
+    printf("%-8s %-8s %4.2f %-5s %8.3f %10.1f", fascia_scene_shape_name(r->c.shape), grid, r->c.nu, row_volumetric(r),
+           r->error_uz_percent, r->ms);
     for (int e = 0; e < FASCIA_CCX_ELEMENT_COUNT_; ++e) {
       const bench_peer *p = r->peer[e];
       char mesh[64] = "not reached";
@@ -767,37 +829,53 @@ static void peer_match_text(const cantilever_result *rows, int count) {
   printf("ratio: fascia's ms over CalculiX's (< 1: fascia faster at that error)\n");
 }
 
-// CalculiX on the same cantilever, each element's ladder solved until it is
-// as accurate as the most accurate converged row; each row then gets the
-// fastest mesh at least as accurate as itself. Without ccx: a line saying so.
+// CalculiX on the same cantilever, per Poisson ratio of the rows: each
+// element's ladder solved until it is as accurate as the most accurate
+// converged row of that ratio; each row then gets the fastest mesh at least
+// as accurate as itself. Without ccx: a line saying so.
 static int cantilever_peers(fascia_ctx *ctx, const bench_options *opt, cantilever_result *rows, int count, int show,
-                            bench_peer (*peers)[BENCH_PEER_MAX]) {
+                            bench_peer (*peers)[FASCIA_CCX_ELEMENT_COUNT_][BENCH_PEER_MAX]) {
   const char *program = fascia_ccx_program();
   if (!program) {
     if (!opt->json) printf("\nCalculiX: not installed (apt-get install calculix-ccx), no peer figures\n");
     return 0;
   }
-  double target = INFINITY;
-  for (int k = 0; k < count; ++k)
-    if (rows[k].converged && fabs(rows[k].error_uz_percent) < target) target = fabs(rows[k].error_uz_percent);
-  if (!isfinite(target)) return 0;
+  double nus[BENCH_MAX_NU];
+  int nu_count = 0;
+  for (int k = 0; k < count; ++k) {
+    int known = 0;
+    for (int j = 0; j < nu_count; ++j) known |= nus[j] == rows[k].c.nu;
+    if (!known && rows[k].converged && nu_count < BENCH_MAX_NU) nus[nu_count++] = rows[k].c.nu;
+  }
   const int threads = opt->threads > 0 ? opt->threads : fascia_ctx_threads(ctx);
-  const double reference = cantilever_reference()->tip_uz;
-  int solved[FASCIA_CCX_ELEMENT_COUNT_] = {0};
-  for (int e = 0; e < FASCIA_CCX_ELEMENT_COUNT_; ++e) {
-    if (show) progress_line("calculix", e + 1, FASCIA_CCX_ELEMENT_COUNT_, fascia_ccx_element_name(e));
-    const fascia_status st = bench_calculix_ladder(ctx, program, e, reference, target, threads, peers[e], solved + e);
-    if (show) fprintf(stderr, "\r\033[K");
-    if (st != FASCIA_OK) return cli_fail("bench", ctx, st);
+  int solved[BENCH_MAX_NU][FASCIA_CCX_ELEMENT_COUNT_] = {{0}};
+  for (int j = 0; j < nu_count; ++j) {
+    double target = INFINITY, reference = 0;
     for (int k = 0; k < count; ++k)
-      if (rows[k].converged) rows[k].peer[e] = bench_calculix_match(peers[e], solved[e], rows[k].error_uz_percent);
+      if (rows[k].c.nu == nus[j] && rows[k].converged && fabs(rows[k].error_uz_percent) < target) {
+        target = fabs(rows[k].error_uz_percent);
+        reference = rows[k].reference_uz;
+      }
+    fascia_scene_beam_def beam = fascia_scene_beam_def_default();
+    beam.poisson_ratio = nus[j];
+    for (int e = 0; e < FASCIA_CCX_ELEMENT_COUNT_; ++e) {
+      if (show) progress_line("calculix", e + 1, FASCIA_CCX_ELEMENT_COUNT_, fascia_ccx_element_name(e));
+      const fascia_status st =
+          bench_calculix_ladder(ctx, program, e, &beam, reference, target, threads, peers[j][e], &solved[j][e]);
+      if (show) fprintf(stderr, "\r\033[K");
+      if (st != FASCIA_OK) return cli_fail("bench", ctx, st);
+      for (int k = 0; k < count; ++k)
+        if (rows[k].converged && rows[k].c.nu == nus[j])
+          rows[k].peer[e] = bench_calculix_match(peers[j][e], solved[j][e], rows[k].error_uz_percent);
+    }
   }
   if (opt->json) return 0;
   printf("\nCalculiX (%s) on the same cantilever: NLGEOM, St. Venant-Kirchhoff, its default controls, %d thread(s),\n"
          "meshes graded towards the clamp (g: largest over smallest element along x); ms: wall time, deck and\n"
-         "files included\n%-7s %-16s %7s %9s %8s %6s %10s\n",
-         program, threads, "element", "mesh", "dofs", "uz_m", "err_uz%", "newton", "ms");
-  for (int e = 0; e < FASCIA_CCX_ELEMENT_COUNT_; ++e) peer_ladder_text(peers[e], solved[e]);
+         "files included\n%-4s %-7s %-16s %7s %9s %8s %6s %10s\n",
+         program, threads, "nu", "element", "mesh", "dofs", "uz_m", "err_uz%", "newton", "ms");
+  for (int j = 0; j < nu_count; ++j)
+    for (int e = 0; e < FASCIA_CCX_ELEMENT_COUNT_; ++e) peer_ladder_text(nus[j], peers[j][e], solved[j][e]);
   peer_match_text(rows, count);
   return 0;
 }
@@ -854,7 +932,7 @@ int cmd_bench(int argc, char **argv) {
   }
   paper_result *paper = calloc((size_t)paper_count + 1, sizeof *paper);
   cantilever_result *cant = calloc((size_t)case_count + 1, sizeof *cant);
-  bench_peer peers[FASCIA_CCX_ELEMENT_COUNT_][BENCH_PEER_MAX];
+  static bench_peer peers[BENCH_MAX_NU][FASCIA_CCX_ELEMENT_COUNT_][BENCH_PEER_MAX];
   cJSON *array = opt.json ? cJSON_CreateArray() : NULL;
   fascia_ctx *ctx = cli_ctx(opt.threads, 0);
   const int show = progress_wanted();
@@ -893,8 +971,10 @@ int cmd_bench(int argc, char **argv) {
     if (opt.json) continue;
     if (k == 0) {
       if (paper_count) printf("\n");
-      printf("cantilever 16 x 1 x 1 m, static; reference tip u = (%.4f, 0, %.4f) m (CalculiX, converged:\n"
-             "data/reference/); err_uz%% > 0: too stiff; twist: largest |rotation about x| over frames\n",
+      printf("cantilever 16 x 1 x 1 m, static; reference tip u = (%.4f, 0, %.4f) m at nu = 0.3 (CalculiX, converged:\n"
+             "data/reference/, one per nu); err_uz%% > 0: too stiff; twist: largest |rotation about x| over frames;\n"
+             "vol: volumetric integration (full, or mean dilatation over cell patches: fascia beam's default from\n"
+             "nu = 0.3)\n",
              cantilever_reference()->tip_ux, cantilever_reference()->tip_uz);
       shown[0] = '\0';
     }
