@@ -7,7 +7,8 @@
 # solved statically; each row's error is that of the tissue's mean
 # displacement at equilibrium (volume-weighted over samples, `fascia run
 # --json` displacement.mean) against the finest resolution. Writes CSV on
-# stdout (or to $1).
+# stdout (or to $1). NU sets the tissue's Poisson ratio, PATCH the radius of
+# its volumetric patches per frame spacing (0: none; unset: prep's default).
 # Needs a build with prep (build/tools/fascia, or FASCIA=path).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/../.." && pwd)"
@@ -18,13 +19,18 @@ trap 'rm -rf "$work"' EXIT
 out="${1:-/dev/stdout}"
 spacings="${SPACINGS:-0.008 0.006 0.005 0.004 0.003}" # m, coarse to fine; the last is the reference
 ratio="${RATIO:-3}"                                       # frame spacing / sample spacing
+nu="${NU:-}"                                              # Poisson ratio of the tissue (default: the scene's, 0.4)
+patch="${PATCH:-}"                                        # patch radius / frame spacing (default: prep's rule; 0: none)
 rows=()
 # the first number under "key" in a JSON file (the top-level keys come first)
 value() { tr -d '\n ' < "$1" | grep -o "\"$2\":[-0-9.e+]*" | head -n 1 | sed 's/.*://'; }
 for h in $spacings; do
   half=$(awk -v h="$h" -v r="$ratio" 'BEGIN { printf "%.6g", h / r }')
   # the mesh paths are relative to the scene: make them absolute for the copy
-  sed -e "s|\"frame_spacing\": [0-9.e-]*|\"frame_spacing\": $h|" \
+  extra=""
+  [ -n "$patch" ] && extra=", \"patch_radius\": $(awk -v h="$h" -v f="$patch" 'BEGIN { printf "%.6g", h * f }')"
+  sed -e "s|\"frame_spacing\": [0-9.e-]*|\"frame_spacing\": $h$extra|" \
+      -e "s|\"poisson_ratio\": [0-9.e-]*|\"poisson_ratio\": ${nu:-0.4}|" \
       -e "s|\"sample_spacing\": [0-9.e-]*|\"sample_spacing\": $half|" \
       -e "s|\"\.\./meshes/|\"$root/data/meshes/|g" "$scene" > "$work/scene-$h.json"
   t0=$(date +%s.%N)
