@@ -71,6 +71,7 @@ static const char *const problem_names[PROBLEM_COUNT] = {"cantilever", "stiff", 
 typedef struct row {
   const char *group, *preset; ///< preset NULL unless group "preset"
   int problem, dynamic, shape, spc, neighbours, reduced; ///< reduced: selective reduced integration
+  int patch; ///< volumetric patches (FASCIA_SCENE_PATCH_*): mean dilatation per cell
   int32_t grid[3];
   fascia_solver_def solver;
   // results
@@ -104,6 +105,7 @@ static fascia_scene_beam_def beam_def(const row *r) {
   if (r->problem == PROBLEM_STIFF) b.youngs_modulus = 4e6;
   if (r->problem == PROBLEM_INCOMPRESSIBLE) b.poisson_ratio = 0.49;
   b.reduced_volumetric = r->reduced;
+  b.volumetric_patch = r->patch;
   return b;
 }
 
@@ -199,6 +201,14 @@ static void discretization_rows(row *rows, int *count, int problem, int quick) {
   add_row(rows, count, "discretization", problem, 0, FASCIA_SCENE_HEX, "10x2x2", 2, 0)->reduced = 1;
   add_row(rows, count, "discretization", problem, 0, FASCIA_SCENE_HEX, "20x3x3", 2, 0)->reduced = 1;
   if (!quick && main_problem) add_row(rows, count, "discretization", problem, 0, FASCIA_SCENE_HEX, "40x5x5", 2, 0)->reduced = 1;
+  // volumetric patches, the default of fascia beam (mean dilatation per cell)
+  for (int g = 0; g < n; ++g) {
+    if (!strcmp(grids[g], "30x4x4") || (problem == PROBLEM_INCOMPRESSIBLE && !strcmp(grids[g], "40x5x5"))) continue;
+    add_row(rows, count, "discretization", problem, 0, FASCIA_SCENE_HEX, grids[g], 2, 0)->patch = FASCIA_SCENE_PATCH_CELL;
+    add_row(rows, count, "discretization", problem, 0, FASCIA_SCENE_TET, grids[g], 4, 0)->patch = FASCIA_SCENE_PATCH_CELL;
+    add_row(rows, count, "discretization", problem, 0, FASCIA_SCENE_MESHLESS, grids[g], 2, 8)->patch = FASCIA_SCENE_PATCH_CELL;
+  }
+  add_row(rows, count, "discretization", problem, 0, FASCIA_SCENE_MESHLESS, "20x3x3", 2, 16)->patch = FASCIA_SCENE_PATCH_CELL;
   if (!main_problem) return;
   add_row(rows, count, "discretization", problem, 0, FASCIA_SCENE_HEX, "20x3x3", 1, 0);
   add_row(rows, count, "discretization", problem, 0, FASCIA_SCENE_HEX, "20x3x3", 3, 0);
@@ -338,7 +348,8 @@ static void row_label(const row *r, char *out, size_t size) {
   if (!r->dynamic) {
     if (r->shape == FASCIA_SCENE_MESHLESS)
       snprintf(out, size, "meshless %s k%d s%d", grid, r->neighbours, r->spc);
-    else snprintf(out, size, "%s %s s%d%s", fascia_scene_shape_name(r->shape), grid, r->spc, r->reduced ? " sri" : "");
+    else snprintf(out, size, "%s %s s%d%s", fascia_scene_shape_name(r->shape), grid, r->spc,
+                  r->reduced ? " sri" : r->patch ? " patches" : "");
   } else if (r->preset) {
     snprintf(out, size, "preset %s", r->preset);
   } else {
@@ -356,7 +367,8 @@ static void row_label(const row *r, char *out, size_t size) {
 static const char csv_header[] =
     "group,problem,mode,label,shape,grid,frames,dofs,samples,samples_per_cell,neighbours,dt,newton_iterations,"
     "newton_tolerance,linear_solver,assembled,precond,cg_iterations,cg_fixed,cg_tolerance,tip_uz,reference_uz,"
-    "error_percent,ms,ms_unit,newton_total,cg_total,converged,memory_mb,peak_memory_mb,pareto,backend,device\n";
+    "error_percent,ms,ms_unit,newton_total,cg_total,converged,memory_mb,peak_memory_mb,pareto,volumetric,backend,"
+    "device\n";
 
 static void csv_row(FILE *f, const row *r) {
   char label[96], grid[32];
@@ -370,7 +382,7 @@ static void csv_row(FILE *f, const row *r) {
           precond_name(d->precond), d->cg_iterations, d->cg_fixed, d->cg_tolerance, r->uz, r->reference,
           r->error_percent, r->ms, r->dynamic ? "per_step" : "per_solve", r->newton, r->cg, r->converged,
           r->memory_mb, r->peak_mb, r->pareto);
-  fprintf(f, ",%s,", r->backend);
+  fprintf(f, ",%s,%s,", r->reduced ? "reduced" : r->patch ? "cell" : "full", r->backend);
   cli_csv_text(f, r->device);
   fputc('\n', f);
 }
@@ -495,10 +507,11 @@ static int write_convergence(const tradeoff_options *opt, const row *rows, int c
   for (int s = 0; s < FASCIA_SCENE_SHAPE_COUNT_; ++s)
     for (int k = 0; k < count; ++k) {
       const row *r = rows + k;
-      if (r->dynamic || r->problem != PROBLEM_CANTILEVER || r->shape != s ||
+      if (r->dynamic || r->problem != PROBLEM_CANTILEVER || r->shape != s || r->reduced ||
           r->spc != (s == FASCIA_SCENE_TET ? 4 : 2) || (s == FASCIA_SCENE_MESHLESS && r->neighbours != 8))
         continue;
-      fprintf(f, "fascia-%s,%dx%dx%d,%d,%.6f,%.4f\n", fascia_scene_shape_name(s), (int)r->grid[0], (int)r->grid[1],
+      fprintf(f, "fascia-%s%s,%dx%dx%d,%d,%.6f,%.4f\n", fascia_scene_shape_name(s), r->patch ? "-patches" : "",
+              (int)r->grid[0], (int)r->grid[1],
               (int)r->grid[2], 6 * r->frames, r->uz,
               100 * (r->uz - calculix_uz(PROBLEM_CANTILEVER)) / fabs(calculix_uz(PROBLEM_CANTILEVER)));
     }
@@ -538,7 +551,8 @@ static int write_plot_scripts(const tradeoff_options *opt) {
   fprintf(f,
           "set title 'cantilever 16 x 1 x 1 m, static, StVK: reference uz = %.4f m'\n"
           "plot %.5f w l dt 2 lc 'black' t 'converged FE reference (CalculiX)', \\\n"
-          "  for [m in 'fascia-hex fascia-tet fascia-meshless calculix-c3d8'] 'convergence.csv' "
+          "  for [m in 'fascia-hex fascia-tet fascia-meshless fascia-hex-patches fascia-tet-patches "
+          "fascia-meshless-patches calculix-c3d8'] 'convergence.csv' "
           "u (strcol(1) eq m ? $3 : NaN):4 w lp pt 7 lw 2 t m\n",
           calculix_uz(PROBLEM_CANTILEVER), calculix_uz(PROBLEM_CANTILEVER));
   return close_out(opt, file);
