@@ -9,11 +9,7 @@
 
 #include "assemble.h"
 #include "dilatation.h"
-
-static int compare_int32(const void *a, const void *b) {
-  const int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
-  return (x > y) - (x < y);
-}
+#include "index_set.h"
 
 static int32_t find_block(const fascia_bsr *B, int32_t i, int32_t j);
 
@@ -96,11 +92,7 @@ fascia_status fascia_bsr_create(fascia_ctx *ctx, const fascia_model *m, fascia_b
       for (int32_t e = patches.support_offsets[p]; e < patches.support_offsets[p + 1]; ++e)
         row[len++] = patches.entry_frame[e];
     }
-    qsort(row, (size_t)len, sizeof(int32_t), compare_int32);
-    int32_t unique = 0;
-    for (int32_t k = 0; k < len; ++k)
-      if (k == 0 || row[k] != row[k - 1]) row[unique++] = row[k];
-    count += unique;
+    count += fascia_index_set_make(row, len);
     out->row_offsets[i + 1] = (int32_t)count;
   }
   fascia_patch_table_free(&patches);
@@ -178,13 +170,7 @@ void fascia_bsr_apply(const fascia_bsr *B, int threads, const fascia_real *v, fa
 }
 
 static int32_t find_block(const fascia_bsr *B, int32_t i, int32_t j) {
-  int32_t lo = B->row_offsets[i], hi = B->row_offsets[i + 1] - 1;
-  while (lo < hi) {
-    const int32_t mid = (lo + hi) / 2;
-    if (B->cols[mid] < j) lo = mid + 1;
-    else hi = mid;
-  }
-  return lo;
+  return fascia_index_set_find(B->cols, B->row_offsets[i], B->row_offsets[i + 1], j);
 }
 
 // Rows of the consistent mass: for each sample of frame i, the product with

@@ -7,11 +7,7 @@
 #include <string.h>
 
 #include "dilatation.h"
-
-static int compare_int32(const void *a, const void *b) {
-  const int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
-  return (x > y) - (x < y);
-}
+#include "index_set.h"
 
 void fascia_patch_table_free(fascia_patch_table *t) {
   free(t->patch_offsets);
@@ -25,15 +21,9 @@ void fascia_patch_table_free(fascia_patch_table *t) {
   memset(t, 0, sizeof *t);
 }
 
-// Entry of frame i in patch p's support (ascending frames: bisection).
+// Entry of frame i in patch p's support.
 static int32_t find_entry(const fascia_patch_table *t, int32_t p, int32_t i) {
-  int32_t lo = t->support_offsets[p], hi = t->support_offsets[p + 1] - 1;
-  while (lo < hi) {
-    const int32_t mid = (lo + hi) / 2;
-    if (t->entry_frame[mid] < i) lo = mid + 1;
-    else hi = mid;
-  }
-  return lo;
+  return fascia_index_set_find(t->entry_frame, t->support_offsets[p], t->support_offsets[p + 1], i);
 }
 
 fascia_status fascia_patch_table_build(fascia_ctx *ctx, const fascia_model *m, fascia_patch_table *t) {
@@ -88,11 +78,7 @@ fascia_status fascia_patch_table_build(fascia_ctx *ctx, const fascia_model *m, f
       const int32_t s = t->patch_samples[q];
       for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k) row[len++] = m->pair_frame[k];
     }
-    qsort(row, (size_t)len, sizeof(int32_t), compare_int32);
-    int32_t unique = 0;
-    for (int32_t k = 0; k < len; ++k)
-      if (k == 0 || row[k] != row[k - 1]) row[unique++] = row[k];
-    count += unique;
+    count += fascia_index_set_make(row, len);
     t->support_offsets[p + 1] = (int32_t)count;
   }
   t->entry_count = (int32_t)count;

@@ -7,6 +7,6 @@ set grid
 set key bottom right
 set xlabel 'degrees of freedom (fascia: 6 x frames; FEM: 3 x nodes)'
 set ylabel 'tip uz (m)'
-set title 'cantilever 16 x 1 x 1 m, static, StVK: reference uz = -6.511 m'
-plot -6.511 w l dt 2 lc 'black' t 'converged FE reference', \
-  for [m in 'fascia-hex fascia-tet fascia-meshless calculix-c3d8'] 'convergence.csv' u (strcol(1) eq m ? $3 : NaN):4 w lp pt 7 lw 2 t m
+set title 'cantilever 16 x 1 x 1 m, static, StVK: reference uz = -6.5104 m'
+plot -6.51045 w l dt 2 lc 'black' t 'converged FE reference (CalculiX)', \
+  for [m in 'fascia-hex fascia-tet fascia-meshless fascia-hex-patches fascia-tet-patches fascia-meshless-patches calculix-c3d8'] 'convergence.csv' u (strcol(1) eq m ? $3 : NaN):4 w lp pt 7 lw 2 t m
