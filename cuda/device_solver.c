@@ -149,6 +149,7 @@ static fascia_status upload_model(fascia_device *dev, const fascia_backend_setup
   MAKE(A_mass, 9 * N, fascia_real);
   MAKE(d, 6 * N, fascia_real);
   MAKE(d_trial, 6 * N, fascia_real);
+  MAKE(saved, 13 * N, fascia_real);
   MAKE(target, 6 * N, fascia_real);
   MAKE(target_M, 6 * N, fascia_real);
   MAKE(g, 6 * N, fascia_real);
@@ -440,6 +441,16 @@ static void device_accept(fascia_backend *backend) {
   else kernel(dev, FASCIA_K_ACCEPT_STATIC, N, NULL, NULL, 0);
 }
 
+static void device_save(fascia_backend *backend) {
+  fascia_device *dev = (fascia_device *)backend;
+  kernel(dev, FASCIA_K_SAVE, dev->frame_count, NULL, NULL, 0);
+}
+
+static void device_restore(fascia_backend *backend) {
+  fascia_device *dev = (fascia_device *)backend;
+  kernel(dev, FASCIA_K_RESTORE, dev->frame_count, NULL, NULL, 0);
+}
+
 // The state of the last evaluation back to the host, with the host system's
 // energies and inversions.
 static fascia_status device_finish(fascia_backend *backend, const fascia_step_result *result) {
@@ -519,7 +530,8 @@ static int launcher_available(const fascia_launcher_ops *ops, char *detail, size
 #define DEVICE_BACKEND_OPS                                                                                            \
   .supports = device_supports, .destroy = device_destroy, .describe = device_describe, .host_evaluates = 0,            \
   .begin = device_begin, .evaluate = device_evaluate, .prepare = device_prepare, .direction = device_direction,        \
-  .accept = device_accept, .finish = device_finish, .gradient = device_gradient,                                       \
+  .accept = device_accept, .save = device_save, .restore = device_restore, .finish = device_finish,                     \
+  .gradient = device_gradient,                                                                                        \
   .hessian_apply = device_hessian_apply, .hessian_diagonal = device_hessian_diagonal
 
 static int emulated_available(char *detail, size_t size) {

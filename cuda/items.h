@@ -73,6 +73,7 @@ typedef struct fascia_dev {
   // state: anchor, increments, current iterate
   fascia_real *x_base, *q_base, *x, *q, *A, *A_mass; ///< [3N] [4N] [3N] [4N] [9N] [9N]
   fascia_real *d, *d_trial, *target, *target_M;     ///< [6N] each
+  fascia_real *saved;                               ///< [13N] a saved iterate: x_base, q_base, d (the watchdog)
   fascia_real *g, *g_trial, *p;                     ///< gradient at d and at d_trial, direction
   fascia_real *r, *z, *dir, *Ad;                    ///< CG vectors [6N]
   fascia_real *mass_blocks, *blocks, *inverse;      ///< [36N] lumped mass, tangent diagonal, preconditioner
@@ -109,6 +110,8 @@ typedef enum fascia_dev_kernel {
   FASCIA_K_ACCEPT_DYNAMIC,   ///< 6N: d = d_trial, g = g_trial
   FASCIA_K_PATCH_EVALUATE,   ///< patches: mean dilatation, energy, pressures, G_e (before the samples' gradient)
   FASCIA_K_PATCH_RATE,       ///< patches: rank-one coefficients of in (skipped when CG is not running)
+  FASCIA_K_SAVE,             ///< N: saved = the iterate (x_base, q_base, d)
+  FASCIA_K_RESTORE,          ///< N: the iterate = saved
   FASCIA_K_COUNT
 } fascia_dev_kernel;
 
@@ -314,6 +317,19 @@ static inline FASCIA_HD void fascia_dev_accept_static_item(const fascia_dev *D, 
   }
 }
 
+// Frame i's part of the iterate to the saved copy (save 1) or back (0).
+static inline FASCIA_HD void fascia_dev_saved_item(const fascia_dev *D, int32_t i, int save) {
+  const int64_t N = D->frame_count;
+  fascia_real *parts[3] = {D->x_base + 3 * (int64_t)i, D->q_base + 4 * (int64_t)i, D->d + 6 * (int64_t)i};
+  fascia_real *copies[3] = {D->saved + 3 * (int64_t)i, D->saved + 3 * N + 4 * (int64_t)i, D->saved + 7 * N + 6 * (int64_t)i};
+  const int sizes[3] = {3, 4, 6};
+  for (int k = 0; k < 3; ++k)
+    for (int c = 0; c < sizes[k]; ++c) {
+      if (save) copies[k][c] = parts[k][c];
+      else parts[k][c] = copies[k][c];
+    }
+}
+
 /// Runs item i of a per-item kernel; in, out and value as the kernel's
 /// comment says.
 static inline FASCIA_HD void fascia_dev_item(const fascia_dev *D, int kernel, int64_t i, const fascia_real *in,
@@ -360,6 +376,8 @@ static inline FASCIA_HD void fascia_dev_item(const fascia_dev *D, int kernel, in
   case FASCIA_K_PATCH_RATE:
     if (D->sc->running) fascia_pt_patch_rate(&D->patches, i32, in);
     break;
+  case FASCIA_K_SAVE:
+  case FASCIA_K_RESTORE: fascia_dev_saved_item(D, i32, kernel == FASCIA_K_SAVE); break;
   default: break;
   }
 }

@@ -367,6 +367,8 @@ static void cuda_kernel(fascia_launcher *L, const fascia_dev *D, fascia_dev_kern
   case FASCIA_K_ACCEPT_DYNAMIC: launch_items<FASCIA_K_ACCEPT_DYNAMIC>(L, D, n, in, out, value); break;
   case FASCIA_K_PATCH_EVALUATE: launch_items<FASCIA_K_PATCH_EVALUATE>(L, D, n, in, out, value); break;
   case FASCIA_K_PATCH_RATE: launch_items<FASCIA_K_PATCH_RATE>(L, D, n, in, out, value); break;
+  case FASCIA_K_SAVE: launch_items<FASCIA_K_SAVE>(L, D, n, in, out, value); break;
+  case FASCIA_K_RESTORE: launch_items<FASCIA_K_RESTORE>(L, D, n, in, out, value); break;
   default: remember_error(L, cudaErrorInvalidValue, "kernel %d (no such kernel)", (int)kernel); break;
   }
 }

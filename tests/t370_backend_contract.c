@@ -6,8 +6,13 @@
 // storage, is solved in one Newton iteration, with the operations called in
 // the contract's order. A backend that never finds a descent ends in the
 // loop's "no decrease" failure, adding its iterations to the report (the
-// device loop added, the CPU loop overwrote). And the registry: unknown
-// names list the valid ones; a backend this build lacks says how to build it.
+// device loop added, the CPU loop overwrote). The watchdog: on Rosenbrock's
+// function from (-1.2, 1), where a full Newton step raises Phi on the way,
+// a backend that can save and restore its iterate converges in fewer
+// iterations than the monotone search; on sqrt(1 + x^2) from x = 2, where
+// full Newton steps run away to overflow, it goes back to the watched
+// iterate and still converges. And the registry: unknown names list the
+// valid ones; a backend this build lacks says how to build it.
 #include <stdlib.h>
 #include <string.h>
 
@@ -23,7 +28,28 @@ typedef struct toy {
   double *a, *t, *d, *d_trial, *p, *g, *g_trial;
   char calls[4096]; ///< the operations, a letter each
   int call_count;
+  int nonlinear; ///< 0: the quadratic; 1: Rosenbrock in d0, d1; 2: sqrt(1 + d0^2) (both plus |d_rest|^2 / 2)
+  double *saved;  ///< the saved iterate, or NULL: no save/restore
 } toy;
+
+// Phi, gradient and the 2x2 Hessian of the first two entries of the
+// nonlinear toys (the rest: |d_k|^2 / 2, Hessian 1).
+static double nonlinear_phi(int kind, const double *d, int64_t n, double *g, double *H) {
+  double phi = 0;
+  for (int64_t k = 2; k < n; ++k) phi += 0.5 * d[k] * d[k], g[k] = d[k];
+  const double x = d[0], y = d[1];
+  if (kind == 1) {
+    phi += 100 * (y - x * x) * (y - x * x) + (1 - x) * (1 - x);
+    g[0] = -400 * x * (y - x * x) - 2 * (1 - x), g[1] = 200 * (y - x * x);
+    H[0] = 1200 * x * x - 400 * y + 2, H[1] = H[2] = -400 * x, H[3] = 200;
+  } else {
+    const double r = sqrt(1 + x * x);
+    phi += r + 0.5 * y * y;
+    g[0] = x / r, g[1] = y;
+    H[0] = 1 / (r * r * r), H[1] = H[2] = 0, H[3] = 1;
+  }
+  return phi;
+}
 
 static void called(toy *T, char c) {
   if (T->call_count + 1 < (int)sizeof T->calls) T->calls[T->call_count++] = c, T->calls[T->call_count] = 0;
@@ -41,6 +67,14 @@ static fascia_status toy_evaluate(fascia_backend *b, double alpha, int current, 
   toy *T = (toy *)b;
   called(T, current ? 'C' : 'E');
   double phi = 0, gg = 0, *g = current ? T->g : T->g_trial;
+  if (T->nonlinear) {
+    double H[4];
+    for (int64_t k = 0; k < T->n; ++k) T->d_trial[k] = current ? T->d[k] : T->d[k] + alpha * T->p[k];
+    phi = nonlinear_phi(T->nonlinear, T->d_trial, T->n, g, H);
+    for (int64_t k = 0; k < T->n; ++k) gg += g[k] * g[k];
+    out->phi = phi, out->gradient_norm2 = gg, out->energy_size = fabs(phi);
+    return isfinite(phi) && isfinite(gg) ? FASCIA_OK : FASCIA_ERR_NUMERIC;
+  }
   for (int64_t k = 0; k < T->n; ++k) {
     T->d_trial[k] = current ? T->d[k] : T->d[k] + alpha * T->p[k];
     const double e = T->d_trial[k] - T->t[k];
@@ -63,6 +97,25 @@ static fascia_status toy_direction(fascia_backend *b, double *shift, double *slo
   (void)r;
   called(T, 'D');
   double s = 0;
+  if (T->nonlinear) { // Newton on the 2x2 block, its shift raised until positive definite (as direct.c)
+    double g[2], H[4], *scratch = T->g_trial;
+    memcpy(scratch, T->g, (size_t)T->n * sizeof(double));
+    nonlinear_phi(T->nonlinear, T->d, T->n, scratch, H);
+    memcpy(T->g_trial, T->g, (size_t)T->n * sizeof(double));
+    g[0] = T->g[0], g[1] = T->g[1];
+    for (;;) {
+      const double a = H[0] + *shift * fabs(H[0]), o = H[1], c = H[3] + *shift * fabs(H[3]), det = a * c - o * o;
+      if (a > 0 && det > 0) {
+        T->p[0] = -(c * g[0] - o * g[1]) / det, T->p[1] = -(a * g[1] - o * g[0]) / det;
+        break;
+      }
+      *shift = *shift == 0 ? 1e-8 : 10 * *shift;
+    }
+    for (int64_t k = 2; k < T->n; ++k) T->p[k] = -T->g[k] / (1 + *shift);
+    for (int64_t k = 0; k < T->n; ++k) s += T->p[k] * T->g[k];
+    *slope = s;
+    return FASCIA_OK;
+  }
   for (int64_t k = 0; k < T->n; ++k) {
     T->p[k] = (T->descends ? -1 : 1) * T->g[k] / (T->a[k] * (1 + *shift));
     s += T->p[k] * T->g[k];
@@ -86,6 +139,18 @@ static fascia_status toy_finish(fascia_backend *b, const fascia_step_result *res
   return FASCIA_OK;
 }
 
+static void toy_save(fascia_backend *b) {
+  toy *T = (toy *)b;
+  called(T, 'S');
+  memcpy(T->saved, T->d, (size_t)T->n * sizeof(double));
+}
+
+static void toy_restore(fascia_backend *b) {
+  toy *T = (toy *)b;
+  called(T, 'R');
+  memcpy(T->d, T->saved, (size_t)T->n * sizeof(double));
+}
+
 static const fascia_backend_ops toy_ops = {.name = "toy",
                                            .begin = toy_begin,
                                            .evaluate = toy_evaluate,
@@ -93,6 +158,41 @@ static const fascia_backend_ops toy_ops = {.name = "toy",
                                            .direction = toy_direction,
                                            .accept = toy_accept,
                                            .finish = toy_finish};
+static const fascia_backend_ops toy_watchdog_ops = {.name = "toy",
+                                                    .begin = toy_begin,
+                                                    .evaluate = toy_evaluate,
+                                                    .prepare = toy_prepare,
+                                                    .direction = toy_direction,
+                                                    .accept = toy_accept,
+                                                    .save = toy_save,
+                                                    .restore = toy_restore,
+                                                    .finish = toy_finish};
+
+// A nonlinear toy (kind 1 or 2) from (x0, y0), with or without save and
+// restore; the report, and the solution in x.
+static fascia_status nonlinear_solve(fascia_solver *S, int kind, int watchdog, double x0, double y0,
+                                     fascia_solve_report *report, double *x) {
+  toy T = {.base = {watchdog ? &toy_watchdog_ops : &toy_ops}, .n = 6 * (int64_t)S->frame_count, .descends = 1,
+           .nonlinear = kind};
+  double *buffers[8];
+  for (int k = 0; k < 8; ++k) buffers[k] = calloc((size_t)T.n, sizeof(double));
+  T.a = buffers[0], T.t = buffers[1], T.d = buffers[2], T.d_trial = buffers[3], T.p = buffers[4], T.g = buffers[5];
+  T.g_trial = buffers[6], T.saved = buffers[7];
+  fascia_backend *cpu = S->backend;
+  S->backend = &T.base;
+  memset(S->d, 0, (size_t)T.n * sizeof(double));
+  S->d[0] = x0, S->d[1] = y0, S->d[2] = 0.5;
+  memset(report, 0, sizeof *report);
+  const fascia_step_values values = {1, 0, 0, 1, S->x_base, S->q_base, S->d, NULL}; // dynamic: d stays anchored
+  const fascia_status st = fascia_newton_minimize(S, &values, 100, report);
+  S->backend = cpu;
+  x[0] = S->d[0], x[1] = S->d[1];
+  printf("%s toy, %s: status %s, %d Newton iterations, %d watchdog returns, x = (%.12g, %.12g)\n",
+         kind == 1 ? "Rosenbrock" : "sqrt(1 + x^2)", watchdog ? "watchdog" : "monotone", fascia_status_name(st),
+         report->newton_iterations, report->watchdog_returns, x[0], x[1]);
+  for (int k = 0; k < 8; ++k) free(buffers[k]);
+  return st;
+}
 
 // One Newton solve of the toy on solver S (its model gives only the sizes
 // and the load scale); 0 when it behaved as the contract says.
@@ -146,6 +246,17 @@ int main(void) {
   CHECK_OK(fascia_solver_create(ctx, m, &sd, &S), ctx);
   int failed = toy_solve(ctx, S, 1);
   failed |= toy_solve(ctx, S, 0);
+  // the watchdog
+  fascia_solve_report monotone, watched;
+  double x[2];
+  S->def.newton_tolerance = 1e-10;
+  CHECK_OK(nonlinear_solve(S, 1, 0, -1.2, 1, &monotone, x), ctx);
+  CHECK(monotone.converged && fabs(x[0] - 1) < 1e-8 && fabs(x[1] - 1) < 1e-8);
+  CHECK_OK(nonlinear_solve(S, 1, 1, -1.2, 1, &watched, x), ctx);
+  CHECK(watched.converged && fabs(x[0] - 1) < 1e-8 && fabs(x[1] - 1) < 1e-8);
+  CHECK(watched.newton_iterations < monotone.newton_iterations && watched.watchdog_returns == 0);
+  CHECK_OK(nonlinear_solve(S, 2, 1, 2, 0, &watched, x), ctx);
+  CHECK(watched.converged && fabs(x[0]) < 1e-8 && watched.watchdog_returns > 0);
   fascia_solver_destroy(&S);
 
   // the registry

@@ -105,6 +105,12 @@ struct fascia_backend_ops {
                              fascia_solve_report *report);
   /// The last trial becomes the iterate; a static solve re-anchors there.
   void (*accept)(fascia_backend *backend);
+  /// Optional (NULL: the loop's line search stays monotone): keep a copy of
+  /// the iterate, and make it the iterate again (its evaluation follows).
+  /// They let the loop try full Newton steps that raise Phi for a while
+  /// (the watchdog, newton.c).
+  void (*save)(fascia_backend *backend);
+  void (*restore)(fascia_backend *backend);
   /// The iterate (the state of the last evaluation) to the host; the host
   /// system's energies and inversion counts set.
   fascia_status (*finish)(fascia_backend *backend, const fascia_step_result *result);

@@ -30,6 +30,7 @@ typedef struct cpu_backend {
   fascia_real target_norm;          ///< (h u).M(h u)
   // work
   fascia_real *d_trial, *gradient_trial, *direction, *rhs, *work, *blocks, *mass_blocks, *damping, *scratch;
+  fascia_real *saved; ///< [13N] the watched iterate (cpu_save): anchor x, q and increments
   fascia_operator op;
   fascia_preconditioner pc;
   int use_direct;    ///< linear systems by sparse Cholesky (direct.h)
@@ -56,6 +57,7 @@ static void cpu_destroy(fascia_backend *backend) {
   fascia_direct_destroy(&B->direct);
   free(B->target_M), free(B->d_trial), free(B->gradient_trial), free(B->direction), free(B->rhs), free(B->work);
   free(B->blocks), free(B->mass_blocks), free(B->damping), free(B->scratch), free(B->pc.inverse);
+  free(B->saved);
   free(B);
 }
 
@@ -131,11 +133,12 @@ static fascia_status cpu_create(const fascia_backend_setup *setup, fascia_backen
   B->mass_blocks = fascia_calloc(36 * N, sizeof(fascia_real));
   B->damping = fascia_calloc(n, sizeof(fascia_real));
   B->scratch = fascia_calloc(2 * n, sizeof(fascia_real));
+  B->saved = fascia_calloc(13 * N, sizeof(fascia_real));
   B->pc.kind = setup->def->precond;
   B->pc.frame_count = B->frame_count;
   B->pc.inverse = fascia_calloc(36 * N, sizeof(fascia_real));
   if (!B->target_M || !B->d_trial || !B->gradient_trial || !B->direction || !B->rhs || !B->work || !B->blocks ||
-      !B->mass_blocks || !B->damping || !B->scratch || !B->pc.inverse) {
+      !B->mass_blocks || !B->damping || !B->scratch || !B->saved || !B->pc.inverse) {
     cpu_destroy(&B->base);
     return FASCIA_FAIL(setup->ctx, FASCIA_ERR_MEMORY, "solver: out of memory for %lld frames", (long long)N);
   }
@@ -345,6 +348,23 @@ static void cpu_accept(fascia_backend *backend) {
   }
 }
 
+// The iterate is the anchor and the increments (rigid organs follow them)
+static void cpu_save(fascia_backend *backend) {
+  cpu_backend *B = (cpu_backend *)backend;
+  const size_t N = (size_t)B->frame_count;
+  memcpy(B->saved, B->x_base, 3 * N * sizeof(fascia_real));
+  memcpy(B->saved + 3 * N, B->q_base, 4 * N * sizeof(fascia_real));
+  memcpy(B->saved + 7 * N, B->d, 6 * N * sizeof(fascia_real));
+}
+
+static void cpu_restore(fascia_backend *backend) {
+  cpu_backend *B = (cpu_backend *)backend;
+  const size_t N = (size_t)B->frame_count;
+  memcpy(B->x_base, B->saved, 3 * N * sizeof(fascia_real));
+  memcpy(B->q_base, B->saved + 3 * N, 4 * N * sizeof(fascia_real));
+  memcpy(B->d, B->saved + 7 * N, 6 * N * sizeof(fascia_real));
+}
+
 // The trials wrote the solver's own arrays: nothing to copy
 static fascia_status cpu_finish(fascia_backend *backend, const fascia_step_result *result) {
   cpu_backend *B = (cpu_backend *)backend;
@@ -390,6 +410,8 @@ const fascia_backend_ops fascia_backend_cpu = {
     .prepare = cpu_prepare,
     .direction = cpu_direction,
     .accept = cpu_accept,
+    .save = cpu_save,
+    .restore = cpu_restore,
     .finish = cpu_finish,
     .gradient = cpu_gradient,
     .hessian_apply = cpu_hessian_apply,

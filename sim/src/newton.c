@@ -20,6 +20,18 @@
 // (damped Newton). This is what lets the solver cross the singular or
 // indefinite tangents of the frame scheme (zero-energy rotation modes,
 // buckling, compressed StVK).
+//
+// Watchdog (Chamberlain, Powell, Lemarechal and Pedersen 1982), where the
+// backend can save and restore an iterate: from a watched iterate the loop
+// first takes up to FASCIA_NEWTON_WATCHDOG full Newton steps without a line
+// search; once Phi falls below the watched value by the Armijo amount of its
+// first step, the iterate there is watched next. If it does not (or a step
+// is not finite), the loop goes back to the watched iterate and takes the
+// line-searched step from there. Full steps through a rise of Phi are what
+// Newton needs on large rotations of nearly incompressible material (each
+// linearization stretches the material to second order, and lambda makes
+// that costly: the monotone search takes about a quarter step each time);
+// going back keeps the descent guarantee of the monotone search.
 #define _POSIX_C_SOURCE 200809L // clock_gettime (strict C11 hides it; gcc's OpenMP header happened to define it)
 #include <string.h>
 #include <time.h>
@@ -127,11 +139,33 @@ fascia_status fascia_newton_minimize(fascia_solver *S, const fascia_step_values 
   int iteration = 0, converged = 0;
   fascia_real gnorm = g0, shift = 0; // the Levenberg shift carries over from one iteration to the next
   fascia_status status = FASCIA_OK;
+  // watchdog: full steps taken since the watched iterate (Phi watch_phi,
+  // the slope of its first step watch_slope); -1: none allowed this iteration
+  const int watchdog = def->line_search && ops->save && ops->restore;
+  int relaxed = 0;
+  fascia_real watch_phi = now.phi, watch_slope = 0, watch_gg = now.gradient_norm2, watch_shift = 0;
   for (; iteration <= max_iterations; ++iteration) {
     gnorm = sqrt(now.gradient_norm2);
-    if (gnorm <= def->newton_tolerance * reference || gnorm <= force_roundoff) {
+    const int small = gnorm <= def->newton_tolerance * reference || gnorm <= force_roundoff;
+    if (relaxed > 0 && accepts(def, watch_phi, now.phi, 1, watch_slope, watch_gg, now.gradient_norm2, now.energy_size,
+                               material_roundoff))
+      relaxed = 0; // Phi came down enough: watch this iterate
+    if (small && relaxed <= 0) {
       converged = 1;
       break;
+    }
+    if (relaxed > 0 && (relaxed >= FASCIA_NEWTON_WATCHDOG || small || max_iterations - iteration <= FASCIA_NEWTON_WATCHDOG)) {
+      // the full steps did not bring Phi down enough (or ended at a
+      // stationary point above it, or the iterations run out): back to the
+      // watched iterate, and a line-searched step from there
+      ops->restore(be);
+      t = fascia_now_ms();
+      FASCIA_TRY(ops->evaluate(be, 0, 1, &now));
+      rep->profile.evaluate_ms += fascia_now_ms() - t;
+      gnorm = sqrt(now.gradient_norm2);
+      relaxed = -1;
+      shift = watch_shift; // the full steps' tangents may have raised it
+      ++rep->watchdog_returns;
     }
     if (iteration == max_iterations) break;
     FASCIA_TRY(ops->prepare(be, rep));
@@ -141,6 +175,31 @@ fascia_status fascia_newton_minimize(fascia_solver *S, const fascia_step_values 
       fascia_real slope;
       FASCIA_TRY(ops->direction(be, &shift, &slope, rep));
       rep->profile.cg_ms += fascia_now_ms() - t;
+      // full steps only with iterations left to come back (a capped solve ends line-searched)
+      if (watchdog && relaxed >= 0 && slope < 0 && max_iterations - iteration > FASCIA_NEWTON_WATCHDOG) {
+        if (relaxed == 0) { // a new watched iterate
+          ops->save(be);
+          watch_phi = now.phi;
+          watch_slope = slope;
+          watch_gg = now.gradient_norm2;
+          watch_shift = shift;
+        }
+        t = fascia_now_ms();
+        const fascia_status st = ops->evaluate(be, 1, 0, &trial);
+        rep->profile.evaluate_ms += fascia_now_ms() - t;
+        if (st != FASCIA_OK && st != FASCIA_ERR_NUMERIC) return st;
+        if (st == FASCIA_OK && isfinite(trial.phi)) {
+          ++relaxed;
+          accepted = 1;
+          if (shift > 0) shift = shift < FASCIA_R(1e-3) ? 0 : shift / 10; // as after a full line-searched step
+          break;
+        }
+        relaxed = FASCIA_NEWTON_WATCHDOG; // not finite: back at the next iteration
+        t = fascia_now_ms();
+        FASCIA_TRY(ops->evaluate(be, 0, 1, &now)); // the iterate's caches again
+        rep->profile.evaluate_ms += fascia_now_ms() - t;
+        break;
+      }
       // backtracking line search on Phi; along a direction that does not
       // descend (where even the backend's fallback failed) there is none
       fascia_real alpha = 1;
@@ -174,9 +233,11 @@ fascia_status fascia_newton_minimize(fascia_solver *S, const fascia_step_values 
       FASCIA_TRY(back);
       FASCIA_TRY(ops->prepare(be, rep));
     }
+    if (relaxed >= FASCIA_NEWTON_WATCHDOG && !accepted) continue; // a full step failed: go back
     if (!accepted) break;
     ops->accept(be);
     now = trial;
+    if (relaxed < 0) relaxed = 0; // the line-searched step: watch its result
   }
   t = fascia_now_ms();
   const fascia_step_result result = {S->x, S->q, S->d, S->gradient};

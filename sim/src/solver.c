@@ -401,6 +401,7 @@ static void merge_report(fascia_solve_report *sum, const fascia_solve_report *r)
   sum->newton_iterations += r->newton_iterations;
   sum->cg_iterations += r->cg_iterations;
   sum->line_search_cuts += r->line_search_cuts;
+  sum->watchdog_returns += r->watchdog_returns;
   sum->negative_curvature += r->negative_curvature;
   sum->direct = r->direct;
   sum->assembled = r->assembled;

@@ -346,10 +346,10 @@ static void row_label(const row *r, char *out, size_t size) {
   char grid[32];
   snprintf(grid, sizeof grid, "%dx%dx%d", (int)r->grid[0], (int)r->grid[1], (int)r->grid[2]);
   if (!r->dynamic) {
+    const char *volumetric = r->reduced ? " sri" : r->patch ? " patches" : "";
     if (r->shape == FASCIA_SCENE_MESHLESS)
-      snprintf(out, size, "meshless %s k%d s%d", grid, r->neighbours, r->spc);
-    else snprintf(out, size, "%s %s s%d%s", fascia_scene_shape_name(r->shape), grid, r->spc,
-                  r->reduced ? " sri" : r->patch ? " patches" : "");
+      snprintf(out, size, "meshless %s k%d s%d%s", grid, r->neighbours, r->spc, volumetric);
+    else snprintf(out, size, "%s %s s%d%s", fascia_scene_shape_name(r->shape), grid, r->spc, volumetric);
   } else if (r->preset) {
     snprintf(out, size, "preset %s", r->preset);
   } else {

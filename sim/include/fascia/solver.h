@@ -108,6 +108,7 @@ typedef struct fascia_solve_report {
   int newton_iterations;
   int cg_iterations;           ///< summed over Newton iterations
   int line_search_cuts;        ///< step halvings summed over iterations
+  int watchdog_returns;        ///< full Newton steps undone: back to the watched iterate (docs/mechanics.md, "Solvers")
   int negative_curvature;      ///< CG solves that met negative curvature, or failed factorizations
   int direct;                  ///< 1 when the linear systems were solved directly
   int assembled;               ///< 1 when the tangent was assembled (direct solver or assembled CG)
