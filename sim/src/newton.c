@@ -23,11 +23,13 @@
 //
 // Watchdog (Chamberlain, Powell, Lemarechal and Pedersen 1982), where the
 // backend can save and restore an iterate: from a watched iterate the loop
-// first takes up to FASCIA_NEWTON_WATCHDOG full Newton steps without a line
-// search; once Phi falls below the watched value by the Armijo amount of its
-// first step, the iterate there is watched next. If it does not (or a step
-// is not finite), the loop goes back to the watched iterate and takes the
-// line-searched step from there. Full steps through a rise of Phi are what
+// takes full Newton steps without a line search; the first may raise Phi,
+// each following one must lower it, and once Phi is below the watched value
+// by the Armijo amount of the first step, the iterate there is watched next.
+// If a full step raises Phi again, or FASCIA_NEWTON_WATCHDOG of them do not
+// get there, or one is not finite, the loop goes back to the watched
+// iterate, takes the line-searched step from there and keeps to the
+// monotone search for the rest of the solve. Full steps through a rise of Phi are what
 // Newton needs on large rotations of nearly incompressible material (each
 // linearization stretches the material to second order, and lambda makes
 // that costly: the monotone search takes about a quarter step each time);
@@ -144,6 +146,7 @@ fascia_status fascia_newton_minimize(fascia_solver *S, const fascia_step_values 
   const int watchdog = def->line_search && ops->save && ops->restore;
   int relaxed = 0;
   fascia_real watch_phi = now.phi, watch_slope = 0, watch_gg = now.gradient_norm2, watch_shift = 0;
+  fascia_real last_phi = now.phi; // Phi of the previous iterate
   for (; iteration <= max_iterations; ++iteration) {
     gnorm = sqrt(now.gradient_norm2);
     const int small = gnorm <= def->newton_tolerance * reference || gnorm <= force_roundoff;
@@ -154,7 +157,10 @@ fascia_status fascia_newton_minimize(fascia_solver *S, const fascia_step_values 
       converged = 1;
       break;
     }
-    if (relaxed > 0 && (relaxed >= FASCIA_NEWTON_WATCHDOG || small || max_iterations - iteration <= FASCIA_NEWTON_WATCHDOG)) {
+    // after the first full step, the following ones must each lower Phi
+    const int rising = relaxed >= 2 && !(now.phi < last_phi);
+    if (relaxed > 0 &&
+        (rising || relaxed >= FASCIA_NEWTON_WATCHDOG || small || max_iterations - iteration <= FASCIA_NEWTON_WATCHDOG)) {
       // the full steps did not bring Phi down enough (or ended at a
       // stationary point above it, or the iterations run out): back to the
       // watched iterate, and a line-searched step from there
@@ -163,7 +169,7 @@ fascia_status fascia_newton_minimize(fascia_solver *S, const fascia_step_values 
       FASCIA_TRY(ops->evaluate(be, 0, 1, &now));
       rep->profile.evaluate_ms += fascia_now_ms() - t;
       gnorm = sqrt(now.gradient_norm2);
-      relaxed = -1;
+      relaxed = -1; // and the monotone search for the rest of this solve: its full steps do not pay here
       shift = watch_shift; // the full steps' tangents may have raised it
       ++rep->watchdog_returns;
     }
@@ -236,8 +242,8 @@ fascia_status fascia_newton_minimize(fascia_solver *S, const fascia_step_values 
     if (relaxed >= FASCIA_NEWTON_WATCHDOG && !accepted) continue; // a full step failed: go back
     if (!accepted) break;
     ops->accept(be);
+    last_phi = now.phi;
     now = trial;
-    if (relaxed < 0) relaxed = 0; // the line-searched step: watch its result
   }
   t = fascia_now_ms();
   const fascia_step_result result = {S->x, S->q, S->d, S->gradient};

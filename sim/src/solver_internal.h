@@ -113,6 +113,6 @@ FASCIA_INTERN fascia_status fascia_newton_minimize(fascia_solver *solver, const 
 #define FASCIA_NEWTON_ARMIJO 1e-4    // sufficient decrease of the line search
 #define FASCIA_NEWTON_MAX_CUTS 30    // step halvings before the Levenberg shift grows
 #define FASCIA_NEWTON_MAX_SHIFT 1e12 // relative Levenberg shift beyond which Newton gives up
-#define FASCIA_NEWTON_WATCHDOG 16    // full Newton steps tried before Phi must be below the watched iterate's
+#define FASCIA_NEWTON_WATCHDOG 32    // full Newton steps tried before Phi must be below the watched iterate's
 
 #endif
