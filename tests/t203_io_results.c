@@ -3,7 +3,8 @@
 // The results writer stores every appended step exactly (read back with the
 // HDF5 API), pads fields missing in a step with NaN, writes an XDMF sidecar
 // naming every step, shows nothing at the final path before close, and leaves
-// nothing behind when abandoned.
+// nothing behind when abandoned; it records what made the results: the
+// model's fingerprint (always), the model file and the run's settings.
 #define _POSIX_C_SOURCE 200809L
 #include <hdf5.h>
 
@@ -93,6 +94,20 @@ static int check_file(const char *path, const char *xdmf, const fascia_model *m,
   return 0;
 }
 
+// The string attribute `name` of the file's root equals `want`.
+static int root_text_is(const char *path, const char *name, const char *want) {
+  char text[512] = "";
+  hid_t file = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+  hid_t attr = file >= 0 ? H5Aopen_by_name(file, "/", name, H5P_DEFAULT, H5P_DEFAULT) : -1;
+  hid_t type = attr >= 0 ? H5Aget_type(attr) : -1;
+  const int ok = type >= 0 && H5Tget_size(type) < sizeof text && H5Aread(attr, type, text) >= 0;
+  if (type >= 0) H5Tclose(type);
+  if (attr >= 0) H5Aclose(attr);
+  if (file >= 0) H5Fclose(file);
+  if (!ok || strcmp(text, want)) fprintf(stderr, "root attribute %s: '%s', expected '%s'\n", name, text, want);
+  return ok && !strcmp(text, want);
+}
+
 int main(void) {
   fascia_ctx_def cdef = fascia_ctx_def_default();
   fascia_ctx *ctx = NULL;
@@ -111,6 +126,7 @@ int main(void) {
   fascia_results *r = NULL;
   double x[15], q[20], p[9], strain[3], damage[3] = {0, 0.5, 1.0}, times[STEPS];
   CHECK_OK(fascia_results_open(ctx, path, m, &def, &r), ctx);
+  CHECK_OK(fascia_results_set_run(r, "models/pelvis.h5", "{\"mode\": \"dynamic\", \"dt\": 0.01}"), ctx);
   for (int t = 0; t < STEPS; ++t) {
     state(t, m, x, q, p, strain);
     times[t] = 0.01 * t + 1.0 / 3.0;
@@ -129,6 +145,17 @@ int main(void) {
   CHECK(r == NULL);
   CHECK(fixture_count_files(dir, ".tmp") == 0);
   if (check_file(path, xdmf, m, times)) ++check_failures_;
+  char fingerprint[32];
+  snprintf(fingerprint, sizeof fingerprint, "%016llx", (unsigned long long)fascia_model_fingerprint(m));
+  CHECK(root_text_is(path, "model_fingerprint", fingerprint));
+  CHECK(root_text_is(path, "model_file", "models/pelvis.h5"));
+  CHECK(root_text_is(path, "run_settings", "{\"mode\": \"dynamic\", \"dt\": 0.01}"));
+  // another model, another fingerprint
+  m->frame_position[0] += 1e-9;
+  char moved[32];
+  snprintf(moved, sizeof moved, "%016llx", (unsigned long long)fascia_model_fingerprint(m));
+  CHECK(strcmp(moved, fingerprint) != 0);
+  m->frame_position[0] -= 1e-9;
 
   // abandoned results leave nothing behind
   char other[256];

@@ -17,7 +17,7 @@
 //   /run/time_step        [1]   f64  s, the run's time step (also a setting)
 //   /model/sizes          [9]   i64  frames, samples, pairs, materials, motions,
 //                                    probes, probe pairs, organs, couplings
-//   /model/fingerprint    [1]   u64  FNV-1a of the model's arrays (see fingerprint)
+//   /model/fingerprint    [1]   u64  FNV-1a of the model's arrays (fascia_model_fingerprint)
 //   /settings             group, one f64 attribute per solver setting that
 //                         changes the trajectory (the table `settings`:
 //                         time_step, newton_iterations, ..., require_convergence)
@@ -47,6 +47,7 @@
 #include <string.h>
 
 #include "fascia/checkpoint.h"
+#include "fnv.h"
 #include "h5io.h"
 #include "organs.h"
 #include "solver_internal.h"
@@ -68,83 +69,17 @@ static void model_sizes(const fascia_model *m, int64_t *z) {
   for (int k = 0; k < SIZE_COUNT; ++k) z[k] = n[k];
 }
 
-static uint64_t fnv(uint64_t h, const void *data, size_t bytes) {
-  const unsigned char *p = data;
-  for (size_t k = 0; k < bytes; ++k) h = (h ^ p[k]) * UINT64_C(0x100000001b3);
-  return h;
-}
-
-#define FNV_START UINT64_C(0xcbf29ce484222325)
-
-// FNV-1a over every array the solver reads (rest state, kinds, motions,
-// loads, samples, weights, materials, organs and their coupling, gravity):
-// two models with the same fingerprint simulate alike. Names, probes and
-// provenance do not count. The contents, not the file's bytes, identify the
-// model: a copy, a rename or a re-save by another HDF5 is the same model.
-static uint64_t fingerprint(const fascia_model *m) {
-  const size_t R = sizeof(fascia_real), I = sizeof(int32_t);
-  const size_t N = (size_t)m->frame_count, S = (size_t)m->sample_count, P = (size_t)m->pair_count;
-  const size_t C = (size_t)m->coupling_count;
-  uint64_t h = FNV_START;
-  h = fnv(h, m->frame_position, 3 * N * R);
-  h = fnv(h, m->frame_rotation, 4 * N * R);
-  h = fnv(h, m->frame_kind, N * I);
-  h = fnv(h, m->frame_motion, N * I);
-  h = fnv(h, m->frame_load, 6 * N * R);
-  h = fnv(h, m->frame_organ, N * I);
-  h = fnv(h, m->sample_position, 3 * S * R);
-  h = fnv(h, m->sample_volume, S * R);
-  h = fnv(h, m->sample_material, S * I);
-  h = fnv(h, m->sample_organ, S * I);
-  for (size_t s = 0; s < S; ++s) // models without patches keep the hash they had before patches existed
-    if (m->sample_patch[s] >= 0) {
-      h = fnv(h, m->sample_patch, S * I);
-      break;
-    }
-  h = fnv(h, m->sample_offsets, (S + 1) * I);
-  h = fnv(h, m->pair_frame, P * I);
-  h = fnv(h, m->pair_weight, P * R);
-  h = fnv(h, m->pair_gradient, 3 * P * R);
-  for (int32_t k = 0; k < m->material_count; ++k) {
-    const fascia_material *mat = m->materials + k;
-    const fascia_real values[5] = {mat->youngs_modulus, mat->poisson_ratio, mat->density, mat->rotation_coupling,
-                                   mat->rotation_smoothing};
-    const int32_t kinds[2] = {mat->law, mat->part};
-    h = fnv(h, kinds, sizeof kinds);
-    h = fnv(h, values, sizeof values);
-  }
-  for (int32_t k = 0; k < m->motion_count; ++k) {
-    const fascia_motion *mo = m->motions + k;
-    const size_t K = (size_t)mo->key_count;
-    h = fnv(h, mo->pivot, 3 * R);
-    h = fnv(h, mo->key_time, K * R);
-    h = fnv(h, mo->key_translation, 3 * K * R);
-    h = fnv(h, mo->key_rotation, 4 * K * R);
-  }
-  for (int32_t k = 0; k < m->organ_count; ++k) {
-    const fascia_organ *o = m->organs + k;
-    const int32_t kinds[4] = {o->kind, o->motion, o->vertex_count, o->triangle_count};
-    h = fnv(h, kinds, sizeof kinds);
-    h = fnv(h, o->vertices, 3 * (size_t)o->vertex_count * R);
-    h = fnv(h, o->triangles, 3 * (size_t)o->triangle_count * I);
-  }
-  h = fnv(h, m->coupling_organ, C * I);
-  h = fnv(h, m->coupling_frame, C * I);
-  h = fnv(h, m->coupling_triangle, C * I);
-  h = fnv(h, m->coupling_barycentric, 3 * C * R);
-  return fnv(h, m->gravity, 3 * R);
-}
 
 // The checksum of a state: step, time, x [3N], q [4N], u [6N], bodies [B].
 static uint64_t state_checksum(int64_t step, double time, int64_t N, const fascia_real *x, const fascia_real *q,
                                const fascia_real *u, size_t B, const fascia_real *bodies) {
   const size_t R = sizeof(fascia_real);
-  uint64_t h = fnv(FNV_START, &step, sizeof step);
-  h = fnv(h, &time, sizeof time);
-  h = fnv(h, x, 3 * (size_t)N * R);
-  h = fnv(h, q, 4 * (size_t)N * R);
-  h = fnv(h, u, 6 * (size_t)N * R);
-  return fnv(h, bodies, B * R);
+  uint64_t h = fascia_fnv(FASCIA_FNV_START, &step, sizeof step);
+  h = fascia_fnv(h, &time, sizeof time);
+  h = fascia_fnv(h, x, 3 * (size_t)N * R);
+  h = fascia_fnv(h, q, 4 * (size_t)N * R);
+  h = fascia_fnv(h, u, 6 * (size_t)N * R);
+  return fascia_fnv(h, bodies, B * R);
 }
 
 // ---------------------------------------------------------------------------
@@ -283,7 +218,7 @@ static fascia_status write_checkpoint(fascia_ctx *ctx, hid_t file, const fascia_
   const hsize_t N = (hsize_t)S->frame_count;
   int64_t sizes[SIZE_COUNT];
   model_sizes(S->model, sizes);
-  const uint64_t print = fingerprint(S->model);
+  const uint64_t print = fascia_model_fingerprint(S->model);
   const double time_step = S->def.time_step, time = S->time;
   const size_t B = S->organs ? fascia_organs_state_size(S->organs) : 0;
   fascia_real *bodies = fascia_calloc((int64_t)B + 1, sizeof(fascia_real));
@@ -462,7 +397,7 @@ static fascia_status check_model(reader *r, const fascia_model *m) {
                  "and %lld samples there, %lld and %lld here); resume with the model the run started from",
                  r->path, (long long)sizes[k], size_names[k], (long long)expected[k], (long long)sizes[0],
                  (long long)sizes[1], (long long)expected[0], (long long)expected[1]);
-  const uint64_t here = fingerprint(m);
+  const uint64_t here = fascia_model_fingerprint(m);
   FASCIA_CHECK(print == here, r->ctx, FASCIA_ERR_ARGUMENT,
                "checkpoint '%s' /model/fingerprint: belongs to another model: same sizes, different contents "
                "(fingerprint %016llx, this model %016llx); resume with the model the run started from",

@@ -177,10 +177,12 @@ static herr_t write_text(hid_t file, const char *name, const char *text) {
 
 // Root attributes, groups, static datasets and empty series.
 static fascia_status create_layout(fascia_results *r, const fascia_model *m) {
-  char creator[64];
+  char creator[64], fingerprint[32];
   snprintf(creator, sizeof creator, "fascia %s", fascia_version());
+  snprintf(fingerprint, sizeof fingerprint, "%016llx", (unsigned long long)fascia_model_fingerprint(m));
   hid_t root = H5Gopen2(r->file, "/", H5P_DEFAULT);
   const int ok = root >= 0 && fascia_h5_attr_int(root, "fascia_results_version", RESULTS_VERSION) >= 0 &&
+                 fascia_h5_attr_string(root, "model_fingerprint", fingerprint) >= 0 &&
                  fascia_h5_attr_string(root, "units", RESULTS_UNITS) >= 0 &&
                  fascia_h5_attr_string(root, "creator", creator) >= 0 &&
                  fascia_h5_attr_int(root, "every", r->every) >= 0 &&
@@ -452,6 +454,17 @@ fascia_status fascia_results_describe_field(fascia_results *r, const char *name,
   if (f && describe(f->dset, unit, meaning) < 0) status = h5_failed(r, "/samples/fields", "describe");
   fascia_h5_quiet_end(&quiet);
   return status;
+}
+
+fascia_status fascia_results_set_run(fascia_results *r, const char *model_file, const char *settings) {
+  if (!r) return FASCIA_ERR_ARGUMENT;
+  FASCIA_CHECK(model_file && settings, r->ctx, FASCIA_ERR_ARGUMENT, "results '%s': no model file or settings",
+               r->path);
+  hid_t root = H5Gopen2(r->file, "/", H5P_DEFAULT);
+  const int ok = root >= 0 && fascia_h5_attr_string(root, "model_file", model_file) >= 0 &&
+                 fascia_h5_attr_string(root, "run_settings", settings) >= 0;
+  if (root >= 0) H5Gclose(root);
+  return ok ? FASCIA_OK : h5_failed(r, "/", "write the run's attributes");
 }
 
 fascia_status fascia_results_set_time_meaning(fascia_results *r, const char *meaning) {

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "fascia/model.h"
+#include "fnv.h"
 #include "status.h"
 
 // Tolerances of the validation: weights are computed in double from rest
@@ -586,4 +587,59 @@ int32_t fascia_model_find_probe(const fascia_model *m, const char *name) {
   for (int32_t p = 0; m && name && p < m->probe_count; ++p)
     if (!strncmp(m->probe_name[p], name, FASCIA_NAME_SIZE)) return p;
   return -1;
+}
+
+// FNV-1a over every array the solver reads (model.h says what counts).
+uint64_t fascia_model_fingerprint(const fascia_model *m) {
+  const size_t R = sizeof(fascia_real), I = sizeof(int32_t);
+  const size_t N = (size_t)m->frame_count, S = (size_t)m->sample_count, P = (size_t)m->pair_count;
+  const size_t C = (size_t)m->coupling_count;
+  uint64_t h = FASCIA_FNV_START;
+  h = fascia_fnv(h, m->frame_position, 3 * N * R);
+  h = fascia_fnv(h, m->frame_rotation, 4 * N * R);
+  h = fascia_fnv(h, m->frame_kind, N * I);
+  h = fascia_fnv(h, m->frame_motion, N * I);
+  h = fascia_fnv(h, m->frame_load, 6 * N * R);
+  h = fascia_fnv(h, m->frame_organ, N * I);
+  h = fascia_fnv(h, m->sample_position, 3 * S * R);
+  h = fascia_fnv(h, m->sample_volume, S * R);
+  h = fascia_fnv(h, m->sample_material, S * I);
+  h = fascia_fnv(h, m->sample_organ, S * I);
+  for (size_t s = 0; s < S; ++s) // models without patches keep the hash they had before patches existed
+    if (m->sample_patch[s] >= 0) {
+      h = fascia_fnv(h, m->sample_patch, S * I);
+      break;
+    }
+  h = fascia_fnv(h, m->sample_offsets, (S + 1) * I);
+  h = fascia_fnv(h, m->pair_frame, P * I);
+  h = fascia_fnv(h, m->pair_weight, P * R);
+  h = fascia_fnv(h, m->pair_gradient, 3 * P * R);
+  for (int32_t k = 0; k < m->material_count; ++k) {
+    const fascia_material *mat = m->materials + k;
+    const fascia_real values[5] = {mat->youngs_modulus, mat->poisson_ratio, mat->density, mat->rotation_coupling,
+                                   mat->rotation_smoothing};
+    const int32_t kinds[2] = {mat->law, mat->part};
+    h = fascia_fnv(h, kinds, sizeof kinds);
+    h = fascia_fnv(h, values, sizeof values);
+  }
+  for (int32_t k = 0; k < m->motion_count; ++k) {
+    const fascia_motion *mo = m->motions + k;
+    const size_t K = (size_t)mo->key_count;
+    h = fascia_fnv(h, mo->pivot, 3 * R);
+    h = fascia_fnv(h, mo->key_time, K * R);
+    h = fascia_fnv(h, mo->key_translation, 3 * K * R);
+    h = fascia_fnv(h, mo->key_rotation, 4 * K * R);
+  }
+  for (int32_t k = 0; k < m->organ_count; ++k) {
+    const fascia_organ *o = m->organs + k;
+    const int32_t kinds[4] = {o->kind, o->motion, o->vertex_count, o->triangle_count};
+    h = fascia_fnv(h, kinds, sizeof kinds);
+    h = fascia_fnv(h, o->vertices, 3 * (size_t)o->vertex_count * R);
+    h = fascia_fnv(h, o->triangles, 3 * (size_t)o->triangle_count * I);
+  }
+  h = fascia_fnv(h, m->coupling_organ, C * I);
+  h = fascia_fnv(h, m->coupling_frame, C * I);
+  h = fascia_fnv(h, m->coupling_triangle, C * I);
+  h = fascia_fnv(h, m->coupling_barycentric, 3 * C * R);
+  return fascia_fnv(h, m->gravity, 3 * R);
 }

@@ -338,10 +338,55 @@ static void print_step_progress(int done, int total, fascia_real t, double elaps
 // per step when the results and the organs were loaded together.
 static fascia_real step_time(const run_options *opt, int n) { return (fascia_real)n * opt->solver.time_step; }
 
-// Opens the results file, its fields described (docs/results-format.md).
+// The run's settings as the results record them (run_settings): what was
+// asked, in the options' own words; NULL when out of memory.
+static char *settings_json(const run_options *opt) {
+  static const char *const precond[] = {"none", "jacobi", "block"}, *const linear[] = {"auto", "cg", "direct"},
+                           *const mass[] = {"consistent", "lumped"};
+  const fascia_solver_def *d = &opt->solver;
+  cJSON *o = cJSON_CreateObject();
+  if (!o) return NULL;
+  cJSON_AddStringToObject(o, "mode", opt->dynamic ? "dynamic" : "static");
+  if (opt->dynamic) {
+    cJSON_AddNumberToObject(o, "steps", opt->steps);
+    cJSON_AddNumberToObject(o, "dt", d->time_step);
+    cJSON_AddNumberToObject(o, "save_every", opt->save_every);
+  } else {
+    cJSON_AddNumberToObject(o, "static_time", opt->static_time);
+    cJSON_AddNumberToObject(o, "load_steps", d->load_steps);
+  }
+  cJSON_AddStringToObject(o, "backend", d->backend ? d->backend : "auto");
+  cJSON_AddNumberToObject(o, "threads", opt->threads);
+  cJSON_AddNumberToObject(o, "newton_iterations", d->newton_iterations);
+  cJSON_AddNumberToObject(o, "newton_tolerance", d->newton_tolerance);
+  cJSON_AddStringToObject(o, "linear_solver", d->linear_solver >= 0 && d->linear_solver < 3 ? linear[d->linear_solver] : "?");
+  cJSON_AddNumberToObject(o, "cg_iterations", d->cg_iterations);
+  cJSON_AddNumberToObject(o, "cg_tolerance", d->cg_tolerance);
+  cJSON_AddBoolToObject(o, "cg_fixed", d->cg_fixed);
+  cJSON_AddStringToObject(o, "precond", d->precond >= 0 && d->precond < 3 ? precond[d->precond] : "?");
+  cJSON_AddStringToObject(o, "assembled", d->assembled == FASCIA_ASSEMBLED_AUTO ? "auto" : d->assembled ? "yes" : "no");
+  cJSON_AddStringToObject(o, "mass", d->mass >= 0 && d->mass < 2 ? mass[d->mass] : "?");
+  cJSON_AddNumberToObject(o, "damping", d->mass_damping);
+  cJSON_AddNumberToObject(o, "step_retries", d->step_retries);
+  cJSON_AddBoolToObject(o, "require_convergence", d->require_convergence);
+  cJSON_AddNumberToObject(o, "blow_up_strain", d->blow_up_strain);
+  char *text = cJSON_PrintUnformatted(o);
+  cJSON_Delete(o);
+  return text;
+}
+
+// Opens the results file, its fields described and what made them recorded
+// (docs/results-format.md).
 static fascia_status open_results(fascia_ctx *ctx, const run_options *opt, const fascia_model *model,
                                   const fascia_results_def *def, fascia_results **res) {
   fascia_status st = fascia_results_open(ctx, opt->results_path, model, def, res);
+  if (st == FASCIA_OK) {
+    char *settings = settings_json(opt);
+    st = settings ? fascia_results_set_run(*res, opt->model_path, settings)
+                  : fascia_ctx_fail(ctx, FASCIA_ERR_MEMORY, __FILE__, __LINE__,
+                                    "results '%s': out of memory for the run's settings", opt->results_path);
+    cJSON_free(settings);
+  }
   if (st == FASCIA_OK && !opt->dynamic)
     st = fascia_results_set_time_meaning(*res, "load factor of a static run: 0 the rest state, 1 the equilibrium");
   if (st == FASCIA_OK && opt->samples)

@@ -245,6 +245,14 @@ FASCIA_API fascia_status fascia_model_make_patches(fascia_ctx *ctx, fascia_model
 /// the samples in them (*patched, may be NULL).
 FASCIA_API int32_t fascia_model_patch_count(const fascia_model *model, int32_t *patched);
 
+/// A fingerprint of the model's contents (FNV-1a, 64 bits) over every array
+/// the solver reads: rest state, kinds, motions, loads, samples, patches,
+/// weights, materials, organs and their coupling, gravity. Two models with
+/// the same fingerprint simulate alike; names, probes and provenance do not
+/// count, so a copy, a rename or a re-save of a model file keeps it.
+/// Checkpoints and results record it.
+FASCIA_API uint64_t fascia_model_fingerprint(const fascia_model *model);
+
 /// Total sample volume (m^3) and mass (kg).
 FASCIA_API fascia_real fascia_model_volume(const fascia_model *model);
 /// Volume of the tissue samples alone (sample_organ == -1), m^3.

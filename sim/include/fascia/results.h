@@ -67,6 +67,14 @@ FASCIA_API fascia_status fascia_results_append_field(fascia_results *results, co
 FASCIA_API fascia_status fascia_results_describe_field(fascia_results *results, const char *name, const char *unit,
                                                        const char *meaning);
 
+/// Records what made the results, as root attributes: `model_file`, the
+/// model's path, and `run_settings`, the run's settings as the caller
+/// spells them (fascia run: a JSON object of the solver settings, the
+/// backend and the command). The model's fingerprint
+/// (fascia_model_fingerprint, 16 hex digits) is always recorded, as
+/// `model_fingerprint`. Either text any length.
+FASCIA_API fascia_status fascia_results_set_run(fascia_results *results, const char *model_file, const char *settings);
+
 /// What /steps/time means, stored as its attribute `time_meaning` (default
 /// "simulation time"); a static run, say, saves rest and equilibrium as two
 /// steps of a load factor. At most 255 characters.
