@@ -279,6 +279,15 @@ static void print_summary(const prep_run *r, const step_clock *c, const char *ou
                   "error %.2g m\n",
           (int)r->model->frame_count, (int)r->coupling->count, (int)r->model->sample_count,
           (int)r->model->pair_count, tissue_volume, organs_part, r->weights->max_linear_error);
+  int32_t patched = 0;
+  const int32_t patches = fascia_model_patch_count(r->model, &patched);
+  if (patches > 0)
+    fprintf(stderr, "volumetric patches: %d over %d samples (mean dilatation from Poisson ratio %.2g on; patch_radius "
+                    "in the scene, docs/mechanics.md)\n",
+            (int)patches, (int)patched, FASCIA_PATCH_MIN_POISSON);
+  else
+    fprintf(stderr, "volumetric patches: none (every material's Poisson ratio is below %.2g, or patch_radius is 0)\n",
+            FASCIA_PATCH_MIN_POISSON);
   if (preview) fprintf(stderr, "preview: %s/{organs,region,frames,samples,coupling}.vtk\n", preview);
   double total = 0;
   fprintf(stderr, "steps (peak resident memory %s)\n", c->resettable ? "per step" : "since start");
@@ -297,6 +306,9 @@ static void print_json(const prep_run *r, const step_clock *c, const char *outpu
   if (preview) cJSON_AddStringToObject(root, "preview", preview);
   cJSON_AddNumberToObject(root, "frames", r->model->frame_count);
   cJSON_AddNumberToObject(root, "samples", r->model->sample_count);
+  int32_t patched = 0;
+  cJSON_AddNumberToObject(root, "volumetric_patches", fascia_model_patch_count(r->model, &patched));
+  cJSON_AddNumberToObject(root, "patched_samples", patched);
   cJSON_AddNumberToObject(root, "pairs", r->model->pair_count);
   cJSON_AddNumberToObject(root, "tissue_volume", fascia_model_tissue_volume(r->model));
   cJSON_AddNumberToObject(root, "volume", fascia_model_volume(r->model));
