@@ -484,7 +484,7 @@ static fascia_status validate_held(fascia_ctx *ctx, const fascia_model *m, const
 // energy is whole (a deviatoric or volumetric part is the other cure).
 static fascia_status validate_patches(fascia_ctx *ctx, const fascia_model *m, const char *origin) {
   const int32_t S = m->sample_count;
-  int32_t *first = NULL; // first sample of each patch, -1 until seen
+  int any = 0;
   for (int32_t s = 0; s < S; ++s) {
     const int32_t p = m->sample_patch[s];
     if (p == -1) continue;
@@ -496,11 +496,16 @@ static fascia_status validate_patches(fascia_ctx *ctx, const fascia_model *m, co
                  "model '%s' /samples/patch: sample %d is in patch %d but its material '%s' integrates only part of "
                  "its energy (part %d); patches need whole materials (part 0)",
                  origin, (int)s, (int)p, mat->name, (int)mat->part);
-    if (!first) {
-      first = malloc((size_t)S * sizeof *first);
-      FASCIA_CHECK(first, ctx, FASCIA_ERR_MEMORY, "model '%s': out of memory checking patches", origin);
-      for (int32_t k = 0; k < S; ++k) first[k] = -1;
-    }
+    any = 1;
+  }
+  if (!any) return FASCIA_OK;
+  // one material per patch: the first sample of each patch names it
+  int32_t *first = malloc((size_t)S * sizeof *first);
+  FASCIA_CHECK(first, ctx, FASCIA_ERR_MEMORY, "model '%s': out of memory checking patches", origin);
+  for (int32_t k = 0; k < S; ++k) first[k] = -1;
+  for (int32_t s = 0; s < S; ++s) {
+    const int32_t p = m->sample_patch[s];
+    if (p == -1) continue;
     if (first[p] < 0) first[p] = s;
     else if (m->sample_material[first[p]] != m->sample_material[s]) {
       const int32_t a = first[p];
