@@ -26,8 +26,10 @@ typedef struct fixture_sample {
 /// Builds the fixture: 5 frames (tetrahedron corners plus one prescribed
 /// frame, rotated rest frames, loads), 3 samples with 2, 3 and 4
 /// neighbours, 2 materials, 1 motion with 2 keys, 1 probe, 1 organ with 2
-/// triangles, 2 coupling entries, gravity and provenance. With minimal != 0
-/// instead: no motion, probe, organ, coupling or provenance (empty arrays).
+/// triangles, 2 coupling entries, gravity and provenance, and samples 0 and 2
+/// (of the whole material) in one volumetric patch (a version 2 file). With
+/// minimal != 0 instead: no motion, probe, organ, coupling, provenance or
+/// patch (empty arrays, a version 1 file).
 static inline fascia_status fixture_model(fascia_ctx *ctx, int minimal, fascia_model **out) {
   const fixture_sample samples[3] = {
       {2, {0, 1, 0, 0}, {0.75, 0.25, 0, 0}, {{-1, 0, 0}, {1, 0, 0}}},
@@ -69,6 +71,7 @@ static inline fascia_status fixture_model(fascia_ctx *ctx, int minimal, fascia_m
     m->sample_material[s] = s % 2;
   }
   m->sample_offsets[3] = k;
+  if (!minimal) m->sample_patch[0] = m->sample_patch[2] = 2;
   const char *names[2] = {"fat", "fascia"};
   for (int j = 0; j < 2; ++j) {
     snprintf(m->materials[j].name, FASCIA_NAME_SIZE, "%s", names[j]);

@@ -34,6 +34,7 @@ static void compare(const fascia_model *a, const fascia_model *b) {
   SAME(a->sample_position, b->sample_position, 3 * S);
   SAME(a->sample_volume, b->sample_volume, S);
   SAME(a->sample_material, b->sample_material, S);
+  SAME(a->sample_patch, b->sample_patch, S);
   SAME(a->sample_offsets, b->sample_offsets, S + 1);
   SAME(a->pair_frame, b->pair_frame, P);
   SAME(a->pair_weight, b->pair_weight, P);

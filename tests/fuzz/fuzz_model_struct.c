@@ -31,7 +31,8 @@ static const char *const datasets[] = {
     "/motions/breathing/translation", "/motions/breathing/rotation", "/probes/position", "/probes/offsets",
     "/probes/frame",     "/probes/weight",        "/organs/liver/vertices", "/organs/liver/triangles",
     "/coupling/organ",   "/coupling/frame",       "/coupling/triangle",     "/coupling/barycentric",
-    "/gravity",          "/materials/name",       "/probes/name",           "/provenance"};
+    "/gravity",          "/materials/name",       "/probes/name",           "/provenance",
+    "/samples/patch"};
 #define DATASET_COUNT ((uint32_t)(sizeof datasets / sizeof datasets[0]))
 
 // Integer attributes: object, attribute name.
