@@ -10,7 +10,7 @@
 //  - with cell patches the error at nu = 0.49 stays within 1.5 points of
 //    the error at nu = 0.3 (no locking), and at nu = 0.3 it is no larger
 //    than full integration's (not made worse);
-//  - hex reaches the goal at nu = 0.49 (2 %); and under refinement
+//  - hex is within 2 % at nu = 0.49; and under refinement
 //    (10x2x2, 20x3x3, 40x5x5 at nu = 0.3) the hex error falls faster than
 //    full integration's (measured -9.4, -1.4, -0.21 % against +15, +5.0,
 //    +1.5 %).
