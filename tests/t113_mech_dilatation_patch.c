@@ -13,15 +13,13 @@
 #include <string.h>
 
 #include "check.h"
+#include "random_model.h"
 #include "scenes.h"
 #include "system.h"
 
-static uint64_t rng_state = 4242;
+static unsigned long long rng_state = 4242;
 
-static double uniform(double lo, double hi) {
-  rng_state = rng_state * 6364136223846793005ULL + 1442695040888963407ULL;
-  return lo + (hi - lo) * (double)(rng_state >> 11) * 0x1.0p-53;
-}
+static double uniform(double lo, double hi) { return rnd_uniform(&rng_state, lo, hi); }
 
 static fascia_model *beam(fascia_ctx *ctx, int shape, int law, int patch) {
   fascia_scene_beam_def def = fascia_scene_beam_def_default();

@@ -77,7 +77,7 @@ int cmd_beam(int argc, char **argv) {
   int json = 0, samples_given = 0, young_given = 0;
   double lambda = -1, mu = -1;
   int32_t samples_per_cell = 0;
-  int volumetric = 5; // auto: cell patches from FASCIA_PATCH_MIN_POISSON on
+  def.volumetric_patch = FASCIA_SCENE_PATCH_AUTO; // cell patches from FASCIA_PATCH_MIN_POISSON on
   for (int k = 1; k < argc; ++k) {
     const char *opt = argv[k];
     if (!strcmp(opt, "--help") || !strcmp(opt, "-h")) {
@@ -126,10 +126,9 @@ int cmd_beam(int argc, char **argv) {
     else if (!strcmp(opt, "--patch-radius"))
       ok = cli_parse_real(value, &def.patch_radius);
     else if (!strcmp(opt, "--volumetric")) {
-      static const char *const kinds[] = {"full", "cell", "frame", "poisson", "reduced", "auto"};
-      ok = 0;
-      for (int j = 0; j < 6; ++j)
-        if (!strcmp(value, kinds[j])) ok = 1, volumetric = j;
+      def.reduced_volumetric = !strcmp(value, "reduced");
+      def.volumetric_patch = def.reduced_volumetric ? FASCIA_SCENE_PATCH_NONE : fascia_scene_patch_from_name(value);
+      ok = def.volumetric_patch != -2;
     }
     else
       path = value;
@@ -144,12 +143,6 @@ int cmd_beam(int argc, char **argv) {
     if (!(lambda >= 0 && mu > 0)) return cli_usage_error("beam", "%s", "--lambda needs a value >= 0 and --mu one > 0, both given");
     fascia_lame_to_young(lambda, mu, &def.youngs_modulus, &def.poisson_ratio);
   }
-  if (volumetric == 5)
-    def.volumetric_patch = def.poisson_ratio >= FASCIA_PATCH_MIN_POISSON ? FASCIA_SCENE_PATCH_CELL : FASCIA_SCENE_PATCH_NONE;
-  else if (volumetric == 4)
-    def.reduced_volumetric = 1;
-  else
-    def.volumetric_patch = volumetric; // the FASCIA_SCENE_PATCH_ values in the order of kinds
   if (samples_given) {
     if (def.shape == FASCIA_SCENE_TET)
       def.samples_per_tet = samples_per_cell;

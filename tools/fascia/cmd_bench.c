@@ -91,13 +91,6 @@ typedef struct value_list {
   int32_t grid[MAX_LIST][3];
 } value_list;
 
-// The volumetric integration of a cantilever row: fascia beam's choice, or a patch kind.
-#define VOLUMETRIC_AUTO (-1)
-
-static const char *volumetric_name(int v) {
-  return v == VOLUMETRIC_AUTO ? "auto" : v == FASCIA_SCENE_PATCH_CELL ? "cell" : v == FASCIA_SCENE_PATCH_FRAME ? "frame" : "full";
-}
-
 // kind: 's' shape name, 'g' grid, 'i' integer >= 1, 'r' real >= 0, 'v' volumetric integration.
 static int parse_list(const char *text, char kind, value_list *out) {
   char buffer[1024];
@@ -118,12 +111,8 @@ static int parse_list(const char *text, char kind, value_list *out) {
     } else if (kind == 'g') {
       if (!cli_parse_grid(item, out->grid[out->count], 2)) return 0;
     } else if (kind == 'v') {
-      *v = !strcmp(item, "auto")    ? VOLUMETRIC_AUTO
-           : !strcmp(item, "full")  ? FASCIA_SCENE_PATCH_NONE
-           : !strcmp(item, "cell")  ? FASCIA_SCENE_PATCH_CELL
-           : !strcmp(item, "frame") ? FASCIA_SCENE_PATCH_FRAME
-                                    : -2;
-      if (*v == -2) return 0;
+      *v = fascia_scene_patch_from_name(item);
+      if (*v == -2 || *v == FASCIA_SCENE_PATCH_POISSON) return 0;
     } else if (kind == 'i') {
       if (!cli_parse_count(item, &n, 1)) return 0;
       *v = n;
@@ -521,7 +510,7 @@ typedef struct cantilever_case {
   double smoothing;
   int linear; ///< fascia_linear_solver for this row, -1: --linear-solver or the solver's default
   double nu;
-  int volumetric; ///< VOLUMETRIC_AUTO or a FASCIA_SCENE_PATCH_* kind
+  int volumetric; ///< a FASCIA_SCENE_PATCH_* kind (AUTO: fascia beam's rule)
 } cantilever_case;
 
 typedef struct cantilever_result {
@@ -547,7 +536,7 @@ static const fascia_ccx_reference *cantilever_reference(void) {
 // and the nearly incompressible beam (nu = 0.49). The paper's scheme on
 // 40 x 5 x 5 is left out: minutes.
 static int default_cases(cantilever_case *cases) {
-  const int H = FASCIA_SCENE_HEX, T = FASCIA_SCENE_TET, M = FASCIA_SCENE_MESHLESS, A = VOLUMETRIC_AUTO,
+  const int H = FASCIA_SCENE_HEX, T = FASCIA_SCENE_TET, M = FASCIA_SCENE_MESHLESS, A = FASCIA_SCENE_PATCH_AUTO,
             F = FASCIA_SCENE_PATCH_NONE;
   const cantilever_case table[] = {
       {H, 2, 0, {10, 2, 2}, 0.1, -1, 0.3, A},  {H, 2, 0, {20, 3, 3}, 0.1, -1, 0.3, A},
@@ -574,7 +563,7 @@ static int sweep_cases(const bench_options *opt, cantilever_case *cases, int cap
   value_list shapes = opt->shapes, grids = opt->grids, spc = opt->spc, kn = opt->neighbours, sm = opt->smoothing;
   value_list nus = opt->nus, vol = opt->volumetric;
   if (!nus.count) nus.count = 1, nus.real[0] = 0.3;
-  if (!vol.count) vol.count = 1, vol.real[0] = VOLUMETRIC_AUTO;
+  if (!vol.count) vol.count = 1, vol.real[0] = FASCIA_SCENE_PATCH_AUTO;
   if (!shapes.count) shapes.count = 1, shapes.real[0] = FASCIA_SCENE_HEX;
   if (!grids.count) grids.count = 1, grids.grid[0][0] = 20, grids.grid[0][1] = 3, grids.grid[0][2] = 3;
   if (!kn.count) kn.count = 1, kn.real[0] = 8;
@@ -631,9 +620,7 @@ static fascia_status bench_cantilever_case(fascia_ctx *ctx, const bench_options 
   if (c->shape == FASCIA_SCENE_MESHLESS) bdef.neighbours = c->neighbours;
   bdef.rotation_smoothing = c->smoothing;
   bdef.poisson_ratio = c->nu;
-  bdef.volumetric_patch = c->volumetric != VOLUMETRIC_AUTO         ? c->volumetric
-                          : c->nu >= FASCIA_PATCH_MIN_POISSON ? FASCIA_SCENE_PATCH_CELL
-                                                              : FASCIA_SCENE_PATCH_NONE;
+  bdef.volumetric_patch = c->volumetric;
   const fascia_ccx_reference *ref = fascia_ccx_reference_find(&bdef);
   if (!ref)
     return fascia_ctx_fail(ctx, FASCIA_ERR_ARGUMENT, __FILE__, __LINE__,
@@ -702,7 +689,7 @@ static void cantilever_text_header(void) {
 // The row's volumetric integration as run: full, or the patch kind.
 static const char *row_volumetric(const cantilever_result *r) {
   const int v = r->c.volumetric;
-  return r->patches <= 0 ? "full" : v == VOLUMETRIC_AUTO ? "cell" : volumetric_name(v);
+  return r->patches <= 0 ? "full" : v == FASCIA_SCENE_PATCH_AUTO ? "cell" : fascia_scene_patch_name(v);
 }
 
 static void cantilever_text_row(const cantilever_result *r) {

@@ -340,10 +340,11 @@ static fascia_real step_time(const run_options *opt, int n) { return (fascia_rea
 
 // The run's settings as the results record them (run_settings): what was
 // asked, in the options' own words; NULL when out of memory.
+static const char *setting_text(const char *name, double value, int digits, char *buf, size_t size);
+
 static char *settings_json(const run_options *opt) {
-  static const char *const precond[] = {"none", "jacobi", "block"}, *const linear[] = {"auto", "cg", "direct"},
-                           *const mass[] = {"consistent", "lumped"};
   const fascia_solver_def *d = &opt->solver;
+  char buf[64];
   cJSON *o = cJSON_CreateObject();
   if (!o) return NULL;
   cJSON_AddStringToObject(o, "mode", opt->dynamic ? "dynamic" : "static");
@@ -359,13 +360,13 @@ static char *settings_json(const run_options *opt) {
   cJSON_AddNumberToObject(o, "threads", opt->threads);
   cJSON_AddNumberToObject(o, "newton_iterations", d->newton_iterations);
   cJSON_AddNumberToObject(o, "newton_tolerance", d->newton_tolerance);
-  cJSON_AddStringToObject(o, "linear_solver", d->linear_solver >= 0 && d->linear_solver < 3 ? linear[d->linear_solver] : "?");
+  cJSON_AddStringToObject(o, "linear_solver", setting_text("linear_solver", d->linear_solver, 0, buf, sizeof buf));
   cJSON_AddNumberToObject(o, "cg_iterations", d->cg_iterations);
   cJSON_AddNumberToObject(o, "cg_tolerance", d->cg_tolerance);
   cJSON_AddBoolToObject(o, "cg_fixed", d->cg_fixed);
-  cJSON_AddStringToObject(o, "precond", d->precond >= 0 && d->precond < 3 ? precond[d->precond] : "?");
+  cJSON_AddStringToObject(o, "precond", setting_text("precond", d->precond, 0, buf, sizeof buf));
   cJSON_AddStringToObject(o, "assembled", d->assembled == FASCIA_ASSEMBLED_AUTO ? "auto" : d->assembled ? "yes" : "no");
-  cJSON_AddStringToObject(o, "mass", d->mass >= 0 && d->mass < 2 ? mass[d->mass] : "?");
+  cJSON_AddStringToObject(o, "mass", setting_text("mass", d->mass, 0, buf, sizeof buf));
   cJSON_AddNumberToObject(o, "damping", d->mass_damping);
   cJSON_AddNumberToObject(o, "step_retries", d->step_retries);
   cJSON_AddBoolToObject(o, "require_convergence", d->require_convergence);

@@ -382,7 +382,7 @@ static void csv_row(FILE *f, const row *r) {
           precond_name(d->precond), d->cg_iterations, d->cg_fixed, d->cg_tolerance, r->uz, r->reference,
           r->error_percent, r->ms, r->dynamic ? "per_step" : "per_solve", r->newton, r->cg, r->converged,
           r->memory_mb, r->peak_mb, r->pareto);
-  fprintf(f, ",%s,%s,", r->reduced ? "reduced" : r->patch ? "cell" : "full", r->backend);
+  fprintf(f, ",%s,%s,", r->reduced ? "reduced" : fascia_scene_patch_name(r->patch), r->backend);
   cli_csv_text(f, r->device);
   fputc('\n', f);
 }

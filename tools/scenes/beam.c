@@ -37,6 +37,23 @@ int fascia_scene_shape_from_name(const char *name) {
   return -1;
 }
 
+const char *fascia_scene_patch_name(int patch) {
+  switch (patch) {
+  case FASCIA_SCENE_PATCH_AUTO: return "auto";
+  case FASCIA_SCENE_PATCH_NONE: return "full";
+  case FASCIA_SCENE_PATCH_CELL: return "cell";
+  case FASCIA_SCENE_PATCH_FRAME: return "frame";
+  case FASCIA_SCENE_PATCH_POISSON: return "poisson";
+  default: return "unknown";
+  }
+}
+
+int fascia_scene_patch_from_name(const char *name) {
+  for (int k = FASCIA_SCENE_PATCH_AUTO; name && k <= FASCIA_SCENE_PATCH_POISSON; ++k)
+    if (!strcmp(name, fascia_scene_patch_name(k))) return k;
+  return -2;
+}
+
 fascia_scene_beam_def fascia_scene_beam_def_default(void) {
   fascia_scene_beam_def def;
   memset(&def, 0, sizeof def);
@@ -109,8 +126,8 @@ static fascia_status check_beam(fascia_ctx *ctx, const fascia_scene_beam_def *de
               (long long)(cells * per_cell * *per_sample), (long long)BEAM_MAX_PAIRS);
   SCENE_CHECK(def->reduced_volumetric == 0 || def->reduced_volumetric == 1, ctx, FASCIA_ERR_ARGUMENT,
               "%s: reduced_volumetric %d, expected 0 or 1", who, (int)def->reduced_volumetric);
-  SCENE_CHECK(def->volumetric_patch >= FASCIA_SCENE_PATCH_NONE && def->volumetric_patch <= FASCIA_SCENE_PATCH_POISSON,
-              ctx, FASCIA_ERR_ARGUMENT, "%s: volumetric_patch %d, expected 0 (none), 1 (cell), 2 (frame) or 3 (poisson)", who,
+  SCENE_CHECK(def->volumetric_patch >= FASCIA_SCENE_PATCH_AUTO && def->volumetric_patch <= FASCIA_SCENE_PATCH_POISSON,
+              ctx, FASCIA_ERR_ARGUMENT, "%s: volumetric_patch %d, expected -1 (auto), 0 (none), 1 (cell), 2 (frame) or 3 (poisson)", who,
               (int)def->volumetric_patch);
   SCENE_CHECK(!def->reduced_volumetric || def->volumetric_patch == FASCIA_SCENE_PATCH_NONE, ctx,
               FASCIA_ERR_ARGUMENT, "%s: reduced_volumetric and volumetric_patch are two cures of locking: choose one",
@@ -279,6 +296,12 @@ static void beam_provenance(char *buf, size_t size, const fascia_scene_beam_def 
 fascia_status fascia_scene_beam_build(fascia_ctx *ctx, const fascia_scene_beam_def *def, fascia_model **out) {
   SCENE_CHECK(out, ctx, FASCIA_ERR_ARGUMENT, "fascia_scene_beam_build: NULL out");
   *out = NULL;
+  // the rule of PATCH_AUTO, once: the def used from here on names its choice
+  fascia_scene_beam_def resolved = *def;
+  if (resolved.volumetric_patch == FASCIA_SCENE_PATCH_AUTO)
+    resolved.volumetric_patch =
+        resolved.poisson_ratio >= FASCIA_PATCH_MIN_POISSON ? FASCIA_SCENE_PATCH_CELL : FASCIA_SCENE_PATCH_NONE;
+  def = &resolved;
   int32_t samples = 0, per_sample = 0;
   fascia_status status = check_beam(ctx, def, &samples, &per_sample);
   if (status != FASCIA_OK) return status;

@@ -33,7 +33,18 @@ int fascia_scene_shape_from_name(const char *name);
 /// includes the faces, frames at x == 0 FIXED (clamped), all others FREE,
 /// loaded by gravity. Start from fascia_scene_beam_def_default().
 /// How the beam groups samples into volumetric patches.
-enum { FASCIA_SCENE_PATCH_NONE = 0, FASCIA_SCENE_PATCH_CELL = 1, FASCIA_SCENE_PATCH_FRAME = 2, FASCIA_SCENE_PATCH_POISSON = 3 };
+/// AUTO: CELL from FASCIA_PATCH_MIN_POISSON on, else NONE (fascia beam's default).
+enum {
+  FASCIA_SCENE_PATCH_AUTO = -1,
+  FASCIA_SCENE_PATCH_NONE = 0,
+  FASCIA_SCENE_PATCH_CELL = 1,
+  FASCIA_SCENE_PATCH_FRAME = 2,
+  FASCIA_SCENE_PATCH_POISSON = 3
+};
+/// "auto", "full" (NONE), "cell", "frame", "poisson"; "unknown" otherwise.
+const char *fascia_scene_patch_name(int patch);
+/// A patch kind from its name; -2 if unknown.
+int fascia_scene_patch_from_name(const char *name);
 
 typedef struct fascia_scene_beam_def {
   fascia_real length, width, height; ///< m; defaults 16, 1, 1
@@ -61,8 +72,9 @@ typedef struct fascia_scene_beam_def {
   /// the volume-averaged dilatation of a patch of samples. PATCH_NONE (the
   /// samples integrate all of it), PATCH_CELL (the samples of each grid
   /// cell), PATCH_FRAME (the samples nearest each frame: its Voronoi cell),
-  /// PATCH_POISSON (fascia_model_make_patches, as prep makes them).
-  /// Not with reduced_volumetric. Default PATCH_NONE.
+  /// PATCH_POISSON (fascia_model_make_patches, as prep makes them),
+  /// PATCH_AUTO (the rule of fascia beam). Not with reduced_volumetric.
+  /// Default PATCH_NONE.
   int32_t volumetric_patch;
   fascia_real patch_radius; ///< PATCH_POISSON: radius of the patches, m (default 0.5)
   fascia_real gravity[3];         ///< m/s^2; default (0, 0, -9.81)
