@@ -27,6 +27,7 @@ void fascia_prep_meshes_destroy(fascia_prep_meshes **meshes) {
   for (int32_t k = 0; m->warnings && k < m->warning_count; ++k) free(m->warnings[k]);
   free(m->warnings);
   free(m->contacts);
+  free(m->occupied);
   free(m);
   *meshes = NULL;
 }

@@ -27,12 +27,11 @@ static int32_t *organ_of_labels(fascia_ctx *ctx, const fascia_prep_scene *scene)
 
 // "5 (liver), 6 (stomach), ..." of the labels the image holds.
 static void labels_present(const fascia_prep_segmentation *seg, const int64_t *count, char *out, size_t size) {
+  const prep_label_table table = {seg->table_count, seg->table_label, seg->table_name};
   out[0] = 0;
   for (int32_t v = 1; v <= PREP_MAX_LABEL; ++v) {
     if (!count[v]) continue;
-    const char *name = NULL;
-    for (int32_t k = 0; k < seg->table_count; ++k)
-      if (seg->table_label[k] == v) name = seg->table_name[k];
+    const char *name = prep_label_table_name(&table, v);
     char item[96];
     snprintf(item, sizeof item, "%s%d%s%s%s", out[0] ? ", " : "", (int)v, name ? " (" : "", name ? name : "",
              name ? ")" : "");
@@ -79,6 +78,67 @@ static fascia_status check_present(fascia_ctx *ctx, const fascia_prep_scene *sce
 static double determinant3(const double *a) { // of the 3x3 part of a row-major 3x4
   return a[0] * (a[5] * a[10] - a[6] * a[9]) - a[1] * (a[4] * a[10] - a[6] * a[8]) +
          a[2] * (a[4] * a[9] - a[5] * a[8]);
+}
+
+const char *fascia_prep_label_name(const fascia_prep_segmentation *seg, int32_t label) {
+  const prep_label_table table = {seg->table_count, seg->table_label, seg->table_name};
+  return prep_label_table_name(&table, label);
+}
+
+void fascia_prep_occupied_text(const fascia_prep_scene *scene, const fascia_prep_tissue_report *report, char *out,
+                               size_t size) {
+  out[0] = 0;
+  size_t used = 0;
+  for (int k = 0; k < 4 && report->occupied_labels[k] && used < size; ++k) {
+    const int32_t v = report->occupied_labels[k];
+    const char *name = fascia_prep_label_name(&scene->segmentation, v);
+    char label[96];
+    if (name)
+      snprintf(label, sizeof label, "%s (%d)", name, (int)v);
+    else
+      snprintf(label, sizeof label, "label %d", (int)v);
+    const int n = snprintf(out + used, size - used, "%s%s %.3g cm^3", k ? ", " : "", label,
+                           1e6 * report->occupied_label_volume[k]);
+    used += n > 0 ? (size_t)n : 0;
+  }
+  double listed = 0;
+  for (int k = 0; k < 4; ++k) listed += report->occupied_label_volume[k];
+  if (used < size && report->occupied_volume > listed * (1 + 1e-9))
+    snprintf(out + used, size - used, ", others %.3g cm^3", 1e6 * (report->occupied_volume - listed));
+}
+
+// The voxels of labels that are neither an organ's nor connective: tissue
+// stays out of them (an unmodelled structure such as a vessel or the bowel
+// is not connective tissue). meshes->occupied stays NULL when there are none.
+static fascia_status find_occupied(fascia_ctx *ctx, const fascia_prep_scene *scene, const prep_labelmap *map,
+                                   const int32_t *organ_of, fascia_prep_meshes *meshes) {
+  const fascia_prep_segmentation *seg = &scene->segmentation;
+  uint8_t *space = prep_calloc(PREP_MAX_LABEL + 1, 1); // 1: tissue may take the label's voxels
+  PREP_CHECK(space, ctx, FASCIA_ERR_MEMORY, "label organs: out of memory");
+  space[0] = 1;
+  for (int32_t k = 0; k < seg->connective_count; ++k) space[seg->connective[k]] = 1;
+  const int64_t n = (int64_t)map->dims[0] * map->dims[1] * map->dims[2];
+  int64_t count = 0;
+  for (int64_t v = 0; v < n; ++v) count += !space[map->labels[v]] && organ_of[map->labels[v]] < 0;
+  if (count) meshes->occupied = prep_calloc(n, sizeof(uint16_t));
+  if (count && meshes->occupied)
+    for (int64_t v = 0; v < n; ++v)
+      if (!space[map->labels[v]] && organ_of[map->labels[v]] < 0) meshes->occupied[v] = (uint16_t)map->labels[v];
+  free(space);
+  PREP_CHECK(!count || meshes->occupied, ctx, FASCIA_ERR_MEMORY, "label organs: out of memory");
+  if (!count) return FASCIA_OK;
+  memcpy(meshes->occupied_dims, map->dims, sizeof map->dims);
+  // [A | t]^-1 = [A^-1 | -A^-1 t], A^-1 by cofactors (the reader refused singular affines)
+  const double *a = map->to_world, det = determinant3(a);
+  double *w = meshes->occupied_from_world;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) {
+      const int r1 = (c + 1) % 3, r2 = (c + 2) % 3, c1 = (r + 1) % 3, c2 = (r + 2) % 3;
+      w[4 * r + c] = (a[4 * r1 + c1] * a[4 * r2 + c2] - a[4 * r1 + c2] * a[4 * r2 + c1]) / det;
+    }
+  for (int r = 0; r < 3; ++r)
+    w[4 * r + 3] = -(w[4 * r] * a[3] + w[4 * r + 1] * a[7] + w[4 * r + 2] * a[11]);
+  return FASCIA_OK;
 }
 
 // The surface of organ o's labels, in the world, into mesh (one part, named after the organ).
@@ -275,6 +335,7 @@ fascia_status prep_label_organs(fascia_ctx *ctx, const fascia_prep_scene *scene,
     m->report.parts_used = 1;
   }
   PREP_TRY_GOTO(find_contacts(ctx, scene, map, organ_of, meshes));
+  PREP_TRY_GOTO(find_occupied(ctx, scene, map, organ_of, meshes));
   if (seg->interface_layer > 0) {
     // carve each organ against its neighbours as they were, so the order does not matter
     original.count = meshes->count;

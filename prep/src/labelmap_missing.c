@@ -16,3 +16,12 @@ fascia_status prep_labelmap_read(fascia_ctx *ctx, const char *path, int32_t fram
                    "); install it and rebuild",
                    path);
 }
+
+fascia_status fascia_prep_labelmap_write(fascia_ctx *ctx, const fascia_prep_scene *scene, fascia_prep_meshes *meshes,
+                                         const char *path, char *table_path, size_t table_size) {
+  (void)scene, (void)meshes, (void)table_path, (void)table_size;
+  return PREP_FAIL(ctx, FASCIA_ERR_UNSUPPORTED,
+                   "label map '%s': this fascia was built without label-map support (missing " FASCIA_LABELMAP_MISSING
+                   "); install it and rebuild",
+                   path);
+}

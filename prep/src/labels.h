@@ -53,4 +53,11 @@ FASCIA_PREP_INTERN void prep_labelmap_destroy(prep_labelmap **map);
 FASCIA_PREP_INTERN fascia_status prep_label_organs(fascia_ctx *ctx, const fascia_prep_scene *scene,
                                                    fascia_prep_meshes *meshes);
 
+/// Every organ's inside, by the rule voxelize uses (the flood fill from
+/// outside), on one grid of the scene's voxel size covering every organ:
+/// labels[v] = o + 1 for the first organ listed whose inside holds voxel v,
+/// else 0 (voxelize.c).
+FASCIA_PREP_INTERN fascia_status prep_organ_labels(fascia_ctx *ctx, const fascia_prep_scene *scene,
+                                                   fascia_prep_meshes *meshes, prep_grid *grid, uint16_t **labels);
+
 #endif

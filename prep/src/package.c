@@ -261,6 +261,7 @@ static cJSON *provenance(const fascia_prep_scene *scene, const fascia_prep_meshe
     cJSON_AddNumberToObject(e, "components", r->components);
     cJSON_AddNumberToObject(e, "dropped_components", r->dropped_components);
     cJSON_AddNumberToObject(e, "dropped_volume_m3", r->dropped_volume);
+    cJSON_AddNumberToObject(e, "occupied_volume_m3", r->occupied_volume);
     int32_t frames = 0, samples = 0;
     for (int32_t i = 0; i < pts->frame_count; ++i) frames += pts->frame_tissue[i] == t;
     for (int32_t s = 0; s < pts->sample_count; ++s) samples += pts->sample_tissue[s] == t;

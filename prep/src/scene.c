@@ -546,13 +546,20 @@ static fascia_status parse_organ_labels(const reader *rd, fascia_prep_scene *sce
         if (scene->organs[k].labels[a] == o->labels[b])
           return key_fail(rd, at, "label %d is already organ '%s''s; a label belongs to one organ", (int)o->labels[b],
                           scene->organs[k].name);
+  const fascia_prep_segmentation *seg = &scene->segmentation;
+  for (int32_t a = 0; a < seg->connective_count; ++a)
+    for (int32_t b = 0; b < o->label_count; ++b)
+      if (seg->connective[a] == o->labels[b])
+        return key_fail(rd, at, "label %d is declared connective (segmentation.connective); a label is either an "
+                        "organ's or space the tissue may take", (int)o->labels[b]);
   return FASCIA_OK;
 }
 
-// "segmentation": {"file", "labels", "frame", "smoothing", "interface_layer"}
+// "segmentation": {"file", "labels", "frame", "smoothing", "interface_layer", "connective"}
 static fascia_status parse_segmentation(const reader *rd, fascia_prep_scene *scene, const cJSON *item,
                                         const char *base_dir) {
-  static const char *const known[] = {"file", "labels", "frame", "smoothing", "interface_layer", "description", NULL};
+  static const char *const known[] = {"file",       "labels",      "frame", "smoothing", "interface_layer",
+                                      "connective", "description", NULL};
   const char *path = "segmentation";
   PREP_TRY(check_keys(rd, item, path, known));
   fascia_prep_segmentation *seg = &scene->segmentation;
@@ -599,6 +606,17 @@ static fascia_status parse_segmentation(const reader *rd, fascia_prep_scene *sce
   PREP_TRY(get_int(rd, item, path, "smoothing", 0, 1, 0, 10, &smoothing));
   seg->smoothing = smoothing;
   PREP_TRY(get_number(rd, item, path, "interface_layer", 0, 0, 0, 1, 0.1, &seg->interface_layer));
+  const cJSON *connective = cJSON_GetObjectItemCaseSensitive(item, "connective");
+  if (connective) {
+    prep_label_table table;
+    scene_table(seg, &table);
+    sub_key(at, path, "connective");
+    uint8_t *by_name = NULL; // a connective label the image lacks is no error: a scene may serve many images
+    const fascia_status status =
+        get_labels(rd, seg, &table, connective, at, &seg->connective, &by_name, &seg->connective_count);
+    free(by_name);
+    PREP_TRY(status);
+  }
   return FASCIA_OK;
 }
 
@@ -1107,6 +1125,7 @@ void fascia_prep_scene_destroy(fascia_prep_scene **scene) {
   free(seg->file);
   free(seg->file_path);
   free(seg->table);
+  free(seg->connective);
   free(s->organs);
   free(s->tissues);
   free(s->materials);

@@ -40,7 +40,7 @@
 
 #include <unistd.h>
 
-#include "prep_util.h"
+#include "labels.h"
 
 // grids above this many voxels are refused (2^31: 2 GB per byte array)
 #define MAX_VOXELS ((int64_t)1 << 31)
@@ -544,6 +544,65 @@ static fascia_status keep_components(fascia_ctx *ctx, const char *name, fascia_p
   return FASCIA_OK;
 }
 
+// The label that occupies world point x (meshes->occupied: a label the
+// scene neither models nor declares connective), 0 for none. A point on a
+// face between image voxels is occupied only when the voxels on both sides
+// are: a voxel centre of the scene on the face of an organ made of labels
+// (or of a mesh organ that follows them) is free.
+static int32_t occupied_label(const fascia_prep_meshes *meshes, const double *x) {
+  if (!meshes->occupied) return 0;
+  const double *w = meshes->occupied_from_world;
+  int32_t lo[3], hi[3];
+  for (int r = 0; r < 3; ++r) {
+    const double f = w[4 * r] * x[0] + w[4 * r + 1] * x[1] + w[4 * r + 2] * x[2] + w[4 * r + 3];
+    lo[r] = hi[r] = (int32_t)fmax(-1, fmin(floor(f + 0.5), meshes->occupied_dims[r]));
+    if (fabs(f - floor(f) - 0.5) < 1e-6) lo[r] = (int32_t)floor(f), hi[r] = lo[r] + 1;
+  }
+  int32_t label = 0;
+  for (int32_t k = lo[2]; k <= hi[2]; ++k)
+    for (int32_t j = lo[1]; j <= hi[1]; ++j)
+      for (int32_t i = lo[0]; i <= hi[0]; ++i) {
+        const int32_t *d = meshes->occupied_dims;
+        if (i < 0 || j < 0 || k < 0 || i >= d[0] || j >= d[1] || k >= d[2]) return 0;
+        const int32_t here = meshes->occupied[i + (int64_t)d[0] * (j + (int64_t)d[1] * k)];
+        if (!here) return 0;
+        label = here;
+      }
+  return label;
+}
+
+// Per label, the voxels of tissue t it occupied; the largest into its report.
+static void report_occupied(const int64_t *voxels_of, double voxel_volume, fascia_prep_tissue_report *rep) {
+  for (int32_t v = 1; v <= 65535; ++v) {
+    if (!voxels_of[v]) continue;
+    const double volume = (double)voxels_of[v] * voxel_volume;
+    rep->occupied_volume += volume;
+    int at = 4;
+    while (at > 0 && (!rep->occupied_labels[at - 1] || rep->occupied_label_volume[at - 1] < volume)) --at;
+    if (at == 4) continue;
+    memmove(rep->occupied_labels + at + 1, rep->occupied_labels + at, (size_t)(3 - at) * sizeof(int32_t));
+    memmove(rep->occupied_label_volume + at + 1, rep->occupied_label_volume + at, (size_t)(3 - at) * sizeof(fascia_real));
+    rep->occupied_labels[at] = v;
+    rep->occupied_label_volume[at] = volume;
+  }
+}
+
+// 1 when a face neighbour of voxel v lies inside an organ.
+static int on_organ_face(const fascia_prep_volume *vol, const prep_grid *g, int64_t v) {
+  int32_t c[3];
+  prep_grid_ijk(g, v, c);
+  for (int r = 0; r < 3; ++r)
+    for (int side = -1; side <= 1; side += 2) {
+      int32_t e[3] = {c[0], c[1], c[2]};
+      e[r] += side;
+      if (e[r] < 0 || e[r] >= g->dims[r]) continue;
+      const int64_t w = prep_grid_index(g, e[0], e[1], e[2]);
+      for (int32_t o = 0; o < vol->organ_count; ++o)
+        if (vol->distance[o] && vol->distance[o][w] <= 0) return 1;
+    }
+  return 0;
+}
+
 // Builds region labels of tissue t on the volume grid; distances are ready.
 static fascia_status build_region(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_meshes *meshes,
                                   fascia_prep_volume *vol, int32_t t) {
@@ -551,6 +610,7 @@ static fascia_status build_region(fascia_ctx *ctx, const fascia_prep_scene *scen
   const prep_grid g = prep_volume_grid(vol);
   const int64_t n = prep_grid_count(&g);
   float *parts = NULL;
+  int64_t *voxels_of = NULL; // per label, the tissue's voxels it occupies
   fascia_status status = FASCIA_OK;
   char names[256];
   organ_list(scene, td, names, sizeof names);
@@ -578,7 +638,9 @@ static fascia_status build_region(fascia_ctx *ctx, const fascia_prep_scene *scen
     free(sub);
     if (status != FASCIA_OK) goto cleanup;
   }
-  int64_t gap_voxels = 0, cut_voxels = 0;
+  int64_t gap_voxels = 0, cut_voxels = 0, occupied_voxels = 0;
+  if (meshes->occupied) voxels_of = prep_calloc(65536, sizeof(int64_t));
+  PREP_CHECK_GOTO(voxels_of || !meshes->occupied, ctx, FASCIA_ERR_MEMORY, "tissue '%s': out of memory", td->name);
   double nearest = INFINITY; // shortest bridge (d_A + d_B over the pairs) through a free voxel
   const int32_t K = td->organ_count;
   for (int64_t v = 0; v < n; ++v) {
@@ -606,28 +668,46 @@ static fascia_status build_region(fascia_ctx *ctx, const fascia_prep_scene *scen
     prep_grid_center(&g, v, x);
     if (!prep_region_contains(&td->region, x)) continue;
     if (vol->region[v]) continue; // an earlier tissue owns it
+    const int32_t label = occupied_label(meshes, x);
+    if (label) {
+      ++occupied_voxels, ++voxels_of[label];
+      continue;
+    }
     vol->region[v] = (uint8_t)(t + 1);
     ++cut_voxels;
   }
+  if (voxels_of) report_occupied(voxels_of, g.h * g.h * g.h, vol->tissues + t);
   if (gap_voxels == 0) {
     double band = INFINITY; // distances are clamped beyond the band: nearest is exact below it
     for (int32_t k = 0; k < td->organ_count; ++k) band = fmin(band, vol->band[td->organs[k]]);
     status = too_far_apart(ctx, scene, meshes, td, nearest < 0.999 * band ? nearest : INFINITY);
     goto cleanup;
   }
-  PREP_CHECK_GOTO(cut_voxels > 0, ctx, FASCIA_ERR_ARGUMENT,
+  PREP_CHECK_GOTO(cut_voxels > 0 || occupied_voxels > 0, ctx, FASCIA_ERR_ARGUMENT,
                   "tissue '%s' (scene '%s' tissues[%d].region): the region selects nothing of the %.3g cm^3 between "
                   "organs %s; check its coordinates (metres, scene frame)",
                   td->name, scene->path, (int)t, 1e6 * (double)gap_voxels * g.h * g.h * g.h, names);
   char what[FASCIA_NAME_SIZE + 16];
   snprintf(what, sizeof what, "tissue '%s'", td->name);
   PREP_TRY_GOTO(keep_components(ctx, what, vol, (uint8_t)(t + 1), td->min_component, vol->tissues + t));
+  for (int64_t v = 0; v < n; ++v)
+    if (vol->region[v] == t + 1) vol->tissues[t].organ_face_voxels += on_organ_face(vol, &g, v);
+  if (vol->tissues[t].voxels == 0 && occupied_voxels > 0) {
+    char labels[512];
+    fascia_prep_occupied_text(scene, vol->tissues + t, labels, sizeof labels);
+    PREP_CHECK_GOTO(0, ctx, FASCIA_ERR_ARGUMENT,
+                    "tissue '%s' (scene '%s'): labels the scene does not model occupy the space between organs %s "
+                    "(%s; %.3g cm^3 left, in pieces smaller than min_component); list them in "
+                    "segmentation.connective if tissue may take their voxels",
+                    td->name, scene->path, names, labels, 1e6 * vol->tissues[t].dropped_volume);
+  }
   PREP_CHECK_GOTO(vol->tissues[t].voxels > 0, ctx, FASCIA_ERR_ARGUMENT,
                   "tissue '%s': every piece of its region is smaller than min_component %g m^3 (largest dropped "
                   "volume %g m^3 in %d pieces); lower min_component or frame_spacing",
                   td->name, td->min_component, vol->tissues[t].dropped_volume, (int)vol->tissues[t].dropped_components);
 cleanup:
   free(parts);
+  free(voxels_of);
   return status;
 }
 
@@ -780,6 +860,46 @@ cleanup:
   free(closest);
   free(triangle);
   return status;
+}
+
+fascia_status prep_organ_labels(fascia_ctx *ctx, const fascia_prep_scene *scene, fascia_prep_meshes *meshes,
+                                prep_grid *grid, uint16_t **labels) {
+  *labels = NULL;
+  PREP_CHECK(meshes->count < 65535, ctx, FASCIA_ERR_ARGUMENT, "scene '%s': %d organs are more than a label map holds",
+             scene->path, (int)meshes->count);
+  const double h = scene->voxel_size;
+  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (int32_t o = 0; o < meshes->count; ++o)
+    for (int r = 0; r < 3; ++r)
+      lo[r] = fmin(lo[r], meshes->organs[o].bounds[r]), hi[r] = fmax(hi[r], meshes->organs[o].bounds[3 + r]);
+  PREP_TRY(check_grid(ctx, "the organs' label map", scene->path, h, lo, hi, 2, 3));
+  prep_grid_cover(grid, h, lo, hi, 2);
+  uint16_t *out = prep_calloc(prep_grid_count(grid), sizeof(uint16_t));
+  PREP_CHECK(out, ctx, FASCIA_ERR_MEMORY, "label map: out of memory for %lld voxels", (long long)prep_grid_count(grid));
+  fascia_status status = FASCIA_OK;
+  for (int32_t o = 0; o < meshes->count && status == FASCIA_OK; ++o) {
+    fascia_prep_mesh *m = meshes->organs + o;
+    prep_grid og;
+    prep_grid_cover(&og, h, m->bounds, m->bounds + 3, 2);
+    uint8_t *inside = prep_calloc(prep_grid_count(&og), 1);
+    status = inside ? organ_inside(ctx, scene, m, &og, inside)
+                    : PREP_FAIL(ctx, FASCIA_ERR_MEMORY, "organ '%s': out of memory", m->name);
+    for (int64_t v = 0; status == FASCIA_OK && v < prep_grid_count(&og); ++v) {
+      if (!inside[v]) continue;
+      int32_t c[3];
+      prep_grid_ijk(&og, v, c);
+      const int64_t at = prep_grid_index(grid, c[0] + og.lo[0] - grid->lo[0], c[1] + og.lo[1] - grid->lo[1],
+                                         c[2] + og.lo[2] - grid->lo[2]);
+      if (!out[at]) out[at] = (uint16_t)(o + 1); // an overlap goes to the organ listed first
+    }
+    free(inside);
+  }
+  if (status != FASCIA_OK) {
+    free(out);
+    return status;
+  }
+  *labels = out;
+  return FASCIA_OK;
 }
 
 fascia_status fascia_prep_voxelize(fascia_ctx *ctx, const fascia_prep_scene *scene, fascia_prep_meshes *meshes,

@@ -13,10 +13,13 @@
 #include "fascia/fascia.h"
 
 static const char prep_usage[] =
-    "usage: fascia prep SCENE.json [-o MODEL.h5] [--json] [--preview DIR] [--threads N]\n"
+    "usage: fascia prep SCENE.json [-o MODEL.h5] [--json] [--preview DIR] [--labelmap MAP.nii.gz] [--threads N]\n"
     "  builds the connective-tissue model of a scene file (data/scenes/README.md)\n"
     "  -o MODEL.h5     output model file (default: the scene's \"output\" key)\n"
     "  --preview DIR   also write ParaView files (organs, region, frames, samples, coupling) into DIR\n"
+    "  --labelmap MAP.nii.gz  also write the organs as a label map (organ k is label k + 1, at the scene's\n"
+    "                  voxel size) and its label table MAP.tsv: a segmentation viewer shows them, and a\n"
+    "                  scene can build the same organs from labels (docs/labelmaps.md)\n"
     "  --json          print one JSON summary object on stdout\n"
     "  --threads N     worker threads, 1 to 1024 (default: all)\n"
     "  --verbose       on failure, also print where the error was found\n";
@@ -235,6 +238,13 @@ static void print_summary(const prep_run *r, const step_clock *c, const char *ou
             "%d frames, %d samples\n",
             sc->tissues[t].name, (long long)tr->voxels, 1e3 * h, 1e6 * tr->volume, (int)tr->components,
             (int)tr->dropped_components, 1e6 * tr->dropped_volume, (int)frames, (int)samples);
+    if (tr->occupied_volume > 0) {
+      char labels[512];
+      fascia_prep_occupied_text(sc, tr, labels, sizeof labels);
+      fprintf(stderr, "  %.3g cm^3 between its organs left out, occupied by labels the scene does not model: %s (to "
+                      "let tissue take them, list them in segmentation.connective)\n",
+              1e6 * tr->occupied_volume, labels);
+    }
     if (sc->tissues[t].shape_kind == FASCIA_PREP_SHAPE_TET)
       fprintf(stderr, "  tet: %d tetrahedra kept inside the region, %.4g cm^3 (%.1f %% of its voxels); the samples, "
                       "%d per tet, add up to the tetrahedra's volume\n",
@@ -298,6 +308,20 @@ static void print_summary(const prep_run *r, const step_clock *c, const char *ou
   fprintf(stderr, "  %-16s %8.2f s\n", "total", total);
 }
 
+// The space between a tissue's organs that unmodelled labels occupy: total and per label.
+static void occupied_json(cJSON *tissue, const fascia_prep_scene *scene, const fascia_prep_tissue_report *report) {
+  cJSON_AddNumberToObject(tissue, "occupied_volume", report->occupied_volume);
+  cJSON *labels = cJSON_AddArrayToObject(tissue, "occupied_by");
+  for (int k = 0; k < 4 && report->occupied_labels[k]; ++k) {
+    cJSON *e = cJSON_CreateObject();
+    cJSON_AddNumberToObject(e, "label", report->occupied_labels[k]);
+    const char *name = fascia_prep_label_name(&scene->segmentation, report->occupied_labels[k]);
+    if (name) cJSON_AddStringToObject(e, "name", name);
+    cJSON_AddNumberToObject(e, "volume", report->occupied_label_volume[k]);
+    cJSON_AddItemToArray(labels, e);
+  }
+}
+
 static void print_json(const prep_run *r, const step_clock *c, const char *output, const char *preview) {
   cJSON *root = cJSON_CreateObject();
   const fascia_prep_volume *v = r->volume;
@@ -334,6 +358,8 @@ static void print_json(const prep_run *r, const step_clock *c, const char *outpu
     cJSON_AddNumberToObject(e, "volume", v->tissues[t].volume);
     cJSON_AddNumberToObject(e, "components", v->tissues[t].components);
     cJSON_AddNumberToObject(e, "dropped_volume", v->tissues[t].dropped_volume);
+    cJSON_AddNumberToObject(e, "organ_face_voxels", (double)v->tissues[t].organ_face_voxels);
+    occupied_json(e, r->scene, v->tissues + t);
     double sample_volume = 0;
     for (int32_t s = 0; s < r->points->sample_count; ++s)
       if (r->points->sample_tissue[s] == t) sample_volume += r->points->sample_volume[s];
@@ -413,12 +439,13 @@ static void print_json(const prep_run *r, const step_clock *c, const char *outpu
   cJSON_Delete(root);
 }
 
-// The model and preview files against the scene and its meshes, and the
+// The model, preview and label-map files against the scene and its meshes, and the
 // folders they go to, before the first stage (cli_check_paths).
-static int check_prep_paths(const fascia_prep_scene *scene, const char *output, const char *preview) {
+static int check_prep_paths(const fascia_prep_scene *scene, const char *output, const char *preview,
+                            const char *labelmap, const char *label_table) {
   static const char *const preview_names[] = {"organs.vtk", "region.vtk", "frames.vtk", "samples.vtk", "coupling.vtk",
                                               NULL};
-  cli_path *paths = calloc((size_t)scene->organ_count + 3, sizeof *paths);
+  cli_path *paths = calloc((size_t)scene->organ_count + 5, sizeof *paths);
   if (!paths) {
     fprintf(stderr, "fascia prep: out of memory\n");
     return 1;
@@ -429,13 +456,16 @@ static int check_prep_paths(const fascia_prep_scene *scene, const char *output, 
     paths[n++] = (cli_path){"organ mesh", scene->organs[o].mesh_path, CLI_INPUT, NULL, NULL};
   paths[n++] = (cli_path){"-o", output, CLI_OUTPUT_FILE, NULL, NULL};
   paths[n++] = (cli_path){"--preview", preview, CLI_OUTPUT_DIR, preview_names, NULL};
+  paths[n++] = (cli_path){"--labelmap", labelmap, CLI_OUTPUT_FILE, NULL, NULL};
+  paths[n++] = (cli_path){"--labelmap's table", label_table, CLI_OUTPUT_FILE, NULL, NULL};
   const int rc = cli_check_paths("prep", paths, n);
   free(paths);
   return rc;
 }
 
 int cmd_prep(int argc, char **argv) {
-  const char *scene_path = NULL, *output = NULL, *preview = NULL;
+  const char *scene_path = NULL, *output = NULL, *preview = NULL, *labelmap = NULL;
+  char label_table[4096] = "";
   int json = 0, threads = 0;
   for (int k = 1; k < argc; ++k) {
     if (!strcmp(argv[k], "--help") || !strcmp(argv[k], "-h")) {
@@ -448,6 +478,14 @@ int cmd_prep(int argc, char **argv) {
       output = argv[++k];
     } else if (!strcmp(argv[k], "--preview") && k + 1 < argc) {
       preview = argv[++k];
+    } else if (!strcmp(argv[k], "--labelmap") && k + 1 < argc) {
+      labelmap = argv[++k];
+      const char *ext = strstr(labelmap, ".nii");
+      if (!ext || (strcmp(ext, ".nii") && strcmp(ext, ".nii.gz"))) {
+        fprintf(stderr, "fascia prep: --labelmap '%s': the name must end in .nii or .nii.gz\n", labelmap);
+        return 2;
+      }
+      snprintf(label_table, sizeof label_table, "%.*s.tsv", (int)(ext - labelmap), labelmap);
     } else if (!strcmp(argv[k], "--threads") && k + 1 < argc) {
       if (!cli_parse_threads(argv[++k], &threads)) {
         fprintf(stderr, "fascia prep: --threads expects a whole number from 1 to %d, found '%s'\n", CLI_MAX_THREADS,
@@ -489,7 +527,7 @@ int cmd_prep(int argc, char **argv) {
     rc = 2;
     goto done;
   }
-  if ((rc = check_prep_paths(r.scene, output, preview)) >= 0) goto done;
+  if ((rc = check_prep_paths(r.scene, output, preview, labelmap, labelmap ? label_table : NULL)) >= 0) goto done;
   rc = 1;
   STEP("import", fascia_prep_import(ctx, r.scene, &r.meshes));
   STEP("check/repair", fascia_prep_repair(ctx, r.scene, r.meshes));
@@ -510,17 +548,28 @@ int cmd_prep(int argc, char **argv) {
                                         &r.model));
   }
   STEP("write", fascia_model_save(ctx, r.model, output));
+  if (labelmap) {
+    step_begin(&clock);
+    st = fascia_prep_labelmap_write(ctx, r.scene, r.meshes, labelmap, label_table, sizeof label_table);
+    step_end(&clock, "label map");
+    if (st != FASCIA_OK) {
+      remove(output); // all or nothing, as for the preview
+      goto fail;
+    }
+  }
   if (preview) {
     step_begin(&clock);
     st = fascia_prep_preview(ctx, preview, r.meshes, r.volume, r.points, r.coupling);
     step_end(&clock, "preview");
     if (st != FASCIA_OK) {
       remove(output); // all or nothing: the model goes with its preview
+      if (labelmap) remove(labelmap), remove(label_table);
       goto fail;
     }
   }
 #undef STEP
   print_summary(&r, &clock, output, preview);
+  if (labelmap) fprintf(stderr, "label map: %s, its table %s\n", labelmap, label_table);
   if (json) print_json(&r, &clock, output, preview);
   rc = 0;
   goto done;

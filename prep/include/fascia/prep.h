@@ -150,6 +150,11 @@ typedef struct fascia_prep_segmentation {
   int32_t frame;              ///< fascia_prep_frame the image is placed in
   int32_t smoothing;          ///< smoothing passes of each label's indicator before its surface is taken
   fascia_real interface_layer; ///< organs closer than this (touching included) each give up half of it at their interface, m
+  /// Labels whose voxels the tissue may take besides the background (fat,
+  /// for instance). A label neither an organ's nor connective keeps tissue
+  /// out of its voxels (docs/labelmaps.md).
+  int32_t connective_count;
+  int32_t *connective;        ///< [connective_count] label values, ascending
 } fascia_prep_segmentation;
 
 /// A parsed scene file (the def of every stage). Built by
@@ -231,6 +236,11 @@ typedef struct fascia_prep_meshes {
   char **warnings; ///< [warning_count] one line each: sizes that look like a units mistake (set by import)
   int32_t contact_count;               ///< pairs of label organs that touch in the label map
   fascia_prep_label_contact *contacts; ///< [contact_count]
+  /// The segmentation's voxels that keep tissue out: those of labels that
+  /// are neither an organ's nor connective (docs/labelmaps.md). NULL: none.
+  uint16_t *occupied;          ///< [nx ny nz] such a voxel's label, else 0 (index i + nx (j + ny k))
+  int32_t occupied_dims[3];
+  double occupied_from_world[12]; ///< row-major [A | t]: a world point (m) to its voxel's (i, j, k) (the centre's)
 } fascia_prep_meshes;
 
 /// Reads every organ's mesh file with assimp, keeps the named parts (error
@@ -271,7 +281,23 @@ typedef struct fascia_prep_tissue_report {
   int32_t components;       ///< pieces kept
   int32_t dropped_components;
   fascia_real dropped_volume; ///< m^3 in pieces smaller than min_component
+  /// Kept voxels with a face neighbour inside an organ: one voxel layer on
+  /// the tissue's faces against the organs (the scale of its volume's error).
+  int64_t organ_face_voxels;
+  /// Space between its organs (within max_gap and its region) left out
+  /// because labels the scene does not model occupy it (meshes->occupied).
+  fascia_real occupied_volume; ///< m^3
+  int32_t occupied_labels[4];  ///< the labels that occupy most of it, largest first (0: none)
+  fascia_real occupied_label_volume[4]; ///< m^3 each
 } fascia_prep_tissue_report;
+
+/// The name of a label in the segmentation's table, NULL if it has none.
+FASCIA_API const char *fascia_prep_label_name(const fascia_prep_segmentation *seg, int32_t label);
+/// "colon (20) 8.1 cm^3, aorta (52) 1.2 cm^3, ..." of the labels the report
+/// says occupy space between a tissue's organs (names from the scene's
+/// label table); "" when none.
+FASCIA_API void fascia_prep_occupied_text(const fascia_prep_scene *scene, const fascia_prep_tissue_report *report,
+                                          char *out, size_t size);
 
 /// The scene's voxel grid: voxel (i, j, k) is centred at
 /// origin + h (i, j, k), index i + nx (j + ny k). It covers every tissue's
@@ -446,6 +472,17 @@ FASCIA_API fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_
 FASCIA_API fascia_status fascia_prep_preview(fascia_ctx *ctx, const char *dir, const fascia_prep_meshes *meshes,
                                              const fascia_prep_volume *volume, const fascia_prep_points *points,
                                              const fascia_prep_coupling *coupling);
+
+/// Writes the organs as a label map (NIfTI-1, `.nii` or `.nii.gz`): organ k
+/// is label k + 1 (uint8, uint16 beyond 254 organs), 0 elsewhere, at the
+/// scene's voxel size on a grid covering every organ, by voxelize's inside
+/// rule; sform in RAS mm (a scene whose segmentation frame is LPS is
+/// turned). Beside it, the label table `PATH-without-.nii[.gz].tsv`, whose
+/// path goes to table_path. Both written under temporary names and renamed.
+/// A build without label-map support answers FASCIA_ERR_UNSUPPORTED.
+FASCIA_API fascia_status fascia_prep_labelmap_write(fascia_ctx *ctx, const fascia_prep_scene *scene,
+                                                    fascia_prep_meshes *meshes, const char *path, char *table_path,
+                                                    size_t table_size);
 
 /// Hex SHA-256 of a file into hex[65].
 FASCIA_API fascia_status fascia_prep_file_sha256(fascia_ctx *ctx, const char *path, char hex[65]);
