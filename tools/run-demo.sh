@@ -8,12 +8,14 @@
 # closing summary.
 #   --scene abdomen-female   the five-organ upper abdomen instead
 #                            (data/scenes/abdomen-female.json), into out/abdomen-female/
+#   --scene abdomen-totalsegmentator   the upper abdomen straight from a CT
+#                            segmentation label map, into out/abdomen-totalsegmentator/
 # Other arguments go to cmake's configure step.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 name=pelvis-female-demo
 if [[ "${1:-}" == "--scene" ]]; then
-  name="${2:?--scene needs a name: pelvis-female-demo or abdomen-female}"
+  name="${2:?--scene needs a name: pelvis-female-demo, abdomen-female or abdomen-totalsegmentator}"
   shift 2
 fi
 case "$name" in
@@ -25,8 +27,12 @@ abdomen-female)
   out="$root/out/abdomen-female" view=coronal
   what="female upper abdomen, liver and kidney fixed, spleen rigid, gallbladder deformable, colon pulled"
   motion="liver and left kidney fixed, spleen rigid, gallbladder deformable, colon pulled 3 mm down and 2 mm forward" ;;
+abdomen-totalsegmentator)
+  out="$root/out/abdomen-totalsegmentator" view=coronal-ras
+  what="upper abdomen from a CT label map, vertebrae and five organs fixed, duodenum and gallbladder rigid, stomach retracted"
+  motion="stomach retracted 3 mm anteriorly, duodenum and gallbladder rigid, the rest fixed" ;;
 *)
-  echo "run-demo.sh: unknown scene '$name' (known: pelvis-female-demo, abdomen-female)" >&2
+  echo "run-demo.sh: unknown scene '$name' (known: pelvis-female-demo, abdomen-female, abdomen-totalsegmentator)" >&2
   exit 2 ;;
 esac
 "$root/tools/setup/debian-packages.sh"
@@ -39,7 +45,7 @@ mkdir -p "$out"
 export FASCIA_PROGRESS="${FASCIA_PROGRESS:-1}" # progress lines with the time left, also when piped
 
 t0=$(date +%s.%N)
-echo "demo: 1/3 preparing $(basename "$scene") (meshes -> tissue model)"
+echo "demo: 1/3 preparing $(basename "$scene") (organs -> tissue model)"
 "$fascia" prep "$scene" -o "$out/$name.h5" >"$out/prep.txt"
 "$fascia" inspect "$out/$name.h5" >"$out/model.txt"
 echo "demo: 2/3 simulating $steps implicit steps of $dt s ($motion)"

@@ -285,7 +285,30 @@ typedef struct run_totals {
   double solve_ms;                    ///< wall time inside the solver
   fascia_profile profile;             ///< summed over steps
   fascia_real energy;                 ///< potential energy at the end, J
+  fascia_real *organ_force_start;     ///< [3 organs] the tissue's force on each organ before the first step, N
 } run_totals;
+
+// The tissue's total force on each organ [3 organs], N: the sum of its
+// reaction on the organ's coupling frames (elastic, and the weight of the
+// tissue those frames carry). An organ without coupling frames gets 0.
+static fascia_status organ_forces(fascia_solver *solver, const fascia_model *m, fascia_real *out) {
+  fascia_real *forces = malloc(3 * ((size_t)m->coupling_count + 1) * sizeof *forces);
+  if (!forces) return FASCIA_ERR_MEMORY;
+  fascia_status st = FASCIA_OK;
+  for (int32_t o = 0; o < m->organ_count && st == FASCIA_OK; ++o) {
+    int32_t count = 0;
+    for (int32_t c = 0; c < m->coupling_count; ++c) count += m->coupling_organ[c] == o;
+    out[3 * o] = out[3 * o + 1] = out[3 * o + 2] = 0;
+    if (!count) continue;
+    st = fascia_solver_organ_reaction(solver, o, forces, NULL);
+    for (int32_t c = 0; st == FASCIA_OK && c < count; ++c)
+      for (int r = 0; r < 3; ++r) out[3 * o + r] += forces[3 * c + r];
+  }
+  free(forces);
+  return st;
+}
+
+static double norm3(const fascia_real *v) { return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
 
 // The per-step counts grow with the steps done, not with --steps: a huge
 // --steps must not fail up front for memory it would need only at the end.
@@ -499,6 +522,18 @@ static void print_text(const run_options *opt, const fascia_model *m, fascia_sol
   printf("\nenergy      potential %.9g J, kinetic %.9g J\n", t->energy,
          fascia_solver_kinetic_energy(solver));
   printf("strain      largest %.6g (Green-Lagrange norm), largest stress %.6g Pa\n", max_strain, max_stress);
+  fascia_real *end = t->organ_force_start ? malloc(3 * (size_t)m->organ_count * sizeof *end) : NULL;
+  if (end && organ_forces(solver, m, end) == FASCIA_OK) {
+    printf("organs      the tissue's force on each organ, change over the run (N):");
+    for (int32_t o = 0; o < m->organ_count; ++o) {
+      const fascia_real change[3] = {end[3 * o] - t->organ_force_start[3 * o],
+                                     end[3 * o + 1] - t->organ_force_start[3 * o + 1],
+                                     end[3 * o + 2] - t->organ_force_start[3 * o + 2]};
+      printf("%s %s %.3g", o ? "," : "", m->organs[o].name, norm3(change));
+    }
+    printf("\n");
+  }
+  free(end);
   for (int32_t p = 0; p < m->probe_count; ++p) {
     fascia_real pos[3], u[3];
     probe_state(solver, m, p, pos, u);
@@ -597,6 +632,16 @@ static int print_json(const run_options *opt, const fascia_model *m, fascia_solv
     cJSON_AddItemToObject(item, "position", cJSON_CreateDoubleArray(pos, 3));
     cJSON_AddItemToObject(item, "rest_position", cJSON_CreateDoubleArray(m->probe_position + 3 * p, 3));
   }
+  fascia_real *end = t->organ_force_start ? malloc(3 * (size_t)m->organ_count * sizeof *end) : NULL;
+  if (end && organ_forces(solver, m, end) == FASCIA_OK) { // organ name -> the tissue's force at the start and end
+    cJSON *organs = cJSON_AddObjectToObject(root, "organ_force");
+    for (int32_t o = 0; o < m->organ_count; ++o) {
+      cJSON *item = cJSON_AddObjectToObject(organs, m->organs[o].name);
+      cJSON_AddItemToObject(item, "start", cJSON_CreateDoubleArray(t->organ_force_start + 3 * o, 3));
+      cJSON_AddItemToObject(item, "end", cJSON_CreateDoubleArray(end + 3 * o, 3));
+    }
+  }
+  free(end);
   cJSON *driven = cJSON_AddObjectToObject(root, "drive"); // organ name -> its CSV file
   for (int k = 0; opt->drive && k < opt->drive->count; ++k)
     cJSON_AddStringToObject(driven, opt->drive->organs[k].organ_name, opt->drive->organs[k].path);
@@ -859,6 +904,9 @@ int cmd_run(int argc, char **argv) {
       FASCIA_OK)
     goto done;
   if (opt.results_path && (st = open_results(ctx, &opt, model, &rdef, &res)) != FASCIA_OK) goto done;
+  tot.organ_force_start = malloc(3 * ((size_t)model->organ_count + 1) * sizeof *tot.organ_force_start);
+  if (tot.organ_force_start && organ_forces(solver, model, tot.organ_force_start) != FASCIA_OK)
+    free(tot.organ_force_start), tot.organ_force_start = NULL; // a state not finite: no forces to report
   if (opt.dynamic) {
     st = run_steps(solver, &opt, res, buffers, &tot);
   } else {
@@ -918,7 +966,7 @@ done:
   if (signals_caught && !run_stop_requested) restore_signals(old_signals);
   run_drive_free(&drive);
   free(buffers[0]), free(buffers[1]), free(buffers[2]);
-  free(tot.newton_per_step), free(tot.cg_per_step);
+  free(tot.newton_per_step), free(tot.cg_per_step), free(tot.organ_force_start);
   fascia_solver_destroy(&solver);
   fascia_model_destroy(&model);
   fascia_ctx_destroy(&ctx);

@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: MIT
 # Pictures of a `fascia run` without a display (gnuplot, pngcairo):
 #   gnuplot -e "dir='out/demo'" tools/plots/demo.gp
-#   (optional: title='...', organs='name ...' in the model's order, view='sagittal' or 'coronal')
+#   (optional: title='...', organs='name ...' in the model's order, view='sagittal', 'coronal' or 'coronal-ras')
 # reads   dir/data/{tissue,organs}-{rest,final}.csv  (fascia run --snapshots dir/data)
 #         dir/history.csv                            (fascia run --history dir/history.csv)
 # writes  dir/scene-rest.png, dir/scene-deformed.png  tissue samples coloured by strain, organ surface points
@@ -16,52 +16,59 @@ set terminal pngcairo size 1200,900 enhanced font "DejaVu Sans,14"
 # sagittal (default): anterior to the right, superior up (a view from the
 # patient's left); coronal: the patient's right on the left, superior up (a
 # view from the front). across: the column (x 1, z 3 of x, y, z) drawn
-# across the picture, depth: the other horizontal one.
+# across the picture (times sign), depth: the other horizontal one, up: the
+# vertical one. Scenes from label maps are in RAS (+x the patient's right,
+# +y anterior, +z superior): coronal-ras is their view from the front.
 if (!exists("view")) view = "sagittal"
-across = view eq "coronal" ? 1 : 3
-depth = view eq "coronal" ? 3 : 1
+ras = view eq "coronal-ras"
+coronal = view eq "coronal" || ras
+across = coronal ? 1 : 3
+depth = ras ? 2 : (coronal ? 3 : 1)
+up = ras ? 3 : 2
+sign = ras ? -1 : 1 # the patient's left to the right of the picture
 stats dir."/data/tissue-final.csv" using 4 every ::1 nooutput
 strain_max = STATS_max > 0 ? STATS_max : 1
 stats dir."/data/tissue-rest.csv" using 1 every ::1 nooutput
 samples = STATS_records
-stats dir."/data/organs-rest.csv" using (column(across + 1)*1000) every ::1 nooutput
+stats dir."/data/organs-rest.csv" using (sign*column(across + 1)*1000) every ::1 nooutput
 h_lo = STATS_min - 5; h_hi = STATS_max + 5
-stats dir."/data/organs-rest.csv" using ($3*1000) every ::1 nooutput
+stats dir."/data/organs-rest.csv" using (column(up + 1)*1000) every ::1 nooutput
 y_lo = STATS_min - 5; y_hi = STATS_max + 5
-if (!exists("organs")) organs = "organ-0 organ-1 organ-2 organ-3 organ-4 organ-5"
+if (!exists("organs")) organs = "organ-0 organ-1 organ-2 organ-3 organ-4 organ-5 organ-6 organ-7 organ-8 organ-9"
 organ_count = words(organs)
-zoom = view eq "coronal" ? 0.95 : 1.35 # the abdomen is tall: all of it in the picture
+zoom = ras ? 1.5 : (coronal ? 0.95 : 1.35) # the HRA abdomen is tall, the CT's field of view wide: all of it in the picture
 set view 90, 0, zoom, zoom
 set view equal xyz
 set xyplane 0
 set xrange [h_lo:h_hi]
 set zrange [y_lo:y_hi]
-if (view eq "coronal") { # the tall abdomen leaves no room for splot's x label: a label of the picture instead
-  set label 1 "x, the patient's left (mm)" at screen 0.5, 0.03 center
+if (coronal) { # the tall abdomen leaves no room for splot's x label: a label of the picture instead
+  set label 1 (ras ? "-x, the patient's left (mm)" : "x, the patient's left (mm)") at screen 0.5, 0.03 center
 } else {
   set xlabel "z, anterior (mm)" offset 0,-1
 }
-set zlabel "y, superior (mm)" rotate parallel offset -2,0
+set zlabel (ras ? "z, superior (mm)" : "y, superior (mm)") rotate parallel offset -2,0
 unset ylabel
 set ytics format ""
 set grid
 set palette defined (0 "#2c7bb6", 0.25 "#abd9e9", 0.5 "#ffffbf", 0.75 "#fdae61", 1 "#d7191c")
 set cbrange [0:strain_max]
 set cblabel "tissue strain: Green-Lagrange |E|"
-if (view eq "coronal") { set key at screen 0.01, 0.92 left top Left reverse width -10 box opaque samplen 1 font ",11" } else { set key top left box opaque }
+if (coronal) { set key at screen 0.01, 0.92 left top Left reverse width -10 box opaque samplen 1 font ",11" } else { set key top left box opaque }
 set colorbox vertical user origin 0.86, 0.2 size 0.03, 0.6
 mm = 1000
-array organ_colour[6] = ["#c97b9b", "#d9b13b", "#7fa36b", "#8a8ac9", "#b5835a", "#5fa8a8"]
+array organ_colour[10] = ["#c97b9b", "#d9b13b", "#7fa36b", "#8a8ac9", "#b5835a", "#5fa8a8", "#9e9e9e", "#e07b39", \
+                          "#6b8fd4", "#a3c94f"]
 do for [stage in "rest final"] {
   out = stage eq "rest" ? "scene-rest.png" : "scene-deformed.png"
   set output dir."/".out
   set title sprintf("%s: %s, %s (%d tissue samples)", title, \
                     stage eq "rest" ? "at rest" : "deformed, end of the run", \
-                    view eq "coronal" ? "coronal view from the front" : "sagittal view from the left", samples)
+                    coronal ? "coronal view from the front" : "sagittal view from the left", samples)
   splot for [k=0:organ_count-1] dir."/data/organs-".stage.".csv" every ::1 \
-          using ($1 == k ? column(across + 1)*mm : NaN):(column(depth + 1)*mm):($3*mm) \
-          with points pt 7 ps 0.3 lc rgb organ_colour[k % 6 + 1] title word(organs, k+1)." surface", \
-        dir."/data/tissue-".stage.".csv" every ::1 using (column(across)*mm):(column(depth)*mm):($2*mm):4 \
+          using ($1 == k ? sign*column(across + 1)*mm : NaN):(column(depth + 1)*mm):(column(up + 1)*mm) \
+          with points pt 7 ps 0.3 lc rgb organ_colour[k % 10 + 1] title word(organs, k+1)." surface" noenhanced, \
+        dir."/data/tissue-".stage.".csv" every ::1 using (sign*column(across)*mm):(column(depth)*mm):(column(up)*mm):4 \
           with points pt 7 ps 0.8 palette title "tissue samples (colour: strain)"
 }
 reset
