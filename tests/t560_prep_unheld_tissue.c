@@ -8,7 +8,8 @@
 // Last, one tissue in two pieces: 'web' connecting all four boxes has an
 // A-B piece (held by the fixed A) and a C-D piece between two rigid boxes
 // that nothing holds: that piece is dropped, listed, and the model left is
-// whole and held.
+// whole and held. Its region splits into the volume each pair of boxes
+// bridges: half A-B, half C-D.
 #define _POSIX_C_SOURCE 200809L // mkdtemp
 #include "check.h"
 #include "prep_fixture.h"
@@ -70,6 +71,14 @@ int main(void) {
       "\"material\": \"soft\", \"frame_spacing\": 0.002, \"sample_spacing\": 0.0015}]}\n";
   CHECK(fixture_write(dir, "scene.json", two_pieces));
   CHECK_OK(fixture_prep(ctx, path, &r), ctx);
+  // the region's volume by the pair each voxel bridges: A-B and C-D, the same slab each; no other pair
+  const fascia_prep_tissue_report *web = r.volume ? r.volume->tissues : NULL;
+  if (web) {
+    const double *pair = web->pair_volume; // (A,B) (A,C) (A,D) (B,C) (B,D) (C,D)
+    CHECK_NEAR(pair[0] + pair[1] + pair[2] + pair[3] + pair[4] + pair[5], web->volume, 1e-12, 0);
+    CHECK_NEAR(pair[0], 0.5 * web->volume, 1e-9, 0);
+    CHECK(pair[1] == 0 && pair[2] == 0 && pair[3] == 0 && pair[4] == 0);
+  }
   CHECK_OK(fascia_model_floating_components(ctx, r.model, NULL, NULL, 0, &count), ctx);
   CHECK(count == 0);
   const char *list = r.model->provenance ? strstr(r.model->provenance, "\"unheld_pieces_dropped\":[{") : NULL;

@@ -87,6 +87,7 @@ void fascia_prep_volume_destroy(fascia_prep_volume **volume) {
   for (int32_t k = 0; v->distance && k < v->organ_count; ++k) free(v->distance[k]);
   free(v->distance);
   free(v->band);
+  for (int32_t t = 0; v->tissues && t < v->tissue_count; ++t) free(v->tissues[t].pair_volume);
   free(v->tissues);
   free(v->overlaps);
   free(v->closest);
@@ -587,6 +588,28 @@ static void report_occupied(const int64_t *voxels_of, double voxel_volume, fasci
   }
 }
 
+// The shortest bridge d_A + d_B through voxel v over the pairs (A, B) of
+// the organs tissue td connects (parts: the distance to its region's named
+// parts, or NULL), and in *pair (when not NULL) that pair's index in the
+// order (0, 1), (0, 2) .. (1, 2) .. of td->organs.
+static double shortest_bridge(const fascia_prep_tissue_def *td, const fascia_prep_volume *vol, const float *parts,
+                              int64_t v, int32_t *pair) {
+  double shortest = INFINITY;
+  for (int32_t i = 0, p = 0; i < td->organ_count; ++i)
+    for (int32_t j = i + 1; j < td->organ_count; ++j, ++p) {
+      double d[2];
+      for (int e = 0; e < 2; ++e) {
+        const int32_t o = td->organs[e ? j : i];
+        d[e] = parts && o == td->region_organ ? parts[v] : vol->distance[o][v];
+      }
+      if (d[0] + d[1] < shortest) {
+        shortest = d[0] + d[1];
+        if (pair) *pair = p;
+      }
+    }
+  return shortest;
+}
+
 // 1 when a face neighbour of voxel v lies inside an organ.
 static int on_organ_face(const fascia_prep_volume *vol, const prep_grid *g, int64_t v) {
   int32_t c[3];
@@ -651,16 +674,7 @@ static fascia_status build_region(fascia_ctx *ctx, const fascia_prep_scene *scen
     // the voxel lies on a path from organ A to organ B no longer than
     // max_gap when d_A + d_B <= max_gap: the tissue is the union of such
     // bridges over every pair of its organs, so each piece touches both
-    double shortest = INFINITY;
-    for (int32_t i = 0; i < K; ++i)
-      for (int32_t j = i + 1; j < K; ++j) {
-        double d[2];
-        for (int e = 0; e < 2; ++e) {
-          const int32_t o = td->organs[e ? j : i];
-          d[e] = parts && o == td->region_organ ? parts[v] : vol->distance[o][v];
-        }
-        shortest = fmin(shortest, d[0] + d[1]);
-      }
+    const double shortest = shortest_bridge(td, vol, parts, v, NULL);
     if (shortest < nearest) nearest = shortest;
     if (shortest > td->max_gap) continue;
     ++gap_voxels;
@@ -690,8 +704,16 @@ static fascia_status build_region(fascia_ctx *ctx, const fascia_prep_scene *scen
   char what[FASCIA_NAME_SIZE + 16];
   snprintf(what, sizeof what, "tissue '%s'", td->name);
   PREP_TRY_GOTO(keep_components(ctx, what, vol, (uint8_t)(t + 1), td->min_component, vol->tissues + t));
-  for (int64_t v = 0; v < n; ++v)
-    if (vol->region[v] == t + 1) vol->tissues[t].organ_face_voxels += on_organ_face(vol, &g, v);
+  // per pair of its organs, the kept voxels whose shortest bridge joins them
+  vol->tissues[t].pair_volume = prep_calloc((int64_t)K * (K - 1) / 2 + 1, sizeof(fascia_real));
+  PREP_CHECK_GOTO(vol->tissues[t].pair_volume, ctx, FASCIA_ERR_MEMORY, "tissue '%s': out of memory", td->name);
+  for (int64_t v = 0; v < n; ++v) {
+    if (vol->region[v] != t + 1) continue;
+    vol->tissues[t].organ_face_voxels += on_organ_face(vol, &g, v);
+    int32_t pair = 0;
+    shortest_bridge(td, vol, parts, v, &pair);
+    vol->tissues[t].pair_volume[pair] += g.h * g.h * g.h;
+  }
   if (vol->tissues[t].voxels == 0 && occupied_voxels > 0) {
     char labels[512];
     fascia_prep_occupied_text(scene, vol->tissues + t, labels, sizeof labels);

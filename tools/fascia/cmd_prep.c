@@ -238,6 +238,17 @@ static void print_summary(const prep_run *r, const step_clock *c, const char *ou
             "%d frames, %d samples\n",
             sc->tissues[t].name, (long long)tr->voxels, 1e3 * h, 1e6 * tr->volume, (int)tr->components,
             (int)tr->dropped_components, 1e6 * tr->dropped_volume, (int)frames, (int)samples);
+    if (sc->tissues[t].organ_count > 2) {
+      fprintf(stderr, "  by the organs each voxel bridges:");
+      const fascia_prep_tissue_def *td = sc->tissues + t;
+      int printed = 0;
+      for (int32_t i = 0, p = 0; i < td->organ_count; ++i)
+        for (int32_t j = i + 1; j < td->organ_count; ++j, ++p)
+          if (tr->pair_volume[p] > 0)
+            fprintf(stderr, "%s %s-%s %.3g cm^3", printed++ ? "," : "", sc->organs[td->organs[i]].name,
+                    sc->organs[td->organs[j]].name, 1e6 * tr->pair_volume[p]);
+      fprintf(stderr, "\n");
+    }
     if (tr->occupied_volume > 0) {
       char labels[512];
       fascia_prep_occupied_text(sc, tr, labels, sizeof labels);
@@ -359,6 +370,16 @@ static void print_json(const prep_run *r, const step_clock *c, const char *outpu
     cJSON_AddNumberToObject(e, "components", v->tissues[t].components);
     cJSON_AddNumberToObject(e, "dropped_volume", v->tissues[t].dropped_volume);
     cJSON_AddNumberToObject(e, "organ_face_voxels", (double)v->tissues[t].organ_face_voxels);
+    cJSON *pairs = cJSON_AddArrayToObject(e, "pairs"); // the volume each pair of its organs bridges
+    const fascia_prep_tissue_def *td = r->scene->tissues + t;
+    for (int32_t i = 0, p = 0; i < td->organ_count; ++i)
+      for (int32_t j = i + 1; j < td->organ_count; ++j, ++p) {
+        cJSON *pair = cJSON_CreateObject();
+        const char *names[2] = {r->scene->organs[td->organs[i]].name, r->scene->organs[td->organs[j]].name};
+        cJSON_AddItemToObject(pair, "organs", cJSON_CreateStringArray(names, 2));
+        cJSON_AddNumberToObject(pair, "volume", v->tissues[t].pair_volume[p]);
+        cJSON_AddItemToArray(pairs, pair);
+      }
     occupied_json(e, r->scene, v->tissues + t);
     double sample_volume = 0;
     for (int32_t s = 0; s < r->points->sample_count; ++s)

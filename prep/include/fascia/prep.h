@@ -284,6 +284,10 @@ typedef struct fascia_prep_tissue_report {
   /// Kept voxels with a face neighbour inside an organ: one voxel layer on
   /// the tissue's faces against the organs (the scale of its volume's error).
   int64_t organ_face_voxels;
+  /// Its kept volume split by the pair of organs whose bridge through each
+  /// voxel is shortest: [K (K - 1) / 2] m^3 for its K organs (the tissue
+  /// def's list), pairs in the order (0, 1), (0, 2) .. (0, K-1), (1, 2) ..
+  fascia_real *pair_volume;
   /// Space between its organs (within max_gap and its region) left out
   /// because labels the scene does not model occupy it (meshes->occupied).
   fascia_real occupied_volume; ///< m^3
