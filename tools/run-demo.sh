@@ -50,7 +50,7 @@ echo "demo: 1/3 preparing $(basename "$scene") (organs -> tissue model)"
 "$fascia" inspect "$out/$name.h5" >"$out/model.txt"
 echo "demo: 2/3 simulating $steps implicit steps of $dt s ($motion)"
 "$fascia" run "$out/$name.h5" --steps "$steps" --dt "$dt" --save-every "$save_every" --samples \
-  -o "$out/results.h5" --history "$out/history.csv" --organs "$out/organs" --snapshots "$out/data" \
+  -o "$out/results.h5" --history "$out/history.csv" --paraview "$out/paraview" --snapshots "$out/data" \
   | tee "$out/run.txt"
 t1=$(date +%s.%N)
 echo "demo: 3/3 drawing pictures (gnuplot)"
@@ -74,7 +74,7 @@ demo summary: $what
   wall time    ${seconds} s to prepare and simulate
   files        $out/
     results.h5 + results.xdmf   tissue frames and samples with displacement, strain and stress per saved step (ParaView)
-    organs/organs.pvd           organ surfaces moved by the simulation (ParaView)
+    paraview/run.pvd            open in ParaView: samples, frames and organ surfaces per saved step
     scene-rest.png, scene-deformed.png   tissue coloured by strain between the organs
     energy.png, iterations.png, ms-per-step.png   the run over time
     history.csv, data/*.csv     the numbers behind the pictures

@@ -27,6 +27,7 @@
 
 #include "fascia/files.h"
 #include "fascia/results.h"
+#include "fascia/solver.h"
 #include "h5io.h"
 
 #define RESULTS_VERSION 2
@@ -333,11 +334,9 @@ static const fascia_real *series_row(fascia_results *r, int k, const fascia_real
   }
   const int column = k - SERIES_AXIS_X; // column c of R(q): R e_c
   for (int64_t i = 0; i < N; ++i) {
-    const fascia_real *q = frame_rotation + 4 * i, w = q[0], x = q[1], y = q[2], z = q[3];
-    fascia_real *a = out + 3 * i;
-    if (column == 0) a[0] = 1 - 2 * (y * y + z * z), a[1] = 2 * (x * y + w * z), a[2] = 2 * (x * z - w * y);
-    else if (column == 1) a[0] = 2 * (x * y - w * z), a[1] = 1 - 2 * (x * x + z * z), a[2] = 2 * (y * z + w * x);
-    else a[0] = 2 * (x * z + w * y), a[1] = 2 * (y * z - w * x), a[2] = 1 - 2 * (x * x + y * y);
+    fascia_real axes[9];
+    fascia_frame_axes(frame_rotation + 4 * i, 1, axes);
+    memcpy(out + 3 * i, axes + 3 * column, 3 * sizeof(fascia_real));
   }
   return out;
 }

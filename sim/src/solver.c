@@ -10,6 +10,7 @@
 #include "backend.h"
 #include "dilatation.h"
 #include "organs.h"
+#include "point/linalg.h"
 #include "solver_internal.h"
 
 fascia_solver_def fascia_solver_def_default(void) {
@@ -502,6 +503,15 @@ const char *fascia_solver_device(const fascia_solver *S) { return S->device_text
 const fascia_real *fascia_solver_frame_positions(const fascia_solver *S) { return S->x; }
 const fascia_real *fascia_solver_frame_rotations(const fascia_solver *S) { return S->q; }
 const fascia_real *fascia_solver_frame_velocities(const fascia_solver *S) { return S->u; }
+
+void fascia_frame_axes(const fascia_real *rotations, int64_t count, fascia_real *axes) {
+  for (int64_t i = 0; i < count; ++i) {
+    fascia_real R[9];
+    fascia_pt_quat_to_mat(rotations + 4 * i, R);
+    for (int c = 0; c < 3; ++c)
+      for (int r = 0; r < 3; ++r) axes[9 * i + 3 * c + r] = R[3 * r + c];
+  }
+}
 
 fascia_status fascia_solver_set_state(fascia_solver *S, const fascia_real *x, const fascia_real *q,
                                       const fascia_real *u) {

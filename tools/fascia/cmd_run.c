@@ -182,7 +182,7 @@ typedef struct run_options {
   const char *static_time_why; ///< where static_time came from, in words
   fascia_solver_def solver;
   const checkpoint_options *checkpoint; ///< --checkpoint, --resume; NULL: none
-  run_outputs *outputs;                 ///< --history, --organs, --snapshots; NULL: none
+  run_outputs *outputs;                 ///< --history, --paraview, --snapshots; NULL: none
   run_drive *drive;                     ///< --drive ORGAN=FILE.csv; NULL: none
 } run_options;
 
@@ -739,7 +739,7 @@ static int take_resume_settings(int argc, char **argv, run_options *opt, const f
 // and the drive templates against the model, --resume and the drive files.
 static int check_run_paths(const run_options *opt, const checkpoint_options *ck, const run_outputs *outs,
                            const run_drive *drive) {
-  static const char *const organ_names[] = {"organs.pvd", NULL};
+  static const char *const organ_names[] = {"run.pvd", "organs.pvd", NULL};
   static const char *const snapshot_names[] = {"tissue-rest.csv", "tissue-final.csv", "organs-rest.csv",
                                                "organs-final.csv", NULL};
   const int most = 8 + drive->count + drive->template_count;
@@ -759,7 +759,7 @@ static int check_run_paths(const run_options *opt, const checkpoint_options *ck,
                           CLI_OUTPUT_FILE, NULL, NULL};
   paths[n++] = (cli_path){"--checkpoint", ck->path, CLI_OUTPUT_FILE, NULL, "--resume"};
   paths[n++] = (cli_path){"--history", outs->history_path, CLI_OUTPUT_FILE, NULL, NULL};
-  paths[n++] = (cli_path){"--organs", outs->organs_dir, CLI_OUTPUT_DIR, organ_names, NULL};
+  paths[n++] = (cli_path){"--paraview", outs->paraview_dir, CLI_OUTPUT_DIR, organ_names, NULL};
   paths[n++] = (cli_path){"--snapshots", outs->snapshots_dir, CLI_OUTPUT_DIR, snapshot_names, NULL};
   for (int k = 0; k < drive->template_count; ++k)
     paths[n++] = (cli_path){"--drive-template", drive->templates[k].path, CLI_OUTPUT_FILE, NULL, NULL};

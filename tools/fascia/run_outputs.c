@@ -3,11 +3,14 @@
 // Extra outputs of `fascia run`:
 //   --history FILE.csv  one row per step: time, energies, Newton and CG
 //                       iterations, ms, largest strain and stress;
-//   --organs DIR        each organ's surface moved by its pose (fixed,
-//                       prescribed, rigid; a driven organ follows its first
-//                       coupling frame) as VTK XML PolyData per saved
-//                       step, with DIR/organs.pvd that ParaView opens as a
-//                       time series next to the results' XDMF;
+//   --paraview DIR      per saved step, the samples and the frames (VTK XML
+//                       UnstructuredGrid, which meshio reads too) and each
+//                       organ's surface where the simulation put it
+//                       (PolyData; deformable organs carried by their
+//                       frames, driven ones by their first coupling frame),
+//                       with DIR/run.pvd that opens all of it, named, in one
+//                       go, and DIR/organs.pvd of the organs alone (to open
+//                       next to the results' XDMF); --organs is its older name;
 //   --snapshots DIR     CSV of the tissue samples (position, strain, stress)
 //                       and of organ surface points, at rest and at the end,
 //                       for the gnuplot scripts in tools/plots/.
@@ -15,6 +18,7 @@
 #include "run_outputs.h"
 
 #include "fascia/files.h"
+#include "vtk_xml.h"
 
 #include <errno.h>
 #include <math.h>
@@ -24,8 +28,10 @@
 
 const char run_outputs_usage[] =
     "  --history FILE.csv     per-step history: time, energies, iterations, ms, largest strain\n"
-    "  --organs DIR           organ surfaces moved by the simulation, per saved step, as\n"
-    "                         DIR/<organ>-<k>.vtp and DIR/organs.pvd (ParaView)\n"
+    "  --paraview DIR         ParaView files per saved step: open DIR/run.pvd for the samples,\n"
+    "                         frames and organ surfaces, named (samples-<k>.vtu, frames-<k>.vtu,\n"
+    "                         <organ>-<k>.vtp; DIR/organs.pvd: the organs alone). --organs DIR:\n"
+    "                         the same (its older name)\n"
     "  --snapshots DIR        CSV of tissue samples and organ surface points at rest and at the end\n"
     "                         (DIR/tissue-rest.csv, tissue-final.csv, organs-rest.csv, organs-final.csv)\n";
 
@@ -34,7 +40,7 @@ int run_outputs_take(int *argc, char **argv, run_outputs *out) {
   int kept = 1;
   for (int k = 1; k < *argc; ++k) {
     const char *o = argv[k];
-    if (strcmp(o, "--history") && strcmp(o, "--organs") && strcmp(o, "--snapshots")) {
+    if (strcmp(o, "--history") && strcmp(o, "--organs") && strcmp(o, "--paraview") && strcmp(o, "--snapshots")) {
       argv[kept++] = argv[k];
       continue;
     }
@@ -44,7 +50,7 @@ int run_outputs_take(int *argc, char **argv, run_outputs *out) {
     }
     const char *v = argv[++k];
     if (!strcmp(o, "--history")) out->history_path = v;
-    else if (!strcmp(o, "--organs")) out->organs_dir = v;
+    else if (!strcmp(o, "--organs") || !strcmp(o, "--paraview")) out->paraview_dir = v;
     else out->snapshots_dir = v;
   }
   *argc = kept;
@@ -79,79 +85,104 @@ static fascia_real *organ_now(const fascia_model *m, const fascia_solver *solver
   return p;
 }
 
-static int little_endian(void) {
-  const uint16_t one = 1;
-  unsigned char first;
-  memcpy(&first, &one, 1);
-  return first == 1;
-}
+_Static_assert(sizeof(fascia_real) == 8, "the VTK files declare Float64");
 
-// Base64 of a VTK binary block: a UInt32 byte count, then the data.
-static void base64_block(FILE *f, const void *data, uint32_t bytes) {
-  static const char tab[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  const size_t total = 4 + (size_t)bytes;
-  unsigned char *buf = malloc(total);
-  if (!buf) return;
-  memcpy(buf, &bytes, 4);
-  memcpy(buf + 4, data, bytes);
-  for (size_t k = 0; k < total; k += 3) {
-    const unsigned b0 = buf[k], b1 = k + 1 < total ? buf[k + 1] : 0, b2 = k + 2 < total ? buf[k + 2] : 0;
-    fputc(tab[b0 >> 2], f);
-    fputc(tab[((b0 & 3) << 4) | (b1 >> 4)], f);
-    fputc(k + 1 < total ? tab[((b1 & 15) << 2) | (b2 >> 6)] : '=', f);
-    fputc(k + 2 < total ? tab[b2 & 63] : '=', f);
-  }
-  free(buf);
-}
-
-// One organ surface at its current pose as VTK XML PolyData (binary inline).
+// One organ surface at its current pose as VTK XML PolyData.
 static fascia_status write_vtp(fascia_ctx *ctx, const char *dir, const char *name, const fascia_organ *o,
                                const fascia_real *positions) {
   fascia_status st = FASCIA_OK;
-  fascia_file *file = open_file(ctx, "--organs", dir, name, &st);
+  fascia_file *file = open_file(ctx, "--paraview", dir, name, &st);
   if (!file) return st;
   FILE *f = fascia_file_stream(file);
-  float *points = malloc(3 * sizeof(float) * (size_t)(o->vertex_count + 1));
-  int32_t *offsets = malloc(sizeof(int32_t) * (size_t)(o->triangle_count + 1));
-  if (!points || !offsets) {
-    free(points), free(offsets), fascia_file_discard(&file);
-    return fascia_ctx_fail(ctx, FASCIA_ERR_MEMORY, __FILE__, __LINE__, "run: out of memory for organ '%s'", o->name);
-  }
-  for (int32_t v = 0; v < 3 * o->vertex_count; ++v) points[v] = (float)positions[v];
-  for (int32_t k = 0; k < o->triangle_count; ++k) offsets[k] = 3 * (k + 1);
-  fprintf(f, "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"0.1\" byte_order=\"%s\" "
-             "header_type=\"UInt32\">\n<PolyData>\n<Piece NumberOfPoints=\"%d\" NumberOfPolys=\"%d\">\n",
-          little_endian() ? "LittleEndian" : "BigEndian",
-          (int)o->vertex_count, (int)o->triangle_count);
-  fprintf(f, "<Points><DataArray type=\"Float32\" NumberOfComponents=\"3\" format=\"binary\">");
-  base64_block(f, points, 3 * sizeof(float) * (uint32_t)o->vertex_count);
-  fprintf(f, "</DataArray></Points>\n<Polys><DataArray type=\"Int32\" Name=\"connectivity\" format=\"binary\">");
-  base64_block(f, o->triangles, 3 * sizeof(int32_t) * (uint32_t)o->triangle_count);
-  fprintf(f, "</DataArray>\n<DataArray type=\"Int32\" Name=\"offsets\" format=\"binary\">");
-  base64_block(f, offsets, sizeof(int32_t) * (uint32_t)o->triangle_count);
-  fprintf(f, "</DataArray></Polys>\n</Piece>\n</PolyData>\n</VTKFile>\n");
-  free(points), free(offsets);
+  vtk_xml_begin(f, "PolyData", positions, o->vertex_count, 3, o->triangles, o->triangle_count);
+  vtk_xml_end(f, "PolyData");
   return fascia_file_commit(&file);
 }
 
-// Every organ at the solver's state, as step k of the PVD collection.
-static fascia_status write_organs(run_outputs *out, fascia_ctx *ctx, const fascia_model *m,
-                                  const fascia_solver *solver, fascia_real time) {
+// The samples (tissue and deformable organs) at the solver's state as an
+// UnstructuredGrid of vertices: displacement, rest position, strain, stress,
+// volume, material and organ (-1 tissue), as in the results file.
+static fascia_status write_samples(run_outputs *out, fascia_ctx *ctx, const fascia_model *m,
+                                   const fascia_solver *solver, const char *name) {
+  const int64_t S = m->sample_count;
+  fascia_solver_sample_positions(solver, out->positions);
+  fascia_solver_sample_strain(solver, out->strain, out->stress);
+  for (int64_t k = 0; k < 3 * S; ++k) out->scratch[k] = out->positions[k] - m->sample_position[k];
+  fascia_status st = FASCIA_OK;
+  fascia_file *file = open_file(ctx, "--paraview", out->paraview_dir, name, &st);
+  if (!file) return st;
+  FILE *f = fascia_file_stream(file);
+  vtk_xml_begin(f, "UnstructuredGrid", out->positions, S, 1, NULL, S);
+  vtk_xml_array(f, "displacement", 3, out->scratch, NULL, S);
+  vtk_xml_array(f, "rest_position", 3, m->sample_position, NULL, S);
+  vtk_xml_array(f, "strain", 1, out->strain, NULL, S);
+  vtk_xml_array(f, "stress", 1, out->stress, NULL, S);
+  vtk_xml_array(f, "volume", 1, m->sample_volume, NULL, S);
+  vtk_xml_array(f, "material", 1, NULL, m->sample_material, S);
+  vtk_xml_array(f, "organ", 1, NULL, m->sample_organ, S);
+  vtk_xml_end(f, "UnstructuredGrid");
+  return fascia_file_commit(&file);
+}
+
+// The frames at the solver's state: displacement, rest position, their axes
+// (three vectors, for Glyph), kind (0 free, 1 fixed, 2 prescribed), organ
+// and the organ it is shared with (its first coupling).
+static fascia_status write_frames(run_outputs *out, fascia_ctx *ctx, const fascia_model *m,
+                                  const fascia_solver *solver, const char *name) {
+  const int64_t N = m->frame_count;
+  const fascia_real *x = fascia_solver_frame_positions(solver);
+  fascia_frame_axes(fascia_solver_frame_rotations(solver), N, out->axes);
+  fascia_status st = FASCIA_OK;
+  fascia_file *file = open_file(ctx, "--paraview", out->paraview_dir, name, &st);
+  if (!file) return st;
+  FILE *f = fascia_file_stream(file);
+  vtk_xml_begin(f, "UnstructuredGrid", x, N, 1, NULL, N);
+  for (int64_t k = 0; k < 3 * N; ++k) out->scratch[k] = x[k] - m->frame_position[k];
+  vtk_xml_array(f, "displacement", 3, out->scratch, NULL, N);
+  vtk_xml_array(f, "rest_position", 3, m->frame_position, NULL, N);
+  static const char *const axis_names[3] = {"axis_x", "axis_y", "axis_z"};
+  for (int c = 0; c < 3; ++c) {
+    for (int64_t i = 0; i < N; ++i) memcpy(out->scratch + 3 * i, out->axes + 9 * i + 3 * c, 3 * sizeof(fascia_real));
+    vtk_xml_array(f, axis_names[c], 3, out->scratch, NULL, N);
+  }
+  vtk_xml_array(f, "kind", 1, NULL, m->frame_kind, N);
+  vtk_xml_array(f, "organ", 1, NULL, m->frame_organ, N);
+  vtk_xml_array(f, "coupled_organ", 1, NULL, out->coupled_organ, N);
+  vtk_xml_end(f, "UnstructuredGrid");
+  return fascia_file_commit(&file);
+}
+
+// One saved step: the samples, the frames and every organ at the solver's
+// state, listed in run.pvd (all of them, named) and organs.pvd (the organs).
+static fascia_status write_step(run_outputs *out, fascia_ctx *ctx, const fascia_model *m,
+                                const fascia_solver *solver, fascia_real time) {
+  FILE *run = fascia_file_stream(out->run_pvd), *organs = fascia_file_stream(out->pvd);
+  char name[FASCIA_NAME_SIZE + 32];
+  fascia_status st;
+  // the time as the results' XDMF writes it: one time per saved step in ParaView
+  snprintf(name, sizeof name, "samples-%04d.vtu", out->organ_steps);
+  if (m->sample_count > 0) {
+    if ((st = write_samples(out, ctx, m, solver, name)) != FASCIA_OK) return st;
+    fprintf(run, "    <DataSet timestep=\"%.17g\" group=\"\" part=\"0\" name=\"samples\" file=\"%s\"/>\n", time, name);
+  }
+  snprintf(name, sizeof name, "frames-%04d.vtu", out->organ_steps);
+  if ((st = write_frames(out, ctx, m, solver, name)) != FASCIA_OK) return st;
+  fprintf(run, "    <DataSet timestep=\"%.17g\" group=\"\" part=\"1\" name=\"frames\" file=\"%s\"/>\n", time, name);
   for (int32_t k = 0; k < m->organ_count; ++k) {
-    char name[FASCIA_NAME_SIZE + 32];
     // a fixed organ never moves: its first file serves every step
     const int fixed = m->organs[k].kind == FASCIA_ORGAN_FIXED;
     snprintf(name, sizeof name, "%s-%04d.vtp", m->organs[k].name, fixed ? 0 : out->organ_steps);
     if (!fixed || out->organ_steps == 0) {
       fascia_real *now = organ_now(m, solver, k);
       if (!now) continue;
-      const fascia_status st = write_vtp(ctx, out->organs_dir, name, m->organs + k, now);
+      st = write_vtp(ctx, out->paraview_dir, name, m->organs + k, now);
       free(now);
       if (st != FASCIA_OK) return st;
     }
-    // the time as the results' XDMF writes it: one time per saved step in ParaView
-    fprintf(fascia_file_stream(out->pvd), "    <DataSet timestep=\"%.17g\" group=\"\" part=\"%d\" name=\"%s\" file=\"%s\"/>\n",
-            time, (int)k, m->organs[k].name, name);
+    fprintf(organs, "    <DataSet timestep=\"%.17g\" group=\"\" part=\"%d\" name=\"%s\" file=\"%s\"/>\n", time,
+            (int)k, m->organs[k].name, name);
+    fprintf(run, "    <DataSet timestep=\"%.17g\" group=\"\" part=\"%d\" name=\"%s\" file=\"%s\"/>\n", time,
+            (int)k + 2, m->organs[k].name, name);
   }
   out->organ_steps++;
   return FASCIA_OK;
@@ -203,14 +234,19 @@ fascia_status run_outputs_begin(run_outputs *out, fascia_ctx *ctx, const fascia_
                                 fascia_real time) {
   out->ctx = ctx;
   out->model = m;
-  if (!out->history_path && !out->organs_dir && !out->snapshots_dir) return FASCIA_OK;
-  const size_t S = (size_t)m->sample_count + 1;
+  if (!out->history_path && !out->paraview_dir && !out->snapshots_dir) return FASCIA_OK;
+  const size_t S = (size_t)m->sample_count + 1, N = (size_t)m->frame_count + 1;
   out->strain = malloc(S * sizeof(fascia_real));
   out->stress = malloc(S * sizeof(fascia_real));
   out->positions = malloc(3 * S * sizeof(fascia_real));
-  if (!out->strain || !out->stress || !out->positions)
+  out->scratch = malloc(3 * (S > N ? S : N) * sizeof(fascia_real));
+  out->axes = malloc(9 * N * sizeof(fascia_real));
+  out->coupled_organ = malloc(N * sizeof(int32_t));
+  if (!out->strain || !out->stress || !out->positions || !out->scratch || !out->axes || !out->coupled_organ)
     return fascia_ctx_fail(ctx, FASCIA_ERR_MEMORY, __FILE__, __LINE__, "run: out of memory for %d samples",
                            (int)m->sample_count);
+  for (int32_t i = 0; i < m->frame_count; ++i) out->coupled_organ[i] = -1;
+  for (int32_t c = m->coupling_count - 1; c >= 0; --c) out->coupled_organ[m->coupling_frame[c]] = m->coupling_organ[c];
   fascia_status st = FASCIA_OK;
   if (out->history_path) {
     if (!(out->history = open_file(ctx, "--history", NULL, out->history_path, &st))) return st;
@@ -220,11 +256,14 @@ fascia_status run_outputs_begin(run_outputs *out, fascia_ctx *ctx, const fascia_
     if ((st = make_dir(ctx, out->snapshots_dir)) != FASCIA_OK) return st;
     if ((st = write_snapshot(out, ctx, m, solver, "rest")) != FASCIA_OK) return st;
   }
-  if (out->organs_dir) {
-    if ((st = make_dir(ctx, out->organs_dir)) != FASCIA_OK) return st;
-    if (!(out->pvd = open_file(ctx, "--organs", out->organs_dir, "organs.pvd", &st))) return st;
-    fprintf(fascia_file_stream(out->pvd), "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n");
-    if ((st = write_organs(out, ctx, m, solver, time)) != FASCIA_OK) return st;
+  if (out->paraview_dir) {
+    if ((st = make_dir(ctx, out->paraview_dir)) != FASCIA_OK) return st;
+    if (!(out->pvd = open_file(ctx, "--paraview", out->paraview_dir, "organs.pvd", &st))) return st;
+    if (!(out->run_pvd = open_file(ctx, "--paraview", out->paraview_dir, "run.pvd", &st))) return st;
+    static const char head[] = "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n";
+    fputs(head, fascia_file_stream(out->pvd));
+    fputs(head, fascia_file_stream(out->run_pvd));
+    if ((st = write_step(out, ctx, m, solver, time)) != FASCIA_OK) return st;
   }
   return FASCIA_OK;
 }
@@ -243,7 +282,7 @@ fascia_status run_outputs_step(run_outputs *out, fascia_solver *solver, int step
             largest(out->strain, m->sample_count), largest(out->stress, m->sample_count), report->converged);
     if (ferror(f)) return fascia_file_commit(&out->history); // a write failed: say why now, not at the end
   }
-  if (out->pvd && saved) return write_organs(out, ctx, m, solver, time);
+  if (out->pvd && saved) return write_step(out, ctx, m, solver, time);
   return FASCIA_OK;
 }
 
@@ -255,9 +294,12 @@ fascia_status run_outputs_end(run_outputs *out, fascia_solver *solver, int ok) {
   // history and organs hold the steps done, also after a failed step: kept
   fascia_status hst = fascia_file_commit(&out->history);
   if (out->pvd) fprintf(fascia_file_stream(out->pvd), "  </Collection>\n</VTKFile>\n");
-  fascia_status pst = fascia_file_commit(&out->pvd);
-  if (st == FASCIA_OK) st = hst != FASCIA_OK ? hst : pst;
-  free(out->strain), free(out->stress), free(out->positions);
-  out->strain = out->stress = out->positions = NULL;
+  if (out->run_pvd) fprintf(fascia_file_stream(out->run_pvd), "  </Collection>\n</VTKFile>\n");
+  fascia_status pst = fascia_file_commit(&out->pvd), rst = fascia_file_commit(&out->run_pvd);
+  if (st == FASCIA_OK) st = hst != FASCIA_OK ? hst : pst != FASCIA_OK ? pst : rst;
+  free(out->strain), free(out->stress), free(out->positions), free(out->scratch), free(out->axes),
+      free(out->coupled_organ);
+  out->coupled_organ = NULL;
+  out->strain = out->stress = out->positions = out->scratch = out->axes = NULL;
   return st;
 }

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
 // Extra outputs of `fascia run` for people and plotting scripts:
-// a per-step history CSV, the organ surfaces moved by the simulation as
+// a per-step history CSV, the samples, frames and organ surfaces as
 // ParaView files per saved step, and CSV snapshots of the scene at rest and
 // at the end for tools/plots/.
 #ifndef FASCIA_TOOLS_RUN_OUTPUTS_H
@@ -14,18 +14,21 @@
 
 typedef struct run_outputs {
   const char *history_path;  ///< --history FILE.csv
-  const char *organs_dir;    ///< --organs DIR: DIR/organs.pvd + DIR/<organ>-<k>.vtp
+  const char *paraview_dir;  ///< --paraview DIR (--organs DIR): run.pvd, organs.pvd, samples/frames-<k>.vtu, <organ>-<k>.vtp
   const char *snapshots_dir; ///< --snapshots DIR: tissue-{rest,final}.csv, organs-{rest,final}.csv
   // state
   fascia_ctx *ctx;
   const fascia_model *model;
   fascia_file *history; ///< written under a temporary name, renamed at the end
-  fascia_file *pvd;
+  fascia_file *pvd;     ///< organs.pvd
+  fascia_file *run_pvd; ///< run.pvd
   int organ_steps;
   fascia_real *strain, *stress, *positions; ///< [S], [S], [3S]
+  fascia_real *scratch, *axes;              ///< [3 max(S, N)], [9N]
+  int32_t *coupled_organ;                   ///< [N] the organ a frame is shared with (its first coupling), -1 none
 } run_outputs;
 
-/// Takes --history, --organs and --snapshots (with their values) out of
+/// Takes --history, --paraview (--organs) and --snapshots (with their values) out of
 /// argv. Returns -1 to go on, else the exit status (2: usage error).
 int run_outputs_take(int *argc, char **argv, run_outputs *out);
 /// Usage lines of the options.

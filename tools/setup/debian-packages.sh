@@ -12,7 +12,7 @@ packages=(
   libassimp-dev libcgal-dev libopenvdb-dev libboost-iostreams-dev libtbb-dev libeigen3-dev nettle-dev  # prep stage
   libnifti2-dev libteem-dev            # prep: label maps (NIfTI, NRRD); optional, prep reads meshes without them
   gnuplot-nox                          # pictures and plots without a display
-  paraview python3-paraview python3-h5py  # tests open the results with ParaView's readers (pvbatch)
+  paraview python3-paraview python3-h5py python3-meshio  # tests open the results with ParaView's readers (pvbatch), h5py and meshio
   calculix-ccx                         # the cantilever's FE reference and bench's peer (data/reference/)
 )
 

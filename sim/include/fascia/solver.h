@@ -163,6 +163,10 @@ FASCIA_API const char *fascia_backend_name(int k);
 /// Current frame positions [3N] (m) and rotations [4N] (unit quaternions).
 FASCIA_API const fascia_real *fascia_solver_frame_positions(const fascia_solver *solver);
 FASCIA_API const fascia_real *fascia_solver_frame_rotations(const fascia_solver *solver);
+/// The axes of count frames of rotations [4 count] (unit quaternions): for
+/// each, the columns of its rotation matrix, x axis then y then z (world),
+/// into axes [9 count]; what ParaView's Glyph draws.
+FASCIA_API void fascia_frame_axes(const fascia_real *rotations, int64_t count, fascia_real *axes);
 /// Current generalized velocities [6N]: linear (m/s), angular (rad/s, world).
 FASCIA_API const fascia_real *fascia_solver_frame_velocities(const fascia_solver *solver);
 /// Sets the state (positions [3N], rotations [4N], velocities [6N] or NULL

@@ -1,0 +1,114 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// `fascia run --paraview DIR` gives one file that opens everything:
+// DIR/run.pvd, opened in ParaView (pvbatch, tests/paraview/check_run_pvd.py),
+// holds one time per saved step and at each the blocks samples, frames and
+// both organs by name, with the arrays docs/results-format.md lists and no
+// other, displacement = position - rest, and the frames shared with an
+// organ on its surface as drawn; meshio reads every per-step samples and
+// frames file with the same arrays (tests/paraview/check_meshio.py). A
+// dynamic run (organ b prescribed), a static one (b rigid, rest and
+// equilibrium) and one with b driven from a file. Without pvbatch and
+// without meshio the test is skipped, saying which is missing.
+// Usage: t931_cli_paraview_folder PATH/TO/fascia WORK_DIR TESTS/paraview DOCS/results-format.md
+#define _POSIX_C_SOURCE 200809L
+#include "check.h"
+#include "cli_exec.h"
+#include "organ_fixture.h"
+
+static cli_result result;
+
+static int run_script(const char *command) {
+  fflush(stdout);
+  const int status = system(command);
+  return status != -1 && WIFEXITED(status) && WEXITSTATUS(status) == 0;
+}
+
+// Debian's python3 holds Debian's meshio; a python3 earlier on PATH may not.
+static const char *meshio_python(void) {
+  if (system("/usr/bin/python3 -c 'import meshio' >/dev/null 2>&1") == 0) return "/usr/bin/python3";
+  if (system("python3 -c 'import meshio' >/dev/null 2>&1") == 0) return "python3";
+  return NULL;
+}
+
+typedef struct paths {
+  const char *fascia, *scripts, *doc, *python;
+  int pvbatch;
+  int32_t samples, frames;
+} paths;
+
+static void check_folder(const paths *p, const char *folder, int steps) {
+  char command[8192];
+  if (p->pvbatch) {
+    snprintf(command, sizeof command, "pvbatch '%s/check_run_pvd.py' '%s' '%s' %d a,b 2>&1 | grep -v -i openpmd",
+             p->scripts, folder, p->doc, steps);
+    // the pipe keeps grep's status: the script prints its failures, the count decides
+    snprintf(command + strlen(command), sizeof command - strlen(command), " | tee /dev/stderr | grep -q ', 0 failures'");
+    CHECK(run_script(command));
+  }
+  if (p->python) {
+    snprintf(command, sizeof command, "%s '%s/check_meshio.py' '%s' '%s' %d %d", p->python, p->scripts, folder, p->doc,
+             (int)p->samples, (int)p->frames);
+    CHECK(run_script(command));
+  }
+}
+
+static int build(const char *path, int kind_b, int32_t *samples, int32_t *frames) {
+  fascia_ctx_def cd = fascia_ctx_def_default();
+  cd.threads = 1;
+  fascia_ctx *ctx = NULL;
+  if (fascia_ctx_create(&cd, &ctx) != FASCIA_OK) return 0;
+  organ_fixture_def fd = organ_fixture_def_default();
+  fd.kind_b = kind_b;
+  fd.pull_b[0] = 0.01;
+  fascia_model *m = NULL;
+  CHECK_OK(organ_fixture_build(ctx, &fd, &m), ctx);
+  if (m) *samples = m->sample_count, *frames = m->frame_count;
+  CHECK_OK(fascia_model_save(ctx, m, path), ctx);
+  fascia_model_destroy(&m);
+  fascia_ctx_destroy(&ctx);
+  return 1;
+}
+
+int main(int argc, char **argv) {
+  if (argc < 5) {
+    fprintf(stderr, "usage: t931_cli_paraview_folder PATH/TO/fascia WORK_DIR TESTS/paraview RESULTS-FORMAT.md\n");
+    return 1;
+  }
+  paths p = {argv[1], argv[3], argv[4], meshio_python(), system("command -v pvbatch >/dev/null 2>&1") == 0, 0, 0};
+  if (!p.pvbatch) printf("t931: ParaView part skipped: pvbatch (Debian's python3-paraview) is not installed\n");
+  if (!p.python) printf("t931: meshio part skipped: meshio (Debian's python3-meshio) is not installed\n");
+  if (!p.pvbatch && !p.python) return TEST_SKIP;
+  char dir[1024], moving[1200], rigid[1200], err[1200], csv[1200], args[8192], folder[1300];
+  snprintf(dir, sizeof dir, "%s/t931", argv[2]);
+  snprintf(moving, sizeof moving, "%s/moving.h5", dir);
+  snprintf(rigid, sizeof rigid, "%s/rigid.h5", dir);
+  snprintf(err, sizeof err, "%s/stderr.txt", dir);
+  snprintf(csv, sizeof csv, "%s/drive.csv", dir);
+  snprintf(args, sizeof args, "rm -rf '%s' && mkdir -p '%s'", dir, dir);
+  CHECK(system(args) == 0);
+  CHECK(build(moving, FASCIA_ORGAN_PRESCRIBED, &p.samples, &p.frames));
+
+  // dynamic: 6 steps, every 3rd saved, with the rest: 3 steps
+  snprintf(folder, sizeof folder, "%s/dyn", dir);
+  snprintf(args, sizeof args, "run '%s' --steps 6 --dt 0.1 --save-every 3 --threads 1 --paraview '%s'", moving, folder);
+  CHECK(cli_exec(p.fascia, args, err, &result) && result.status == 0);
+  check_folder(&p, folder, 3);
+
+  // b driven from a file (its template: held at rest)
+  snprintf(args, sizeof args, "run '%s' --steps 2 --dt 0.1 --drive-template 'b=%s'", moving, csv);
+  CHECK(cli_exec(p.fascia, args, err, &result) && result.status == 0);
+  snprintf(folder, sizeof folder, "%s/drv", dir);
+  snprintf(args, sizeof args, "run '%s' --steps 2 --dt 0.1 --threads 1 --drive 'b=%s' --paraview '%s'", moving, csv,
+           folder);
+  CHECK(cli_exec(p.fascia, args, err, &result) && result.status == 0);
+  check_folder(&p, folder, 3);
+
+  // static, b rigid: rest and equilibrium
+  CHECK(build(rigid, FASCIA_ORGAN_RIGID, &p.samples, &p.frames));
+  snprintf(folder, sizeof folder, "%s/stat", dir);
+  snprintf(args, sizeof args, "run '%s' --static --threads 1 --organs '%s'", rigid, folder);
+  CHECK(cli_exec(p.fascia, args, err, &result) && result.status == 0);
+  check_folder(&p, folder, 2);
+  return CHECK_RESULT();
+}
