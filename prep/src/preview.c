@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// A preview for ParaView of what prep built, as legacy VTK files (binary,
-// big-endian, as the legacy format requires): organ surfaces, the region's
-// voxel grid, frames, samples and the shared (coupling) frames. Each file is
+// A preview for ParaView of what prep built, as VTK XML files
+// (fascia/vtk_xml.h): each organ's surface, the region grid, the frames
+// (with what holds each), the samples and the shared (coupling) frames, and
+// preview.pvd, which opens them all as blocks named after them. Each file is
 // written under a temporary name and renamed (fascia/files.h), so a reader
 // never sees half a file.
 #include <errno.h>
@@ -13,147 +14,152 @@
 #include <sys/stat.h>
 
 #include "fascia/files.h"
+#include "fascia/vtk_xml.h"
 #include "prep_util.h"
 
-static void put_be32(FILE *f, const void *value) {
-  uint32_t x;
-  memcpy(&x, value, 4);
-  const uint8_t b[4] = {(uint8_t)(x >> 24), (uint8_t)(x >> 16), (uint8_t)(x >> 8), (uint8_t)x};
-  fwrite(b, 1, 4, f);
-}
-static void put_float(FILE *f, double v) {
-  const float x = (float)v;
-  put_be32(f, &x);
-}
-static void put_int(FILE *f, int32_t v) { put_be32(f, &v); }
+/// What holds a frame, in the preview's `kind` array.
+enum { KIND_FREE = 0, KIND_FIXED = 1, KIND_PRESCRIBED = 2, KIND_RIGID = 3, KIND_DEFORMABLE = 4 };
 
-typedef struct vtk_file {
-  FILE *f;
-  fascia_file *file; ///< written under a temporary name, renamed when complete
-} vtk_file;
+typedef struct preview {
+  fascia_ctx *ctx;
+  const char *dir;
+  fascia_file *pvd; ///< preview.pvd, its parts listed as they are written
+  int parts;
+} preview;
 
-static fascia_status vtk_open(fascia_ctx *ctx, vtk_file *v, const char *dir, const char *name, const char *title,
-                              const char *dataset) {
+static fascia_status open_part(preview *p, const char *name, fascia_file **file) {
   char path[4096];
-  snprintf(path, sizeof path, "%s/%s", dir, name);
-  v->file = NULL;
-  PREP_TRY(fascia_file_open(ctx, "preview", path, &v->file));
-  v->f = fascia_file_stream(v->file);
-  fprintf(v->f, "# vtk DataFile Version 3.0\n%s\nBINARY\nDATASET %s\n", title, dataset);
+  snprintf(path, sizeof path, "%s/%s", p->dir, name);
+  return fascia_file_open(p->ctx, "preview", path, file);
+}
+
+// Commits a part's file and lists it in preview.pvd under its block name.
+static fascia_status close_part(preview *p, fascia_file **file, const char *file_name, const char *block) {
+  PREP_TRY(fascia_file_commit(file));
+  fprintf(fascia_file_stream(p->pvd), "    <DataSet timestep=\"0\" group=\"\" part=\"%d\" name=\"%s\" file=\"%s\"/>\n",
+          p->parts++, block, file_name);
   return FASCIA_OK;
 }
 
-static fascia_status vtk_close(fascia_ctx *ctx, vtk_file *v) {
-  (void)ctx; // the file keeps the ctx it was opened with
-  v->f = NULL;
-  return fascia_file_commit(&v->file);
-}
-
-// Points with one vertex cell each.
-static void vtk_points(FILE *f, int64_t n, const double *x, const int32_t *pick) {
-  fprintf(f, "POINTS %lld float\n", (long long)n);
-  for (int64_t k = 0; k < n; ++k) {
-    const double *p = x + 3 * (pick ? pick[k] : k);
-    put_float(f, p[0]), put_float(f, p[1]), put_float(f, p[2]);
-  }
-  fprintf(f, "\nVERTICES %lld %lld\n", (long long)n, (long long)(2 * n));
-  for (int64_t k = 0; k < n; ++k) put_int(f, 1), put_int(f, (int32_t)k);
-  fprintf(f, "\nPOINT_DATA %lld\n", (long long)n);
-}
-
-static void vtk_int_field(FILE *f, const char *name, int64_t n, const int32_t *values, const int32_t *pick) {
-  fprintf(f, "SCALARS %s int 1\nLOOKUP_TABLE default\n", name);
-  for (int64_t k = 0; k < n; ++k) put_int(f, values[pick ? pick[k] : k]);
-  fprintf(f, "\n");
-}
-
-static fascia_status write_organs(fascia_ctx *ctx, const char *dir, const fascia_prep_meshes *meshes) {
-  vtk_file v;
-  PREP_TRY(vtk_open(ctx, &v, dir, "organs.vtk", "fascia prep: organ surfaces", "POLYDATA"));
-  int64_t nv = 0, nt = 0;
-  for (int32_t o = 0; o < meshes->count; ++o) nv += meshes->organs[o].vertex_count, nt += meshes->organs[o].triangle_count;
-  fprintf(v.f, "POINTS %lld float\n", (long long)nv);
-  for (int32_t o = 0; o < meshes->count; ++o)
-    for (int64_t k = 0; k < 3 * (int64_t)meshes->organs[o].vertex_count; ++k) put_float(v.f, meshes->organs[o].vertices[k]);
-  fprintf(v.f, "\nPOLYGONS %lld %lld\n", (long long)nt, (long long)(4 * nt));
-  int64_t base = 0;
+static fascia_status write_organs(preview *p, const fascia_prep_meshes *meshes) {
   for (int32_t o = 0; o < meshes->count; ++o) {
     const fascia_prep_mesh *m = meshes->organs + o;
-    for (int64_t t = 0; t < m->triangle_count; ++t) {
-      put_int(v.f, 3);
-      for (int r = 0; r < 3; ++r) put_int(v.f, (int32_t)(base + m->triangles[3 * t + r]));
-    }
-    base += m->vertex_count;
+    char name[FASCIA_NAME_SIZE + 8];
+    snprintf(name, sizeof name, "%s.vtp", m->name);
+    fascia_file *file = NULL;
+    PREP_TRY(open_part(p, name, &file));
+    FILE *f = fascia_file_stream(file);
+    fascia_vtk_begin(f, "PolyData", m->vertices, m->vertex_count, 3, m->triangles, m->triangle_count);
+    fascia_vtk_end(f, "PolyData");
+    PREP_TRY(close_part(p, &file, name, m->name));
   }
-  fprintf(v.f, "\nCELL_DATA %lld\nSCALARS organ int 1\nLOOKUP_TABLE default\n", (long long)nt);
-  for (int32_t o = 0; o < meshes->count; ++o)
-    for (int64_t t = 0; t < meshes->organs[o].triangle_count; ++t) put_int(v.f, o);
-  fprintf(v.f, "\nSCALARS part int 1\nLOOKUP_TABLE default\n");
-  for (int32_t o = 0; o < meshes->count; ++o)
-    for (int64_t t = 0; t < meshes->organs[o].triangle_count; ++t) put_int(v.f, meshes->organs[o].triangle_part[t]);
-  fprintf(v.f, "\n");
-  return vtk_close(ctx, &v);
+  return FASCIA_OK;
 }
 
-static fascia_status write_region(fascia_ctx *ctx, const char *dir, const fascia_prep_volume *vol) {
-  vtk_file v;
-  PREP_TRY(vtk_open(ctx, &v, dir, "region.vtk", "fascia prep: regions (tissue = index + 1, then deformable organs' insides, 0 none)",
-                    "STRUCTURED_POINTS"));
+// The region grid: region (0 none, t + 1 tissue t, then the deformable
+// organs' insides) and the signed distance to the nearest organ (contour 0
+// shows the organs as voxelized).
+static fascia_status write_region(preview *p, const fascia_prep_volume *vol) {
   const int64_t n = (int64_t)vol->dims[0] * vol->dims[1] * vol->dims[2];
-  fprintf(v.f, "DIMENSIONS %d %d %d\nORIGIN %.9g %.9g %.9g\nSPACING %.9g %.9g %.9g\nPOINT_DATA %lld\n",
-          (int)vol->dims[0], (int)vol->dims[1], (int)vol->dims[2], vol->origin[0], vol->origin[1], vol->origin[2],
-          vol->voxel_size, vol->voxel_size, vol->voxel_size, (long long)n);
-  fprintf(v.f, "SCALARS tissue int 1\nLOOKUP_TABLE default\n");
-  for (int64_t k = 0; k < n; ++k) put_int(v.f, vol->region[k]);
-  // signed distance to the nearest organ (negative inside one): contour 0 shows the organs as voxelized
-  fprintf(v.f, "\nSCALARS organ_distance float 1\nLOOKUP_TABLE default\n");
+  int32_t *region = prep_calloc(n, sizeof(int32_t));
+  float *distance = prep_calloc(n, sizeof(float));
+  fascia_status status = FASCIA_OK;
+  fascia_file *file = NULL;
+  PREP_CHECK_GOTO(region && distance, p->ctx, FASCIA_ERR_MEMORY, "preview: out of memory for %lld voxels",
+                  (long long)n);
   for (int64_t k = 0; k < n; ++k) {
     double d = INFINITY;
     for (int32_t o = 0; o < vol->organ_count; ++o)
       if (vol->distance[o]) d = fmin(d, vol->distance[o][k]);
-    put_float(v.f, isfinite(d) ? d : 1);
+    distance[k] = (float)(isfinite(d) ? d : 1);
+    region[k] = vol->region[k];
   }
-  fprintf(v.f, "\n");
-  return vtk_close(ctx, &v);
+  PREP_TRY_GOTO(open_part(p, "region.vti", &file));
+  FILE *f = fascia_file_stream(file);
+  fascia_vtk_begin_image(f, vol->dims, vol->origin, vol->voxel_size);
+  fascia_vtk_array(f, "region", 1, NULL, region, n);
+  fascia_vtk_array_float(f, "organ_distance", distance, n);
+  fascia_vtk_end(f, "ImageData");
+  status = close_part(p, &file, "region.vti", "region");
+cleanup:
+  fascia_file_discard(&file);
+  free(region);
+  free(distance);
+  return status;
 }
 
-static fascia_status write_points(fascia_ctx *ctx, const char *dir, const fascia_prep_points *pts,
+// Points of a set (all, or pick[k] of them) with one vertex each.
+static fascia_status begin_points(preview *p, const char *name, fascia_file **file, const double *x, int64_t n,
+                                  const int32_t *pick, double *picked) {
+  PREP_TRY(open_part(p, name, file));
+  if (pick)
+    for (int64_t k = 0; k < n; ++k) memcpy(picked + 3 * k, x + 3 * (int64_t)pick[k], 3 * sizeof(double));
+  fascia_vtk_begin(fascia_file_stream(*file), "UnstructuredGrid", pick ? picked : x, n, 1, NULL, n);
+  return FASCIA_OK;
+}
+
+// What holds each frame: the organ it is shared with (its kind), the
+// deformable organ whose inside holds it, or nothing (a free tissue frame).
+static void frame_kinds(const fascia_prep_scene *scene, const fascia_prep_points *pts, const int32_t *shared,
+                        int32_t *kind) {
+  static const int32_t of_organ[FASCIA_ORGAN_KIND_COUNT_] = {
+      [FASCIA_ORGAN_FIXED] = KIND_FIXED, [FASCIA_ORGAN_PRESCRIBED] = KIND_PRESCRIBED,
+      [FASCIA_ORGAN_RIGID] = KIND_RIGID, [FASCIA_ORGAN_DEFORMABLE] = KIND_DEFORMABLE};
+  for (int32_t i = 0; i < pts->frame_count; ++i) {
+    kind[i] = KIND_FREE;
+    if (pts->frame_inside_organ[i] >= 0) kind[i] = KIND_DEFORMABLE;
+    if (shared[i] >= 0) kind[i] = of_organ[scene->organs[shared[i]].kind];
+  }
+}
+
+static fascia_status write_points(preview *p, const fascia_prep_scene *scene, const fascia_prep_points *pts,
                                   const fascia_prep_coupling *cpl) {
-  vtk_file v;
-  PREP_TRY(vtk_open(ctx, &v, dir, "frames.vtk", "fascia prep: frames", "POLYDATA"));
-  vtk_points(v.f, pts->frame_count, pts->frame_position, NULL);
-  vtk_int_field(v.f, "tissue", pts->frame_count, pts->frame_tissue, NULL);
-  vtk_int_field(v.f, "inside_organ", pts->frame_count, pts->frame_inside_organ, NULL);
-  vtk_int_field(v.f, "on_organ", pts->frame_count, pts->frame_organ, NULL);
-  int32_t *shared = prep_calloc(pts->frame_count, sizeof(int32_t));
-  if (!shared) fascia_file_discard(&v.file);
-  PREP_CHECK(shared, ctx, FASCIA_ERR_MEMORY, "preview: out of memory");
-  for (int32_t i = 0; i < pts->frame_count; ++i) shared[i] = -1;
-  for (int32_t c = 0; c < cpl->count; ++c) shared[cpl->frame[c]] = cpl->organ[c];
-  vtk_int_field(v.f, "shared_with_organ", pts->frame_count, shared, NULL);
+  const int64_t N = pts->frame_count, S = pts->sample_count;
+  int32_t *shared = prep_calloc(N, sizeof(int32_t)), *kind = prep_calloc(N, sizeof(int32_t));
+  double *picked = prep_calloc(3 * (int64_t)cpl->count, sizeof(double));
+  fascia_status status = FASCIA_OK;
+  fascia_file *file = NULL;
+  PREP_CHECK_GOTO(shared && kind && picked, p->ctx, FASCIA_ERR_MEMORY, "preview: out of memory");
+  for (int32_t i = 0; i < N; ++i) shared[i] = -1;
+  for (int32_t c = cpl->count - 1; c >= 0; --c) shared[cpl->frame[c]] = cpl->organ[c];
+  frame_kinds(scene, pts, shared, kind);
+
+  PREP_TRY_GOTO(begin_points(p, "frames.vtu", &file, pts->frame_position, N, NULL, NULL));
+  FILE *f = fascia_file_stream(file);
+  fascia_vtk_array(f, "kind", 1, NULL, kind, N);
+  fascia_vtk_array(f, "tissue", 1, NULL, pts->frame_tissue, N);
+  fascia_vtk_array(f, "inside_organ", 1, NULL, pts->frame_inside_organ, N);
+  fascia_vtk_array(f, "on_organ", 1, NULL, pts->frame_organ, N);
+  fascia_vtk_array(f, "shared_with_organ", 1, NULL, shared, N);
+  fascia_vtk_end(f, "UnstructuredGrid");
+  PREP_TRY_GOTO(close_part(p, &file, "frames.vtu", "frames"));
+
+  PREP_TRY_GOTO(begin_points(p, "samples.vtu", &file, pts->sample_position, S, NULL, NULL));
+  f = fascia_file_stream(file);
+  fascia_vtk_array(f, "tissue", 1, NULL, pts->sample_tissue, S);
+  fascia_vtk_array(f, "inside_organ", 1, NULL, pts->sample_inside_organ, S);
+  fascia_vtk_array(f, "volume", 1, pts->sample_volume, NULL, S);
+  fascia_vtk_end(f, "UnstructuredGrid");
+  PREP_TRY_GOTO(close_part(p, &file, "samples.vtu", "samples"));
+
+  PREP_TRY_GOTO(begin_points(p, "coupling.vtu", &file, pts->frame_position, cpl->count, cpl->frame, picked));
+  f = fascia_file_stream(file);
+  fascia_vtk_array(f, "organ", 1, NULL, cpl->organ, cpl->count);
+  fascia_vtk_array(f, "triangle", 1, NULL, cpl->triangle, cpl->count);
+  fascia_vtk_end(f, "UnstructuredGrid");
+  status = close_part(p, &file, "coupling.vtu", "coupling");
+cleanup:
+  fascia_file_discard(&file);
   free(shared);
-  PREP_TRY(vtk_close(ctx, &v));
-
-  PREP_TRY(vtk_open(ctx, &v, dir, "samples.vtk", "fascia prep: samples", "POLYDATA"));
-  vtk_points(v.f, pts->sample_count, pts->sample_position, NULL);
-  vtk_int_field(v.f, "tissue", pts->sample_count, pts->sample_tissue, NULL);
-  vtk_int_field(v.f, "inside_organ", pts->sample_count, pts->sample_inside_organ, NULL);
-  fprintf(v.f, "SCALARS volume float 1\nLOOKUP_TABLE default\n");
-  for (int32_t s = 0; s < pts->sample_count; ++s) put_float(v.f, pts->sample_volume[s]);
-  fprintf(v.f, "\n");
-  PREP_TRY(vtk_close(ctx, &v));
-
-  PREP_TRY(vtk_open(ctx, &v, dir, "coupling.vtk", "fascia prep: frames shared with organs", "POLYDATA"));
-  vtk_points(v.f, cpl->count, pts->frame_position, cpl->frame);
-  vtk_int_field(v.f, "organ", cpl->count, cpl->organ, NULL);
-  vtk_int_field(v.f, "triangle", cpl->count, cpl->triangle, NULL);
-  return vtk_close(ctx, &v);
+  free(kind);
+  free(picked);
+  return status;
 }
 
-fascia_status fascia_prep_preview(fascia_ctx *ctx, const char *dir, const fascia_prep_meshes *meshes,
-                                  const fascia_prep_volume *volume, const fascia_prep_points *points,
-                                  const fascia_prep_coupling *coupling) {
-  PREP_CHECK(ctx && dir && meshes && volume && points && coupling, ctx, FASCIA_ERR_ARGUMENT,
+fascia_status fascia_prep_preview(fascia_ctx *ctx, const char *dir, const fascia_prep_scene *scene,
+                                  const fascia_prep_meshes *meshes, const fascia_prep_volume *volume,
+                                  const fascia_prep_points *points, const fascia_prep_coupling *coupling) {
+  PREP_CHECK(ctx && dir && scene && meshes && volume && points && coupling, ctx, FASCIA_ERR_ARGUMENT,
              "fascia_prep_preview: NULL argument");
   struct stat st;
   if (stat(dir, &st) != 0)
@@ -162,8 +168,19 @@ fascia_status fascia_prep_preview(fascia_ctx *ctx, const char *dir, const fascia
   else
     PREP_CHECK(S_ISDIR(st.st_mode), ctx, FASCIA_ERR_IO, "preview folder '%s' exists and is not a folder", dir);
   fascia_ctx_progress(ctx, "preview", -1, dir);
-  PREP_TRY(write_organs(ctx, dir, meshes));
-  PREP_TRY(write_region(ctx, dir, volume));
-  PREP_TRY(write_points(ctx, dir, points, coupling));
-  return FASCIA_OK;
+  preview p = {ctx, dir, NULL, 0};
+  char path[4096];
+  snprintf(path, sizeof path, "%s/preview.pvd", dir);
+  PREP_TRY(fascia_file_open(ctx, "preview", path, &p.pvd));
+  fputs("<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n",
+        fascia_file_stream(p.pvd));
+  fascia_status status = write_organs(&p, meshes);
+  if (status == FASCIA_OK) status = write_region(&p, volume);
+  if (status == FASCIA_OK) status = write_points(&p, scene, points, coupling);
+  if (status != FASCIA_OK) {
+    fascia_file_discard(&p.pvd);
+    return status;
+  }
+  fputs("  </Collection>\n</VTKFile>\n", fascia_file_stream(p.pvd));
+  return fascia_file_commit(&p.pvd);
 }

@@ -16,7 +16,8 @@ static const char prep_usage[] =
     "usage: fascia prep SCENE.json [-o MODEL.h5] [--json] [--preview DIR] [--labelmap MAP.nii.gz] [--threads N]\n"
     "  builds the connective-tissue model of a scene file (data/scenes/README.md)\n"
     "  -o MODEL.h5     output model file (default: the scene's \"output\" key)\n"
-    "  --preview DIR   also write ParaView files (organs, region, frames, samples, coupling) into DIR\n"
+    "  --preview DIR   also write ParaView files into DIR: open DIR/preview.pvd (organs by name,\n"
+    "                  region, frames with what holds each, samples, coupling)\n"
     "  --labelmap MAP.nii.gz  also write the organs as a label map (organ k is label k + 1, at the scene's\n"
     "                  voxel size) and its label table MAP.tsv: a segmentation viewer shows them, and a\n"
     "                  scene can build the same organs from labels (docs/labelmaps.md)\n"
@@ -309,7 +310,7 @@ static void print_summary(const prep_run *r, const step_clock *c, const char *ou
   else
     fprintf(stderr, "volumetric patches: none (every material's Poisson ratio is below %.2g, or patch_radius is 0)\n",
             FASCIA_PATCH_MIN_POISSON);
-  if (preview) fprintf(stderr, "preview: %s/{organs,region,frames,samples,coupling}.vtk\n", preview);
+  if (preview) fprintf(stderr, "preview: open %s/preview.pvd in ParaView (the organs, region, frames, samples, coupling)\n", preview);
   double total = 0;
   fprintf(stderr, "steps (peak resident memory %s)\n", c->resettable ? "per step" : "since start");
   for (int k = 0; k < c->count; ++k) {
@@ -464,7 +465,7 @@ static void print_json(const prep_run *r, const step_clock *c, const char *outpu
 // folders they go to, before the first stage (cli_check_paths).
 static int check_prep_paths(const fascia_prep_scene *scene, const char *output, const char *preview,
                             const char *labelmap, const char *label_table) {
-  static const char *const preview_names[] = {"organs.vtk", "region.vtk", "frames.vtk", "samples.vtk", "coupling.vtk",
+  static const char *const preview_names[] = {"preview.pvd", "region.vti", "frames.vtu", "samples.vtu", "coupling.vtu",
                                               NULL};
   cli_path *paths = calloc((size_t)scene->organ_count + 5, sizeof *paths);
   if (!paths) {
@@ -580,7 +581,7 @@ int cmd_prep(int argc, char **argv) {
   }
   if (preview) {
     step_begin(&clock);
-    st = fascia_prep_preview(ctx, preview, r.meshes, r.volume, r.points, r.coupling);
+    st = fascia_prep_preview(ctx, preview, r.scene, r.meshes, r.volume, r.points, r.coupling);
     step_end(&clock, "preview");
     if (st != FASCIA_OK) {
       remove(output); // all or nothing: the model goes with its preview

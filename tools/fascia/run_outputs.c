@@ -18,7 +18,7 @@
 #include "run_outputs.h"
 
 #include "fascia/files.h"
-#include "vtk_xml.h"
+#include "fascia/vtk_xml.h"
 
 #include <errno.h>
 #include <math.h>
@@ -94,8 +94,8 @@ static fascia_status write_vtp(fascia_ctx *ctx, const char *dir, const char *nam
   fascia_file *file = open_file(ctx, "--paraview", dir, name, &st);
   if (!file) return st;
   FILE *f = fascia_file_stream(file);
-  vtk_xml_begin(f, "PolyData", positions, o->vertex_count, 3, o->triangles, o->triangle_count);
-  vtk_xml_end(f, "PolyData");
+  fascia_vtk_begin(f, "PolyData", positions, o->vertex_count, 3, o->triangles, o->triangle_count);
+  fascia_vtk_end(f, "PolyData");
   return fascia_file_commit(&file);
 }
 
@@ -112,15 +112,15 @@ static fascia_status write_samples(run_outputs *out, fascia_ctx *ctx, const fasc
   fascia_file *file = open_file(ctx, "--paraview", out->paraview_dir, name, &st);
   if (!file) return st;
   FILE *f = fascia_file_stream(file);
-  vtk_xml_begin(f, "UnstructuredGrid", out->positions, S, 1, NULL, S);
-  vtk_xml_array(f, "displacement", 3, out->scratch, NULL, S);
-  vtk_xml_array(f, "rest_position", 3, m->sample_position, NULL, S);
-  vtk_xml_array(f, "strain", 1, out->strain, NULL, S);
-  vtk_xml_array(f, "stress", 1, out->stress, NULL, S);
-  vtk_xml_array(f, "volume", 1, m->sample_volume, NULL, S);
-  vtk_xml_array(f, "material", 1, NULL, m->sample_material, S);
-  vtk_xml_array(f, "organ", 1, NULL, m->sample_organ, S);
-  vtk_xml_end(f, "UnstructuredGrid");
+  fascia_vtk_begin(f, "UnstructuredGrid", out->positions, S, 1, NULL, S);
+  fascia_vtk_array(f, "displacement", 3, out->scratch, NULL, S);
+  fascia_vtk_array(f, "rest_position", 3, m->sample_position, NULL, S);
+  fascia_vtk_array(f, "strain", 1, out->strain, NULL, S);
+  fascia_vtk_array(f, "stress", 1, out->stress, NULL, S);
+  fascia_vtk_array(f, "volume", 1, m->sample_volume, NULL, S);
+  fascia_vtk_array(f, "material", 1, NULL, m->sample_material, S);
+  fascia_vtk_array(f, "organ", 1, NULL, m->sample_organ, S);
+  fascia_vtk_end(f, "UnstructuredGrid");
   return fascia_file_commit(&file);
 }
 
@@ -136,19 +136,19 @@ static fascia_status write_frames(run_outputs *out, fascia_ctx *ctx, const fasci
   fascia_file *file = open_file(ctx, "--paraview", out->paraview_dir, name, &st);
   if (!file) return st;
   FILE *f = fascia_file_stream(file);
-  vtk_xml_begin(f, "UnstructuredGrid", x, N, 1, NULL, N);
+  fascia_vtk_begin(f, "UnstructuredGrid", x, N, 1, NULL, N);
   for (int64_t k = 0; k < 3 * N; ++k) out->scratch[k] = x[k] - m->frame_position[k];
-  vtk_xml_array(f, "displacement", 3, out->scratch, NULL, N);
-  vtk_xml_array(f, "rest_position", 3, m->frame_position, NULL, N);
+  fascia_vtk_array(f, "displacement", 3, out->scratch, NULL, N);
+  fascia_vtk_array(f, "rest_position", 3, m->frame_position, NULL, N);
   static const char *const axis_names[3] = {"axis_x", "axis_y", "axis_z"};
   for (int c = 0; c < 3; ++c) {
     for (int64_t i = 0; i < N; ++i) memcpy(out->scratch + 3 * i, out->axes + 9 * i + 3 * c, 3 * sizeof(fascia_real));
-    vtk_xml_array(f, axis_names[c], 3, out->scratch, NULL, N);
+    fascia_vtk_array(f, axis_names[c], 3, out->scratch, NULL, N);
   }
-  vtk_xml_array(f, "kind", 1, NULL, m->frame_kind, N);
-  vtk_xml_array(f, "organ", 1, NULL, m->frame_organ, N);
-  vtk_xml_array(f, "coupled_organ", 1, NULL, out->coupled_organ, N);
-  vtk_xml_end(f, "UnstructuredGrid");
+  fascia_vtk_array(f, "kind", 1, NULL, m->frame_kind, N);
+  fascia_vtk_array(f, "organ", 1, NULL, m->frame_organ, N);
+  fascia_vtk_array(f, "coupled_organ", 1, NULL, out->coupled_organ, N);
+  fascia_vtk_end(f, "UnstructuredGrid");
   return fascia_file_commit(&file);
 }
 

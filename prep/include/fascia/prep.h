@@ -469,13 +469,17 @@ FASCIA_API fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_
                                              const fascia_prep_coupling *coupling, const fascia_prep_run_info *info,
                                              fascia_model **out);
 
-/// Writes a ParaView preview into folder dir (created if absent): organs.vtk
-/// (surfaces, organ id), region.vtk (voxel grid: tissue id, distances),
-/// frames.vtk (kind, organ shared with), samples.vtk (volume, tissue),
-/// coupling.vtk (shared frames). Files are written to .tmp and renamed.
-FASCIA_API fascia_status fascia_prep_preview(fascia_ctx *ctx, const char *dir, const fascia_prep_meshes *meshes,
-                                             const fascia_prep_volume *volume, const fascia_prep_points *points,
-                                             const fascia_prep_coupling *coupling);
+/// Writes a ParaView preview into folder dir (created if absent), VTK XML:
+/// ORGAN.vtp per organ (its surface), region.vti (the voxel grid: region,
+/// distance to the nearest organ), frames.vtu (kind: 0 free, 1 on a fixed
+/// organ, 2 prescribed, 3 rigid, 4 a deformable organ's; tissue, organs),
+/// samples.vtu (tissue, organ, volume), coupling.vtu (shared frames), and
+/// preview.pvd, which opens them all as blocks named after the organs and
+/// the parts (docs/results-format.md). Files are written to temporary
+/// names and renamed.
+FASCIA_API fascia_status fascia_prep_preview(fascia_ctx *ctx, const char *dir, const fascia_prep_scene *scene,
+                                             const fascia_prep_meshes *meshes, const fascia_prep_volume *volume,
+                                             const fascia_prep_points *points, const fascia_prep_coupling *coupling);
 
 /// Writes the organs as a label map (NIfTI-1, `.nii` or `.nii.gz`): organ k
 /// is label k + 1 (uint8, uint16 beyond 254 organs), 0 elsewhere, at the

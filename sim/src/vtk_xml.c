@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// VTK XML writing for fascia run's ParaView files (vtk_xml.h).
-#include "vtk_xml.h"
+// VTK XML writing for the ParaView files of fascia run and prep's preview
+// (fascia/vtk_xml.h).
+#include "fascia/vtk_xml.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -42,7 +43,7 @@ static void data_array(FILE *f, const char *vtk_type, const char *name, int comp
   fprintf(f, "</DataArray>\n");
 }
 
-void vtk_xml_begin(FILE *f, const char *type, const fascia_real *points, int64_t point_count, int nodes,
+void fascia_vtk_begin(FILE *f, const char *type, const fascia_real *points, int64_t point_count, int nodes,
                    const int32_t *cell_nodes, int64_t cell_count) {
   const int poly = !strcmp(type, "PolyData");
   fprintf(f, "<?xml version=\"1.0\"?>\n<VTKFile type=\"%s\" version=\"0.1\" byte_order=\"%s\" header_type=\"UInt32\">\n"
@@ -72,7 +73,7 @@ void vtk_xml_begin(FILE *f, const char *type, const fascia_real *points, int64_t
   fprintf(f, "</%s>\n<PointData>\n", poly ? "Polys" : "Cells");
 }
 
-void vtk_xml_array(FILE *f, const char *name, int components, const fascia_real *real, const int32_t *ints,
+void fascia_vtk_array(FILE *f, const char *name, int components, const fascia_real *real, const int32_t *ints,
                    int64_t point_count) {
   const size_t n = (size_t)components * (size_t)point_count;
   if (real)
@@ -81,6 +82,19 @@ void vtk_xml_array(FILE *f, const char *name, int components, const fascia_real 
     data_array(f, "Int32", name, components, ints, n * sizeof(int32_t));
 }
 
-void vtk_xml_end(FILE *f, const char *type) {
+void fascia_vtk_end(FILE *f, const char *type) {
   fprintf(f, "</PointData>\n</Piece>\n</%s>\n</VTKFile>\n", type);
+}
+
+void fascia_vtk_begin_image(FILE *f, const int32_t *dims, const fascia_real *origin, fascia_real spacing) {
+  fprintf(f, "<?xml version=\"1.0\"?>\n<VTKFile type=\"ImageData\" version=\"0.1\" byte_order=\"%s\" header_type=\"UInt32\">\n"
+             "<ImageData WholeExtent=\"0 %d 0 %d 0 %d\" Origin=\"%.17g %.17g %.17g\" Spacing=\"%.17g %.17g %.17g\">\n"
+             "<Piece Extent=\"0 %d 0 %d 0 %d\">\n<PointData>\n",
+          little_endian() ? "LittleEndian" : "BigEndian", (int)dims[0] - 1, (int)dims[1] - 1, (int)dims[2] - 1,
+          origin[0], origin[1], origin[2], spacing, spacing, spacing, (int)dims[0] - 1, (int)dims[1] - 1,
+          (int)dims[2] - 1);
+}
+
+void fascia_vtk_array_float(FILE *f, const char *name, const float *values, int64_t point_count) {
+  data_array(f, "Float32", name, 1, values, sizeof(float) * (size_t)point_count);
 }
