@@ -141,6 +141,25 @@ done:
   return st;
 }
 
+/// Gives the model a tissue surface: the box of its samples' positions,
+/// outward, 2 triangles a face.
+static inline fascia_status organ_fixture_add_surface(fascia_ctx *ctx, fascia_model *m) {
+  double lo[3] = {1e30, 1e30, 1e30}, hi[3] = {-1e30, -1e30, -1e30};
+  for (int32_t s = 0; s < m->sample_count; ++s)
+    for (int r = 0; r < 3; ++r)
+      lo[r] = fmin(lo[r], m->sample_position[3 * s + r]), hi[r] = fmax(hi[r], m->sample_position[3 * s + r]);
+  fascia_organ box;
+  memset(&box, 0, sizeof box);
+  fascia_status st = fixture_box(ctx, &box, lo, hi);
+  if (st == FASCIA_OK) st = fascia_surface_alloc(ctx, &m->tissue_surface, box.vertex_count, box.triangle_count);
+  if (st == FASCIA_OK) {
+    memcpy(m->tissue_surface.vertices, box.vertices, 3 * sizeof(double) * (size_t)box.vertex_count);
+    memcpy(m->tissue_surface.triangles, box.triangles, 3 * sizeof(int32_t) * (size_t)box.triangle_count);
+  }
+  free(box.vertices), free(box.triangles);
+  return st;
+}
+
 static organ_fixture_def organ_fixture_def_default(void) {
   organ_fixture_def d;
   memset(&d, 0, sizeof d);

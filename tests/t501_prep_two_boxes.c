@@ -5,8 +5,8 @@
 // a voxel per boundary face (a bound that tightens with the voxel size), every
 // sample lies in the region, sample volumes add up to it, the weights are a
 // partition of unity that reproduces linear fields, shared frames sit on the
-// face of the right box with kinds from the organ model, and the model
-// survives a save and a load.
+// face of the right box with kinds from the organ model, the tissue
+// surface wraps the slab, and the model survives a save and a load.
 #define _POSIX_C_SOURCE 200809L // mkdtemp
 #include <math.h>
 
@@ -95,6 +95,19 @@ static int run(const char *dir, double h, double sample_spacing) {
   for (int32_t i = 0; i < m->frame_count; ++i)
     if (m->frame_kind[i] == FASCIA_FRAME_FREE) CHECK(fabs(m->frame_position[3 * i]) < FACE);
   CHECK(m->provenance && strstr(m->provenance, "\"voxel_size\""));
+  // the tissue surface wraps the slab: its box is the slab's within a voxel
+  const fascia_surface *ts = &m->tissue_surface;
+  double lo[3] = {1e30, 1e30, 1e30}, hi[3] = {-1e30, -1e30, -1e30};
+  for (int32_t v = 0; v < ts->vertex_count; ++v)
+    for (int c = 0; c < 3; ++c)
+      lo[c] = fmin(lo[c], ts->vertices[3 * v + c]), hi[c] = fmax(hi[c], ts->vertices[3 * v + c]);
+  CHECK(ts->triangle_count > 0);
+  CHECK_NEAR(lo[0], -FACE, 0, h);
+  CHECK_NEAR(hi[0], FACE, 0, h);
+  for (int c = 1; c < 3; ++c) {
+    CHECK_NEAR(lo[c], -HALF_REGION, 0, h);
+    CHECK_NEAR(hi[c], HALF_REGION, 0, h);
+  }
 
   // the model file: written, read back with the same counts
   snprintf(path, sizeof path, "%s/model.h5", dir);

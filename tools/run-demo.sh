@@ -53,9 +53,21 @@ echo "demo: 2/3 simulating $steps implicit steps of $dt s ($motion)"
   -o "$out/results.h5" --history "$out/history.csv" --paraview "$out/paraview" --snapshots "$out/data" \
   | tee "$out/run.txt"
 t1=$(date +%s.%N)
-echo "demo: 3/3 drawing pictures (gnuplot)"
+echo "demo: 3/3 drawing pictures"
 organs=$(awk '/^organs/{on=1; next} on && /^  [^ ]/{print $1} on && !/^  /{on=0}' "$out/model.txt" | tr '\n' ' ')
 gnuplot -e "dir='$out'; title='$name'; organs='${organs% }'; view='$view'" "$root/tools/plots/demo.gp"
+# the scene pictures rendered by ParaView where it is installed (the tissue
+# surface coloured by strain, organs translucent); else gnuplot's stay
+pictures="gnuplot (ParaView's pvbatch or xvfb-run not found: the scene pictures are gnuplot's point plots)"
+if command -v pvbatch >/dev/null && command -v xvfb-run >/dev/null; then
+  if xvfb-run -a pvbatch "$root/tools/plots/demo_paraview.py" "$out/paraview/run.pvd" "$out" "$name" "$view" \
+      >"$out/paraview.log" 2>&1; then
+    pictures="ParaView (scene) and gnuplot (energy, iterations, time)"
+  else
+    pictures="gnuplot (ParaView failed, see $out/paraview.log: the scene pictures are gnuplot's point plots)"
+  fi
+fi
+echo "demo: pictures by $pictures"
 
 # closing summary
 field() { sed -n "s/^$1 *//p" "$out/run.txt" | head -1; }
@@ -74,8 +86,8 @@ demo summary: $what
   wall time    ${seconds} s to prepare and simulate
   files        $out/
     results.h5 + results.xdmf   tissue frames and samples with displacement, strain and stress per saved step (ParaView)
-    paraview/run.pvd            open in ParaView: samples, frames and organ surfaces per saved step
-    scene-rest.png, scene-deformed.png   tissue coloured by strain between the organs
+    paraview/run.pvd            open in ParaView: tissue surface, samples, frames, organs per saved step
+    scene-rest.png, scene-deformed.png   tissue coloured by strain between the organs ($pictures)
     energy.png, iterations.png, ms-per-step.png   the run over time
     history.csv, data/*.csv     the numbers behind the pictures
 EOF

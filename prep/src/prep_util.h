@@ -147,6 +147,11 @@ FASCIA_PREP_INTERN void prep_units_hint_box(double extent, char *out, size_t siz
 /// Rotation matrix R (row-major) of the unit quaternion q = (w, x, y, z).
 FASCIA_PREP_INTERN void prep_quat_matrix(const double *q, double *R);
 
+/// The boundary of the tissues' regions (labels 1 .. tissue_count), smoothed
+/// and meshed, in the world (tissue_surface.c).
+FASCIA_PREP_INTERN fascia_status prep_tissue_surface(fascia_ctx *ctx, const fascia_prep_scene *scene,
+                                                     const fascia_prep_volume *vol, fascia_surface *out);
+
 /// Heap of (distance, voxel) for Dijkstra over voxels.
 typedef struct prep_heap {
   int64_t count, capacity;

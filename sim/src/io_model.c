@@ -50,6 +50,8 @@
 //   /coupling/organ       [C]    i32;  frame [C] i32;  triangle [C] i32
 //   /coupling/barycentric [C,3]  f64  1
 //   /gravity              [3]    f64  m/s^2, world
+//   /tissue_surface/      optional (drawing only): vertices [V,3] f64 m,
+//                         triangles [T,3] i32 (any version reads it)
 //   /provenance           scalar string, JSON text (absent when unknown)
 //
 // Sizes come from the datasets' shapes; before anything is allocated for
@@ -303,6 +305,12 @@ static fascia_status write_model(writer *w, const fascia_model *m) {
   FASCIA_TRY(write_probes(w, m));
   FASCIA_TRY(write_organs_coupling(w, m));
   WRITE1(w, "/gravity", ELEM_REAL, 3, m->gravity, "m/s^2");
+  const fascia_surface *ts = &m->tissue_surface;
+  if (ts->triangle_count > 0) { // optional, for drawing: older readers ignore it and simulate the same
+    FASCIA_TRY(write_group(w, "/tissue_surface", -1, -1, -1));
+    WRITE2(w, "/tissue_surface/vertices", ELEM_REAL, ts->vertex_count, 3, ts->vertices, "m");
+    WRITE2(w, "/tissue_surface/triangles", ELEM_INT, ts->triangle_count, 3, ts->triangles, NULL);
+  }
   if (m->provenance) FASCIA_TRY(write_text(w, "/provenance", m->provenance));
   return FASCIA_OK;
 }
@@ -928,6 +936,16 @@ static fascia_status read_rest(reader *r, fascia_model *m) {
     FASCIA_CHECK(m->allow_floating == 0 || m->allow_floating == 1, r->ctx, FASCIA_ERR_FORMAT,
                  "model '%s' /: attribute 'allow_floating' is %d, not 0 or 1; %s", r->path, (int)m->allow_floating,
                  REMEDY);
+  }
+  if (fascia_h5_link_exists(r->file, "/tissue_surface/triangles")) {
+    int64_t V, T;
+    FASCIA_TRY(count_rows(r, "/tissue_surface/vertices", ELEM_REAL, 3, &V));
+    FASCIA_TRY(count_rows(r, "/tissue_surface/triangles", ELEM_INT, 3, &T));
+    FASCIA_TRY(check_stored(r, "/tissue_surface/vertices"));
+    FASCIA_TRY(check_stored(r, "/tissue_surface/triangles"));
+    FASCIA_TRY(fascia_surface_alloc(r->ctx, &m->tissue_surface, (int32_t)V, (int32_t)T));
+    READ(r, "/tissue_surface/vertices", ELEM_REAL, V, 3, m->tissue_surface.vertices);
+    READ(r, "/tissue_surface/triangles", ELEM_INT, T, 3, m->tissue_surface.triangles);
   }
   return read_provenance(r, &m->provenance);
 }

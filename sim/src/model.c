@@ -91,6 +91,8 @@ fascia_status fascia_model_alloc(fascia_ctx *ctx, const fascia_model_sizes *z, f
 void fascia_model_destroy(fascia_model **model) {
   if (!model || !*model) return;
   fascia_model *m = *model;
+  free(m->tissue_surface.vertices);
+  free(m->tissue_surface.triangles);
   free(m->frame_position);
   free(m->frame_rotation);
   free(m->frame_kind);
@@ -147,6 +149,22 @@ fascia_status fascia_motion_alloc(fascia_ctx *ctx, fascia_motion *motion, int32_
   FASCIA_CHECK(motion->key_time && motion->key_translation && motion->key_rotation, ctx, FASCIA_ERR_MEMORY,
                "motion '%s': out of memory for %d keys", motion->name, (int)key_count);
   for (int32_t k = 0; k < key_count; ++k) motion->key_rotation[4 * k] = 1;
+  return FASCIA_OK;
+}
+
+fascia_status fascia_surface_alloc(fascia_ctx *ctx, fascia_surface *surface, int32_t vertex_count,
+                                   int32_t triangle_count) {
+  FASCIA_CHECK(surface && vertex_count >= 0 && triangle_count >= 0 && vertex_count <= FASCIA_MAX_COUNT &&
+                   triangle_count <= FASCIA_MAX_COUNT,
+               ctx, FASCIA_ERR_ARGUMENT, "surface: bad size (%d vertices, %d triangles)", (int)vertex_count,
+               (int)triangle_count);
+  free(surface->vertices);
+  free(surface->triangles);
+  surface->vertex_count = vertex_count;
+  surface->triangle_count = triangle_count;
+  surface->vertices = fascia_calloc(3 * (int64_t)vertex_count, sizeof(fascia_real));
+  surface->triangles = fascia_calloc(3 * (int64_t)triangle_count, sizeof(int32_t));
+  FASCIA_CHECK(surface->vertices && surface->triangles, ctx, FASCIA_ERR_MEMORY, "surface: out of memory");
   return FASCIA_OK;
 }
 
@@ -423,6 +441,14 @@ static fascia_status validate_organs(fascia_ctx *ctx, const fascia_model *m, con
                    "model '%s' /organs/%s/triangles: triangle %lld names vertex %d of %d", origin, o->name,
                    (long long)(t / 3), (int)o->triangles[t], (int)o->vertex_count);
   }
+  const fascia_surface *ts = &m->tissue_surface;
+  int64_t bad;
+  FASCIA_CHECK(finite_all(ts->vertices, 3 * (int64_t)ts->vertex_count, &bad), ctx, FASCIA_ERR_FORMAT,
+               "model '%s' /tissue_surface/vertices: vertex %lld is not finite", origin, (long long)(bad / 3));
+  for (int64_t t = 0; t < 3 * (int64_t)ts->triangle_count; ++t)
+    FASCIA_CHECK(ts->triangles[t] >= 0 && ts->triangles[t] < ts->vertex_count, ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' /tissue_surface/triangles: triangle %lld names vertex %d of %d", origin,
+                 (long long)(t / 3), (int)ts->triangles[t], (int)ts->vertex_count);
   for (int32_t c = 0; c < m->coupling_count; ++c) {
     const int32_t o = m->coupling_organ[c];
     FASCIA_CHECK(o >= 0 && o < m->organ_count, ctx, FASCIA_ERR_FORMAT,

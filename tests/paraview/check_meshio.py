@@ -15,7 +15,7 @@ from documented_arrays import documented
 
 
 def main(folder, doc, samples, frames):
-    kinds = {kind: set(names) for kind, names in documented(doc).items()}
+    kinds = {kind: set(names) for kind, names in documented(doc).items()}  # (the tissue's .vtp: not meshio's)
     failures, files = [], 0
     for kind, count in (("samples", samples), ("frames", frames)):
         for path in sorted(glob.glob("%s/%s-*.vtu" % (folder, kind))):

@@ -2,11 +2,13 @@
 # SPDX-FileCopyrightText: fascia developers
 # Opens a run's ParaView folder as a user would (run.pvd in pvbatch) and
 # checks it against docs/results-format.md: ParaView picks its PVD reader,
-# one time per saved step, the blocks samples, frames and every organ by
-# name at each, the arrays of each file exactly as the docs' table lists
-# them, displacement = position - rest position, and every frame shared
-# with an organ on that organ's surface as drawn at that step. Run by t931.
+# one time per saved step, the blocks tissue (when the model has its
+# surface), samples, frames and every organ by name at each, the arrays of
+# each file exactly as the docs' table lists them, displacement = position
+# - rest position, and every frame shared with an organ on that organ's
+# surface as drawn at that step. Run by t931.
 # Usage: pvbatch check_run_pvd.py DIR RESULTS-FORMAT.md STEPS ORGAN,ORGAN,...
+import glob
 import sys
 
 import paraview.simple as pvs
@@ -32,15 +34,16 @@ def leaf(block):
 def main(folder, doc, steps, organs):
     failures = []
     kinds = documented(doc)
-    if set(kinds) != {"samples", "frames"}:
-        failures.append("the docs' table lists %s, not samples and frames" % sorted(kinds))
+    if set(kinds) != {"tissue", "samples", "frames"}:
+        failures.append("the docs' table lists %s, not tissue, samples and frames" % sorted(kinds))
     reader = pvs.OpenDataFile(folder + "/run.pvd")
     if reader.GetXMLName() != "PVDReader":
         failures.append("ParaView opens run.pvd with %s" % reader.GetXMLName())
     times = list(reader.TimestepValues)
     if len(times) != steps:
         failures.append("%d times, %d saved steps" % (len(times), steps))
-    names = ["samples", "frames"] + organs
+    surface = bool(glob.glob(folder + "/tissue-*.vtp"))
+    names = (["tissue"] if surface else []) + ["samples", "frames"] + organs
     for t in times:
         reader.UpdatePipeline(t)
         data = sm.Fetch(reader)
@@ -49,7 +52,7 @@ def main(folder, doc, steps, organs):
             failures.append("t = %.17g: blocks %s, expected %s" % (t, got, names))
             continue
         blocks = {n: leaf(data.GetBlock(k)) for k, n in enumerate(got)}
-        for kind in ("samples", "frames"):
+        for kind in names[:-len(organs)] if organs else names:
             b = blocks[kind]
             if arrays(b) != kinds.get(kind):
                 failures.append("t = %.17g %s: arrays %s, the docs list %s" % (t, kind, arrays(b), kinds.get(kind)))

@@ -108,6 +108,9 @@ static void print_text(const char *path, const fascia_model *m, const summary *z
     printf("  %-14s %d keys, t = %g .. %g s\n", mo->name, (int)mo->key_count, mo->key_time[0],
            mo->key_time[mo->key_count - 1]);
   }
+  if (m->tissue_surface.triangle_count > 0)
+    printf("surface     the tissue's, %d vertices, %d triangles (drawn by fascia run --paraview)\n",
+           (int)m->tissue_surface.vertex_count, (int)m->tissue_surface.triangle_count);
   printf("probes      %d\n", (int)m->probe_count);
   for (int32_t p = 0; p < m->probe_count; ++p)
     printf("  %-14s (%g, %g, %g) m, %d frames\n", m->probe_name[p], m->probe_position[3 * p],
@@ -160,6 +163,9 @@ static char *make_json(const char *path, const fascia_model *m, const summary *z
   }
   cJSON *motions = cJSON_AddArrayToObject(root, "motions");
   for (int32_t k = 0; k < m->motion_count; ++k) cJSON_AddItemToArray(motions, cJSON_CreateString(m->motions[k].name));
+  cJSON *surface = cJSON_AddObjectToObject(root, "tissue_surface");
+  cJSON_AddNumberToObject(surface, "vertices", m->tissue_surface.vertex_count);
+  cJSON_AddNumberToObject(surface, "triangles", m->tissue_surface.triangle_count);
   cJSON *probes = cJSON_AddArrayToObject(root, "probes");
   for (int32_t p = 0; p < m->probe_count; ++p) cJSON_AddItemToArray(probes, cJSON_CreateString(m->probe_name[p]));
   cJSON *organs = cJSON_AddArrayToObject(root, "organs");

@@ -152,22 +152,56 @@ static fascia_status write_frames(run_outputs *out, fascia_ctx *ctx, const fasci
   return fascia_file_commit(&file);
 }
 
-// One saved step: the samples, the frames and every organ at the solver's
-// state, listed in run.pvd (all of them, named) and organs.pvd (the organs).
+// The tissue surface (model->tissue_surface) where the frames carry it, with
+// its displacement and the strain of the sample nearest each vertex.
+static fascia_status write_tissue(run_outputs *out, fascia_ctx *ctx, const fascia_model *m,
+                                  const fascia_solver *solver, const char *name) {
+  const fascia_surface *ts = &m->tissue_surface;
+  const int64_t V = ts->vertex_count;
+  fascia_real *x = malloc(3 * ((size_t)V + 1) * sizeof *x), *u = malloc(3 * ((size_t)V + 1) * sizeof *u);
+  fascia_real *strain = malloc(((size_t)V + 1) * sizeof *strain);
+  fascia_status st = x && u && strain ? fascia_solver_tissue_surface(solver, x, strain)
+                                      : fascia_ctx_fail(ctx, FASCIA_ERR_MEMORY, __FILE__, __LINE__,
+                                                        "run: out of memory for the tissue surface");
+  fascia_file *file = st == FASCIA_OK ? open_file(ctx, "--paraview", out->paraview_dir, name, &st) : NULL;
+  if (file) {
+    FILE *f = fascia_file_stream(file);
+    for (int64_t k = 0; k < 3 * V; ++k) u[k] = x[k] - ts->vertices[k];
+    fascia_vtk_begin(f, "PolyData", x, V, 3, ts->triangles, ts->triangle_count);
+    fascia_vtk_array(f, "displacement", 3, u, NULL, V);
+    fascia_vtk_array(f, "rest_position", 3, ts->vertices, NULL, V);
+    fascia_vtk_array(f, "strain", 1, strain, NULL, V);
+    fascia_vtk_end(f, "PolyData");
+    st = fascia_file_commit(&file);
+  }
+  free(x), free(u), free(strain);
+  return st;
+}
+
+// One saved step: the tissue surface, the samples, the frames and every
+// organ at the solver's state, listed in run.pvd (all of them, named) and
+// organs.pvd (the organs).
 static fascia_status write_step(run_outputs *out, fascia_ctx *ctx, const fascia_model *m,
                                 const fascia_solver *solver, fascia_real time) {
   FILE *run = fascia_file_stream(out->run_pvd), *organs = fascia_file_stream(out->pvd);
   char name[FASCIA_NAME_SIZE + 32];
   fascia_status st;
   // the time as the results' XDMF writes it: one time per saved step in ParaView
-  snprintf(name, sizeof name, "samples-%04d.vtu", out->organ_steps);
-  if (m->sample_count > 0) {
-    if ((st = write_samples(out, ctx, m, solver, name)) != FASCIA_OK) return st;
-    fprintf(run, "    <DataSet timestep=\"%.17g\" group=\"\" part=\"0\" name=\"samples\" file=\"%s\"/>\n", time, name);
+  int part = 0;
+  if (m->tissue_surface.triangle_count > 0) {
+    snprintf(name, sizeof name, "tissue-%04d.vtp", out->organ_steps);
+    if ((st = write_tissue(out, ctx, m, solver, name)) != FASCIA_OK) return st;
+    fprintf(run, "    <DataSet timestep=\"%.17g\" group=\"\" part=\"%d\" name=\"tissue\" file=\"%s\"/>\n", time,
+            part++, name);
   }
+  snprintf(name, sizeof name, "samples-%04d.vtu", out->organ_steps);
+  if ((st = write_samples(out, ctx, m, solver, name)) != FASCIA_OK) return st;
+  fprintf(run, "    <DataSet timestep=\"%.17g\" group=\"\" part=\"%d\" name=\"samples\" file=\"%s\"/>\n", time,
+          part++, name);
   snprintf(name, sizeof name, "frames-%04d.vtu", out->organ_steps);
   if ((st = write_frames(out, ctx, m, solver, name)) != FASCIA_OK) return st;
-  fprintf(run, "    <DataSet timestep=\"%.17g\" group=\"\" part=\"1\" name=\"frames\" file=\"%s\"/>\n", time, name);
+  fprintf(run, "    <DataSet timestep=\"%.17g\" group=\"\" part=\"%d\" name=\"frames\" file=\"%s\"/>\n", time,
+          part++, name);
   for (int32_t k = 0; k < m->organ_count; ++k) {
     // a fixed organ never moves: its first file serves every step
     const int fixed = m->organs[k].kind == FASCIA_ORGAN_FIXED;
@@ -182,7 +216,7 @@ static fascia_status write_step(run_outputs *out, fascia_ctx *ctx, const fascia_
     fprintf(organs, "    <DataSet timestep=\"%.17g\" group=\"\" part=\"%d\" name=\"%s\" file=\"%s\"/>\n", time,
             (int)k, m->organs[k].name, name);
     fprintf(run, "    <DataSet timestep=\"%.17g\" group=\"\" part=\"%d\" name=\"%s\" file=\"%s\"/>\n", time,
-            (int)k + 2, m->organs[k].name, name);
+            part++, m->organs[k].name, name);
   }
   out->organ_steps++;
   return FASCIA_OK;

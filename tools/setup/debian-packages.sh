@@ -13,6 +13,7 @@ packages=(
   libnifti2-dev libteem-dev            # prep: label maps (NIfTI, NRRD); optional, prep reads meshes without them
   gnuplot-nox                          # pictures and plots without a display
   paraview python3-paraview python3-h5py python3-meshio  # tests open the results with ParaView's readers (pvbatch), h5py and meshio
+  xvfb xauth                           # the demo's pictures rendered by ParaView without a display (xvfb-run)
   calculix-ccx                         # the cantilever's FE reference and bench's peer (data/reference/)
 )
 

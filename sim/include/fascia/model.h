@@ -104,6 +104,14 @@ typedef struct fascia_organ {
   int32_t *triangles;     ///< [3 triangle_count] vertex indices
 } fascia_organ;
 
+/// A triangle surface at rest: what the tissue looks like (drawing only).
+typedef struct fascia_surface {
+  int32_t vertex_count;   ///< vertices
+  int32_t triangle_count; ///< triangles
+  fascia_real *vertices;  ///< [3 vertex_count] m, rest
+  int32_t *triangles;     ///< [3 triangle_count] vertex indices, outward
+} fascia_surface;
+
 /// Array sizes of a model, for fascia_model_alloc.
 typedef struct fascia_model_sizes {
   int32_t frames, samples, pairs, materials, motions, probes, probe_pairs, organs, couplings;
@@ -174,6 +182,11 @@ typedef struct fascia_model {
   /// piece is a model error (fascia_model_validate refuses it).
   int32_t allow_floating;
   char *provenance;       ///< JSON text: what made this model, from what (may be NULL)
+  /// The boundary of the tissues' regions, smoothed (prep; empty when the
+  /// model has none): drawn carried by the frames
+  /// (fascia_solver_tissue_surface). No part of the mechanics: the
+  /// fingerprint leaves it out.
+  fascia_surface tissue_surface;
 } fascia_model;
 
 /// Allocates a model with every array sized and zeroed (frame rotations set to
@@ -188,6 +201,9 @@ FASCIA_API fascia_status fascia_motion_alloc(fascia_ctx *ctx, fascia_motion *mot
 /// Allocates the surface arrays of an organ.
 FASCIA_API fascia_status fascia_organ_alloc(fascia_ctx *ctx, fascia_organ *organ, int32_t vertex_count,
                                             int32_t triangle_count);
+/// (Re)allocates a surface's arrays, zeroed.
+FASCIA_API fascia_status fascia_surface_alloc(fascia_ctx *ctx, fascia_surface *surface, int32_t vertex_count,
+                                              int32_t triangle_count);
 /// Sets provenance to a copy of text (JSON).
 FASCIA_API fascia_status fascia_model_set_provenance(fascia_ctx *ctx, fascia_model *model, const char *text);
 

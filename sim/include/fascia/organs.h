@@ -40,6 +40,14 @@ FASCIA_API fascia_status fascia_solver_organ_mass(const fascia_solver *solver, i
 /// the caller following its first coupling frame rigidly.
 FASCIA_API fascia_status fascia_solver_organ_surface(const fascia_solver *solver, int32_t organ,
                                                      fascia_real *positions);
+/// Where the tissue surface's vertices are now (model->tissue_surface;
+/// [3 vertex_count] m, world), carried by the tissue frames the way samples
+/// are (each vertex by the few frames nearest it at rest, positive kernel
+/// weights); strain [vertex_count] (may be NULL): the Green-Lagrange strain
+/// norm of the tissue sample nearest each vertex at rest. Nothing to do when
+/// the model has no tissue surface.
+FASCIA_API fascia_status fascia_solver_tissue_surface(const fascia_solver *solver, fascia_real *positions,
+                                                      fascia_real *strain);
 /// Current pose of an organ as the rigid map from its rest surface to the
 /// world: p_world = R p_rest + translation, R the rotation of `rotation`.
 /// Fixed organs: identity. Prescribed: their motion at the solver's time.
