@@ -26,6 +26,17 @@ static const char scene[] =
     "  \"coupling\": {\"organs\": {\"A\": false,\n"
     "     \"B\": {\"region\": {\"box\": {\"min\": [0, -1, -1], \"max\": [1, 1, 0]}}}}}}]}\n";
 
+// |volume| of the tetrahedron on frames f[0..3] at rest
+static double tet_volume(const fascia_model *m, const int32_t *f) {
+  const double *x[4];
+  for (int c = 0; c < 4; ++c) x[c] = m->frame_position + 3 * f[c];
+  double e[3][3];
+  for (int j = 0; j < 3; ++j)
+    for (int a = 0; a < 3; ++a) e[j][a] = x[j + 1][a] - x[0][a];
+  return fabs(e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) - e[0][1] * (e[1][0] * e[2][2] - e[1][2] * e[2][0]) +
+              e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0])) / 6;
+}
+
 int main(void) {
   char dir[256], path[512];
   if (!fixture_tmpdir(dir)) return 1;
@@ -40,15 +51,7 @@ int main(void) {
     CHECK(sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) <= 0.009 + 0.0005); // in region voxels: within h of the sphere
     CHECK(m->sample_offsets[s + 1] - m->sample_offsets[s] == 4);
     volume += m->sample_volume[s];
-    if (s % 4 == 0) { // 4 quadrature points per tet (the default), consecutive
-      const double *x[4];
-      for (int c = 0; c < 4; ++c) x[c] = m->frame_position + 3 * r.points->sample_tet_frame[4 * s + c];
-      double e[3][3];
-      for (int j = 0; j < 3; ++j)
-        for (int a = 0; a < 3; ++a) e[j][a] = x[j + 1][a] - x[0][a];
-      tets += fabs(e[0][0] * (e[1][1] * e[2][2] - e[1][2] * e[2][1]) - e[0][1] * (e[1][0] * e[2][2] - e[1][2] * e[2][0]) +
-                   e[0][2] * (e[1][0] * e[2][1] - e[1][1] * e[2][0])) / 6;
-    }
+    if (s % 4 == 0) tets += tet_volume(m, r.points->sample_tet_frame + 4 * s); // 4 quadrature points per tet, consecutive
     double w = 0, x[3] = {0, 0, 0};
     for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k) {
       CHECK(m->pair_weight[k] >= -1e-12 && m->pair_weight[k] <= 1 + 1e-12); // round-off only
@@ -62,6 +65,11 @@ int main(void) {
   CHECK(worst < 1e-9);
   CHECK(m->sample_count % 4 == 0);
   CHECK_NEAR(volume, tets, 1e-12, 0);
+  // the model keeps each tetrahedron once, for drawing
+  double kept = 0;
+  for (int32_t k = 0; k < m->tetrahedron_count; ++k) kept += tet_volume(m, m->tetrahedra + 4 * k);
+  CHECK(m->tetrahedron_count == m->sample_count / 4);
+  CHECK_NEAR(kept, volume, 1e-12, 0);
   CHECK(volume > 0.5 * r.volume->tissues[0].volume && volume < r.volume->tissues[0].volume);
   int32_t on_a_surface = 0, shared_b = 0;
   for (int32_t i = 0; i < r.points->frame_count; ++i)

@@ -3,7 +3,7 @@
 // `fascia run --paraview DIR` gives one file that opens everything:
 // DIR/run.pvd, opened in ParaView (pvbatch, tests/paraview/check_run_pvd.py),
 // holds one time per saved step and at each the blocks tissue (the model's
-// tissue surface), samples, frames and both organs by name, with the arrays docs/results-format.md lists and no
+// tissue surface), tetrahedra, samples, frames and both organs by name, with the arrays docs/results-format.md lists and no
 // other, displacement = position - rest, and the frames shared with an
 // organ on its surface as drawn; meshio reads every per-step samples and
 // frames file with the same arrays (tests/paraview/check_meshio.py). A
@@ -64,6 +64,11 @@ static int build(const char *path, int kind_b, int32_t *samples, int32_t *frames
   fascia_model *m = NULL;
   CHECK_OK(organ_fixture_build(ctx, &fd, &m), ctx);
   if (m) CHECK_OK(organ_fixture_add_surface(ctx, m), ctx);
+  if (m) { // two tetrahedra to draw, as a tet tissue has
+    CHECK_OK(fascia_model_tetrahedra_alloc(ctx, m, 2), ctx);
+    const int32_t N = m->frame_count, corners[8] = {0, 1, 2, N - 1, 3, 4, 5, N - 2};
+    memcpy(m->tetrahedra, corners, sizeof corners);
+  }
   if (m) *samples = m->sample_count, *frames = m->frame_count;
   CHECK_OK(fascia_model_save(ctx, m, path), ctx);
   fascia_model_destroy(&m);

@@ -364,7 +364,23 @@ static fascia_status compact(fascia_ctx *ctx, fascia_model **mp, const int32_t *
     memcpy(n->coupling_barycentric + 3 * d, m->coupling_barycentric + 3 * c, 3 * sizeof(double));
     ++d;
   }
+  int32_t tets = 0; // the tetrahedra whose frames all stay
+  for (int32_t k = 0; k < m->tetrahedron_count; ++k) {
+    const int32_t *t = m->tetrahedra + 4 * (int64_t)k;
+    tets += map[t[0]] >= 0 && map[t[1]] >= 0 && map[t[2]] >= 0 && map[t[3]] >= 0;
+  }
+  status = fascia_model_tetrahedra_alloc(ctx, n, tets);
+  for (int32_t k = 0, j = 0; status == FASCIA_OK && k < m->tetrahedron_count; ++k) {
+    const int32_t *t = m->tetrahedra + 4 * (int64_t)k;
+    if (map[t[0]] < 0 || map[t[1]] < 0 || map[t[2]] < 0 || map[t[3]] < 0) continue;
+    for (int c = 0; c < 4; ++c) n->tetrahedra[4 * (int64_t)j + c] = map[t[c]];
+    ++j;
+  }
   free(map);
+  if (status != FASCIA_OK) {
+    fascia_model_destroy(&n);
+    return status;
+  }
   memcpy(n->gravity, m->gravity, sizeof n->gravity);
   memcpy(n->materials, m->materials, (size_t)m->material_count * sizeof *n->materials);
   // hand the organs' meshes and the motions' keys over instead of copying them
@@ -375,6 +391,28 @@ static fascia_status compact(fascia_ctx *ctx, fascia_model **mp, const int32_t *
   fascia_model_destroy(mp);
   *mp = n;
   return fascia_model_build_reverse(ctx, n);
+}
+
+static int compare_tets(const void *a, const void *b) { return memcmp(a, b, 4 * sizeof(int32_t)); }
+
+// The tetrahedra of the TET regions (drawing only): each sample's corner
+// frames (ascending), each tetrahedron once.
+static fascia_status collect_tetrahedra(fascia_ctx *ctx, const fascia_prep_points *pts, fascia_model *m) {
+  const int32_t S = pts->sample_count;
+  int32_t *tets = prep_calloc(4 * (int64_t)S + 4, sizeof(int32_t)), count = 0;
+  PREP_CHECK(tets, ctx, FASCIA_ERR_MEMORY, "package: out of memory");
+  for (int32_t s = 0; s < S; ++s)
+    if (pts->sample_tet_frame[4 * (int64_t)s] >= 0)
+      memcpy(tets + 4 * (int64_t)count++, pts->sample_tet_frame + 4 * (int64_t)s, 4 * sizeof(int32_t));
+  qsort(tets, (size_t)count, 4 * sizeof(int32_t), compare_tets);
+  int32_t unique = 0;
+  for (int32_t k = 0; k < count; ++k)
+    if (unique == 0 || compare_tets(tets + 4 * (int64_t)k, tets + 4 * (int64_t)(unique - 1)))
+      memmove(tets + 4 * (int64_t)unique++, tets + 4 * (int64_t)k, 4 * sizeof(int32_t));
+  const fascia_status status = fascia_model_tetrahedra_alloc(ctx, m, unique);
+  if (status == FASCIA_OK) memcpy(m->tetrahedra, tets, 4 * (size_t)unique * sizeof(int32_t));
+  free(tets);
+  return status;
 }
 
 // Tissue that no fixed or prescribed organ holds, directly or through other
@@ -508,6 +546,7 @@ fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_scene *scen
   memcpy(m->pair_weight, weights->pair_weight, (size_t)weights->pair_count * sizeof(double));
   memcpy(m->pair_gradient, weights->pair_gradient, 3 * (size_t)weights->pair_count * sizeof(double));
   PREP_TRY_GOTO(fascia_model_build_reverse(ctx, m));
+  PREP_TRY_GOTO(collect_tetrahedra(ctx, points, m));
   dropped = cJSON_CreateArray();
   PREP_CHECK_GOTO(dropped, ctx, FASCIA_ERR_MEMORY, "package: out of memory");
   PREP_TRY_GOTO(drop_unheld(ctx, scene, points, &m, dropped));

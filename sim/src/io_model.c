@@ -52,6 +52,8 @@
 //   /gravity              [3]    f64  m/s^2, world
 //   /tissue_surface/      optional (drawing only): vertices [V,3] f64 m,
 //                         triangles [T,3] i32 (any version reads it)
+//   /tetrahedra           [M,4] i32, optional (drawing only): the frames at
+//                         the corners of a tet tissue's tetrahedra
 //   /provenance           scalar string, JSON text (absent when unknown)
 //
 // Sizes come from the datasets' shapes; before anything is allocated for
@@ -311,6 +313,7 @@ static fascia_status write_model(writer *w, const fascia_model *m) {
     WRITE2(w, "/tissue_surface/vertices", ELEM_REAL, ts->vertex_count, 3, ts->vertices, "m");
     WRITE2(w, "/tissue_surface/triangles", ELEM_INT, ts->triangle_count, 3, ts->triangles, NULL);
   }
+  if (m->tetrahedron_count > 0) WRITE2(w, "/tetrahedra", ELEM_INT, m->tetrahedron_count, 4, m->tetrahedra, NULL);
   if (m->provenance) FASCIA_TRY(write_text(w, "/provenance", m->provenance));
   return FASCIA_OK;
 }
@@ -946,6 +949,13 @@ static fascia_status read_rest(reader *r, fascia_model *m) {
     FASCIA_TRY(fascia_surface_alloc(r->ctx, &m->tissue_surface, (int32_t)V, (int32_t)T));
     READ(r, "/tissue_surface/vertices", ELEM_REAL, V, 3, m->tissue_surface.vertices);
     READ(r, "/tissue_surface/triangles", ELEM_INT, T, 3, m->tissue_surface.triangles);
+  }
+  if (fascia_h5_link_exists(r->file, "/tetrahedra")) {
+    int64_t M;
+    FASCIA_TRY(count_rows(r, "/tetrahedra", ELEM_INT, 4, &M));
+    FASCIA_TRY(check_stored(r, "/tetrahedra"));
+    FASCIA_TRY(fascia_model_tetrahedra_alloc(r->ctx, m, (int32_t)M));
+    READ(r, "/tetrahedra", ELEM_INT, M, 4, m->tetrahedra);
   }
   return read_provenance(r, &m->provenance);
 }

@@ -93,6 +93,7 @@ void fascia_model_destroy(fascia_model **model) {
   fascia_model *m = *model;
   free(m->tissue_surface.vertices);
   free(m->tissue_surface.triangles);
+  free(m->tetrahedra);
   free(m->frame_position);
   free(m->frame_rotation);
   free(m->frame_kind);
@@ -165,6 +166,16 @@ fascia_status fascia_surface_alloc(fascia_ctx *ctx, fascia_surface *surface, int
   surface->vertices = fascia_calloc(3 * (int64_t)vertex_count, sizeof(fascia_real));
   surface->triangles = fascia_calloc(3 * (int64_t)triangle_count, sizeof(int32_t));
   FASCIA_CHECK(surface->vertices && surface->triangles, ctx, FASCIA_ERR_MEMORY, "surface: out of memory");
+  return FASCIA_OK;
+}
+
+fascia_status fascia_model_tetrahedra_alloc(fascia_ctx *ctx, fascia_model *m, int32_t count) {
+  FASCIA_CHECK(m && count >= 0 && count <= FASCIA_MAX_COUNT, ctx, FASCIA_ERR_ARGUMENT,
+               "model: bad tetrahedron count %d", (int)count);
+  free(m->tetrahedra);
+  m->tetrahedron_count = count;
+  m->tetrahedra = fascia_calloc(4 * (int64_t)count, sizeof(int32_t));
+  FASCIA_CHECK(m->tetrahedra, ctx, FASCIA_ERR_MEMORY, "model: out of memory for %d tetrahedra", (int)count);
   return FASCIA_OK;
 }
 
@@ -449,6 +460,10 @@ static fascia_status validate_organs(fascia_ctx *ctx, const fascia_model *m, con
     FASCIA_CHECK(ts->triangles[t] >= 0 && ts->triangles[t] < ts->vertex_count, ctx, FASCIA_ERR_FORMAT,
                  "model '%s' /tissue_surface/triangles: triangle %lld names vertex %d of %d", origin,
                  (long long)(t / 3), (int)ts->triangles[t], (int)ts->vertex_count);
+  for (int64_t k = 0; k < 4 * (int64_t)m->tetrahedron_count; ++k)
+    FASCIA_CHECK(m->tetrahedra[k] >= 0 && m->tetrahedra[k] < m->frame_count, ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' /tetrahedra: tetrahedron %lld names frame %d of %d", origin, (long long)(k / 4),
+                 (int)m->tetrahedra[k], (int)m->frame_count);
   for (int32_t c = 0; c < m->coupling_count; ++c) {
     const int32_t o = m->coupling_organ[c];
     FASCIA_CHECK(o >= 0 && o < m->organ_count, ctx, FASCIA_ERR_FORMAT,

@@ -178,6 +178,23 @@ static fascia_status write_tissue(run_outputs *out, fascia_ctx *ctx, const fasci
   return st;
 }
 
+// The tetrahedra of tet tissues (model->tetrahedra) on the frames as they
+// are now, with the frames' displacement.
+static fascia_status write_tetrahedra(run_outputs *out, fascia_ctx *ctx, const fascia_model *m,
+                                      const fascia_solver *solver, const char *name) {
+  const int64_t N = m->frame_count;
+  const fascia_real *x = fascia_solver_frame_positions(solver);
+  fascia_status st = FASCIA_OK;
+  fascia_file *file = open_file(ctx, "--paraview", out->paraview_dir, name, &st);
+  if (!file) return st;
+  FILE *f = fascia_file_stream(file);
+  fascia_vtk_begin(f, "UnstructuredGrid", x, N, 4, m->tetrahedra, m->tetrahedron_count);
+  for (int64_t k = 0; k < 3 * N; ++k) out->scratch[k] = x[k] - m->frame_position[k];
+  fascia_vtk_array(f, "displacement", 3, out->scratch, NULL, N);
+  fascia_vtk_end(f, "UnstructuredGrid");
+  return fascia_file_commit(&file);
+}
+
 // One saved step: the tissue surface, the samples, the frames and every
 // organ at the solver's state, listed in run.pvd (all of them, named) and
 // organs.pvd (the organs).
@@ -192,6 +209,12 @@ static fascia_status write_step(run_outputs *out, fascia_ctx *ctx, const fascia_
     snprintf(name, sizeof name, "tissue-%04d.vtp", out->organ_steps);
     if ((st = write_tissue(out, ctx, m, solver, name)) != FASCIA_OK) return st;
     fprintf(run, "    <DataSet timestep=\"%.17g\" group=\"\" part=\"%d\" name=\"tissue\" file=\"%s\"/>\n", time,
+            part++, name);
+  }
+  if (m->tetrahedron_count > 0) {
+    snprintf(name, sizeof name, "tetrahedra-%04d.vtu", out->organ_steps);
+    if ((st = write_tetrahedra(out, ctx, m, solver, name)) != FASCIA_OK) return st;
+    fprintf(run, "    <DataSet timestep=\"%.17g\" group=\"\" part=\"%d\" name=\"tetrahedra\" file=\"%s\"/>\n", time,
             part++, name);
   }
   snprintf(name, sizeof name, "samples-%04d.vtu", out->organ_steps);

@@ -187,6 +187,11 @@ typedef struct fascia_model {
   /// (fascia_solver_tissue_surface). No part of the mechanics: the
   /// fingerprint leaves it out.
   fascia_surface tissue_surface;
+  /// The tetrahedra of tissues with tetrahedral shape functions (prep; none
+  /// otherwise): the frames at their corners, for drawing them. No part of
+  /// the mechanics (the samples' weights are), left out of the fingerprint.
+  int32_t tetrahedron_count;
+  int32_t *tetrahedra; ///< [4 tetrahedron_count] frame indices
 } fascia_model;
 
 /// Allocates a model with every array sized and zeroed (frame rotations set to
@@ -204,6 +209,8 @@ FASCIA_API fascia_status fascia_organ_alloc(fascia_ctx *ctx, fascia_organ *organ
 /// (Re)allocates a surface's arrays, zeroed.
 FASCIA_API fascia_status fascia_surface_alloc(fascia_ctx *ctx, fascia_surface *surface, int32_t vertex_count,
                                               int32_t triangle_count);
+/// (Re)allocates the model's tetrahedra [4 count], zeroed.
+FASCIA_API fascia_status fascia_model_tetrahedra_alloc(fascia_ctx *ctx, fascia_model *model, int32_t count);
 /// Sets provenance to a copy of text (JSON).
 FASCIA_API fascia_status fascia_model_set_provenance(fascia_ctx *ctx, fascia_model *model, const char *text);
 
