@@ -17,6 +17,7 @@ ORGAN_COLOURS = [(0.79, 0.48, 0.61), (0.85, 0.69, 0.23), (0.50, 0.64, 0.42), (0.
                  (0.37, 0.66, 0.66), (0.62, 0.62, 0.62), (0.88, 0.48, 0.22), (0.42, 0.56, 0.83), (0.64, 0.79, 0.31)]
 # camera direction (from the scene towards the camera) and up, per view
 VIEWS = {"sagittal": ((1, 0, 0), (0, 1, 0)), "coronal": ((0, 0, 1), (0, 1, 0)), "coronal-ras": ((0, 1, 0), (0, 0, 1))}
+ZOOM = {"coronal-ras": 1.6}  # a CT's field of view is wide and flat
 
 
 def main(pvd, out_dir, title, view):
@@ -78,6 +79,7 @@ def main(pvd, out_dir, title, view):
         camera.SetPosition([focal[i] + distance * direction[i] for i in range(3)])
         camera.SetViewUp(up)
         render.ResetCamera()
+        camera.Zoom(ZOOM.get(view, 1.2))  # the bounding sphere leaves room: fill the picture
         if not pvs.SaveScreenshot(out_dir + "/" + file, render, ImageResolution=[1200, 900]):
             return 1
     return 0
