@@ -8,7 +8,9 @@
 // organ on its surface as drawn; meshio reads every per-step samples and
 // frames file with the same arrays (tests/paraview/check_meshio.py). A
 // dynamic run (organ b prescribed), a static one (b rigid, rest and
-// equilibrium) and one with b driven from a file. Without pvbatch and
+// equilibrium) and one with b driven from a file. The dynamic run's
+// results.h5 holds exactly the datasets and attributes its docs list
+// (h5py, tests/paraview/check_results_docs.py). Without pvbatch and
 // without meshio the test is skipped, saying which is missing.
 // Usage: t931_cli_paraview_folder PATH/TO/fascia WORK_DIR TESTS/paraview DOCS/results-format.md
 #define _POSIX_C_SOURCE 200809L
@@ -95,11 +97,22 @@ int main(int argc, char **argv) {
   CHECK(system(args) == 0);
   CHECK(build(moving, FASCIA_ORGAN_PRESCRIBED, &p.samples, &p.frames));
 
-  // dynamic: 6 steps, every 3rd saved, with the rest: 3 steps
+  // dynamic: 6 steps, every 3rd saved, with the rest: 3 steps; the results file against its docs too
   snprintf(folder, sizeof folder, "%s/dyn", dir);
-  snprintf(args, sizeof args, "run '%s' --steps 6 --dt 0.1 --save-every 3 --threads 1 --paraview '%s'", moving, folder);
+  snprintf(args, sizeof args,
+           "run '%s' --steps 6 --dt 0.1 --save-every 3 --threads 1 --paraview '%s' --samples -o '%s/dyn.h5'", moving,
+           folder, dir);
   CHECK(cli_exec(p.fascia, args, err, &result) && result.status == 0);
   check_folder(&p, folder, 3);
+  char command[4096];
+  snprintf(command, sizeof command, "%s -c 'import h5py' 2>/dev/null", p.python ? p.python : "false");
+  if (system(command) == 0) {
+    snprintf(command, sizeof command, "%s '%s/check_results_docs.py' '%s/dyn.h5' '%s'", p.python, p.scripts, dir,
+             p.doc);
+    CHECK(run_script(command));
+  } else {
+    printf("t931: results-docs part skipped: h5py (Debian's python3-h5py) is not installed\n");
+  }
 
   // b driven from a file (its template: held at rest)
   snprintf(args, sizeof args, "run '%s' --steps 2 --dt 0.1 --drive-template 'b=%s'", moving, csv);
