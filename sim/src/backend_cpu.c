@@ -36,6 +36,8 @@ typedef struct cpu_backend {
   int use_direct;    ///< linear systems by sparse Cholesky (direct.h)
   int use_assembled; ///< the block matrix K is assembled every Newton iteration
   fascia_bsr K;
+  int reduced;  ///< rigid organs with the direct solver: it factors R = P^T K P (organs.c), not K
+  fascia_bsr R;
   fascia_direct *direct;
   char text[96];
 } cpu_backend;
@@ -54,6 +56,7 @@ static void cpu_destroy(fascia_backend *backend) {
   cpu_backend *B = (cpu_backend *)backend;
   if (!B) return;
   fascia_bsr_destroy(&B->K);
+  fascia_bsr_destroy(&B->R);
   fascia_direct_destroy(&B->direct);
   free(B->target_M), free(B->d_trial), free(B->gradient_trial), free(B->direction), free(B->rhs), free(B->work);
   free(B->blocks), free(B->mass_blocks), free(B->damping), free(B->scratch), free(B->pc.inverse);
@@ -80,12 +83,7 @@ static double assembled_bytes(const fascia_model *m) {
 }
 
 static fascia_status choose_linear_solver(cpu_backend *B, fascia_ctx *ctx, const fascia_organs *organs) {
-  fascia_linear_solver kind = B->def->linear_solver;
-  if (fascia_organs_body_count(organs) > 0) { // no direct P^T K P for rigid organs yet (organs.c): CG
-    FASCIA_CHECK(kind != FASCIA_LINEAR_DIRECT, ctx, FASCIA_ERR_ARGUMENT,
-                 "solver: the direct linear solver does not handle rigid organs; use cg or auto");
-    kind = FASCIA_LINEAR_CG;
-  }
+  const fascia_linear_solver kind = B->def->linear_solver;
   const int assembled = B->def->assembled == FASCIA_ASSEMBLED_AUTO
                             ? assembled_bytes(B->model) <= FASCIA_AUTO_MAX_MATRIX_BYTES
                             : B->def->assembled;
@@ -94,7 +92,10 @@ static fascia_status choose_linear_solver(cpu_backend *B, fascia_ctx *ctx, const
   B->use_assembled = 1;
   if (kind == FASCIA_LINEAR_CG) return FASCIA_OK;
   const int automatic = kind == FASCIA_LINEAR_AUTO;
-  fascia_status st = fascia_direct_create(ctx, &B->K, B->mask, &B->direct);
+  // rigid organs: the direct solver factors the reduced matrix P^T K P, on the masters' unknowns
+  B->reduced = fascia_organs_body_count(organs) > 0;
+  if (B->reduced) FASCIA_TRY(fascia_organs_reduced_pattern(ctx, organs, &B->K, &B->R));
+  fascia_status st = fascia_direct_create(ctx, B->reduced ? &B->R : &B->K, B->mask, &B->direct);
   if (st == FASCIA_OK && (!automatic || fascia_direct_flops(B->direct) <= AUTO_MAX_FLOPS)) {
     B->use_direct = 1;
     return FASCIA_OK;
@@ -103,6 +104,8 @@ static fascia_status choose_linear_solver(cpu_backend *B, fascia_ctx *ctx, const
   // automatic: CG, with the product chosen above
   fascia_ctx_clear(ctx);
   fascia_direct_destroy(&B->direct);
+  fascia_bsr_destroy(&B->R);
+  B->reduced = 0;
   if (!assembled) {
     fascia_bsr_destroy(&B->K);
     B->use_assembled = 0;
@@ -264,6 +267,7 @@ static fascia_status assemble(cpu_backend *B) {
       for (int q = 0; q < 36; ++q) D[q] += c * B->mass_blocks[36 * (int64_t)i + q];
     }
   }
+  if (B->use_direct && B->reduced) fascia_organs_reduce_matrix(B->S->organs, B->sys, c, &B->K, &B->R);
   if (B->def->single_precision_matrix && !B->use_direct)
     return fascia_bsr_make_single(B->S->ctx, &B->K, B->threads);
   return FASCIA_OK;
@@ -281,11 +285,12 @@ static fascia_status cpu_prepare(fascia_backend *backend, fascia_solve_report *r
     t = fascia_now_ms();
   }
   if (!B->use_direct) fascia_precond_build(&B->pc, &B->op, B->blocks);
-  if (B->op.organs) fascia_organs_precond(B->S->organs, &B->op, &B->pc, B->blocks);
+  if (!B->use_direct && B->op.organs) fascia_organs_precond(B->S->organs, &B->op, &B->pc, B->blocks);
   fascia_real scale = 0;
+  const fascia_bsr *factored = B->reduced ? &B->R : &B->K; // what the direct solver factors
   for (int32_t i = 0; i < N; ++i)
     for (int c = 0; c < 6; ++c) {
-      const fascia_real diag = B->use_direct ? fabs(B->K.values[36 * (int64_t)B->K.diagonal[i] + 7 * c])
+      const fascia_real diag = B->use_direct ? fabs(factored->values[36 * (int64_t)factored->diagonal[i] + 7 * c])
                                              : fabs(B->blocks[36 * (int64_t)i + 7 * c]);
       B->damping[6 * (int64_t)i + c] = diag;
       scale += diag;
@@ -307,7 +312,8 @@ static fascia_status cpu_direction(fascia_backend *backend, fascia_real *shift, 
   if (B->use_direct) {
     // not positive definite: raise the Levenberg shift until it is
     int factored;
-    while ((factored = fascia_direct_factor(B->direct, B->S->ctx, &B->K, B->mask, B->damping, B->op.shift)) == 0) {
+    const fascia_bsr *A = B->reduced ? &B->R : &B->K;
+    while ((factored = fascia_direct_factor(B->direct, B->S->ctx, A, B->mask, B->damping, B->op.shift)) == 0) {
       ++report->negative_curvature;
       B->op.shift = B->op.shift == 0 ? FASCIA_R(1e-8) : 10 * B->op.shift;
       if (B->op.shift > FASCIA_NEWTON_MAX_SHIFT)

@@ -50,6 +50,7 @@
 #include <string.h>
 
 #include "fascia/organs.h"
+#include "index_set.h"
 #include "organs.h"
 #include "point/linalg.h"
 
@@ -511,26 +512,129 @@ void fascia_organs_operator_apply(const fascia_operator *op, const fascia_real *
     if (!op->mask[k]) out[k] = 0;
 }
 
-// out = T^T B T for a 6x6 block B and offset a.
-static void congruence(const fascia_real *B, const fascia_real *a, fascia_real *out) {
-  fascia_real T[36] = {0}, BT[36];
-  for (int c = 0; c < 6; ++c) T[7 * c] = 1;
-  // -[a]x in the upper right block
-  T[0 * 6 + 4] = a[2], T[0 * 6 + 5] = -a[1];
-  T[1 * 6 + 3] = -a[2], T[1 * 6 + 5] = a[0];
-  T[2 * 6 + 3] = a[1], T[2 * 6 + 4] = -a[0];
+// out = T(a)^T B T(b) for a 6x6 block B: T(a) maps a master's increment to
+// a frame at offset a on its body, (u - a x theta, theta).
+static void transform_block(const fascia_real *B, const fascia_real *a, const fascia_real *b, fascia_real *out) {
+  fascia_real Ta[36] = {0}, Tb[36] = {0}, BT[36];
+  const fascia_real *offset[2] = {a, b};
+  fascia_real *T[2] = {Ta, Tb};
+  for (int t = 0; t < 2; ++t) {
+    const fascia_real *o = offset[t];
+    for (int c = 0; c < 6; ++c) T[t][7 * c] = 1;
+    // -[o]x in the upper right block
+    T[t][0 * 6 + 4] = o[2], T[t][0 * 6 + 5] = -o[1];
+    T[t][1 * 6 + 3] = -o[2], T[t][1 * 6 + 5] = o[0];
+    T[t][2 * 6 + 3] = o[1], T[t][2 * 6 + 4] = -o[0];
+  }
   for (int r = 0; r < 6; ++r)
     for (int c = 0; c < 6; ++c) {
       fascia_real sum = 0;
-      for (int k = 0; k < 6; ++k) sum += B[6 * r + k] * T[6 * k + c];
+      for (int k = 0; k < 6; ++k) sum += B[6 * r + k] * Tb[6 * k + c];
       BT[6 * r + c] = sum;
     }
   for (int r = 0; r < 6; ++r)
     for (int c = 0; c < 6; ++c) {
       fascia_real sum = 0;
-      for (int k = 0; k < 6; ++k) sum += T[6 * k + r] * BT[6 * k + c];
+      for (int k = 0; k < 6; ++k) sum += Ta[6 * k + r] * BT[6 * k + c];
       out[6 * r + c] = sum;
     }
+}
+
+// out = T^T B T for a 6x6 block B and offset a.
+static void congruence(const fascia_real *B, const fascia_real *a, fascia_real *out) { transform_block(B, a, a, out); }
+
+// The frame a frame's unknowns are reduced to: its body's master for a
+// frame of a simulated rigid organ, else itself.
+static int32_t reduced_frame(const fascia_organs *O, int32_t i) {
+  const int32_t b = O->frame_body[i];
+  return b >= 0 && active(O, b) ? O->master[b] : i;
+}
+
+fascia_status fascia_organs_reduced_pattern(fascia_ctx *ctx, const fascia_organs *O, const fascia_bsr *K,
+                                            fascia_bsr *R) {
+  memset(R, 0, sizeof *R);
+  const int32_t N = K->rows;
+  // each reduced row gets a slice: its diagonal, then the columns its frames reach
+  int64_t *begin = calloc((size_t)N + 1, sizeof *begin), *cursor = calloc((size_t)N + 1, sizeof *cursor);
+  R->rows = N;
+  R->row_offsets = calloc((size_t)N + 1, sizeof *R->row_offsets);
+  R->diagonal = calloc((size_t)N + 1, sizeof *R->diagonal);
+  int32_t *cols = NULL;
+  fascia_status st = begin && cursor && R->row_offsets && R->diagonal
+                         ? FASCIA_OK
+                         : FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "solver: out of memory for the reduced matrix");
+  if (st == FASCIA_OK) {
+    for (int32_t i = 0; i < N; ++i) begin[reduced_frame(O, i) + 1] += K->row_offsets[i + 1] - K->row_offsets[i];
+    for (int32_t r = 0; r < N; ++r) begin[r + 1] += begin[r] + 1;
+    cols = malloc((size_t)begin[N] * sizeof *cols + 1);
+    if (!cols) st = FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "solver: out of memory for the reduced matrix");
+  }
+  if (st == FASCIA_OK) {
+    for (int32_t r = 0; r < N; ++r) cols[begin[r]] = r, cursor[r] = begin[r] + 1;
+    for (int32_t i = 0; i < N; ++i)
+      for (int32_t k = K->row_offsets[i]; k < K->row_offsets[i + 1]; ++k)
+        cols[cursor[reduced_frame(O, i)]++] = reduced_frame(O, K->cols[k]);
+    int32_t packed = 0; // each slice sorted, unique, moved down
+    for (int32_t r = 0; r < N; ++r) {
+      const int32_t unique = fascia_index_set_make(cols + begin[r], (int32_t)(cursor[r] - begin[r]));
+      memmove(cols + packed, cols + begin[r], (size_t)unique * sizeof *cols);
+      R->row_offsets[r] = packed;
+      R->diagonal[r] = fascia_index_set_find(cols, packed, packed + unique, r);
+      packed += unique;
+    }
+    R->row_offsets[N] = packed;
+    R->blocks = packed;
+    R->cols = cols;
+    R->values = calloc(36 * (size_t)packed + 1, sizeof *R->values);
+    if (!R->values) st = FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "solver: out of memory for the reduced matrix");
+  } else {
+    free(cols);
+  }
+  free(begin), free(cursor);
+  if (st != FASCIA_OK) fascia_bsr_destroy(R);
+  return st;
+}
+
+void fascia_organs_reduce_matrix(const fascia_organs *O, const fascia_system *sys, fascia_real mass_coefficient,
+                                 const fascia_bsr *K, fascia_bsr *R) {
+  const int32_t N = K->rows;
+  memset(R->values, 0, 36 * (size_t)R->blocks * sizeof *R->values);
+  // slave rows and columns fold into their master's through T(a), a = x_i - x_master
+  for (int32_t i = 0; i < N; ++i) {
+    const int32_t ri = reduced_frame(O, i);
+    for (int32_t k = K->row_offsets[i]; k < K->row_offsets[i + 1]; ++k) {
+      const int32_t j = K->cols[k], rj = reduced_frame(O, j);
+      const fascia_real *block = K->values + 36 * (int64_t)k;
+      fascia_real *out = R->values + 36 * (int64_t)fascia_index_set_find(R->cols, R->row_offsets[ri],
+                                                                          R->row_offsets[ri + 1], rj);
+      if (ri == i && rj == j) { // neither frame on a body: the block as it is
+        for (int q = 0; q < 36; ++q) out[q] += block[q];
+        continue;
+      }
+      fascia_real folded[36], ai[3], aj[3];
+      for (int c = 0; c < 3; ++c) ai[c] = sys->x[3 * (int64_t)i + c] - sys->x[3 * (int64_t)ri + c];
+      for (int c = 0; c < 3; ++c) aj[c] = sys->x[3 * (int64_t)j + c] - sys->x[3 * (int64_t)rj + c];
+      transform_block(block, ai, aj, folded);
+      for (int q = 0; q < 36; ++q) out[q] += folded[q];
+    }
+  }
+  // each body's own mass and inertia through its centre, and the geometric term
+  for (int32_t b = 0; b < O->organ_count; ++b) {
+    if (!active(O, b)) continue;
+    const int32_t m = O->master[b];
+    fascia_real Q[4], Rm[9], r[3], ac[3], body[36] = {0}, folded[36];
+    body_rotation(O, b, sys->q, Q, Rm);
+    rest_offset(O, b, -1, r);
+    fascia_pt_mat_vec(Rm, r, ac);
+    for (int c = 0; c < 3; ++c) body[7 * c] = mass_coefficient * O->mass[b];
+    for (int rr = 0; rr < 3; ++rr)
+      for (int c = 0; c < 3; ++c) body[6 * (3 + rr) + 3 + c] = mass_coefficient * O->world_inertia[9 * b + 3 * rr + c];
+    congruence(body, ac, folded);
+    for (int rr = 0; rr < 3; ++rr)
+      for (int c = 0; c < 3; ++c) folded[6 * (3 + rr) + 3 + c] += O->geometric[9 * b + 3 * rr + c];
+    fascia_real *out = R->values + 36 * (int64_t)R->diagonal[m];
+    for (int q = 0; q < 36; ++q) out[q] += folded[q];
+  }
 }
 
 // Inverse of a symmetric 6x6 block by Cholesky after the smallest shift

@@ -47,6 +47,17 @@ FASCIA_INTERN fascia_real fascia_organs_reduce(fascia_organs *O, fascia_solver *
 /// body block (blocks [36N]) and its inverse goes into the preconditioner.
 FASCIA_INTERN void fascia_organs_precond(const fascia_organs *O, const fascia_operator *op, fascia_preconditioner *pc,
                                          fascia_real *blocks);
+/// The pattern of the reduced matrix P^T K P for the direct solver: K's
+/// block pattern with every frame of a simulated rigid organ mapped to its
+/// body's master frame; every row keeps its diagonal. R's values allocated.
+FASCIA_INTERN fascia_status fascia_organs_reduced_pattern(fascia_ctx *ctx, const fascia_organs *O,
+                                                          const fascia_bsr *K, fascia_bsr *R);
+/// R = P^T K P at the state of sys, plus each body's mass and inertia
+/// (mass_coefficient, as fascia_organs_operator_apply) and the geometric
+/// term of the last fascia_organs_reduce: the assembled form of that
+/// operator on the reduced coordinates.
+FASCIA_INTERN void fascia_organs_reduce_matrix(const fascia_organs *O, const fascia_system *sys,
+                                               fascia_real mass_coefficient, const fascia_bsr *K, fascia_bsr *R);
 /// Squared norm of the loads on the bodies (gravity of the body, loads and
 /// tissue weight on the slave frames), for the Newton tolerance.
 FASCIA_INTERN fascia_real fascia_organs_load_norm2(const fascia_organs *O, const fascia_solver *S);
