@@ -60,12 +60,15 @@ gnuplot -e "dir='$out'; title='$name'; organs='${organs% }'; view='$view'" "$roo
 # surface coloured by strain, organs translucent); else gnuplot's stay
 pictures="gnuplot (ParaView's pvbatch or xvfb-run not found: the scene pictures are gnuplot's point plots)"
 if command -v pvbatch >/dev/null && command -v xvfb-run >/dev/null; then
-  if xvfb-run -a pvbatch "$root/tools/plots/demo_paraview.py" "$out/paraview/run.pvd" "$out" "$name" "$view" \
-      >"$out/paraview.log" 2>&1; then
-    pictures="ParaView (scene) and gnuplot (energy, iterations, time)"
-  else
-    pictures="gnuplot (ParaView failed, see $out/paraview.log: the scene pictures are gnuplot's point plots)"
-  fi
+  pictures="gnuplot (ParaView failed, see $out/paraview.log: the scene pictures are gnuplot's point plots)"
+  # a second try: on a loaded machine the X server may not be up in time
+  for try in 1 2; do
+    if xvfb-run -a -s "-screen 0 1280x1024x24" pvbatch "$root/tools/plots/demo_paraview.py" \
+        "$out/paraview/run.pvd" "$out" "$name" "$view" >"$out/paraview.log" 2>&1; then
+      pictures="ParaView (scene) and gnuplot (energy, iterations, time)"
+      break
+    fi
+  done
 fi
 echo "demo: pictures by $pictures"
 
