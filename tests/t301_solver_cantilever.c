@@ -74,7 +74,7 @@ int main(void) {
   }
   CHECK(errors[1] < errors[0]);
   CHECK(errors[2] < errors[1]);
-  CHECK(errors[2] < 0.02); // the acceptance: finest affordable grid within 2 %
+  CHECK(errors[2] < 0.02); // the accuracy asked of the method: the finest affordable grid within 2 %
   // the paper's scheme itself, mirrored half beam: the independent prototype's
   // -6.208 m at 20x3x3 (hex, 2x2x2 samples), to the prototype's 3 digits
   fascia_scene_beam_def half = fascia_scene_beam_def_default();

@@ -8,7 +8,7 @@
 //               on a device backend (--backend cuda, emulated) against the
 //               paper's GPU figure and the same run on this machine's CPU.
 //   large       rows of Table 3's density beyond the paper (100k to 2M samples)
-//               in the same mode, for the issue's GPU goals.
+//               in the same mode, for the GPU goals (docs/gpu.md).
 //   cantilever  accuracy against cost on the paper's cantilever (sec. 4.1):
 //               static tip deflection against the converged CalculiX reference
 //               (data/reference/) over shape kinds, frame grids, samples,
@@ -44,7 +44,7 @@ static const char bench_usage[] =
     "                        CG iterations; ROW (or --scene ROW) runs one row (see --list)\n"
     "  large                 rows beyond the paper at Table 3's density (4 neighbours, one frame\n"
     "                        per five samples): 100k, 300k, 1M and 2M samples, the same mode;\n"
-    "                        on cuda the goals of the issue are checked: t3-s34610 in <= 1 ms per\n"
+    "                        on cuda the GPU goals (docs/gpu.md) are checked: t3-s34610 in <= 1 ms per\n"
     "                        step, the 1M row at >= 60 steps per second\n"
     "  cantilever            static cantilever: tip deflection error against the converged\n"
     "                        CalculiX reference, Newton and CG iterations, time; where ccx\n"
@@ -397,10 +397,10 @@ static void paper_text_header(const bench_options *opt) {
            "precnd_ms", "cg_ms", "cg_iter");
 }
 
-// The issue's goal of a row, on a GPU only: "goal ...: met" or "NOT met".
+// The GPU goal of a row, on a GPU only: "goal ...: met" or "NOT met".
 static void paper_text_goal(const paper_result *r) {
   if (!(r->row->gpu_goal_ms > 0) || strcmp(r->backend, "cuda")) return;
-  printf("      goal of the issue for %s: <= %.3g ms/step (%.0f steps/s): %s (%.3f ms/step, %.1f steps/s)\n",
+  printf("      GPU goal for %s: <= %.3g ms/step (%.0f steps/s): %s (%.3f ms/step, %.1f steps/s)\n",
          r->row->name, r->row->gpu_goal_ms, 1000 / r->row->gpu_goal_ms, r->ms <= r->row->gpu_goal_ms ? "met" : "NOT met",
          r->ms, 1000 / r->ms);
 }

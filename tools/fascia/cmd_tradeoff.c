@@ -515,7 +515,7 @@ static int write_convergence(const tradeoff_options *opt, const row *rows, int c
               (int)r->grid[2], 6 * r->frames, r->uz,
               100 * (r->uz - calculix_uz(PROBLEM_CANTILEVER)) / fabs(calculix_uz(PROBLEM_CANTILEVER)));
     }
-  for (size_t k = 0; k < sizeof c3d8 / sizeof c3d8[0]; ++k) // error < 0: too stiff, as the issue signs it
+  for (size_t k = 0; k < sizeof c3d8 / sizeof c3d8[0]; ++k) // error < 0: too stiff, as the tables sign it
     fprintf(f, "calculix-c3d8,%s,%d,%.6f,%.4f\n", c3d8[k].grid, c3d8[k].dofs,
             C3D8_REFERENCE * (1 + c3d8[k].error_percent / 100), -c3d8[k].error_percent);
   return close_out(opt, file);

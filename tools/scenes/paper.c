@@ -56,11 +56,11 @@ static const fascia_scene_paper_row paper_rows[] = {
     {"t3-s16210", 3, 3242, 16210, 4, 1561.8, 39.29, 0},
     {"t3-s19990", 3, 3998, 19990, 4, 1990.06, 43.12, 0},
     {"t3-s26750", 3, 5350, 26750, 4, 2675.47, 53.09, 0},
-    {"t3-s34610", 3, 6922, 34610, 4, 3468.54, 66.1, 1.0}, // the issue: "in at most 1 ms per step"
+    {"t3-s34610", 3, 6922, 34610, 4, 3468.54, 66.1, 1.0}, // the GPU goal: at most 1 ms per step
 };
 
 // Not in the paper (table 0, no paper figures): Table 3's density, 4
-// neighbours and one frame per five samples, up to the issue's "a model of 1
+// neighbours and one frame per five samples, up to the goal's "a model of 1
 // million samples at 60 steps per second or better" and twice that.
 static const fascia_scene_paper_row large_rows[] = {
     {"big-f20000-s100000-k4", 0, 20000, 100000, 4, 0, 0, 0},

@@ -105,7 +105,7 @@ typedef struct fascia_scene_paper_row {
   int32_t neighbours;     ///< frames per sample
   double paper_cpu_ms;    ///< paper's CPU time per step (Xeon W3520, one thread); 0 for table 0
   double paper_gpu_ms;    ///< paper's GPU time per step (GTX 570); 0 where not given (Table 2, table 0)
-  double gpu_goal_ms;     ///< the issue's goal for a step on the GPU, ms; 0 where it sets none
+  double gpu_goal_ms;     ///< the goal for a step on the GPU, ms (docs/gpu.md); 0 where none is set
 } fascia_scene_paper_row;
 
 /// The rows of Tables 2 and 3, in the paper's order; *count gets their number.
