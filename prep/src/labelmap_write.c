@@ -17,8 +17,8 @@
 // "DIR/NAME.tmp-PID.nii.gz" for "DIR/NAME.nii.gz": the library picks the
 // compression from the name's ending, so the temporary name keeps it.
 static int temporary_name(const char *path, char *out, size_t size) {
-  const char *ext = strstr(path, ".nii");
-  if (!ext || (strcmp(ext, ".nii") && strcmp(ext, ".nii.gz"))) return 0;
+  const char *ext = prep_nifti_ending(path);
+  if (!ext) return 0;
   const int n = snprintf(out, size, "%.*s.tmp-%ld%s", (int)(ext - path), path, (long)getpid(), ext);
   return n > 0 && (size_t)n < size;
 }
@@ -28,9 +28,8 @@ fascia_status fascia_prep_labelmap_write(fascia_ctx *ctx, const fascia_prep_scen
   char temporary[4096];
   PREP_CHECK(temporary_name(path, temporary, sizeof temporary), ctx, FASCIA_ERR_ARGUMENT,
              "label map '%s': the name must end in .nii or .nii.gz", path);
-  const char *ext = strstr(path, ".nii");
-  const int n = snprintf(table_path, table_size, "%.*s.tsv", (int)(ext - path), path);
-  PREP_CHECK(n > 0 && (size_t)n < table_size, ctx, FASCIA_ERR_ARGUMENT, "label map '%s': path too long", path);
+  PREP_CHECK(fascia_prep_labelmap_table_path(path, table_path, table_size), ctx, FASCIA_ERR_ARGUMENT,
+             "label map '%s': path too long", path);
   prep_grid g;
   uint16_t *labels = NULL;
   PREP_TRY(prep_organ_labels(ctx, scene, meshes, &g, &labels));

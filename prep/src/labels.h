@@ -18,6 +18,8 @@ typedef struct prep_label_table {
   char **name;    ///< [count]
 } prep_label_table;
 
+/// The ".nii" or ".nii.gz" that ends path, NULL when it ends otherwise.
+FASCIA_PREP_INTERN const char *prep_nifti_ending(const char *path);
 /// A TSV table (label TAB name) read from path; messages name it and the line.
 FASCIA_PREP_INTERN fascia_status prep_label_table_load(fascia_ctx *ctx, const char *path, prep_label_table *table);
 /// A built-in table by name (PREP_TOTALSEGMENTATOR_TOTAL).

@@ -147,3 +147,17 @@ int32_t prep_label_match(const prep_label_table *table, const char *spec, int32_
   }
   return n;
 }
+
+const char *prep_nifti_ending(const char *path) {
+  const size_t n = strlen(path);
+  if (n > 7 && !strcmp(path + n - 7, ".nii.gz")) return path + n - 7;
+  if (n > 4 && !strcmp(path + n - 4, ".nii")) return path + n - 4;
+  return NULL;
+}
+
+int fascia_prep_labelmap_table_path(const char *path, char *out, size_t size) {
+  const char *ending = prep_nifti_ending(path);
+  if (!ending) return 0;
+  const int n = snprintf(out, size, "%.*s.tsv", (int)(ending - path), path);
+  return n > 0 && (size_t)n < size;
+}

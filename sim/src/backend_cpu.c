@@ -83,7 +83,13 @@ static double assembled_bytes(const fascia_model *m) {
 }
 
 static fascia_status choose_linear_solver(cpu_backend *B, fascia_ctx *ctx, const fascia_organs *organs) {
-  const fascia_linear_solver kind = B->def->linear_solver;
+  fascia_linear_solver kind = B->def->linear_solver;
+  // rigid organs: the direct solver factors the reduced matrix P^T K P, on the masters' unknowns. auto
+  // keeps CG for them: where the tangent is indefinite (frame rotations near a hanging body, t321) CG's
+  // truncation at negative curvature converges in 5 Newton iterations where the Levenberg-shifted
+  // factorization took over 100; on the CT abdomen both cost the same (the assembly dominates)
+  const int bodies = fascia_organs_body_count(organs) > 0;
+  if (bodies && kind == FASCIA_LINEAR_AUTO) kind = FASCIA_LINEAR_CG;
   const int assembled = B->def->assembled == FASCIA_ASSEMBLED_AUTO
                             ? assembled_bytes(B->model) <= FASCIA_AUTO_MAX_MATRIX_BYTES
                             : B->def->assembled;
@@ -92,12 +98,7 @@ static fascia_status choose_linear_solver(cpu_backend *B, fascia_ctx *ctx, const
   B->use_assembled = 1;
   if (kind == FASCIA_LINEAR_CG) return FASCIA_OK;
   const int automatic = kind == FASCIA_LINEAR_AUTO;
-  // rigid organs: the direct solver factors the reduced matrix P^T K P, on the masters' unknowns. auto
-  // keeps CG for them: where the tangent is indefinite (frame rotations near a hanging body, t321) CG's
-  // truncation at negative curvature converges in 5 Newton iterations where the Levenberg-shifted
-  // factorization took over 100; on the CT abdomen both cost the same (the assembly dominates)
-  B->reduced = fascia_organs_body_count(organs) > 0;
-  if (B->reduced && automatic) return FASCIA_OK;
+  B->reduced = bodies;
   if (B->reduced) FASCIA_TRY(fascia_organs_reduced_pattern(ctx, organs, &B->K, &B->R));
   fascia_status st = fascia_direct_create(ctx, B->reduced ? &B->R : &B->K, B->mask, &B->direct);
   if (st == FASCIA_OK && (!automatic || fascia_direct_flops(B->direct) <= AUTO_MAX_FLOPS)) {

@@ -502,12 +502,10 @@ int cmd_prep(int argc, char **argv) {
       preview = argv[++k];
     } else if (!strcmp(argv[k], "--labelmap") && k + 1 < argc) {
       labelmap = argv[++k];
-      const char *ext = strstr(labelmap, ".nii");
-      if (!ext || (strcmp(ext, ".nii") && strcmp(ext, ".nii.gz"))) {
+      if (!fascia_prep_labelmap_table_path(labelmap, label_table, sizeof label_table)) {
         fprintf(stderr, "fascia prep: --labelmap '%s': the name must end in .nii or .nii.gz\n", labelmap);
         return 2;
       }
-      snprintf(label_table, sizeof label_table, "%.*s.tsv", (int)(ext - labelmap), labelmap);
     } else if (!strcmp(argv[k], "--threads") && k + 1 < argc) {
       if (!cli_parse_threads(argv[++k], &threads)) {
         fprintf(stderr, "fascia prep: --threads expects a whole number from 1 to %d, found '%s'\n", CLI_MAX_THREADS,

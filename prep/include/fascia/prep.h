@@ -492,6 +492,10 @@ FASCIA_API fascia_status fascia_prep_labelmap_write(fascia_ctx *ctx, const fasci
                                                     fascia_prep_meshes *meshes, const char *path, char *table_path,
                                                     size_t table_size);
 
+/// The label table beside the label map at path (MAP.nii[.gz] -> MAP.tsv)
+/// into out; 0 when path does not end in .nii or .nii.gz (or out is too short).
+FASCIA_API int fascia_prep_labelmap_table_path(const char *path, char *out, size_t size);
+
 /// Hex SHA-256 of a file into hex[65].
 FASCIA_API fascia_status fascia_prep_file_sha256(fascia_ctx *ctx, const char *path, char hex[65]);
 
