@@ -216,9 +216,9 @@ static fascia_status device_create(const fascia_backend_setup *setup, const fasc
   for (int k = 0; k < setup->crossing_count && dev->pinned_count < MAX_PINNED; ++k)
     if (ops->pin(dev->L, setup->crossing[k], setup->crossing_bytes[k])) dev->pinned[dev->pinned_count++] = setup->crossing[k];
   const fascia_solver_def *def = setup->def;
-  dev->set.cg_max = def->cg_iterations;
-  dev->set.cg_fixed = def->cg_fixed;
-  dev->set.cg_tolerance = def->cg_tolerance;
+  dev->set.cg_limits.max = def->cg_iterations;
+  dev->set.cg_limits.fixed = def->cg_fixed;
+  dev->set.cg_limits.tolerance = def->cg_tolerance;
   dev->set.consistent_mass = def->mass == FASCIA_MASS_CONSISTENT;
   dev->set.precond = (int32_t)def->precond;
   dev->set.gravity_scale = 1;
@@ -317,7 +317,7 @@ typedef struct cg_body_arg {
 } cg_body_arg;
 
 // `iterations` CG iterations; each one stops short on the device once CG
-// has ended (the kernels test sc->running and sc->action)
+// has ended (the kernels test sc->cg.running and sc->cg.action)
 static void cg_body(void *argument) {
   const cg_body_arg *arg = argument;
   fascia_device *dev = arg->dev;
@@ -336,10 +336,10 @@ static void cg_body(void *argument) {
 // Solves A p = -g on the free DOFs (cg.c); reports iterations and negative
 // curvature.
 static fascia_status cg_solve(fascia_device *dev, fascia_solve_report *rep) {
-  const int fixed = dev->set.cg_fixed, slot = fixed ? SLOT_CG_FIXED : SLOT_CG_CHUNK;
+  const int fixed = dev->set.cg_limits.fixed, slot = fixed ? SLOT_CG_FIXED : SLOT_CG_CHUNK;
   reduce(dev, FASCIA_T_CG_START, dev->D.frame_count, NULL, NULL, FASCIA_S_CG_START);
   if (!dev->recorded[slot]) {
-    cg_body_arg arg = {dev, fixed ? dev->set.cg_max : CG_CHUNK};
+    cg_body_arg arg = {dev, fixed ? dev->set.cg_limits.max : CG_CHUNK};
     FASCIA_TRY(dev->ops->record(dev->L, slot, cg_body, &arg));
     dev->recorded[slot] = 1;
   }
@@ -347,14 +347,14 @@ static fascia_status cg_solve(fascia_device *dev, fascia_solve_report *rep) {
     dev->ops->replay(dev->L, slot);
     FASCIA_TRY(pull_scalars(dev));
   } else {
-    for (int done = 0; done < dev->set.cg_max; done += CG_CHUNK) {
+    for (int done = 0; done < dev->set.cg_limits.max; done += CG_CHUNK) {
       dev->ops->replay(dev->L, slot);
       FASCIA_TRY(pull_scalars(dev)); // four bytes that matter, every CG_CHUNK iterations
-      if (!dev->sc.running) break;
+      if (!dev->sc.cg.running) break;
     }
   }
-  rep->cg_iterations += dev->sc.iterations;
-  rep->negative_curvature += dev->sc.negative_curvature;
+  rep->cg_iterations += dev->sc.cg.iterations;
+  rep->negative_curvature += dev->sc.cg.negative_curvature;
   return FASCIA_OK;
 }
 
@@ -493,8 +493,8 @@ static fascia_status device_hessian_apply(fascia_backend *backend, const fascia_
   fascia_device *dev = (fascia_device *)backend;
   const size_t N = (size_t)dev->frame_count;
   fascia_dev_scalars sc = dev->sc;
-  sc.running = 1; // the operator kernels run only inside CG
-  sc.action = FASCIA_CG_NONE; // as in CG's first iteration: Ad = A z
+  sc.cg.running = 1; // the operator kernels run only inside CG
+  sc.cg.action = FASCIA_CG_NONE; // as in CG's first iteration: Ad = A z
   FASCIA_TRY(dev->ops->upload(dev->L, dev->sc_dev, &sc, sizeof sc));
   FASCIA_TRY(dev->ops->upload(dev->L, dev->D.z, v, 6 * N * sizeof(fascia_real)));
   kernel(dev, dev->stiffness, dev->D.sample_count, dev->D.z, NULL, 0);
@@ -551,4 +551,13 @@ static fascia_status cuda_create(const fascia_backend_setup *setup, fascia_backe
 }
 const fascia_backend_ops fascia_backend_cuda = {
     .name = "cuda", .automatic = 1, .available = cuda_available, .create = cuda_create, DEVICE_BACKEND_OPS};
+#else
+// A build without the CUDA toolkit: the name is known, and says how to get it.
+static int cuda_missing(char *detail, size_t size) {
+  if (detail)
+    snprintf(detail, size, "this build has no CUDA backend: install the CUDA toolkit (nvcc) and configure with "
+                           "-DFASCIA_CUDA=ON");
+  return 0;
+}
+const fascia_backend_ops fascia_backend_cuda = {.name = "cuda", .automatic = 1, .available = cuda_missing};
 #endif

@@ -18,13 +18,10 @@
 #define FASCIA_CUDA_ITEMS_H
 
 #include "point/block6.h"
+#include "point/cg.h"
 #include "point/frame.h"
 #include "point/patch.h"
 #include "point/sample.h"
-
-/// A relative CG residual at which CG has converged as far as doubles go
-/// (as cg.c).
-#define FASCIA_DEV_ROUNDOFF 1e-14
 
 /// What the host sets between launches (never written on the device).
 typedef struct fascia_dev_settings {
@@ -32,12 +29,10 @@ typedef struct fascia_dev_settings {
   fascia_real mass_coefficient;  ///< c1 + c2: the mass term of the Newton operator
   fascia_real shift;             ///< Levenberg shift
   fascia_real gravity_scale;     ///< load factor on gravity and loads
-  fascia_real cg_tolerance;      ///< relative residual of a linear solve
   int32_t jacobian;              ///< 1: gradient with respect to anchored increments (dynamic)
-  int32_t cg_max;                ///< most CG iterations
-  int32_t cg_fixed;              ///< 1: exactly cg_max (unless round-off or negative curvature)
   int32_t consistent_mass;       ///< 1: consistent mass products; 0: lumped blocks
   int32_t precond;               ///< FASCIA_PRECOND_* (solver.h)
+  fascia_pt_cg_limits cg_limits; ///< of every linear solve
 } fascia_dev_settings;
 
 /// What the device computes for the host and for later kernels.
@@ -47,13 +42,8 @@ typedef struct fascia_dev_scalars {
   fascia_real inverted, nonfinite; ///< sample counts (exact in double)
   fascia_real target_norm;      ///< (h u).M(h u) of the inertia target
   fascia_real scale;            ///< mean absolute tangent diagonal
-  // conjugate gradients
-  fascia_real bnorm, rz, rnorm, alpha, beta;
-  int32_t iterations, running, negative_curvature, action;
+  fascia_pt_cg cg;              ///< conjugate gradients (point/cg.h)
 } fascia_dev_scalars;
-
-/// What the CG update does this iteration (set by the scalar steps).
-enum { FASCIA_CG_NONE = 0, FASCIA_CG_UPDATE = 1, FASCIA_CG_COPY_Z = 2, FASCIA_CG_DIRECTION = 3 };
 
 /// Device views of the model, the state and the work arrays (all device
 /// pointers; passed to every kernel by value).
@@ -222,7 +212,7 @@ static inline FASCIA_HD void fascia_dev_sample_mass_item(const fascia_dev *D, in
 // all three).
 FASCIA_STATIC_FORCE_INLINE FASCIA_HD void fascia_dev_sample_stiffness_item(const fascia_dev *D, int32_t s,
                                                                            const fascia_real *in, int parts) {
-  if (!D->sc->running) return;
+  if (!D->sc->cg.running) return;
   const fascia_pt_state st = fascia_dev_state(D);
   const int32_t begin = D->pm.sample_offsets[s];
   fascia_pt_sample_stiffness_parts(&D->pm, &st, s, D->cache + (int64_t)s * FASCIA_PT_CACHE_SIZE, in,
@@ -344,7 +334,7 @@ static inline FASCIA_HD void fascia_dev_item(const fascia_dev *D, int kernel, in
   case FASCIA_K_LUMPED_MASS: fascia_dev_lumped_mass_item(D, i32); break;
   case FASCIA_K_SAMPLE_GRADIENT: fascia_dev_sample_gradient_item(D, i32); break;
   case FASCIA_K_CG_SAMPLE_MASS:
-    if (!D->sc->running || !D->set->consistent_mass || D->set->mass_coefficient == 0) break;
+    if (!D->sc->cg.running || !D->set->consistent_mass || D->set->mass_coefficient == 0) break;
     fascia_dev_sample_mass_item(D, i32, in);
     break;
   case FASCIA_K_SAMPLE_MASS: fascia_dev_sample_mass_item(D, i32, in); break;
@@ -374,7 +364,7 @@ static inline FASCIA_HD void fascia_dev_item(const fascia_dev *D, int kernel, in
     break;
   }
   case FASCIA_K_PATCH_RATE:
-    if (D->sc->running) fascia_pt_patch_rate(&D->patches, i32, in);
+    if (D->sc->cg.running) fascia_pt_patch_rate(&D->patches, i32, in);
     break;
   case FASCIA_K_SAVE:
   case FASCIA_K_RESTORE: fascia_dev_saved_item(D, i32, kernel == FASCIA_K_SAVE); break;
@@ -407,8 +397,8 @@ static inline FASCIA_HD void fascia_dev_operator_term(const fascia_dev *D, int32
   }
   if (set->shift != 0)
     for (int c = 0; c < 6; ++c) out[c] += set->shift * D->damping[i6 + c] * v[c];
-  const int next = D->sc->action == FASCIA_CG_DIRECTION;
-  const fascia_real beta = D->sc->beta;
+  const int next = D->sc->cg.action == FASCIA_CG_DIRECTION;
+  const fascia_real beta = D->sc->cg.beta;
   t[0] = t[1] = 0;
   for (int c = 0; c < 6; ++c) {
     if (!D->mask[i6 + c]) out[c] = 0;
@@ -438,11 +428,11 @@ static inline FASCIA_HD void fascia_dev_cg_start_term(const fascia_dev *D, int32
 
 static inline FASCIA_HD void fascia_dev_cg_update_term(const fascia_dev *D, int32_t i, fascia_real *t) {
   const int64_t i6 = 6 * (int64_t)i;
-  const int action = D->sc->action;
+  const int action = D->sc->cg.action;
   if (action == FASCIA_CG_COPY_Z)
     for (int c = 0; c < 6; ++c) D->p[i6 + c] = D->z[i6 + c];
   if (action != FASCIA_CG_UPDATE) return;
-  const fascia_real alpha = D->sc->alpha;
+  const fascia_real alpha = D->sc->cg.alpha;
   for (int c = 0; c < 6; ++c) {
     D->p[i6 + c] += alpha * D->dir[i6 + c];
     D->r[i6 + c] -= alpha * D->Ad[i6 + c];
@@ -472,7 +462,7 @@ static inline FASCIA_HD void fascia_dev_term(const fascia_dev *D, int terms, int
   case FASCIA_T_SUM: t[0] = a[i]; break;
   case FASCIA_T_CG_START: fascia_dev_cg_start_term(D, (int32_t)i, t); break;
   case FASCIA_T_OPERATOR:
-    if (D->sc->running) fascia_dev_operator_term(D, (int32_t)i, t);
+    if (D->sc->cg.running) fascia_dev_operator_term(D, (int32_t)i, t);
     break;
   case FASCIA_T_CG_UPDATE: fascia_dev_cg_update_term(D, (int32_t)i, t); break;
   case FASCIA_T_PATCHES: t[0] = D->patches.energy[i]; break;
@@ -480,8 +470,8 @@ static inline FASCIA_HD void fascia_dev_term(const fascia_dev *D, int terms, int
   }
 }
 
-/// The scalar step after a reduction, run by one thread (cg.c's scalar
-/// logic, so that CG never waits for the host).
+/// The scalar step after a reduction, run by one thread (CG's scalar logic
+/// is point/cg.h's, so that CG never waits for the host).
 static inline FASCIA_HD void fascia_dev_scalar_step(const fascia_dev *D, int step, const fascia_real *sum) {
   fascia_dev_scalars *sc = D->sc;
   const fascia_dev_settings *set = D->set;
@@ -510,50 +500,9 @@ static inline FASCIA_HD void fascia_dev_scalar_step(const fascia_dev *D, int ste
     sc->scale = sum[0] > 0 ? sum[0] / n : 1;
     break;
   }
-  case FASCIA_S_CG_START:
-    sc->bnorm = sc->rnorm = sqrt(sum[0]);
-    sc->rz = sum[1];
-    sc->iterations = 0;
-    sc->negative_curvature = 0;
-    sc->running = sc->bnorm > 0 && set->cg_max > 0;
-    sc->action = FASCIA_CG_NONE;
-    break;
-  case FASCIA_S_CG_CURVATURE: {
-    sc->action = FASCIA_CG_NONE;
-    if (!sc->running) break;
-    const fascia_real curvature = sum[0], dd = sum[1];
-    if (!(curvature > 1e-12 * sc->scale * dd) || !isfinite(curvature)) {
-      // non-positive curvature: keep p, or the preconditioned residual if
-      // nothing was done yet (a descent direction either way)
-      sc->negative_curvature = 1;
-      sc->running = 0;
-      if (sc->iterations == 0) sc->action = FASCIA_CG_COPY_Z;
-      break;
-    }
-    sc->alpha = sc->rz / curvature;
-    sc->action = FASCIA_CG_UPDATE;
-    break;
-  }
-  case FASCIA_S_CG_RESIDUAL: {
-    if (sc->action != FASCIA_CG_UPDATE) {
-      sc->action = FASCIA_CG_NONE;
-      break;
-    }
-    sc->iterations += 1;
-    sc->rnorm = sqrt(sum[0]);
-    const fascia_real rz_next = sum[1];
-    sc->action = FASCIA_CG_NONE;
-    // a fixed count still ends at round-off: past it iterations churn noise
-    if (sc->rnorm <= FASCIA_DEV_ROUNDOFF * sc->bnorm || (!set->cg_fixed && sc->rnorm <= set->cg_tolerance * sc->bnorm) ||
-        sc->iterations >= set->cg_max || !(rz_next > 0)) {
-      sc->running = 0;
-      break;
-    }
-    sc->beta = rz_next / sc->rz;
-    sc->rz = rz_next;
-    sc->action = FASCIA_CG_DIRECTION;
-    break;
-  }
+  case FASCIA_S_CG_START: fascia_pt_cg_start(&sc->cg, &set->cg_limits, sum[0], sum[1]); break;
+  case FASCIA_S_CG_CURVATURE: fascia_pt_cg_curvature(&sc->cg, sc->scale, sum[0], sum[1]); break;
+  case FASCIA_S_CG_RESIDUAL: fascia_pt_cg_residual(&sc->cg, &set->cg_limits, sum[0], sum[1]); break;
   default: break;
   }
 }

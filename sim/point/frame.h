@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
 // The per-frame math, shared by the CPU (sim/src/system.c) and the device
-// kernels (cuda/items.h): a frame's sum over its pairs, its orientation
+// kernels (the device backend): a frame's sum over its pairs, its orientation
 // relative to rest, the gravity and load terms of its gradient and tangent,
 // the symmetrizing term of the rotation update, and its lumped mass block.
 // Written once, so both sides do the same operations in the same order.

@@ -10,18 +10,6 @@
 #include "backend.h"
 #include "solver_internal.h"
 
-#ifndef FASCIA_HAVE_CUDA
-// A build without the CUDA toolkit: the name is known, and says how to get it.
-static int cuda_missing(char *detail, size_t size) {
-  if (detail)
-    snprintf(detail, size, "this build has no CUDA backend: install the CUDA toolkit (nvcc) and configure with "
-                           "-DFASCIA_CUDA=ON");
-  return 0;
-}
-
-const fascia_backend_ops fascia_backend_cuda = {.name = "cuda", .automatic = 1, .available = cuda_missing};
-#endif
-
 static const fascia_backend_ops *const registry[] = {&fascia_backend_cuda, &fascia_backend_cpu,
                                                      &fascia_backend_emulated};
 

@@ -128,7 +128,7 @@ struct fascia_backend_ops {
 /// The backends (backend.c): a backend not in this build answers available()
 /// with how to build it.
 extern const fascia_backend_ops fascia_backend_cpu;
-extern const fascia_backend_ops fascia_backend_cuda;     ///< cuda/device_solver.c, or backend.c's stub
+extern const fascia_backend_ops fascia_backend_cuda;     ///< cuda/device_solver.c (without CUDA: says how to build it)
 extern const fascia_backend_ops fascia_backend_emulated; ///< cuda/device_solver.c
 
 /// The registry in priority order, count entries.
