@@ -24,10 +24,13 @@ typedef struct fascia_backend {
 } fascia_backend;
 
 /// What a backend is made from. The system is the model compiled for the
-/// per-sample math (system.c); the mask marks the free DOFs (read at every
-/// step: a caller may fix DOFs after the solver is made). solver and organs
-/// are for the CPU backend's rigid organs, which work on the solver's state
-/// (organs.c); a backend that refuses rigid organs ignores them.
+/// per-sample math (system.c); the mask marks the free DOFs of the reduced
+/// coordinates (read at every step: a caller may fix DOFs, or drive an
+/// organ, after the solver is made). Rigid organs come as the bodies'
+/// table (point/body.h), whose per-step values and active flags the solver
+/// sets before each step, and the full mask of every frame the tissue moves.
+/// organs is for the CPU's direct solver, which assembles P^T K P
+/// (organs.c); solver is the state the CPU backend works in.
 typedef struct fascia_backend_setup {
   fascia_ctx *ctx;
   const fascia_model *model;
@@ -36,7 +39,9 @@ typedef struct fascia_backend_setup {
   const fascia_solver_def *def;
   struct fascia_solver *solver;
   fascia_organs *organs;
-  int32_t rigid_bodies; ///< rigid organs in the model
+  int32_t rigid_bodies; ///< rigid organs simulated as bodies now
+  const struct fascia_pt_bodies *bodies; ///< NULL: no rigid organ with coupling frames
+  const unsigned char *full_mask;        ///< [6N]; the mask where there are no bodies
   /// the volumetric patches as the per-patch math reads them (host arrays;
   /// count 0: none), and their support entries (the length of entry_frame)
   const fascia_pt_patches *patches;

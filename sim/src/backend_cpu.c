@@ -31,6 +31,9 @@ typedef struct cpu_backend {
   // work
   fascia_real *d_trial, *gradient_trial, *direction, *rhs, *work, *blocks, *mass_blocks, *damping, *scratch;
   fascia_real *saved; ///< [13N] the watched iterate (cpu_save): anchor x, q and increments
+  const fascia_pt_bodies *bodies; ///< rigid organs (point/body.h), NULL for none
+  const unsigned char *full_mask; ///< [6N] every frame the tissue moves (the bodies' slaves too)
+  fascia_real *prolonged;         ///< [6N] the operator's P v for rigid organs
   fascia_operator op;
   fascia_preconditioner pc;
   int use_direct;    ///< linear systems by sparse Cholesky (direct.h)
@@ -60,7 +63,7 @@ static void cpu_destroy(fascia_backend *backend) {
   fascia_direct_destroy(&B->direct);
   free(B->target_M), free(B->d_trial), free(B->gradient_trial), free(B->direction), free(B->rhs), free(B->work);
   free(B->blocks), free(B->mass_blocks), free(B->damping), free(B->scratch), free(B->pc.inverse);
-  free(B->saved);
+  free(B->saved), free(B->prolonged);
   free(B);
 }
 
@@ -128,6 +131,8 @@ static fascia_status cpu_create(const fascia_backend_setup *setup, fascia_backen
   B->model = setup->model;
   B->def = setup->def;
   B->mask = setup->mask;
+  B->bodies = setup->bodies;
+  B->full_mask = setup->full_mask;
   B->frame_count = setup->model->frame_count;
   B->threads = setup->sys->threads;
   const int64_t N = B->frame_count, n = 6 * N;
@@ -142,11 +147,12 @@ static fascia_status cpu_create(const fascia_backend_setup *setup, fascia_backen
   B->damping = fascia_calloc(n, sizeof(fascia_real));
   B->scratch = fascia_calloc(2 * n, sizeof(fascia_real));
   B->saved = fascia_calloc(13 * N, sizeof(fascia_real));
+  B->prolonged = fascia_calloc(n, sizeof(fascia_real));
   B->pc.kind = setup->def->precond;
   B->pc.frame_count = B->frame_count;
   B->pc.inverse = fascia_calloc(36 * N, sizeof(fascia_real));
   if (!B->target_M || !B->d_trial || !B->gradient_trial || !B->direction || !B->rhs || !B->work || !B->blocks ||
-      !B->mass_blocks || !B->damping || !B->scratch || !B->saved || !B->pc.inverse) {
+      !B->mass_blocks || !B->damping || !B->scratch || !B->saved || !B->prolonged || !B->pc.inverse) {
     cpu_destroy(&B->base);
     return FASCIA_FAIL(setup->ctx, FASCIA_ERR_MEMORY, "solver: out of memory for %lld frames", (long long)N);
   }
@@ -197,9 +203,19 @@ static fascia_status cpu_begin(fascia_backend *backend, const fascia_step_values
     B->target_norm = fascia_dot(v->inertia_target, B->target_M, n, B->threads);
   }
   const fascia_real c = v->c1 + v->c2;
-  fascia_operator op = {B->sys,     c,  B->def->mass, B->mass_blocks, B->damping, 0, 1,
-                        B->use_assembled ? &B->K : NULL, B->mask, B->scratch + n, NULL, 0};
-  if (fascia_organs_body_count(S->organs) > 0) op.organs = S->organs;
+  fascia_operator op = {.sys = B->sys,
+                        .mass_coefficient = c,
+                        .mass = B->def->mass,
+                        .mass_blocks = B->mass_blocks,
+                        .damping_diagonal = B->damping,
+                        .scale = 1,
+                        .assembled = B->use_assembled ? &B->K : NULL,
+                        .mask = B->mask,
+                        .scratch = B->scratch + n};
+  // rigid organs: the table says which bodies move in this step (the caller may drive one)
+  op.bodies = fascia_organs_body_count(S->organs) > 0 ? B->bodies : NULL;
+  op.full_mask = B->full_mask;
+  op.prolonged = B->prolonged;
   op.single = B->use_assembled && !B->use_direct && B->def->single_precision_matrix;
   B->op = op;
   report->direct = B->use_direct;
@@ -235,7 +251,9 @@ static fascia_status objective(cpu_backend *B, const fascia_real *d, fascia_real
     for (int64_t k = 0; k < n; ++k) gradient[k] += (v->c1 + v->c2) * B->scratch[k] - v->c1 * B->target_M[k];
   }
   // rigid organs: the bodies' own terms, gradient restricted to their masters
-  energy += fascia_organs_reduce(S->organs, S, v->c1, v->c2, v->dynamic, d, gradient);
+  const fascia_pt_body_step body_step = {v->c1, v->c2, v->gravity_scale, v->dynamic,
+                                         {B->sys->gravity[0], B->sys->gravity[1], B->sys->gravity[2]}};
+  energy += fascia_organs_reduce(S->organs, &body_step, S->x, S->q, B->x_base, B->q_base, d, gradient);
   for (int64_t k = 0; k < n; ++k)
     if (!B->mask[k]) gradient[k] = 0;
   *phi = energy;
@@ -250,7 +268,7 @@ static fascia_status cpu_evaluate(fascia_backend *backend, fascia_real alpha, in
   fascia_real *g = current ? B->gradient : B->gradient_trial;
   if (!current) {
     for (int64_t k = 0; k < n; ++k) B->d_trial[k] = B->d[k] + alpha * B->direction[k];
-    fascia_organs_expand(B->S->organs, B->S, B->d_trial); // slaves of rigid organs follow their master
+    fascia_organs_expand(B->S->organs, B->x_base, B->q_base, B->d_trial); // slaves of rigid organs follow their master
     d = B->d_trial;
   }
   FASCIA_TRY(objective(B, d, &out->phi, g));
@@ -290,7 +308,6 @@ static fascia_status cpu_prepare(fascia_backend *backend, fascia_solve_report *r
     t = fascia_now_ms();
   }
   if (!B->use_direct) fascia_precond_build(&B->pc, &B->op, B->blocks);
-  if (!B->use_direct && B->op.organs) fascia_organs_precond(B->S->organs, &B->op, &B->pc, B->blocks);
   fascia_real scale = 0;
   const fascia_bsr *factored = B->reduced ? &B->R : &B->K; // what the direct solver factors
   for (int32_t i = 0; i < N; ++i)

@@ -5,12 +5,30 @@
 // the device runs too. Constrained DOFs are kept at zero by the mask.
 #include <string.h>
 
+#include "point/body.h"
 #include "point/cg.h"
 #include "solver_internal.h"
 
+// Rigid organs: P^T A P v, A on every frame the tissue moves, plus the
+// bodies' own terms (point/body.h).
+static void reduced_apply(const fascia_operator *op, const fascia_real *v, fascia_real *out) {
+  const fascia_pt_bodies *bodies = op->bodies;
+  const fascia_system *sys = op->sys;
+  const int32_t N = sys->frame_count;
+  for (int32_t i = 0; i < N; ++i) fascia_pt_body_prolong(bodies, i, sys->x, v, op->prolonged);
+  fascia_operator inner = *op;
+  inner.bodies = NULL;
+  inner.mask = op->full_mask;
+  fascia_operator_apply(&inner, op->prolonged, out);
+  for (int32_t b = 0; b < bodies->count; ++b)
+    if (bodies->active[b]) fascia_pt_body_restrict(bodies, b, op->mass_coefficient, sys->x, sys->q, v, out);
+  for (int64_t k = 0; k < 6 * (int64_t)N; ++k)
+    if (!op->mask[k]) out[k] = 0;
+}
+
 void fascia_operator_apply(const fascia_operator *op, const fascia_real *v, fascia_real *out) {
-  if (op->organs) { // rigid organs: reduced coordinates (organs.c)
-    fascia_organs_operator_apply(op, v, out);
+  if (op->bodies) {
+    reduced_apply(op, v, out);
     return;
   }
   fascia_system *sys = op->sys;

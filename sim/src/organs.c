@@ -26,7 +26,9 @@
 //       a_i = Q r_i the slave's current offset from the master,
 //
 //   taken exactly (nonlinear in the rotation) when the increments are
-//   expanded (fascia_organs_expand), linearly in the operator. Gradients
+//   expanded, linearly in the operator. The math of one frame or body is
+//   sim/point/body.h's, which every backend runs; this file keeps the
+//   bodies' table (fascia_pt_bodies) and their state between steps. Gradients
 //   restrict as T_i^T g_i (plus the Jacobian of the rotation map for
 //   dynamic steps, as newton.c does per frame), the Newton operator is
 //   P^T A P applied matrix-free (expand, the existing operator on all
@@ -39,8 +41,8 @@
 //
 //   Linear solvers: the matrix-free and the assembled CG both work (the
 //   assembled block matrix of all frames sits inside P^T . P); the direct
-//   solver would need P^T K P assembled with its new fill, so a model with
-//   rigid organs solves by CG (solver.c: auto takes CG, direct is refused).
+//   solver factors P^T K P, assembled here with its new fill
+//   (fascia_organs_reduced_pattern, fascia_organs_reduce_matrix).
 //
 //   A rigid organ without coupling frames flies freely under gravity.
 //   An organ driven by the caller (fascia_solver_organ_set_frames) has its
@@ -52,7 +54,8 @@
 #include "fascia/organs.h"
 #include "index_set.h"
 #include "organs.h"
-#include "point/linalg.h"
+#include "point/block6.h"
+#include "point/body.h"
 
 struct fascia_organs {
   const fascia_model *model;
@@ -75,7 +78,9 @@ struct fascia_organs {
   fascia_real *target_x;    ///< [3N] targets of frames driven by the caller
   fascia_real *target_q;    ///< [4N]
   unsigned char *full_mask; ///< [6N]
-  fascia_real *w, *y;       ///< [6N] operator scratch
+  fascia_real *reaction;    ///< [6N] the gradient fascia_solver_organ_reaction reads
+  unsigned char *active;    ///< [O] 1: a body the solver moves now (rigid, with coupling frames, not driven)
+  fascia_pt_bodies bodies;  ///< the table every backend's body math reads (point/body.h)
 };
 
 int32_t fascia_model_find_organ(const fascia_model *m, const char *name) {
@@ -92,19 +97,7 @@ static void quat_conj(const fascia_real *q, fascia_real *out) {
 
 // Body rotation from the master's state: Q = q_m conj(q_m,rest).
 static void body_rotation(const fascia_organs *O, int32_t b, const fascia_real *q, fascia_real *Q, fascia_real *R) {
-  const int32_t m = O->master[b];
-  fascia_real c[4];
-  quat_conj(O->model->frame_rotation + 4 * m, c);
-  fascia_pt_quat_mul(q + 4 * m, c, Q);
-  fascia_pt_quat_normalize(Q);
-  if (R) fascia_pt_quat_to_mat(Q, R);
-}
-
-// Rest offset of frame i (or the centre when i < 0) from body b's master.
-static void rest_offset(const fascia_organs *O, int32_t b, int32_t i, fascia_real *r) {
-  const fascia_real *xm = O->model->frame_position + 3 * O->master[b];
-  const fascia_real *p = i < 0 ? O->centre + 3 * b : O->model->frame_position + 3 * i;
-  for (int c = 0; c < 3; ++c) r[c] = p[c] - xm[c];
+  fascia_pt_body_rotation(&O->bodies, b, q, Q, R);
 }
 
 // Mass properties of a closed triangle surface at density rho: signed
@@ -157,8 +150,8 @@ void fascia_organs_destroy(fascia_organs **organs) {
   fascia_organs *O = *organs;
   free(O->frame_offsets), free(O->frames), free(O->driven), free(O->master), free(O->mass), free(O->centre);
   free(O->inertia), free(O->velocity), free(O->free_pose), free(O->target), free(O->world_inertia);
-  free(O->geometric), free(O->frame_body), free(O->target_x), free(O->target_q), free(O->full_mask), free(O->w);
-  free(O->y);
+  free(O->geometric), free(O->frame_body), free(O->target_x), free(O->target_q), free(O->full_mask);
+  free(O->active), free(O->reaction);
   free(O);
   *organs = NULL;
 }
@@ -244,12 +237,12 @@ fascia_status fascia_organs_create(fascia_ctx *ctx, const fascia_model *m, fasci
   O->target_x = fascia_calloc(3 * N, sizeof(fascia_real));
   O->target_q = fascia_calloc(4 * N, sizeof(fascia_real));
   O->full_mask = fascia_calloc(6 * N, 1);
-  O->w = fascia_calloc(6 * N, sizeof(fascia_real));
-  O->y = fascia_calloc(6 * N, sizeof(fascia_real));
+  O->active = fascia_calloc(K, 1);
+  O->reaction = fascia_calloc(6 * N, sizeof(fascia_real));
   fascia_status status = FASCIA_OK;
   if (!O->frame_offsets || !O->frames || !O->driven || !O->master || !O->mass || !O->centre || !O->inertia ||
       !O->velocity || !O->free_pose || !O->target || !O->world_inertia || !O->geometric || !O->frame_body ||
-      !O->target_x || !O->target_q || !O->full_mask || !O->w || !O->y) {
+      !O->target_x || !O->target_q || !O->full_mask || !O->active || !O->reaction) {
     status = FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "organs: out of memory for %lld frames", (long long)N);
     goto cleanup;
   }
@@ -258,6 +251,11 @@ fascia_status fascia_organs_create(fascia_ctx *ctx, const fascia_model *m, fasci
     for (int c = 0; c < 3; ++c) O->world_inertia[9 * k + 4 * c] = 1;
   FASCIA_TRY_GOTO(list_frames(ctx, O));
   FASCIA_TRY_GOTO(setup_bodies(ctx, O));
+  const fascia_pt_bodies table = {O->organ_count, O->frame_offsets, O->frames,  O->frame_body,
+                                  O->master,      m->frame_position, m->frame_rotation, O->centre,
+                                  O->mass,        O->active,       O->world_inertia, O->target,
+                                  O->geometric};
+  O->bodies = table;
   *out = O;
   return FASCIA_OK;
 cleanup:
@@ -276,7 +274,15 @@ int fascia_organs_driven(const fascia_organs *O, int32_t organ) { return O && O-
 int32_t fascia_organs_frame_body(const fascia_organs *O, int32_t i) { return O ? O->frame_body[i] : -1; }
 
 // A body is simulated when it is rigid, has a master and is not driven.
-static int active(const fascia_organs *O, int32_t b) { return O->master[b] >= 0 && !O->driven[b]; }
+static int active(const fascia_organs *O, int32_t b) { return O->active[b]; }
+
+const fascia_pt_bodies *fascia_organs_bodies(const fascia_organs *O) {
+  for (int32_t b = 0; O && b < O->organ_count; ++b)
+    if (O->master[b] >= 0) return &O->bodies;
+  return NULL;
+}
+
+const unsigned char *fascia_organs_full_mask(const fascia_organs *O) { return O ? O->full_mask : NULL; }
 
 int32_t fascia_organs_body_count(const fascia_organs *O) {
   int32_t count = 0;
@@ -286,6 +292,7 @@ int32_t fascia_organs_body_count(const fascia_organs *O) {
 
 void fascia_organs_masks(fascia_organs *O, unsigned char *mask) {
   const fascia_model *m = O->model;
+  for (int32_t k = 0; k < O->organ_count; ++k) O->active[k] = O->master[k] >= 0 && !O->driven[k];
   for (int32_t i = 0; i < O->frame_count; ++i)
     for (int c = 0; c < 6; ++c) O->full_mask[6 * i + c] = m->frame_kind[i] == FASCIA_FRAME_FREE;
   for (int32_t k = 0; k < O->organ_count; ++k)
@@ -309,30 +316,10 @@ void fascia_organs_place(const fascia_organs *O, fascia_real *x, fascia_real *q)
     }
 }
 
-void fascia_organs_expand(const fascia_organs *O, const fascia_solver *S, fascia_real *d) {
-  for (int32_t b = 0; O && b < O->organ_count; ++b) {
-    if (!active(O, b)) continue;
-    const int32_t m = O->master[b];
-    fascia_real Q0[4], Q[4], R[9], xm[3];
-    body_rotation(O, b, S->q_base, Q0, NULL);
-    fascia_pt_quat_exp(d + 6 * m + 3, Q);
-    fascia_real t[4];
-    fascia_pt_quat_mul(Q, Q0, t);
-    fascia_pt_quat_normalize(t);
-    fascia_pt_quat_to_mat(t, R);
-    for (int c = 0; c < 3; ++c) xm[c] = S->x_base[3 * m + c] + d[6 * m + c];
-    for (int32_t f = O->frame_offsets[b]; f < O->frame_offsets[b + 1]; ++f) {
-      const int32_t i = O->frames[f];
-      if (i == m) continue;
-      fascia_real r[3], a[3];
-      rest_offset(O, b, i, r);
-      fascia_pt_mat_vec(R, r, a);
-      for (int c = 0; c < 3; ++c) {
-        d[6 * i + c] = xm[c] + a[c] - S->x_base[3 * i + c];
-        d[6 * i + 3 + c] = d[6 * m + 3 + c];
-      }
-    }
-  }
+void fascia_organs_expand(const fascia_organs *O, const fascia_real *x_base, const fascia_real *q_base,
+                          fascia_real *d) {
+  for (int32_t i = 0; fascia_organs_body_count(O) > 0 && i < O->frame_count; ++i)
+    fascia_pt_body_expand(&O->bodies, i, x_base, q_base, d);
 }
 
 void fascia_organs_step_begin(fascia_organs *O, fascia_solver *S, fascia_real h) {
@@ -356,19 +343,7 @@ void fascia_organs_step_begin(fascia_organs *O, fascia_solver *S, fascia_real h)
     fascia_pt_mat_mul(R0, IR, O->world_inertia + 9 * b);
     for (int c = 0; c < 6; ++c) O->target[6 * b + c] = h * O->velocity[6 * b + c];
   }
-  fascia_organs_expand(O, S, S->d);
-}
-
-// Increment of body b's centre over the step: d_c = x_m + Q r_c - c0.
-static void centre_increment(const fascia_organs *O, const fascia_solver *S, int32_t b, fascia_real *dc) {
-  const int32_t m = O->master[b];
-  fascia_real Q[4], R[9], Q0[4], R0[9], r[3], a[3], a0[3];
-  body_rotation(O, b, S->q, Q, R);
-  body_rotation(O, b, S->q_base, Q0, R0);
-  rest_offset(O, b, -1, r);
-  fascia_pt_mat_vec(R, r, a);
-  fascia_pt_mat_vec(R0, r, a0);
-  for (int c = 0; c < 3; ++c) dc[c] = S->x[3 * m + c] + a[c] - S->x_base[3 * m + c] - a0[c];
+  fascia_organs_expand(O, S->x_base, S->q_base, S->d);
 }
 
 void fascia_organs_step_end(fascia_organs *O, fascia_solver *S, fascia_real h) {
@@ -377,7 +352,7 @@ void fascia_organs_step_end(fascia_organs *O, fascia_solver *S, fascia_real h) {
   for (int32_t b = 0; b < O->organ_count; ++b) {
     fascia_real *v = O->velocity + 6 * b;
     if (active(O, b)) {
-      centre_increment(O, S, b, v);
+      fascia_pt_body_centre_increment(&O->bodies, b, S->x, S->q, S->x_base, S->q_base, v);
       for (int c = 0; c < 3; ++c) v[c] /= h, v[3 + c] = S->d[6 * O->master[b] + 3 + c] / h;
     } else if (S->model->organs[b].kind == FASCIA_ORGAN_RIGID && O->master[b] < 0) {
       // free flight, backward Euler: no torque, constant angular velocity
@@ -390,158 +365,14 @@ void fascia_organs_step_end(fascia_organs *O, fascia_solver *S, fascia_real h) {
 
 // ---------------------------------------------------------------- reduction
 
-// g += T^T y for the offset a: (y_x, a x y_x + y_theta); the moment part
-// goes to mom so that the caller can apply the rotation map's Jacobian.
-static void restrict_add(const fascia_real *a, const fascia_real *y, fascia_real *gx, fascia_real *mom,
-                         fascia_real *gt) {
-  fascia_real ay[3];
-  fascia_pt_cross(a, y, ay);
-  for (int c = 0; c < 3; ++c) gx[c] += y[c], mom[c] += ay[c], gt[c] += y[3 + c];
-}
-
-// G += sym(g a^T) - (g.a) I: second derivative of g.x under a rotation of a.
-static void geometric_add(const fascia_real *g, const fascia_real *a, fascia_real *G) {
-  const fascia_real ga = fascia_pt_dot3(g, a);
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) G[3 * r + c] += FASCIA_R(0.5) * (g[r] * a[c] + a[r] * g[c]) - (r == c) * ga;
-}
-
-fascia_real fascia_organs_reduce(fascia_organs *O, fascia_solver *S, fascia_real c1, fascia_real c2, int jacobian,
+fascia_real fascia_organs_reduce(const fascia_organs *O, const fascia_pt_body_step *step, const fascia_real *x,
+                                 const fascia_real *q, const fascia_real *x_base, const fascia_real *q_base,
                                  const fascia_real *d, fascia_real *gradient) {
-  if (!O) return 0;
-  const fascia_real s = S->sys->gravity_scale, *gravity = S->sys->gravity;
   fascia_real energy = 0;
-  for (int32_t b = 0; b < O->organ_count; ++b) {
-    if (!active(O, b)) continue;
-    const int32_t m = O->master[b];
-    const fascia_real mass = O->mass[b], *Iw = O->world_inertia + 9 * b, *t = O->target + 6 * b;
-    const fascia_real *phi = d + 6 * m + 3;
-    fascia_real Q[4], R[9], r[3], ac[3], dc[3], cpos[3];
-    body_rotation(O, b, S->q, Q, R);
-    rest_offset(O, b, -1, r);
-    fascia_pt_mat_vec(R, r, ac);
-    centre_increment(O, S, b, dc);
-    for (int c = 0; c < 3; ++c) cpos[c] = S->x[3 * m + c] + ac[c];
-    // body energy: gravity, inertia and mass damping (newton.c's Phi)
-    fascia_real e[3], p[3], Ie[3], Ip[3];
-    for (int c = 0; c < 3; ++c) e[c] = dc[c] - t[c], p[c] = phi[c] - t[3 + c];
-    fascia_pt_mat_vec(Iw, p, Ie);
-    fascia_pt_mat_vec(Iw, phi, Ip);
-    energy += -s * mass * fascia_pt_dot3(gravity, cpos) +
-              FASCIA_R(0.5) * c1 * (mass * fascia_pt_dot3(e, e) + fascia_pt_dot3(p, Ie)) +
-              FASCIA_R(0.5) * c2 * (mass * fascia_pt_dot3(dc, dc) + fascia_pt_dot3(phi, Ip));
-    if (!gradient) continue;
-    fascia_real y[6], gx[3] = {0, 0, 0}, mom[3] = {0, 0, 0}, gt[3] = {0, 0, 0}, *G = O->geometric + 9 * b;
-    for (int c = 0; c < 3; ++c) {
-      y[c] = -s * mass * gravity[c] + c1 * mass * e[c] + c2 * mass * dc[c];
-      y[3 + c] = c1 * Ie[c] + c2 * Ip[c];
-    }
-    memset(G, 0, 9 * sizeof(fascia_real));
-    restrict_add(ac, y, gx, mom, gt);
-    geometric_add(y, ac, G);
-    for (int32_t f = O->frame_offsets[b]; f < O->frame_offsets[b + 1]; ++f) {
-      const int32_t i = O->frames[f];
-      if (i == m) continue;
-      fascia_real a[3], *gi = gradient + 6 * i;
-      for (int c = 0; c < 3; ++c) a[c] = S->x[3 * i + c] - S->x[3 * m + c];
-      restrict_add(a, gi, gx, mom, gt);
-      geometric_add(gi, a, G);
-      memset(gi, 0, 6 * sizeof(fascia_real));
-    }
-    fascia_real jm[3];
-    if (jacobian) fascia_pt_left_jacobian_t(phi, mom, jm);
-    else memcpy(jm, mom, sizeof jm);
-    for (int c = 0; c < 3; ++c) gradient[6 * m + c] += gx[c], gradient[6 * m + 3 + c] += jm[c] + gt[c];
-  }
+  for (int32_t b = 0; O && b < O->organ_count; ++b)
+    if (active(O, b)) energy += fascia_pt_body_gradient(&O->bodies, b, step, x, q, x_base, q_base, d, gradient);
   return energy;
 }
-
-// w = T y: (y_x - a x y_theta, y_theta)
-static void prolong(const fascia_real *a, const fascia_real *v, fascia_real *w) {
-  fascia_real av[3];
-  fascia_pt_cross(a, v + 3, av);
-  for (int c = 0; c < 3; ++c) w[c] = v[c] - av[c], w[3 + c] = v[3 + c];
-}
-
-void fascia_organs_operator_apply(const fascia_operator *op, const fascia_real *v, fascia_real *out) {
-  const fascia_organs *O = op->organs;
-  const fascia_system *sys = op->sys;
-  const int64_t n = 6 * (int64_t)O->frame_count;
-  memcpy(O->w, v, (size_t)n * sizeof(fascia_real));
-  for (int32_t b = 0; b < O->organ_count; ++b) {
-    if (!active(O, b)) continue;
-    const int32_t m = O->master[b];
-    for (int32_t f = O->frame_offsets[b]; f < O->frame_offsets[b + 1]; ++f) {
-      const int32_t i = O->frames[f];
-      if (i == m) continue;
-      fascia_real a[3];
-      for (int c = 0; c < 3; ++c) a[c] = sys->x[3 * i + c] - sys->x[3 * m + c];
-      prolong(a, v + 6 * m, O->w + 6 * i);
-    }
-  }
-  fascia_operator inner = *op;
-  inner.organs = NULL;
-  inner.mask = O->full_mask;
-  fascia_operator_apply(&inner, O->w, out);
-  for (int32_t b = 0; b < O->organ_count; ++b) {
-    if (!active(O, b)) continue;
-    const int32_t m = O->master[b];
-    fascia_real gx[3] = {0, 0, 0}, mom[3] = {0, 0, 0}, gt[3] = {0, 0, 0};
-    for (int32_t f = O->frame_offsets[b]; f < O->frame_offsets[b + 1]; ++f) {
-      const int32_t i = O->frames[f];
-      if (i == m) continue;
-      fascia_real a[3];
-      for (int c = 0; c < 3; ++c) a[c] = sys->x[3 * i + c] - sys->x[3 * m + c];
-      restrict_add(a, out + 6 * i, gx, mom, gt);
-    }
-    // the body: mass and inertia through the centre, geometric term
-    fascia_real Q[4], R[9], r[3], ac[3], wc[6], yc[6], Gv[3];
-    body_rotation(O, b, sys->q, Q, R);
-    rest_offset(O, b, -1, r);
-    fascia_pt_mat_vec(R, r, ac);
-    prolong(ac, v + 6 * m, wc);
-    const fascia_real coefficient = op->mass_coefficient;
-    for (int c = 0; c < 3; ++c) yc[c] = coefficient * O->mass[b] * wc[c];
-    fascia_pt_mat_vec(O->world_inertia + 9 * b, wc + 3, yc + 3);
-    for (int c = 0; c < 3; ++c) yc[3 + c] *= coefficient;
-    restrict_add(ac, yc, gx, mom, gt);
-    fascia_pt_mat_vec(O->geometric + 9 * b, v + 6 * m + 3, Gv);
-    for (int c = 0; c < 3; ++c) out[6 * m + c] += gx[c], out[6 * m + 3 + c] += mom[c] + gt[c] + Gv[c];
-  }
-  for (int64_t k = 0; k < n; ++k)
-    if (!op->mask[k]) out[k] = 0;
-}
-
-// out = T(a)^T B T(b) for a 6x6 block B: T(a) maps a master's increment to
-// a frame at offset a on its body, (u - a x theta, theta).
-static void transform_block(const fascia_real *B, const fascia_real *a, const fascia_real *b, fascia_real *out) {
-  fascia_real Ta[36] = {0}, Tb[36] = {0}, BT[36];
-  const fascia_real *offset[2] = {a, b};
-  fascia_real *T[2] = {Ta, Tb};
-  for (int t = 0; t < 2; ++t) {
-    const fascia_real *o = offset[t];
-    for (int c = 0; c < 6; ++c) T[t][7 * c] = 1;
-    // -[o]x in the upper right block
-    T[t][0 * 6 + 4] = o[2], T[t][0 * 6 + 5] = -o[1];
-    T[t][1 * 6 + 3] = -o[2], T[t][1 * 6 + 5] = o[0];
-    T[t][2 * 6 + 3] = o[1], T[t][2 * 6 + 4] = -o[0];
-  }
-  for (int r = 0; r < 6; ++r)
-    for (int c = 0; c < 6; ++c) {
-      fascia_real sum = 0;
-      for (int k = 0; k < 6; ++k) sum += B[6 * r + k] * Tb[6 * k + c];
-      BT[6 * r + c] = sum;
-    }
-  for (int r = 0; r < 6; ++r)
-    for (int c = 0; c < 6; ++c) {
-      fascia_real sum = 0;
-      for (int k = 0; k < 6; ++k) sum += Ta[6 * k + r] * BT[6 * k + c];
-      out[6 * r + c] = sum;
-    }
-}
-
-// out = T^T B T for a 6x6 block B and offset a.
-static void congruence(const fascia_real *B, const fascia_real *a, fascia_real *out) { transform_block(B, a, a, out); }
 
 // The frame a frame's unknowns are reduced to: its body's master for a
 // frame of a simulated rigid organ, else itself.
@@ -614,7 +445,7 @@ void fascia_organs_reduce_matrix(const fascia_organs *O, const fascia_system *sy
       fascia_real folded[36], ai[3], aj[3];
       for (int c = 0; c < 3; ++c) ai[c] = sys->x[3 * (int64_t)i + c] - sys->x[3 * (int64_t)ri + c];
       for (int c = 0; c < 3; ++c) aj[c] = sys->x[3 * (int64_t)j + c] - sys->x[3 * (int64_t)rj + c];
-      transform_block(block, ai, aj, folded);
+      fascia_pt_body_transform_block(block, ai, aj, folded);
       for (int q = 0; q < 36; ++q) out[q] += folded[q];
     }
   }
@@ -622,102 +453,10 @@ void fascia_organs_reduce_matrix(const fascia_organs *O, const fascia_system *sy
   for (int32_t b = 0; b < O->organ_count; ++b) {
     if (!active(O, b)) continue;
     const int32_t m = O->master[b];
-    fascia_real Q[4], Rm[9], r[3], ac[3], body[36] = {0}, folded[36];
-    body_rotation(O, b, sys->q, Q, Rm);
-    rest_offset(O, b, -1, r);
-    fascia_pt_mat_vec(Rm, r, ac);
-    for (int c = 0; c < 3; ++c) body[7 * c] = mass_coefficient * O->mass[b];
-    for (int rr = 0; rr < 3; ++rr)
-      for (int c = 0; c < 3; ++c) body[6 * (3 + rr) + 3 + c] = mass_coefficient * O->world_inertia[9 * b + 3 * rr + c];
-    congruence(body, ac, folded);
-    for (int rr = 0; rr < 3; ++rr)
-      for (int c = 0; c < 3; ++c) folded[6 * (3 + rr) + 3 + c] += O->geometric[9 * b + 3 * rr + c];
+    fascia_real folded[36];
+    fascia_pt_body_own_block(&O->bodies, b, mass_coefficient, sys->q, folded);
     fascia_real *out = R->values + 36 * (int64_t)R->diagonal[m];
     for (int q = 0; q < 36; ++q) out[q] += folded[q];
-  }
-}
-
-// Inverse of a symmetric 6x6 block by Cholesky after the smallest shift
-// that makes it positive (the preconditioner must stay positive for CG).
-static void spd_inverse(const fascia_real *B, fascia_real *inv) {
-  fascia_real trace = 0;
-  for (int c = 0; c < 6; ++c) trace += fabs(B[7 * c]);
-  if (trace == 0 || !isfinite(trace)) trace = 1;
-  fascia_real shift = 0;
-  for (int attempt = 0; attempt < 60; ++attempt, shift = shift == 0 ? 1e-10 * trace : 4 * shift) {
-    fascia_real L[36];
-    memcpy(L, B, sizeof L);
-    int ok = 1;
-    for (int j = 0; j < 6 && ok; ++j) {
-      fascia_real dj = L[7 * j] + shift;
-      for (int k = 0; k < j; ++k) dj -= L[6 * j + k] * L[6 * j + k];
-      if (!(dj > 0)) ok = 0;
-      else {
-        dj = sqrt(dj);
-        L[7 * j] = dj;
-        for (int i = j + 1; i < 6; ++i) {
-          fascia_real sum = L[6 * i + j];
-          for (int k = 0; k < j; ++k) sum -= L[6 * i + k] * L[6 * j + k];
-          L[6 * i + j] = sum / dj;
-        }
-      }
-    }
-    if (!ok) continue;
-    for (int col = 0; col < 6; ++col) {
-      fascia_real z[6];
-      for (int i = 0; i < 6; ++i) {
-        fascia_real sum = (i == col);
-        for (int k = 0; k < i; ++k) sum -= L[6 * i + k] * z[k];
-        z[i] = sum / L[7 * i];
-      }
-      for (int i = 5; i >= 0; --i) {
-        fascia_real sum = z[i];
-        for (int k = i + 1; k < 6; ++k) sum -= L[6 * k + i] * inv[6 * k + col];
-        inv[6 * i + col] = sum / L[7 * i];
-      }
-    }
-    return;
-  }
-  memset(inv, 0, 36 * sizeof(fascia_real));
-  for (int c = 0; c < 6; ++c) inv[7 * c] = 6 / trace;
-}
-
-void fascia_organs_precond(const fascia_organs *O, const fascia_operator *op, fascia_preconditioner *pc,
-                           fascia_real *blocks) {
-  if (!O) return;
-  const fascia_system *sys = op->sys;
-  for (int32_t b = 0; b < O->organ_count; ++b) {
-    if (!active(O, b)) continue;
-    const int32_t m = O->master[b];
-    fascia_real *B = blocks + 36 * (int64_t)m, TBT[36];
-    for (int32_t f = O->frame_offsets[b]; f < O->frame_offsets[b + 1]; ++f) {
-      const int32_t i = O->frames[f];
-      if (i == m) continue;
-      fascia_real a[3];
-      for (int c = 0; c < 3; ++c) a[c] = sys->x[3 * i + c] - sys->x[3 * m + c];
-      congruence(blocks + 36 * (int64_t)i, a, TBT);
-      for (int k = 0; k < 36; ++k) B[k] += TBT[k];
-    }
-    fascia_real Q[4], R[9], r[3], ac[3], M[36] = {0};
-    body_rotation(O, b, sys->q, Q, R);
-    rest_offset(O, b, -1, r);
-    fascia_pt_mat_vec(R, r, ac);
-    for (int c = 0; c < 3; ++c) M[7 * c] = op->mass_coefficient * O->mass[b];
-    for (int rr = 0; rr < 3; ++rr)
-      for (int c = 0; c < 3; ++c)
-        M[6 * (3 + rr) + 3 + c] = op->mass_coefficient * O->world_inertia[9 * b + 3 * rr + c] +
-                                  O->geometric[9 * b + 3 * rr + c];
-    congruence(M, ac, TBT);
-    for (int k = 0; k < 36; ++k) B[k] += TBT[k];
-    fascia_real *inv = pc->inverse + 36 * (int64_t)m;
-    if (pc->kind == FASCIA_PRECOND_BLOCK_JACOBI) {
-      spd_inverse(B, inv);
-    } else if (pc->kind == FASCIA_PRECOND_JACOBI) {
-      fascia_real trace = 0;
-      for (int c = 0; c < 6; ++c) trace += fabs(B[7 * c]);
-      memset(inv, 0, 36 * sizeof(fascia_real));
-      for (int c = 0; c < 6; ++c) inv[7 * c] = fabs(B[7 * c]) > 1e-12 * trace ? 1 / fabs(B[7 * c]) : 6 / trace;
-    }
   }
 }
 
@@ -763,7 +502,7 @@ static void place_slaves(fascia_organs *O, fascia_solver *S, int32_t b) {
   for (int32_t f = O->frame_offsets[b]; f < O->frame_offsets[b + 1]; ++f) {
     const int32_t i = O->frames[f];
     if (i == m) continue;
-    rest_offset(O, b, i, r);
+    fascia_pt_body_rest_offset(&O->bodies, b, i, r);
     fascia_pt_mat_vec(R, r, a);
     fascia_real wa[3];
     fascia_pt_cross(um + 3, a, wa);
@@ -775,7 +514,7 @@ static void place_slaves(fascia_organs *O, fascia_solver *S, int32_t b) {
     fascia_pt_quat_mul(Q, O->model->frame_rotation + 4 * i, S->q + 4 * i);
     fascia_pt_quat_normalize(S->q + 4 * i);
   }
-  rest_offset(O, b, -1, r);
+  fascia_pt_body_rest_offset(&O->bodies, b, -1, r);
   fascia_pt_mat_vec(R, r, a);
   fascia_real wa[3];
   fascia_pt_cross(um + 3, a, wa);
@@ -945,7 +684,7 @@ fascia_status fascia_solver_organ_reaction(fascia_solver *S, int32_t organ, fasc
   FASCIA_TRY(check_organ(S, organ, "organ reaction"));
   FASCIA_CHECK(forces, S->ctx, FASCIA_ERR_ARGUMENT, "organ reaction: NULL forces");
   fascia_organs *O = S->organs;
-  fascia_real energy, *g = O->y;
+  fascia_real energy, *g = O->reaction;
   const fascia_real scale = S->sys->gravity_scale;
   S->sys->gravity_scale = 1;
   fascia_system_set_state(S->sys, S->x, S->q);

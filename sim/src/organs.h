@@ -7,6 +7,7 @@
 #ifndef FASCIA_SRC_ORGANS_H
 #define FASCIA_SRC_ORGANS_H
 
+#include "point/body.h"
 #include "solver_internal.h"
 
 /// Builds the organ state of a solver: mass properties of rigid organs, the
@@ -31,29 +32,31 @@ FASCIA_INTERN void fascia_organs_step_begin(fascia_organs *O, fascia_solver *S, 
 /// flight of rigid organs without coupling frames.
 FASCIA_INTERN void fascia_organs_step_end(fascia_organs *O, fascia_solver *S, fascia_real h);
 
+/// The bodies' table that every backend's body math reads (point/body.h);
+/// NULL when the model has no rigid organ with coupling frames. Its active
+/// flags say which bodies move now (fascia_organs_body_count of them).
+FASCIA_INTERN const fascia_pt_bodies *fascia_organs_bodies(const fascia_organs *O);
+/// [6N] every frame the tissue may move (the bodies' slaves included; the
+/// solver's mask has only their masters); NULL without organs.
+FASCIA_INTERN const unsigned char *fascia_organs_full_mask(const fascia_organs *O);
+
 /// Prolongation of increments: overwrites the increments [6N] of each body's
 /// slave frames from its master's (exactly rigid, nonlinear in the rotation).
-FASCIA_INTERN void fascia_organs_expand(const fascia_organs *O, const fascia_solver *S, fascia_real *d);
-/// At the state objective() just evaluated (increments d, full gradient of
-/// Phi with respect to d, may be NULL): adds each body's gravity and inertia
-/// (coefficients c1, c2 of newton.c) and returns their energy; restricts the
-/// gradient to the master frames (T_i^T, with the Jacobian of the rotation
-/// map when `jacobian`), and keeps the geometric term of the reduced Hessian.
-FASCIA_INTERN fascia_real fascia_organs_reduce(fascia_organs *O, fascia_solver *S, fascia_real c1, fascia_real c2,
-                                               int jacobian, const fascia_real *d, fascia_real *gradient);
-// fascia_organs_operator_apply (out = P^T A P v plus the body's mass and
-// geometric terms) is declared in solver_internal.h for cg.c.
-/// After fascia_precond_build: each master's block becomes the reduced
-/// body block (blocks [36N]) and its inverse goes into the preconditioner.
-FASCIA_INTERN void fascia_organs_precond(const fascia_organs *O, const fascia_operator *op, fascia_preconditioner *pc,
-                                         fascia_real *blocks);
+FASCIA_INTERN void fascia_organs_expand(const fascia_organs *O, const fascia_real *x_base, const fascia_real *q_base,
+                                        fascia_real *d);
+/// At state x, q (increments d from x_base, q_base; gradient the full one
+/// of Phi, may be NULL): the bodies' energy, their gradient folded into the
+/// masters (fascia_pt_body_gradient).
+FASCIA_INTERN fascia_real fascia_organs_reduce(const fascia_organs *O, const fascia_pt_body_step *step,
+                                               const fascia_real *x, const fascia_real *q, const fascia_real *x_base,
+                                               const fascia_real *q_base, const fascia_real *d, fascia_real *gradient);
 /// The pattern of the reduced matrix P^T K P for the direct solver: K's
 /// block pattern with every frame of a simulated rigid organ mapped to its
 /// body's master frame; every row keeps its diagonal. R's values allocated.
 FASCIA_INTERN fascia_status fascia_organs_reduced_pattern(fascia_ctx *ctx, const fascia_organs *O,
                                                           const fascia_bsr *K, fascia_bsr *R);
 /// R = P^T K P at the state of sys, plus each body's mass and inertia
-/// (mass_coefficient, as fascia_organs_operator_apply) and the geometric
+/// (mass_coefficient, as the operator's restriction) and the geometric
 /// term of the last fascia_organs_reduce: the assembled form of that
 /// operator on the reduced coordinates.
 FASCIA_INTERN void fascia_organs_reduce_matrix(const fascia_organs *O, const fascia_system *sys,

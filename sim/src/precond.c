@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "point/block6.h"
+#include "point/body.h"
 #include "solver_internal.h"
 
 void fascia_precond_build(fascia_preconditioner *pc, const fascia_operator *op, fascia_real *blocks) {
@@ -28,8 +29,12 @@ void fascia_precond_build(fascia_preconditioner *pc, const fascia_operator *op, 
   for (int32_t i = 0; i < N; ++i) {
     fascia_real *B = blocks + 36 * (int64_t)i;
     for (int c = 0; c < 6; ++c) B[7 * c] += op->shift * op->damping_diagonal[6 * (int64_t)i + c];
-    fascia_pt_block6_precond(B, pc->kind == FASCIA_PRECOND_JACOBI, pc->inverse + 36 * (int64_t)i);
   }
+  // rigid organs: a master's block becomes its body's block of P^T A P
+  for (int32_t b = 0; op->bodies && b < op->bodies->count; ++b)
+    if (op->bodies->active[b]) fascia_pt_body_diagonal(op->bodies, b, op->mass_coefficient, sys->x, sys->q, blocks);
+  for (int32_t i = 0; i < N; ++i)
+    fascia_pt_block6_precond(blocks + 36 * (int64_t)i, pc->kind == FASCIA_PRECOND_JACOBI, pc->inverse + 36 * (int64_t)i);
 }
 
 void fascia_precond_apply(const fascia_preconditioner *pc, const unsigned char *mask, const fascia_real *r,

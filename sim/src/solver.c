@@ -161,6 +161,8 @@ fascia_status fascia_solver_create(fascia_ctx *ctx, const fascia_model *model, c
                                 S,
                                 S->organs,
                                 fascia_organs_body_count(S->organs),
+                                fascia_organs_bodies(S->organs),
+                                S->organs ? fascia_organs_full_mask(S->organs) : S->mask,
                                 patches ? &patches->view : &no_patches,
                                 patches ? patches->table.entry_count : 0,
                                 {0},

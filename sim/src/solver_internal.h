@@ -28,13 +28,15 @@ typedef struct fascia_operator {
   const fascia_bsr *assembled; ///< when set: H + mass_coefficient M assembled, used instead of products
   const unsigned char *mask; ///< [6N] 1 free, 0 constrained
   fascia_real *scratch;      ///< [6N]
-  const fascia_organs *organs; ///< when set: P^T A P on the reduced coordinates of rigid organs (organs.c)
+  /// when set: P^T A P on the reduced coordinates of rigid organs (point/body.h), the
+  /// inner operator on every frame the tissue moves (full_mask), of v prolonged to them
+  const struct fascia_pt_bodies *bodies;
+  const unsigned char *full_mask;
+  fascia_real *prolonged; ///< [6N] P v
   int single;                  ///< products with the assembled matrix's float copy
 } fascia_operator;
 
 FASCIA_INTERN void fascia_operator_apply(const fascia_operator *op, const fascia_real *v, fascia_real *out);
-/// out = P^T A P v for models with rigid organs (organs.c); fascia_operator_apply defers to it when op->organs is set.
-FASCIA_INTERN void fascia_organs_operator_apply(const fascia_operator *op, const fascia_real *v, fascia_real *out);
 
 /// Preconditioner: inverse blocks [36N] (block Jacobi) or inverse diagonal
 /// [6N] (Jacobi) or nothing.
