@@ -40,14 +40,23 @@ typedef struct fascia_device {
   void *pinned[MAX_PINNED];      ///< the solver's arrays that cross every step, page-locked
   int pinned_count;
   fascia_real *zeros;            ///< host [6N]
+  // what crosses at every step's begin: the masks and the frame loads (a
+  // caller may fix DOFs, drive an organ or change loads between steps, as
+  // on the CPU) and the bodies' per-step values
+  const unsigned char *host_mask, *host_full_mask;
+  const fascia_real *host_load;
+  fascia_real *frame_load;             ///< device copy (D.frame_load)
+  const fascia_pt_bodies *host_bodies; ///< NULL: no rigid organs
+  unsigned char *mask, *full_mask;     ///< device copies (D.mask, D.full_mask)
+  unsigned char *active;
+  fascia_real *world_inertia, *target;
   char name[256];
 } fascia_device;
 
 static int device_supports(const fascia_backend_setup *setup, char *why, size_t size) {
   const fascia_solver_def *def = setup->def;
   const char *reason = NULL;
-  if (setup->rigid_bodies > 0) reason = "rigid organs are solved on the CPU only";
-  else if (def->linear_solver == FASCIA_LINEAR_DIRECT) reason = "the direct linear solver runs on the CPU only";
+  if (def->linear_solver == FASCIA_LINEAR_DIRECT) reason = "the direct linear solver runs on the CPU only";
   else if (def->assembled == 1) reason = "the assembled matrix runs on the CPU only (the device is matrix-free)";
   else if (def->single_precision_matrix) reason = "the float matrix runs on the CPU only";
   if (reason && why) snprintf(why, size, "%s", reason);
@@ -98,6 +107,38 @@ static fascia_status upload_patches(fascia_device *dev, const fascia_pt_patches 
   return FASCIA_OK;
 }
 
+// Rigid organs: the bodies' table (point/body.h), the full mask and the
+// operator's two vectors; the per-step values cross at each begin.
+static fascia_status upload_bodies(fascia_device *dev, const fascia_backend_setup *setup) {
+  const fascia_pt_bodies *h = setup->bodies;
+  fascia_dev *D = &dev->D;
+  fascia_pt_bodies *B = &D->bodies;
+  const int64_t K = h->count, N = D->frame_count, F = h->frame_offsets[K];
+  dev->host_bodies = h;
+  dev->host_full_mask = setup->full_mask;
+  FASCIA_TRY(put(dev, setup->full_mask, 6 * (size_t)N, (void **)&dev->full_mask));
+  D->full_mask = dev->full_mask;
+  B->count = h->count;
+  PUT(bodies.frame_offsets, h->frame_offsets, K + 1, int32_t);
+  PUT(bodies.frames, h->frames, F, int32_t);
+  PUT(bodies.frame_body, h->frame_body, N, int32_t);
+  PUT(bodies.master, h->master, K, int32_t);
+  PUT(bodies.rest_position, h->rest_position, 3 * N, fascia_real);
+  B->rest_rotation = D->rest_rotation;
+  PUT(bodies.centre, h->centre, 3 * K, fascia_real);
+  PUT(bodies.mass, h->mass, K, fascia_real);
+  FASCIA_TRY(make(dev, (size_t)K, (void **)&dev->active));
+  FASCIA_TRY(make(dev, 9 * (size_t)K * sizeof(fascia_real), (void **)&dev->world_inertia));
+  FASCIA_TRY(make(dev, 6 * (size_t)K * sizeof(fascia_real), (void **)&dev->target));
+  B->active = dev->active;
+  B->world_inertia = dev->world_inertia;
+  B->target = dev->target;
+  MAKE(bodies.geometric, 9 * K, fascia_real);
+  MAKE(prolonged, 6 * N, fascia_real);
+  MAKE(product, 6 * N, fascia_real);
+  return FASCIA_OK;
+}
+
 static fascia_status upload_model(fascia_device *dev, const fascia_backend_setup *setup) {
   const fascia_system *sys = setup->sys;
   const fascia_model *m = setup->model;
@@ -136,9 +177,12 @@ static fascia_status upload_model(fascia_device *dev, const fascia_backend_setup
   PUT(pair_lumped_mass, sys->pair_lumped_mass, P, fascia_real);
   PUT(frame_mass, sys->frame_mass, N, fascia_real);
   PUT(frame_moment, sys->frame_moment, 3 * N, fascia_real);
-  PUT(frame_load, m->frame_load, 6 * N, fascia_real);
+  FASCIA_TRY(put(dev, m->frame_load, 6 * (size_t)N * sizeof(fascia_real), (void **)&dev->frame_load));
+  D->frame_load = dev->frame_load;
   PUT(rest_rotation, m->frame_rotation, 4 * N, fascia_real);
-  PUT(mask, setup->mask, 6 * N, unsigned char);
+  FASCIA_TRY(put(dev, setup->mask, 6 * (size_t)N, (void **)&dev->mask));
+  D->mask = D->full_mask = dev->mask;
+  if (setup->bodies) FASCIA_TRY(upload_bodies(dev, setup));
   if (setup->patches->count > 0) FASCIA_TRY(upload_patches(dev, setup->patches, setup->patch_entries));
   // state and work
   MAKE(x_base, 3 * N, fascia_real);
@@ -200,6 +244,8 @@ static fascia_status device_create(const fascia_backend_setup *setup, const fasc
   dev->ctx = setup->ctx;
   dev->sys = setup->sys;
   dev->frame_count = setup->model->frame_count;
+  dev->host_mask = setup->mask;
+  dev->host_load = setup->model->frame_load;
   dev->ops = ops;
   dev->zeros = calloc(6 * (size_t)dev->frame_count + 1, sizeof(fascia_real));
   fascia_status status = dev->zeros ? FASCIA_OK : FASCIA_FAIL(setup->ctx, FASCIA_ERR_MEMORY, "device: out of memory");
@@ -272,12 +318,14 @@ static fascia_status objective(fascia_device *dev, fascia_real alpha, fascia_rea
   fascia_dev *D = &dev->D;
   const int64_t N = D->frame_count, n = 6 * N, S = D->sample_count;
   kernel(dev, FASCIA_K_TRIAL, n, NULL, NULL, alpha);
+  if (D->bodies.count > 0) kernel(dev, FASCIA_K_BODY_EXPAND, N, NULL, NULL, 0); // slaves follow their master
   kernel(dev, FASCIA_K_STATE, N, NULL, NULL, 0);
   if (D->patches.count > 0) kernel(dev, FASCIA_K_PATCH_EVALUATE, D->patches.count, NULL, NULL, 0);
   kernel(dev, FASCIA_K_SAMPLE_GRADIENT, S, NULL, NULL, 0);
   if (dev->set.consistent_mass && (dev->set.c1 != 0 || dev->set.c2 != 0))
     kernel(dev, FASCIA_K_SAMPLE_MASS, S, D->d_trial, NULL, 0);
   kernel(dev, FASCIA_K_FRAME_GRADIENT, N, NULL, NULL, 0);
+  if (D->bodies.count > 0) kernel(dev, FASCIA_K_BODY_GRADIENT, D->bodies.count, NULL, NULL, 0);
   reduce(dev, FASCIA_T_SAMPLES, S, NULL, NULL, FASCIA_S_SAMPLES);
   if (D->patches.count > 0) reduce(dev, FASCIA_T_PATCHES, D->patches.count, NULL, NULL, FASCIA_S_PATCHES);
   reduce(dev, FASCIA_T_FRAMES, N, NULL, NULL, FASCIA_S_OBJECTIVE);
@@ -301,6 +349,7 @@ static void build_precond(fascia_device *dev) {
   if (dev->set.precond == FASCIA_PRECOND_NONE) return;
   kernel(dev, FASCIA_K_PAIR_DIAGONAL, D->pair_count, NULL, NULL, 0);
   kernel(dev, FASCIA_K_FRAME_PRECOND, D->frame_count, NULL, NULL, 0);
+  if (D->bodies.count > 0) kernel(dev, FASCIA_K_BODY_DIAGONAL, D->bodies.count, NULL, NULL, 0);
 }
 
 // The Levenberg diagonal and the operator's scale from the diagonal blocks
@@ -316,18 +365,35 @@ typedef struct cg_body_arg {
   int iterations;
 } cg_body_arg;
 
+// The launches before the operator's reduction: the pair products of z
+// (with rigid organs, of P z, then A P z on every frame and its restriction
+// to the masters), run only while CG runs.
+static void operator_products(fascia_device *dev) {
+  const fascia_dev *D = &dev->D;
+  const int64_t N = D->frame_count, S = D->sample_count;
+  const fascia_real *in = D->z;
+  if (D->bodies.count > 0) {
+    kernel(dev, FASCIA_K_BODY_PROLONG, N, NULL, NULL, 0);
+    in = D->prolonged;
+  }
+  kernel(dev, dev->stiffness, S, in, NULL, 0);
+  if (D->patches.count > 0) kernel(dev, FASCIA_K_PATCH_RATE, D->patches.count, in, NULL, 0);
+  if (dev->set.consistent_mass) kernel(dev, FASCIA_K_CG_SAMPLE_MASS, S, in, NULL, 0); // lumped: per frame
+  if (D->bodies.count > 0) {
+    kernel(dev, FASCIA_K_FRAME_OPERATOR, N, NULL, NULL, 0);
+    kernel(dev, FASCIA_K_BODY_OPERATOR, D->bodies.count, NULL, NULL, 0);
+  }
+}
+
 // `iterations` CG iterations; each one stops short on the device once CG
 // has ended (the kernels test sc->cg.running and sc->cg.action)
 static void cg_body(void *argument) {
   const cg_body_arg *arg = argument;
   fascia_device *dev = arg->dev;
-  const fascia_dev *D = &dev->D;
-  const int64_t N = D->frame_count, S = D->sample_count;
+  const int64_t N = dev->D.frame_count;
   for (int it = 0; it < arg->iterations; ++it) {
-    // products of z; the operator's reduction makes dir and A dir of them
-    kernel(dev, dev->stiffness, S, D->z, NULL, 0);
-    if (D->patches.count > 0) kernel(dev, FASCIA_K_PATCH_RATE, D->patches.count, D->z, NULL, 0);
-    if (dev->set.consistent_mass) kernel(dev, FASCIA_K_CG_SAMPLE_MASS, S, D->z, NULL, 0); // lumped: per frame
+    // the operator's reduction makes dir and A dir of the products
+    operator_products(dev);
     reduce(dev, FASCIA_T_OPERATOR, N, NULL, NULL, FASCIA_S_CG_CURVATURE);
     reduce(dev, FASCIA_T_CG_UPDATE, N, NULL, NULL, FASCIA_S_CG_RESIDUAL);
   }
@@ -380,6 +446,16 @@ static fascia_status device_begin(fascia_backend *backend, const fascia_step_val
   ops->send(dev->L, D->x_base, v->x_base, 3 * N * sizeof(fascia_real));
   ops->send(dev->L, D->q_base, v->q_base, 4 * N * sizeof(fascia_real));
   ops->send(dev->L, D->d, v->d, n * sizeof(fascia_real));
+  ops->send(dev->L, dev->mask, dev->host_mask, n);
+  ops->send(dev->L, dev->frame_load, dev->host_load, n * sizeof(fascia_real));
+  const fascia_pt_bodies *bodies = dev->host_bodies;
+  if (bodies) {
+    const size_t K = (size_t)bodies->count;
+    ops->send(dev->L, dev->full_mask, dev->host_full_mask, n);
+    ops->send(dev->L, dev->active, bodies->active, K);
+    ops->send(dev->L, dev->world_inertia, bodies->world_inertia, 9 * K * sizeof(fascia_real));
+    ops->send(dev->L, dev->target, bodies->target, 6 * K * sizeof(fascia_real));
+  }
   dev->set.c1 = v->c1;
   dev->set.c2 = v->c2;
   dev->set.mass_coefficient = v->c1 + v->c2;
@@ -497,8 +573,7 @@ static fascia_status device_hessian_apply(fascia_backend *backend, const fascia_
   sc.cg.action = FASCIA_CG_NONE; // as in CG's first iteration: Ad = A z
   FASCIA_TRY(dev->ops->upload(dev->L, dev->sc_dev, &sc, sizeof sc));
   FASCIA_TRY(dev->ops->upload(dev->L, dev->D.z, v, 6 * N * sizeof(fascia_real)));
-  kernel(dev, dev->stiffness, dev->D.sample_count, dev->D.z, NULL, 0);
-  if (dev->D.patches.count > 0) kernel(dev, FASCIA_K_PATCH_RATE, dev->D.patches.count, dev->D.z, NULL, 0);
+  operator_products(dev);
   reduce(dev, FASCIA_T_OPERATOR, (int64_t)N, NULL, NULL, FASCIA_S_STORE);
   return dev->ops->download(dev->L, out, dev->D.Ad, 6 * N * sizeof(fascia_real));
 }

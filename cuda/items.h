@@ -18,6 +18,7 @@
 #define FASCIA_CUDA_ITEMS_H
 
 #include "point/block6.h"
+#include "point/body.h"
 #include "point/cg.h"
 #include "point/frame.h"
 #include "point/patch.h"
@@ -59,7 +60,10 @@ typedef struct fascia_dev {
   const fascia_real *frame_load;     ///< [6N] force, torque
   const fascia_real *rest_rotation;  ///< [4N] quaternions at rest
   fascia_real gravity[3];
-  const unsigned char *mask;         ///< [6N] 1 free
+  const unsigned char *mask;         ///< [6N] 1 free (the reduced coordinates: of a body only its master)
+  const unsigned char *full_mask;    ///< [6N] every frame the tissue moves (mask itself without bodies)
+  fascia_pt_bodies bodies;           ///< rigid organs (count 0: none); the operator is then P^T A P
+  fascia_real *prolonged, *product;  ///< [6N] P z, and A P z on every frame (bodies only)
   // state: anchor, increments, current iterate
   fascia_real *x_base, *q_base, *x, *q, *A, *A_mass; ///< [3N] [4N] [3N] [4N] [9N] [9N]
   fascia_real *d, *d_trial, *target, *target_M;     ///< [6N] each
@@ -102,6 +106,13 @@ typedef enum fascia_dev_kernel {
   FASCIA_K_PATCH_RATE,       ///< patches: rank-one coefficients of in (skipped when CG is not running)
   FASCIA_K_SAVE,             ///< N: saved = the iterate (x_base, q_base, d)
   FASCIA_K_RESTORE,          ///< N: the iterate = saved
+  // rigid organs (point/body.h); the operator's three run only inside CG
+  FASCIA_K_BODY_EXPAND,      ///< N: slaves' d_trial from their master's
+  FASCIA_K_BODY_GRADIENT,    ///< organs: g_trial folded into the masters, the bodies' energy and terms
+  FASCIA_K_BODY_PROLONG,     ///< N: prolonged = P z
+  FASCIA_K_FRAME_OPERATOR,   ///< N: product = A prolonged on every frame the tissue moves
+  FASCIA_K_BODY_OPERATOR,    ///< organs: product folded into the masters, the bodies' terms of z
+  FASCIA_K_BODY_DIAGONAL,    ///< organs: a master's block and preconditioner become its body's
   FASCIA_K_COUNT
 } fascia_dev_kernel;
 
@@ -248,8 +259,8 @@ static inline FASCIA_HD void fascia_dev_frame_gradient_item(const fascia_dev *D,
     }
   }
   fascia_real gg = 0;
-  for (int c = 0; c < 6; ++c) {
-    if (!D->mask[i6 + c]) gi[c] = 0;
+  for (int c = 0; c < 6; ++c) { // a body's slaves keep theirs until the body folds them (FASCIA_K_BODY_GRADIENT)
+    if (!D->full_mask[i6 + c]) gi[c] = 0;
     D->g_trial[i6 + c] = gi[c];
     gg += gi[c] * gi[c];
   }
@@ -320,6 +331,59 @@ static inline FASCIA_HD void fascia_dev_saved_item(const fascia_dev *D, int32_t 
     }
 }
 
+// Frame i's entries of the Newton operator's product of v (H + mass_coefficient
+// M + shift D, cg.c fascia_operator_apply frame by frame), on the entries
+// mask frees; the stiffness kernels have left H's pair products of v.
+static inline FASCIA_HD void fascia_dev_frame_operator(const fascia_dev *D, int32_t i, const fascia_real *v,
+                                                       const unsigned char *mask, fascia_real *out) {
+  const fascia_dev_settings *set = D->set;
+  const int64_t i6 = 6 * (int64_t)i;
+  fascia_dev_gather6(D, D->pair_buffer, i, out);
+  if (D->patches.count > 0) fascia_pt_patch_frame_add(&D->patches, i, out);
+  fascia_pt_frame_gravity_product(D->A + 9 * (int64_t)i, D->frame_moment + 3 * (int64_t)i, D->gravity,
+                                  set->gravity_scale, v + i6, out);
+  fascia_pt_frame_symmetrizing_product(D->torque + 3 * (int64_t)i, v + i6, out);
+  if (set->mass_coefficient != 0) {
+    fascia_real Mv[6];
+    fascia_dev_frame_mass(D, i, v, Mv);
+    for (int c = 0; c < 6; ++c) out[c] += set->mass_coefficient * Mv[c];
+  }
+  if (set->shift != 0)
+    for (int c = 0; c < 6; ++c) out[c] += set->shift * D->damping[i6 + c] * v[i6 + c];
+  for (int c = 0; c < 6; ++c)
+    if (!mask[i6 + c]) out[c] = 0;
+}
+
+// Body b's part of the objective: its slaves' gradient folded into the
+// master's, its energy added to the master's external term, and the two
+// frames' |g|^2 terms made again (as the CPU's objective, organs.c).
+static inline FASCIA_HD void fascia_dev_body_gradient_item(const fascia_dev *D, int32_t b) {
+  const fascia_pt_bodies *B = &D->bodies;
+  if (!B->active[b]) return;
+  const fascia_dev_settings *set = D->set;
+  const fascia_pt_body_step step = {set->c1, set->c2, set->gravity_scale, set->jacobian,
+                                    {D->gravity[0], D->gravity[1], D->gravity[2]}};
+  const int32_t m = B->master[b];
+  D->frame_terms[4 * (int64_t)m] += fascia_pt_body_gradient(B, b, &step, D->x, D->q, D->x_base, D->q_base, D->d_trial,
+                                                            D->g_trial);
+  for (int32_t f = B->frame_offsets[b]; f < B->frame_offsets[b + 1]; ++f) {
+    const int64_t i = B->frames[f];
+    fascia_real gg = 0;
+    for (int c = 0; c < 6; ++c) gg += D->g_trial[6 * i + c] * D->g_trial[6 * i + c];
+    D->frame_terms[4 * i + 3] = gg;
+  }
+}
+
+// Body b's master block of the reduced operator, and its preconditioner
+// block (after FASCIA_K_FRAME_PRECOND; precond.c)
+static inline FASCIA_HD void fascia_dev_body_diagonal_item(const fascia_dev *D, int32_t b) {
+  const fascia_pt_bodies *B = &D->bodies;
+  if (!B->active[b]) return;
+  const int64_t m = B->master[b];
+  fascia_pt_body_diagonal(B, b, D->set->mass_coefficient, D->x, D->q, D->blocks);
+  fascia_pt_block6_precond(D->blocks + 36 * m, D->set->precond == 1 /* FASCIA_PRECOND_JACOBI */, D->inverse + 36 * m);
+}
+
 /// Runs item i of a per-item kernel; in, out and value as the kernel's
 /// comment says.
 static inline FASCIA_HD void fascia_dev_item(const fascia_dev *D, int kernel, int64_t i, const fascia_real *in,
@@ -368,40 +432,43 @@ static inline FASCIA_HD void fascia_dev_item(const fascia_dev *D, int kernel, in
     break;
   case FASCIA_K_SAVE:
   case FASCIA_K_RESTORE: fascia_dev_saved_item(D, i32, kernel == FASCIA_K_SAVE); break;
+  case FASCIA_K_BODY_EXPAND: fascia_pt_body_expand(&D->bodies, i32, D->x_base, D->q_base, D->d_trial); break;
+  case FASCIA_K_BODY_GRADIENT: fascia_dev_body_gradient_item(D, i32); break;
+  case FASCIA_K_BODY_PROLONG:
+    if (D->sc->cg.running) fascia_pt_body_prolong(&D->bodies, i32, D->x, D->z, D->prolonged);
+    break;
+  case FASCIA_K_FRAME_OPERATOR:
+    if (D->sc->cg.running) fascia_dev_frame_operator(D, i32, D->prolonged, D->full_mask, D->product + 6 * i);
+    break;
+  case FASCIA_K_BODY_OPERATOR:
+    if (D->sc->cg.running && D->bodies.active[i])
+      fascia_pt_body_restrict(&D->bodies, i32, D->set->mass_coefficient, D->x, D->q, D->z, D->product);
+    break;
+  case FASCIA_K_BODY_DIAGONAL: fascia_dev_body_diagonal_item(D, i32); break;
   default: break;
   }
 }
 
 // ------------------------------------------------------------- reductions --
 
-// Newton operator on frame i: w_i = ((H + mass_coefficient M + shift D) z)_i
-// restricted to free DOFs (cg.c fascia_operator_apply, frame by frame), then
-// CG's new direction and its image, dir = z + beta dir and Ad = w + beta Ad
-// (A dir by recurrence: the product takes z, which the previous reduction
-// left complete, so no launch of its own updates dir); t gets dir_i.Ad_i
-// and dir_i.dir_i. Right after CG starts dir = z and Ad = w.
+// Newton operator on frame i: w_i = (A z)_i on the free DOFs (with rigid
+// organs, P^T A P z, which FASCIA_K_BODY_OPERATOR has left in product),
+// then CG's new direction and its image, dir = z + beta dir and Ad = w +
+// beta Ad (A dir by recurrence: the product takes z, which the previous
+// reduction left complete, so no launch of its own updates dir); t gets
+// dir_i.Ad_i and dir_i.dir_i. Right after CG starts dir = z and Ad = w.
 static inline FASCIA_HD void fascia_dev_operator_term(const fascia_dev *D, int32_t i, fascia_real *t) {
-  const fascia_dev_settings *set = D->set;
   const int64_t i6 = 6 * (int64_t)i;
   const fascia_real *v = D->z + i6;
   fascia_real out[6];
-  fascia_dev_gather6(D, D->pair_buffer, i, out);
-  if (D->patches.count > 0) fascia_pt_patch_frame_add(&D->patches, i, out);
-  fascia_pt_frame_gravity_product(D->A + 9 * (int64_t)i, D->frame_moment + 3 * (int64_t)i, D->gravity,
-                                  set->gravity_scale, v, out);
-  fascia_pt_frame_symmetrizing_product(D->torque + 3 * (int64_t)i, v, out);
-  if (set->mass_coefficient != 0) {
-    fascia_real Mv[6];
-    fascia_dev_frame_mass(D, i, D->z, Mv);
-    for (int c = 0; c < 6; ++c) out[c] += set->mass_coefficient * Mv[c];
-  }
-  if (set->shift != 0)
-    for (int c = 0; c < 6; ++c) out[c] += set->shift * D->damping[i6 + c] * v[c];
+  if (D->bodies.count > 0)
+    for (int c = 0; c < 6; ++c) out[c] = D->mask[i6 + c] ? D->product[i6 + c] : 0;
+  else
+    fascia_dev_frame_operator(D, i, D->z, D->mask, out);
   const int next = D->sc->cg.action == FASCIA_CG_DIRECTION;
   const fascia_real beta = D->sc->cg.beta;
   t[0] = t[1] = 0;
   for (int c = 0; c < 6; ++c) {
-    if (!D->mask[i6 + c]) out[c] = 0;
     const fascia_real dir = next ? v[c] + beta * D->dir[i6 + c] : v[c];
     const fascia_real Ad = next ? out[c] + beta * D->Ad[i6 + c] : out[c];
     D->dir[i6 + c] = dir;

@@ -369,6 +369,12 @@ static void cuda_kernel(fascia_launcher *L, const fascia_dev *D, fascia_dev_kern
   case FASCIA_K_PATCH_RATE: launch_items<FASCIA_K_PATCH_RATE>(L, D, n, in, out, value); break;
   case FASCIA_K_SAVE: launch_items<FASCIA_K_SAVE>(L, D, n, in, out, value); break;
   case FASCIA_K_RESTORE: launch_items<FASCIA_K_RESTORE>(L, D, n, in, out, value); break;
+  case FASCIA_K_BODY_EXPAND: launch_items<FASCIA_K_BODY_EXPAND>(L, D, n, in, out, value); break;
+  case FASCIA_K_BODY_GRADIENT: launch_items<FASCIA_K_BODY_GRADIENT>(L, D, n, in, out, value); break;
+  case FASCIA_K_BODY_PROLONG: launch_items<FASCIA_K_BODY_PROLONG>(L, D, n, in, out, value); break;
+  case FASCIA_K_FRAME_OPERATOR: launch_items<FASCIA_K_FRAME_OPERATOR>(L, D, n, in, out, value); break;
+  case FASCIA_K_BODY_OPERATOR: launch_items<FASCIA_K_BODY_OPERATOR>(L, D, n, in, out, value); break;
+  case FASCIA_K_BODY_DIAGONAL: launch_items<FASCIA_K_BODY_DIAGONAL>(L, D, n, in, out, value); break;
   default: remember_error(L, cudaErrorInvalidValue, "kernel %d (no such kernel)", (int)kernel); break;
   }
 }
