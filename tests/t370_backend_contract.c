@@ -11,8 +11,10 @@
 // a backend that can save and restore its iterate converges in fewer
 // iterations than the monotone search; on sqrt(1 + x^2) from x = 2, where
 // full Newton steps run away to overflow, it goes back to the watched
-// iterate and still converges. And the registry: unknown names list the
-// valid ones; a backend this build lacks says how to build it.
+// iterate and still converges. And the registry: the toy registered from
+// this file (fascia_backend_register) is a backend like the others, chosen
+// by name through the public API, solving a static problem; unknown names
+// list the valid ones; a backend this build lacks says how to build it.
 #include <stdlib.h>
 #include <string.h>
 
@@ -30,6 +32,7 @@ typedef struct toy {
   int call_count;
   int nonlinear; ///< 0: the quadratic; 1: Rosenbrock in d0, d1; 2: sqrt(1 + d0^2) (both plus |d_rest|^2 / 2)
   double *saved;  ///< the saved iterate, or NULL: no save/restore
+  const double *x_base, *q_base; ///< the step's anchor (the registered toy writes the state from it)
 } toy;
 
 // Phi, gradient and the 2x2 Hessian of the first two entries of the
@@ -60,6 +63,7 @@ static fascia_status toy_begin(fascia_backend *b, const fascia_step_values *v, f
   (void)r;
   called(T, 'B');
   memcpy(T->d, v->d, (size_t)T->n * sizeof(double));
+  T->x_base = v->x_base, T->q_base = v->q_base;
   return FASCIA_OK;
 }
 
@@ -149,6 +153,73 @@ static void toy_restore(fascia_backend *b) {
   toy *T = (toy *)b;
   called(T, 'R');
   memcpy(T->d, T->saved, (size_t)T->n * sizeof(double));
+}
+
+// The toy as a registered backend: made from the setup like any other, its
+// quadratic over the model's 6N unknowns; it writes the state x = x_base +
+// d, q = q_base rotated by d back.
+static int toy_available(char *detail, size_t size) {
+  if (detail) snprintf(detail, size, "a quadratic of its own (t370)");
+  return 1;
+}
+static int toy_supports(const fascia_backend_setup *setup, char *why, size_t size) {
+  (void)setup, (void)why, (void)size;
+  return 1;
+}
+static void toy_destroy(fascia_backend *b) {
+  toy *T = (toy *)b;
+  if (!T) return;
+  free(T->a), free(T->t), free(T->d), free(T->d_trial), free(T->p), free(T->g), free(T->g_trial);
+  free(T);
+}
+static fascia_status toy_create(const fascia_backend_setup *setup, fascia_backend **out);
+static const char *toy_describe(const fascia_backend *b) {
+  (void)b;
+  return "toy, a quadratic in its own storage";
+}
+static fascia_status toy_finish_state(fascia_backend *b, const fascia_step_result *result) {
+  toy *T = (toy *)b;
+  called(T, 'F');
+  const int64_t N = T->n / 6;
+  memcpy(result->d, T->d, (size_t)T->n * sizeof(double));
+  memcpy(result->gradient, T->g, (size_t)T->n * sizeof(double));
+  for (int64_t i = 0; i < N; ++i) {
+    for (int c = 0; c < 3; ++c) result->x[3 * i + c] = T->x_base[3 * i + c] + T->d[6 * i + c];
+    memcpy(result->q + 4 * i, T->q_base + 4 * i, 4 * sizeof(double));
+    fascia_pt_quat_rotate_by(T->d + 6 * i + 3, result->q + 4 * i);
+  }
+  return FASCIA_OK;
+}
+static const fascia_backend_ops toy_registered_ops = {.name = "toy",
+                                                      .automatic = 0,
+                                                      .available = toy_available,
+                                                      .supports = toy_supports,
+                                                      .create = toy_create,
+                                                      .destroy = toy_destroy,
+                                                      .describe = toy_describe,
+                                                      .begin = toy_begin,
+                                                      .evaluate = toy_evaluate,
+                                                      .prepare = toy_prepare,
+                                                      .direction = toy_direction,
+                                                      .accept = toy_accept,
+                                                      .finish = toy_finish_state};
+static fascia_status toy_create(const fascia_backend_setup *setup, fascia_backend **out) {
+  toy *T = calloc(1, sizeof *T);
+  FASCIA_CHECK(T, setup->ctx, FASCIA_ERR_MEMORY, "toy: out of memory");
+  T->base.ops = &toy_registered_ops;
+  T->n = 6 * (int64_t)setup->model->frame_count;
+  T->descends = 1;
+  double **arrays[7] = {&T->a, &T->t, &T->d, &T->d_trial, &T->p, &T->g, &T->g_trial};
+  for (int k = 0; k < 7; ++k) *arrays[k] = calloc((size_t)T->n, sizeof(double));
+  if (!T->a || !T->t || !T->d || !T->d_trial || !T->p || !T->g || !T->g_trial) {
+    toy_destroy(&T->base);
+    return FASCIA_FAIL(setup->ctx, FASCIA_ERR_MEMORY, "toy: out of memory");
+  }
+  // fixed DOFs stay where they are: their target is the start
+  for (int64_t k = 0; k < T->n; ++k)
+    T->a[k] = 1 + (double)(k % 7), T->t[k] = setup->mask[k] ? 0.01 * (double)((k % 5) - 2) : 0;
+  *out = &T->base;
+  return FASCIA_OK;
 }
 
 static const fascia_backend_ops toy_ops = {.name = "toy",
@@ -259,11 +330,39 @@ int main(void) {
   CHECK(watched.converged && fabs(x[0]) < 1e-8 && watched.watchdog_returns > 0);
   fascia_solver_destroy(&S);
 
-  // the registry
+  // the registry: the toy registered from here, then used by name through
+  // the public API; a second "toy", or one without its operations, refused
+  CHECK_OK(fascia_backend_register(ctx, &toy_registered_ops), ctx);
+  CHECK(fascia_backend_register(ctx, &toy_registered_ops) == FASCIA_ERR_ARGUMENT);
+  printf("registered twice: %s\n", fascia_ctx_message(ctx));
+  fascia_ctx_clear(ctx);
+  fascia_backend_ops partial = toy_registered_ops;
+  partial.name = "partial", partial.direction = NULL;
+  CHECK(fascia_backend_register(ctx, &partial) == FASCIA_ERR_ARGUMENT);
+  fascia_ctx_clear(ctx);
+  sd.backend = "toy";
+  sd.newton_tolerance = 1e-12;
+  CHECK_OK(fascia_solver_create(ctx, m, &sd, &S), ctx);
+  CHECK(!strcmp(fascia_solver_backend(S), "toy"));
+  fascia_solve_report rep;
+  CHECK_OK(fascia_solver_solve_static(S, &rep), ctx);
+  double err = 0;
+  const double *xs = fascia_solver_frame_positions(S);
+  for (int32_t i = 0; i < m->frame_count; ++i)
+    for (int c = 0; c < 3; ++c) {
+      const int64_t k = 6 * (int64_t)i + c;
+      const double t = m->frame_kind[i] == FASCIA_FRAME_FREE ? 0.01 * (double)((k % 5) - 2) : 0;
+      err = fmax(err, fabs(xs[3 * i + c] - m->frame_position[3 * i + c] - t));
+    }
+  printf("registered toy through fascia_solver_solve_static: %d Newton iterations, converged %d, |x - target| %.3g\n",
+         rep.newton_iterations, rep.converged, err);
+  CHECK(rep.converged && rep.newton_iterations == 1 && err < 1e-14); // x_base + d rounds
+  fascia_solver_destroy(&S);
+  sd.newton_tolerance = fascia_solver_def_default().newton_tolerance;
   sd.backend = "vulkan";
   CHECK(fascia_solver_create(ctx, m, &sd, &S) == FASCIA_ERR_ARGUMENT);
   printf("unknown backend: %s\n", fascia_ctx_message(ctx));
-  CHECK(strstr(fascia_ctx_message(ctx), "valid: auto, cuda, cpu, emulated"));
+  CHECK(strstr(fascia_ctx_message(ctx), "valid: auto, cuda, cpu, emulated, toy"));
   char detail[256];
   if (!fascia_backend_available("cuda", detail, sizeof detail)) {
     printf("cuda: %s\n", detail);

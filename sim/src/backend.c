@@ -3,29 +3,46 @@
 // The registry of backends (backend.h) and the choice among them. The CUDA
 // backend is first: "auto" takes a GPU when there is one and it runs the
 // model; the CPU is the reference and always there; the host emulation of
-// the device is for tests and is taken only by name.
+// the device is for tests and is taken only by name. Backends registered
+// at run time (fascia_backend_register) follow, in the order registered.
 #include <stdio.h>
 #include <string.h>
 
 #include "backend.h"
 #include "solver_internal.h"
 
-static const fascia_backend_ops *const registry[] = {&fascia_backend_cuda, &fascia_backend_cpu,
-                                                     &fascia_backend_emulated};
+#define BUILT_IN 3
+
+static const fascia_backend_ops *registry[FASCIA_BACKEND_MAX] = {&fascia_backend_cuda, &fascia_backend_cpu,
+                                                                 &fascia_backend_emulated};
+static int registry_count = BUILT_IN;
 
 const fascia_backend_ops *const *fascia_backends(int *count) {
-  *count = (int)(sizeof registry / sizeof registry[0]);
+  *count = registry_count;
   return registry;
 }
 
 const fascia_backend_ops *fascia_backend_find(const char *name) {
-  for (size_t k = 0; name && k < sizeof registry / sizeof registry[0]; ++k)
+  for (int k = 0; name && k < registry_count; ++k)
     if (!strcmp(registry[k]->name, name)) return registry[k];
   return NULL;
 }
 
-const char *fascia_backend_name(int k) {
-  return k >= 0 && k < (int)(sizeof registry / sizeof registry[0]) ? registry[k]->name : NULL;
+const char *fascia_backend_name(int k) { return k >= 0 && k < registry_count ? registry[k]->name : NULL; }
+
+fascia_status fascia_backend_register(fascia_ctx *ctx, const fascia_backend_ops *ops) {
+  FASCIA_CHECK(ops && ops->name && ops->name[0] && strcmp(ops->name, "auto") && ops->available && ops->supports &&
+                   ops->create && ops->destroy && ops->describe && ops->begin && ops->evaluate && ops->prepare &&
+                   ops->direction && ops->accept && ops->finish,
+               ctx, FASCIA_ERR_ARGUMENT,
+               "backend registry: a backend needs a name other than 'auto' and every operation of the Newton loop "
+               "and of its life (available, supports, create, destroy, describe)");
+  FASCIA_CHECK(!fascia_backend_find(ops->name), ctx, FASCIA_ERR_ARGUMENT,
+               "backend registry: a backend named '%s' is registered already", ops->name);
+  FASCIA_CHECK(registry_count < FASCIA_BACKEND_MAX, ctx, FASCIA_ERR_UNSUPPORTED,
+               "backend registry: full (%d backends)", FASCIA_BACKEND_MAX);
+  registry[registry_count++] = ops;
+  return FASCIA_OK;
 }
 
 int fascia_backend_available(const char *name, char *detail, size_t size) {
@@ -54,8 +71,8 @@ fascia_status fascia_backend_pick(const fascia_backend_setup *setup, fascia_back
   if (strcmp(name, "auto")) {
     const fascia_backend_ops *ops = fascia_backend_find(name);
     if (!ops) {
-      char valid[128] = "auto";
-      for (size_t k = 0; k < sizeof registry / sizeof registry[0]; ++k)
+      char valid[256] = "auto";
+      for (int k = 0; k < registry_count; ++k)
         snprintf(valid + strlen(valid), sizeof valid - strlen(valid), ", %s", registry[k]->name);
       return FASCIA_FAIL(setup->ctx, FASCIA_ERR_ARGUMENT, "unknown backend '%s'; valid: %s", name, valid);
     }
@@ -69,7 +86,7 @@ fascia_status fascia_backend_pick(const fascia_backend_setup *setup, fascia_back
   }
   // auto: the first that runs; why each one before it did not
   char skipped[512] = "";
-  for (size_t k = 0; k < sizeof registry / sizeof registry[0]; ++k) {
+  for (int k = 0; k < registry_count; ++k) {
     const fascia_backend_ops *ops = registry[k];
     if (!ops->automatic) continue;
     why[0] = 0;

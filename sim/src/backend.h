@@ -138,6 +138,13 @@ extern const fascia_backend_ops fascia_backend_emulated; ///< cuda/device_solver
 
 /// The registry in priority order, count entries.
 FASCIA_INTERN const fascia_backend_ops *const *fascia_backends(int *count);
+/// Most backends in the registry: the built-in three and those registered.
+#define FASCIA_BACKEND_MAX 8
+/// Adds a backend after the built-in ones (lower priority for "auto", which
+/// takes it only when ops->automatic is set); its name must be new. The
+/// registry is the program's: register before making solvers, from one
+/// thread.
+FASCIA_INTERN fascia_status fascia_backend_register(fascia_ctx *ctx, const fascia_backend_ops *ops);
 /// The backend of a name, NULL if there is none of that name.
 FASCIA_INTERN const fascia_backend_ops *fascia_backend_find(const char *name);
 
