@@ -159,6 +159,16 @@ static inline int check_run(fascia_ctx *ctx, const char *name, const fascia_mode
   if (steps)
     CHECK(relative_difference("velocities", fascia_solver_frame_velocities(dev), fascia_solver_frame_velocities(cpu),
                               6 * N) <= tolerance);
+  // what the results report per sample: strain, and stress with the patches' pressure
+  const int64_t S = m->sample_count;
+  double *ea = malloc(4 * S * sizeof *ea + 1), *eb = ea + S, *sa = ea + 2 * S, *sb = ea + 3 * S;
+  fascia_solver_sample_strain(cpu, ea, sa);
+  fascia_solver_sample_strain(dev, eb, sb);
+  if (max_abs(ea, S) > 1e-8) { // a body in rigid motion has no strain to compare
+    CHECK(relative_difference("sample strain", eb, ea, S) <= tolerance);
+    CHECK(relative_difference("sample stress", sb, sa, S) <= tolerance);
+  }
+  free(ea);
   if (again) {
     CHECK(!memcmp(fascia_solver_frame_positions(again), xb, 3 * N * sizeof(double)));
     CHECK(!memcmp(fascia_solver_frame_rotations(again), fascia_solver_frame_rotations(dev), 4 * N * sizeof(double)));

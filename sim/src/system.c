@@ -392,15 +392,18 @@ fascia_real fascia_system_largest_strain(const fascia_system *sys, int32_t *samp
   return largest;
 }
 
-void fascia_system_sample_strain(const fascia_system *sys, fascia_real *strain, fascia_real *stress) {
+void fascia_system_sample_strain(fascia_system *sys, fascia_real *strain, fascia_real *stress) {
   const fascia_pt_state st = {sys->x, sys->A};
+  // the patches' pressures at this state: the last evaluation may have been
+  // of a trial, or on a device, which keeps its own
+  if (stress && sys->dilatation) fascia_dilatation_evaluate(sys, sys->dilatation);
 #pragma omp parallel for num_threads(sys->threads) schedule(static)
   for (int32_t s = 0; s < sys->sample_count; ++s) {
     fascia_real F[9], P[9], aux[FASCIA_PT_AUX_SIZE];
     strain[s] = strain_norm(sys, &st, s, F);
     if (stress) {
       fascia_pt_stress(sys->sample_law[s], sys->sample_lambda[s], sys->sample_mu[s], F, P, aux);
-      if (sys->pm.sample_pressure) { // the patch's pressure, as of the last evaluation
+      if (sys->pm.sample_pressure) { // the patch's pressure
         fascia_real dtheta[9];
         fascia_pt_dilatation(sys->sample_law[s], F, dtheta);
         for (int q = 0; q < 9; ++q) P[q] += sys->pm.sample_pressure[s] * dtheta[q];

@@ -105,7 +105,7 @@ FASCIA_INTERN void fascia_system_probe_position(const fascia_system *sys, int32_
 /// Green-Lagrange strain magnitude |E| (Frobenius) per sample [S] at the
 /// current state, and von Mises-like stress magnitude |P| (Pa) if stress
 /// is not NULL.
-FASCIA_INTERN void fascia_system_sample_strain(const fascia_system *sys, fascia_real *strain, fascia_real *stress);
+FASCIA_INTERN void fascia_system_sample_strain(fascia_system *sys, fascia_real *strain, fascia_real *stress);
 /// The largest |E| over the samples at the current state (infinity when one
 /// is not finite), and in *sample (if not NULL) the lowest sample that has it.
 FASCIA_INTERN fascia_real fascia_system_largest_strain(const fascia_system *sys, int32_t *sample);
