@@ -28,4 +28,23 @@ static inline void backend_skip_unless_available(const char *backend) {
   exit(TEST_SKIP);
 }
 
+/// Whether a case kept to the CPU backend (say, the direct solver or the
+/// assembled matrix, which the device backends refuse: cuda/device_solver.c)
+/// runs on backend; where not, says which case is skipped and why, and the
+/// rest of the test runs there.
+static inline int backend_runs_cpu_case(const char *backend, const char *name, const char *why) {
+  if (!strcmp(backend, "cpu")) return 1;
+  printf("skipped on %s: %s: %s\n", backend, name, why);
+  return 0;
+}
+
+/// CG settings for the static solves of the cantilevers, where CG solves
+/// them (a device backend's only linear solver): at CG's default tolerance,
+/// 1e-3, their Newton iterations stall, on the CPU's CG too. The direct
+/// solver, auto's choice on the CPU for these models, ignores them.
+static inline void backend_static_cg(fascia_solver_def *sd) {
+  sd->cg_tolerance = 1e-6;
+  sd->cg_iterations = 1000;
+}
+
 #endif

@@ -6,13 +6,16 @@
 // total energy E_kin + E_pot does not grow once nothing from outside does
 // work (implicit Euler dissipates); a step the solver cannot take comes back
 // as FASCIA_ERR_NUMERIC with a message and the state, velocities and time
-// exactly as before the step, never as garbage.
+// exactly as before the step, never as garbage. On every backend: a test
+// sets stab_backend from its --backend (tests/backend_arg.h) and takes its
+// solver settings from stab_solver_def().
 #ifndef FASCIA_TESTS_STABILITY_H
 #define FASCIA_TESTS_STABILITY_H
 
 #include <stdlib.h>
 #include <string.h>
 
+#include "backend_arg.h"
 #include "check.h"
 #include "fascia/solver.h"
 #include "scenes.h"
@@ -37,6 +40,16 @@ typedef struct stab_result {
   double energy_start, energy_end, max_rise; ///< E_kin + E_pot (J); largest growth in one step over the scale
   double max_above_start; ///< largest E_kin + E_pot - energy_start over the scale
 } stab_result;
+
+/// The backend every solver of the test runs on.
+static const char *stab_backend = "cpu";
+
+/// The default solver settings, on stab_backend.
+static inline fascia_solver_def stab_solver_def(void) {
+  fascia_solver_def sd = fascia_solver_def_default();
+  sd.backend = stab_backend;
+  return sd;
+}
 
 static inline fascia_ctx *stab_ctx(void) {
   fascia_ctx_def cd = fascia_ctx_def_default();
@@ -201,7 +214,7 @@ static inline fascia_model *stab_copy_model(fascia_ctx *ctx, const fascia_model 
 /// Tip (probe "tip") displacement along z after a static solve of at most
 /// `newton` iterations, or NAN.
 static inline double stab_static_tip(fascia_ctx *ctx, const fascia_model *m, int newton, fascia_status *status) {
-  fascia_solver_def sd = fascia_solver_def_default();
+  fascia_solver_def sd = stab_solver_def();
   sd.newton_iterations = newton;
   fascia_solver *s = NULL;
   *status = fascia_solver_create(ctx, m, &sd, &s);

@@ -7,7 +7,9 @@
 // equilibrium instead of returning garbage.
 #include "stability.h"
 
-int main(void) {
+int main(int argc, char **argv) {
+  stab_backend = backend_arg(argc, argv, "cpu");
+  backend_skip_unless_available(stab_backend);
   fascia_ctx *ctx = stab_ctx();
   if (!ctx) return 1;
   const double dts[] = {1e-4, 1e-3, 1e-2, 0.1, 1.0};
@@ -19,7 +21,7 @@ int main(void) {
     const double tip_static = stab_static_tip(ctx, m, 100, &st);
     CHECK_OK(st, ctx);
     for (size_t k = 0; k < sizeof dts / sizeof dts[0]; ++k) {
-      fascia_solver_def sd = fascia_solver_def_default();
+      fascia_solver_def sd = stab_solver_def();
       sd.time_step = dts[k];
       char name[64];
       snprintf(name, sizeof name, "%s dt %g", fascia_law_name(law), dts[k]);

@@ -6,7 +6,8 @@
 // could not: its energy's rounding hid the decrease near the minimum). A
 // heterogeneous beam, two materials with a 1e4 stiffness contrast alternating
 // cell by cell along it, is just as stable, and its static deflection lies
-// between those of the all-soft and all-stiff beams.
+// between those of the all-soft and all-stiff beams. The device backends
+// leave out the mixed beam's static solve, for time.
 #include "stability.h"
 
 #define SOFT 4e2
@@ -33,14 +34,19 @@ static fascia_model *beam(fascia_ctx *ctx, int law, double youngs) {
   return m;
 }
 
-int main(void) {
+int main(int argc, char **argv) {
+  stab_backend = backend_arg(argc, argv, "cpu");
+  backend_skip_unless_available(stab_backend);
   fascia_ctx *ctx = stab_ctx();
   if (!ctx) return 1;
   const double moduli[] = {1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 0, SOFT, STIFF};
   const int dynamic_count = 8; // the last two only bound the mixed beam's deflection
+  const int mixed_static = backend_runs_cpu_case(stab_backend, "the mixed beam's static solve and bounds",
+                                                 "by CG it takes 6 s in the emulation, 80 s sanitized");
+  const int count = mixed_static ? 10 : dynamic_count;
   for (int law = 0; law < FASCIA_LAW_COUNT_; ++law) {
     double tip[10];
-    for (int k = 0; k < 10; ++k) {
+    for (int k = 0; k < count; ++k) {
       fascia_model *m = beam(ctx, law, moduli[k]);
       CHECK(m != NULL);
       if (!m) return 1;
@@ -48,12 +54,16 @@ int main(void) {
       if (moduli[k] > 0) snprintf(name, sizeof name, "%s E %g", fascia_law_name(law), moduli[k]);
       else snprintf(name, sizeof name, "%s E %g/%g alternating", fascia_law_name(law), SOFT, STIFF);
       if (k < dynamic_count) {
-        fascia_solver_def sd = fascia_solver_def_default();
+        fascia_solver_def sd = stab_solver_def();
         const stab_result r = stab_run(ctx, name, m, &sd, 20, 0, 1);
         CHECK(!r.bad);
         CHECK(r.steps == 20);
         if (r.converged != r.steps) fprintf(stderr, "%s: %d of %d steps converged\n", name, r.converged, r.steps);
         CHECK(r.converged == r.steps); // 20 Newton iterations are plenty at dt = 0.01 s
+      }
+      if (moduli[k] == 0 && !mixed_static) {
+        fascia_model_destroy(&m);
+        continue;
       }
       // the mixed beam is a hard static problem: its soft cells act as hinges
       // that turn and (StVK) invert under the stiff cells' weight; measured
@@ -66,7 +76,7 @@ int main(void) {
     }
     // deflection falls as E grows; the mixed beam lies between its parts
     for (int k = 1; k < 7; ++k) CHECK(tip[k] > tip[k - 1]);
-    CHECK(tip[7] > tip[8] && tip[7] < tip[9]);
+    if (mixed_static) CHECK(tip[7] > tip[8] && tip[7] < tip[9]);
   }
   fascia_ctx_destroy(&ctx);
   return CHECK_RESULT();

@@ -7,7 +7,9 @@
 // frame scheme locks as nu -> 0.5; docs/mechanics.md) but never flips sign.
 #include "stability.h"
 
-int main(void) {
+int main(int argc, char **argv) {
+  stab_backend = backend_arg(argc, argv, "cpu");
+  backend_skip_unless_available(stab_backend);
   fascia_ctx *ctx = stab_ctx();
   if (!ctx) return 1;
   const double ratios[] = {0, 0.25, 0.45, 0.49, 0.499};
@@ -21,7 +23,7 @@ int main(void) {
       CHECK_OK(fascia_scene_beam_build(ctx, &bd, &m), ctx);
       char name[64];
       snprintf(name, sizeof name, "%s nu %g", fascia_law_name(law), ratios[k]);
-      fascia_solver_def sd = fascia_solver_def_default();
+      fascia_solver_def sd = stab_solver_def();
       const stab_result r = stab_run(ctx, name, m, &sd, 20, 0, 1);
       CHECK(!r.bad);
       CHECK(r.steps == 20);

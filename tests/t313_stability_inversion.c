@@ -9,12 +9,15 @@
 // not grow. StVK's known failure, no resistance to inversion (a reflection
 // has zero StVK energy), is reported, not hidden: the steps report inverted
 // samples, or a step is refused with FASCIA_ERR_NUMERIC and the state kept.
+// The device backends (CG only) skip the Neo-Hookean end push.
 #include "stability.h"
 
 #define MOTION_END 1.0 // s
 #define DT 0.05
 
-int main(void) {
+int main(int argc, char **argv) {
+  stab_backend = backend_arg(argc, argv, "cpu");
+  backend_skip_unless_available(stab_backend);
   fascia_ctx *ctx = stab_ctx();
   if (!ctx) return 1;
   const double planes[2] = {4.0, 2.4}, pushes[2] = {3.0, 2.0};
@@ -23,11 +26,18 @@ int main(void) {
       fascia_model *m = stab_pushed_beam(ctx, law, planes[c], pushes[c], MOTION_END);
       CHECK(m != NULL);
       if (!m) return 1;
-      fascia_solver_def sd = fascia_solver_def_default();
+      fascia_solver_def sd = stab_solver_def();
       sd.time_step = DT;
       sd.require_convergence = 1; // an unconverged step is split, not accepted
       char name[64];
       snprintf(name, sizeof name, "%s %s", fascia_law_name(law), c == 0 ? "end pushed" : "plane pushed through");
+      if (law == FASCIA_LAW_NEOHOOKEAN && c == 0 &&
+          !backend_runs_cpu_case(stab_backend, name,
+                                 "its buckling needs the direct solver (auto's choice on the CPU): with CG, on the "
+                                 "CPU too, a step fails even at dt / 16")) {
+        fascia_model_destroy(&m);
+        continue;
+      }
       const int steps = (int)(1.2 * MOTION_END / DT + 0.5);
       const stab_result r = stab_run(ctx, name, m, &sd, steps, MOTION_END, 1);
       CHECK(!r.bad);

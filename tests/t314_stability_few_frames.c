@@ -12,7 +12,7 @@
 #define G 9.81
 
 static int run_case(fascia_ctx *ctx, const char *name, const fascia_model *m, int steps) {
-  fascia_solver_def sd = fascia_solver_def_default();
+  fascia_solver_def sd = stab_solver_def();
   const stab_result r = stab_run(ctx, name, m, &sd, steps, 0, 1);
   CHECK(!r.bad);
   CHECK(r.steps == steps);
@@ -61,7 +61,9 @@ static fascia_model *single_neighbour_model(fascia_ctx *ctx, int law, int32_t *d
   return m;
 }
 
-int main(void) {
+int main(int argc, char **argv) {
+  stab_backend = backend_arg(argc, argv, "cpu");
+  backend_skip_unless_available(stab_backend);
   fascia_ctx *ctx = stab_ctx();
   if (!ctx) return 1;
   for (int law = 0; law < FASCIA_LAW_COUNT_; ++law) {
@@ -98,7 +100,7 @@ int main(void) {
     snprintf(name, sizeof name, "%s single neighbours", fascia_law_name(law));
     if (run_case(ctx, name, m, 10)) return 1;
     // the dangling frame falls freely: z_n = -g h^2 n (n + 1) / 2 (implicit Euler)
-    fascia_solver_def sd = fascia_solver_def_default();
+    fascia_solver_def sd = stab_solver_def();
     sd.newton_tolerance = 1e-10;
     fascia_solver *s = NULL;
     CHECK_OK(fascia_solver_create(ctx, m, &sd, &s), ctx);

@@ -5,10 +5,13 @@
 // impulse n h F, and each step's angular momentum change about the centre
 // equals h J_l(h w)^T (r x F) (the torque of the load at the step's end,
 // through the rotation map of the step); the coupling frames stay rigid.
+#include "backend_arg.h"
 #include "check.h"
 #include "fascia/organs.h"
 #include "organ_fixture.h"
 #include "point/linalg.h"
+
+static const char *backend = "cpu"; // --backend (tests/backend_arg.h)
 
 #define STEPS 5
 #define H 0.01
@@ -24,7 +27,9 @@ static void jlt(const double *phi, const double *g, double *out) {
   for (int c = 0; c < 3; ++c) out[c] = g[c] - a * pg[c] + b * ppg[c];
 }
 
-int main(void) {
+int main(int argc, char **argv) {
+  backend = backend_arg(argc, argv, "cpu");
+  backend_skip_unless_available(backend);
   fascia_ctx_def cd = fascia_ctx_def_default();
   cd.threads = 1; // small model: threads cost more than they give
   fascia_ctx *ctx = NULL;
@@ -35,6 +40,7 @@ int main(void) {
   fascia_model *m = NULL;
   CHECK_OK(organ_fixture_build(ctx, &fd, &m), ctx);
   fascia_solver_def sd = fascia_solver_def_default();
+  sd.backend = backend;
   sd.time_step = H;
   sd.newton_tolerance = 1e-13; // the balance holds to the Newton tolerance: make it rounding
   sd.newton_iterations = 50;

@@ -4,10 +4,13 @@
 // and rotations) while the tissue it holds carries a rigid organ sagging
 // under gravity, in dynamic steps and in a static solve; its pose stays the
 // identity, and the rigid organ's coupling frames stay rigid.
+#include "backend_arg.h"
 #include "check.h"
 #include "fascia/organs.h"
 #include "organ_fixture.h"
 #include "point/linalg.h"
+
+static const char *backend = "cpu"; // --backend (tests/backend_arg.h)
 
 static int check_fixed(const fascia_model *m, const fascia_solver *s) {
   int bad = 0;
@@ -25,7 +28,9 @@ static int check_fixed(const fascia_model *m, const fascia_solver *s) {
   return bad;
 }
 
-int main(void) {
+int main(int argc, char **argv) {
+  backend = backend_arg(argc, argv, "cpu");
+  backend_skip_unless_available(backend);
   fascia_ctx_def cd = fascia_ctx_def_default();
   cd.threads = 1; // small model: threads cost more than they give
   fascia_ctx *ctx = NULL;
@@ -35,6 +40,7 @@ int main(void) {
   fascia_model *m = NULL;
   CHECK_OK(organ_fixture_build(ctx, &fd, &m), ctx);
   fascia_solver_def sd = fascia_solver_def_default();
+  sd.backend = backend;
   sd.time_step = 0.01;
   fascia_solver *s = NULL;
   CHECK_OK(fascia_solver_create(ctx, m, &sd, &s), ctx);

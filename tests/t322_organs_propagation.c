@@ -5,9 +5,12 @@
 // free rigid organ B; at static equilibrium B has followed A's translation
 // exactly (nothing else holds it); with the tissue between them removed, B
 // does not move at all.
+#include "backend_arg.h"
 #include "check.h"
 #include "fascia/organs.h"
 #include "organ_fixture.h"
+
+static const char *backend = "cpu"; // --backend (tests/backend_arg.h)
 
 #define PULL 0.01 // m along x (away from B: a traction) and 0.005 m down
 
@@ -20,6 +23,7 @@ static fascia_status run(fascia_ctx *ctx, int cut, double *moved) {
   fascia_status st = organ_fixture_build(ctx, &fd, &m);
   if (st != FASCIA_OK) return st;
   fascia_solver_def sd = fascia_solver_def_default();
+  sd.backend = backend;
   sd.time_step = 0.05;
   fascia_solver *s = NULL;
   st = fascia_solver_create(ctx, m, &sd, &s);
@@ -37,7 +41,9 @@ static fascia_status run(fascia_ctx *ctx, int cut, double *moved) {
   return st;
 }
 
-int main(void) {
+int main(int argc, char **argv) {
+  backend = backend_arg(argc, argv, "cpu");
+  backend_skip_unless_available(backend);
   fascia_ctx_def cd = fascia_ctx_def_default();
   cd.threads = 1; // small model: threads cost more than they give
   fascia_ctx *ctx = NULL;

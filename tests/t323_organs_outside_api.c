@@ -8,14 +8,19 @@
 // minus the derivative of the potential energy (central differences); (4) in
 // dynamic steps the frames land exactly on the targets, and a released organ
 // is a rigid body again.
+#include "backend_arg.h"
 #include "check.h"
 #include "fascia/organs.h"
 #include "organ_fixture.h"
 #include "point/linalg.h"
 
+static const char *backend = "cpu"; // --backend (tests/backend_arg.h)
+
 #define C 9 // coupling frames per organ in the fixture
 
-int main(void) {
+int main(int argc, char **argv) {
+  backend = backend_arg(argc, argv, "cpu");
+  backend_skip_unless_available(backend);
   fascia_ctx_def cd = fascia_ctx_def_default();
   cd.threads = 1; // small model: threads cost more than they give
   fascia_ctx *ctx = NULL;
@@ -24,6 +29,7 @@ int main(void) {
   fascia_model *m = NULL;
   CHECK_OK(organ_fixture_build(ctx, &fd, &m), ctx);
   fascia_solver_def sd = fascia_solver_def_default();
+  sd.backend = backend;
   sd.newton_tolerance = 1e-11;
   sd.newton_iterations = 200;
   fascia_solver *s = NULL;
