@@ -184,6 +184,24 @@ static inline FASCIA_HD void fascia_pt_body_transform_block(const fascia_real *M
     }
 }
 
+/// Folds body b's slaves' entries of y [6N] (at positions x) into its
+/// master's sums (fascia_pt_body_restrict_add) and zeroes them; with G, adds
+/// each slave's geometric term too.
+static inline FASCIA_HD void fascia_pt_body_fold(const fascia_pt_bodies *B, int32_t b, const fascia_real *x,
+                                                 fascia_real *y, fascia_real *gx, fascia_real *mom, fascia_real *gt,
+                                                 fascia_real *G) {
+  const int32_t m = B->master[b];
+  for (int32_t f = B->frame_offsets[b]; f < B->frame_offsets[b + 1]; ++f) {
+    const int32_t i = B->frames[f];
+    if (i == m) continue;
+    fascia_real a[3], *yi = y + 6 * (int64_t)i;
+    fascia_pt_body_offset(B, b, i, x, a);
+    fascia_pt_body_restrict_add(a, yi, gx, mom, gt);
+    if (G) fascia_pt_body_geometric_add(yi, a, G);
+    for (int c = 0; c < 6; ++c) yi[c] = 0;
+  }
+}
+
 /// Body b's own block in its master's unknowns at rotations q: mass and
 /// inertia (times mass_coefficient) through its centre, plus the geometric
 /// term of the last gradient.
@@ -248,15 +266,7 @@ static inline FASCIA_HD fascia_real fascia_pt_body_gradient(const fascia_pt_bodi
   for (int k = 0; k < 9; ++k) G[k] = 0;
   fascia_pt_body_restrict_add(ac, y, gx, mom, gt);
   fascia_pt_body_geometric_add(y, ac, G);
-  for (int32_t f = B->frame_offsets[b]; f < B->frame_offsets[b + 1]; ++f) {
-    const int32_t i = B->frames[f];
-    if (i == m) continue;
-    fascia_real a[3], *gi = gradient + 6 * (int64_t)i;
-    fascia_pt_body_offset(B, b, i, x, a);
-    fascia_pt_body_restrict_add(a, gi, gx, mom, gt);
-    fascia_pt_body_geometric_add(gi, a, G);
-    for (int c = 0; c < 6; ++c) gi[c] = 0;
-  }
+  fascia_pt_body_fold(B, b, x, gradient, gx, mom, gt, G);
   fascia_real jm[3];
   if (step->jacobian) fascia_pt_left_jacobian_t(phi, mom, jm);
   else
@@ -275,14 +285,7 @@ static inline FASCIA_HD void fascia_pt_body_restrict(const fascia_pt_bodies *B, 
   const int32_t m = B->master[b];
   const fascia_real *vm = v + 6 * (int64_t)m;
   fascia_real gx[3] = {0, 0, 0}, mom[3] = {0, 0, 0}, gt[3] = {0, 0, 0};
-  for (int32_t f = B->frame_offsets[b]; f < B->frame_offsets[b + 1]; ++f) {
-    const int32_t i = B->frames[f];
-    if (i == m) continue;
-    fascia_real a[3], *oi = out + 6 * (int64_t)i;
-    fascia_pt_body_offset(B, b, i, x, a);
-    fascia_pt_body_restrict_add(a, oi, gx, mom, gt);
-    for (int c = 0; c < 6; ++c) oi[c] = 0;
-  }
+  fascia_pt_body_fold(B, b, x, out, gx, mom, gt, NULL);
   fascia_real ac[3], wc[6], yc[6], Gv[3];
   fascia_pt_body_centre_offset(B, b, q, ac);
   fascia_pt_body_prolong6(ac, vm, wc);
