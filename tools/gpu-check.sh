@@ -5,20 +5,26 @@
 # Debian packages fascia builds with:
 #
 #   tools/gpu-check.sh pack        here: builds build-gpu/ (CUDA on, prep off),
-#                                  prepares the demo tissue model, and gathers
-#                                  the programs and the shared libraries they
-#                                  need into build-gpu/pack (a few MB)
+#                                  prepares the demo tissue model, gathers the
+#                                  programs and the shared libraries they need
+#                                  into build-gpu/pack (about 100 MB, OpenBLAS
+#                                  alone 37) and compresses it into
+#                                  build-gpu/pack.tar.xz, which must stay under
+#                                  the device tool's 64 MiB carry limit
 #   tools/gpu-check.sh run [DIR]   on the GPU machine, from the repository root,
-#                                  with build-gpu/pack carried there: the GPU
-#                                  tests, the benchmarks, a kernel profile (ncu)
-#                                  and compute-sanitizer; logs and CSV into DIR
-#                                  (default: $OUT, else out/gpu-check)
+#                                  with build-gpu/pack.tar.xz (or the folder)
+#                                  carried there: the GPU tests, the benchmarks,
+#                                  a kernel profile (ncu) and compute-sanitizer;
+#                                  logs and CSV into DIR (default: $OUT, else
+#                                  out/gpu-check)
 #
 # With the session's device tool: run(command="tools/gpu-check.sh run",
-# carry=["build-gpu/pack"]); it writes 8 files, what that tool brings back.
+# carry=["build-gpu/pack.tar.xz"]); it writes 8 files, what that tool brings back.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 pack="$root/build-gpu/pack"
+archive="$root/build-gpu/pack.tar.xz"
+carry_limit=$((64 * 1024 * 1024))
 # the solver, stability and organ suites, run on the GPU with --backend cuda
 solver_tests=(t301_solver_cantilever t302_solver_free_fall t303_solver_determinism t304_solver_prescribed
   t305_solver_loads t306_solver_reduced_integration t307_solver_volumetric_patches t310_stability_time_step
@@ -48,12 +54,19 @@ pack)
     cp -L "$lib" "$pack/lib/"
   done
   "$prep_fascia" prep "$root/data/scenes/pelvis-female-demo.json" -o "$pack/demo.h5" >/dev/null
-  echo "gpu-check: packed $(du -sh "$pack" | cut -f1) into $pack"
+  tar -C "$root/build-gpu" -cf - pack | xz -6 -T0 >"$archive.tmp"
+  mv "$archive.tmp" "$archive"
+  size=$(stat -c %s "$archive")
+  echo "gpu-check: packed $(du -sh "$pack" | cut -f1) into $pack, $((size / 1048576)) MiB compressed in $archive"
+  [ "$size" -lt "$carry_limit" ] ||
+    { echo "gpu-check: $archive is over the device tool's 64 MiB carry limit" >&2; exit 1; }
   ;;
 run)
   out="${2:-${OUT:-$root/out/gpu-check}}"
   mkdir -p "$out"
-  [ -x "$pack/bin/fascia" ] || { echo "gpu-check: $pack is missing: run 'tools/gpu-check.sh pack' first and carry it" >&2; exit 1; }
+  if [ ! -x "$pack/bin/fascia" ] && [ -f "$archive" ]; then xz -dc "$archive" | tar -C "$root/build-gpu" -xf -; fi
+  [ -x "$pack/bin/fascia" ] ||
+    { echo "gpu-check: $archive is missing: run 'tools/gpu-check.sh pack' first and carry it" >&2; exit 1; }
   export LD_LIBRARY_PATH="$pack/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
   status=0
   { nvidia-smi -L || true; date -u +%Y-%m-%dT%H:%MZ; "$pack/bin/fascia" info; } 2>&1 | tee "$out/device.txt"
