@@ -21,7 +21,6 @@ typedef struct cpu_backend {
   const fascia_solver_def *def;
   const unsigned char *mask;
   int32_t frame_count;
-  int threads;
   // the step
   fascia_step_values values;
   fascia_real *x_base, *q_base, *d; ///< the solver's anchor and iterate (the organs read them there)
@@ -134,7 +133,6 @@ static fascia_status cpu_create(const fascia_backend_setup *setup, fascia_backen
   B->bodies = setup->bodies;
   B->full_mask = setup->full_mask;
   B->frame_count = setup->model->frame_count;
-  B->threads = setup->sys->threads;
   const int64_t N = B->frame_count, n = 6 * N;
   B->target_M = fascia_calloc(n, sizeof(fascia_real));
   B->d_trial = fascia_calloc(n, sizeof(fascia_real));
@@ -161,7 +159,8 @@ static fascia_status cpu_create(const fascia_backend_setup *setup, fascia_backen
     cpu_destroy(&B->base);
     return st;
   }
-  snprintf(B->text, sizeof B->text, "cpu, %d thread%s", B->threads, B->threads == 1 ? "" : "s");
+  const int threads = B->sys->threads_max;
+  snprintf(B->text, sizeof B->text, "cpu, %d thread%s", threads, threads == 1 ? "" : "s");
   *out = &B->base;
   return FASCIA_OK;
 }
@@ -200,7 +199,7 @@ static fascia_status cpu_begin(fascia_backend *backend, const fascia_step_values
     fascia_system_mass_snapshot(B->sys);
     fascia_system_mass_lumped(B->sys, B->mass_blocks);
     mass_apply(B, v->inertia_target, B->target_M);
-    B->target_norm = fascia_dot(v->inertia_target, B->target_M, n, B->threads);
+    B->target_norm = fascia_dot(v->inertia_target, B->target_M, n, B->sys->threads);
   }
   const fascia_real c = v->c1 + v->c2;
   fascia_operator op = {.sys = B->sys,
@@ -246,7 +245,8 @@ static fascia_status objective(cpu_backend *B, const fascia_real *d, fascia_real
   if (v->c1 != 0 || v->c2 != 0) {
     // c1/2 (d - hu).M(d - hu) + c2/2 d.M d with M(hu) precomputed
     mass_apply(B, d, B->scratch);
-    const fascia_real dMd = fascia_dot(d, B->scratch, n, B->threads), dz = fascia_dot(d, B->target_M, n, B->threads);
+    const int threads = B->sys->threads;
+    const fascia_real dMd = fascia_dot(d, B->scratch, n, threads), dz = fascia_dot(d, B->target_M, n, threads);
     energy += FASCIA_R(0.5) * v->c1 * (dMd - 2 * dz + B->target_norm) + FASCIA_R(0.5) * v->c2 * dMd;
     for (int64_t k = 0; k < n; ++k) gradient[k] += (v->c1 + v->c2) * B->scratch[k] - v->c1 * B->target_M[k];
   }
@@ -272,7 +272,7 @@ static fascia_status cpu_evaluate(fascia_backend *backend, fascia_real alpha, in
     d = B->d_trial;
   }
   FASCIA_TRY(objective(B, d, &out->phi, g));
-  out->gradient_norm2 = fascia_dot(g, g, n, B->threads);
+  out->gradient_norm2 = fascia_dot(g, g, n, B->sys->threads);
   out->energy_size = fabs(B->sys->energy_internal) + fabs(B->sys->energy_external);
   return FASCIA_OK;
 }
@@ -292,7 +292,7 @@ static fascia_status assemble(cpu_backend *B) {
   }
   if (B->use_direct && B->reduced) fascia_organs_reduce_matrix(B->S->organs, B->sys, c, &B->K, &B->R);
   if (B->def->single_precision_matrix && !B->use_direct)
-    return fascia_bsr_make_single(B->S->ctx, &B->K, B->threads);
+    return fascia_bsr_make_single(B->S->ctx, &B->K, B->sys->threads);
   return FASCIA_OK;
 }
 
@@ -351,11 +351,11 @@ static fascia_status cpu_direction(fascia_backend *backend, fascia_real *shift, 
     report->cg_iterations += cg.iterations;
     report->negative_curvature += cg.negative_curvature;
   }
-  *slope = fascia_dot(p, g, n, B->threads);
+  *slope = fascia_dot(p, g, n, B->sys->threads);
   if (!(*slope < 0)) { // not a descent direction: preconditioned gradient
     fascia_precond_apply(&B->pc, B->mask, g, p);
     for (int64_t k = 0; k < n; ++k) p[k] = -p[k];
-    *slope = fascia_dot(p, g, n, B->threads);
+    *slope = fascia_dot(p, g, n, B->sys->threads);
   }
   return FASCIA_OK;
 }

@@ -4,8 +4,11 @@
 // docs/mechanics.md): per-sample work in parallel into a pair buffer, then one
 // per-frame gather through the reverse table, as the paper's two GPU kernels
 // do. See system.h for the contract.
+#define _POSIX_C_SOURCE 200809L // sysconf (strict C11 hides it)
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "system.h"
 #include "dilatation.h"
@@ -46,7 +49,7 @@ fascia_status fascia_system_create(fascia_ctx *ctx, const fascia_model *m, int t
   sys->frame_count = m->frame_count;
   sys->sample_count = m->sample_count;
   sys->pair_count = m->pair_count;
-  sys->threads = threads > 0 ? threads : 1;
+  sys->threads = sys->threads_max = threads > 0 ? threads : 1;
   sys->gravity_scale = 1;
   for (int32_t s = 0; s < m->sample_count; ++s) {
     const int32_t n = m->sample_offsets[s + 1] - m->sample_offsets[s];
@@ -411,4 +414,18 @@ void fascia_system_sample_strain(fascia_system *sys, fascia_real *strain, fascia
       stress[s] = sqrt(fascia_pt_ddot(P, P));
     }
   }
+}
+
+int fascia_threads_free(int wanted) {
+  if (wanted <= 1) return 1;
+  FILE *f = fopen("/proc/loadavg", "r");
+  if (!f) return wanted;
+  double a, b, c;
+  long running = 0, total = 0;
+  const int read = fscanf(f, "%lf %lf %lf %ld/%ld", &a, &b, &c, &running, &total);
+  fclose(f);
+  const long cores = sysconf(_SC_NPROCESSORS_ONLN);
+  if (read != 5 || cores < 1) return wanted;
+  const long free_cores = cores - (running - 1); // this thread is one of the runnable
+  return free_cores < 1 ? 1 : free_cores < wanted ? (int)free_cores : wanted;
 }

@@ -22,7 +22,8 @@ typedef struct fascia_system {
   fascia_ctx *ctx;
   const fascia_model *model; ///< borrowed, outlives the system
   int32_t frame_count, sample_count, pair_count;
-  int threads;
+  int threads;     ///< of the parallel loops now: threads_max, or fewer where other work holds the cores
+  int threads_max; ///< the solver's setting
 
   fascia_pt_model pm; ///< views into the arrays below and the model's
   fascia_real *pair_offset;     ///< [3P] p_rest_s - x_rest_i
@@ -113,5 +114,12 @@ FASCIA_INTERN fascia_real fascia_system_largest_strain(const fascia_system *sys,
 /// Deterministic dot product (fixed blocking: the same bits for any thread
 /// count) on `threads` threads.
 FASCIA_INTERN fascia_real fascia_dot(const fascia_real *a, const fascia_real *b, int64_t n, int threads);
+
+/// Threads to use now, at most `wanted`: the cores no other runnable task
+/// holds (Linux: /proc/loadavg's runnable count, this thread aside), at
+/// least 1. The parallel loops end at a barrier, so a thread that waits for
+/// a busy core holds up all of them: on a loaded machine fewer threads
+/// finish sooner. Every sum has a fixed blocking, so results do not change.
+FASCIA_INTERN int fascia_threads_free(int wanted);
 
 #endif
