@@ -33,8 +33,9 @@ void fascia_precond_build(fascia_preconditioner *pc, const fascia_operator *op, 
   // rigid organs: a master's block becomes its body's block of P^T A P
   for (int32_t b = 0; op->bodies && b < op->bodies->count; ++b)
     if (op->bodies->active[b]) fascia_pt_body_diagonal(op->bodies, b, op->mass_coefficient, sys->x, sys->q, blocks);
+  const int jacobi = pc->kind == FASCIA_PRECOND_JACOBI;
   for (int32_t i = 0; i < N; ++i)
-    fascia_pt_block6_precond(blocks + 36 * (int64_t)i, pc->kind == FASCIA_PRECOND_JACOBI, pc->inverse + 36 * (int64_t)i);
+    fascia_pt_block6_precond(blocks + 36 * (int64_t)i, jacobi, pc->inverse + 36 * (int64_t)i);
 }
 
 void fascia_precond_apply(const fascia_preconditioner *pc, const unsigned char *mask, const fascia_real *r,
