@@ -95,10 +95,6 @@ static void quat_conj(const fascia_real *q, fascia_real *out) {
   out[0] = q[0], out[1] = -q[1], out[2] = -q[2], out[3] = -q[3];
 }
 
-// Body rotation from the master's state: Q = q_m conj(q_m,rest).
-static void body_rotation(const fascia_organs *O, int32_t b, const fascia_real *q, fascia_real *Q, fascia_real *R) {
-  fascia_pt_body_rotation(&O->bodies, b, q, Q, R);
-}
 
 // Mass properties of a closed triangle surface at density rho: signed
 // tetrahedra from a reference point (divergence theorem); the covariance of
@@ -338,7 +334,7 @@ void fascia_organs_step_begin(fascia_organs *O, fascia_solver *S, fascia_real h)
     }
     if (!active(O, b)) continue;
     fascia_real Q0[4], R0[9], IR[9];
-    body_rotation(O, b, S->q_base, Q0, R0);
+    fascia_pt_body_rotation(&O->bodies, b, S->q_base, Q0, R0);
     fascia_pt_mat_mult(O->inertia + 9 * b, R0, IR); // I R0^T
     fascia_pt_mat_mul(R0, IR, O->world_inertia + 9 * b);
     for (int c = 0; c < 6; ++c) O->target[6 * b + c] = h * O->velocity[6 * b + c];
@@ -497,7 +493,7 @@ void fascia_organs_restore(fascia_organs *O, const fascia_real *buffer) {
 static void place_slaves(fascia_organs *O, fascia_solver *S, int32_t b) {
   const int32_t m = O->master[b];
   fascia_real Q[4], R[9], r[3], a[3];
-  body_rotation(O, b, S->q, Q, R);
+  fascia_pt_body_rotation(&O->bodies, b, S->q, Q, R);
   const fascia_real *um = S->u + 6 * m;
   for (int32_t f = O->frame_offsets[b]; f < O->frame_offsets[b + 1]; ++f) {
     const int32_t i = O->frames[f];
@@ -532,7 +528,7 @@ fascia_real fascia_organs_kinetic_energy(const fascia_organs *O, const fascia_so
     if (S->model->organs[b].kind != FASCIA_ORGAN_RIGID || O->driven[b]) continue;
     const fascia_real *v = O->velocity + 6 * b;
     fascia_real Q[4], R[9], Rw[3], IRw[3], w[3];
-    if (O->master[b] >= 0) body_rotation(O, b, S->q, Q, R);
+    if (O->master[b] >= 0) fascia_pt_body_rotation(&O->bodies, b, S->q, Q, R);
     else fascia_pt_quat_to_mat(O->free_pose + 7 * b + 3, R);
     fascia_pt_mat_tvec(R, v + 3, Rw); // body-axes angular velocity
     fascia_pt_mat_vec(O->inertia + 9 * b, Rw, IRw);
@@ -598,7 +594,7 @@ fascia_status fascia_solver_organ_pose(const fascia_solver *S, int32_t organ, fa
   } else if (o->kind == FASCIA_ORGAN_RIGID && O->master[organ] >= 0) {
     // x_m = t + Q x_m,rest
     const int32_t m = O->master[organ];
-    body_rotation(O, organ, S->q, rotation, R);
+    fascia_pt_body_rotation(&O->bodies, organ, S->q, rotation, R);
     fascia_pt_mat_vec(R, S->model->frame_position + 3 * m, p);
     for (int c = 0; c < 3; ++c) translation[c] = S->x[3 * m + c] - p[c];
   } else if (o->kind == FASCIA_ORGAN_RIGID) {
