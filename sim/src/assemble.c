@@ -125,21 +125,6 @@ fascia_status fascia_bsr_make_single(fascia_ctx *ctx, fascia_bsr *B, int threads
   return FASCIA_OK;
 }
 
-void fascia_bsr_apply_single(const fascia_bsr *B, int threads, const fascia_real *v, fascia_real *out) {
-#pragma omp parallel for num_threads(threads) schedule(static)
-  for (int32_t i = 0; i < B->rows; ++i) {
-    fascia_real sum[6] = {0, 0, 0, 0, 0, 0};
-    for (int32_t b = B->row_offsets[i]; b < B->row_offsets[i + 1]; ++b) {
-      const float *blk = B->values_single + 36 * (int64_t)b;
-      const fascia_real *vj = v + 6 * (int64_t)B->cols[b];
-      for (int r = 0; r < 6; ++r)
-        sum[r] += blk[6 * r] * vj[0] + blk[6 * r + 1] * vj[1] + blk[6 * r + 2] * vj[2] + blk[6 * r + 3] * vj[3] +
-                  blk[6 * r + 4] * vj[4] + blk[6 * r + 5] * vj[5];
-    }
-    for (int r = 0; r < 6; ++r) out[6 * (int64_t)i + r] = sum[r];
-  }
-}
-
 void fascia_bsr_destroy(fascia_bsr *bsr) {
   free(bsr->values_single);
   free(bsr->local_offsets);
@@ -153,20 +138,6 @@ void fascia_bsr_destroy(fascia_bsr *bsr) {
   free(bsr->diagonal);
   free(bsr->values);
   memset(bsr, 0, sizeof *bsr);
-}
-
-void fascia_bsr_apply(const fascia_bsr *B, int threads, const fascia_real *v, fascia_real *out) {
-#pragma omp parallel for num_threads(threads) schedule(static)
-  for (int32_t i = 0; i < B->rows; ++i) {
-    fascia_real sum[6] = {0, 0, 0, 0, 0, 0};
-    for (int32_t b = B->row_offsets[i]; b < B->row_offsets[i + 1]; ++b) {
-      const fascia_real *blk = B->values + 36 * (int64_t)b, *vj = v + 6 * (int64_t)B->cols[b];
-      for (int r = 0; r < 6; ++r)
-        sum[r] += blk[6 * r] * vj[0] + blk[6 * r + 1] * vj[1] + blk[6 * r + 2] * vj[2] + blk[6 * r + 3] * vj[3] +
-                  blk[6 * r + 4] * vj[4] + blk[6 * r + 5] * vj[5];
-    }
-    for (int r = 0; r < 6; ++r) out[6 * (int64_t)i + r] = sum[r];
-  }
 }
 
 static int32_t find_block(const fascia_bsr *B, int32_t i, int32_t j) {
