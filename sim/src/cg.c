@@ -2,7 +2,13 @@
 // SPDX-FileCopyrightText: fascia developers
 // Projected preconditioned conjugate gradients for one Newton iteration on
 // the CPU: the vector loops around the scalar logic of sim/point/cg.h, which
-// the device runs too. Constrained DOFs are kept at zero by the mask.
+// the device runs too. Constrained DOFs are kept at zero by the mask. Each
+// vector pass is one parallel loop over fixed blocks of frames, its dot
+// products summed per block and then in block order, so the result does not
+// depend on the thread count; a pass is fused where the algorithm allows,
+// since on two cores a parallel loop's start and end cost about as much as
+// a pass over 40,000 numbers.
+#include <stdlib.h>
 #include <string.h>
 
 #include "point/body.h"
@@ -61,33 +67,105 @@ void fascia_operator_apply(const fascia_operator *op, const fascia_real *v, fasc
     if (!op->mask[k]) out[k] = 0;
 }
 
+#define CG_BLOCK_FRAMES 256 // frames per partial sum (fixed: determinism)
+
+typedef struct cg_pass {
+  const fascia_operator *op;
+  const fascia_preconditioner *pc;
+  int32_t frames, blocks;
+  fascia_real *partial; // [2 blocks]
+} cg_pass;
+
+static void block_range(const cg_pass *c, int32_t blk, int64_t *begin, int64_t *end) {
+  *begin = (int64_t)blk * CG_BLOCK_FRAMES;
+  *end = *begin + CG_BLOCK_FRAMES < c->frames ? *begin + CG_BLOCK_FRAMES : c->frames;
+}
+
+// sums[0] = sum of partial[2 b], sums[1] = sum of partial[2 b + 1], in block order
+static void sum_partials(const cg_pass *c, fascia_real sums[2]) {
+  sums[0] = sums[1] = 0;
+  for (int32_t b = 0; b < c->blocks; ++b) {
+    sums[0] += c->partial[2 * b];
+    sums[1] += c->partial[2 * b + 1];
+  }
+}
+
+// The residual's pass: r = b masked (start, b given) or p += alpha dir and
+// r -= alpha Ad (a step, b NULL); then z = P r and sums = (r.r, r.z).
+static void residual(const cg_pass *c, const fascia_real *b, fascia_real alpha, const fascia_real *dir,
+                     const fascia_real *Ad, fascia_real *p, fascia_real *r, fascia_real *z, fascia_real sums[2]) {
+#pragma omp parallel for num_threads(c->op->sys->threads) schedule(static)
+  for (int32_t blk = 0; blk < c->blocks; ++blk) {
+    int64_t i0, i1;
+    block_range(c, blk, &i0, &i1);
+    if (b) {
+      for (int64_t k = 6 * i0; k < 6 * i1; ++k) r[k] = c->op->mask[k] ? b[k] : 0;
+    } else {
+      for (int64_t k = 6 * i0; k < 6 * i1; ++k) {
+        p[k] += alpha * dir[k];
+        r[k] -= alpha * Ad[k];
+      }
+    }
+    fascia_precond_apply_frames(c->pc, c->op->mask, r, z, (int32_t)i0, (int32_t)i1);
+    fascia_real rr = 0, rz = 0;
+    for (int64_t k = 6 * i0; k < 6 * i1; ++k) {
+      rr += r[k] * r[k];
+      rz += r[k] * z[k];
+    }
+    c->partial[2 * blk] = rr;
+    c->partial[2 * blk + 1] = rz;
+  }
+  sum_partials(c, sums);
+}
+
+// sums = (dir.Ad, dir.dir)
+static void curvature(const cg_pass *c, const fascia_real *dir, const fascia_real *Ad, fascia_real sums[2]) {
+#pragma omp parallel for num_threads(c->op->sys->threads) schedule(static)
+  for (int32_t blk = 0; blk < c->blocks; ++blk) {
+    int64_t i0, i1;
+    block_range(c, blk, &i0, &i1);
+    fascia_real dAd = 0, dd = 0;
+    for (int64_t k = 6 * i0; k < 6 * i1; ++k) {
+      dAd += dir[k] * Ad[k];
+      dd += dir[k] * dir[k];
+    }
+    c->partial[2 * blk] = dAd;
+    c->partial[2 * blk + 1] = dd;
+  }
+  sum_partials(c, sums);
+}
+
 fascia_cg_result fascia_cg_solve(const fascia_operator *op, const fascia_preconditioner *pc, const fascia_real *b,
                                  fascia_real *p, int max_iterations, int fixed, fascia_real tolerance,
                                  fascia_real *work) {
-  const int64_t n = 6 * (int64_t)op->sys->frame_count;
-  const int threads = op->sys->threads;
-  fascia_real *r = work, *z = work + n, *dir = work + 2 * n, *Ad = work + 3 * n;
+  const int32_t N = op->sys->frame_count;
+  const int64_t n = 6 * (int64_t)N;
+  fascia_real *r = work, *z = work + n, *dir = work + 2 * n, *Ad = work + 3 * n, sums[2];
   const fascia_pt_cg_limits limits = {tolerance, max_iterations, fixed};
   fascia_pt_cg s;
+  cg_pass c = {op, pc, N, (N + CG_BLOCK_FRAMES - 1) / CG_BLOCK_FRAMES, NULL};
+  fascia_real partial_stack[128];
+  c.partial = c.blocks <= 64 ? partial_stack : malloc(2 * (size_t)c.blocks * sizeof(fascia_real));
   memset(p, 0, (size_t)n * sizeof(fascia_real));
-  for (int64_t k = 0; k < n; ++k) r[k] = op->mask[k] ? b[k] : 0;
-  fascia_precond_apply(pc, op->mask, r, z);
+  if (!c.partial) { // out of memory: no step (the caller's line search sees no descent)
+    const fascia_cg_result none = {0, 0, 1};
+    return none;
+  }
+  residual(&c, b, 0, NULL, NULL, p, r, z, sums);
   memcpy(dir, z, (size_t)n * sizeof(fascia_real));
-  fascia_pt_cg_start(&s, &limits, fascia_dot(r, r, n, threads), fascia_dot(r, z, n, threads));
+  fascia_pt_cg_start(&s, &limits, sums[0], sums[1]);
   while (s.running) {
     fascia_operator_apply(op, dir, Ad);
-    fascia_pt_cg_curvature(&s, op->scale, fascia_dot(dir, Ad, n, threads), fascia_dot(dir, dir, n, threads));
+    curvature(&c, dir, Ad, sums);
+    fascia_pt_cg_curvature(&s, op->scale, sums[0], sums[1]);
     if (s.action == FASCIA_CG_COPY_Z) memcpy(p, z, (size_t)n * sizeof(fascia_real));
     if (s.action != FASCIA_CG_UPDATE) break;
-    for (int64_t k = 0; k < n; ++k) {
-      p[k] += s.alpha * dir[k];
-      r[k] -= s.alpha * Ad[k];
-    }
-    fascia_precond_apply(pc, op->mask, r, z);
-    fascia_pt_cg_residual(&s, &limits, fascia_dot(r, r, n, threads), fascia_dot(r, z, n, threads));
+    residual(&c, NULL, s.alpha, dir, Ad, p, r, z, sums);
+    fascia_pt_cg_residual(&s, &limits, sums[0], sums[1]);
     if (s.action == FASCIA_CG_DIRECTION)
       for (int64_t k = 0; k < n; ++k) dir[k] = z[k] + s.beta * dir[k];
   }
+  if (c.partial != partial_stack) free(c.partial);
   const fascia_cg_result result = {s.iterations, s.negative_curvature, s.bnorm > 0 ? s.rnorm / s.bnorm : 0};
   return result;
 }

@@ -40,8 +40,12 @@ void fascia_precond_build(fascia_preconditioner *pc, const fascia_operator *op, 
 
 void fascia_precond_apply(const fascia_preconditioner *pc, const unsigned char *mask, const fascia_real *r,
                           fascia_real *z) {
-  const int32_t N = pc->frame_count;
-  for (int32_t i = 0; i < N; ++i)
+  fascia_precond_apply_frames(pc, mask, r, z, 0, pc->frame_count);
+}
+
+void fascia_precond_apply_frames(const fascia_preconditioner *pc, const unsigned char *mask, const fascia_real *r,
+                                 fascia_real *z, int32_t begin, int32_t end) {
+  for (int32_t i = begin; i < end; ++i)
     fascia_pt_block6_apply(pc->kind == FASCIA_PRECOND_NONE ? NULL : pc->inverse + 36 * (int64_t)i,
                            mask + 6 * (int64_t)i, r + 6 * (int64_t)i, z + 6 * (int64_t)i);
 }

@@ -50,6 +50,9 @@ typedef struct fascia_preconditioner {
 FASCIA_INTERN void fascia_precond_build(fascia_preconditioner *pc, const fascia_operator *op, fascia_real *blocks);
 FASCIA_INTERN void fascia_precond_apply(const fascia_preconditioner *pc, const unsigned char *mask,
                                         const fascia_real *r, fascia_real *z);
+/// The same on frames [begin, end) only.
+FASCIA_INTERN void fascia_precond_apply_frames(const fascia_preconditioner *pc, const unsigned char *mask,
+                                               const fascia_real *r, fascia_real *z, int32_t begin, int32_t end);
 
 typedef struct fascia_cg_result {
   int iterations;
