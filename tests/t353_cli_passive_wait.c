@@ -2,7 +2,8 @@
 // SPDX-FileCopyrightText: fascia developers
 // The fascia program runs OpenMP with the passive wait policy, so that its
 // threads do not spin for cores a busy machine does not give them (README.md,
-// "On a busy machine"), and keeps a policy the user set.
+// "On a busy machine") after a short spin, and keeps a policy or a spin
+// count the user set.
 //   t353_cli_passive_wait FASCIA_BINARY
 #include <stdio.h>
 #include <string.h>
@@ -13,11 +14,11 @@
 
 static cli_result result;
 
-// `fascia info` with OMP_WAIT_POLICY unset (NULL) or set to policy
-static int info(const char *fascia, const char *policy) {
+// `fascia info` with the environment settings in env (e.g. "OMP_WAIT_POLICY=active"),
+// OMP_WAIT_POLICY and GOMP_SPINCOUNT unset otherwise
+static int info(const char *fascia, const char *env) {
   char command[8192];
-  if (policy) snprintf(command, sizeof command, "OMP_WAIT_POLICY=%s '%s' info", policy, fascia);
-  else snprintf(command, sizeof command, "env -u OMP_WAIT_POLICY '%s' info", fascia);
+  snprintf(command, sizeof command, "env -u OMP_WAIT_POLICY -u GOMP_SPINCOUNT %s '%s' info", env, fascia);
   FILE *p = popen(command, "r");
   if (!p) return 0;
   cli_read_all_(p, result.out);
@@ -26,10 +27,15 @@ static int info(const char *fascia, const char *policy) {
 
 int main(int argc, char **argv) {
   if (argc < 2) return 2;
-  CHECK(info(argv[1], NULL));
+  CHECK(info(argv[1], ""));
   CHECK(strstr(result.out, "openmp wait policy: PASSIVE\n") != NULL);
-  CHECK(info(argv[1], "active"));
+  CHECK(strstr(result.out, "openmp spin count: 3000\n") != NULL);
+  CHECK(info(argv[1], "OMP_WAIT_POLICY=active"));
   CHECK(strstr(result.out, "openmp wait policy: active\n") != NULL);
+  CHECK(strstr(result.out, "openmp spin count: the runtime's default\n") != NULL);
+  CHECK(info(argv[1], "GOMP_SPINCOUNT=0"));
+  CHECK(strstr(result.out, "openmp wait policy: the runtime's default\n") != NULL);
+  CHECK(strstr(result.out, "openmp spin count: 0\n") != NULL);
   if (check_failures_) fprintf(stderr, "fascia info said:\n%s", result.out);
   return CHECK_RESULT();
 }

@@ -12,9 +12,9 @@
 int cmd_info(int argc, char **argv) {
   for (int k = 1; k < argc; ++k)
     if (!strcmp(argv[k], "--help")) {
-      printf("usage: fascia info\n\nPrints the version, the worker threads, OpenMP's wait policy and, one line\n"
-             "each, whether the solver backends cpu, cuda and emulated can run here (and on what,\n"
-             "or why not).\n");
+      printf("usage: fascia info\n\nPrints the version, the worker threads, OpenMP's wait policy and spin\n"
+             "count and, one line each, whether the solver backends cpu, cuda and emulated can\n"
+             "run here (and on what, or why not).\n");
       return 0;
     } else if (strcmp(argv[k], "--verbose")) {
       fprintf(stderr, "fascia info: unknown option '%s'\n", argv[k]);
@@ -24,7 +24,9 @@ int cmd_info(int argc, char **argv) {
   fascia_ctx *ctx = cli_ctx(0, 0);
   printf("threads: %d\n", fascia_ctx_threads(ctx));
   const char *policy = getenv("OMP_WAIT_POLICY"); // main.c sets PASSIVE unless the user chose
-  printf("openmp wait policy: %s\n", policy ? policy : "the runtime's default (spinning)");
+  const char *spin = getenv("GOMP_SPINCOUNT");
+  printf("openmp wait policy: %s\n", policy ? policy : "the runtime's default");
+  printf("openmp spin count: %s\n", spin ? spin : "the runtime's default");
   fascia_ctx_destroy(&ctx);
   // "auto" is not listed: it is the first of these that is available and
   // runs the model (the emulation is never chosen by itself)

@@ -67,11 +67,18 @@ fascia_ctx *cli_ctx(int threads, int progress) {
 
 // OpenMP threads that spin while they wait for a core they do not get make
 // a run on a busy machine 10-30 times slower (README.md, "Speed"); with the
-// passive wait policy it degrades with the cores it gets. libgomp reads the
-// policy once, as it loads, so the program sets it and starts itself again,
-// unless the user chose a policy. If that fails the run goes on as it is.
+// passive wait policy it degrades with the cores it gets. A short spin
+// (FASCIA_OMP_SPIN rounds of libgomp's pause loop, about 0.1 ms) before a
+// thread sleeps is kept: CG passes follow each other within microseconds,
+// and waking a sleeping thread for each cost t3-s34610 a tenth of its step.
+// libgomp reads the policy once, as it loads, so the program sets it and
+// starts itself again, unless the user chose a policy or a spin count. If
+// that fails the run goes on as it is.
+#define FASCIA_OMP_SPIN "3000"
+
 static void passive_omp_wait(char **argv) {
-  if (getenv("OMP_WAIT_POLICY") || setenv("OMP_WAIT_POLICY", "PASSIVE", 1) != 0) return;
+  if (getenv("OMP_WAIT_POLICY") || getenv("GOMP_SPINCOUNT")) return;
+  if (setenv("OMP_WAIT_POLICY", "PASSIVE", 1) != 0 || setenv("GOMP_SPINCOUNT", FASCIA_OMP_SPIN, 1) != 0) return;
   execv("/proc/self/exe", argv);
 }
 
