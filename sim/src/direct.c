@@ -10,6 +10,9 @@
 // pattern was built in.
 #include <stdlib.h>
 #include <string.h>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 #include <cholmod.h>
 
@@ -223,8 +226,22 @@ int fascia_direct_factor(fascia_direct *d, fascia_ctx *ctx, const fascia_bsr *K,
   // OpenBLAS's Cholesky lets a NaN through: look at the numbers first
   for (int64_t e = 0; e < k; ++e)
     if (!isfinite(x[e])) return 0;
-  if (!cholmod_l_factorize(d->matrix, d->factor, &d->common)) return 0;
-  return d->common.status == CHOLMOD_OK && d->factor->minor == d->factor->n;
+  // Debian's CHOLMOD asks OpenMP for teams of a fixed 4 threads in its
+  // supernodal factorization: on 2 cores each factorization started two
+  // extra threads that competed with the solver's (t3-row-sized scenes: 83
+  // against 30 ms of linear solves per step). With OpenMP's dynamic
+  // adjustment on, the runtime gives its teams no more threads than the
+  // cores are free for; its loops only copy, so the bits do not change.
+  int factored;
+#ifdef _OPENMP
+  const int dynamic = omp_get_dynamic();
+  omp_set_dynamic(1);
+#endif
+  factored = cholmod_l_factorize(d->matrix, d->factor, &d->common);
+#ifdef _OPENMP
+  omp_set_dynamic(dynamic);
+#endif
+  return factored && d->common.status == CHOLMOD_OK && d->factor->minor == d->factor->n;
 }
 
 void fascia_direct_solve(fascia_direct *d, const fascia_real *rhs, fascia_real *x) {
