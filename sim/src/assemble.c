@@ -147,7 +147,7 @@ static int32_t find_block(const fascia_bsr *B, int32_t i, int32_t j) {
 // Rows of the consistent mass: for each sample of frame i, the product with
 // unit vectors on frame i's slot gives column i, which is row i transposed
 // (the mass is symmetric).
-static void mass_rows(fascia_system *sys, fascia_bsr *B, fascia_real coefficient) {
+static void mass_rows(fascia_system *sys, const unsigned char *moves, fascia_bsr *B, fascia_real coefficient) {
   const fascia_model *m = sys->model;
   const fascia_pt_state st = {sys->x, sys->A_mass};
   const int32_t maxn = sys->max_neighbours;
@@ -158,6 +158,7 @@ static void mass_rows(fascia_system *sys, fascia_bsr *B, fascia_real coefficient
 #pragma omp for schedule(static)
     for (int32_t i = 0; i < sys->frame_count; ++i) {
       if (!dq || !col) continue; // out of memory in a worker: rows stay as they were
+      if (moves && !moves[i]) continue;
       for (int32_t r = m->frame_offsets[i]; r < m->frame_offsets[i + 1]; ++r) {
         const int32_t k = m->frame_pairs[r], s = sys->pair_sample[k], begin = m->sample_offsets[s];
         const int32_t n = m->sample_offsets[s + 1] - begin, j = k - begin;
@@ -166,6 +167,7 @@ static void mass_rows(fascia_system *sys, fascia_bsr *B, fascia_real coefficient
           fascia_pt_sample_mass(&sys->pm, &st, s, sys->sample_mass[s], dq, sys->local_slot, col);
           dq[6 * j + c] = 0;
           for (int32_t l = 0; l < n; ++l) {
+            if (moves && !moves[m->pair_frame[begin + l]]) continue;
             fascia_real *blk = B->values + 36 * (int64_t)find_block(B, i, m->pair_frame[begin + l]);
             for (int a = 0; a < 6; ++a) blk[6 * c + a] += coefficient * col[6 * l + a];
           }
@@ -198,15 +200,16 @@ static void local_stiffness(const fascia_system *sys, const fascia_pt_state *st,
 }
 
 // The volumetric patches' rank-one terms lambda_p / V_p G_p G_p^T, row by row.
-static void dilatation_rows(const fascia_system *sys, fascia_bsr *B) {
+static void dilatation_rows(const fascia_system *sys, const unsigned char *moves, fascia_bsr *B) {
   const fascia_dilatation *d = sys->dilatation;
   const fascia_patch_table *t = &d->table;
 #pragma omp parallel for num_threads(sys->threads) schedule(static)
   for (int32_t i = 0; i < sys->frame_count; ++i)
-    for (int32_t r = t->frame_entry_offsets[i]; r < t->frame_entry_offsets[i + 1]; ++r) {
+    for (int32_t r = t->frame_entry_offsets[i]; (!moves || moves[i]) && r < t->frame_entry_offsets[i + 1]; ++r) {
       const int32_t e = t->frame_entries[r], p = t->entry_patch[e];
       const fascia_real c = d->patch_lambda[p] / d->patch_volume[p], *Gi = d->entry_gradient + 6 * (int64_t)e;
       for (int32_t f = t->support_offsets[p]; f < t->support_offsets[p + 1]; ++f) {
+        if (moves && !moves[t->entry_frame[f]]) continue;
         const fascia_real *Gj = d->entry_gradient + 6 * (int64_t)f;
         fascia_real *blk = B->values + 36 * (int64_t)find_block(B, i, t->entry_frame[f]);
         for (int a = 0; a < 6; ++a)
@@ -215,7 +218,14 @@ static void dilatation_rows(const fascia_system *sys, fascia_bsr *B) {
     }
 }
 
-void fascia_system_hessian_assemble(fascia_system *sys, fascia_bsr *B) {
+// Whether sample s has a frame that moves.
+static int sample_moves(const fascia_model *m, const unsigned char *moves, int32_t s) {
+  for (int32_t k = m->sample_offsets[s]; moves && k < m->sample_offsets[s + 1]; ++k)
+    if (moves[m->pair_frame[k]]) return 1;
+  return !moves;
+}
+
+void fascia_system_hessian_assemble(fascia_system *sys, const unsigned char *moves, fascia_bsr *B) {
   const fascia_pt_state st = {sys->x, sys->A};
   memset(B->values, 0, 36 * (size_t)B->blocks * sizeof(fascia_real));
   memcpy(B->cursor, B->contrib_offsets, (size_t)B->blocks * sizeof(int64_t));
@@ -230,26 +240,31 @@ void fascia_system_hessian_assemble(fascia_system *sys, fascia_bsr *B) {
       fascia_real *col = calloc(6 * (size_t)sys->max_neighbours, sizeof(fascia_real));
 #pragma omp for schedule(static)
       for (int32_t s = s0; s < s1; ++s)
-        if (dq && col) local_stiffness(sys, &st, s, B->chunk + 36 * (B->local_offsets[s] - e0), dq, col);
+        if (dq && col && sample_moves(sys->model, moves, s))
+          local_stiffness(sys, &st, s, B->chunk + 36 * (B->local_offsets[s] - e0), dq, col);
       free(dq);
       free(col);
+      // a block of two moving frames has contributions from moving samples only
 #pragma omp for schedule(static)
-      for (int64_t b = 0; b < B->blocks; ++b) {
-        fascia_real *dst = B->values + 36 * b;
-        int64_t c = B->cursor[b];
-        for (; c < B->contrib_offsets[b + 1] && B->contrib[c] < e1; ++c) {
-          const fascia_real *src = B->chunk + 36 * (B->contrib[c] - e0);
-          for (int q = 0; q < 36; ++q) dst[q] += src[q];
+      for (int32_t i = 0; i < B->rows; ++i)
+        for (int32_t b = B->row_offsets[i]; (!moves || moves[i]) && b < B->row_offsets[i + 1]; ++b) {
+          if (moves && !moves[B->cols[b]]) continue;
+          fascia_real *dst = B->values + 36 * (int64_t)b;
+          int64_t c = B->cursor[b];
+          for (; c < B->contrib_offsets[b + 1] && B->contrib[c] < e1; ++c) {
+            const fascia_real *src = B->chunk + 36 * (B->contrib[c] - e0);
+            for (int q = 0; q < 36; ++q) dst[q] += src[q];
+          }
+          B->cursor[b] = c;
         }
-        B->cursor[b] = c;
-      }
     }
     s0 = s1;
   }
-  if (sys->dilatation) dilatation_rows(sys, B);
+  if (sys->dilatation) dilatation_rows(sys, moves, B);
   // frame-local terms: gravity (theta-theta) and the symmetrizing 1/2 [g_theta]x
   const fascia_real gs = sys->gravity_scale, *g = sys->gravity;
   for (int32_t i = 0; i < sys->frame_count; ++i) {
+    if (moves && !moves[i]) continue;
     fascia_real *D = B->values + 36 * (int64_t)B->diagonal[i], b[3];
     fascia_pt_mat_vec(sys->A + 9 * i, sys->frame_moment + 3 * i, b);
     const fascia_real bg = fascia_pt_dot3(b, g), *t = sys->conservative_torque + 3 * i;
@@ -262,6 +277,7 @@ void fascia_system_hessian_assemble(fascia_system *sys, fascia_bsr *B) {
   }
 }
 
-void fascia_system_mass_assemble_add(fascia_system *sys, fascia_real coefficient, fascia_bsr *B) {
-  mass_rows(sys, B, coefficient);
+void fascia_system_mass_assemble_add(fascia_system *sys, const unsigned char *moves, fascia_real coefficient,
+                                     fascia_bsr *B) {
+  mass_rows(sys, moves, B, coefficient);
 }

@@ -47,8 +47,13 @@ FASCIA_INTERN void fascia_bsr_apply_single(const fascia_bsr *bsr, int threads, c
 
 /// Fills bsr->values with the symmetric Hessian H at the state of the last
 /// fascia_system_evaluate (what fascia_system_hessian_apply applies).
-FASCIA_INTERN void fascia_system_hessian_assemble(fascia_system *sys, fascia_bsr *bsr);
-/// Adds coefficient * M (consistent mass at the snapshot) to bsr->values.
-FASCIA_INTERN void fascia_system_mass_assemble_add(fascia_system *sys, fascia_real coefficient, fascia_bsr *bsr);
+/// moves: [frames] nonzero for a frame the step may move; a block of any
+/// other frame is left zero, and no work is spent on it (in organ scenes
+/// most blocks couple a fixed frame). NULL: every frame.
+FASCIA_INTERN void fascia_system_hessian_assemble(fascia_system *sys, const unsigned char *moves, fascia_bsr *bsr);
+/// Adds coefficient * M (consistent mass at the snapshot) to bsr->values, on
+/// the blocks of moving frames (moves as above).
+FASCIA_INTERN void fascia_system_mass_assemble_add(fascia_system *sys, const unsigned char *moves,
+                                                   fascia_real coefficient, fascia_bsr *bsr);
 
 #endif

@@ -33,6 +33,7 @@ typedef struct cpu_backend {
   const fascia_pt_bodies *bodies; ///< rigid organs (point/body.h), NULL for none
   const unsigned char *full_mask; ///< [6N] every frame the tissue moves (the bodies' slaves too)
   fascia_real *prolonged;         ///< [6N] the operator's P v for rigid organs
+  unsigned char *frame_moves;     ///< [N] a frame with a free unknown, a body's slave included (assembly)
   fascia_operator op;
   fascia_preconditioner pc;
   int use_direct;    ///< linear systems by sparse Cholesky (direct.h)
@@ -62,7 +63,7 @@ static void cpu_destroy(fascia_backend *backend) {
   fascia_direct_destroy(&B->direct);
   free(B->target_M), free(B->d_trial), free(B->gradient_trial), free(B->direction), free(B->rhs), free(B->work);
   free(B->blocks), free(B->mass_blocks), free(B->damping), free(B->scratch), free(B->pc.inverse);
-  free(B->saved), free(B->prolonged);
+  free(B->saved), free(B->prolonged), free(B->frame_moves);
   free(B);
 }
 
@@ -146,11 +147,13 @@ static fascia_status cpu_create(const fascia_backend_setup *setup, fascia_backen
   B->scratch = fascia_calloc(2 * n, sizeof(fascia_real));
   B->saved = fascia_calloc(13 * N, sizeof(fascia_real));
   B->prolonged = fascia_calloc(n, sizeof(fascia_real));
+  B->frame_moves = fascia_calloc(N, 1);
   B->pc.kind = setup->def->precond;
   B->pc.frame_count = B->frame_count;
   B->pc.inverse = fascia_calloc(36 * N, sizeof(fascia_real));
   if (!B->target_M || !B->d_trial || !B->gradient_trial || !B->direction || !B->rhs || !B->work || !B->blocks ||
-      !B->mass_blocks || !B->damping || !B->scratch || !B->saved || !B->prolonged || !B->pc.inverse) {
+      !B->mass_blocks || !B->damping || !B->scratch || !B->saved || !B->prolonged || !B->frame_moves ||
+      !B->pc.inverse) {
     cpu_destroy(&B->base);
     return FASCIA_FAIL(setup->ctx, FASCIA_ERR_MEMORY, "solver: out of memory for %lld frames", (long long)N);
   }
@@ -280,17 +283,24 @@ static fascia_status cpu_evaluate(fascia_backend *backend, fascia_real alpha, in
 // K = H (+ (c1 + c2) M for a dynamic step) at the current iterate, and its
 // float copy when the products use one
 static fascia_status assemble(cpu_backend *B) {
-  fascia_system_hessian_assemble(B->sys, &B->K);
+  // the masks may change between steps: the frames that move, from them
+  for (int32_t i = 0; i < B->frame_count; ++i) {
+    unsigned char moves = 0;
+    for (int c = 0; c < 6; ++c)
+      moves |= B->mask[6 * (int64_t)i + c] | (B->full_mask ? B->full_mask[6 * (int64_t)i + c] : 0);
+    B->frame_moves[i] = moves != 0;
+  }
+  fascia_system_hessian_assemble(B->sys, B->frame_moves, &B->K);
   const fascia_real c = B->values.c1 + B->values.c2;
   if (c != 0 && B->def->mass == FASCIA_MASS_CONSISTENT) {
-    fascia_system_mass_assemble_add(B->sys, c, &B->K);
+    fascia_system_mass_assemble_add(B->sys, B->frame_moves, c, &B->K);
   } else if (c != 0) {
     for (int32_t i = 0; i < B->frame_count; ++i) {
       fascia_real *D = B->K.values + 36 * (int64_t)B->K.diagonal[i];
       for (int q = 0; q < 36; ++q) D[q] += c * B->mass_blocks[36 * (int64_t)i + q];
     }
   }
-  if (B->use_direct && B->reduced) fascia_organs_reduce_matrix(B->S->organs, B->sys, c, &B->K, &B->R);
+  if (B->use_direct && B->reduced) fascia_organs_reduce_matrix(B->S->organs, B->sys, B->frame_moves, c, &B->K, &B->R);
   if (B->def->single_precision_matrix && !B->use_direct)
     return fascia_bsr_make_single(B->S->ctx, &B->K, B->sys->threads);
   return FASCIA_OK;

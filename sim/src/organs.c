@@ -422,14 +422,15 @@ fascia_status fascia_organs_reduced_pattern(fascia_ctx *ctx, const fascia_organs
   return st;
 }
 
-void fascia_organs_reduce_matrix(const fascia_organs *O, const fascia_system *sys, fascia_real mass_coefficient,
-                                 const fascia_bsr *K, fascia_bsr *R) {
+void fascia_organs_reduce_matrix(const fascia_organs *O, const fascia_system *sys, const unsigned char *moves,
+                                 fascia_real mass_coefficient, const fascia_bsr *K, fascia_bsr *R) {
   const int32_t N = K->rows;
   memset(R->values, 0, 36 * (size_t)R->blocks * sizeof *R->values);
   // slave rows and columns fold into their master's through T(a), a = x_i - x_master
   for (int32_t i = 0; i < N; ++i) {
     const int32_t ri = reduced_frame(O, i);
-    for (int32_t k = K->row_offsets[i]; k < K->row_offsets[i + 1]; ++k) {
+    for (int32_t k = K->row_offsets[i]; (!moves || moves[i]) && k < K->row_offsets[i + 1]; ++k) {
+      if (moves && !moves[K->cols[k]]) continue;
       const int32_t j = K->cols[k], rj = reduced_frame(O, j);
       const fascia_real *block = K->values + 36 * (int64_t)k;
       fascia_real *out = R->values + 36 * (int64_t)fascia_index_set_find(R->cols, R->row_offsets[ri],

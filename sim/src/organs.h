@@ -58,9 +58,11 @@ FASCIA_INTERN fascia_status fascia_organs_reduced_pattern(fascia_ctx *ctx, const
 /// R = P^T K P at the state of sys, plus each body's mass and inertia
 /// (mass_coefficient, as the operator's restriction) and the geometric
 /// term of the last fascia_organs_reduce: the assembled form of that
-/// operator on the reduced coordinates.
+/// operator on the reduced coordinates. Blocks of frames not in moves
+/// (fascia_system_hessian_assemble; NULL: all) are not read.
 FASCIA_INTERN void fascia_organs_reduce_matrix(const fascia_organs *O, const fascia_system *sys,
-                                               fascia_real mass_coefficient, const fascia_bsr *K, fascia_bsr *R);
+                                               const unsigned char *moves, fascia_real mass_coefficient,
+                                               const fascia_bsr *K, fascia_bsr *R);
 /// Squared norm of the loads on the bodies (gravity of the body, loads and
 /// tissue weight on the slave frames), for the Newton tolerance.
 FASCIA_INTERN fascia_real fascia_organs_load_norm2(const fascia_organs *O, const fascia_solver *S);
