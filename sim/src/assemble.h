@@ -38,12 +38,15 @@ typedef struct fascia_bsr {
 /// Pattern of frame pairs that share a sample (every frame has its diagonal).
 FASCIA_INTERN fascia_status fascia_bsr_create(fascia_ctx *ctx, const fascia_model *model, fascia_bsr *out);
 FASCIA_INTERN void fascia_bsr_destroy(fascia_bsr *bsr);
-/// out = B v
-FASCIA_INTERN void fascia_bsr_apply(const fascia_bsr *bsr, int threads, const fascia_real *v, fascia_real *out);
+/// out = B v; with moves ([rows], NULL: all), only the rows and columns of
+/// moving frames (the others are not assembled): out is 0 on other rows.
+FASCIA_INTERN void fascia_bsr_apply(const fascia_bsr *bsr, int threads, const unsigned char *moves,
+                                    const fascia_real *v, fascia_real *out);
 /// Rounds the values to the float copy (allocated on first use); FASCIA_ERR_MEMORY if it cannot be.
 FASCIA_INTERN fascia_status fascia_bsr_make_single(fascia_ctx *ctx, fascia_bsr *bsr, int threads);
-/// out = B v with the float copy (products summed in double).
-FASCIA_INTERN void fascia_bsr_apply_single(const fascia_bsr *bsr, int threads, const fascia_real *v, fascia_real *out);
+/// out = B v with the float copy (products summed in double); moves as above.
+FASCIA_INTERN void fascia_bsr_apply_single(const fascia_bsr *bsr, int threads, const unsigned char *moves,
+                                           const fascia_real *v, fascia_real *out);
 
 /// Fills bsr->values with the symmetric Hessian H at the state of the last
 /// fascia_system_evaluate (what fascia_system_hessian_apply applies).

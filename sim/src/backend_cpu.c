@@ -204,6 +204,13 @@ static fascia_status cpu_begin(fascia_backend *backend, const fascia_step_values
     mass_apply(B, v->inertia_target, B->target_M);
     B->target_norm = fascia_dot(v->inertia_target, B->target_M, n, B->sys->threads);
   }
+  // the masks may change between steps: the frames that move, from them
+  for (int32_t i = 0; i < B->frame_count; ++i) {
+    unsigned char moves = 0;
+    for (int c = 0; c < 6; ++c)
+      moves |= B->mask[6 * (int64_t)i + c] | (B->full_mask ? B->full_mask[6 * (int64_t)i + c] : 0);
+    B->frame_moves[i] = moves != 0;
+  }
   const fascia_real c = v->c1 + v->c2;
   fascia_operator op = {.sys = B->sys,
                         .mass_coefficient = c,
@@ -212,6 +219,7 @@ static fascia_status cpu_begin(fascia_backend *backend, const fascia_step_values
                         .damping_diagonal = B->damping,
                         .scale = 1,
                         .assembled = B->use_assembled ? &B->K : NULL,
+                        .frame_moves = B->frame_moves,
                         .mask = B->mask,
                         .scratch = B->scratch + n};
   // rigid organs: the table says which bodies move in this step (the caller may drive one)
@@ -283,13 +291,6 @@ static fascia_status cpu_evaluate(fascia_backend *backend, fascia_real alpha, in
 // K = H (+ (c1 + c2) M for a dynamic step) at the current iterate, and its
 // float copy when the products use one
 static fascia_status assemble(cpu_backend *B) {
-  // the masks may change between steps: the frames that move, from them
-  for (int32_t i = 0; i < B->frame_count; ++i) {
-    unsigned char moves = 0;
-    for (int c = 0; c < 6; ++c)
-      moves |= B->mask[6 * (int64_t)i + c] | (B->full_mask ? B->full_mask[6 * (int64_t)i + c] : 0);
-    B->frame_moves[i] = moves != 0;
-  }
   fascia_system_hessian_assemble(B->sys, B->frame_moves, &B->K);
   const fascia_real c = B->values.c1 + B->values.c2;
   if (c != 0 && B->def->mass == FASCIA_MASS_CONSISTENT) {

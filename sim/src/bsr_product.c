@@ -46,11 +46,12 @@ static inline void fold_rows(const wide_real acc[9], fascia_real *out) {
   }
 }
 
-WIDE_CLONES static void rows_double(const fascia_bsr *B, int32_t begin, int32_t end, const fascia_real *v,
-                                    fascia_real *out) {
+WIDE_CLONES static void rows_double(const fascia_bsr *B, const unsigned char *moves, int32_t begin, int32_t end,
+                                    const fascia_real *v, fascia_real *out) {
   for (int32_t i = begin; i < end; ++i) {
     wide_real acc[9] = {0};
-    for (int32_t b = B->row_offsets[i]; b < B->row_offsets[i + 1]; ++b) {
+    for (int32_t b = B->row_offsets[i]; (!moves || moves[i]) && b < B->row_offsets[i + 1]; ++b) {
+      if (moves && !moves[B->cols[b]]) continue;
       const fascia_real *blk = B->values + 36 * (int64_t)b, *x = v + 6 * (int64_t)B->cols[b];
       const wide_real x0 = {x[0], x[1], x[2], x[3]}, x1 = {x[4], x[5], x[0], x[1]}, x2 = {x[2], x[3], x[4], x[5]};
       for (int q = 0; q < 3; ++q) {
@@ -63,11 +64,12 @@ WIDE_CLONES static void rows_double(const fascia_bsr *B, int32_t begin, int32_t 
   }
 }
 
-WIDE_CLONES static void rows_single(const fascia_bsr *B, int32_t begin, int32_t end, const fascia_real *v,
-                                    fascia_real *out) {
+WIDE_CLONES static void rows_single(const fascia_bsr *B, const unsigned char *moves, int32_t begin, int32_t end,
+                                    const fascia_real *v, fascia_real *out) {
   for (int32_t i = begin; i < end; ++i) {
     wide_real acc[9] = {0};
-    for (int32_t b = B->row_offsets[i]; b < B->row_offsets[i + 1]; ++b) {
+    for (int32_t b = B->row_offsets[i]; (!moves || moves[i]) && b < B->row_offsets[i + 1]; ++b) {
+      if (moves && !moves[B->cols[b]]) continue;
       const float *blk = B->values_single + 36 * (int64_t)b;
       const fascia_real *x = v + 6 * (int64_t)B->cols[b];
       const wide_real x0 = {x[0], x[1], x[2], x[3]}, x1 = {x[4], x[5], x[0], x[1]}, x2 = {x[2], x[3], x[4], x[5]};
@@ -81,20 +83,22 @@ WIDE_CLONES static void rows_single(const fascia_bsr *B, int32_t begin, int32_t 
   }
 }
 
-void fascia_bsr_apply(const fascia_bsr *B, int threads, const fascia_real *v, fascia_real *out) {
+void fascia_bsr_apply(const fascia_bsr *B, int threads, const unsigned char *moves, const fascia_real *v,
+                      fascia_real *out) {
   const int32_t tasks = (B->rows + ROWS_PER_TASK - 1) / ROWS_PER_TASK;
 #pragma omp parallel for num_threads(threads) schedule(static)
   for (int32_t t = 0; t < tasks; ++t) {
     const int32_t begin = t * ROWS_PER_TASK, end = begin + ROWS_PER_TASK < B->rows ? begin + ROWS_PER_TASK : B->rows;
-    rows_double(B, begin, end, v, out);
+    rows_double(B, moves, begin, end, v, out);
   }
 }
 
-void fascia_bsr_apply_single(const fascia_bsr *B, int threads, const fascia_real *v, fascia_real *out) {
+void fascia_bsr_apply_single(const fascia_bsr *B, int threads, const unsigned char *moves, const fascia_real *v,
+                             fascia_real *out) {
   const int32_t tasks = (B->rows + ROWS_PER_TASK - 1) / ROWS_PER_TASK;
 #pragma omp parallel for num_threads(threads) schedule(static)
   for (int32_t t = 0; t < tasks; ++t) {
     const int32_t begin = t * ROWS_PER_TASK, end = begin + ROWS_PER_TASK < B->rows ? begin + ROWS_PER_TASK : B->rows;
-    rows_single(B, begin, end, v, out);
+    rows_single(B, moves, begin, end, v, out);
   }
 }

@@ -40,9 +40,9 @@ void fascia_operator_apply(const fascia_operator *op, const fascia_real *v, fasc
   fascia_system *sys = op->sys;
   const int64_t n = 6 * (int64_t)sys->frame_count;
   if (op->assembled && op->single) {
-    fascia_bsr_apply_single(op->assembled, sys->threads, v, out);
+    fascia_bsr_apply_single(op->assembled, sys->threads, op->frame_moves, v, out);
   } else if (op->assembled) {
-    fascia_bsr_apply(op->assembled, sys->threads, v, out);
+    fascia_bsr_apply(op->assembled, sys->threads, op->frame_moves, v, out);
   } else {
     fascia_system_hessian_apply(sys, v, out);
   }

@@ -26,6 +26,7 @@ typedef struct fascia_operator {
   fascia_real shift;
   fascia_real scale; ///< mean absolute diagonal: curvature below 1e-12 scale counts as none
   const fascia_bsr *assembled; ///< when set: H + mass_coefficient M assembled, used instead of products
+  const unsigned char *frame_moves; ///< [N] the frames assembled (fascia_system_hessian_assemble)
   const unsigned char *mask; ///< [6N] 1 free, 0 constrained
   fascia_real *scratch;      ///< [6N]
   /// when set: P^T A P on the reduced coordinates of rigid organs (point/body.h), the
