@@ -386,8 +386,11 @@ static inline FASCIA_HD void fascia_pt_sample_stiffness(const fascia_pt_model *m
 /// Equals fascia_pt_sample_stiffness_parts(.., BASE | SMOOTHING) applied to
 /// unit vectors; it is how the assembled matrix is built without 6n products
 /// per sample (the rotation coupling, when on, is added by such products).
+/// frame_moves ([frames], NULL: all): a block with a frame not in it is not
+/// written (the assembly leaves the blocks of frames a step holds).
 static inline FASCIA_HD void fascia_pt_sample_local_stiffness(const fascia_pt_model *m, const fascia_pt_state *st,
-                                                              int32_t s, const fascia_real *cache, fascia_real *out) {
+                                                              int32_t s, const fascia_real *cache,
+                                                              const unsigned char *frame_moves, fascia_real *out) {
   const fascia_real *F = cache, *P = cache + 9, *aux = cache + 18;
   const fascia_real v = m->sample_volume[s];
   const int32_t begin = m->sample_offsets[s], n = m->sample_offsets[s + 1] - begin;
@@ -404,6 +407,7 @@ static inline FASCIA_HD void fascia_pt_sample_local_stiffness(const fascia_pt_mo
     // B_a^T D, a 6x9 matrix: rows x_k: sum_c g_c D[(k c), :]; rows theta_k:
     // sum_c (c_c x D[(. c), :])_k, c_c the columns of C
     const int32_t ka = begin + a;
+    if (frame_moves && !frame_moves[m->pair_frame[ka]]) continue;
     const fascia_real *Aa = st->frame_A + 9 * m->pair_frame[ka], *ga = m->pair_gradient + 3 * ka;
     fascia_real aa[3], Ca[9], BtD[54];
     fascia_pt_pair_C(Aa, m->pair_offset + 3 * ka, ga, m->pair_weight[ka], aa, Ca);
@@ -422,6 +426,7 @@ static inline FASCIA_HD void fascia_pt_sample_local_stiffness(const fascia_pt_mo
       // (B_a^T D) B_b: column x_k of B_b has g_c at row (k c); column
       // theta_k maps x to sum_c (c_c x x_c)_k, x_c = (x[c], x[3+c], x[6+c])
       const int32_t kb = begin + b;
+      if (frame_moves && !frame_moves[m->pair_frame[kb]]) continue;
       const fascia_real *Ab = st->frame_A + 9 * m->pair_frame[kb], *gb = m->pair_gradient + 3 * kb;
       fascia_real ab[3], Cb[9];
       fascia_pt_pair_C(Ab, m->pair_offset + 3 * kb, gb, m->pair_weight[kb], ab, Cb);
@@ -460,8 +465,10 @@ static inline FASCIA_HD void fascia_pt_sample_local_stiffness(const fascia_pt_mo
       for (int q = 0; q < 9; ++q) Mc[9 * c + q] += g[c] * A[q];
   }
   for (int a = 0; a < n; ++a) {
+    if (frame_moves && !frame_moves[m->pair_frame[begin + a]]) continue;
     const fascia_real *Aa = st->frame_A + 9 * m->pair_frame[begin + a], *ga = m->pair_gradient + 3 * (begin + a);
     for (int b = a; b < n; ++b) { // block (b, a) is the transpose
+      if (frame_moves && !frame_moves[m->pair_frame[begin + b]]) continue;
       const fascia_real *Ab = st->frame_A + 9 * m->pair_frame[begin + b], *gb = m->pair_gradient + 3 * (begin + b);
       const fascia_real gg = v * kc * fascia_pt_dot3(ga, gb);
       fascia_real Q[9]; // A_b A_a^T

@@ -181,15 +181,17 @@ static void mass_rows(fascia_system *sys, const unsigned char *moves, fascia_bsr
 
 // Local stiffness of sample s into out (n x n blocks): the paper's terms and
 // the rotation smoothing in closed form, the rotation coupling, when on, as
-// products with the 6n unit vectors of the sample.
-static void local_stiffness(const fascia_system *sys, const fascia_pt_state *st, int32_t s, fascia_real *out,
-                            fascia_real *dq, fascia_real *col) {
+// products with the 6n unit vectors of the sample. Blocks with a frame not
+// in moves are left unwritten.
+static void local_stiffness(const fascia_system *sys, const fascia_pt_state *st, const unsigned char *moves,
+                            int32_t s, fascia_real *out, fascia_real *dq, fascia_real *col) {
   const fascia_model *m = sys->model;
   const fascia_real *cache = sys->cache + (int64_t)s * FASCIA_PT_CACHE_SIZE;
-  fascia_pt_sample_local_stiffness(&sys->pm, st, s, cache, out);
+  fascia_pt_sample_local_stiffness(&sys->pm, st, s, cache, moves, out);
   if (sys->sample_coupling[s] == 0) return;
-  const int32_t n = m->sample_offsets[s + 1] - m->sample_offsets[s];
-  for (int32_t b = 0; b < n; ++b)
+  const int32_t begin = m->sample_offsets[s], n = m->sample_offsets[s + 1] - begin;
+  for (int32_t b = 0; b < n; ++b) {
+    if (moves && !moves[m->pair_frame[begin + b]]) continue;
     for (int c = 0; c < 6; ++c) {
       dq[6 * b + c] = 1;
       fascia_pt_sample_stiffness_parts(&sys->pm, st, s, cache, dq, sys->local_slot, col, FASCIA_PT_PART_COUPLING);
@@ -197,6 +199,7 @@ static void local_stiffness(const fascia_system *sys, const fascia_pt_state *st,
       for (int32_t a = 0; a < n; ++a)
         for (int r = 0; r < 6; ++r) out[36 * (a * n + b) + 6 * r + c] += col[6 * a + r];
     }
+  }
 }
 
 // The volumetric patches' rank-one terms lambda_p / V_p G_p G_p^T, row by row.
@@ -241,7 +244,7 @@ void fascia_system_hessian_assemble(fascia_system *sys, const unsigned char *mov
 #pragma omp for schedule(static)
       for (int32_t s = s0; s < s1; ++s)
         if (dq && col && sample_moves(sys->model, moves, s))
-          local_stiffness(sys, &st, s, B->chunk + 36 * (B->local_offsets[s] - e0), dq, col);
+          local_stiffness(sys, &st, moves, s, B->chunk + 36 * (B->local_offsets[s] - e0), dq, col);
       free(dq);
       free(col);
       // a block of two moving frames has contributions from moving samples only
