@@ -406,6 +406,7 @@ static void merge_report(fascia_solve_report *sum, const fascia_solve_report *r)
   sum->cg_iterations += r->cg_iterations;
   sum->line_search_cuts += r->line_search_cuts;
   sum->watchdog_returns += r->watchdog_returns;
+  sum->factorizations += r->factorizations;
   sum->negative_curvature += r->negative_curvature;
   sum->direct = r->direct;
   sum->assembled = r->assembled;

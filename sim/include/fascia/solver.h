@@ -112,6 +112,7 @@ typedef struct fascia_solve_report {
   int negative_curvature;      ///< CG solves that met negative curvature, or failed factorizations
   int direct;                  ///< 1 when the linear systems were solved directly
   int assembled;               ///< 1 when the tangent was assembled (direct solver or assembled CG)
+  int factorizations;          ///< direct solver: tangents assembled and factored (an iteration may reuse the last)
   fascia_real gradient_norm;   ///< final |gradient| over free DOFs
   fascia_real reference_norm;  ///< |external load|, the tolerance's scale
   fascia_real energy;          ///< final potential energy, J
