@@ -29,7 +29,7 @@ static int check_static_json(const char *fascia, const char *model, const char *
     return 1;
   }
   static const char *const keys[] = {"probes", "ms_per_step", "newton_iterations", "cg_iterations",
-                                     "newton_iterations_per_step", "cg_iterations_per_step", "converged",
+                                     "factorizations", "newton_iterations_per_step", "cg_iterations_per_step", "converged",
                                      "backend", "device", "steps", "time", "energy"};
   for (size_t k = 0; k < sizeof keys / sizeof keys[0]; ++k)
     if (!cJSON_GetObjectItemCaseSensitive(root, keys[k])) {
@@ -43,6 +43,9 @@ static int check_static_json(const char *fascia, const char *model, const char *
   CHECK(cJSON_IsNumber(ms) && ms->valuedouble > 0);
   const cJSON *newton = cJSON_GetObjectItemCaseSensitive(root, "newton_iterations");
   CHECK(cJSON_IsNumber(newton) && newton->valueint >= 1);
+  // the direct solver factors at most once per Newton iteration (chord steps: fewer)
+  const cJSON *factorizations = cJSON_GetObjectItemCaseSensitive(root, "factorizations");
+  CHECK(cJSON_IsNumber(factorizations) && factorizations->valueint <= newton->valueint);
   const cJSON *tip = cJSON_GetObjectItemCaseSensitive(cJSON_GetObjectItemCaseSensitive(root, "probes"), "tip");
   const cJSON *u = cJSON_GetObjectItemCaseSensitive(tip, "displacement");
   const cJSON *x = cJSON_GetObjectItemCaseSensitive(tip, "position");

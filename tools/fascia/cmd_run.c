@@ -278,7 +278,7 @@ static int parse_options(int argc, char **argv, run_options *opt, const fascia_s
 
 /// What the run did, for the summary.
 typedef struct run_totals {
-  int steps, newton, cg, converged_steps, interrupted, saved, direct_steps, assembled_steps;
+  int steps, newton, cg, factorizations, converged_steps, interrupted, saved, direct_steps, assembled_steps;
   int capacity;                       ///< of the per-step arrays, grown as steps are done
   int *newton_per_step, *cg_per_step; ///< [steps done]
   fascia_ctx *ctx;                    ///< for the out-of-memory message
@@ -328,6 +328,7 @@ static fascia_status add_report(run_totals *t, const fascia_solve_report *r) {
   t->cg_per_step[t->steps] = r->cg_iterations;
   t->newton += r->newton_iterations;
   t->cg += r->cg_iterations;
+  t->factorizations += r->factorizations;
   t->converged_steps += r->converged != 0;
   t->direct_steps += r->direct != 0;
   t->assembled_steps += r->assembled != 0;
@@ -518,6 +519,7 @@ static void print_text(const run_options *opt, const fascia_model *m, fascia_sol
          t->profile.assemble_ms / steps, t->profile.cg_ms / steps);
   printf("iterations  Newton %d (%.2f per step), CG %d (%.1f per step)", t->newton, (double)t->newton / steps,
          t->cg, (double)t->cg / steps);
+  if (t->direct_steps > 0) printf(", %d factorizations (chord steps keep one)", t->factorizations);
   if (opt->dynamic) printf(", %d of %d steps converged", t->converged_steps, t->steps);
   printf("\nenergy      potential %.9g J, kinetic %.9g J\n", t->energy,
          fascia_solver_kinetic_energy(solver));
@@ -606,6 +608,7 @@ static int print_json(const run_options *opt, const fascia_model *m, fascia_solv
   cJSON_AddNumberToObject(root, "wall_ms", t->solve_ms);
   cJSON_AddNumberToObject(root, "newton_iterations", t->newton);
   cJSON_AddNumberToObject(root, "cg_iterations", t->cg);
+  cJSON_AddNumberToObject(root, "factorizations", t->factorizations);
   cJSON_AddItemToObject(root, "newton_iterations_per_step", int_array(t->newton_per_step, t->steps));
   cJSON_AddItemToObject(root, "cg_iterations_per_step", int_array(t->cg_per_step, t->steps));
   cJSON *profile = cJSON_AddObjectToObject(root, "profile_ms_per_step");
