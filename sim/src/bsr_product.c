@@ -46,59 +46,48 @@ static inline void fold_rows(const wide_real acc[9], fascia_real *out) {
   }
 }
 
-WIDE_CLONES static void rows_double(const fascia_bsr *B, const unsigned char *moves, int32_t begin, int32_t end,
-                                    const fascia_real *v, fascia_real *out) {
+// Rows [begin, end) of B v, with the float copy of the values where single.
+WIDE_CLONES static void rows(const fascia_bsr *B, int single, const unsigned char *moves, int32_t begin, int32_t end,
+                             const fascia_real *v, fascia_real *out) {
   for (int32_t i = begin; i < end; ++i) {
     wide_real acc[9] = {0};
     for (int32_t b = B->row_offsets[i]; (!moves || moves[i]) && b < B->row_offsets[i + 1]; ++b) {
       if (moves && !moves[B->cols[b]]) continue;
-      const fascia_real *blk = B->values + 36 * (int64_t)b, *x = v + 6 * (int64_t)B->cols[b];
+      const fascia_real *x = v + 6 * (int64_t)B->cols[b];
       const wide_real x0 = {x[0], x[1], x[2], x[3]}, x1 = {x[4], x[5], x[0], x[1]}, x2 = {x[2], x[3], x[4], x[5]};
       for (int q = 0; q < 3; ++q) {
-        add_product(&acc[3 * q], blk + 12 * q, &x0);
-        add_product(&acc[3 * q + 1], blk + 12 * q + 4, &x1);
-        add_product(&acc[3 * q + 2], blk + 12 * q + 8, &x2);
+        const int64_t at = 36 * (int64_t)b + 12 * q;
+        if (single) {
+          add_product_float(&acc[3 * q], B->values_single + at, &x0);
+          add_product_float(&acc[3 * q + 1], B->values_single + at + 4, &x1);
+          add_product_float(&acc[3 * q + 2], B->values_single + at + 8, &x2);
+        } else {
+          add_product(&acc[3 * q], B->values + at, &x0);
+          add_product(&acc[3 * q + 1], B->values + at + 4, &x1);
+          add_product(&acc[3 * q + 2], B->values + at + 8, &x2);
+        }
       }
     }
     fold_rows(acc, out + 6 * (int64_t)i);
   }
 }
 
-WIDE_CLONES static void rows_single(const fascia_bsr *B, const unsigned char *moves, int32_t begin, int32_t end,
-                                    const fascia_real *v, fascia_real *out) {
-  for (int32_t i = begin; i < end; ++i) {
-    wide_real acc[9] = {0};
-    for (int32_t b = B->row_offsets[i]; (!moves || moves[i]) && b < B->row_offsets[i + 1]; ++b) {
-      if (moves && !moves[B->cols[b]]) continue;
-      const float *blk = B->values_single + 36 * (int64_t)b;
-      const fascia_real *x = v + 6 * (int64_t)B->cols[b];
-      const wide_real x0 = {x[0], x[1], x[2], x[3]}, x1 = {x[4], x[5], x[0], x[1]}, x2 = {x[2], x[3], x[4], x[5]};
-      for (int q = 0; q < 3; ++q) {
-        add_product_float(&acc[3 * q], blk + 12 * q, &x0);
-        add_product_float(&acc[3 * q + 1], blk + 12 * q + 4, &x1);
-        add_product_float(&acc[3 * q + 2], blk + 12 * q + 8, &x2);
-      }
-    }
-    fold_rows(acc, out + 6 * (int64_t)i);
+static void apply(const fascia_bsr *B, int single, int threads, const unsigned char *moves, const fascia_real *v,
+                  fascia_real *out) {
+  const int32_t tasks = (B->rows + ROWS_PER_TASK - 1) / ROWS_PER_TASK;
+#pragma omp parallel for num_threads(threads) schedule(static)
+  for (int32_t t = 0; t < tasks; ++t) {
+    const int32_t begin = t * ROWS_PER_TASK, end = begin + ROWS_PER_TASK < B->rows ? begin + ROWS_PER_TASK : B->rows;
+    rows(B, single, moves, begin, end, v, out);
   }
 }
 
 void fascia_bsr_apply(const fascia_bsr *B, int threads, const unsigned char *moves, const fascia_real *v,
                       fascia_real *out) {
-  const int32_t tasks = (B->rows + ROWS_PER_TASK - 1) / ROWS_PER_TASK;
-#pragma omp parallel for num_threads(threads) schedule(static)
-  for (int32_t t = 0; t < tasks; ++t) {
-    const int32_t begin = t * ROWS_PER_TASK, end = begin + ROWS_PER_TASK < B->rows ? begin + ROWS_PER_TASK : B->rows;
-    rows_double(B, moves, begin, end, v, out);
-  }
+  apply(B, 0, threads, moves, v, out);
 }
 
 void fascia_bsr_apply_single(const fascia_bsr *B, int threads, const unsigned char *moves, const fascia_real *v,
                              fascia_real *out) {
-  const int32_t tasks = (B->rows + ROWS_PER_TASK - 1) / ROWS_PER_TASK;
-#pragma omp parallel for num_threads(threads) schedule(static)
-  for (int32_t t = 0; t < tasks; ++t) {
-    const int32_t begin = t * ROWS_PER_TASK, end = begin + ROWS_PER_TASK < B->rows ? begin + ROWS_PER_TASK : B->rows;
-    rows_single(B, moves, begin, end, v, out);
-  }
+  apply(B, 1, threads, moves, v, out);
 }

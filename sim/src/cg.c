@@ -81,6 +81,18 @@ static void block_range(const cg_pass *c, int32_t blk, int64_t *begin, int64_t *
   *end = *begin + CG_BLOCK_FRAMES < c->frames ? *begin + CG_BLOCK_FRAMES : c->frames;
 }
 
+// partial = (a.b, a.c) over entries [k0, k1)
+static void block_dots(const fascia_real *a, const fascia_real *b, const fascia_real *c, int64_t k0, int64_t k1,
+                       fascia_real partial[2]) {
+  fascia_real ab = 0, ac = 0;
+  for (int64_t k = k0; k < k1; ++k) {
+    ab += a[k] * b[k];
+    ac += a[k] * c[k];
+  }
+  partial[0] = ab;
+  partial[1] = ac;
+}
+
 // sums[0] = sum of partial[2 b], sums[1] = sum of partial[2 b + 1], in block order
 static void sum_partials(const cg_pass *c, fascia_real sums[2]) {
   sums[0] = sums[1] = 0;
@@ -107,13 +119,7 @@ static void residual(const cg_pass *c, const fascia_real *b, fascia_real alpha, 
       }
     }
     fascia_precond_apply_frames(c->pc, c->op->mask, r, z, (int32_t)i0, (int32_t)i1);
-    fascia_real rr = 0, rz = 0;
-    for (int64_t k = 6 * i0; k < 6 * i1; ++k) {
-      rr += r[k] * r[k];
-      rz += r[k] * z[k];
-    }
-    c->partial[2 * blk] = rr;
-    c->partial[2 * blk + 1] = rz;
+    block_dots(r, r, z, 6 * i0, 6 * i1, c->partial + 2 * blk);
   }
   sum_partials(c, sums);
 }
@@ -124,13 +130,7 @@ static void curvature(const cg_pass *c, const fascia_real *dir, const fascia_rea
   for (int32_t blk = 0; blk < c->blocks; ++blk) {
     int64_t i0, i1;
     block_range(c, blk, &i0, &i1);
-    fascia_real dAd = 0, dd = 0;
-    for (int64_t k = 6 * i0; k < 6 * i1; ++k) {
-      dAd += dir[k] * Ad[k];
-      dd += dir[k] * dir[k];
-    }
-    c->partial[2 * blk] = dAd;
-    c->partial[2 * blk + 1] = dd;
+    block_dots(dir, Ad, dir, 6 * i0, 6 * i1, c->partial + 2 * blk);
   }
   sum_partials(c, sums);
 }
