@@ -19,6 +19,9 @@
 //   weights  4 neighbours: barycentric weights of the containing tetrahedron
 //            of the 6-tetrahedron (Kuhn) split of the frame grid (the paper's
 //            mesh-based linear scheme); more: MLS over the k nearest frames.
+// Where a row has more frames than its samples reach (t2-f500-s750,
+// t2-f792-s750), a frame no sample weighs on carries no mass and nothing
+// holds it: it is fixed, and the provenance counts such frames.
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -158,7 +161,7 @@ static fascia_status weights_at(fascia_ctx *ctx, const scene_grid *g, const fasc
 }
 
 static void paper_provenance(char *buf, size_t size, const fascia_scene_paper_row *row, const int32_t frames[3],
-                             const int32_t strata[2], const fascia_scene_beam_def *body) {
+                             const int32_t strata[2], int32_t unweighted, const fascia_scene_beam_def *body) {
   buf[0] = 0;
   scene_append(buf, size,
                "{\"generator\": \"fascia_scene_paper_build\", \"fascia_version\": \"%s\", \"scene\": \"paper\", ",
@@ -179,6 +182,7 @@ static void paper_provenance(char *buf, size_t size, const fascia_scene_paper_ro
                "\"sampling\": \"stratified jittered, one per stratum, stratum volume\", \"strata_section\": [%d, %d], "
                "\"seed\": %llu, \"paper_cpu_ms\": %g, \"paper_gpu_ms\": %g, ",
                (int)strata[0], (int)strata[1], (unsigned long long)PAPER_SEED, row->paper_cpu_ms, row->paper_gpu_ms);
+  scene_append(buf, size, "\"frames_without_samples_fixed\": %d, ", (int)unweighted);
   scene_append_body_json(buf, size, body);
   scene_append(buf, size, "}");
 }
@@ -244,8 +248,21 @@ fascia_status fascia_scene_paper_build(fascia_ctx *ctx, const fascia_scene_paper
     SCENE_TRY_GOTO(weights_at(ctx, &g, grid, m->sample_position + 3 * (int64_t)s, k, frame, w, grad));
     scene_set_pairs(m, s, k, frame, w, grad);
   }
-  paper_provenance(provenance, PROVENANCE_SIZE, row, frames, strata, &body);
-  SCENE_TRY_GOTO(scene_finish(ctx, m, &body, &probe, provenance, row->name));
+  // frames no sample weighs on (rows with more frames than their samples reach)
+  unsigned char *weighed = calloc((size_t)frame_count, 1);
+  if (!weighed) {
+    status = SCENE_FAIL(ctx, FASCIA_ERR_MEMORY, "paper generator: out of memory for %d frames", (int)frame_count);
+    goto cleanup;
+  }
+  for (int64_t q = 0; q < (int64_t)row->samples * k; ++q) weighed[m->pair_frame[q]] = 1;
+  int32_t unweighted = 0;
+  for (int32_t i = 0; i < frame_count; ++i) unweighted += !weighed[i];
+  paper_provenance(provenance, PROVENANCE_SIZE, row, frames, strata, unweighted, &body);
+  status = scene_finish(ctx, m, &body, &probe, provenance, row->name);
+  for (int32_t i = 0; status == FASCIA_OK && i < frame_count; ++i)
+    if (!weighed[i]) m->frame_kind[i] = FASCIA_FRAME_FIXED;
+  free(weighed);
+  if (status != FASCIA_OK) goto cleanup;
   *out = m;
   m = NULL;
 cleanup:
