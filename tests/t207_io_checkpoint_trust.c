@@ -3,7 +3,8 @@
 // A checkpoint is only resumed when it is intact and belongs to the solver:
 // a flipped bit in the state, positions moved through the HDF5 API, a step
 // count or time that cannot be, another model, or a solver with other
-// settings are each refused with the file and the dataset named, and the
+// settings are each refused with the file and the dataset named (the kept
+// factorization, /state/linear, is under the checksum too), and the
 // solver is left unchanged. After every refusal no HDF5 object is left open.
 // The settings read back from a checkpoint are those it was written with.
 #define _POSIX_C_SOURCE 200809L
@@ -178,6 +179,11 @@ int main(void) {
   CHECK((file = corrupt_copy("velocity", path, sizeof path)) >= 0);
   CHECK(edit(file, "/state/velocity", 0, 0, 1, 1e-12) == 0 && H5Fclose(file) >= 0);
   expect_refused(ctx, solver, path, FASCIA_ERR_FORMAT, "/state/checksum", NULL);
+
+  // the direct solver's kept factorization travels with the state, under the same checksum
+  CHECK((file = corrupt_copy("linear", path, sizeof path)) >= 0);
+  CHECK(edit(file, "/state/linear", 0, 5, 1, 1e-9) == 0 && H5Fclose(file) >= 0);
+  expect_refused(ctx, solver, path, FASCIA_ERR_FORMAT, "/state/checksum", "does not match");
 
   CHECK((file = corrupt_copy("step-1e15", path, sizeof path)) >= 0);
   CHECK(edit(file, "/run/step", 1, 0, 0, 1e15) == 0 && H5Fclose(file) >= 0);

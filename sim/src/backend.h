@@ -120,6 +120,16 @@ struct fascia_backend_ops {
   /// system's energies and inversion counts set.
   fascia_status (*finish)(fascia_backend *backend, const fascia_step_result *result);
 
+  // --- optional: the linear solver's state the next step reads -------------
+  /// (NULL: none.) A kept factorization the next step may use: its size in
+  /// reals (0: none kept), and those reals, so that a checkpoint carries it
+  /// and a resumed run takes the path of the run that saved it. load
+  /// returns 0 (nothing kept, the next step factors afresh) where they do
+  /// not fit this solver.
+  int64_t (*linear_state_size)(fascia_backend *backend);
+  void (*linear_state_save)(fascia_backend *backend, fascia_real *out);
+  int (*linear_state_load)(fascia_backend *backend, const fascia_real *in, int64_t count);
+
   // --- operators at a given state, for the tests of every backend ---------
   /// Potential energy and projected gradient [6N] at x, q.
   fascia_status (*gradient)(fascia_backend *backend, const fascia_real *x, const fascia_real *q,

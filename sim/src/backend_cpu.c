@@ -43,23 +43,28 @@ typedef struct cpu_backend {
   int reduced;  ///< rigid organs with the direct solver: it factors R = P^T K P (organs.c), not K
   fascia_bsr R;
   fascia_direct *direct;
-  // the factorization's reuse (cpu_prepare): valid while the mask, the step
-  // and the shift it was made with hold
-  int factor_valid, reusing;
+  // the factorization's reuse (cpu_prepare): valid while the mask, the mass
+  // coefficient and the shift it was made with hold
+  int factor_valid, reusing, first_prepare;
   fascia_real factor_shift;   ///< the Levenberg shift it was factored with
+  fascia_real factor_mass;    ///< the mass coefficient c1 + c2 it was factored with
+  uint64_t factor_epoch;      ///< the solver's linear_epoch then (the state set or restored since: stale)
   fascia_real prepared_norm2; ///< |gradient|^2 at the last prepare
   char text[96];
 } cpu_backend;
 
 /// The direct solver's chord steps: a Newton iteration keeps the last
-/// factorization of the step when the last direction lowered |gradient| at
-/// least this many times (the tangent then barely moved: Newton converges
+/// factorization when the last direction lowered |gradient| at least this
+/// many times (the tangent then barely moved: Newton converges
 /// quadratically there, and a stale tangent still gives linear convergence
-/// at a rate the next prepare checks again). Assembly and factorization are
-/// 80-90 % of a direct iteration, the solve with the factor about 3 %.
-/// Dynamic steps only: a static solve keeps exact Newton, whose iteration
-/// count the accuracy study reports (the 20x3x3 cantilever at nu = 0.49,
-/// hex: 24 iterations in 121-130 ms; with chord steps 26 in 113 ms).
+/// at a rate the next prepare checks again); a step's first iteration tries
+/// the last step's, when it was made for the same mask and mass coefficient
+/// and the state was not set or restored since (a checkpoint carries it:
+/// linear_state_save), and a second iteration may follow to check it. Assembly and factorization are 80-90 % of a direct
+/// iteration, the solve with the factor about 3 %. Dynamic steps only: a
+/// static solve keeps exact Newton, whose iteration count the accuracy study
+/// reports (the 20x3x3 cantilever at nu = 0.49, hex: 24 iterations in
+/// 121-130 ms; with chord steps 26 in 113 ms).
 #define REUSE_REDUCTION 10
 
 static int cpu_available(char *detail, size_t size) {
@@ -212,8 +217,14 @@ static fascia_status cpu_begin(fascia_backend *backend, const fascia_step_values
   FASCIA_CHECK(v->x_base == S->x_base && v->q_base == S->q_base && v->d == S->d, S->ctx, FASCIA_ERR_INTERNAL,
                "cpu backend: the step's arrays are not the solver's");
   B->values = *v;
-  B->factor_valid = 0; // another step: other coefficients, perhaps another mask
   if (B->direct) B->use_direct = !B->direct_dynamic_only || v->dynamic;
+  // the last factorization fits this step when the mask and the mass coefficient are the same
+  // (and a second Newton iteration to check it: with one per step, as the
+  // interactive preset has, a kept factorization would never be checked)
+  B->factor_valid = B->factor_valid && B->use_direct && v->c1 + v->c2 == B->factor_mass &&
+                    B->factor_epoch == S->linear_epoch && fascia_direct_mask_is(B->direct, B->mask) &&
+                    B->def->newton_iterations > 1;
+  B->first_prepare = 1;
   B->x_base = S->x_base, B->q_base = S->q_base, B->d = S->d, B->gradient = S->gradient;
   B->sys->gravity_scale = v->gravity_scale;
   const int64_t n = 6 * (int64_t)B->frame_count;
@@ -337,8 +348,9 @@ static fascia_status cpu_prepare(fascia_backend *backend, fascia_solve_report *r
   const int64_t n = 6 * (int64_t)N;
   const fascia_real norm2 = fascia_dot(B->gradient, B->gradient, n, B->sys->threads);
   B->reusing = B->use_direct && B->values.dynamic && B->factor_valid &&
-               norm2 * REUSE_REDUCTION * REUSE_REDUCTION <= B->prepared_norm2;
+               (B->first_prepare || norm2 * REUSE_REDUCTION * REUSE_REDUCTION <= B->prepared_norm2);
   B->prepared_norm2 = norm2;
+  B->first_prepare = 0;
   if (B->reusing) return FASCIA_OK;
   B->factor_valid = 0;
   double t = fascia_now_ms();
@@ -392,6 +404,8 @@ static fascia_status cpu_direction(fascia_backend *backend, fascia_real *shift, 
     }
     if (factored < 0) return FASCIA_ERR_MEMORY; // the new analysis failed; the message says why
     *shift = B->factor_shift = B->op.shift;
+    B->factor_mass = B->values.c1 + B->values.c2;
+    B->factor_epoch = B->S->linear_epoch;
     B->factor_valid = 1;
     fascia_direct_solve(B->direct, B->rhs, p);
   } else {
@@ -473,6 +487,41 @@ static fascia_status cpu_hessian_diagonal(fascia_backend *backend, fascia_real *
   return FASCIA_OK;
 }
 
+// The kept factorization, for checkpoints: the mass coefficient and the
+// shift it was made with, then the values it factored (direct.h).
+static int64_t cpu_linear_state_size(fascia_backend *backend) {
+  cpu_backend *B = (cpu_backend *)backend;
+  if (!B->factor_valid || !B->direct || B->factor_epoch != B->S->linear_epoch) return 0;
+  int64_t count;
+  fascia_direct_values(B->direct, &count);
+  return 2 + count;
+}
+
+static void cpu_linear_state_save(fascia_backend *backend, fascia_real *out) {
+  cpu_backend *B = (cpu_backend *)backend;
+  int64_t count;
+  const double *values = fascia_direct_values(B->direct, &count);
+  out[0] = B->factor_mass;
+  out[1] = B->factor_shift;
+  memcpy(out + 2, values, (size_t)count * sizeof(double));
+}
+
+static int cpu_linear_state_load(fascia_backend *backend, const fascia_real *in, int64_t count) {
+  cpu_backend *B = (cpu_backend *)backend;
+  B->factor_valid = 0;
+  int64_t expected = 0;
+  double *values = B->direct && fascia_direct_mask_is(B->direct, B->mask) ? fascia_direct_values(B->direct, &expected)
+                                                                          : NULL;
+  if (!values || count != 2 + expected) return 0;
+  memcpy(values, in + 2, (size_t)expected * sizeof(double));
+  if (!fascia_direct_factor_values(B->direct)) return 0;
+  B->factor_mass = in[0];
+  B->factor_shift = in[1];
+  B->factor_epoch = B->S->linear_epoch;
+  B->factor_valid = 1;
+  return 1;
+}
+
 const fascia_backend_ops fascia_backend_cpu = {
     .name = "cpu",
     .automatic = 1,
@@ -490,6 +539,9 @@ const fascia_backend_ops fascia_backend_cpu = {
     .save = cpu_save,
     .restore = cpu_restore,
     .finish = cpu_finish,
+    .linear_state_size = cpu_linear_state_size,
+    .linear_state_save = cpu_linear_state_save,
+    .linear_state_load = cpu_linear_state_load,
     .gradient = cpu_gradient,
     .hessian_apply = cpu_hessian_apply,
     .hessian_diagonal = cpu_hessian_diagonal,

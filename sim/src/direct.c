@@ -209,6 +209,10 @@ double fascia_direct_flops(const fascia_direct *d) { return d->common.fl; }
 
 double fascia_direct_factor_nonzeros(const fascia_direct *d) { return d->common.lnz; }
 
+int fascia_direct_mask_is(const fascia_direct *d, const unsigned char *mask) {
+  return !memcmp(mask, d->mask, (size_t)d->unknowns);
+}
+
 int fascia_direct_factor(fascia_direct *d, fascia_ctx *ctx, const fascia_bsr *K, const unsigned char *mask,
                          const fascia_real *damping, fascia_real shift) {
   if (memcmp(mask, d->mask, (size_t)d->unknowns)) { // other unknowns fixed: analyse again
@@ -223,6 +227,17 @@ int fascia_direct_factor(fascia_direct *d, fascia_ctx *ctx, const fascia_bsr *K,
     const int64_t column = d->free_index[u];
     if (column >= 0) x[p[column]] += shift * damping[u]; // the diagonal leads its column
   }
+  return fascia_direct_factor_values(d);
+}
+
+double *fascia_direct_values(fascia_direct *d, int64_t *count) {
+  *count = (int64_t)((const SuiteSparse_long *)d->matrix->p)[d->matrix->ncol];
+  return d->matrix->x;
+}
+
+int fascia_direct_factor_values(fascia_direct *d) {
+  int64_t k;
+  const double *x = fascia_direct_values(d, &k);
   // OpenBLAS's Cholesky lets a NaN through: look at the numbers first
   for (int64_t e = 0; e < k; ++e)
     if (!isfinite(x[e])) return 0;

@@ -26,9 +26,14 @@
 //   /state/velocity       [N,6] f64  m/s then rad/s, world
 //   /state/organs         [B]   f64  state of the rigid organ bodies (organs.c:
 //                                    fascia_organs_save), B = 0 without them
+//   /state/linear         [L]   f64  the linear solver's kept factorization
+//                                    (backend.h, linear_state_save; L = 0:
+//                                    none; absent in older files: none), so
+//                                    that the resumed run takes the saving
+//                                    run's path bit for bit
 //   /state/checksum       [1]   u64  FNV-1a of step, time, position, rotation,
-//                                    velocity and organs, in that order, as
-//                                    the native values
+//                                    velocity, organs and linear, in that
+//                                    order, as the native values
 //
 // Version 1 (no settings, no checksum) is refused with a message saying so.
 //
@@ -46,6 +51,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "backend.h"
 #include "fascia/checkpoint.h"
 #include "fnv.h"
 #include "h5io.h"
@@ -70,16 +76,25 @@ static void model_sizes(const fascia_model *m, int64_t *z) {
 }
 
 
-// The checksum of a state: step, time, x [3N], q [4N], u [6N], bodies [B].
+// The checksum of a state: step, time, x [3N], q [4N], u [6N], bodies [B],
+// linear [L] (L = 0 adds nothing: older files keep their sums).
 static uint64_t state_checksum(int64_t step, double time, int64_t N, const fascia_real *x, const fascia_real *q,
-                               const fascia_real *u, size_t B, const fascia_real *bodies) {
+                               const fascia_real *u, size_t B, const fascia_real *bodies, int64_t L,
+                               const fascia_real *linear) {
   const size_t R = sizeof(fascia_real);
   uint64_t h = fascia_fnv(FASCIA_FNV_START, &step, sizeof step);
   h = fascia_fnv(h, &time, sizeof time);
   h = fascia_fnv(h, x, 3 * (size_t)N * R);
   h = fascia_fnv(h, q, 4 * (size_t)N * R);
   h = fascia_fnv(h, u, 6 * (size_t)N * R);
-  return fascia_fnv(h, bodies, B * R);
+  h = fascia_fnv(h, bodies, B * R);
+  return fascia_fnv(h, linear, (size_t)L * R);
+}
+
+// The backend's kept linear state (backend.h): its size, 0 for none.
+static int64_t linear_size(const fascia_solver *S) {
+  const fascia_backend *be = S->backend;
+  return be->ops->linear_state_size && be->ops->linear_state_save ? be->ops->linear_state_size(S->backend) : 0;
 }
 
 // ---------------------------------------------------------------------------
@@ -224,7 +239,12 @@ static fascia_status write_checkpoint(fascia_ctx *ctx, hid_t file, const fascia_
   fascia_real *bodies = fascia_calloc((int64_t)B + 1, sizeof(fascia_real));
   FASCIA_CHECK(bodies, ctx, FASCIA_ERR_MEMORY, "checkpoint '%s': out of memory", path);
   if (B) fascia_organs_save(S->organs, bodies);
-  const uint64_t checksum = state_checksum(step, time, S->frame_count, S->x, S->q, S->u, B, bodies);
+  const int64_t L = linear_size(S);
+  fascia_real *linear = fascia_calloc(L + 1, sizeof(fascia_real));
+  if (!linear) free(bodies);
+  FASCIA_CHECK(linear, ctx, FASCIA_ERR_MEMORY, "checkpoint '%s': out of memory", path);
+  if (L) S->backend->ops->linear_state_save(S->backend, linear);
+  const uint64_t checksum = state_checksum(step, time, S->frame_count, S->x, S->q, S->u, B, bodies, L, linear);
   fascia_status status = FASCIA_OK;
   if (!write_group(file, "/run") || !write_group(file, "/model") || !write_group(file, "/state"))
     status = write_failed(ctx, path, "groups");
@@ -241,9 +261,11 @@ static fascia_status write_checkpoint(fascia_ctx *ctx, hid_t file, const fascia_
   PUT("/state/rotation", 2, N, 4, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, S->q);
   PUT("/state/velocity", 2, N, 6, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, S->u);
   PUT("/state/organs", 1, B, 0, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, bodies);
+  PUT("/state/linear", 1, (hsize_t)L, 0, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, linear);
   PUT("/state/checksum", 1, 1, 0, H5T_STD_U64LE, H5T_NATIVE_UINT64, &checksum);
 #undef PUT
   free(bodies);
+  free(linear);
   return status;
 }
 
@@ -419,17 +441,31 @@ static fascia_status check_settings(reader *r, const fascia_solver_def *def) {
   return FASCIA_OK;
 }
 
-// Reads and checks the state into x, q, u ([3N], [4N], [6N]) and bodies [B].
+// How many values the dataset holds; 0 where it is absent.
+static int64_t dataset_length(reader *r, const char *name) {
+  if (!fascia_h5_link_exists(r->file, name)) return 0;
+  fascia_h5_scope scope = FASCIA_H5_SCOPE_INIT;
+  const hid_t dset = fascia_h5_keep(&scope, H5Dopen2(r->file, name, H5P_DEFAULT));
+  const hid_t space = dset >= 0 ? fascia_h5_keep(&scope, H5Dget_space(dset)) : H5I_INVALID_HID;
+  const hssize_t n = space >= 0 ? H5Sget_simple_extent_npoints(space) : 0;
+  fascia_h5_scope_close(&scope);
+  return n > 0 ? (int64_t)n : 0;
+}
+
+// Reads and checks the state into x, q, u ([3N], [4N], [6N]), bodies [B]
+// and the linear solver's kept state [L].
 static fascia_status read_state(reader *r, int64_t N, fascia_real *x, fascia_real *q, fascia_real *u,
-                                size_t B, fascia_real *bodies, double time_step, double *time, int64_t *step) {
+                                size_t B, fascia_real *bodies, int64_t L, fascia_real *linear, double time_step,
+                                double *time, int64_t *step) {
   FASCIA_TRY(read_run(r, time_step, step, time));
   FASCIA_TRY(read_exact(r, "/state/position", H5T_FLOAT, H5T_NATIVE_DOUBLE, (hsize_t)(3 * N), x));
   FASCIA_TRY(read_exact(r, "/state/rotation", H5T_FLOAT, H5T_NATIVE_DOUBLE, (hsize_t)(4 * N), q));
   FASCIA_TRY(read_exact(r, "/state/velocity", H5T_FLOAT, H5T_NATIVE_DOUBLE, (hsize_t)(6 * N), u));
   FASCIA_TRY(read_exact(r, "/state/organs", H5T_FLOAT, H5T_NATIVE_DOUBLE, (hsize_t)B, bodies));
+  if (L) FASCIA_TRY(read_exact(r, "/state/linear", H5T_FLOAT, H5T_NATIVE_DOUBLE, (hsize_t)L, linear));
   uint64_t stored = 0;
   FASCIA_TRY(read_exact(r, "/state/checksum", H5T_INTEGER, H5T_NATIVE_UINT64, 1, &stored));
-  const uint64_t computed = state_checksum(*step, *time, N, x, q, u, B, bodies);
+  const uint64_t computed = state_checksum(*step, *time, N, x, q, u, B, bodies, L, linear);
   FASCIA_CHECK(stored == computed, r->ctx, FASCIA_ERR_FORMAT,
                "checkpoint '%s' /state/checksum: the state does not match its checksum (stored %016llx, computed "
                "%016llx); %s",
@@ -485,13 +521,19 @@ fascia_status fascia_checkpoint_load(fascia_ctx *ctx, fascia_solver *solver, con
   fascia_h5_quiet_begin(&quiet);
   reader r = {ctx, path, H5I_INVALID_HID};
   double time = 0;
-  int64_t steps = 0;
+  int64_t steps = 0, L = 0;
+  fascia_real *linear = NULL;
   fascia_status status = open_checkpoint(&r);
   if (status == FASCIA_OK) status = check_model(&r, solver->model);
   if (status == FASCIA_OK) status = check_settings(&r, &solver->def);
+  if (status == FASCIA_OK) {
+    L = dataset_length(&r, "/state/linear");
+    linear = fascia_calloc(L + 1, sizeof(fascia_real));
+    if (!linear) status = FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "checkpoint '%s': out of memory for /state/linear", path);
+  }
   if (status == FASCIA_OK)
-    status = read_state(&r, N, buffer, buffer + 3 * N, buffer + 7 * N, B, buffer + 13 * N, solver->def.time_step,
-                        &time, &steps);
+    status = read_state(&r, N, buffer, buffer + 3 * N, buffer + 7 * N, B, buffer + 13 * N, L, linear,
+                        solver->def.time_step, &time, &steps);
   if (r.file >= 0) H5Fclose(r.file);
   fascia_h5_quiet_end(&quiet);
   if (status == FASCIA_OK) {
@@ -502,8 +544,13 @@ fascia_status fascia_checkpoint_load(fascia_ctx *ctx, fascia_solver *solver, con
     solver->time = time;
     if (B) fascia_organs_restore(solver->organs, buffer + 13 * N);
     fascia_system_set_state(solver->sys, solver->x, solver->q);
+    ++solver->linear_epoch;
+    // the factorization the saving run kept (where it fits: else the next step factors afresh)
+    const fascia_backend_ops *ops = solver->backend->ops;
+    if (L && ops->linear_state_load) ops->linear_state_load(solver->backend, linear, L);
     *step = steps;
   }
+  free(linear);
   free(buffer);
   return status;
 }

@@ -673,6 +673,7 @@ fascia_status fascia_solver_organ_release(fascia_solver *S, int32_t organ) {
   fascia_organs_masks(O, S->mask);
   if (active(O, organ)) place_slaves(O, S, organ);
   fascia_system_set_state(S->sys, S->x, S->q);
+  ++S->linear_epoch;
   return FASCIA_OK;
 }
 

@@ -501,6 +501,7 @@ fascia_status fascia_solver_set_time(fascia_solver *S, fascia_real time) {
   FASCIA_CHECK(isfinite(time) && time >= 0, S->ctx, FASCIA_ERR_ARGUMENT,
                "fascia_solver_set_time: time %g s is not a finite number >= 0", time);
   S->time = time;
+  ++S->linear_epoch;
   return FASCIA_OK;
 }
 const char *fascia_solver_backend(const fascia_solver *S) { return S->backend_name; }
@@ -545,6 +546,7 @@ fascia_status fascia_solver_set_state(fascia_solver *S, const fascia_real *x, co
   fascia_organs_sync(S->organs, S);
   fascia_system_set_state(S->sys, S->x, S->q);
   S->energy_known = 0;
+  ++S->linear_epoch;
   return FASCIA_OK;
 }
 
