@@ -158,7 +158,7 @@ static void mass_rows(fascia_system *sys, const unsigned char *moves, fascia_bsr
 #pragma omp for schedule(static)
     for (int32_t i = 0; i < sys->frame_count; ++i) {
       if (!dq || !col) continue; // out of memory in a worker: rows stay as they were
-      if (moves && !moves[i]) continue;
+      if (!fascia_frame_moving(moves, i)) continue;
       for (int32_t r = m->frame_offsets[i]; r < m->frame_offsets[i + 1]; ++r) {
         const int32_t k = m->frame_pairs[r], s = sys->pair_sample[k], begin = m->sample_offsets[s];
         const int32_t n = m->sample_offsets[s + 1] - begin, j = k - begin;
@@ -167,7 +167,7 @@ static void mass_rows(fascia_system *sys, const unsigned char *moves, fascia_bsr
           fascia_pt_sample_mass(&sys->pm, &st, s, sys->sample_mass[s], dq, sys->local_slot, col);
           dq[6 * j + c] = 0;
           for (int32_t l = 0; l < n; ++l) {
-            if (moves && !moves[m->pair_frame[begin + l]]) continue;
+            if (!fascia_frame_moving(moves, m->pair_frame[begin + l])) continue;
             fascia_real *blk = B->values + 36 * (int64_t)find_block(B, i, m->pair_frame[begin + l]);
             for (int a = 0; a < 6; ++a) blk[6 * c + a] += coefficient * col[6 * l + a];
           }
@@ -191,7 +191,7 @@ static void local_stiffness(const fascia_system *sys, const fascia_pt_state *st,
   if (sys->sample_coupling[s] == 0) return;
   const int32_t begin = m->sample_offsets[s], n = m->sample_offsets[s + 1] - begin;
   for (int32_t b = 0; b < n; ++b) {
-    if (moves && !moves[m->pair_frame[begin + b]]) continue;
+    if (!fascia_frame_moving(moves, m->pair_frame[begin + b])) continue;
     for (int c = 0; c < 6; ++c) {
       dq[6 * b + c] = 1;
       fascia_pt_sample_stiffness_parts(&sys->pm, st, s, cache, dq, sys->local_slot, col, FASCIA_PT_PART_COUPLING);
@@ -207,25 +207,27 @@ static void dilatation_rows(const fascia_system *sys, const unsigned char *moves
   const fascia_dilatation *d = sys->dilatation;
   const fascia_patch_table *t = &d->table;
 #pragma omp parallel for num_threads(sys->threads) schedule(static)
-  for (int32_t i = 0; i < sys->frame_count; ++i)
-    for (int32_t r = t->frame_entry_offsets[i]; (!moves || moves[i]) && r < t->frame_entry_offsets[i + 1]; ++r) {
+  for (int32_t i = 0; i < sys->frame_count; ++i) {
+    if (!fascia_frame_moving(moves, i)) continue;
+    for (int32_t r = t->frame_entry_offsets[i]; r < t->frame_entry_offsets[i + 1]; ++r) {
       const int32_t e = t->frame_entries[r], p = t->entry_patch[e];
       const fascia_real c = d->patch_lambda[p] / d->patch_volume[p], *Gi = d->entry_gradient + 6 * (int64_t)e;
       for (int32_t f = t->support_offsets[p]; f < t->support_offsets[p + 1]; ++f) {
-        if (moves && !moves[t->entry_frame[f]]) continue;
+        if (!fascia_frame_moving(moves, t->entry_frame[f])) continue;
         const fascia_real *Gj = d->entry_gradient + 6 * (int64_t)f;
         fascia_real *blk = B->values + 36 * (int64_t)find_block(B, i, t->entry_frame[f]);
         for (int a = 0; a < 6; ++a)
           for (int b = 0; b < 6; ++b) blk[6 * a + b] += c * Gi[a] * Gj[b];
       }
     }
+  }
 }
 
 // Whether sample s has a frame that moves.
 static int sample_moves(const fascia_model *m, const unsigned char *moves, int32_t s) {
-  for (int32_t k = m->sample_offsets[s]; moves && k < m->sample_offsets[s + 1]; ++k)
-    if (moves[m->pair_frame[k]]) return 1;
-  return !moves;
+  for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k)
+    if (fascia_frame_moving(moves, m->pair_frame[k])) return 1;
+  return 0;
 }
 
 void fascia_system_hessian_assemble(fascia_system *sys, const unsigned char *moves, fascia_bsr *B) {
@@ -249,9 +251,10 @@ void fascia_system_hessian_assemble(fascia_system *sys, const unsigned char *mov
       free(col);
       // a block of two moving frames has contributions from moving samples only
 #pragma omp for schedule(static)
-      for (int32_t i = 0; i < B->rows; ++i)
-        for (int32_t b = B->row_offsets[i]; (!moves || moves[i]) && b < B->row_offsets[i + 1]; ++b) {
-          if (moves && !moves[B->cols[b]]) continue;
+      for (int32_t i = 0; i < B->rows; ++i) {
+        if (!fascia_frame_moving(moves, i)) continue;
+        for (int32_t b = B->row_offsets[i]; b < B->row_offsets[i + 1]; ++b) {
+          if (!fascia_frame_moving(moves, B->cols[b])) continue;
           fascia_real *dst = B->values + 36 * (int64_t)b;
           int64_t c = B->cursor[b];
           for (; c < B->contrib_offsets[b + 1] && B->contrib[c] < e1; ++c) {
@@ -260,6 +263,7 @@ void fascia_system_hessian_assemble(fascia_system *sys, const unsigned char *mov
           }
           B->cursor[b] = c;
         }
+      }
     }
     s0 = s1;
   }
@@ -267,7 +271,7 @@ void fascia_system_hessian_assemble(fascia_system *sys, const unsigned char *mov
   // frame-local terms: gravity (theta-theta) and the symmetrizing 1/2 [g_theta]x
   const fascia_real gs = sys->gravity_scale, *g = sys->gravity;
   for (int32_t i = 0; i < sys->frame_count; ++i) {
-    if (moves && !moves[i]) continue;
+    if (!fascia_frame_moving(moves, i)) continue;
     fascia_real *D = B->values + 36 * (int64_t)B->diagonal[i], b[3];
     fascia_pt_mat_vec(sys->A + 9 * i, sys->frame_moment + 3 * i, b);
     const fascia_real bg = fascia_pt_dot3(b, g), *t = sys->conservative_torque + 3 * i;

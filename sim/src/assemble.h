@@ -32,6 +32,9 @@ typedef struct fascia_bsr {
   int64_t chunk_capacity;    ///< FASCIA_ASSEMBLY_CHUNK, or the largest sample's n^2
 } fascia_bsr;
 
+/// Whether frame i moves, for the moves arrays below (NULL: every frame).
+static inline int fascia_frame_moving(const unsigned char *moves, int32_t i) { return !moves || moves[i]; }
+
 /// Local blocks computed per pass of the assembly (bounds its scratch: 9 MB).
 #define FASCIA_ASSEMBLY_CHUNK 32768
 

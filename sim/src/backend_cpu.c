@@ -50,6 +50,7 @@ typedef struct cpu_backend {
   fascia_real factor_mass;    ///< the mass coefficient c1 + c2 it was factored with
   uint64_t factor_epoch;      ///< the solver's linear_epoch then (the state set or restored since: stale)
   fascia_real prepared_norm2; ///< |gradient|^2 at the last prepare
+  fascia_real gradient_norm2, trial_norm2; ///< of the current and the trial gradient (cpu_evaluate)
   char text[96];
 } cpu_backend;
 
@@ -60,11 +61,12 @@ typedef struct cpu_backend {
 /// at a rate the next prepare checks again); a step's first iteration tries
 /// the last step's, when it was made for the same mask and mass coefficient
 /// and the state was not set or restored since (a checkpoint carries it:
-/// linear_state_save), and a second iteration may follow to check it. Assembly and factorization are 80-90 % of a direct
-/// iteration, the solve with the factor about 3 %. Dynamic steps only: a
-/// static solve keeps exact Newton, whose iteration count the accuracy study
-/// reports (the 20x3x3 cantilever at nu = 0.49, hex: 24 iterations in
-/// 121-130 ms; with chord steps 26 in 113 ms).
+/// linear_state_save), and a second iteration may follow to check it.
+/// Assembly and factorization are 80-90 % of a direct iteration, the solve
+/// with the factor about 3 %. Dynamic steps only: a static solve keeps
+/// exact Newton, whose iteration count the accuracy study reports (the
+/// 20x3x3 cantilever at nu = 0.49, hex: 24 iterations in 121-130 ms; with
+/// chord steps 26 in 113 ms).
 #define REUSE_REDUCTION 10
 
 static int cpu_available(char *detail, size_t size) {
@@ -316,6 +318,7 @@ static fascia_status cpu_evaluate(fascia_backend *backend, fascia_real alpha, in
   }
   FASCIA_TRY(objective(B, d, &out->phi, g));
   out->gradient_norm2 = fascia_dot(g, g, n, B->sys->threads);
+  *(current ? &B->gradient_norm2 : &B->trial_norm2) = out->gradient_norm2;
   out->energy_size = fabs(B->sys->energy_internal) + fabs(B->sys->energy_external);
   return FASCIA_OK;
 }
@@ -339,20 +342,12 @@ static fascia_status assemble(cpu_backend *B) {
   return FASCIA_OK;
 }
 
-// The assembled matrix, the preconditioner and the Levenberg scale; the
-// direct solver keeps its factorization where the last direction lowered
-// the gradient REUSE_REDUCTION times (a chord step)
-static fascia_status cpu_prepare(fascia_backend *backend, fascia_solve_report *report) {
-  cpu_backend *B = (cpu_backend *)backend;
+// The assembled matrix, the preconditioner and the Levenberg scale at the
+// current iterate (a kept factorization no longer fits)
+static fascia_status prepare_tangent(cpu_backend *B, fascia_solve_report *report) {
   const int32_t N = B->frame_count;
   const int64_t n = 6 * (int64_t)N;
-  const fascia_real norm2 = fascia_dot(B->gradient, B->gradient, n, B->sys->threads);
-  B->reusing = B->use_direct && B->values.dynamic && B->factor_valid &&
-               (B->first_prepare || norm2 * REUSE_REDUCTION * REUSE_REDUCTION <= B->prepared_norm2);
-  B->prepared_norm2 = norm2;
-  B->first_prepare = 0;
-  if (B->reusing) return FASCIA_OK;
-  B->factor_valid = 0;
+  B->factor_valid = B->reusing = 0;
   double t = fascia_now_ms();
   if (B->use_assembled) {
     FASCIA_TRY(assemble(B));
@@ -376,17 +371,26 @@ static fascia_status cpu_prepare(fascia_backend *backend, fascia_solve_report *r
   return FASCIA_OK;
 }
 
+// A new tangent, or the kept factorization where the last direction lowered
+// the gradient REUSE_REDUCTION times (a chord step)
+static fascia_status cpu_prepare(fascia_backend *backend, fascia_solve_report *report) {
+  cpu_backend *B = (cpu_backend *)backend;
+  const fascia_real norm2 = B->gradient_norm2;
+  B->reusing = B->use_direct && B->values.dynamic && B->factor_valid &&
+               (B->first_prepare || norm2 * REUSE_REDUCTION * REUSE_REDUCTION <= B->prepared_norm2);
+  B->prepared_norm2 = norm2;
+  B->first_prepare = 0;
+  return B->reusing ? FASCIA_OK : prepare_tangent(B, report);
+}
+
 static fascia_status cpu_direction(fascia_backend *backend, fascia_real *shift, fascia_real *slope,
                                    fascia_solve_report *report) {
   cpu_backend *B = (cpu_backend *)backend;
   const int64_t n = 6 * (int64_t)B->frame_count;
   fascia_real *p = B->direction, *g = B->gradient;
   for (int64_t k = 0; k < n; ++k) B->rhs[k] = -g[k];
-  if (B->reusing && *shift != B->factor_shift) { // the loop changed the shift: a new tangent after all
-    B->factor_valid = B->reusing = 0;
-    B->prepared_norm2 = 0;
-    FASCIA_TRY(cpu_prepare(backend, report));
-  }
+  if (B->reusing && *shift != B->factor_shift) // the loop changed the shift: a new tangent after all
+    FASCIA_TRY(prepare_tangent(B, report));
   B->op.shift = *shift;
   if (B->reusing) {
     fascia_direct_solve(B->direct, B->rhs, p);
@@ -428,6 +432,7 @@ static void cpu_accept(fascia_backend *backend) {
   const int32_t N = B->frame_count;
   const size_t n = 6 * (size_t)N;
   memcpy(B->gradient, B->gradient_trial, n * sizeof(fascia_real));
+  B->gradient_norm2 = B->trial_norm2;
   if (B->values.dynamic) {
     memcpy(B->d, B->d_trial, n * sizeof(fascia_real));
   } else {

@@ -51,8 +51,9 @@ WIDE_CLONES static void rows(const fascia_bsr *B, int single, const unsigned cha
                              const fascia_real *v, fascia_real *out) {
   for (int32_t i = begin; i < end; ++i) {
     wide_real acc[9] = {0};
-    for (int32_t b = B->row_offsets[i]; (!moves || moves[i]) && b < B->row_offsets[i + 1]; ++b) {
-      if (moves && !moves[B->cols[b]]) continue;
+    const int32_t end_block = fascia_frame_moving(moves, i) ? B->row_offsets[i + 1] : B->row_offsets[i];
+    for (int32_t b = B->row_offsets[i]; b < end_block; ++b) {
+      if (!fascia_frame_moving(moves, B->cols[b])) continue;
       const fascia_real *x = v + 6 * (int64_t)B->cols[b];
       const wide_real x0 = {x[0], x[1], x[2], x[3]}, x1 = {x[4], x[5], x[0], x[1]}, x2 = {x[2], x[3], x[4], x[5]};
       for (int q = 0; q < 3; ++q) {

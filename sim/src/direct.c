@@ -215,7 +215,7 @@ int fascia_direct_mask_is(const fascia_direct *d, const unsigned char *mask) {
 
 int fascia_direct_factor(fascia_direct *d, fascia_ctx *ctx, const fascia_bsr *K, const unsigned char *mask,
                          const fascia_real *damping, fascia_real shift) {
-  if (memcmp(mask, d->mask, (size_t)d->unknowns)) { // other unknowns fixed: analyse again
+  if (!fascia_direct_mask_is(d, mask)) { // other unknowns fixed: analyse again
     release(d);
     if (create(ctx, K, mask, d) != FASCIA_OK) return -1;
   }

@@ -428,9 +428,10 @@ void fascia_organs_reduce_matrix(const fascia_organs *O, const fascia_system *sy
   memset(R->values, 0, 36 * (size_t)R->blocks * sizeof *R->values);
   // slave rows and columns fold into their master's through T(a), a = x_i - x_master
   for (int32_t i = 0; i < N; ++i) {
+    if (!fascia_frame_moving(moves, i)) continue;
     const int32_t ri = reduced_frame(O, i);
-    for (int32_t k = K->row_offsets[i]; (!moves || moves[i]) && k < K->row_offsets[i + 1]; ++k) {
-      if (moves && !moves[K->cols[k]]) continue;
+    for (int32_t k = K->row_offsets[i]; k < K->row_offsets[i + 1]; ++k) {
+      if (!fascia_frame_moving(moves, K->cols[k])) continue;
       const int32_t j = K->cols[k], rj = reduced_frame(O, j);
       const fascia_real *block = K->values + 36 * (int64_t)k;
       fascia_real *out = R->values + 36 * (int64_t)fascia_index_set_find(R->cols, R->row_offsets[ri],
