@@ -352,12 +352,12 @@ static void build_precond(fascia_device *dev) {
   if (D->bodies.count > 0) kernel(dev, FASCIA_K_BODY_DIAGONAL, D->bodies.count, NULL, NULL, 0);
 }
 
-// The Levenberg diagonal and the operator's scale from the diagonal blocks
+// The Levenberg weights and the operator's scale from the diagonal blocks
 static void build_damping(fascia_device *dev) {
   const int64_t n = 6 * (int64_t)dev->D.frame_count;
   kernel(dev, FASCIA_K_DAMPING, n, NULL, NULL, 0);
   reduce(dev, FASCIA_T_SUM, n, dev->D.damping, NULL, FASCIA_S_SCALE);
-  kernel(dev, FASCIA_K_DAMPING_CLAMP, n, NULL, NULL, 0);
+  kernel(dev, FASCIA_K_DAMPING_WEIGHT, n, NULL, NULL, 0);
 }
 
 typedef struct cg_body_arg {

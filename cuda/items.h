@@ -97,7 +97,7 @@ typedef enum fascia_dev_kernel {
   FASCIA_K_PAIR_DIAGONAL,    ///< P: one pair's 6x6 block of its sample's stiffness
   FASCIA_K_FRAME_PRECOND,    ///< N: tangent diagonal blocks, preconditioner blocks
   FASCIA_K_DAMPING,          ///< 6N: Levenberg diagonal |diag(blocks)|
-  FASCIA_K_DAMPING_CLAMP,    ///< 6N: at least 1e-8 scale
+  FASCIA_K_DAMPING_WEIGHT,   ///< 6N: the Levenberg weights from the diagonal and the scale
   FASCIA_K_PRECOND_DESCENT,  ///< N: p = -P^-1 g (fallback descent direction)
   FASCIA_K_COPY_GRADIENT,    ///< 6N: g = g_trial
   FASCIA_K_ACCEPT_STATIC,    ///< N: re-anchor at the iterate, d = 0, g = g_trial
@@ -412,9 +412,7 @@ static inline FASCIA_HD void fascia_dev_item(const fascia_dev *D, int kernel, in
   case FASCIA_K_PAIR_DIAGONAL: fascia_dev_pair_diagonal_item(D, i); break;
   case FASCIA_K_FRAME_PRECOND: fascia_dev_frame_precond_item(D, i32); break;
   case FASCIA_K_DAMPING: D->damping[i] = fabs(D->blocks[36 * (i / 6) + 7 * (i % 6)]); break;
-  case FASCIA_K_DAMPING_CLAMP:
-    if (D->damping[i] < 1e-8 * D->sc->scale) D->damping[i] = 1e-8 * D->sc->scale;
-    break;
+  case FASCIA_K_DAMPING_WEIGHT: D->damping[i] = fascia_pt_levenberg_weight(D->damping[i], (int)(i % 6), D->sc->scale); break;
   case FASCIA_K_PRECOND_DESCENT: fascia_dev_precond_descent_item(D, i32); break;
   case FASCIA_K_COPY_GRADIENT: D->g[i] = D->g_trial[i]; break;
   case FASCIA_K_ACCEPT_STATIC: fascia_dev_accept_static_item(D, i32); break;

@@ -360,7 +360,7 @@ static void cuda_kernel(fascia_launcher *L, const fascia_dev *D, fascia_dev_kern
   case FASCIA_K_PAIR_DIAGONAL: launch_items<FASCIA_K_PAIR_DIAGONAL>(L, D, n, in, out, value); break;
   case FASCIA_K_FRAME_PRECOND: launch_items<FASCIA_K_FRAME_PRECOND>(L, D, n, in, out, value); break;
   case FASCIA_K_DAMPING: launch_items<FASCIA_K_DAMPING>(L, D, n, in, out, value); break;
-  case FASCIA_K_DAMPING_CLAMP: launch_items<FASCIA_K_DAMPING_CLAMP>(L, D, n, in, out, value); break;
+  case FASCIA_K_DAMPING_WEIGHT: launch_items<FASCIA_K_DAMPING_WEIGHT>(L, D, n, in, out, value); break;
   case FASCIA_K_PRECOND_DESCENT: launch_items<FASCIA_K_PRECOND_DESCENT>(L, D, n, in, out, value); break;
   case FASCIA_K_COPY_GRADIENT: launch_items<FASCIA_K_COPY_GRADIENT>(L, D, n, in, out, value); break;
   case FASCIA_K_ACCEPT_STATIC: launch_items<FASCIA_K_ACCEPT_STATIC>(L, D, n, in, out, value); break;

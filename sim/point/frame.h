@@ -3,7 +3,8 @@
 // The per-frame math, shared by the CPU (sim/src/system.c) and the device
 // kernels (the device backend): a frame's sum over its pairs, its orientation
 // relative to rest, the gravity and load terms of its gradient and tangent,
-// the symmetrizing term of the rotation update, and its lumped mass block.
+// the symmetrizing term of the rotation update, its lumped mass block and
+// the weight of its unknowns in the Levenberg shift.
 // Written once, so both sides do the same operations in the same order.
 #ifndef FASCIA_POINT_FRAME_H
 #define FASCIA_POINT_FRAME_H
@@ -104,6 +105,22 @@ static inline FASCIA_HD void fascia_pt_frame_lumped_mass(const int32_t *frame_of
     const int32_t k = frame_pairs[r];
     fascia_pt_lumped_mass_add(A, pair_offset + 3 * (int64_t)k, pair_lumped_mass[k], B);
   }
+}
+
+/// The weight of a frame's unknown c (0-2 translation, 3-5 rotation) in the
+/// Levenberg shift (the solver adds shift * weight to the tangent's
+/// diagonal), from the absolute diagonal entry and the mean of them all
+/// (scale): a rotation weighs its diagonal, a translation only the floor
+/// 1e-8 scale that keeps every unknown's weight positive. The frame scheme's
+/// tangent is indefinite in the rotations (the frames' geometric stiffness,
+/// the symmetrizing torque term, the plane-twist mechanisms), while the
+/// translations enter the positions linearly; damping them too slowed Newton
+/// to a gradient descent after a large step (the static 20 x 3 x 3
+/// cantilever at nu = 0.49: 24 to 95 iterations, 13 with this weight;
+/// docs/mechanics.md, "Solvers").
+static inline FASCIA_HD fascia_real fascia_pt_levenberg_weight(fascia_real diagonal, int c, fascia_real scale) {
+  const fascia_real floor = FASCIA_R(1e-8) * scale;
+  return c >= 3 && diagonal > floor ? diagonal : floor;
 }
 
 #endif

@@ -11,6 +11,7 @@
 
 #include "backend.h"
 #include "organs.h"
+#include "point/frame.h"
 #include "solver_internal.h"
 
 typedef struct cpu_backend {
@@ -365,8 +366,7 @@ static fascia_status prepare_tangent(cpu_backend *B, fascia_solve_report *report
       scale += diag;
     }
   B->op.scale = scale > 0 ? scale / (fascia_real)n : 1;
-  for (int64_t k = 0; k < n; ++k)
-    if (B->damping[k] < 1e-8 * B->op.scale) B->damping[k] = 1e-8 * B->op.scale;
+  for (int64_t k = 0; k < n; ++k) B->damping[k] = fascia_pt_levenberg_weight(B->damping[k], (int)(k % 6), B->op.scale);
   report->profile.precond_ms += fascia_now_ms() - t;
   return FASCIA_OK;
 }
