@@ -423,6 +423,7 @@ static inline FASCIA_HD void fascia_dev_item(const fascia_dev *D, int kernel, in
   case FASCIA_K_PATCH_EVALUATE: {
     const fascia_pt_state st = fascia_dev_state(D);
     fascia_pt_patch_evaluate(&D->pm, &st, &D->patches, i32);
+    fascia_pt_patch_gradient(&D->pm, &st, &D->patches, i32);
     break;
   }
   case FASCIA_K_PATCH_RATE:

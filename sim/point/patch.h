@@ -31,19 +31,35 @@ typedef struct fascia_pt_patches {
   fascia_real *sample_pressure;        ///< [S] lambda_p thetabar_p on the samples of p (pm.sample_pressure)
 } fascia_pt_patches;
 
-/// Patch p at the state st: its mean dilatation, energy, its samples'
-/// pressure and the gradient G_e of each support entry.
+/// Patch p at the state st: its mean dilatation, energy and its samples'
+/// pressure (what the gradient needs).
 static inline FASCIA_HD void fascia_pt_patch_evaluate(const fascia_pt_model *m, const fascia_pt_state *st,
+                                                      const fascia_pt_patches *t, int32_t p) {
+  fascia_real sum = 0;
+  for (int32_t q = t->patch_offsets[p]; q < t->patch_offsets[p + 1]; ++q) {
+    const int32_t s = t->patch_samples[q];
+    fascia_real F[9], dtheta[9];
+    fascia_pt_sample_F(m, st, s, F);
+    sum += m->sample_volume[s] * fascia_pt_dilatation(t->law[p], F, dtheta);
+  }
+  const fascia_real theta = sum / t->volume[p], pressure = t->lambda[p] * theta;
+  t->theta[p] = theta;
+  t->energy[p] = FASCIA_R(0.5) * t->volume[p] * pressure * theta;
+  for (int32_t q = t->patch_offsets[p]; q < t->patch_offsets[p + 1]; ++q) t->sample_pressure[t->patch_samples[q]] = pressure;
+}
+
+/// Patch p at the state st: the gradient G_e of sum_{s in p} v_s theta_s on
+/// each support entry's frame (what the Hessian's rank-one term needs).
+static inline FASCIA_HD void fascia_pt_patch_gradient(const fascia_pt_model *m, const fascia_pt_state *st,
                                                       const fascia_pt_patches *t, int32_t p) {
   for (int64_t q = 6 * (int64_t)t->support_offsets[p]; q < 6 * (int64_t)t->support_offsets[p + 1]; ++q)
     t->entry_gradient[q] = 0;
-  fascia_real sum = 0;
   for (int32_t q = t->patch_offsets[p]; q < t->patch_offsets[p + 1]; ++q) {
     const int32_t s = t->patch_samples[q];
     const fascia_real v = m->sample_volume[s];
     fascia_real F[9], dtheta[9];
     fascia_pt_sample_F(m, st, s, F);
-    sum += v * fascia_pt_dilatation(t->law[p], F, dtheta);
+    fascia_pt_dilatation(t->law[p], F, dtheta);
     // v grad theta_s on each frame of s: (dtheta g, axial(C dtheta^T)), as the stress gradient
     for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k) {
       const fascia_real *A = st->frame_A + 9 * (int64_t)m->pair_frame[k], *g = m->pair_gradient + 3 * (int64_t)k;
@@ -59,10 +75,6 @@ static inline FASCIA_HD void fascia_pt_patch_evaluate(const fascia_pt_model *m, 
       }
     }
   }
-  const fascia_real theta = sum / t->volume[p], pressure = t->lambda[p] * theta;
-  t->theta[p] = theta;
-  t->energy[p] = FASCIA_R(0.5) * t->volume[p] * pressure * theta;
-  for (int32_t q = t->patch_offsets[p]; q < t->patch_offsets[p + 1]; ++q) t->sample_pressure[t->patch_samples[q]] = pressure;
 }
 
 /// The rank-one term's coefficient of patch p for the direction v [6N]:

@@ -204,7 +204,8 @@ static void local_stiffness(const fascia_system *sys, const fascia_pt_state *st,
 
 // The volumetric patches' rank-one terms lambda_p / V_p G_p G_p^T, row by row.
 static void dilatation_rows(const fascia_system *sys, const unsigned char *moves, fascia_bsr *B) {
-  const fascia_dilatation *d = sys->dilatation;
+  fascia_dilatation *d = sys->dilatation;
+  fascia_dilatation_gradients(sys, d);
   const fascia_patch_table *t = &d->table;
 #pragma omp parallel for num_threads(sys->threads) schedule(static)
   for (int32_t i = 0; i < sys->frame_count; ++i) {

@@ -195,20 +195,31 @@ fascia_real fascia_dilatation_evaluate(fascia_system *sys, fascia_dilatation *d)
   const fascia_pt_state st = {sys->x, sys->A};
 #pragma omp parallel for num_threads(sys->threads) schedule(static)
   for (int32_t p = 0; p < d->view.count; ++p) fascia_pt_patch_evaluate(&sys->pm, &st, &d->view, p);
+  d->gradients_current = 0;
   fascia_real energy = 0;
   for (int32_t p = 0; p < d->view.count; ++p) energy += d->patch_energy[p];
   return energy;
 }
 
+void fascia_dilatation_gradients(const fascia_system *sys, fascia_dilatation *d) {
+  if (d->gradients_current) return;
+  const fascia_pt_state st = {sys->x, sys->A};
+#pragma omp parallel for num_threads(sys->threads) schedule(static)
+  for (int32_t p = 0; p < d->view.count; ++p) fascia_pt_patch_gradient(&sys->pm, &st, &d->view, p);
+  d->gradients_current = 1;
+}
+
 void fascia_dilatation_apply_add(const fascia_system *sys, fascia_dilatation *d, const fascia_real *v,
                                  fascia_real *out) {
+  fascia_dilatation_gradients(sys, d);
 #pragma omp parallel for num_threads(sys->threads) schedule(static)
   for (int32_t p = 0; p < d->view.count; ++p) fascia_pt_patch_rate(&d->view, p, v);
 #pragma omp parallel for num_threads(sys->threads) schedule(static)
   for (int32_t i = 0; i < sys->frame_count; ++i) fascia_pt_patch_frame_add(&d->view, i, out + 6 * (int64_t)i);
 }
 
-void fascia_dilatation_diagonal_add(const fascia_system *sys, const fascia_dilatation *d, fascia_real *blocks) {
+void fascia_dilatation_diagonal_add(const fascia_system *sys, fascia_dilatation *d, fascia_real *blocks) {
+  fascia_dilatation_gradients(sys, d);
 #pragma omp parallel for num_threads(sys->threads) schedule(static)
   for (int32_t i = 0; i < sys->frame_count; ++i)
     fascia_pt_patch_frame_diagonal_add(&d->view, i, blocks + 36 * (int64_t)i);

@@ -58,6 +58,7 @@ typedef struct fascia_dilatation {
   fascia_real *entry_gradient;  ///< [6 entries] G_p restricted to the entry's frame (x then theta)
   fascia_real *sample_pressure; ///< [S] lambda_p thetabar_p on the samples of p, 0 elsewhere
   fascia_pt_patches view;       ///< all of the above, as the per-patch math reads them
+  int gradients_current;        ///< entry_gradient is for the last evaluated state
 } fascia_dilatation;
 
 /// Makes the term for sys (NULL in *out when the model has no patch): the
@@ -65,14 +66,19 @@ typedef struct fascia_dilatation {
 FASCIA_INTERN fascia_status fascia_dilatation_create(fascia_system *sys, fascia_dilatation **out);
 FASCIA_INTERN void fascia_dilatation_destroy(fascia_dilatation **dilatation);
 
-/// At the system's current state: every patch's mean dilatation, pressure
-/// and gradient G_p; returns E_vol (J), not finite when a patch's is not.
+/// At the system's current state: every patch's mean dilatation and
+/// pressure; returns E_vol (J), not finite when a patch's is not. The
+/// gradients G_p wait for the first Hessian use (fascia_dilatation_gradients):
+/// line-search trials and chord steps never need them.
 FASCIA_INTERN fascia_real fascia_dilatation_evaluate(fascia_system *sys, fascia_dilatation *d);
+/// The gradients G_p at the last evaluated state, unless they are there
+/// already; the Hessian's users below call it, and so does the assembly.
+FASCIA_INTERN void fascia_dilatation_gradients(const fascia_system *sys, fascia_dilatation *d);
 /// out += sum_p lambda_p / V_p G_p (G_p . v): the rank-one terms.
 FASCIA_INTERN void fascia_dilatation_apply_add(const fascia_system *sys, fascia_dilatation *d, const fascia_real *v,
                                                fascia_real *out);
 /// Adds the rank-one terms' 6x6 diagonal blocks [36N].
-FASCIA_INTERN void fascia_dilatation_diagonal_add(const fascia_system *sys, const fascia_dilatation *d,
+FASCIA_INTERN void fascia_dilatation_diagonal_add(const fascia_system *sys, fascia_dilatation *d,
                                                   fascia_real *blocks);
 
 #endif
