@@ -40,6 +40,7 @@ static inline void rnd_rotation(unsigned long long *state, double max_angle, dou
 
 static inline fascia_model *random_model(fascia_ctx *ctx, unsigned long long seed, int frames, int samples, int law,
                                          double coupling, double curvature) {
+  if (frames > 64) return NULL; // the frame choice below works in an array of 64
   unsigned long long st = seed;
   int *counts = malloc((size_t)samples * sizeof(int)), pairs = 0;
   for (int s = 0; s < samples; ++s) {

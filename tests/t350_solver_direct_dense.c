@@ -12,6 +12,7 @@
 #include "check.h"
 #include "direct.h"
 #include "random_model.h"
+#include "scenes.h"
 
 // Random symmetric values on the pattern, diagonally dominant (so positive
 // definite) by `margin` on each row.
@@ -109,9 +110,21 @@ int main(void) {
   fascia_ctx_def cd = fascia_ctx_def_default();
   fascia_ctx *ctx = NULL;
   if (fascia_ctx_create(&cd, &ctx) != FASCIA_OK) return 1;
-  for (unsigned long long seed = 1; seed <= 6; ++seed) {
-    const int frames = 8 + 7 * (int)seed, samples = 2 * frames;
-    fascia_model *m = random_model(ctx, seed, frames, samples, 0, 0, 0);
+  int kinds[2] = {0, 0}; // simplicial and supernodal factors seen
+  for (unsigned long long seed = 1; seed <= 7; ++seed) {
+    // random models (banded patterns: simplicial factors), and a hexahedral
+    // beam of 12 x 3 x 3 frames, whose fronts are dense enough for a
+    // supernodal factor
+    fascia_model *m = NULL;
+    int frames = 8 + 7 * (int)seed;
+    if (seed < 7) {
+      m = random_model(ctx, seed, frames, 2 * frames, 0, 0, 0);
+    } else {
+      fascia_scene_beam_def def = fascia_scene_beam_def_default();
+      def.frames[0] = 12;
+      CHECK_OK(fascia_scene_beam_build(ctx, &def, &m), ctx);
+      frames = m ? m->frame_count : 0;
+    }
     CHECK(m != NULL);
     if (!m) break;
     fascia_bsr K;
@@ -129,6 +142,8 @@ int main(void) {
     CHECK_OK(fascia_direct_create(ctx, &K, mask, &d), ctx);
     if (!d) break;
     CHECK(fascia_direct_flops(d) > 0);
+    printf("seed %llu: %d frames, %s factor\n", seed, frames, fascia_direct_supernodal(d) ? "supernodal" : "simplicial");
+    ++kinds[fascia_direct_supernodal(d)];
     random_spd(&K, &st, 0.1);
     check_against_dense(ctx, d, &K, mask, damping, 0, b);
     random_spd(&K, &st, 1e-3); // other numbers, the same analysis, a shift
@@ -139,6 +154,7 @@ int main(void) {
     free(mask), free(damping), free(b);
     fascia_model_destroy(&m);
   }
+  CHECK(kinds[0] > 0 && kinds[1] > 0); // each kind reads its own triangle: both are checked
   fascia_ctx_destroy(&ctx);
   return CHECK_RESULT();
 }

@@ -497,29 +497,22 @@ static fascia_status cpu_hessian_diagonal(fascia_backend *backend, fascia_real *
 static int64_t cpu_linear_state_size(fascia_backend *backend) {
   cpu_backend *B = (cpu_backend *)backend;
   if (!B->factor_valid || !B->direct || B->factor_epoch != B->S->linear_epoch) return 0;
-  int64_t count;
-  fascia_direct_values(B->direct, &count);
-  return 2 + count;
+  return 2 + fascia_direct_values_count(B->direct);
 }
 
 static void cpu_linear_state_save(fascia_backend *backend, fascia_real *out) {
   cpu_backend *B = (cpu_backend *)backend;
-  int64_t count;
-  const double *values = fascia_direct_values(B->direct, &count);
   out[0] = B->factor_mass;
   out[1] = B->factor_shift;
-  memcpy(out + 2, values, (size_t)count * sizeof(double));
+  fascia_direct_values_save(B->direct, out + 2);
 }
 
 static int cpu_linear_state_load(fascia_backend *backend, const fascia_real *in, int64_t count) {
   cpu_backend *B = (cpu_backend *)backend;
   B->factor_valid = 0;
-  int64_t expected = 0;
-  double *values = B->direct && fascia_direct_mask_is(B->direct, B->mask) ? fascia_direct_values(B->direct, &expected)
-                                                                          : NULL;
-  if (!values || count != 2 + expected) return 0;
-  memcpy(values, in + 2, (size_t)expected * sizeof(double));
-  if (!fascia_direct_factor_values(B->direct)) return 0;
+  if (!B->direct || !fascia_direct_mask_is(B->direct, B->mask) || count != 2 + fascia_direct_values_count(B->direct) ||
+      !fascia_direct_values_load(B->direct, in + 2))
+    return 0;
   B->factor_mass = in[0];
   B->factor_shift = in[1];
   B->factor_epoch = B->S->linear_epoch;

@@ -4,10 +4,13 @@
 // computed on the frame graph (6 times smaller than the unknowns': AMD, or
 // METIS where CHOLMOD finds AMD's fill large) and expanded to each frame's
 // free unknowns, which keeps a frame's 6 unknowns together in the
-// supernodes. The matrix is CHOLMOD's lower triangle in compressed columns:
-// column 6i+a holds row a of frame i's blocks with frames j >= i, so the
-// values are copied from the block rows in storage order, the order the
-// pattern was built in.
+// supernodes. The unknowns are then numbered in that order (postordered),
+// and CHOLMOD factors the matrix in its natural order: given the triangle
+// it works on (the lower one for a supernodal factor, the upper one for a
+// simplicial one), a factorization copies no matrix. With the ordering left
+// to CHOLMOD it transposed the matrix twice per factorization, which cost
+// more than the supernodal arithmetic on the 20x3x3 cantilever. The values
+// are gathered from the block rows through a map made once per analysis.
 #include <stdlib.h>
 #include <string.h>
 #ifdef _OPENMP
@@ -24,16 +27,21 @@ void openblas_set_num_threads(int threads);
 struct fascia_direct {
   int64_t unknowns;     // 6N
   int64_t free_count;   // unknowns of the systems
-  int64_t *free_index;  // [6N] index among the free unknowns, -1 for a fixed one
+  int64_t *free_index;  // [6N] row of the unknown in the factored matrix (the fill-reducing order), -1 fixed
   unsigned char *mask;  // [6N] the mask the analysis is for
+  int64_t entries;      // stored values
+  int64_t *value_index; // [entries] where each stored value is in the block values (36 blk + 6 a + c)
+  int64_t *walk_place;  // [entries] the place of the pattern walk's j-th entry among the stored values
+  int64_t *diagonal;    // [free_count] the place of each diagonal entry
   cholmod_common common;
-  cholmod_sparse *matrix; // [free_count^2] lower triangle, pattern fixed at creation
+  cholmod_sparse *matrix; // [free_count^2] one triangle, pattern fixed at creation
   cholmod_factor *factor;
   cholmod_dense *rhs, *solution, *work_y, *work_e;
 };
 
-// Runs BODY for every stored entry (column, row, value_index into B's
-// values) in storage order: the pattern and the values take the same walk.
+// Runs BODY for every entry of one triangle (column, row: the unknowns'
+// numbers; value_index into B's values) in the pattern's walk: frame i's
+// row a, then its blocks with frames j >= i.
 #define FOR_EACH_ENTRY(d, B, BODY)                                                                                   \
   for (int32_t i = 0; i < (B)->rows; ++i)                                                                            \
     for (int a = 0; a < 6; ++a) {                                                                                    \
@@ -114,9 +122,63 @@ static void release(fascia_direct *d) {
   cholmod_l_free_dense(&d->work_e, &d->common);
   free(d->free_index);
   free(d->mask);
-  d->free_index = NULL;
+  free(d->value_index);
+  free(d->walk_place);
+  free(d->diagonal);
+  d->free_index = d->value_index = d->walk_place = d->diagonal = NULL;
   d->mask = NULL;
-  d->free_count = 0;
+  d->free_count = d->entries = 0;
+}
+
+// d->matrix in the unknowns' numbering: triangle stype (-1 lower, 1 upper),
+// rows ascending in each column; d->value_index, d->walk_place, d->diagonal.
+static fascia_status fill_pattern(fascia_ctx *ctx, fascia_direct *d, const fascia_bsr *B, int stype) {
+  const int64_t n = d->free_count, entries = d->entries;
+  d->matrix = cholmod_l_allocate_sparse((size_t)n, (size_t)n, (size_t)entries, 1, 1, stype, CHOLMOD_REAL, &d->common);
+  d->value_index = fascia_calloc(entries > 0 ? entries : 1, sizeof(int64_t));
+  d->walk_place = fascia_calloc(entries > 0 ? entries : 1, sizeof(int64_t));
+  d->diagonal = fascia_calloc(n > 0 ? n : 1, sizeof(int64_t));
+  int64_t *next = fascia_calloc(n + 1, sizeof(int64_t)), *walk_of = fascia_calloc(entries > 0 ? entries : 1, sizeof(int64_t));
+  if (!d->matrix || !d->value_index || !d->walk_place || !d->diagonal || !next || !walk_of) {
+    free(next);
+    free(walk_of);
+    return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "direct solver: out of memory for a matrix of %lld entries",
+                       (long long)entries);
+  }
+  SuiteSparse_long *p = d->matrix->p, *rows = d->matrix->i;
+  // an entry (column, row) of the walk's triangle goes to column min or max
+#define TARGET(column, row) (stype < 0 ? ((column) < (row) ? (column) : (row)) : ((column) < (row) ? (row) : (column)))
+#define OTHER(column, row) (stype < 0 ? ((column) < (row) ? (row) : (column)) : ((column) < (row) ? (column) : (row)))
+  FOR_EACH_ENTRY(d, B, ++next[TARGET(column, row) + 1]);
+  for (int64_t c = 0; c < n; ++c) next[c + 1] += next[c];
+  for (int64_t c = 0; c <= n; ++c) p[c] = next[c];
+  int64_t j = 0;
+  FOR_EACH_ENTRY(d, B, {
+    const int64_t place = next[TARGET(column, row)]++;
+    rows[place] = OTHER(column, row);
+    d->value_index[place] = value_index;
+    walk_of[place] = j++;
+  });
+#undef TARGET
+#undef OTHER
+  // rows ascending within each column (insertion sort: columns are short)
+  for (int64_t c = 0; c < n; ++c)
+    for (int64_t a = p[c] + 1; a < p[c + 1]; ++a)
+      for (int64_t b = a; b > p[c] && rows[b - 1] > rows[b]; --b) {
+        const SuiteSparse_long r = rows[b];
+        rows[b] = rows[b - 1], rows[b - 1] = r;
+        const int64_t v = d->value_index[b];
+        d->value_index[b] = d->value_index[b - 1], d->value_index[b - 1] = v;
+        const int64_t w = walk_of[b];
+        walk_of[b] = walk_of[b - 1], walk_of[b - 1] = w;
+      }
+  for (int64_t place = 0; place < entries; ++place) d->walk_place[walk_of[place]] = place;
+  for (int64_t c = 0; c < n; ++c)
+    for (int64_t place = p[c]; place < p[c + 1]; ++place)
+      if (rows[place] == c) d->diagonal[c] = place;
+  free(next);
+  free(walk_of);
+  return FASCIA_OK;
 }
 
 static fascia_status create(fascia_ctx *ctx, const fascia_bsr *B, const unsigned char *mask, fascia_direct *d) {
@@ -141,15 +203,16 @@ static fascia_status create(fascia_ctx *ctx, const fascia_bsr *B, const unsigned
 
   int64_t entries = 0;
   FOR_EACH_ENTRY(d, B, ++entries);
+  d->entries = entries;
   const size_t n = (size_t)d->free_count;
-  d->matrix = cholmod_l_allocate_sparse(n, n, (size_t)entries, 1, 1, -1, CHOLMOD_REAL, &d->common);
-  d->rhs = cholmod_l_zeros(n, 1, CHOLMOD_REAL, &d->common);
-  if (!d->matrix || !d->rhs) {
+  // 1. the given frame order, postordered, on the pattern in mask order
+  cholmod_sparse *first = cholmod_l_allocate_sparse(n, n, (size_t)entries, 1, 1, -1, CHOLMOD_PATTERN, &d->common);
+  if (!first) {
     st = FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "direct solver: out of memory for a matrix of %lld entries",
                      (long long)entries);
     goto done;
   }
-  SuiteSparse_long *p = d->matrix->p, *rows = d->matrix->i, k = 0, previous = -1;
+  SuiteSparse_long *p = first->p, *rows = first->i, k = 0, previous = -1;
   FOR_EACH_ENTRY(d, B, {
     if (column != previous) {
       p[column] = k;
@@ -158,13 +221,40 @@ static fascia_status create(fascia_ctx *ctx, const fascia_bsr *B, const unsigned
     rows[k++] = row;
   });
   p[n] = k;
-  // the given frame order, postordered, and the supernodal symbolic factor
   d->common.nmethods = 1;
   d->common.method[0].ordering = CHOLMOD_GIVEN;
   d->common.postorder = 1;
   d->common.supernodal = CHOLMOD_AUTO; // supernodal where the fronts are dense enough, else simplicial
   d->common.final_ll = 1;              // LL^T, not LDL^T, so that a system not positive definite fails
-  d->factor = cholmod_l_analyze_p(d->matrix, perm, NULL, 0, &d->common);
+  cholmod_factor *ordered = cholmod_l_analyze_p(first, perm, NULL, 0, &d->common);
+  cholmod_l_free_sparse(&first, &d->common);
+  if (!ordered) {
+    st = FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY,
+                     "direct solver: the analysis of %lld unknowns (%lld entries) failed (CHOLMOD status %d); use the "
+                     "CG solver",
+                     (long long)n, (long long)entries, d->common.status);
+    goto done;
+  }
+  // 2. number the unknowns in that order (perm is free now: its inverse)
+  const SuiteSparse_long *final_order = ordered->Perm;
+  for (size_t q = 0; q < n; ++q) perm[final_order[q]] = (SuiteSparse_long)q;
+  for (int64_t u = 0; u < d->unknowns; ++u)
+    if (d->free_index[u] >= 0) d->free_index[u] = perm[d->free_index[u]];
+  const int supernodal = ordered->is_super;
+  cholmod_l_free_factor(&ordered, &d->common);
+  // 3. the triangle CHOLMOD's natural order reads as it is, rows sorted per
+  // column, with the maps to the block values and from the walk
+  if ((st = fill_pattern(ctx, d, B, supernodal ? -1 : 1)) != FASCIA_OK) goto done;
+  d->rhs = cholmod_l_zeros(n, 1, CHOLMOD_REAL, &d->common);
+  if (!d->rhs) {
+    st = FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "direct solver: out of memory for %lld unknowns", (long long)n);
+    goto done;
+  }
+  // 4. the symbolic factor in that order: the same fill, no permutation
+  d->common.method[0].ordering = CHOLMOD_NATURAL;
+  d->common.postorder = 0;
+  d->common.supernodal = supernodal ? CHOLMOD_SUPERNODAL : CHOLMOD_SIMPLICIAL;
+  d->factor = cholmod_l_analyze(d->matrix, &d->common);
   if (!d->factor)
     st = FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY,
                      "direct solver: the analysis of %lld unknowns (%lld entries) failed (CHOLMOD status %d); use the "
@@ -207,39 +297,20 @@ void fascia_direct_destroy(fascia_direct **dp) {
 
 double fascia_direct_flops(const fascia_direct *d) { return d->common.fl; }
 
+int fascia_direct_supernodal(const fascia_direct *d) { return d->factor && d->factor->is_super; }
+
 double fascia_direct_factor_nonzeros(const fascia_direct *d) { return d->common.lnz; }
 
 int fascia_direct_mask_is(const fascia_direct *d, const unsigned char *mask) {
   return !memcmp(mask, d->mask, (size_t)d->unknowns);
 }
 
-int fascia_direct_factor(fascia_direct *d, fascia_ctx *ctx, const fascia_bsr *K, const unsigned char *mask,
-                         const fascia_real *damping, fascia_real shift) {
-  if (!fascia_direct_mask_is(d, mask)) { // other unknowns fixed: analyse again
-    release(d);
-    if (create(ctx, K, mask, d) != FASCIA_OK) return -1;
-  }
-  double *x = d->matrix->x;
-  const SuiteSparse_long *p = d->matrix->p;
-  int64_t k = 0;
-  FOR_EACH_ENTRY(d, K, x[k++] = K->values[value_index]);
-  for (int64_t u = 0; u < d->unknowns; ++u) {
-    const int64_t column = d->free_index[u];
-    if (column >= 0) x[p[column]] += shift * damping[u]; // the diagonal leads its column
-  }
-  return fascia_direct_factor_values(d);
-}
-
-double *fascia_direct_values(fascia_direct *d, int64_t *count) {
-  *count = (int64_t)((const SuiteSparse_long *)d->matrix->p)[d->matrix->ncol];
-  return d->matrix->x;
-}
-
-int fascia_direct_factor_values(fascia_direct *d) {
-  int64_t k;
-  const double *x = fascia_direct_values(d, &k);
+// Factors the values in d->matrix: 1, or 0 when not positive definite (or
+// not finite).
+static int factor_values(fascia_direct *d) {
+  const double *x = d->matrix->x;
   // OpenBLAS's Cholesky lets a NaN through: look at the numbers first
-  for (int64_t e = 0; e < k; ++e)
+  for (int64_t e = 0; e < d->entries; ++e)
     if (!isfinite(x[e])) return 0;
   // Debian's CHOLMOD asks OpenMP for teams of a fixed 4 threads in its
   // supernodal factorization: on 2 cores each factorization started two
@@ -257,6 +328,34 @@ int fascia_direct_factor_values(fascia_direct *d) {
   omp_set_dynamic(dynamic);
 #endif
   return factored && d->common.status == CHOLMOD_OK && d->factor->minor == d->factor->n;
+}
+
+int fascia_direct_factor(fascia_direct *d, fascia_ctx *ctx, const fascia_bsr *K, const unsigned char *mask,
+                         const fascia_real *damping, fascia_real shift) {
+  if (!fascia_direct_mask_is(d, mask)) { // other unknowns fixed: analyse again
+    release(d);
+    if (create(ctx, K, mask, d) != FASCIA_OK) return -1;
+  }
+  double *x = d->matrix->x;
+  for (int64_t k = 0; k < d->entries; ++k) x[k] = K->values[d->value_index[k]];
+  for (int64_t u = 0; u < d->unknowns; ++u) {
+    const int64_t row = d->free_index[u];
+    if (row >= 0) x[d->diagonal[row]] += shift * damping[u];
+  }
+  return factor_values(d);
+}
+
+int64_t fascia_direct_values_count(const fascia_direct *d) { return d->entries; }
+
+void fascia_direct_values_save(const fascia_direct *d, double *out) {
+  const double *x = d->matrix->x;
+  for (int64_t j = 0; j < d->entries; ++j) out[j] = x[d->walk_place[j]];
+}
+
+int fascia_direct_values_load(fascia_direct *d, const double *in) {
+  double *x = d->matrix->x;
+  for (int64_t j = 0; j < d->entries; ++j) x[d->walk_place[j]] = in[j];
+  return factor_values(d);
 }
 
 void fascia_direct_solve(fascia_direct *d, const fascia_real *rhs, fascia_real *x) {
