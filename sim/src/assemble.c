@@ -240,6 +240,14 @@ void fascia_system_hessian_assemble(fascia_system *sys, const unsigned char *mov
     int32_t s1 = s0;
     while (s1 < sys->sample_count && B->local_offsets[s1 + 1] - B->local_offsets[s0] <= B->chunk_capacity) ++s1;
     const int64_t e0 = B->local_offsets[s0], e1 = B->local_offsets[s1];
+    // the block rows the chunk's samples touch (a narrow range where samples are ordered in space)
+    const fascia_model *m = sys->model;
+    int32_t first_row = B->rows, last_row = -1;
+    for (int32_t k = m->sample_offsets[s0]; k < m->sample_offsets[s1]; ++k) {
+      const int32_t i = m->pair_frame[k];
+      if (i < first_row) first_row = i;
+      if (i > last_row) last_row = i;
+    }
 #pragma omp parallel num_threads(sys->threads)
     {
       fascia_real *dq = calloc(6 * (size_t)sys->max_neighbours, sizeof(fascia_real));
@@ -252,7 +260,7 @@ void fascia_system_hessian_assemble(fascia_system *sys, const unsigned char *mov
       free(col);
       // a block of two moving frames has contributions from moving samples only
 #pragma omp for schedule(static)
-      for (int32_t i = 0; i < B->rows; ++i) {
+      for (int32_t i = first_row; i <= last_row; ++i) {
         if (!fascia_frame_moving(moves, i)) continue;
         for (int32_t b = B->row_offsets[i]; b < B->row_offsets[i + 1]; ++b) {
           if (!fascia_frame_moving(moves, B->cols[b])) continue;

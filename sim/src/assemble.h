@@ -35,8 +35,12 @@ typedef struct fascia_bsr {
 /// Whether frame i moves, for the moves arrays below (NULL: every frame).
 static inline int fascia_frame_moving(const unsigned char *moves, int32_t i) { return !moves || moves[i]; }
 
-/// Local blocks computed per pass of the assembly (bounds its scratch: 9 MB).
-#define FASCIA_ASSEMBLY_CHUNK 32768
+/// Local blocks computed per pass of the assembly (bounds its scratch: 4.7 MB,
+/// which the last-level cache keeps between the pass that writes the blocks
+/// and the one that adds them up: the static 20x3x3 hex cantilever 28 -> 22
+/// ms of assembly against 32768; t3-s34610 31-33 ms either way; smaller
+/// chunks cost the paper rows more passes, 8192: 38 ms).
+#define FASCIA_ASSEMBLY_CHUNK 16384
 
 /// Pattern of frame pairs that share a sample (every frame has its diagonal).
 FASCIA_INTERN fascia_status fascia_bsr_create(fascia_ctx *ctx, const fascia_model *model, fascia_bsr *out);
