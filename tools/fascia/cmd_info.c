@@ -13,7 +13,7 @@ int cmd_info(int argc, char **argv) {
   for (int k = 1; k < argc; ++k)
     if (!strcmp(argv[k], "--help")) {
       printf("usage: fascia info\n\nPrints the version, the worker threads, OpenMP's wait policy and spin\n"
-             "count and, one line each, whether the solver backends cpu, cuda and emulated can\n"
+             "count, OpenBLAS's thread count and, one line each, whether the solver backends cpu, cuda and emulated can\n"
              "run here (and on what, or why not).\n");
       return 0;
     } else if (strcmp(argv[k], "--verbose")) {
@@ -27,6 +27,8 @@ int cmd_info(int argc, char **argv) {
   const char *spin = getenv("GOMP_SPINCOUNT");
   printf("openmp wait policy: %s\n", policy ? policy : "the runtime's default");
   printf("openmp spin count: %s\n", spin ? spin : "the runtime's default");
+  const char *blas = getenv("OPENBLAS_NUM_THREADS"); // main.c sets 1 unless the user chose
+  printf("openblas threads: %s\n", blas ? blas : "the library's default");
   fascia_ctx_destroy(&ctx);
   // "auto" is not listed: it is the first of these that is available and
   // runs the model (the emulation is never chosen by itself)
