@@ -66,8 +66,8 @@ typedef struct cpu_backend {
 /// Assembly and factorization are 80-90 % of a direct iteration, the solve
 /// with the factor about 3 %. Dynamic steps only: a static solve keeps
 /// exact Newton, whose iteration count the accuracy study reports (the
-/// 20x3x3 cantilever at nu = 0.49, hex: 24 iterations in 121-130 ms; with
-/// chord steps 26 in 113 ms).
+/// 20x3x3 cantilever at nu = 0.49, hex: 13 iterations in 75 ms; with chord
+/// steps 15 in 72 ms).
 #define REUSE_REDUCTION 10
 
 static int cpu_available(char *detail, size_t size) {
