@@ -133,52 +133,58 @@ static void release(fascia_direct *d) {
 // d->matrix in the unknowns' numbering: triangle stype (-1 lower, 1 upper),
 // rows ascending in each column; d->value_index, d->walk_place, d->diagonal.
 static fascia_status fill_pattern(fascia_ctx *ctx, fascia_direct *d, const fascia_bsr *B, int stype) {
-  const int64_t n = d->free_count, entries = d->entries;
+  const int64_t n = d->free_count, entries = d->entries, e1 = entries > 0 ? entries : 1;
   d->matrix = cholmod_l_allocate_sparse((size_t)n, (size_t)n, (size_t)entries, 1, 1, stype, CHOLMOD_REAL, &d->common);
-  d->value_index = fascia_calloc(entries > 0 ? entries : 1, sizeof(int64_t));
-  d->walk_place = fascia_calloc(entries > 0 ? entries : 1, sizeof(int64_t));
+  d->value_index = fascia_calloc(e1, sizeof(int64_t));
+  d->walk_place = fascia_calloc(e1, sizeof(int64_t));
   d->diagonal = fascia_calloc(n > 0 ? n : 1, sizeof(int64_t));
-  int64_t *next = fascia_calloc(n + 1, sizeof(int64_t)), *walk_of = fascia_calloc(entries > 0 ? entries : 1, sizeof(int64_t));
-  if (!d->matrix || !d->value_index || !d->walk_place || !d->diagonal || !next || !walk_of) {
-    free(next);
-    free(walk_of);
-    return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "direct solver: out of memory for a matrix of %lld entries",
-                       (long long)entries);
+  // the entries bucketed by row first (column, value and walk index of each),
+  // then dealt to their columns row by row: each column's rows come out
+  // ascending, in time linear in the entries
+  int64_t *next = fascia_calloc(n + 1, sizeof(int64_t)), *by_row = fascia_calloc(n + 1, sizeof(int64_t));
+  int64_t *row_column = fascia_calloc(e1, sizeof(int64_t)), *row_value = fascia_calloc(e1, sizeof(int64_t));
+  int64_t *row_walk = fascia_calloc(e1, sizeof(int64_t));
+  fascia_status st = FASCIA_OK;
+  if (!d->matrix || !d->value_index || !d->walk_place || !d->diagonal || !next || !by_row || !row_column ||
+      !row_value || !row_walk) {
+    st = FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "direct solver: out of memory for a matrix of %lld entries",
+                     (long long)entries);
+    goto done;
   }
   SuiteSparse_long *p = d->matrix->p, *rows = d->matrix->i;
   // an entry (column, row) of the walk's triangle goes to column min or max
 #define TARGET(column, row) (stype < 0 ? ((column) < (row) ? (column) : (row)) : ((column) < (row) ? (row) : (column)))
 #define OTHER(column, row) (stype < 0 ? ((column) < (row) ? (row) : (column)) : ((column) < (row) ? (column) : (row)))
-  FOR_EACH_ENTRY(d, B, ++next[TARGET(column, row) + 1]);
-  for (int64_t c = 0; c < n; ++c) next[c + 1] += next[c];
+  FOR_EACH_ENTRY(d, B, {
+    ++next[TARGET(column, row) + 1];
+    ++by_row[OTHER(column, row) + 1];
+  });
+  for (int64_t c = 0; c < n; ++c) next[c + 1] += next[c], by_row[c + 1] += by_row[c];
   for (int64_t c = 0; c <= n; ++c) p[c] = next[c];
   int64_t j = 0;
   FOR_EACH_ENTRY(d, B, {
-    const int64_t place = next[TARGET(column, row)]++;
-    rows[place] = OTHER(column, row);
-    d->value_index[place] = value_index;
-    walk_of[place] = j++;
+    const int64_t slot = by_row[OTHER(column, row)]++;
+    row_column[slot] = TARGET(column, row);
+    row_value[slot] = value_index;
+    row_walk[slot] = j++;
   });
 #undef TARGET
 #undef OTHER
-  // rows ascending within each column (insertion sort: columns are short)
-  for (int64_t c = 0; c < n; ++c)
-    for (int64_t a = p[c] + 1; a < p[c + 1]; ++a)
-      for (int64_t b = a; b > p[c] && rows[b - 1] > rows[b]; --b) {
-        const SuiteSparse_long r = rows[b];
-        rows[b] = rows[b - 1], rows[b - 1] = r;
-        const int64_t v = d->value_index[b];
-        d->value_index[b] = d->value_index[b - 1], d->value_index[b - 1] = v;
-        const int64_t w = walk_of[b];
-        walk_of[b] = walk_of[b - 1], walk_of[b - 1] = w;
-      }
-  for (int64_t place = 0; place < entries; ++place) d->walk_place[walk_of[place]] = place;
-  for (int64_t c = 0; c < n; ++c)
-    for (int64_t place = p[c]; place < p[c + 1]; ++place)
-      if (rows[place] == c) d->diagonal[c] = place;
+  for (int64_t r = 0, slot = 0; r < n; ++r) // by_row[r] is now where row r + 1 starts
+    for (; slot < by_row[r]; ++slot) {
+      const int64_t c = row_column[slot], place = next[c]++;
+      rows[place] = r;
+      d->value_index[place] = row_value[slot];
+      d->walk_place[row_walk[slot]] = place;
+      if (r == c) d->diagonal[c] = place;
+    }
+done:
   free(next);
-  free(walk_of);
-  return FASCIA_OK;
+  free(by_row);
+  free(row_column);
+  free(row_value);
+  free(row_walk);
+  return st;
 }
 
 static fascia_status create(fascia_ctx *ctx, const fascia_bsr *B, const unsigned char *mask, fascia_direct *d) {
