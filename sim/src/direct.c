@@ -113,8 +113,16 @@ static fascia_status order_frames(fascia_ctx *ctx, fascia_direct *d, const fasci
   return FASCIA_OK;
 }
 
-static void release(fascia_direct *d) {
+// The matrix and its maps (fill_pattern).
+static void free_pattern(fascia_direct *d) {
   cholmod_l_free_sparse(&d->matrix, &d->common);
+  free(d->value_index);
+  free(d->walk_place);
+  free(d->diagonal);
+  d->value_index = d->walk_place = d->diagonal = NULL;
+}
+
+static void release(fascia_direct *d) {
   cholmod_l_free_factor(&d->factor, &d->common);
   cholmod_l_free_dense(&d->rhs, &d->common);
   cholmod_l_free_dense(&d->solution, &d->common);
@@ -122,12 +130,17 @@ static void release(fascia_direct *d) {
   cholmod_l_free_dense(&d->work_e, &d->common);
   free(d->free_index);
   free(d->mask);
-  free(d->value_index);
-  free(d->walk_place);
-  free(d->diagonal);
-  d->free_index = d->value_index = d->walk_place = d->diagonal = NULL;
+  free_pattern(d);
+  d->free_index = NULL;
   d->mask = NULL;
   d->free_count = d->entries = 0;
+}
+
+static fascia_status analysis_failed(fascia_ctx *ctx, const fascia_direct *d) {
+  return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY,
+                     "direct solver: the analysis of %lld unknowns (%lld entries) failed (CHOLMOD status %d); use the "
+                     "CG solver",
+                     (long long)d->free_count, (long long)d->entries, d->common.status);
 }
 
 // d->matrix in the unknowns' numbering: triangle stype (-1 lower, 1 upper),
@@ -212,33 +225,16 @@ static fascia_status create(fascia_ctx *ctx, const fascia_bsr *B, const unsigned
   d->entries = entries;
   const size_t n = (size_t)d->free_count;
   // 1. the given frame order, postordered, on the pattern in mask order
-  cholmod_sparse *first = cholmod_l_allocate_sparse(n, n, (size_t)entries, 1, 1, -1, CHOLMOD_PATTERN, &d->common);
-  if (!first) {
-    st = FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "direct solver: out of memory for a matrix of %lld entries",
-                     (long long)entries);
-    goto done;
-  }
-  SuiteSparse_long *p = first->p, *rows = first->i, k = 0, previous = -1;
-  FOR_EACH_ENTRY(d, B, {
-    if (column != previous) {
-      p[column] = k;
-      previous = column;
-    }
-    rows[k++] = row;
-  });
-  p[n] = k;
+  if ((st = fill_pattern(ctx, d, B, -1)) != FASCIA_OK) goto done;
   d->common.nmethods = 1;
   d->common.method[0].ordering = CHOLMOD_GIVEN;
   d->common.postorder = 1;
   d->common.supernodal = CHOLMOD_AUTO; // supernodal where the fronts are dense enough, else simplicial
   d->common.final_ll = 1;              // LL^T, not LDL^T, so that a system not positive definite fails
-  cholmod_factor *ordered = cholmod_l_analyze_p(first, perm, NULL, 0, &d->common);
-  cholmod_l_free_sparse(&first, &d->common);
+  cholmod_factor *ordered = cholmod_l_analyze_p(d->matrix, perm, NULL, 0, &d->common);
+  free_pattern(d);
   if (!ordered) {
-    st = FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY,
-                     "direct solver: the analysis of %lld unknowns (%lld entries) failed (CHOLMOD status %d); use the "
-                     "CG solver",
-                     (long long)n, (long long)entries, d->common.status);
+    st = analysis_failed(ctx, d);
     goto done;
   }
   // 2. number the unknowns in that order (perm is free now: its inverse)
@@ -261,11 +257,7 @@ static fascia_status create(fascia_ctx *ctx, const fascia_bsr *B, const unsigned
   d->common.postorder = 0;
   d->common.supernodal = supernodal ? CHOLMOD_SUPERNODAL : CHOLMOD_SIMPLICIAL;
   d->factor = cholmod_l_analyze(d->matrix, &d->common);
-  if (!d->factor)
-    st = FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY,
-                     "direct solver: the analysis of %lld unknowns (%lld entries) failed (CHOLMOD status %d); use the "
-                     "CG solver",
-                     (long long)n, (long long)entries, d->common.status);
+  if (!d->factor) st = analysis_failed(ctx, d);
 done:
   free(order);
   free(perm);
