@@ -14,6 +14,8 @@
 
 /// The backend the solves run on ("cpu" unless a test's --backend says otherwise).
 static const char *beam_tip_backend = "cpu";
+/// The static solves' Newton tolerance (relative to the load).
+static double beam_tip_tolerance = 1e-8;
 
 /// Sets beam_tip_backend from --backend for the tests of locking (t306,
 /// t307); 1 when their cases at nu = 0.49 run on it. On the device backends
@@ -37,7 +39,7 @@ static inline int beam_tip_uz_of(fascia_ctx *ctx, const fascia_scene_beam_def *d
   CHECK_NEAR(fascia_model_volume(m), 16.0, 1e-12, 0); // the volumetric samples overlap, not add
   fascia_solver_def sd = fascia_solver_def_default();
   sd.newton_iterations = 150;
-  sd.newton_tolerance = 1e-8;
+  sd.newton_tolerance = beam_tip_tolerance;
   sd.backend = beam_tip_backend;
   backend_static_cg(&sd);
   fascia_solver *s = NULL;

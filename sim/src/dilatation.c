@@ -115,6 +115,12 @@ fascia_status fascia_patch_table_build(fascia_ctx *ctx, const fascia_model *m, f
   return FASCIA_OK;
 }
 
+// lambda_s of dilatation.h: with it lambda_s + 2 mu is Young's modulus, the
+// stiffness of a dilatation the frames cannot pair with a lateral contraction.
+static fascia_real sample_lambda_in_patch(fascia_real lambda, fascia_real mu) {
+  return lambda > 0 && mu > 0 ? lambda * mu / (lambda + mu) : 0;
+}
+
 fascia_status fascia_dilatation_create(fascia_system *sys, fascia_dilatation **out) {
   *out = NULL;
   const fascia_model *m = sys->model;
@@ -144,12 +150,13 @@ fascia_status fascia_dilatation_create(fascia_system *sys, fascia_dilatation **o
   for (int32_t p = 0; p < P; ++p) {
     // validation guarantees one material per patch
     const int32_t first = table.patch_samples[table.patch_offsets[p]];
-    d->patch_lambda[p] = sys->sample_lambda[first];
+    const fascia_real own = sample_lambda_in_patch(sys->sample_lambda[first], sys->sample_mu[first]);
+    d->patch_lambda[p] = sys->sample_lambda[first] - own;
     d->patch_law[p] = sys->sample_law[first];
     for (int32_t q = table.patch_offsets[p]; q < table.patch_offsets[p + 1]; ++q) {
       const int32_t s = table.patch_samples[q];
       d->patch_volume[p] += m->sample_volume[s];
-      sys->sample_lambda[s] = 0; // the patch carries it
+      sys->sample_lambda[s] = own; // the patch carries the rest
     }
   }
   sys->pm.sample_pressure = d->sample_pressure;

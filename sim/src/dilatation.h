@@ -1,12 +1,19 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
 // Mean dilatation over volumetric patches, the cure of volumetric locking
-// (docs/mechanics.md, "Volumetric locking"). The samples of a patch keep the
-// deviatoric part of their energy; the volumetric part lambda/2 theta^2
-// (theta = tr E for StVK, J - 1 for the stable Neo-Hookean) is evaluated once
-// per patch, on the volume average of theta over its samples:
+// (docs/mechanics.md, "Volumetric locking"). The volumetric part of the
+// energy, lambda/2 theta^2 (theta = tr E for StVK, J - 1 for the stable
+// Neo-Hookean; each law is affine in lambda), is split: each sample keeps
+// lambda_s = lambda mu / (lambda + mu) of it on its own theta_s (at most mu:
+// no locking; the variation of theta across a patch is then as stiff as
+// uniaxial stress), and the rest, lambda_p = lambda - lambda_s, is evaluated
+// once per patch, on the volume average of theta over its samples:
 //
-//   E_vol = sum_p V_p lambda_p/2 thetabar_p^2,  thetabar_p = sum_{s in p} v_s theta_s / V_p
+//   E_vol = sum_s v_s lambda_s/2 theta_s^2 + sum_p V_p lambda_p/2 thetabar_p^2,
+//   thetabar_p = sum_{s in p} v_s theta_s / V_p
+//
+// The samples' share is part of their law (fascia_pt_stress at lambda_s);
+// what follows is the patch's share:
 //   grad  = sum_p lambda_p thetabar_p G_p,      G_p = sum_{s in p} v_s grad theta_s
 //   H     = sum_p lambda_p / V_p G_p G_p^T  +  lambda_p thetabar_p sum_{s in p} v_s hess theta_s
 //

@@ -392,13 +392,17 @@ cleanup:
 
 // Copied from data/reference/cantilever-calculix.csv (tests/t361 checks the copy).
 static const fascia_ccx_reference references[] = {
+    {FASCIA_LAW_STVK, 40000, 0, -1.61135, -6.53479, 0.0002},
+    {FASCIA_LAW_STVK, 40000, 0.2, -1.60608, -6.52526, 0.0002},
     {FASCIA_LAW_STVK, 40000, 0.3, -1.59904, -6.51045, 0.0002},
     {FASCIA_LAW_STVK, 40000, 0.45, -1.58157, -6.47227, 0.0007},
     {FASCIA_LAW_STVK, 40000, 0.49, -1.57499, -6.45761, 0.0006},
-    {FASCIA_LAW_NEOHOOKEAN, 40000, 0.3, -1.59212, -6.51244, 0.0003},
-    {FASCIA_LAW_NEOHOOKEAN, 40000, 0.49, -1.56830, -6.45978, 0.0008},
+    {FASCIA_LAW_STVK, 4e+06, 0, -0.0002038, -0.0755744, 2e-06},
+    {FASCIA_LAW_STVK, 4e+06, 0.2, -0.0002030, -0.0754387, 2e-06},
     {FASCIA_LAW_STVK, 4e+06, 0.3, -0.0002020, -0.0752261, 2e-06},
     {FASCIA_LAW_STVK, 4e+06, 0.49, -0.0001983, -0.0744742, 8e-06},
+    {FASCIA_LAW_NEOHOOKEAN, 40000, 0.3, -1.59212, -6.51244, 0.0003},
+    {FASCIA_LAW_NEOHOOKEAN, 40000, 0.49, -1.56830, -6.45978, 0.0008},
 };
 
 const fascia_ccx_reference *fascia_ccx_references(int *count) {

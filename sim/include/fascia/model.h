@@ -248,9 +248,11 @@ FASCIA_API fascia_status fascia_model_floating_components(fascia_ctx *ctx, const
                                                           int32_t capacity, int32_t *count);
 
 /// The Poisson ratio from which fascia's generators (fascia prep, fascia
-/// beam) put samples into volumetric patches by default: below it the
-/// volumetric energy is small and full integration is as accurate
-/// (docs/mechanics.md, "Volumetric locking").
+/// beam) put samples into volumetric patches by default. Below it the
+/// patches still gain on the cantilever (hex at nu = 0.2: +3.2 -> +1.8 %),
+/// but soft tissue has nu = 0.4-0.49 and a prepared model's patches couple
+/// more frames in its matrix; a scene's patch_radius turns them on at any
+/// ratio (docs/mechanics.md, "Volumetric locking").
 #define FASCIA_PATCH_MIN_POISSON 0.3
 
 /// Groups the samples into volumetric patches (sample_patch) for models
