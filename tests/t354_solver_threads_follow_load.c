@@ -2,8 +2,10 @@
 // SPDX-FileCopyrightText: fascia developers
 // The solver's thread count follows the free cores (fascia_threads_free,
 // README.md "On a busy machine"): never more than asked, at least one, and
-// one while other processes keep every core busy; a run that changes its
-// thread count on the way gives the same bits as one that does not.
+// one while other processes keep every core busy, unless its passes are long
+// (FASCIA_THREADS_LONG_PASS_PAIRS pairs or more: all it asked for, busy or
+// not); a run that changes its thread count on the way gives the same bits
+// as one that does not.
 #define _POSIX_C_SOURCE 200809L
 #include <signal.h>
 #include <string.h>
@@ -19,9 +21,11 @@
 
 int main(void) {
   const long cores = sysconf(_SC_NPROCESSORS_ONLN);
-  CHECK(fascia_threads_free(1) == 1);
-  CHECK(fascia_threads_free(0) == 1);
-  const int quiet = fascia_threads_free((int)cores);
+  const int64_t short_passes = FASCIA_THREADS_LONG_PASS_PAIRS - 1, long_passes = FASCIA_THREADS_LONG_PASS_PAIRS;
+  CHECK(fascia_threads_free(1, short_passes) == 1);
+  CHECK(fascia_threads_free(0, short_passes) == 1);
+  CHECK(fascia_threads_free(1, long_passes) == 1);
+  const int quiet = fascia_threads_free((int)cores, short_passes);
   CHECK(quiet >= 1 && quiet <= cores);
   // every core busy with another process: one thread
   pid_t busy[MAX_BUSY];
@@ -35,16 +39,20 @@ int main(void) {
   }
   const struct timespec settle = {0, 200 * 1000 * 1000};
   nanosleep(&settle, NULL);
-  int loaded = (int)cores;
+  int loaded = (int)cores, loaded_long = (int)cores;
   for (int k = 0; k < 5; ++k) { // the lowest of a few looks: the count is a sample
-    const int t = fascia_threads_free((int)cores);
+    const int t = fascia_threads_free((int)cores, short_passes);
     loaded = t < loaded ? t : loaded;
+    const int l = fascia_threads_free((int)cores, long_passes);
+    loaded_long = l < loaded_long ? l : loaded_long;
   }
   for (int k = 0; k < started; ++k) kill(busy[k], SIGKILL);
   for (int k = 0; k < started; ++k) waitpid(busy[k], NULL, 0);
-  printf("%ld cores: %d threads free when quiet, %d beside %d busy processes\n", cores, quiet, loaded, started);
+  printf("%ld cores: %d threads free when quiet, %d beside %d busy processes (long passes: %d)\n", cores, quiet,
+         loaded, started, loaded_long);
   CHECK(started == cores || started == MAX_BUSY);
   CHECK(loaded == 1 || cores > MAX_BUSY);
+  CHECK(loaded_long == cores);
 
   // the same steps on a fixed thread count and on one that changes each step
   fascia_ctx_def cd = fascia_ctx_def_default();

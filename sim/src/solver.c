@@ -239,7 +239,7 @@ fascia_status fascia_solver_solve_static(fascia_solver *S, fascia_solve_report *
   if (!report) report = &local;
   memset(report, 0, sizeof *report);
   const int32_t N = S->frame_count;
-  S->sys->threads = fascia_threads_free(S->sys->threads_max);
+  S->sys->threads = fascia_threads_free(S->sys->threads_max, S->sys->pair_count);
   place_prescribed(S, S->time);
   fascia_status status = FASCIA_OK;
   const int steps = S->def.load_steps;
@@ -467,7 +467,7 @@ fascia_status fascia_solver_step(fascia_solver *S, fascia_solve_report *report) 
   fascia_solve_report local;
   if (!report) report = &local;
   memset(report, 0, sizeof *report);
-  S->sys->threads = fascia_threads_free(S->sys->threads_max); // fewer where other work holds the cores
+  S->sys->threads = fascia_threads_free(S->sys->threads_max, S->sys->pair_count); // fewer where other work holds the cores
   const fascia_real t0 = S->time, h = S->def.time_step;
   fascia_real *backup = NULL;
   FASCIA_TRY(save_state(S, &backup));

@@ -416,8 +416,9 @@ void fascia_system_sample_strain(fascia_system *sys, fascia_real *strain, fascia
   }
 }
 
-int fascia_threads_free(int wanted) {
+int fascia_threads_free(int wanted, int64_t pairs) {
   if (wanted <= 1) return 1;
+  if (pairs >= FASCIA_THREADS_LONG_PASS_PAIRS) return wanted;
   FILE *f = fopen("/proc/loadavg", "r");
   if (!f) return wanted;
   double a, b, c;

@@ -115,11 +115,20 @@ FASCIA_INTERN fascia_real fascia_system_largest_strain(const fascia_system *sys,
 /// count) on `threads` threads.
 FASCIA_INTERN fascia_real fascia_dot(const fascia_real *a, const fascia_real *b, int64_t n, int threads);
 
-/// Threads to use now, at most `wanted`: the cores no other runnable task
+/// Pairs from which a system's passes are long enough to keep every thread
+/// on a loaded machine (fascia_threads_free).
+#define FASCIA_THREADS_LONG_PASS_PAIRS 32768
+
+/// Threads to use now for a system of `pairs` sample-frame pairs, at most
+/// `wanted`. The parallel loops end at a barrier, so a thread that waits for
+/// a busy core holds up all of them for up to a scheduler slice (a few ms):
+/// where one pass over the pairs is shorter than that (below
+/// FASCIA_THREADS_LONG_PASS_PAIRS, about 1 ms a pass on one core), fewer
+/// threads finish sooner, and this gives the cores no other runnable task
 /// holds (Linux: /proc/loadavg's runnable count, this thread aside), at
-/// least 1. The parallel loops end at a barrier, so a thread that waits for
-/// a busy core holds up all of them: on a loaded machine fewer threads
-/// finish sooner. Every sum has a fixed blocking, so results do not change.
-FASCIA_INTERN int fascia_threads_free(int wanted);
+/// least 1. Longer passes keep `wanted`: a busy core then costs a fraction
+/// of a pass, and more threads get a larger share of a shared machine.
+/// Every sum has a fixed blocking, so results do not change.
+FASCIA_INTERN int fascia_threads_free(int wanted, int64_t pairs);
 
 #endif
