@@ -467,7 +467,7 @@ fascia_status fascia_solver_step(fascia_solver *S, fascia_solve_report *report) 
   fascia_solve_report local;
   if (!report) report = &local;
   memset(report, 0, sizeof *report);
-  S->sys->threads = fascia_threads_free(S->sys->threads_max, S->sys->pair_count); // fewer where other work holds the cores
+  S->sys->threads = fascia_threads_free(S->sys->threads_max, S->sys->pair_count); // fewer on busy cores if passes are short
   const fascia_real t0 = S->time, h = S->def.time_step;
   fascia_real *backup = NULL;
   FASCIA_TRY(save_state(S, &backup));
