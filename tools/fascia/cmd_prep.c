@@ -4,54 +4,18 @@
 // prep/ one by one with progress on stderr, times each step and its
 // peak memory, writes the model (atomically: no partial file on error) and
 // an optional ParaView preview, and ends with a summary, as text on stderr or
-// (--json) as one JSON object on stdout.
+// (--json) as one JSON object on stdout. Built as the module fascia-prep.so,
+// which the program loads when the command is asked for (prep_module.c).
+#include <cjson/cJSON.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-#include "commands.h"
-#include "fascia/fascia.h"
-
-static const char prep_usage[] =
-    "usage: fascia prep SCENE.json [-o MODEL.h5] [--json] [--preview DIR] [--labelmap MAP.nii.gz] [--threads N]\n"
-    "  builds the connective-tissue model of a scene file (data/scenes/README.md)\n"
-    "  -o MODEL.h5     output model file (default: the scene's \"output\" key)\n"
-    "  --preview DIR   also write ParaView files into DIR: open DIR/preview.pvd (organs by name,\n"
-    "                  region, frames with what holds each, samples, coupling)\n"
-    "  --labelmap MAP.nii.gz  also write the organs as a label map (organ k is label k + 1, at the scene's\n"
-    "                  voxel size) and its label table MAP.tsv: a segmentation viewer shows them, and a\n"
-    "                  scene can build the same organs from labels (docs/labelmaps.md)\n"
-    "  --json          print one JSON summary object on stdout\n"
-    "  --threads N     worker threads, 1 to 1024 (default: all)\n"
-    "  --verbose       on failure, also print where the error was found\n";
-
-#ifndef FASCIA_HAVE_PREP
-
-int cmd_prep(int argc, char **argv) {
-  for (int k = 1; k < argc; ++k)
-    if (!strcmp(argv[k], "--help")) {
-      printf("%s", prep_usage);
-      break;
-    }
-  fprintf(stderr,
-          "fascia prep: the preprocessing stage was not built (%s); install libassimp-dev, libcgal-dev, "
-          "libopenvdb-dev and libcjson-dev, then reconfigure with -DFASCIA_PREP=ON\n",
-#ifdef FASCIA_PREP_WHY
-          FASCIA_PREP_WHY
-#else
-          "unknown reason"
-#endif
-  );
-  return 1;
-}
-
-#else
-
-#include <cjson/cJSON.h>
 #include <sys/resource.h>
 #include <time.h>
 #include <unistd.h>
 
+#include "commands.h"
+#include "fascia/fascia.h"
 #include "fascia/prep.h"
 
 enum { STEP_MAX = 12 };
@@ -485,13 +449,13 @@ static int check_prep_paths(const fascia_prep_scene *scene, const char *output, 
   return rc;
 }
 
-int cmd_prep(int argc, char **argv) {
+int fascia_prep_command(int argc, char **argv) {
   const char *scene_path = NULL, *output = NULL, *preview = NULL, *labelmap = NULL;
   char label_table[4096] = "";
   int json = 0, threads = 0;
   for (int k = 1; k < argc; ++k) {
     if (!strcmp(argv[k], "--help") || !strcmp(argv[k], "-h")) {
-      printf("%s", prep_usage);
+      printf("%s", cli_prep_usage);
       return 0;
     } else if (!strcmp(argv[k], "--json")) {
       json = 1;
@@ -513,7 +477,7 @@ int cmd_prep(int argc, char **argv) {
         return 2;
       }
     } else if (argv[k][0] == '-') {
-      fprintf(stderr, "fascia prep: unknown option '%s' (or its value is missing)\n%s", argv[k], prep_usage);
+      fprintf(stderr, "fascia prep: unknown option '%s' (or its value is missing)\n%s", argv[k], cli_prep_usage);
       return 2;
     } else if (!scene_path) {
       scene_path = argv[k];
@@ -523,7 +487,7 @@ int cmd_prep(int argc, char **argv) {
     }
   }
   if (!scene_path) {
-    fprintf(stderr, "fascia prep: no scene file given\n%s", prep_usage);
+    fprintf(stderr, "fascia prep: no scene file given\n%s", cli_prep_usage);
     return 2;
   }
   fascia_ctx *ctx = cli_ctx(threads, 1);
@@ -602,5 +566,3 @@ done:
   fascia_ctx_destroy(&ctx);
   return rc;
 }
-
-#endif

@@ -20,10 +20,16 @@ typedef struct fascia_command {
 int cmd_info(int argc, char **argv);
 int cmd_beam(int argc, char **argv);
 int cmd_inspect(int argc, char **argv);
-int cmd_prep(int argc, char **argv);
+int cmd_prep(int argc, char **argv); ///< loads fascia-prep.so and runs fascia_prep_command (prep_module.c)
 int cmd_run(int argc, char **argv);
 int cmd_bench(int argc, char **argv);
 int cmd_tradeoff(int argc, char **argv);
+
+/// `fascia prep` itself, in the module fascia-prep.so (cmd_prep.c); it
+/// calls the program's cli_* helpers and its usage text below.
+int fascia_prep_command(int argc, char **argv);
+/// fascia prep's usage, printed by the program where the module is missing.
+extern const char cli_prep_usage[];
 
 /// Prints "fascia NAME: <ctx message>" on stderr (and where, with --verbose)
 /// and returns 1.

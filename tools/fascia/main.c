@@ -77,8 +77,11 @@ fascia_ctx *cli_ctx(int threads, int progress) {
 // being started (a static cantilever's run: 1898 samples of a spinning
 // thread beside 5281 of the solver's, none with it).
 // Both libraries read these as they load, so the program sets them and
-// starts itself again, keeping each the user chose. If that fails the run
-// goes on as it is.
+// starts itself again, keeping each the user chose (a start is about 20 ms:
+// the prep stage's libraries are loaded by `fascia prep` only,
+// prep_module.c). A function in the program's preinit array runs before
+// the libraries' constructors, but glibc 2.36 sets up the environment after
+// it, and its setenv is lost. If the new start fails the run goes on as it is.
 #define FASCIA_OMP_SPIN "3000"
 
 static void start_settings(char **argv) {
