@@ -125,7 +125,8 @@ static void other_settings(fascia_ctx *ctx, const fascia_model *m, const fascia_
     double changed = value == 0 ? 1 : value == 1 ? 0 : 2 * value;
     if (!strcmp(name, "cg_tolerance") || !strcmp(name, "newton_tolerance")) changed = value / 2;
     if (!strcmp(name, "precond") || !strcmp(name, "linear_solver")) changed = value == 1 ? 2 : 1;
-    if (!strcmp(name, "assembled")) changed = value == 1 ? 0 : 1; // -1 (auto), 0 or 1
+    if (!strcmp(name, "assembled") || !strcmp(name, "single_precision_matrix"))
+      changed = value == 1 ? 0 : 1; // -1 (auto), 0 or 1
     fascia_checkpoint_setting_set(&other, k, changed);
     fascia_solver *solver = NULL;
     if (fascia_solver_create(ctx, m, &other, &solver) != FASCIA_OK) {

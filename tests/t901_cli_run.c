@@ -137,8 +137,22 @@ int main(int argc, char **argv) {
   CHECK(cJSON_IsString(device) && device->valuestring[0] != '\0');
   CHECK(cJSON_IsString(linear) && !strcmp(linear->valuestring, "cg"));
   CHECK(cJSON_IsNumber(steps) && steps->valueint == 2);
+  const cJSON *product = cJSON_GetObjectItemCaseSensitive(root, "cg_product");
+  CHECK(cJSON_IsString(product) && !strcmp(product->valuestring, "matrix-free")); // the device has no matrix
   if (!cJSON_IsObject(root)) fprintf(stderr, "stdout: %.400s\nstderr: %.400s\n", result.out, result.err);
   cJSON_Delete(root);
+  // CG on the CPU: the assembled matrix's float copy by default, the double one when asked for
+  const char *const products[][2] = {{"", "assembled float"}, {"--double", "assembled double"},
+                                     {"--cg-tolerance 1e-8", "assembled double"}, {"--matrix-free", "matrix-free"}};
+  for (int k = 0; k < 4; ++k) {
+    snprintf(args, sizeof args, "run '%s' --steps 1 --linear-solver cg %s --threads 1 --json", model, products[k][0]);
+    CHECK(cli_exec(fascia, args, err, &result));
+    CHECK(result.status == 0);
+    root = cJSON_Parse(result.out);
+    product = cJSON_GetObjectItemCaseSensitive(root, "cg_product");
+    CHECK(cJSON_IsString(product) && !strcmp(product->valuestring, products[k][1]));
+    cJSON_Delete(root);
+  }
   snprintf(args, sizeof args, "run '%s' --steps 1 --backend bogus", model);
   CHECK(cli_exec(fascia, args, err, &result));
   CHECK(result.status == 2);

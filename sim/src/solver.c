@@ -25,6 +25,7 @@ fascia_solver_def fascia_solver_def_default(void) {
   d.precond = FASCIA_PRECOND_BLOCK_JACOBI;
   d.linear_solver = FASCIA_LINEAR_AUTO;
   d.assembled = FASCIA_ASSEMBLED_AUTO;
+  d.single_precision_matrix = FASCIA_SINGLE_AUTO;
   d.mass = FASCIA_MASS_LUMPED;
   d.line_search = 1;
   d.load_steps = 1;
@@ -59,6 +60,9 @@ static fascia_status check_def(fascia_ctx *ctx, const fascia_solver_def *d) {
                FASCIA_ERR_ARGUMENT, "solver: unknown linear solver %d", (int)d->linear_solver);
   FASCIA_CHECK(d->assembled >= FASCIA_ASSEMBLED_AUTO && d->assembled <= 1, ctx, FASCIA_ERR_ARGUMENT,
                "solver: assembled %d; give 0 (matrix-free), 1 or FASCIA_ASSEMBLED_AUTO", d->assembled);
+  FASCIA_CHECK(d->single_precision_matrix >= FASCIA_SINGLE_AUTO && d->single_precision_matrix <= 1, ctx,
+               FASCIA_ERR_ARGUMENT, "solver: single precision matrix %d; give 0 (double), 1 (float) or FASCIA_SINGLE_AUTO",
+               d->single_precision_matrix);
   FASCIA_CHECK(d->mass == FASCIA_MASS_CONSISTENT || d->mass == FASCIA_MASS_LUMPED, ctx, FASCIA_ERR_ARGUMENT,
                "solver: unknown mass kind %d", (int)d->mass);
   FASCIA_CHECK(isfinite(d->mass_damping) && d->mass_damping >= 0, ctx, FASCIA_ERR_ARGUMENT,
@@ -410,6 +414,7 @@ static void merge_report(fascia_solve_report *sum, const fascia_solve_report *r)
   sum->negative_curvature += r->negative_curvature;
   sum->direct = r->direct;
   sum->assembled = r->assembled;
+  sum->single_precision_matrix = r->single_precision_matrix;
   sum->gradient_norm = r->gradient_norm;
   sum->reference_norm = r->reference_norm;
   sum->energy = r->energy;

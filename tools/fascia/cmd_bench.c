@@ -35,7 +35,7 @@ static const char bench_usage[] =
     "usage: fascia bench [--list] [paper | large | cantilever | ROW ...] [--table 2|3]\n"
     "                    [--backend cpu|cuda|auto|emulated [--no-cpu]]\n"
     "                    [--threads T] [--repeats R] [--steps S] [--json] [--csv FILE]\n"
-    "                    [--assembled [--single]] [--linear-solver cg|direct|auto] [--no-calculix]\n"
+    "                    [--assembled [--single|--double]] [--linear-solver cg|direct|auto] [--no-calculix]\n"
     "                    [--shapes hex,tet,meshless] [--frames 10x2x2,20x3x3,...]\n"
     "                    [--samples-per-cell N,...] [--neighbours K,...] [--rotation-smoothing R,...]\n"
     "\n"
@@ -64,7 +64,9 @@ static const char bench_usage[] =
     "  --json                one JSON array of row objects on stdout\n"
     "  --csv FILE            also write the rows as CSV with a header row (one benchmark at a time)\n"
     "  --assembled           CG multiplies by the assembled block matrix (default: where it fits)\n"
-    "  --single              ... stored in float (half the memory traffic of the products)\n"
+    "  --single              ... stored in float (half the memory traffic of the products; the\n"
+    "                        default in the paper's mode and where the CG tolerance is 1e-6 or looser)\n"
+    "  --double              ... stored in double\n"
     "  --linear-solver KIND  cantilever: cg, direct or auto (default: the solver's default)\n"
     "  --no-calculix         cantilever: no CalculiX peer figures\n"
     "cantilever sweep (any of these replaces the default rows by the product of the lists):\n"
@@ -157,6 +159,7 @@ static int add_row_name(bench_options *opt, const char *name) {
 static int parse_options(int argc, char **argv, bench_options *opt) {
   memset(opt, 0, sizeof *opt);
   opt->backend = "cpu";
+  opt->single = FASCIA_SINGLE_AUTO;
   for (int k = 1; k < argc; ++k) {
     const char *o = argv[k];
     if (!strcmp(o, "--help") || !strcmp(o, "-h")) {
@@ -173,6 +176,7 @@ static int parse_options(int argc, char **argv, bench_options *opt) {
     else if (!strcmp(o, "--json")) opt->json = 1;
     else if (!strcmp(o, "--assembled")) opt->assembled = 1;
     else if (!strcmp(o, "--single")) opt->single = 1;
+    else if (!strcmp(o, "--double")) opt->single = 0;
     else if (!strcmp(o, "--no-cpu")) opt->no_cpu = 1;
     else if (!strcmp(o, "--no-calculix")) opt->no_calculix = 1;
     else {
@@ -280,6 +284,7 @@ static int32_t max_neighbours(const fascia_model *m) {
 typedef struct paper_result {
   const fascia_scene_paper_row *row;
   int frames, samples, neighbours, threads, assembled; ///< assembled: the products used the assembled matrix
+  int single; ///< ... its float copy
   double ms, evaluate_ms, precond_ms, assemble_ms, cg_ms; ///< per step, best repeat
   double cg_per_step, peak_memory_mb, memory_mb;
   /// The same run on the CPU, ms per step: beside a device backend unless
@@ -339,6 +344,7 @@ static fascia_status time_paper_mode(fascia_ctx *ctx, const bench_options *opt, 
       out->cg_ms = sum.cg_ms / opt->steps;
       out->cg_per_step = cg / opt->steps;
       out->assembled = report.assembled;
+      out->single = report.single_precision_matrix;
     }
   }
   out->memory_mb = cli_resident_mb() - base_mb;
@@ -390,9 +396,9 @@ static void text_device_line(char *shown, size_t size, const char *backend, cons
 // backend the comparison with the paper's GPU column (GTX 570) and the CPU.
 static void paper_text_header(const bench_options *opt) {
   if (!strcmp(opt->backend, "cpu"))
-    printf("%-5s %-26s %6s %7s %3s %10s %10s %8s %10s %8s %9s %9s %9s %9s %7s\n", "table", "name", "frames",
+    printf("%-5s %-26s %6s %7s %3s %10s %10s %8s %10s %8s %9s %9s %9s %9s %7s %s\n", "table", "name", "frames",
            "samples", "k", "ms/step", "paper_ms", "speedup", "paper_gpu", "peak_MB", "eval_ms", "precnd_ms", "asm_ms",
-           "cg_ms", "cg_iter");
+           "cg_ms", "cg_iter", "product");
   else
     printf("%-5s %-26s %6s %7s %3s %10s %10s %9s %10s %8s %8s %9s %9s %9s %7s\n", "table", "name", "frames",
            "samples", "k", "ms/step", "paper_gpu", "gpu_ratio", "cpu_ms", "cpu/gpu", "peak_MB", "eval_ms",
@@ -411,10 +417,11 @@ static void paper_text_row(const paper_result *r, const bench_options *opt) {
   char a[32], b[32], c[32], d[32];
   const fascia_scene_paper_row *row = r->row;
   if (!strcmp(opt->backend, "cpu"))
-    printf("%-5d %-26s %6d %7d %3d %10.3f %10s %8s %10s %8.1f %9.3f %9.3f %9.3f %9.3f %7.1f\n", row->table, row->name,
+    printf("%-5d %-26s %6d %7d %3d %10.3f %10s %8s %10s %8.1f %9.3f %9.3f %9.3f %9.3f %7.1f %s\n", row->table, row->name,
            r->frames, r->samples, r->neighbours, r->ms, figure(a, sizeof a, "%.2f", row->paper_cpu_ms),
            figure(b, sizeof b, "%.2f", row->paper_cpu_ms / r->ms), figure(c, sizeof c, "%.2f", row->paper_gpu_ms),
-           r->peak_memory_mb, r->evaluate_ms, r->precond_ms, r->assemble_ms, r->cg_ms, r->cg_per_step);
+           r->peak_memory_mb, r->evaluate_ms, r->precond_ms, r->assemble_ms, r->cg_ms, r->cg_per_step,
+           !r->assembled ? "matrix-free" : r->single ? "float" : "double");
   else
     printf("%-5d %-26s %6d %7d %3d %10.3f %10s %9s %10s %8s %8.1f %9.3f %9.3f %9.3f %7.1f\n", row->table, row->name,
            r->frames, r->samples, r->neighbours, r->ms, figure(a, sizeof a, "%.2f", row->paper_gpu_ms),
@@ -463,7 +470,7 @@ static cJSON *paper_json(const paper_result *r, const bench_options *opt) {
   }
   cJSON_AddNumberToObject(o, "threads", r->threads);
   cJSON_AddBoolToObject(o, "assembled", r->assembled);
-  cJSON_AddBoolToObject(o, "single_precision_matrix", opt->single);
+  cJSON_AddBoolToObject(o, "single_precision_matrix", r->single);
   cJSON_AddNumberToObject(o, "steps", opt->steps);
   cJSON_AddNumberToObject(o, "repeats", opt->repeats);
   return o;
@@ -479,7 +486,7 @@ static void csv_figure(FILE *f, const char *format, double x) {
 static void paper_csv(FILE *f, const paper_result *rows, int count, const bench_options *opt) {
   fprintf(f, "table,name,frames,frames_requested,samples,neighbours,ms_per_step,paper_ms,paper_gpu_ms,speedup,"
              "peak_memory_mb,memory_mb,evaluate_ms,precond_ms,assemble_ms,cg_ms,cg_iterations_per_step,backend,"
-             "threads,assembled,steps,repeats,device,cpu_ms_per_step,paper_gpu_ratio,cpu_gpu_ratio\n");
+             "threads,assembled,steps,repeats,device,cpu_ms_per_step,paper_gpu_ratio,cpu_gpu_ratio,single_precision_matrix\n");
   const int device = strcmp(opt->backend, "cpu") != 0;
   for (int k = 0; k < count; ++k) {
     const paper_result *r = rows + k;
@@ -500,7 +507,7 @@ static void paper_csv(FILE *f, const paper_result *rows, int count, const bench_
     if (device) csv_figure(f, "%.3f", r->row->paper_gpu_ms / r->ms);
     fputc(',', f);
     if (device) csv_figure(f, "%.3f", r->cpu_ms / r->ms);
-    fputc('\n', f);
+    fprintf(f, ",%d\n", r->single);
   }
 }
 

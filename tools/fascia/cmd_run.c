@@ -72,13 +72,15 @@ static const char run_usage[] =
     "  --assembled            CG multiplies by the assembled block matrix (the default on the CPU\n"
     "                         up to a 2 GiB matrix)\n"
     "  --matrix-free          CG multiplies without a matrix (the default beyond that and on a GPU)\n"
-    "  --single               ... stored in float for the products (half their memory traffic)\n"
+    "  --single               ... stored in float for the products (half their memory traffic; the\n"
+    "                         default where the CG tolerance is 1e-6 or looser, or --cg-fixed)\n"
+    "  --double               ... stored in double for the products\n"
     "  --preset NAME          interactive, balanced or accurate: solver settings measured by\n"
     "                         'fascia tradeoff' (tools/bench/README.md) for dynamic runs; options\n"
-    "                         after it override it; a static solve keeps its Newton limit of 100\n"
-    "  --verbose              on failure, also print where the error was found\n";
+    "                         after it override it; a static solve keeps its Newton limit of 100\n";
 // the rest of the help, split off: C99 guarantees string literals of 4095 bytes only
 static const char run_usage_notes[] =
+    "  --verbose              on failure, also print where the error was found\n"
     "Progress with the time left goes to stderr when it is a terminal (or FASCIA_PROGRESS=1).\n"
     "Every output is written as NAME.tmp-PID-K and renamed when complete; the next run writing\n"
     "it removes those a killed run left. SIGINT/SIGTERM (also repeated) stop a dynamic run after\n"
@@ -213,6 +215,7 @@ static int parse_options(int argc, char **argv, run_options *opt, const fascia_s
     else if (!strcmp(o, "--assembled")) opt->solver.assembled = 1;
     else if (!strcmp(o, "--matrix-free")) opt->solver.assembled = 0;
     else if (!strcmp(o, "--single")) opt->solver.single_precision_matrix = 1;
+    else if (!strcmp(o, "--double")) opt->solver.single_precision_matrix = 0;
     else if (!strcmp(o, "--require-convergence")) opt->solver.require_convergence = 1;
     else if (!strcmp(o, "--accept-unconverged")) opt->solver.require_convergence = 0;
     else {
@@ -278,7 +281,7 @@ static int parse_options(int argc, char **argv, run_options *opt, const fascia_s
 
 /// What the run did, for the summary.
 typedef struct run_totals {
-  int steps, newton, cg, factorizations, converged_steps, interrupted, saved, direct_steps, assembled_steps;
+  int steps, newton, cg, factorizations, converged_steps, interrupted, saved, direct_steps, assembled_steps, single_steps;
   int capacity;                       ///< of the per-step arrays, grown as steps are done
   int *newton_per_step, *cg_per_step; ///< [steps done]
   fascia_ctx *ctx;                    ///< for the out-of-memory message
@@ -332,6 +335,7 @@ static fascia_status add_report(run_totals *t, const fascia_solve_report *r) {
   t->converged_steps += r->converged != 0;
   t->direct_steps += r->direct != 0;
   t->assembled_steps += r->assembled != 0;
+  t->single_steps += r->single_precision_matrix != 0;
   t->profile.assemble_ms += r->profile.assemble_ms;
   t->profile.evaluate_ms += r->profile.evaluate_ms;
   t->profile.precond_ms += r->profile.precond_ms;
@@ -390,6 +394,8 @@ static char *settings_json(const run_options *opt) {
   cJSON_AddBoolToObject(o, "cg_fixed", d->cg_fixed);
   cJSON_AddStringToObject(o, "precond", setting_text("precond", d->precond, 0, buf, sizeof buf));
   cJSON_AddStringToObject(o, "assembled", d->assembled == FASCIA_ASSEMBLED_AUTO ? "auto" : d->assembled ? "yes" : "no");
+  cJSON_AddStringToObject(o, "single_precision_matrix",
+                          setting_text("single_precision_matrix", d->single_precision_matrix, 0, buf, sizeof buf));
   cJSON_AddStringToObject(o, "mass", setting_text("mass", d->mass, 0, buf, sizeof buf));
   cJSON_AddNumberToObject(o, "damping", d->mass_damping);
   cJSON_AddNumberToObject(o, "step_retries", d->step_retries);
@@ -513,7 +519,10 @@ static void print_text(const run_options *opt, const fascia_model *m, fascia_sol
   printf("backend     %s\n", fascia_solver_backend(solver));
   printf("device      %s\n", fascia_solver_device(solver));
   printf("linear      %s%s\n", linear_name(t),
-         t->direct_steps > 0 ? "" : t->assembled_steps == 0 ? " (matrix-free)" : " (assembled matrix)");
+         t->direct_steps > 0        ? ""
+         : t->assembled_steps == 0  ? " (matrix-free)"
+         : t->single_steps > 0      ? " (assembled matrix, float copy for the products)"
+                                    : " (assembled matrix)");
   printf("time        %.3f ms per step (evaluate %.3f, preconditioner %.3f, assembly %.3f, linear solves %.3f)\n",
          t->solve_ms / steps, t->profile.evaluate_ms / steps, t->profile.precond_ms / steps,
          t->profile.assemble_ms / steps, t->profile.cg_ms / steps);
@@ -595,6 +604,11 @@ static int print_json(const run_options *opt, const fascia_model *m, fascia_solv
   cJSON_AddStringToObject(root, "backend", fascia_solver_backend(solver));
   cJSON_AddStringToObject(root, "device", fascia_solver_device(solver));
   cJSON_AddStringToObject(root, "linear_solver", linear_name(t));
+  // what CG multiplied by: "none" where every step solved directly
+  cJSON_AddStringToObject(root, "cg_product", t->direct_steps == t->steps && t->steps > 0 ? "none"
+                                              : t->assembled_steps == 0                  ? "matrix-free"
+                                              : t->single_steps > 0                      ? "assembled float"
+                                                                                         : "assembled double");
   cJSON_AddNumberToObject(root, "threads", opt->threads);
   cJSON_AddNumberToObject(root, "frames", m->frame_count);
   cJSON_AddNumberToObject(root, "samples", m->sample_count);
@@ -674,7 +688,7 @@ static const char *setting_option(const char *name) {
       {"newton_tolerance", "--newton-tolerance"}, {"cg_iterations", "--cg-iterations"},
       {"cg_fixed", "--cg-fixed"},      {"cg_tolerance", "--cg-tolerance"},
       {"precond", "--precond"},        {"linear_solver", "--linear-solver"},
-      {"assembled", "--assembled"},    {"single_precision_matrix", "--single"},
+      {"assembled", "--assembled"},    {"single_precision_matrix", "--single or --double"},
       {"mass", "--mass"},              {"mass_damping", "--damping"},
       {"step_retries", "--step-retries"}, {"require_convergence", "--require-convergence"},
       {"blow_up_strain", "--blow-up-strain"}};
@@ -694,6 +708,9 @@ static const char *setting_text(const char *name, double value, int digits, char
   if (!strcmp(name, "linear_solver") && i >= 0 && i < 3) return linear[i];
   if (!strcmp(name, "mass") && i >= 0 && i < 2) return mass[i];
   if (flag && (i == 0 || i == 1)) return i ? "on" : "off";
+  if ((!strcmp(name, "single_precision_matrix") && i == FASCIA_SINGLE_AUTO) ||
+      (!strcmp(name, "assembled") && i == FASCIA_ASSEMBLED_AUTO))
+    return "auto";
   snprintf(buf, size, "%.*g", digits, value);
   return buf;
 }

@@ -247,7 +247,7 @@ static void dynamic_rows(row *rows, int *count, int quick) {
     r->solver.cg_tolerance = tolerances[k];
   }
   r = dyn(rows, count, "solver");
-  r->solver.linear_solver = FASCIA_LINEAR_CG, r->solver.assembled = 1;
+  r->solver.linear_solver = FASCIA_LINEAR_CG, r->solver.assembled = 1, r->solver.single_precision_matrix = 0;
   r = dyn(rows, count, "solver"); // float or double: the assembled matrix in float
   r->solver.linear_solver = FASCIA_LINEAR_CG, r->solver.assembled = 1, r->solver.single_precision_matrix = 1;
   for (int p = FASCIA_PRECOND_NONE; p <= FASCIA_PRECOND_JACOBI && !quick; ++p) {
@@ -359,7 +359,7 @@ static void row_label(const row *r, char *out, size_t size) {
     else if (d->linear_solver == FASCIA_LINEAR_CG)
       snprintf(out, size, "dt %g newton %d cg %s tol %g%s", d->time_step, d->newton_iterations,
                precond_name(d->precond), d->cg_tolerance,
-               d->single_precision_matrix ? " assembled float" : d->assembled ? " assembled" : "");
+               d->single_precision_matrix == 1 ? " assembled float" : d->assembled == 1 ? " assembled" : "");
     else snprintf(out, size, "dt %g newton %d %s", d->time_step, d->newton_iterations, linear_name(d));
   }
 }

@@ -38,6 +38,15 @@ typedef enum fascia_mass_kind {
 
 /// fascia_solver_def.assembled: the product chosen by its measured cost.
 #define FASCIA_ASSEMBLED_AUTO (-1)
+/// fascia_solver_def.single_precision_matrix: float products where the CG
+/// tolerance is at least FASCIA_SINGLE_MIN_CG_TOLERANCE (or CG runs a fixed
+/// count), else double.
+#define FASCIA_SINGLE_AUTO (-1)
+/// The tightest relative CG residual the automatic choice
+/// takes float products for: 16x above float's rounding (6e-8), so the
+/// matrix's rounding stays far below what each linear solve is asked for
+/// (and Newton's gradient, in double, decides convergence either way).
+#define FASCIA_SINGLE_MIN_CG_TOLERANCE 1e-6
 /// The largest assembled matrix (with its assembly plan) the automatic choice
 /// takes, bytes: beyond it the products go matrix-free.
 #define FASCIA_AUTO_MAX_MATRIX_BYTES ((double)(2LL << 30))
@@ -62,9 +71,11 @@ typedef struct fascia_solver_def {
   /// takes at most FASCIA_AUTO_MAX_MATRIX_BYTES, else matrix-free (the
   /// fastest product: docs/mechanics.md)
   int assembled;
-  /// Assembled CG: 1 stores the matrix in float for the products (half the
-  /// memory traffic; each product then carries ~1e-7 relative error, which
-  /// only changes the linear solve, not the energy or forces); default 0.
+  /// Assembled CG: 1 multiplies by a float copy of the matrix (half the
+  /// memory traffic of the products, which bound a paper-mode step; each
+  /// product then carries ~1e-7 relative error, which only changes the
+  /// linear solve, not the energy or forces), 0 by the double matrix,
+  /// FASCIA_SINGLE_AUTO (default) float as that constant says.
   int single_precision_matrix;
   fascia_mass_kind mass;         ///< default lumped (frames carry rotational inertia; docs/mechanics.md)
   fascia_real mass_damping;      ///< Rayleigh mass damping alpha, 1/s (default 0)
@@ -112,6 +123,7 @@ typedef struct fascia_solve_report {
   int negative_curvature;      ///< CG solves that met negative curvature, or failed factorizations
   int direct;                  ///< 1 when the linear systems were solved directly
   int assembled;               ///< 1 when the tangent was assembled (direct solver or assembled CG)
+  int single_precision_matrix; ///< 1 when CG multiplied by the assembled matrix's float copy
   int factorizations;          ///< direct solver: tangents assembled and factored (an iteration may reuse the last)
   fascia_real gradient_norm;   ///< final |gradient| over free DOFs
   fascia_real reference_norm;  ///< |external load|, the tolerance's scale
