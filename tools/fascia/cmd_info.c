@@ -9,11 +9,14 @@
 #include "commands.h"
 #include "fascia/fascia.h"
 
+// OpenBLAS's own count, read as it loaded (weak: another BLAS may stand in for it)
+extern int openblas_get_num_threads(void) __attribute__((weak));
+
 int cmd_info(int argc, char **argv) {
   for (int k = 1; k < argc; ++k)
     if (!strcmp(argv[k], "--help")) {
       printf("usage: fascia info\n\nPrints the version, the worker threads, OpenMP's wait policy and spin\n"
-             "count, OpenBLAS's thread count and, one line each, whether the solver backends cpu, cuda and emulated can\n"
+             "count, OpenBLAS's thread count (as set, and as the library took it) and, one line each, whether the solver backends cpu, cuda and emulated can\n"
              "run here (and on what, or why not).\n");
       return 0;
     } else if (strcmp(argv[k], "--verbose")) {
@@ -29,6 +32,7 @@ int cmd_info(int argc, char **argv) {
   printf("openmp spin count: %s\n", spin ? spin : "the runtime's default");
   const char *blas = getenv("OPENBLAS_NUM_THREADS"); // main.c sets 1 unless the user chose
   printf("openblas threads: %s\n", blas ? blas : "the library's default");
+  if (openblas_get_num_threads) printf("openblas threads in use: %d\n", openblas_get_num_threads());
   fascia_ctx_destroy(&ctx);
   // "auto" is not listed: it is the first of these that is available and
   // runs the model (the emulation is never chosen by itself)
