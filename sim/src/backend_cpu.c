@@ -263,7 +263,7 @@ static fascia_status cpu_begin(fascia_backend *backend, const fascia_step_values
   op.full_mask = B->full_mask;
   op.prolonged = B->prolonged;
   // float products: half the memory traffic of CG's products, which bound a paper-mode step (t3-s34610, 2
-  // threads: CG 115 -> 79 ms per step on the 2-core machine); the rounding stays far below the CG tolerance
+  // threads: CG 172 -> 104 ms per step on a shared 2-core machine); the rounding stays far below the CG tolerance
   const int single = B->def->single_precision_matrix == FASCIA_SINGLE_AUTO
                          ? B->def->cg_fixed || B->def->cg_tolerance >= FASCIA_SINGLE_MIN_CG_TOLERANCE
                          : B->def->single_precision_matrix;
