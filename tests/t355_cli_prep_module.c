@@ -2,8 +2,9 @@
 // SPDX-FileCopyrightText: fascia developers
 // The fascia program starts without the prep stage's libraries (OpenVDB,
 // assimp, ...): `fascia prep` loads them with its module fascia-prep.so
-// (tools/fascia/prep_module.c), found next to the program; a program whose
-// module is missing says so in one line and still runs every other command.
+// (tools/fascia/prep_module.c), found next to the program, and `fascia info`
+// says where it is; a program whose module is missing says so in one line
+// (and in `fascia info`) and still runs every other command.
 //   t355_cli_prep_module FASCIA_BINARY prep|no-prep
 #define _POSIX_C_SOURCE 200809L // popen, mkdtemp
 #include <stdio.h>
@@ -45,6 +46,10 @@ int main(int argc, char **argv) {
     CHECK(strstr(result.out, "fascia-prep.so") != NULL && strstr(result.out, "libopenvdb") != NULL);
     CHECK(strstr(result.out, "usage: fascia prep SCENE.json") != NULL);
   }
+  snprintf(command, sizeof command, "'%s' info", fascia);
+  CHECK(shell(command) && result.status == 0);
+  CHECK(strstr(result.out, prep ? "\nprep: module /" : "\nprep: not built (") != NULL);
+  CHECK(!prep || strstr(result.out, "/fascia-prep.so\n") != NULL);
   // the program alone in a folder: prep says what is missing, the rest runs
   char folder[] = "/tmp/fascia-t355-XXXXXX";
   CHECK(mkdtemp(folder) != NULL);
@@ -58,6 +63,9 @@ int main(int argc, char **argv) {
   if (check_failures_) fprintf(stderr, "fascia prep without its module said: %s", line);
   snprintf(command, sizeof command, "'%s/fascia' --version", folder);
   CHECK(shell(command) && result.status == 0 && strncmp(result.out, "fascia ", 7) == 0);
+  snprintf(command, sizeof command, "'%s/fascia' info", folder);
+  CHECK(shell(command) && result.status == 0);
+  CHECK(strstr(result.out, prep ? "\nprep: module fascia-prep.so missing: neither in " : "\nprep: not built (") != NULL);
   snprintf(command, sizeof command, "rm -rf '%s'", folder);
   CHECK(shell(command) && result.status == 0);
   return CHECK_RESULT();

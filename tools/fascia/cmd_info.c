@@ -9,6 +9,7 @@
 #include "commands.h"
 #include "fascia/fascia.h"
 
+enum { PREP_STATUS_SIZE = 8192 }; // the line holds two folders
 // OpenBLAS's own count, read as it loaded (weak: another BLAS may stand in for it)
 extern int openblas_get_num_threads(void) __attribute__((weak));
 
@@ -16,8 +17,9 @@ int cmd_info(int argc, char **argv) {
   for (int k = 1; k < argc; ++k)
     if (!strcmp(argv[k], "--help")) {
       printf("usage: fascia info\n\nPrints the version, the worker threads, OpenMP's wait policy and spin\n"
-             "count, OpenBLAS's thread count (as set, and as the library took it) and, one line each, whether the solver backends cpu, cuda and emulated can\n"
-             "run here (and on what, or why not).\n");
+             "count, OpenBLAS's thread count (as set, and as the library took it), where fascia prep's\n"
+             "module is (or why there is none) and, one line each, whether the solver backends cpu, cuda\n"
+             "and emulated can run here (and on what, or why not).\n");
       return 0;
     } else if (strcmp(argv[k], "--verbose")) {
       fprintf(stderr, "fascia info: unknown option '%s'\n", argv[k]);
@@ -33,6 +35,9 @@ int cmd_info(int argc, char **argv) {
   const char *blas = getenv("OPENBLAS_NUM_THREADS"); // main.c sets 1 unless the user chose
   printf("openblas threads: %s\n", blas ? blas : "the library's default");
   if (openblas_get_num_threads) printf("openblas threads in use: %d\n", openblas_get_num_threads());
+  char prep[PREP_STATUS_SIZE];
+  cli_prep_status(prep, sizeof prep);
+  printf("prep: %s\n", prep);
   fascia_ctx_destroy(&ctx);
   // "auto" is not listed: it is the first of these that is available and
   // runs the model (the emulation is never chosen by itself)

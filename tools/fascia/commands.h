@@ -30,6 +30,9 @@ int cmd_tradeoff(int argc, char **argv);
 int fascia_prep_command(int argc, char **argv);
 /// fascia prep's usage, printed by the program where the module is missing.
 extern const char cli_prep_usage[];
+/// One line on fascia prep for `fascia info`: "module PATH", "module ... missing: ..." or
+/// "not built (why)"; the module is looked for, not loaded.
+void cli_prep_status(char *out, size_t size);
 
 /// Prints "fascia NAME: <ctx message>" on stderr (and where, with --verbose)
 /// and returns 1.

@@ -38,17 +38,18 @@ static int asks_for_help(int argc, char **argv) {
 
 #ifndef FASCIA_HAVE_PREP
 
+#ifndef FASCIA_PREP_WHY
+#define FASCIA_PREP_WHY "unknown reason"
+#endif
+
+void cli_prep_status(char *out, size_t size) { snprintf(out, size, "not built (%s)", FASCIA_PREP_WHY); }
+
 int cmd_prep(int argc, char **argv) {
   if (asks_for_help(argc, argv)) printf("%s", cli_prep_usage);
   fprintf(stderr,
           "fascia prep: the preprocessing stage was not built (%s); install libassimp-dev, libcgal-dev, "
           "libopenvdb-dev and libcjson-dev, then reconfigure with -DFASCIA_PREP=ON\n",
-#ifdef FASCIA_PREP_WHY
-          FASCIA_PREP_WHY
-#else
-          "unknown reason"
-#endif
-  );
+          FASCIA_PREP_WHY);
   return 1;
 }
 
@@ -56,22 +57,45 @@ int cmd_prep(int argc, char **argv) {
 
 #define MODULE_NAME "fascia-prep.so"
 
-int cmd_prep(int argc, char **argv) {
-  char folder[PATH_MAX];
-  const ssize_t n = readlink("/proc/self/exe", folder, sizeof folder - 1);
+// The program's folder into folder (PATH_MAX); 0 where /proc/self/exe does not say.
+static int program_folder(char *folder) {
+  const ssize_t n = readlink("/proc/self/exe", folder, PATH_MAX - 1);
   if (n > 0) folder[n] = 0;
   char *slash = n > 0 ? strrchr(folder, '/') : NULL;
-  if (!slash) {
+  if (slash) *slash = 0;
+  return slash != NULL;
+}
+
+// The module's path into path (PATH_MAX + 64), the first place that has it; 0 for none.
+static int find_module(const char *folder, char *path) {
+  const char *const places[] = {"", "/" FASCIA_PREP_MODULE_DIR};
+  for (size_t k = 0; k < sizeof places / sizeof places[0]; ++k) {
+    snprintf(path, PATH_MAX + 64, "%s%s/" MODULE_NAME, folder, places[k]);
+    if (access(path, F_OK) == 0) return 1;
+  }
+  return 0;
+}
+
+void cli_prep_status(char *out, size_t size) {
+  char folder[PATH_MAX], path[PATH_MAX + 64];
+  if (!program_folder(folder))
+    snprintf(out, size, "module " MODULE_NAME " not looked for: /proc/self/exe does not say where the program lies");
+  else if (find_module(folder, path))
+    snprintf(out, size, "module %s", path);
+  else
+    snprintf(out, size, "module " MODULE_NAME " missing: neither in %s nor in %s/" FASCIA_PREP_MODULE_DIR, folder,
+             folder);
+}
+
+int cmd_prep(int argc, char **argv) {
+  char folder[PATH_MAX];
+  if (!program_folder(folder)) {
     fprintf(stderr, "fascia prep: cannot find where the fascia program lies (/proc/self/exe), so not its module "
                     MODULE_NAME "\n");
     return 1;
   }
-  *slash = 0;
-  const char *const places[] = {"", "/" FASCIA_PREP_MODULE_DIR};
   char path[PATH_MAX + 64];
-  for (size_t k = 0; k < sizeof places / sizeof places[0]; ++k) {
-    snprintf(path, sizeof path, "%s%s/" MODULE_NAME, folder, places[k]);
-    if (access(path, F_OK) != 0) continue;
+  if (find_module(folder, path)) {
     void *module = dlopen(path, RTLD_NOW | RTLD_LOCAL);
     if (!module) { // there but not loadable, e.g. a library of the prep stage missing: dlerror names it
       const char *why = dlerror();
