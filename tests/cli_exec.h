@@ -29,6 +29,18 @@ static inline size_t cli_read_all_(FILE *f, char *buffer) {
   return n;
 }
 
+/// A python3 that imports `modules` ("h5py, numpy"): Debian's, which holds
+/// Debian's packages (a python3 earlier on PATH may not), else PATH's; NULL
+/// for none.
+static inline const char *cli_python_with(const char *modules) {
+  static char command[512];
+  snprintf(command, sizeof command, "/usr/bin/python3 -c 'import %s' >/dev/null 2>&1", modules);
+  if (system(command) == 0) return "/usr/bin/python3";
+  snprintf(command, sizeof command, "python3 -c 'import %s' >/dev/null 2>&1", modules);
+  if (system(command) == 0) return "python3";
+  return NULL;
+}
+
 /// Runs "'fascia' ARGS" with stderr sent to err_path and fills r. Returns 0
 /// when the command could not be started.
 static inline int cli_exec(const char *fascia, const char *args, const char *err_path, cli_result *r) {

@@ -21,15 +21,9 @@
 #include "beam_calculix.h"
 #include "beam_tip.h"
 #include "check.h"
+#include "cli_exec.h"
 #include "fascia/solver.h"
 #include "scenes.h"
-
-// A python3 with h5py and numpy: Debian's (a python3 earlier on PATH may lack them), else PATH's; NULL for none.
-static const char *python(void) {
-  if (system("/usr/bin/python3 -c 'import h5py, numpy' >/dev/null 2>&1") == 0) return "/usr/bin/python3";
-  if (system("python3 -c 'import h5py, numpy' >/dev/null 2>&1") == 0) return "python3";
-  return NULL;
-}
 
 // The script's tip uz for the model at path (options appended); 1 on success.
 static int script_tip_uz(const char *python, const char *script, const char *path, const char *options, double *uz) {
@@ -46,7 +40,7 @@ static int script_tip_uz(const char *python, const char *script, const char *pat
 
 int main(int argc, char **argv) {
   if (argc < 2) return 2;
-  const char *py = python();
+  const char *py = cli_python_with("h5py, numpy");
   if (!py) {
     printf("t363: skipped: python3 with h5py and numpy (Debian's python3-h5py, tools/setup/debian-packages.sh) is not "
            "installed\n");

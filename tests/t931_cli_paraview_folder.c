@@ -29,13 +29,6 @@ static int run_script(const char *command) {
   return status != -1 && WIFEXITED(status) && WEXITSTATUS(status) == 0;
 }
 
-// Debian's python3 holds Debian's meshio; a python3 earlier on PATH may not.
-static const char *meshio_python(void) {
-  if (system("/usr/bin/python3 -c 'import meshio' >/dev/null 2>&1") == 0) return "/usr/bin/python3";
-  if (system("python3 -c 'import meshio' >/dev/null 2>&1") == 0) return "python3";
-  return NULL;
-}
-
 typedef struct paths {
   const char *fascia, *scripts, *doc, *python;
   int pvbatch;
@@ -87,7 +80,7 @@ int main(int argc, char **argv) {
                     "DEFORMABLE-SCENE.json\n");
     return 1;
   }
-  paths p = {argv[1], argv[3], argv[4], meshio_python(), system("command -v pvbatch >/dev/null 2>&1") == 0, 0, 0};
+  paths p = {argv[1], argv[3], argv[4], cli_python_with("meshio"), system("command -v pvbatch >/dev/null 2>&1") == 0, 0, 0};
   if (!p.pvbatch) printf("t931: ParaView part skipped: pvbatch (Debian's python3-paraview) is not installed\n");
   if (!p.python) printf("t931: meshio part skipped: meshio (Debian's python3-meshio) is not installed\n");
   if (!p.pvbatch && !p.python) return TEST_SKIP;
