@@ -59,6 +59,7 @@ static int device_supports(const fascia_backend_setup *setup, char *why, size_t 
   if (def->linear_solver == FASCIA_LINEAR_DIRECT) reason = "the direct linear solver runs on the CPU only";
   else if (def->assembled == 1) reason = "the assembled matrix runs on the CPU only (the device is matrix-free)";
   else if (def->single_precision_matrix == 1) reason = "the float matrix runs on the CPU only";
+  else if (setup->sys->modes) reason = "enhanced strain modes (tetrahedral shape functions) run on the CPU only";
   if (reason && why) snprintf(why, size, "%s", reason);
   return reason == NULL;
 }

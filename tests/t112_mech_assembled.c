@@ -4,7 +4,8 @@
 // terms) multiplies like the matrix-free Hessian product, and the assembled
 // consistent mass like the matrix-free mass product, for both laws, with
 // and without the rotation coupling and smoothing and volumetric patches
-// (whose rank-one terms widen the pattern), at random states; and
+// (whose rank-one terms widen the pattern) and their enhanced strain modes
+// (condensed, rank 9 per patch), at random states; and
 // the assembly gives bit-identical values for 1 and 2 threads; its float
 // copy multiplies like it to float rounding. Assembled for some frames only
 // (the frames a step moves), a block of two such frames is bit-identical to
@@ -34,6 +35,7 @@ static int run_case(fascia_ctx *ctx, unsigned long long seed, int law, double co
                     int patches) {
   fascia_model *m = random_model(ctx, seed, 9, 14, law, coupling, smoothing);
   if (m && patches) random_model_patches(m);
+  for (int32_t s = 0; m && s < m->sample_count; ++s) m->sample_modes[s] = patches == 2;
   if (getenv("T112_VERBOSE")) fprintf(stderr, "case seed %llu law %d coupling %g smoothing %g\n", seed, law, coupling, smoothing);
   CHECK(m != NULL);
   if (!m) return 1;
@@ -121,6 +123,8 @@ int main(void) {
     failed |= run_case(ctx, seed, FASCIA_LAW_NEOHOOKEAN, 0.5, 0.3, 0);
     failed |= run_case(ctx, seed, FASCIA_LAW_STVK, 0, 0, 1);
     failed |= run_case(ctx, seed, FASCIA_LAW_NEOHOOKEAN, 0.5, 0.3, 1);
+    failed |= run_case(ctx, seed, FASCIA_LAW_STVK, 0, 0, 2);
+    failed |= run_case(ctx, seed, FASCIA_LAW_NEOHOOKEAN, 0.5, 0.3, 2);
   }
   fascia_ctx_destroy(&ctx);
   return failed | CHECK_RESULT();

@@ -5,6 +5,10 @@
 // version 1 with no such dataset (older readers read it as before); a
 // version 2 file without the dataset, a patch index out of range and a patch
 // mixing materials are refused with the file, the dataset and the problem.
+// Enhanced strain modes: a model whose patches carry them is version 3 with
+// /samples/modes and reads back the same; a version 3 file without the
+// dataset, modes on a sample in no patch, a patch whose samples disagree and
+// a value other than 0 or 1 are refused likewise.
 #define _POSIX_C_SOURCE 200809L
 #include <hdf5.h>
 #include <stdlib.h>
@@ -24,19 +28,72 @@ static int version_of(const char *path) {
   return version;
 }
 
-static int has_patch_dataset(const char *path) {
+static int has_dataset(const char *path, const char *name) {
   hid_t file = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
-  const int has = file >= 0 && H5Lexists(file, "/samples/patch", H5P_DEFAULT) > 0;
+  const int has = file >= 0 && H5Lexists(file, "/samples", H5P_DEFAULT) > 0 && H5Lexists(file, name, H5P_DEFAULT) > 0;
   if (file >= 0) H5Fclose(file);
   return has;
 }
 
-static fascia_model *beam(fascia_ctx *ctx, int patch) {
+static int has_patch_dataset(const char *path) { return has_dataset(path, "/samples/patch"); }
+
+static fascia_model *beam_of(fascia_ctx *ctx, int shape, int patch) {
   fascia_scene_beam_def def = fascia_scene_beam_def_default();
   def.frames[0] = 6;
+  def.shape = shape;
   def.volumetric_patch = patch;
+  def.enhanced_modes = -1; // fascia beam's rule: on for tet with patches
   fascia_model *m = NULL;
   return fascia_scene_beam_build(ctx, &def, &m) == FASCIA_OK ? m : NULL;
+}
+
+static fascia_model *beam(fascia_ctx *ctx, int patch) { return beam_of(ctx, FASCIA_SCENE_HEX, patch); }
+
+// Saves m, expecting the validation to refuse it naming /samples/modes and what.
+static void expect_modes_refused(fascia_ctx *ctx, const fascia_model *m, const char *path, const char *what) {
+  CHECK(fascia_model_save(ctx, m, path) == FASCIA_ERR_FORMAT);
+  CHECK(strstr(fascia_ctx_message(ctx), "/samples/modes") && strstr(fascia_ctx_message(ctx), what));
+  printf("t209: %s\n", fascia_ctx_message(ctx));
+}
+
+static int modes_in_file(fascia_ctx *ctx, const char *dir) {
+  char path[256];
+  snprintf(path, sizeof path, "%s/modes.h5", dir);
+  fascia_model *m = beam_of(ctx, FASCIA_SCENE_TET, FASCIA_SCENE_PATCH_CELL), *back = NULL;
+  CHECK(m != NULL);
+  if (!m) return 1;
+  int32_t with = 0;
+  for (int32_t s = 0; s < m->sample_count; ++s) with += m->sample_modes[s];
+  CHECK(with == m->sample_count); // every tet sample is in a cell patch with modes
+  CHECK_OK(fascia_model_save(ctx, m, path), ctx);
+  CHECK(version_of(path) == 3 && has_dataset(path, "/samples/modes"));
+  CHECK_OK(fascia_model_load(ctx, path, &back), ctx);
+  CHECK(back && !memcmp(back->sample_modes, m->sample_modes, (size_t)m->sample_count * sizeof(int32_t)));
+  CHECK(back && fascia_model_fingerprint(back) == fascia_model_fingerprint(m));
+  fascia_model_destroy(&back);
+  // the fingerprint tells a model with modes from the same without
+  const uint64_t with_modes = fascia_model_fingerprint(m);
+  for (int32_t s = 0; s < m->sample_count; ++s) m->sample_modes[s] = 0;
+  CHECK(fascia_model_fingerprint(m) != with_modes);
+  for (int32_t s = 0; s < m->sample_count; ++s) m->sample_modes[s] = 1;
+  // version 3 without its dataset
+  hid_t file = H5Fopen(path, H5F_ACC_RDWR, H5P_DEFAULT);
+  CHECK(file >= 0 && H5Ldelete(file, "/samples/modes", H5P_DEFAULT) >= 0 && H5Fclose(file) >= 0);
+  CHECK(fascia_model_load(ctx, path, &back) == FASCIA_ERR_FORMAT && back == NULL);
+  CHECK(strstr(fascia_ctx_message(ctx), path) && strstr(fascia_ctx_message(ctx), "/samples/modes"));
+  // bad values
+  m->sample_modes[5] = 2;
+  expect_modes_refused(ctx, m, path, "sample 5");
+  m->sample_modes[5] = 1;
+  const int32_t patch = m->sample_patch[7];
+  m->sample_patch[7] = -1;
+  expect_modes_refused(ctx, m, path, "no volumetric patch");
+  m->sample_patch[7] = patch;
+  m->sample_modes[7] = 0;
+  expect_modes_refused(ctx, m, path, "share its modes");
+  fascia_model_destroy(&m);
+  remove(path);
+  return 0;
 }
 
 int main(void) {
@@ -86,6 +143,7 @@ int main(void) {
   printf("t209: %s\n", fascia_ctx_message(ctx));
   fascia_model_destroy(&m);
   fascia_model_destroy(&p);
+  modes_in_file(ctx, dir);
   remove(path);
   remove(plain);
   rmdir(dir);

@@ -107,6 +107,25 @@ static fascia_status make_patches(fascia_ctx *ctx, const fascia_prep_scene *scen
   return status;
 }
 
+// Enhanced strain modes (docs/mechanics.md) on the patches of tetrahedral
+// regions: sample_modes holds 1 for the samples of such regions until the
+// patches are made; a patch keeps its modes where all its samples are so
+// (a patch that also holds samples of a meshless region of the same material
+// has none: their weights already vary the strain across it).
+static fascia_status modes_on_tet_patches(fascia_ctx *ctx, fascia_model *m) {
+  const int32_t S = m->sample_count;
+  signed char *all_tet = malloc((size_t)S + 1);
+  PREP_CHECK(all_tet, ctx, FASCIA_ERR_MEMORY, "package: out of memory");
+  memset(all_tet, -1, (size_t)S + 1);
+  for (int32_t s = 0; s < S; ++s) {
+    const int32_t p = m->sample_patch[s];
+    if (p >= 0) all_tet[p] = (signed char)(all_tet[p] != 0 && m->sample_modes[s]);
+  }
+  for (int32_t s = 0; s < S; ++s) m->sample_modes[s] = m->sample_patch[s] >= 0 && all_tet[m->sample_patch[s]] == 1;
+  free(all_tet);
+  return FASCIA_OK;
+}
+
 static cJSON *provenance(const fascia_prep_scene *scene, const fascia_prep_meshes *meshes,
                          const fascia_prep_volume *vol, const fascia_prep_points *pts, const fascia_prep_weights *W,
                          const fascia_prep_coupling *cpl, const fascia_prep_run_info *info) {
@@ -349,6 +368,7 @@ static fascia_status compact(fascia_ctx *ctx, fascia_model **mp, const int32_t *
     n->sample_material[t] = m->sample_material[s];
     n->sample_organ[t] = m->sample_organ[s];
     n->sample_patch[t] = m->sample_patch[s];
+    n->sample_modes[t] = m->sample_modes[s];
     for (int32_t p = m->sample_offsets[s]; p < m->sample_offsets[s + 1]; ++p, ++q) {
       n->pair_frame[q] = map[m->pair_frame[p]]; // the order of frames is kept: still ascending
       n->pair_weight[q] = m->pair_weight[p];
@@ -539,6 +559,9 @@ fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_scene *scen
     m->sample_material[s] = points->sample_tissue[s] >= 0 ? scene->tissues[points->sample_tissue[s]].material
                                                           : scene->organs[points->sample_inside_organ[s]].material;
     m->sample_organ[s] = points->sample_inside_organ[s]; // model organs are the scene's, in order
+    const int32_t shape = points->sample_tissue[s] >= 0 ? scene->tissues[points->sample_tissue[s]].shape_kind
+                                                        : scene->organs[points->sample_inside_organ[s]].shape_kind;
+    m->sample_modes[s] = shape == FASCIA_PREP_SHAPE_TET; // settled on the patches below
   }
   for (int32_t i = 0; i < points->frame_count; ++i) m->frame_organ[i] = points->frame_inside_organ[i];
   memcpy(m->sample_offsets, weights->sample_offsets, ((size_t)points->sample_count + 1) * sizeof(int32_t));
@@ -551,6 +574,7 @@ fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_scene *scen
   PREP_CHECK_GOTO(dropped, ctx, FASCIA_ERR_MEMORY, "package: out of memory");
   PREP_TRY_GOTO(drop_unheld(ctx, scene, points, &m, dropped));
   PREP_TRY_GOTO(make_patches(ctx, scene, m));
+  PREP_TRY_GOTO(modes_on_tet_patches(ctx, m));
   PREP_TRY_GOTO(prep_tissue_surface(ctx, scene, volume, &m->tissue_surface));
   // provenance (its counts are those before the unheld pieces were dropped)
   prov = provenance(scene, meshes, volume, points, weights, coupling, info);

@@ -6,41 +6,15 @@
 #ifndef FASCIA_POINT_BLOCK6_H
 #define FASCIA_POINT_BLOCK6_H
 
-#include "hd.h"
+#include "linalg.h"
 
 /// Cholesky factor of a 6x6 block in place (lower triangle); 0 if the block
 /// is not positive definite.
-static inline FASCIA_HD int fascia_pt_cholesky6(fascia_real *a) {
-  for (int j = 0; j < 6; ++j) {
-    fascia_real d = a[6 * j + j];
-    for (int k = 0; k < j; ++k) d -= a[6 * j + k] * a[6 * j + k];
-    if (!(d > 0)) return 0;
-    d = sqrt(d);
-    a[6 * j + j] = d;
-    for (int i = j + 1; i < 6; ++i) {
-      fascia_real s = a[6 * i + j];
-      for (int k = 0; k < j; ++k) s -= a[6 * i + k] * a[6 * j + k];
-      a[6 * i + j] = s / d;
-    }
-  }
-  return 1;
-}
+static inline FASCIA_HD int fascia_pt_cholesky6(fascia_real *a) { return fascia_pt_cholesky(a, 6); }
 
 /// Inverse of an SPD block from its Cholesky factor L: solves L L^T X = I.
 static inline FASCIA_HD void fascia_pt_cholesky6_inverse(const fascia_real *L, fascia_real *inv) {
-  for (int col = 0; col < 6; ++col) {
-    fascia_real y[6];
-    for (int i = 0; i < 6; ++i) {
-      fascia_real s = (i == col);
-      for (int k = 0; k < i; ++k) s -= L[6 * i + k] * y[k];
-      y[i] = s / L[6 * i + i];
-    }
-    for (int i = 5; i >= 0; --i) {
-      fascia_real s = y[i];
-      for (int k = i + 1; k < 6; ++k) s -= L[6 * k + i] * inv[6 * k + col];
-      inv[6 * i + col] = s / L[6 * i + i];
-    }
-  }
+  fascia_pt_cholesky_inverse(L, 6, inv);
 }
 
 /// Preconditioner block of one frame from its (shifted) diagonal block B of

@@ -181,4 +181,39 @@ static inline FASCIA_HD void fascia_pt_left_jacobian_t(const fascia_real *phi, c
   for (int c = 0; c < 3; ++c) out[c] = g[c] - a * pg[c] + b * ppg[c];
 }
 
+/// Cholesky factor of an n x n matrix in place (row-major, lower triangle
+/// written); 0 if it is not positive definite.
+static inline FASCIA_HD int fascia_pt_cholesky(fascia_real *a, int n) {
+  for (int j = 0; j < n; ++j) {
+    fascia_real d = a[n * j + j];
+    for (int k = 0; k < j; ++k) d -= a[n * j + k] * a[n * j + k];
+    if (!(d > 0)) return 0;
+    d = sqrt(d);
+    a[n * j + j] = d;
+    for (int i = j + 1; i < n; ++i) {
+      fascia_real s = a[n * i + j];
+      for (int k = 0; k < j; ++k) s -= a[n * i + k] * a[n * j + k];
+      a[n * i + j] = s / d;
+    }
+  }
+  return 1;
+}
+
+/// Inverse of an SPD n x n matrix from its Cholesky factor L: solves L L^T X = I.
+static inline FASCIA_HD void fascia_pt_cholesky_inverse(const fascia_real *L, int n, fascia_real *inv) {
+  for (int col = 0; col < n; ++col) {
+    fascia_real y[16]; // n <= 16
+    for (int i = 0; i < n; ++i) {
+      fascia_real s = (i == col);
+      for (int k = 0; k < i; ++k) s -= L[n * i + k] * y[k];
+      y[i] = s / L[n * i + i];
+    }
+    for (int i = n - 1; i >= 0; --i) {
+      fascia_real s = y[i];
+      for (int k = i + 1; k < n; ++k) s -= L[n * k + i] * inv[n * k + col];
+      inv[n * i + col] = s / L[n * i + i];
+    }
+  }
+}
+
 #endif

@@ -57,6 +57,10 @@ typedef struct fascia_pt_model {
   /// without patches: the stress gains pressure * dtheta/dF, the energy
   /// nothing (the patch holds it).
   const fascia_real *sample_pressure;
+  /// [9S] the enhanced part of a sample's deformation gradient, from its
+  /// patch's strain modes (sim/src/modes.h, row-major), or NULL without
+  /// modes: F = the frames' F + this. The frames do not move it.
+  const fascia_real *sample_enhanced;
 } fascia_pt_model;
 
 /// Current frame state: positions [3N] and A_i = R_i R_rest_i^T [9N].
@@ -108,9 +112,9 @@ static inline FASCIA_HD void fascia_pt_sample_position(const fascia_pt_model *m,
   }
 }
 
-/// Deformation gradient F_s (paper eq. 8), row-major.
-static inline FASCIA_HD void fascia_pt_sample_F(const fascia_pt_model *m, const fascia_pt_state *st, int32_t s,
-                                                fascia_real *F) {
+/// The frames' part of the deformation gradient F_s (paper eq. 8), row-major.
+static inline FASCIA_HD void fascia_pt_sample_F_frames(const fascia_pt_model *m, const fascia_pt_state *st, int32_t s,
+                                                       fascia_real *F) {
   for (int k = 0; k < 9; ++k) F[k] = 0;
   for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k) {
     const int32_t i = m->pair_frame[k];
@@ -122,6 +126,35 @@ static inline FASCIA_HD void fascia_pt_sample_F(const fascia_pt_model *m, const 
       for (int c = 0; c < 3; ++c) F[3 * r + c] += y * g[c] + w * A[3 * r + c];
     }
   }
+}
+
+/// Deformation gradient F_s: the frames' part and, with strain modes, the
+/// enhanced part.
+static inline FASCIA_HD void fascia_pt_sample_F(const fascia_pt_model *m, const fascia_pt_state *st, int32_t s,
+                                                fascia_real *F) {
+  fascia_pt_sample_F_frames(m, st, s, F);
+  if (m->sample_enhanced)
+    for (int q = 0; q < 9; ++q) F[q] += m->sample_enhanced[9 * (int64_t)s + q];
+}
+
+/// Energy density of sample s's law at F, rotation coupling included (not
+/// the patch's pressure), and its stress Pt into P[9], the law's aux into aux.
+static inline FASCIA_HD fascia_real fascia_pt_sample_law_stress(const fascia_pt_model *m, const fascia_pt_state *st,
+                                                                int32_t s, const fascia_real *F, fascia_real *P,
+                                                                fascia_real *aux) {
+  fascia_real psi = fascia_pt_stress(m->sample_law[s], m->sample_lambda[s], m->sample_mu[s], F, P, aux);
+  const fascia_real muc = m->sample_coupling[s];
+  if (muc > 0) {
+    for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k) {
+      const fascia_real *A = st->frame_A + 9 * m->pair_frame[k], w = m->pair_weight[k];
+      fascia_real K[9], AK[9];
+      fascia_pt_coupling_K(A, F, NULL, NULL, K, NULL);
+      psi += w * muc * fascia_pt_ddot(K, K);
+      fascia_pt_mat_mul(A, K, AK);
+      for (int q = 0; q < 9; ++q) P[q] += 2 * muc * w * AK[q];
+    }
+  }
+  return psi;
 }
 
 /// Energy, partial energy gradients and cache of sample s.
@@ -136,23 +169,13 @@ static inline FASCIA_HD fascia_real fascia_pt_sample_gradient(const fascia_pt_mo
   fascia_real F[9], P[9], aux[FASCIA_PT_AUX_SIZE];
   fascia_pt_sample_F(m, st, s, F);
   const fascia_real v = m->sample_volume[s], muc = m->sample_coupling[s];
-  fascia_real psi = fascia_pt_stress(m->sample_law[s], m->sample_lambda[s], m->sample_mu[s], F, P, aux);
+  fascia_real psi = fascia_pt_sample_law_stress(m, st, s, F, P, aux);
   const int32_t begin = m->sample_offsets[s], end = m->sample_offsets[s + 1];
   const fascia_real pressure = m->sample_pressure ? m->sample_pressure[s] : 0;
   if (pressure != 0) {
     fascia_real dtheta[9];
     fascia_pt_dilatation(m->sample_law[s], F, dtheta);
     for (int q = 0; q < 9; ++q) P[q] += pressure * dtheta[q];
-  }
-  if (muc > 0) {
-    for (int32_t k = begin; k < end; ++k) {
-      const fascia_real *A = st->frame_A + 9 * m->pair_frame[k], w = m->pair_weight[k];
-      fascia_real K[9], AK[9];
-      fascia_pt_coupling_K(A, F, NULL, NULL, K, NULL);
-      psi += w * muc * fascia_pt_ddot(K, K);
-      fascia_pt_mat_mul(A, K, AK);
-      for (int q = 0; q < 9; ++q) P[q] += 2 * muc * w * AK[q];
-    }
   }
   const fascia_real kc = m->sample_curvature[s];
   fascia_real Mc[27]; // M_c = sum_i g_c A_i, c = 0..2, each row-major 3x3
@@ -224,24 +247,34 @@ enum {
   FASCIA_PT_PART_ALL = 7
 };
 
-// The stiffness product's body. only < 0: every pair moves by dq + 6
+/// only: every pair moves (FASCIA_PT_ONLY_ALL), none does and F moves by
+/// dF_in (FASCIA_PT_ONLY_NONE, an enhanced mode), or pair j >= 0 alone.
+enum { FASCIA_PT_ONLY_ALL = -1, FASCIA_PT_ONLY_NONE = -2 };
+
+// The stiffness product's body. only ALL: every pair moves by dq + 6
 // slot[j] and every pair gets its row out6 + 6 j. only = j: pair j alone
 // moves, by dq[0..5], and only its row is written, to out6[0..5] (one column
 // of the diagonal block per call; the other pairs' zero directions are
-// skipped, not multiplied).
+// skipped, not multiplied). only NONE: no frame moves, F moves by dF_in, and
+// every pair gets its row (out6 NULL: no rows). dP_out, if not NULL, gets
+// the stress change dPt.
 FASCIA_STATIC_FORCE_INLINE FASCIA_HD void
 fascia_pt_stiffness_core(const fascia_pt_model *m, const fascia_pt_state *st, int32_t s, const fascia_real *cache,
-                         const fascia_real *dq, const int32_t *slot, fascia_real *out6, int parts, int32_t only) {
+                         const fascia_real *dq, const int32_t *slot, fascia_real *out6, int parts, int32_t only,
+                         const fascia_real *dF_in, fascia_real *dP_out) {
   const fascia_real *F = cache, *P = cache + 9, *aux = cache + 18;
   const fascia_real v = m->sample_volume[s], muc = m->sample_coupling[s];
   const int32_t begin = m->sample_offsets[s], end = m->sample_offsets[s + 1];
-  // the pairs that move and get a row
+  // the pairs that get a row, and the pairs that move
   const int32_t first = only < 0 ? begin : begin + only, last = only < 0 ? end : begin + only + 1;
+  const int32_t move_last = only == FASCIA_PT_ONLY_NONE ? first : last;
   const fascia_real zero[6] = {0, 0, 0, 0, 0, 0};
-#define FASCIA_PT_DQ(k) (only < 0 ? dq + 6 * slot[(k) - begin] : (k) == first ? dq : zero)
+#define FASCIA_PT_DQ(k) (only == FASCIA_PT_ONLY_ALL ? dq + 6 * slot[(k) - begin] : only >= 0 && (k) == first ? dq : zero)
   // dF = sum_i dx_i g^T + [dtheta_i]x C_i
   fascia_real dF[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
-  for (int32_t k = first; k < last; ++k) {
+  if (dF_in)
+    for (int q = 0; q < 9; ++q) dF[q] = dF_in[q];
+  for (int32_t k = first; k < move_last; ++k) {
     const int32_t i = m->pair_frame[k];
     const fascia_real *A = st->frame_A + 9 * i, *g = m->pair_gradient + 3 * k, *dx = FASCIA_PT_DQ(k);
     const fascia_real *dt = dx + 3;
@@ -282,7 +315,7 @@ fascia_pt_stiffness_core(const fascia_pt_model *m, const fascia_pt_state *st, in
       for (int c = 0; c < 3; ++c)
         for (int q = 0; q < 9; ++q) Mc[9 * c + q] += g[c] * A[q];
     }
-    for (int32_t k = first; k < last; ++k) {
+    for (int32_t k = first; k < move_last; ++k) {
       const fascia_real *A = st->frame_A + 9 * m->pair_frame[k], *g = m->pair_gradient + 3 * k;
       fascia_real tA[9];
       fascia_pt_skew_mul(FASCIA_PT_DQ(k) + 3, A, tA);
@@ -290,6 +323,9 @@ fascia_pt_stiffness_core(const fascia_pt_model *m, const fascia_pt_state *st, in
         for (int q = 0; q < 9; ++q) dMc[9 * c + q] += g[c] * tA[q];
     }
   }
+  if (dP_out)
+    for (int q = 0; q < 9; ++q) dP_out[q] = dP[q];
+  if (!out6) return;
   for (int32_t k = first; k < last; ++k) {
     const int32_t i = m->pair_frame[k];
     const fascia_real *A = st->frame_A + 9 * i, *g = m->pair_gradient + 3 * k, *dt = FASCIA_PT_DQ(k) + 3;
@@ -352,7 +388,20 @@ static inline FASCIA_HD void fascia_pt_sample_stiffness_parts(const fascia_pt_mo
                                                               int32_t s, const fascia_real *cache,
                                                               const fascia_real *dq, const int32_t *slot,
                                                               fascia_real *out6, int parts) {
-  fascia_pt_stiffness_core(m, st, s, cache, dq, slot, out6, parts, -1);
+  fascia_pt_stiffness_core(m, st, s, cache, dq, slot, out6, parts, FASCIA_PT_ONLY_ALL, (const fascia_real *)0,
+                           (fascia_real *)0);
+}
+
+/// Sample s's response to a change dF of its deformation gradient with the
+/// frames held (an enhanced strain mode, sim/src/modes.h): dP_out[9] gets
+/// the stress change (law, patch pressure and rotation coupling), and, if
+/// out6 is not NULL, out6 + 6 j the change of the gradient on its j-th
+/// pair's frame. cache: the sample's, at the state.
+static inline FASCIA_HD void fascia_pt_sample_F_response(const fascia_pt_model *m, const fascia_pt_state *st,
+                                                         int32_t s, const fascia_real *cache, const fascia_real *dF,
+                                                         fascia_real *out6, fascia_real *dP_out) {
+  fascia_pt_stiffness_core(m, st, s, cache, (const fascia_real *)0, (const int32_t *)0, out6,
+                           FASCIA_PT_PART_BASE | FASCIA_PT_PART_COUPLING, FASCIA_PT_ONLY_NONE, dF, dP_out);
 }
 
 /// The 6x6 diagonal block of sample s's stiffness on its j-th pair's frame
@@ -365,7 +414,8 @@ static inline FASCIA_HD void fascia_pt_sample_pair_block(const fascia_pt_model *
   for (int c = 0; c < 6; ++c) {
     fascia_real e[6] = {0, 0, 0, 0, 0, 0}, col[6];
     e[c] = 1;
-    fascia_pt_stiffness_core(m, st, s, cache, e, (const int32_t *)0, col, FASCIA_PT_PART_ALL, j);
+    fascia_pt_stiffness_core(m, st, s, cache, e, (const int32_t *)0, col, FASCIA_PT_PART_ALL, j,
+                             (const fascia_real *)0, (fascia_real *)0);
     for (int row = 0; row < 6; ++row) block[6 * row + c] = col[row];
   }
 }
@@ -388,13 +438,11 @@ static inline FASCIA_HD void fascia_pt_sample_stiffness(const fascia_pt_model *m
 /// per sample (the rotation coupling, when on, is added by such products).
 /// frame_moves ([frames], NULL: all): a block with a frame not in it is not
 /// written (the assembly leaves the blocks of frames a step holds).
-static inline FASCIA_HD void fascia_pt_sample_local_stiffness(const fascia_pt_model *m, const fascia_pt_state *st,
-                                                              int32_t s, const fascia_real *cache,
-                                                              const unsigned char *frame_moves, fascia_real *out) {
-  const fascia_real *F = cache, *P = cache + 9, *aux = cache + 18;
-  const fascia_real v = m->sample_volume[s];
-  const int32_t begin = m->sample_offsets[s], n = m->sample_offsets[s + 1] - begin;
-  fascia_real D[81]; // D[9 row + col] = dP_row / dF_col
+/// D = dPt/dF of sample s at its cache (9x9, D[9 row + col] = dP_row /
+/// dF_col): its law and its patch's pressure, not the rotation coupling.
+static inline FASCIA_HD void fascia_pt_sample_tangent(const fascia_pt_model *m, int32_t s, const fascia_real *cache,
+                                                      fascia_real *D) {
+  const fascia_real *F = cache, *aux = cache + 18;
   for (int col = 0; col < 9; ++col) {
     fascia_real e[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, dP[9];
     e[col] = 1;
@@ -403,25 +451,44 @@ static inline FASCIA_HD void fascia_pt_sample_local_stiffness(const fascia_pt_mo
       fascia_pt_dilatation_diff_add(m->sample_law[s], m->sample_pressure[s], F, e, dP);
     for (int r = 0; r < 9; ++r) D[9 * r + col] = dP[r];
   }
+}
+
+/// B_k^T D for pair k (6x9, row-major), B_k the 9x6 map of paper eq. 11
+/// from its frame's (dx, dtheta) to dF: rows x_r: sum_c g_c D[(r c), :];
+/// rows theta_r: sum_c (c_c x D[(. c), :])_r, c_c the columns of C.
+static inline FASCIA_HD void fascia_pt_pair_BtD(const fascia_pt_model *m, const fascia_pt_state *st, int32_t k,
+                                                const fascia_real *D, fascia_real *BtD) {
+  const fascia_real *A = st->frame_A + 9 * m->pair_frame[k], *g = m->pair_gradient + 3 * k;
+  fascia_real a[3], C[9];
+  fascia_pt_pair_C(A, m->pair_offset + 3 * k, g, m->pair_weight[k], a, C);
+  for (int j = 0; j < 9; ++j) {
+    for (int r = 0; r < 3; ++r)
+      BtD[9 * r + j] = g[0] * D[9 * (3 * r) + j] + g[1] * D[9 * (3 * r + 1) + j] + g[2] * D[9 * (3 * r + 2) + j];
+    fascia_real th[3] = {0, 0, 0};
+    for (int c = 0; c < 3; ++c) {
+      const fascia_real cc[3] = {C[c], C[3 + c], C[6 + c]};
+      const fascia_real dcol[3] = {D[9 * c + j], D[9 * (3 + c) + j], D[9 * (6 + c) + j]};
+      fascia_pt_cross_add(cc, dcol, th);
+    }
+    for (int r = 0; r < 3; ++r) BtD[9 * (3 + r) + j] = th[r];
+  }
+}
+
+static inline FASCIA_HD void fascia_pt_sample_local_stiffness(const fascia_pt_model *m, const fascia_pt_state *st,
+                                                              int32_t s, const fascia_real *cache,
+                                                              const unsigned char *frame_moves, fascia_real *out) {
+  const fascia_real *P = cache + 9;
+  const fascia_real v = m->sample_volume[s];
+  const int32_t begin = m->sample_offsets[s], n = m->sample_offsets[s + 1] - begin;
+  fascia_real D[81];
+  fascia_pt_sample_tangent(m, s, cache, D);
   for (int a = 0; a < n; ++a) {
-    // B_a^T D, a 6x9 matrix: rows x_k: sum_c g_c D[(k c), :]; rows theta_k:
-    // sum_c (c_c x D[(. c), :])_k, c_c the columns of C
     const int32_t ka = begin + a;
     if (frame_moves && !frame_moves[m->pair_frame[ka]]) continue;
     const fascia_real *Aa = st->frame_A + 9 * m->pair_frame[ka], *ga = m->pair_gradient + 3 * ka;
     fascia_real aa[3], Ca[9], BtD[54];
     fascia_pt_pair_C(Aa, m->pair_offset + 3 * ka, ga, m->pair_weight[ka], aa, Ca);
-    for (int j = 0; j < 9; ++j) {
-      for (int k = 0; k < 3; ++k)
-        BtD[9 * k + j] = ga[0] * D[9 * (3 * k) + j] + ga[1] * D[9 * (3 * k + 1) + j] + ga[2] * D[9 * (3 * k + 2) + j];
-      fascia_real th[3] = {0, 0, 0};
-      for (int c = 0; c < 3; ++c) {
-        const fascia_real cc[3] = {Ca[c], Ca[3 + c], Ca[6 + c]};
-        const fascia_real dcol[3] = {D[9 * c + j], D[9 * (3 + c) + j], D[9 * (6 + c) + j]};
-        fascia_pt_cross_add(cc, dcol, th);
-      }
-      for (int k = 0; k < 3; ++k) BtD[9 * (3 + k) + j] = th[k];
-    }
+    fascia_pt_pair_BtD(m, st, ka, D, BtD);
     for (int b = a; b < n; ++b) { // K_ba = K_ab^T (D is symmetric): mirrored below
       // (B_a^T D) B_b: column x_k of B_b has g_c at row (k c); column
       // theta_k maps x to sum_c (c_c x x_c)_k, x_c = (x[c], x[3+c], x[6+c])

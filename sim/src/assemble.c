@@ -9,6 +9,7 @@
 
 #include "assemble.h"
 #include "dilatation.h"
+#include "modes.h"
 #include "index_set.h"
 
 static int32_t find_block(const fascia_bsr *B, int32_t i, int32_t j);
@@ -224,6 +225,24 @@ static void dilatation_rows(const fascia_system *sys, const unsigned char *moves
   }
 }
 
+// The enhanced strain modes' condensed terms -K_ue K_aa^-1 K_uf^T, row by row.
+static void modes_rows(const fascia_system *sys, const unsigned char *moves, fascia_bsr *B) {
+  fascia_modes *md = sys->modes;
+  fascia_modes_tangent(sys, md);
+  const fascia_pt_patches *t = &sys->dilatation->view;
+#pragma omp parallel for num_threads(sys->threads) schedule(static)
+  for (int32_t i = 0; i < sys->frame_count; ++i) {
+    if (!fascia_frame_moving(moves, i)) continue;
+    for (int32_t r = t->frame_entry_offsets[i]; r < t->frame_entry_offsets[i + 1]; ++r) {
+      const int32_t e = t->frame_entries[r], p = t->entry_patch[e];
+      for (int32_t f = t->support_offsets[p]; f < t->support_offsets[p + 1]; ++f) {
+        if (!fascia_frame_moving(moves, t->entry_frame[f])) continue;
+        fascia_pt_modes_block_add(t, &md->view, e, f, B->values + 36 * (int64_t)find_block(B, i, t->entry_frame[f]));
+      }
+    }
+  }
+}
+
 // Whether sample s has a frame that moves.
 static int sample_moves(const fascia_model *m, const unsigned char *moves, int32_t s) {
   for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k)
@@ -277,6 +296,7 @@ void fascia_system_hessian_assemble(fascia_system *sys, const unsigned char *mov
     s0 = s1;
   }
   if (sys->dilatation) dilatation_rows(sys, moves, B);
+  if (sys->modes) modes_rows(sys, moves, B);
   // frame-local terms: gravity (theta-theta) and the symmetrizing 1/2 [g_theta]x
   const fascia_real gs = sys->gravity_scale, *g = sys->gravity;
   for (int32_t i = 0; i < sys->frame_count; ++i) {

@@ -5,9 +5,10 @@
 // summary must stay in step with it. Bump the version (and the reader's
 // range) whenever a reader of the previous version would misread a new file.
 //
-// Schema, version 2 (version 1: the same without /samples/patch; a model
-// without patches is still written as version 1, which older readers read
-// the same way). N frames, S samples, P sample-frame pairs, M materials,
+// Schema, version 3 (version 2: the same without /samples/modes; version 1:
+// without /samples/patch either. A model is written
+// with the lowest version that holds it, which older readers read the same
+// way). N frames, S samples, P sample-frame pairs, M materials,
 // Q probes, R probe-frame pairs, C coupling entries, K keys of a motion,
 // V vertices and T triangles of an organ. Reals are IEEE f64 little endian,
 // indices int32 (-1 = none), names fixed strings of 64 bytes (NUL-terminated,
@@ -29,6 +30,7 @@
 //   /samples/volume       [S]    f64  m^3   > 0
 //   /samples/material     [S]    i32        material index
 //   /samples/patch        [S]    i32        volumetric patch, -1 none (version 2)
+//   /samples/modes        [S]    i32        1: the patch has enhanced strain modes, else 0 (version 3)
 //   /samples/offsets      [S+1]  i32        CSR into /pairs
 //   /pairs/frame          [P]    i32        frame index, ascending per sample
 //   /pairs/weight         [P]    f64  1     w_is, sum per sample = 1
@@ -73,9 +75,13 @@
 // A model with volumetric patches is version 2: a version 1 reader would
 // drop the patches and compute a locking answer without a word.
 #define MODEL_VERSION_PATCHES 2
+// A model whose patches carry enhanced strain modes (/samples/modes) is
+// version 3: a version 2 reader would drop the modes and compute a stiffer
+// answer without a word.
+#define MODEL_VERSION_MODES 3
 // Versions this reader understands.
 #define MODEL_VERSION_MIN 1
-#define MODEL_VERSION_MAX 2
+#define MODEL_VERSION_MAX 3
 #define MODEL_UNITS "SI: m, kg, s, Pa"
 #define REMEDY "re-run 'fascia prep' or 'fascia beam' with this version"
 #define PATH_SIZE 256
@@ -182,6 +188,12 @@ static int model_has_patches(const fascia_model *m) {
   return 0;
 }
 
+static int model_has_modes(const fascia_model *m) {
+  for (int32_t s = 0; s < m->sample_count; ++s)
+    if (m->sample_modes[s]) return 1;
+  return 0;
+}
+
 static fascia_status write_samples_pairs(writer *w, const fascia_model *m) {
   const int64_t S = m->sample_count, P = m->pair_count;
   FASCIA_TRY(write_group(w, "/samples", -1, -1, -1));
@@ -190,6 +202,7 @@ static fascia_status write_samples_pairs(writer *w, const fascia_model *m) {
   WRITE1(w, "/samples/material", ELEM_INT, S, m->sample_material, NULL);
   WRITE1(w, "/samples/organ", ELEM_INT, S, m->sample_organ, NULL);
   if (model_has_patches(m)) WRITE1(w, "/samples/patch", ELEM_INT, S, m->sample_patch, NULL);
+  if (model_has_modes(m)) WRITE1(w, "/samples/modes", ELEM_INT, S, m->sample_modes, NULL);
   WRITE1(w, "/samples/offsets", ELEM_INT, S + 1, m->sample_offsets, NULL);
   FASCIA_TRY(write_group(w, "/pairs", -1, -1, -1));
   WRITE1(w, "/pairs/frame", ELEM_INT, P, m->pair_frame, NULL);
@@ -293,7 +306,7 @@ static fascia_status write_model(writer *w, const fascia_model *m) {
   char creator[64];
   snprintf(creator, sizeof creator, "fascia %s", fascia_version());
   hid_t root = H5Gopen2(w->file, "/", H5P_DEFAULT);
-  const int version = model_has_patches(m) ? MODEL_VERSION_PATCHES : 1;
+  const int version = model_has_modes(m) ? MODEL_VERSION_MODES : model_has_patches(m) ? MODEL_VERSION_PATCHES : 1;
   const int ok = root >= 0 && fascia_h5_attr_int(root, "fascia_model_version", version) >= 0 &&
                  fascia_h5_attr_string(root, "units", MODEL_UNITS) >= 0 &&
                  fascia_h5_attr_string(root, "creator", creator) >= 0 &&
@@ -810,6 +823,7 @@ static fascia_status read_frames_samples(reader *r, fascia_model *m) {
   if (fascia_h5_link_exists(r->file, "/frames/organ")) READ(r, "/frames/organ", ELEM_INT, N, 0, m->frame_organ);
   if (fascia_h5_link_exists(r->file, "/samples/organ")) READ(r, "/samples/organ", ELEM_INT, S, 0, m->sample_organ);
   if (r->version >= MODEL_VERSION_PATCHES) READ(r, "/samples/patch", ELEM_INT, S, 0, m->sample_patch);
+  if (r->version >= MODEL_VERSION_MODES) READ(r, "/samples/modes", ELEM_INT, S, 0, m->sample_modes);
   READ(r, "/samples/offsets", ELEM_INT, S + 1, 0, m->sample_offsets);
   READ(r, "/pairs/frame", ELEM_INT, P, 0, m->pair_frame);
   READ(r, "/pairs/weight", ELEM_REAL, P, 0, m->pair_weight);

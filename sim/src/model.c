@@ -47,6 +47,7 @@ fascia_status fascia_model_alloc(fascia_ctx *ctx, const fascia_model_sizes *z, f
   m->frame_organ = fascia_calloc(N, sizeof(int32_t));
   m->sample_organ = fascia_calloc(S, sizeof(int32_t));
   m->sample_patch = fascia_calloc(S, sizeof(int32_t));
+  m->sample_modes = fascia_calloc(S, sizeof(int32_t));
   m->sample_position = fascia_calloc(3 * S, sizeof(fascia_real));
   m->sample_volume = fascia_calloc(S, sizeof(fascia_real));
   m->sample_material = fascia_calloc(S, sizeof(int32_t));
@@ -68,7 +69,7 @@ fascia_status fascia_model_alloc(fascia_ctx *ctx, const fascia_model_sizes *z, f
   m->coupling_frame = fascia_calloc(C, sizeof(int32_t));
   m->coupling_triangle = fascia_calloc(C, sizeof(int32_t));
   m->coupling_barycentric = fascia_calloc(3 * C, sizeof(fascia_real));
-  if (!m->frame_organ || !m->sample_organ || !m->sample_patch || !m->frame_position || !m->frame_rotation || !m->frame_kind || !m->frame_motion || !m->frame_load ||
+  if (!m->frame_organ || !m->sample_organ || !m->sample_patch || !m->sample_modes || !m->frame_position || !m->frame_rotation || !m->frame_kind || !m->frame_motion || !m->frame_load ||
       !m->sample_position || !m->sample_volume || !m->sample_material || !m->sample_offsets || !m->pair_frame ||
       !m->pair_weight || !m->pair_gradient || !m->frame_offsets || !m->frame_pairs || !m->materials || !m->motions ||
       !m->probe_name || !m->probe_position || !m->probe_offsets || !m->probe_frame || !m->probe_weight ||
@@ -102,6 +103,7 @@ void fascia_model_destroy(fascia_model **model) {
   free(m->frame_organ);
   free(m->sample_organ);
   free(m->sample_patch);
+  free(m->sample_modes);
   free(m->sample_position);
   free(m->sample_volume);
   free(m->sample_material);
@@ -539,6 +541,15 @@ static fascia_status validate_patches(fascia_ctx *ctx, const fascia_model *m, co
                  origin, (int)s, (int)p, mat->name, (int)mat->part);
     any = 1;
   }
+  for (int32_t s = 0; s < S; ++s) {
+    FASCIA_CHECK(m->sample_modes[s] == 0 || m->sample_modes[s] == 1, ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' /samples/modes: sample %d has %d, expected 0 or 1", origin, (int)s,
+                 (int)m->sample_modes[s]);
+    FASCIA_CHECK(!m->sample_modes[s] || m->sample_patch[s] >= 0, ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' /samples/modes: sample %d has enhanced strain modes but no volumetric patch; the modes "
+                 "live on the patches",
+                 origin, (int)s);
+  }
   if (!any) return FASCIA_OK;
   // one material per patch: the first sample of each patch names it
   int32_t *first = malloc((size_t)S * sizeof *first);
@@ -548,7 +559,14 @@ static fascia_status validate_patches(fascia_ctx *ctx, const fascia_model *m, co
     const int32_t p = m->sample_patch[s];
     if (p == -1) continue;
     if (first[p] < 0) first[p] = s;
-    else if (m->sample_material[first[p]] != m->sample_material[s]) {
+    else if (m->sample_modes[first[p]] != m->sample_modes[s]) {
+      const int32_t a = first[p];
+      free(first);
+      return FASCIA_FAIL(ctx, FASCIA_ERR_FORMAT,
+                         "model '%s' /samples/modes: patch %d holds samples %d (modes %d) and %d (modes %d); a "
+                         "patch's samples share its modes",
+                         origin, (int)p, (int)a, (int)m->sample_modes[a], (int)s, (int)m->sample_modes[s]);
+    } else if (m->sample_material[first[p]] != m->sample_material[s]) {
       const int32_t a = first[p];
       free(first);
       return FASCIA_FAIL(ctx, FASCIA_ERR_FORMAT,
@@ -654,6 +672,11 @@ uint64_t fascia_model_fingerprint(const fascia_model *m) {
   for (size_t s = 0; s < S; ++s) // models without patches keep the hash they had before patches existed
     if (m->sample_patch[s] >= 0) {
       h = fascia_fnv(h, m->sample_patch, S * I);
+      break;
+    }
+  for (size_t s = 0; s < S; ++s) // likewise for models without modes
+    if (m->sample_modes[s]) {
+      h = fascia_fnv(h, m->sample_modes, S * I);
       break;
     }
   h = fascia_fnv(h, m->sample_offsets, (S + 1) * I);

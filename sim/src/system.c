@@ -12,6 +12,7 @@
 
 #include "system.h"
 #include "dilatation.h"
+#include "modes.h"
 #include "point/frame.h"
 
 #define DOT_BLOCK 2048 // entries per partial sum of fascia_dot (fixed: determinism)
@@ -130,7 +131,8 @@ fascia_status fascia_system_create(fascia_ctx *ctx, const fascia_model *m, int t
   pm->sample_coupling = sys->sample_coupling;
   pm->sample_curvature = sys->sample_curvature;
   pm->sample_law = sys->sample_law;
-  const fascia_status status = fascia_dilatation_create(sys, &sys->dilatation);
+  fascia_status status = fascia_dilatation_create(sys, &sys->dilatation);
+  if (status == FASCIA_OK) status = fascia_modes_create(sys, &sys->modes);
   if (status != FASCIA_OK) {
     fascia_system_destroy(&sys);
     return status;
@@ -154,6 +156,7 @@ int32_t fascia_model_pair_owner(const fascia_model *m, int32_t k) {
 void fascia_system_destroy(fascia_system **sys) {
   if (!sys || !*sys) return;
   fascia_system *s = *sys;
+  fascia_modes_destroy(&s->modes);
   fascia_dilatation_destroy(&s->dilatation);
   free(s->pair_offset);
   free(s->sample_lambda);
@@ -228,8 +231,11 @@ fascia_status fascia_system_evaluate(fascia_system *sys, fascia_real *gradient, 
   const fascia_pt_state st = {sys->x, sys->A};
   const int32_t S = sys->sample_count;
   // sample energies are summed in fixed blocks of samples (determinism)
-  // the patches' pressures first: the samples' stresses read them
+  // the modes' enhanced F first, then the patches' pressures: the samples'
+  // stresses read both
+  const int32_t failed_patch = sys->modes ? fascia_modes_evaluate(sys, sys->modes) : -1;
   fascia_real internal = sys->dilatation ? fascia_dilatation_evaluate(sys, sys->dilatation) : 0;
+  if (failed_patch >= 0) internal = NAN; // no minimum in the modes: the step is refused below
   int32_t inverted = 0, first_inverted = -1, first_nonfinite = -1;
   const int64_t blocks = ((int64_t)S + DOT_BLOCK - 1) / DOT_BLOCK;
   fascia_real partial_stack[64], *partial = blocks <= 64 ? partial_stack : malloc((size_t)blocks * sizeof *partial);
@@ -269,6 +275,11 @@ fascia_status fascia_system_evaluate(fascia_system *sys, fascia_real *gradient, 
                                          sys->conservative_torque + 3 * (int64_t)i);
   sys->energy_external = external;
   if (energy) *energy = internal + external;
+  if (failed_patch >= 0 && first_nonfinite < 0)
+    return FASCIA_FAIL(sys->ctx, FASCIA_ERR_NUMERIC,
+                       "patch %d: its enhanced strain modes found no minimum at this state; the step is too large or "
+                       "the model is unstable",
+                       (int)failed_patch);
   if (first_nonfinite >= 0 || !isfinite(internal + external))
     return FASCIA_FAIL(sys->ctx, FASCIA_ERR_NUMERIC,
                        "sample %d: energy is not finite (deformation gradient blew up); the step is too large or the "
@@ -288,6 +299,7 @@ void fascia_system_gradient_derivative(fascia_system *sys, const fascia_real *v,
   }
   gather(sys, out);
   if (sys->dilatation) fascia_dilatation_apply_add(sys, sys->dilatation, v, out);
+  if (sys->modes) fascia_modes_apply_add(sys, sys->modes, v, out);
   for (int32_t i = 0; i < sys->frame_count; ++i)
     fascia_pt_frame_gravity_product(sys->A + 9 * (int64_t)i, sys->frame_moment + 3 * (int64_t)i, sys->gravity,
                                     sys->gravity_scale, v + 6 * (int64_t)i, out + 6 * (int64_t)i);
@@ -318,6 +330,7 @@ void fascia_system_hessian_diagonal(fascia_system *sys, fascia_real *blocks) {
                                     sys->gravity_scale, sys->conservative_torque + 3 * (int64_t)i, B);
   }
   if (sys->dilatation) fascia_dilatation_diagonal_add(sys, sys->dilatation, blocks);
+  if (sys->modes) fascia_modes_diagonal_add(sys, sys->modes, blocks);
 }
 
 void fascia_system_mass_snapshot(fascia_system *sys) {
@@ -399,6 +412,7 @@ void fascia_system_sample_strain(fascia_system *sys, fascia_real *strain, fascia
   const fascia_pt_state st = {sys->x, sys->A};
   // the patches' pressures at this state: the last evaluation may have been
   // of a trial, or on a device, which keeps its own
+  if (sys->modes) fascia_modes_evaluate(sys, sys->modes); // F has the modes at this state
   if (stress && sys->dilatation) fascia_dilatation_evaluate(sys, sys->dilatation);
 #pragma omp parallel for num_threads(sys->threads) schedule(static)
   for (int32_t s = 0; s < sys->sample_count; ++s) {

@@ -17,6 +17,7 @@
 #include "status.h"
 
 struct fascia_dilatation;
+struct fascia_modes;
 
 typedef struct fascia_system {
   fascia_ctx *ctx;
@@ -37,6 +38,7 @@ typedef struct fascia_system {
   int32_t *pair_sample;         ///< [P] the sample each pair belongs to
   fascia_real *pair_lumped_mass; ///< [P] kg: the share of its sample's mass the lumped mass puts on the pair's frame
   struct fascia_dilatation *dilatation; ///< the volumetric patches' term (dilatation.h), NULL without patches
+  struct fascia_modes *modes;           ///< the patches' enhanced strain modes (modes.h), NULL without
 
   // gravity as frame moments: E_g = -sum_i g.(M_i x_i + A_i D_i)
   fascia_real *frame_mass;   ///< [N] M_i = sum_s m_s w_is

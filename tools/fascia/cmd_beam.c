@@ -19,7 +19,7 @@ static const char beam_usage[] =
     "                   [--neighbours K] [--E PA --nu V | --lambda PA --mu PA] [--law stvk|neohookean]\n"
     "                   [--mass KG] [--density KG_M3] [--rotation-coupling R]\n"
     "                   [--rotation-smoothing R] [--volumetric auto|full|cell|frame|poisson|reduced]\n"
-    "                   [--patch-radius M] -o BEAM.h5 [--json]\n"
+    "                   [--patch-radius M] [--modes auto|on|off] -o BEAM.h5 [--json]\n"
     "\n"
     "The cantilever of Bosman et al. 2013 sec. 4.1: 16 x 1 x 1 m along x, clamped at x = 0,\n"
     "loaded by gravity, probe 'tip' at (16, 0, 0).\n"
@@ -41,6 +41,10 @@ static const char beam_usage[] =
     "                          over Poisson-disk patches of --patch-radius (as fascia prep makes\n"
     "                          them); reduced: one extra sample per cell (per tetrahedron)\n"
     "  --patch-radius M        radius of the poisson patches, m (default 0.5)\n"
+    "  --modes auto|on|off     nine enhanced strain modes per volumetric patch, the cure of the\n"
+    "                          tetrahedra's stiffness in bending (docs/mechanics.md); auto\n"
+    "                          (default): on for tet with patches (hex and meshless weights\n"
+    "                          vary strain across a cell already: the modes make them too soft)\n"
     "  --rotation-smoothing R  rotation smoothing, relative to the frame spacing (default 0.1;\n"
     "                          0 is the paper's scheme, which has zero-energy twist modes)\n"
     "  -o PATH                 model file to write (required)\n"
@@ -78,6 +82,7 @@ int cmd_beam(int argc, char **argv) {
   double lambda = -1, mu = -1;
   int32_t samples_per_cell = 0;
   def.volumetric_patch = FASCIA_SCENE_PATCH_AUTO; // cell patches from FASCIA_PATCH_MIN_POISSON on
+  def.enhanced_modes = -1;                        // on the tetrahedra's patches
   for (int k = 1; k < argc; ++k) {
     const char *opt = argv[k];
     if (!strcmp(opt, "--help") || !strcmp(opt, "-h")) {
@@ -90,7 +95,7 @@ int cmd_beam(int argc, char **argv) {
     }
     if (!strcmp(opt, "--verbose")) continue;
     static const char *const valued[] = {"--frames", "--shape", "--samples-per-cell", "--neighbours", "--E", "--nu", "--lambda", "--mu",
-                                         "--law", "--mass", "--density", "--rotation-coupling", "--rotation-smoothing", "--volumetric", "--patch-radius", "-o", "--output"};
+                                         "--law", "--mass", "--density", "--rotation-coupling", "--rotation-smoothing", "--volumetric", "--patch-radius", "--modes", "-o", "--output"};
     int known = 0;
     for (size_t j = 0; j < sizeof valued / sizeof valued[0]; ++j) known |= !strcmp(opt, valued[j]);
     if (!known) return cli_usage_error("beam", "unknown option '%s'", opt);
@@ -125,7 +130,10 @@ int cmd_beam(int argc, char **argv) {
       ok = cli_parse_real(value, &def.rotation_smoothing);
     else if (!strcmp(opt, "--patch-radius"))
       ok = cli_parse_real(value, &def.patch_radius);
-    else if (!strcmp(opt, "--volumetric")) {
+    else if (!strcmp(opt, "--modes")) {
+      def.enhanced_modes = !strcmp(value, "auto") ? -1 : !strcmp(value, "on") ? 1 : !strcmp(value, "off") ? 0 : -2;
+      ok = def.enhanced_modes != -2;
+    } else if (!strcmp(opt, "--volumetric")) {
       def.reduced_volumetric = !strcmp(value, "reduced");
       def.volumetric_patch = def.reduced_volumetric ? FASCIA_SCENE_PATCH_NONE : fascia_scene_patch_from_name(value);
       ok = def.volumetric_patch != -2;

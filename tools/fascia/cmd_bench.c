@@ -77,7 +77,9 @@ static const char bench_usage[] =
     "  --rotation-smoothing LIST  0 is the paper's scheme (default 0.1, the beam's default)\n"
     "  --nu LIST                  Poisson ratios with a converged reference: 0.3, 0.45, 0.49 (default 0.3)\n"
     "  --volumetric LIST          auto (cell patches from nu = 0.3, as fascia beam), full, cell, frame\n"
-    "                             (default auto; docs/mechanics.md, \"Volumetric locking\")\n";
+    "                             (default auto; docs/mechanics.md, \"Volumetric locking\")\n"
+    "  --modes LIST               enhanced strain modes on the patches: auto (on for tet, as fascia\n"
+    "                             beam), on, off (default auto; docs/mechanics.md)\n";
 
 #define PAPER_WARMUP_STEPS 2
 #define PAPER_CG_ITERATIONS 60
@@ -93,7 +95,12 @@ typedef struct value_list {
   int32_t grid[MAX_LIST][3];
 } value_list;
 
-// kind: 's' shape name, 'g' grid, 'i' integer >= 1, 'r' real >= 0, 'v' volumetric integration.
+// Enhanced strain modes of a cantilever row: fascia beam's rule (on for
+// tet with patches), or forced.
+enum { MODES_AUTO = 0, MODES_ON = 1, MODES_OFF = 2 };
+
+// kind: 's' shape name, 'g' grid, 'i' integer >= 1, 'r' real >= 0, 'v' volumetric integration,
+// 'm' enhanced modes (auto, on, off).
 static int parse_list(const char *text, char kind, value_list *out) {
   char buffer[1024];
   if (strlen(text) >= sizeof buffer) return 0;
@@ -112,6 +119,9 @@ static int parse_list(const char *text, char kind, value_list *out) {
       *v = shape;
     } else if (kind == 'g') {
       if (!cli_parse_grid(item, out->grid[out->count], 2)) return 0;
+    } else if (kind == 'm') {
+      *v = !strcmp(item, "auto") ? MODES_AUTO : !strcmp(item, "on") ? MODES_ON : !strcmp(item, "off") ? MODES_OFF : -1;
+      if (*v < 0) return 0;
     } else if (kind == 'v') {
       *v = fascia_scene_patch_from_name(item);
       if (*v == -2 || *v == FASCIA_SCENE_PATCH_POISSON) return 0;
@@ -138,7 +148,7 @@ typedef struct bench_options {
   const char *backend, *csv;
   int row_count;
   const fascia_scene_paper_row *rows[MAX_ROWS];
-  value_list shapes, grids, spc, neighbours, smoothing, nus, volumetric;
+  value_list shapes, grids, spc, neighbours, smoothing, nus, volumetric, modes;
   int sweep; ///< a cantilever list option was given
 } bench_options;
 
@@ -183,7 +193,7 @@ static int parse_options(int argc, char **argv, bench_options *opt) {
       static const char *const valued[] = {"--table", "--backend", "--threads", "--repeats", "--steps", "--csv",
                                            "--scene", "--linear-solver", "--shapes", "--frames",
                                            "--samples-per-cell", "--neighbours", "--rotation-smoothing", "--nu",
-                                           "--volumetric"};
+                                           "--volumetric", "--modes"};
       int known = 0;
       for (size_t j = 0; j < sizeof valued / sizeof valued[0]; ++j) known |= !strcmp(o, valued[j]);
       if (!known) return cli_usage_error("bench", "unknown option '%s'", o);
@@ -211,6 +221,7 @@ static int parse_options(int argc, char **argv, bench_options *opt) {
         else if (!strcmp(o, "--neighbours")) ok = parse_list(v, 'i', &opt->neighbours);
         else if (!strcmp(o, "--nu")) ok = parse_list(v, 'r', &opt->nus);
         else if (!strcmp(o, "--volumetric")) ok = parse_list(v, 'v', &opt->volumetric);
+        else if (!strcmp(o, "--modes")) ok = parse_list(v, 'm', &opt->modes);
         else ok = parse_list(v, 'r', &opt->smoothing);
       }
       if (!ok) {
@@ -520,6 +531,7 @@ typedef struct cantilever_case {
   int linear; ///< fascia_linear_solver for this row, -1: --linear-solver or the solver's default
   double nu;
   int volumetric; ///< a FASCIA_SCENE_PATCH_* kind (AUTO: fascia beam's rule)
+  int modes;      ///< MODES_*
 } cantilever_case;
 
 typedef struct cantilever_result {
@@ -528,6 +540,7 @@ typedef struct cantilever_result {
   double tip[3], error_uz_percent, error_ux_percent, twist, ms;
   double reference_uz; ///< the converged reference for this row's law, E and nu
   int patches;         ///< volumetric patches of the model (0: full integration)
+  int modes;           ///< 1: the patches carry enhanced strain modes
   char backend[16], device[256]; ///< where it ran (fascia_solver_backend, _device)
   const bench_peer *peer[FASCIA_CCX_ELEMENT_COUNT_]; ///< CalculiX at the same error, NULL: none or not run
 } cantilever_result;
@@ -542,25 +555,27 @@ static const fascia_ccx_reference *cantilever_reference(void) {
 // kind, then one knob at a time on the 20 x 3 x 3 hexahedral beam: samples,
 // the paper's scheme (rotation smoothing 0), CG instead of the default
 // linear solver; full integration against the default volumetric patches;
-// and the nearly incompressible beam (nu = 0.49). The paper's scheme on
+// tet without its enhanced strain modes; and the nearly incompressible beam
+// (nu = 0.49). The paper's scheme on
 // 40 x 5 x 5 is left out: minutes.
 static int default_cases(cantilever_case *cases) {
   const int H = FASCIA_SCENE_HEX, T = FASCIA_SCENE_TET, M = FASCIA_SCENE_MESHLESS, A = FASCIA_SCENE_PATCH_AUTO,
             F = FASCIA_SCENE_PATCH_NONE;
   const cantilever_case table[] = {
-      {H, 2, 0, {10, 2, 2}, 0.1, -1, 0.3, A},  {H, 2, 0, {20, 3, 3}, 0.1, -1, 0.3, A},
-      {H, 2, 0, {40, 5, 5}, 0.1, -1, 0.3, A},  {H, 1, 0, {20, 3, 3}, 0.1, -1, 0.3, A},
-      {H, 3, 0, {20, 3, 3}, 0.1, -1, 0.3, A},  {H, 2, 0, {10, 2, 2}, 0, -1, 0.3, A},
-      {H, 2, 0, {20, 3, 3}, 0, -1, 0.3, A},    {H, 2, 0, {20, 3, 3}, 0.1, FASCIA_LINEAR_CG, 0.3, A},
-      {T, 4, 0, {10, 2, 2}, 0.1, -1, 0.3, A},  {T, 4, 0, {20, 3, 3}, 0.1, -1, 0.3, A},
-      {T, 4, 0, {40, 5, 5}, 0.1, -1, 0.3, A},  {T, 1, 0, {20, 3, 3}, 0.1, -1, 0.3, A},
-      {M, 2, 8, {10, 2, 2}, 0.1, -1, 0.3, A},  {M, 2, 8, {20, 3, 3}, 0.1, -1, 0.3, A},
-      {M, 2, 16, {20, 3, 3}, 0.1, -1, 0.3, A}, {M, 2, 8, {40, 5, 5}, 0.1, -1, 0.3, A},
-      {H, 2, 0, {20, 3, 3}, 0.1, -1, 0.3, F},  {T, 4, 0, {20, 3, 3}, 0.1, -1, 0.3, F},
-      {M, 2, 8, {20, 3, 3}, 0.1, -1, 0.3, F},  {M, 2, 16, {20, 3, 3}, 0.1, -1, 0.3, F},
-      {H, 2, 0, {20, 3, 3}, 0.1, -1, 0.49, A}, {T, 4, 0, {20, 3, 3}, 0.1, -1, 0.49, A},
-      {M, 2, 8, {20, 3, 3}, 0.1, -1, 0.49, A}, {M, 2, 16, {20, 3, 3}, 0.1, -1, 0.49, A},
-      {H, 2, 0, {20, 3, 3}, 0.1, -1, 0.49, F},
+      {H, 2, 0, {10, 2, 2}, 0.1, -1, 0.3, A, MODES_AUTO},  {H, 2, 0, {20, 3, 3}, 0.1, -1, 0.3, A, MODES_AUTO},
+      {H, 2, 0, {40, 5, 5}, 0.1, -1, 0.3, A, MODES_AUTO},  {H, 1, 0, {20, 3, 3}, 0.1, -1, 0.3, A, MODES_AUTO},
+      {H, 3, 0, {20, 3, 3}, 0.1, -1, 0.3, A, MODES_AUTO},  {H, 2, 0, {10, 2, 2}, 0, -1, 0.3, A, MODES_AUTO},
+      {H, 2, 0, {20, 3, 3}, 0, -1, 0.3, A, MODES_AUTO},    {H, 2, 0, {20, 3, 3}, 0.1, FASCIA_LINEAR_CG, 0.3, A, MODES_AUTO},
+      {T, 4, 0, {10, 2, 2}, 0.1, -1, 0.3, A, MODES_AUTO},  {T, 4, 0, {20, 3, 3}, 0.1, -1, 0.3, A, MODES_AUTO},
+      {T, 4, 0, {40, 5, 5}, 0.1, -1, 0.3, A, MODES_AUTO},  {T, 1, 0, {20, 3, 3}, 0.1, -1, 0.3, A, MODES_AUTO},
+      {M, 2, 8, {10, 2, 2}, 0.1, -1, 0.3, A, MODES_AUTO},  {M, 2, 8, {20, 3, 3}, 0.1, -1, 0.3, A, MODES_AUTO},
+      {M, 2, 16, {20, 3, 3}, 0.1, -1, 0.3, A, MODES_AUTO}, {M, 2, 8, {40, 5, 5}, 0.1, -1, 0.3, A, MODES_AUTO},
+      {H, 2, 0, {20, 3, 3}, 0.1, -1, 0.3, F, MODES_AUTO},  {T, 4, 0, {20, 3, 3}, 0.1, -1, 0.3, F, MODES_AUTO},
+      {M, 2, 8, {20, 3, 3}, 0.1, -1, 0.3, F, MODES_AUTO},  {M, 2, 16, {20, 3, 3}, 0.1, -1, 0.3, F, MODES_AUTO},
+      {T, 4, 0, {20, 3, 3}, 0.1, -1, 0.3, A, MODES_OFF}, {T, 4, 0, {20, 3, 3}, 0.1, -1, 0.49, A, MODES_OFF},
+      {H, 2, 0, {20, 3, 3}, 0.1, -1, 0.49, A, MODES_AUTO}, {T, 4, 0, {20, 3, 3}, 0.1, -1, 0.49, A, MODES_AUTO},
+      {M, 2, 8, {20, 3, 3}, 0.1, -1, 0.49, A, MODES_AUTO}, {M, 2, 16, {20, 3, 3}, 0.1, -1, 0.49, A, MODES_AUTO},
+      {H, 2, 0, {20, 3, 3}, 0.1, -1, 0.49, F, MODES_AUTO},
   };
   const int count = (int)(sizeof table / sizeof table[0]);
   memcpy(cases, table, sizeof table);
@@ -570,7 +585,8 @@ static int default_cases(cantilever_case *cases) {
 // The product of the list options, defaults filling the lists not given.
 static int sweep_cases(const bench_options *opt, cantilever_case *cases, int capacity) {
   value_list shapes = opt->shapes, grids = opt->grids, spc = opt->spc, kn = opt->neighbours, sm = opt->smoothing;
-  value_list nus = opt->nus, vol = opt->volumetric;
+  value_list nus = opt->nus, vol = opt->volumetric, modes = opt->modes;
+  if (!modes.count) modes.count = 1, modes.real[0] = MODES_AUTO;
   if (!nus.count) nus.count = 1, nus.real[0] = 0.3;
   if (!vol.count) vol.count = 1, vol.real[0] = FASCIA_SCENE_PATCH_AUTO;
   if (!shapes.count) shapes.count = 1, shapes.real[0] = FASCIA_SCENE_HEX;
@@ -584,9 +600,10 @@ static int sweep_cases(const bench_options *opt, cantilever_case *cases, int cap
         for (int d = 0; d < (shapes.real[a] == FASCIA_SCENE_MESHLESS ? kn.count : 1); ++d)
           for (int e = 0; e < sm.count; ++e)
             for (int f = 0; f < nus.count; ++f)
-              for (int g = 0; g < vol.count; ++g) {
+              for (int g = 0; g < vol.count * modes.count; ++g) {
                 if (count == capacity) return -1;
                 cantilever_case *x = cases + count++;
+                x->modes = (int)modes.real[g % modes.count];
                 x->shape = (int)shapes.real[a];
                 memcpy(x->grid, grids.grid[b], sizeof x->grid);
                 x->spc = spc.count ? (int)spc.real[c] : x->shape == FASCIA_SCENE_TET ? 4 : 2;
@@ -594,7 +611,7 @@ static int sweep_cases(const bench_options *opt, cantilever_case *cases, int cap
                 x->smoothing = sm.real[e];
                 x->linear = -1;
                 x->nu = nus.real[f];
-                x->volumetric = (int)vol.real[g];
+                x->volumetric = (int)vol.real[g / modes.count];
               }
   return count;
 }
@@ -630,6 +647,7 @@ static fascia_status bench_cantilever_case(fascia_ctx *ctx, const bench_options 
   bdef.rotation_smoothing = c->smoothing;
   bdef.poisson_ratio = c->nu;
   bdef.volumetric_patch = c->volumetric;
+  bdef.enhanced_modes = c->modes == MODES_ON ? 1 : c->modes == MODES_OFF ? 0 : -1;
   const fascia_ccx_reference *ref = fascia_ccx_reference_find(&bdef);
   if (!ref)
     return fascia_ctx_fail(ctx, FASCIA_ERR_ARGUMENT, __FILE__, __LINE__,
@@ -641,6 +659,7 @@ static fascia_status bench_cantilever_case(fascia_ctx *ctx, const bench_options 
   fascia_status st = fascia_scene_beam_build(ctx, &bdef, &model);
   if (st != FASCIA_OK) goto cleanup;
   out->patches = fascia_model_patch_count(model, NULL);
+  for (int32_t s = 0; s < model->sample_count; ++s) out->modes |= model->sample_modes[s];
   fascia_solver_def def = fascia_solver_def_default();
   def.backend = opt->backend;
   def.threads = opt->threads;
@@ -690,7 +709,7 @@ static void grid_text(const int32_t grid[3], char *out, size_t size) {
 }
 
 static void cantilever_text_header(void) {
-  printf("%-8s %-8s %6s %7s %3s %4s %6s %4s %-5s %-6s %9s %9s %9s %8s %9s %6s %6s %4s %10s\n", "shape", "grid", "frames",
+  printf("%-8s %-8s %6s %7s %3s %4s %6s %4s %-7s %-6s %9s %9s %9s %8s %9s %6s %6s %4s %10s\n", "shape", "grid", "frames",
          "samples", "k", "spc", "smooth", "nu", "vol", "linear", "ux_m", "uy_m", "uz_m", "err_uz%", "twist_rad", "newton",
          "cg", "conv", "ms");
 }
@@ -701,12 +720,18 @@ static const char *row_volumetric(const cantilever_result *r) {
   return r->patches <= 0 ? "full" : v == FASCIA_SCENE_PATCH_AUTO ? "cell" : fascia_scene_patch_name(v);
 }
 
+// The same for the tables, "+m" where the patches carry enhanced strain modes.
+static const char *row_volumetric_text(const cantilever_result *r, char *buf, size_t size) {
+  snprintf(buf, size, "%s%s", row_volumetric(r), r->modes ? "+m" : "");
+  return buf;
+}
+
 static void cantilever_text_row(const cantilever_result *r) {
-  char grid[48];
+  char grid[48], vol[16];
   grid_text(r->c.grid, grid, sizeof grid);
-  printf("%-8s %-8s %6d %7d %3d %4d %6.3g %4.2f %-5s %-6s %9.4f %9.2e %9.4f %8.2f %9.2e %6d %6d %4s %10.1f\n",
+  printf("%-8s %-8s %6d %7d %3d %4d %6.3g %4.2f %-7s %-6s %9.4f %9.2e %9.4f %8.2f %9.2e %6d %6d %4s %10.1f\n",
          fascia_scene_shape_name(r->c.shape), grid, r->frames, r->samples, r->neighbours, r->c.spc, r->c.smoothing,
-         r->c.nu, row_volumetric(r), r->direct ? "direct" : "cg", r->tip[0], r->tip[1], r->tip[2], r->error_uz_percent, r->twist, r->newton, r->cg,
+         r->c.nu, row_volumetric_text(r, vol, sizeof vol), r->direct ? "direct" : "cg", r->tip[0], r->tip[1], r->tip[2], r->error_uz_percent, r->twist, r->newton, r->cg,
          r->converged ? "yes" : "NO", r->ms);
   fflush(stdout);
 }
@@ -726,6 +751,7 @@ static cJSON *cantilever_json(const cantilever_result *r) {
   cJSON_AddNumberToObject(o, "poisson_ratio", r->c.nu);
   cJSON_AddStringToObject(o, "volumetric", row_volumetric(r));
   cJSON_AddNumberToObject(o, "volumetric_patches", r->patches);
+  cJSON_AddBoolToObject(o, "enhanced_modes", r->modes);
   cJSON_AddStringToObject(o, "linear_solver", r->direct ? "direct" : "cg");
   cJSON_AddItemToObject(o, "tip_displacement", cJSON_CreateDoubleArray(r->tip, 3));
   cJSON_AddNumberToObject(o, "tip_ux", r->tip[0]);
@@ -767,7 +793,7 @@ static void cantilever_csv(FILE *f, const cantilever_result *rows, int count) {
              "linear_solver,tip_ux,tip_uy,"
              "tip_uz,reference_uz,error_uz_percent,error_ux_percent,twist_rad,newton_iterations,cg_iterations,"
              "converged,ms,threads,backend,device,calculix_c3d20r_mesh,calculix_c3d20r_error_uz_percent,"
-             "calculix_c3d20r_ms,calculix_c3d8i_mesh,calculix_c3d8i_error_uz_percent,calculix_c3d8i_ms\n");
+             "calculix_c3d20r_ms,calculix_c3d8i_mesh,calculix_c3d8i_error_uz_percent,calculix_c3d8i_ms,enhanced_modes\n");
   for (int k = 0; k < count; ++k) {
     const cantilever_result *r = rows + k;
     char grid[48];
@@ -785,7 +811,7 @@ static void cantilever_csv(FILE *f, const cantilever_result *rows, int count) {
       if (r->peer[e]) fprintf(f, "%.3f,%.1f", r->peer[e]->error_uz_percent, r->peer[e]->result.ms);
       else fputc(',', f);
     }
-    fputc('\n', f);
+    fprintf(f, ",%d\n", r->modes);
   }
 }
 
@@ -803,15 +829,16 @@ static void peer_ladder_text(double nu, const bench_peer *p, int count) {
 // fascia's rows against CalculiX's cheapest mesh at least as accurate.
 static void peer_match_text(const cantilever_result *rows, int count) {
   printf("\ntime to the same error: each row against CalculiX's fastest mesh at least as accurate\n"
-         "%-8s %-8s %4s %-5s %8s %10s", "shape", "grid", "nu", "vol", "err_uz%", "ms");
+         "%-8s %-8s %4s %-7s %8s %10s", "shape", "grid", "nu", "vol", "err_uz%", "ms");
   for (int e = 0; e < FASCIA_CCX_ELEMENT_COUNT_; ++e)
     printf(" | %-6s %-9s %8s %10s %7s", fascia_ccx_element_name(e), "mesh", "err_uz%", "ms", "ratio");
   printf("\n");
   for (int k = 0; k < count; ++k) {
     const cantilever_result *r = rows + k;
-    char grid[48];
+    char grid[48], vol[16];
     grid_text(r->c.grid, grid, sizeof grid);
-    printf("%-8s %-8s %4.2f %-5s %8.3f %10.1f", fascia_scene_shape_name(r->c.shape), grid, r->c.nu, row_volumetric(r),
+    printf("%-8s %-8s %4.2f %-7s %8.3f %10.1f", fascia_scene_shape_name(r->c.shape), grid, r->c.nu,
+           row_volumetric_text(r, vol, sizeof vol),
            r->error_uz_percent, r->ms);
     for (int e = 0; e < FASCIA_CCX_ELEMENT_COUNT_; ++e) {
       const bench_peer *p = r->peer[e];
@@ -970,7 +997,7 @@ int cmd_bench(int argc, char **argv) {
       printf("cantilever 16 x 1 x 1 m, static; reference tip u = (%.4f, 0, %.4f) m at nu = 0.3 (CalculiX, converged:\n"
              "data/reference/, one per nu); err_uz%% > 0: too stiff; twist: largest |rotation about x| over frames;\n"
              "vol: volumetric integration (full, or mean dilatation over cell patches: fascia beam's default from\n"
-             "nu = 0.3)\n",
+             "nu = 0.3; +m: with nine enhanced strain modes per patch, fascia beam's default for tet)\n",
              cantilever_reference()->tip_ux, cantilever_reference()->tip_uz);
       shown[0] = '\0';
     }

@@ -81,6 +81,13 @@ static void print_provenance_text(const char *text) {
   cJSON_Delete(json);
 }
 
+// Samples whose patch carries enhanced strain modes.
+static int32_t samples_with_modes(const fascia_model *m) {
+  int32_t count = 0;
+  for (int32_t s = 0; s < m->sample_count; ++s) count += m->sample_modes[s] != 0;
+  return count;
+}
+
 static void print_text(const char *path, const fascia_model *m, const summary *z) {
   printf("model       %s\n", path);
   printf("frames      %d (free %d, fixed %d, prescribed %d)\n", (int)m->frame_count, (int)z->frames_by_kind[0],
@@ -91,6 +98,8 @@ static void print_text(const char *path, const fascia_model *m, const summary *z
   if (patches > 0)
     printf("patches     %d volumetric patches over %d samples (mean dilatation: %.2f samples per patch)\n",
            (int)patches, (int)patched, (double)patched / patches);
+  const int32_t moded = samples_with_modes(m);
+  if (moded > 0) printf("modes       9 enhanced strain modes on the patches of %d samples\n", (int)moded);
   printf("pairs       %d (neighbours per sample: min %d, mean %.2f, max %d)\n", (int)m->pair_count,
          (int)z->neighbours_min, z->neighbours_mean, (int)z->neighbours_max);
   printf("volume      %.6g m^3 (tissue %.6g m^3, deformable organs %.6g m^3), mass %.6g kg\n", z->volume,
@@ -139,6 +148,7 @@ static char *make_json(const char *path, const fascia_model *m, const summary *z
   int32_t patched = 0;
   cJSON_AddNumberToObject(root, "volumetric_patches", fascia_model_patch_count(m, &patched));
   cJSON_AddNumberToObject(root, "patched_samples", patched);
+  cJSON_AddNumberToObject(root, "enhanced_mode_samples", samples_with_modes(m));
   cJSON_AddNumberToObject(root, "pairs", m->pair_count);
   cJSON *neighbours = cJSON_AddObjectToObject(root, "neighbours");
   cJSON_AddNumberToObject(neighbours, "min", z->neighbours_min);

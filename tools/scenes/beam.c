@@ -77,6 +77,7 @@ fascia_scene_beam_def fascia_scene_beam_def_default(void) {
   def.reduced_volumetric = 0;
   def.volumetric_patch = FASCIA_SCENE_PATCH_NONE;
   def.patch_radius = 0.5;
+  def.enhanced_modes = 0;
   def.gravity[2] = -9.81;
   def.cookie_ = FASCIA_SCENE_BEAM_COOKIE_;
   return def;
@@ -129,6 +130,10 @@ static fascia_status check_beam(fascia_ctx *ctx, const fascia_scene_beam_def *de
   SCENE_CHECK(def->volumetric_patch >= FASCIA_SCENE_PATCH_AUTO && def->volumetric_patch <= FASCIA_SCENE_PATCH_POISSON,
               ctx, FASCIA_ERR_ARGUMENT, "%s: volumetric_patch %d, expected -1 (auto), 0 (none), 1 (cell), 2 (frame) or 3 (poisson)", who,
               (int)def->volumetric_patch);
+  SCENE_CHECK(def->enhanced_modes >= -1 && def->enhanced_modes <= 1, ctx, FASCIA_ERR_ARGUMENT,
+              "%s: enhanced_modes %d, expected -1 (auto), 0 or 1", who, (int)def->enhanced_modes);
+  SCENE_CHECK(def->enhanced_modes != 1 || def->volumetric_patch != FASCIA_SCENE_PATCH_NONE, ctx, FASCIA_ERR_ARGUMENT,
+              "%s: enhanced strain modes live on volumetric patches: choose a volumetric_patch", who);
   SCENE_CHECK(!def->reduced_volumetric || def->volumetric_patch == FASCIA_SCENE_PATCH_NONE, ctx,
               FASCIA_ERR_ARGUMENT, "%s: reduced_volumetric and volumetric_patch are two cures of locking: choose one",
               who);
@@ -301,6 +306,8 @@ fascia_status fascia_scene_beam_build(fascia_ctx *ctx, const fascia_scene_beam_d
   if (resolved.volumetric_patch == FASCIA_SCENE_PATCH_AUTO)
     resolved.volumetric_patch =
         resolved.poisson_ratio >= FASCIA_PATCH_MIN_POISSON ? FASCIA_SCENE_PATCH_CELL : FASCIA_SCENE_PATCH_NONE;
+  if (resolved.enhanced_modes < 0)
+    resolved.enhanced_modes = resolved.shape == FASCIA_SCENE_TET && resolved.volumetric_patch != FASCIA_SCENE_PATCH_NONE;
   def = &resolved;
   int32_t samples = 0, per_sample = 0;
   fascia_status status = check_beam(ctx, def, &samples, &per_sample);
@@ -340,6 +347,7 @@ fascia_status fascia_scene_beam_build(fascia_ctx *ctx, const fascia_scene_beam_d
   }
   if (def->volumetric_patch == FASCIA_SCENE_PATCH_POISSON) SCENE_TRY_GOTO(fascia_model_make_patches(ctx, m, &def->patch_radius));
   else if (def->volumetric_patch != FASCIA_SCENE_PATCH_NONE) assign_patches(def, &g, m);
+  for (int32_t s = 0; s < m->sample_count; ++s) m->sample_modes[s] = def->enhanced_modes && m->sample_patch[s] >= 0;
   beam_provenance(provenance, PROVENANCE_SIZE, def, m);
   SCENE_TRY_GOTO(scene_finish(ctx, m, def, &probe, provenance, "beam generator"));
   *out = m;

@@ -77,6 +77,10 @@ typedef struct fascia_scene_beam_def {
   /// Default PATCH_NONE.
   int32_t volumetric_patch;
   fascia_real patch_radius; ///< PATCH_POISSON: radius of the patches, m (default 0.5)
+  /// Enhanced strain modes on the patches (fascia_model.enhanced_modes,
+  /// docs/mechanics.md): 1 on (needs patches), 0 off, -1 auto (on for TET
+  /// with patches: the rule of fascia beam). Default 0.
+  int32_t enhanced_modes;
   fascia_real gravity[3];         ///< m/s^2; default (0, 0, -9.81)
   int cookie_;                    ///< private: set by fascia_scene_beam_def_default
 } fascia_scene_beam_def;

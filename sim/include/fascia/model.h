@@ -144,6 +144,11 @@ typedef struct fascia_model {
   /// which cures volumetric locking as nu approaches 1/2 (docs/mechanics.md).
   /// A sample with -1 integrates its whole energy itself.
   int32_t *sample_patch;
+  /// [S] 1: the sample's patch carries nine enhanced strain modes, solved
+  /// afresh at each evaluation (docs/mechanics.md, "Enhanced strain modes":
+  /// the cure of tetrahedral shape functions' stiffness in bending); every
+  /// sample of that patch says so. 0, the default: none.
+  int32_t *sample_modes;
 
   // Sample -> frames (CSR): pairs of sample s are sample_offsets[s] ..
   // sample_offsets[s+1]-1, frames ascending within a sample.
@@ -271,8 +276,8 @@ FASCIA_API fascia_status fascia_model_make_patches(fascia_ctx *ctx, fascia_model
 FASCIA_API int32_t fascia_model_patch_count(const fascia_model *model, int32_t *patched);
 
 /// A fingerprint of the model's contents (FNV-1a, 64 bits) over every array
-/// the solver reads: rest state, kinds, motions, loads, samples, patches,
-/// weights, materials, organs and their coupling, gravity. Two models with
+/// the solver reads: rest state, kinds, motions, loads, samples, patches
+/// and their modes, weights, materials, organs and their coupling, gravity. Two models with
 /// the same fingerprint simulate alike; names, probes and provenance do not
 /// count, so a copy, a rename or a re-save of a model file keeps it.
 /// Checkpoints and results record it.

@@ -1,0 +1,314 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// Per-patch work of the enhanced strain modes (sim/src/modes.h has the
+// method and its derivatives), written once for every backend that runs
+// them. A patch p holds samples (sim/point/patch.h); mode j = 3 r + c adds
+// a_j xi_c to entry (r, c) of each sample's deformation gradient, xi = X_s -
+// Xbar_p the sample's rest offset from the patch's centre.
+#ifndef FASCIA_POINT_MODES_H
+#define FASCIA_POINT_MODES_H
+
+#include "patch.h"
+
+/// The local solve stops when its step changes no mode's strain (a_j |xi_c|)
+/// by more than this: near rounding, so that the energy's gradient and
+/// Hessian hold to rounding at the amplitudes found.
+#define FASCIA_PT_MODES_TOLERANCE FASCIA_R(1e-12)
+#define FASCIA_PT_MODES_MAX_ITERATIONS 60
+
+/// The modes' tables (host or device arrays) and what an evaluation leaves.
+typedef struct fascia_pt_modes {
+  const int32_t *active;       ///< [patches] bit c: the three modes of column c act (the patch spans X_c)
+  const fascia_real *xi_max;   ///< [3 patches] the largest |xi_c| of each patch's samples, m
+  const fascia_real *sample_xi; ///< [3S] xi_s, m (0 outside patches)
+  fascia_real *amplitude;      ///< [9 patches] a_p at the last evaluation, 1/m
+  int32_t *failed;             ///< [patches] 1: the last local solve found no minimum
+  fascia_real *sample_enhanced; ///< [9S] the enhanced part of F (pm.sample_enhanced)
+  /// [54 entries] W_e = K_ue L^-T at the last tangent (6x9, row-major; 0 in
+  /// inactive modes): K_ue the change of entry e's gradient per mode, L L^T
+  /// = K_aa, so the condensed term is K_ue K_aa^-1 K_uf^T = W_e W_f^T
+  fascia_real *entry_factor;
+  fascia_real *reduced;        ///< [9 patches] W_p^T v of the last product
+} fascia_pt_modes;
+
+static inline FASCIA_HD int fascia_pt_mode_active(const fascia_pt_modes *md, int32_t p, int j) {
+  return (md->active[p] >> (j % 3)) & 1;
+}
+
+// The enhanced part of F for amplitudes a at rest offset xi.
+static inline FASCIA_HD void fascia_pt_modes_F(const fascia_real *a, const fascia_real *xi, fascia_real *E) {
+  for (int j = 0; j < 9; ++j) E[j] = a[j] * xi[j % 3];
+}
+
+// Patch p's energy E_p(a) (J: its samples' own energies and its
+// mean-dilatation term), its gradient r and Hessian H (81) in the modes at
+// amplitudes a, the frames held. m is the model without pressures or modes.
+// Returns 0 where some sample's energy is not finite.
+static inline FASCIA_HD int fascia_pt_modes_local(const fascia_pt_model *m, const fascia_pt_state *st,
+                                                  const fascia_pt_patches *t, const fascia_pt_modes *md, int32_t p,
+                                                  const fascia_real *a, fascia_real *energy, fascia_real *r,
+                                                  fascia_real *H) {
+  // H NULL: energy and gradient only
+  fascia_real g[9] = {0}, D[81] = {0}, sum = 0, e = 0;
+  for (int j = 0; j < 9; ++j) r[j] = 0;
+  for (int j = 0; j < 81 && H; ++j) H[j] = 0;
+  int ok = 1;
+  const int law = t->law[p];
+  for (int32_t q = t->patch_offsets[p]; q < t->patch_offsets[p + 1]; ++q) {
+    const int32_t s = t->patch_samples[q];
+    const fascia_real v = m->sample_volume[s], *xi = md->sample_xi + 3 * (int64_t)s;
+    fascia_real cache[FASCIA_PT_CACHE_SIZE], E[9], dtheta[9];
+    fascia_real *F = cache, *P = cache + 9, *aux = cache + 18;
+    fascia_pt_sample_F_frames(m, st, s, F);
+    fascia_pt_modes_F(a, xi, E);
+    for (int j = 0; j < 9; ++j) F[j] += E[j];
+    const fascia_real psi = fascia_pt_sample_law_stress(m, st, s, F, P, aux);
+    if (!isfinite(psi)) ok = 0;
+    e += v * psi;
+    sum += v * fascia_pt_dilatation(law, F, dtheta);
+    for (int j = 0; j < 9; ++j) {
+      r[j] += v * xi[j % 3] * P[j];
+      g[j] += v * xi[j % 3] * dtheta[j];
+    }
+    for (int k = 0; k < 9 && H; ++k) {
+      if (!fascia_pt_mode_active(md, p, k)) continue;
+      fascia_real dF[9] = {0}, dP[9], dd[9] = {0};
+      dF[k] = xi[k % 3];
+      fascia_pt_sample_F_response(m, st, s, cache, dF, (fascia_real *)0, dP);
+      fascia_pt_dilatation_diff_add(law, 1, F, dF, dd);
+      for (int j = 0; j < 9; ++j) {
+        H[9 * j + k] += v * xi[j % 3] * dP[j];
+        D[9 * j + k] += v * xi[j % 3] * dd[j];
+      }
+    }
+  }
+  const fascia_real theta = sum / t->volume[p], pressure = t->lambda[p] * theta, c = t->lambda[p] / t->volume[p];
+  e += FASCIA_R(0.5) * t->volume[p] * pressure * theta;
+  for (int j = 0; j < 9; ++j) {
+    r[j] += pressure * g[j];
+    for (int k = 0; k < 9 && H; ++k) H[9 * j + k] += pressure * D[9 * j + k] + c * g[j] * g[k];
+  }
+  *energy = e;
+  return ok && isfinite(e);
+}
+
+// The Cholesky factor L (n x n, row-major) of H on patch p's n active
+// modes idx, H shifted on its diagonal until positive definite. Returns 0 if
+// no shift makes it so.
+static inline FASCIA_HD int fascia_pt_modes_factor(const fascia_pt_modes *md, int32_t p, const fascia_real *H,
+                                                   int *idx, int *n_out, fascia_real *L) {
+  int n = 0;
+  for (int j = 0; j < 9; ++j)
+    if (fascia_pt_mode_active(md, p, j)) idx[n++] = j;
+  *n_out = n;
+  fascia_real scale = 0, shift = 0;
+  for (int u = 0; u < n; ++u) scale = fmax(scale, fabs(H[10 * idx[u]]));
+  for (int attempt = 0; attempt < 40; ++attempt) {
+    for (int u = 0; u < n; ++u)
+      for (int w = 0; w < n; ++w) L[n * u + w] = H[9 * idx[u] + idx[w]] + (u == w ? shift : 0);
+    if (fascia_pt_cholesky(L, n)) return 1;
+    shift = shift > 0 ? 4 * shift : FASCIA_R(1e-12) * (scale > 0 ? scale : 1);
+  }
+  return 0;
+}
+
+// The inverse (81, 0 in inactive rows and columns) of H on patch p's
+// active modes, shifted as fascia_pt_modes_factor does. Returns 0 on failure.
+static inline FASCIA_HD int fascia_pt_modes_inverse(const fascia_pt_modes *md, int32_t p, const fascia_real *H,
+                                                    fascia_real *inverse) {
+  int idx[9], n;
+  fascia_real L[81], inv[81];
+  for (int j = 0; j < 81; ++j) inverse[j] = 0;
+  if (!fascia_pt_modes_factor(md, p, H, idx, &n, L)) return 0;
+  fascia_pt_cholesky_inverse(L, n, inv);
+  for (int u = 0; u < n; ++u)
+    for (int w = 0; w < n; ++w) inverse[9 * idx[u] + idx[w]] = inv[n * u + w];
+  return 1;
+}
+
+/// Patch p at the state st: the amplitudes that minimize its energy with the
+/// frames held, and its samples' enhanced F. Chord steps from a = 0 with the
+/// Hessian of their start (the modes' energy is nearly quadratic: strains
+/// are small corrections), the Hessian taken afresh where a step gains
+/// energy or converges slowly; the last step, below the tolerance, is taken
+/// unevaluated. From 0 each time, so the result depends on the state alone.
+/// m is the model without pressures or modes (the patch's pressure follows
+/// the amplitudes here).
+static inline FASCIA_HD void fascia_pt_modes_evaluate(const fascia_pt_model *m, const fascia_pt_state *st,
+                                                      const fascia_pt_patches *t, fascia_pt_modes *md, int32_t p) {
+  md->failed[p] = 0;
+  if (!md->active[p]) return; // a patch without modes keeps its zero enhanced F
+  fascia_real a[9] = {0}, trial[9], step[9], r[9], r_trial[9], H[81], inverse[81], e, e_trial;
+  fascia_real last_change = 0, shrink = 1;
+  int failed = 1, fresh = 1;
+  if (fascia_pt_modes_local(m, st, t, md, p, a, &e, r, H) && fascia_pt_modes_inverse(md, p, H, inverse)) {
+    for (int it = 0; it < FASCIA_PT_MODES_MAX_ITERATIONS; ++it) {
+      fascia_real change = 0;
+      for (int j = 0; j < 9; ++j) {
+        fascia_real sum = 0;
+        for (int k = 0; k < 9; ++k) sum -= inverse[9 * j + k] * r[k];
+        step[j] = shrink * sum;
+        trial[j] = a[j] + step[j];
+        change = fmax(change, fabs(step[j]) * md->xi_max[3 * p + j % 3]);
+      }
+      if (change <= FASCIA_PT_MODES_TOLERANCE) {
+        for (int j = 0; j < 9; ++j) a[j] = trial[j];
+        failed = 0;
+        break;
+      }
+      const int ok = fascia_pt_modes_local(m, st, t, md, p, trial, &e_trial, r_trial, (fascia_real *)0);
+      if (!ok || e_trial > e + FASCIA_R(1e-13) * fabs(e)) {
+        if (fresh) { // a Newton step gains energy: shorten it
+          shrink *= FASCIA_R(0.5);
+          if (shrink < FASCIA_R(1e-6)) break;
+        } else if (!fascia_pt_modes_local(m, st, t, md, p, a, &e, r, H) ||
+                   !fascia_pt_modes_inverse(md, p, H, inverse))
+          break;
+        else
+          fresh = 1;
+        continue;
+      }
+      const int slow = it > 0 && change > FASCIA_R(0.25) * last_change;
+      for (int j = 0; j < 9; ++j) {
+        a[j] = trial[j];
+        r[j] = r_trial[j];
+      }
+      e = e_trial;
+      last_change = change;
+      shrink = 1;
+      fresh = 0;
+      if (slow) { // the chord converges slowly: the Hessian here
+        if (!fascia_pt_modes_local(m, st, t, md, p, a, &e, r, H) ||
+            !fascia_pt_modes_inverse(md, p, H, inverse))
+          break;
+        fresh = 1;
+      }
+    }
+  }
+  md->failed[p] = failed;
+  for (int j = 0; j < 9; ++j) md->amplitude[9 * p + j] = a[j];
+  for (int32_t q = t->patch_offsets[p]; q < t->patch_offsets[p + 1]; ++q) {
+    const int32_t s = t->patch_samples[q];
+    fascia_pt_modes_F(a, md->sample_xi + 3 * (int64_t)s, md->sample_enhanced + 9 * (int64_t)s);
+  }
+}
+
+/// Patch p at the state st (after its evaluation, its samples' cache and
+/// the patches' gradients G_e current): K_aa and the coupling K_ue of the
+/// modes with each support entry's frame, both including the patch's
+/// rank-one term, into the factors W_e. pair_scratch: [6P] rows, each
+/// sample's own part written (where the rotation coupling acts).
+static inline FASCIA_HD void fascia_pt_modes_tangent(const fascia_pt_model *m, const fascia_pt_state *st,
+                                                     const fascia_pt_patches *t, fascia_pt_modes *md, int32_t p,
+                                                     const fascia_real *cache, fascia_real *pair_scratch) {
+  if (!md->active[p]) return; // its factors stay zero
+  fascia_real K[81] = {0}, g[9] = {0};
+  for (int64_t q = 54 * (int64_t)t->support_offsets[p]; q < 54 * (int64_t)t->support_offsets[p + 1]; ++q)
+    md->entry_factor[q] = 0;
+  const int law = t->law[p];
+  for (int32_t q = t->patch_offsets[p]; q < t->patch_offsets[p + 1]; ++q) {
+    const int32_t s = t->patch_samples[q], begin = m->sample_offsets[s], end = m->sample_offsets[s + 1];
+    const fascia_real v = m->sample_volume[s], *xi = md->sample_xi + 3 * (int64_t)s;
+    const fascia_real *c = cache + (int64_t)s * FASCIA_PT_CACHE_SIZE;
+    fascia_real dtheta[9], *rows = pair_scratch + 6 * (int64_t)begin;
+    fascia_pt_dilatation(law, c, dtheta);
+    for (int j = 0; j < 9; ++j) g[j] += v * xi[j % 3] * dtheta[j];
+    if (!(m->sample_coupling[s] > 0)) { // D and B^T D, as the assembly's local blocks
+      fascia_real D[81], BtD[54];
+      fascia_pt_sample_tangent(m, s, c, D);
+      for (int j = 0; j < 9; ++j)
+        for (int k = 0; k < 9; ++k)
+          if (fascia_pt_mode_active(md, p, k)) K[9 * j + k] += v * xi[j % 3] * xi[k % 3] * D[9 * j + k];
+      for (int32_t kk = begin; kk < end; ++kk) {
+        fascia_real *Ke = md->entry_factor + 54 * (int64_t)t->pair_entry[kk];
+        fascia_pt_pair_BtD(m, st, kk, D, BtD);
+        for (int row = 0; row < 6; ++row)
+          for (int k = 0; k < 9; ++k)
+            if (fascia_pt_mode_active(md, p, k)) Ke[9 * row + k] += v * xi[k % 3] * BtD[9 * row + k];
+      }
+      continue;
+    }
+    for (int k = 0; k < 9; ++k) { // the rotation coupling's part too: the full response per mode
+      if (!fascia_pt_mode_active(md, p, k)) continue;
+      fascia_real dF[9] = {0}, dP[9];
+      dF[k] = xi[k % 3];
+      fascia_pt_sample_F_response(m, st, s, c, dF, rows, dP);
+      for (int j = 0; j < 9; ++j) K[9 * j + k] += v * xi[j % 3] * dP[j];
+      for (int32_t kk = begin; kk < end; ++kk) {
+        fascia_real *Ke = md->entry_factor + 54 * (int64_t)t->pair_entry[kk];
+        for (int row = 0; row < 6; ++row) Ke[9 * row + k] += rows[6 * (kk - begin) + row];
+      }
+    }
+  }
+  const fascia_real c = t->lambda[p] / t->volume[p];
+  for (int j = 0; j < 9; ++j)
+    for (int k = 0; k < 9; ++k) K[9 * j + k] += c * g[j] * g[k];
+  for (int32_t e = t->support_offsets[p]; e < t->support_offsets[p + 1]; ++e) {
+    const fascia_real *G = t->entry_gradient + 6 * (int64_t)e;
+    fascia_real *Ke = md->entry_factor + 54 * (int64_t)e;
+    for (int row = 0; row < 6; ++row)
+      for (int k = 0; k < 9; ++k)
+        if (fascia_pt_mode_active(md, p, k)) Ke[9 * row + k] += c * G[row] * g[k];
+  }
+  // W_e = K_ue L^-T: row r of W_e solves L w = K_ue[r]
+  int idx[9], n;
+  fascia_real L[81];
+  const int factored = fascia_pt_modes_factor(md, p, K, idx, &n, L);
+  for (int32_t e = t->support_offsets[p]; e < t->support_offsets[p + 1]; ++e) {
+    fascia_real *W = md->entry_factor + 54 * (int64_t)e;
+    for (int row = 0; row < 6; ++row) {
+      fascia_real w[9];
+      for (int u = 0; u < n; ++u) {
+        fascia_real sum = W[9 * row + idx[u]];
+        for (int k = 0; k < u; ++k) sum -= L[n * u + k] * w[k];
+        w[u] = sum / L[n * u + u];
+      }
+      for (int j = 0; j < 9; ++j) W[9 * row + j] = 0;
+      for (int u = 0; u < n && factored; ++u) W[9 * row + idx[u]] = w[u];
+    }
+  }
+}
+
+/// The condensed term's coefficient of patch p for the direction v [6N]:
+/// reduced_p = W_p^T v (= L^-1 K_au v).
+static inline FASCIA_HD void fascia_pt_modes_reduce(const fascia_pt_patches *t, fascia_pt_modes *md, int32_t p,
+                                                    const fascia_real *v) {
+  fascia_real y[9] = {0};
+  for (int32_t e = md->active[p] ? t->support_offsets[p] : 0; e < (md->active[p] ? t->support_offsets[p + 1] : 0); ++e) {
+    const fascia_real *W = md->entry_factor + 54 * (int64_t)e, *x = v + 6 * (int64_t)t->entry_frame[e];
+    for (int row = 0; row < 6; ++row)
+      for (int k = 0; k < 9; ++k) y[k] += W[9 * row + k] * x[row];
+  }
+  for (int j = 0; j < 9; ++j) md->reduced[9 * p + j] = y[j];
+}
+
+/// out -= frame i's rows of the condensed terms: sum over its entries of W_e reduced_p.
+static inline FASCIA_HD void fascia_pt_modes_frame_add(const fascia_pt_patches *t, const fascia_pt_modes *md,
+                                                       int32_t i, fascia_real *out) {
+  for (int32_t r = t->frame_entry_offsets[i]; r < t->frame_entry_offsets[i + 1]; ++r) {
+    const int32_t e = t->frame_entries[r];
+    if (!md->active[t->entry_patch[e]]) continue;
+    const fascia_real *W = md->entry_factor + 54 * (int64_t)e, *z = md->reduced + 9 * (int64_t)t->entry_patch[e];
+    for (int row = 0; row < 6; ++row) {
+      fascia_real sum = 0;
+      for (int k = 0; k < 9; ++k) sum += W[9 * row + k] * z[k];
+      out[row] -= sum;
+    }
+  }
+}
+
+/// B -= the condensed term's block between support entries e and f of one
+/// patch: W_e W_f^T (6x6, row-major).
+static inline FASCIA_HD void fascia_pt_modes_block_add(const fascia_pt_patches *t, const fascia_pt_modes *md,
+                                                       int32_t e, int32_t f, fascia_real *B) {
+  if (!md->active[t->entry_patch[e]]) return;
+  const fascia_real *We = md->entry_factor + 54 * (int64_t)e, *Wf = md->entry_factor + 54 * (int64_t)f;
+  for (int a = 0; a < 6; ++a)
+    for (int b = 0; b < 6; ++b) {
+      fascia_real sum = 0;
+      for (int k = 0; k < 9; ++k) sum += We[9 * a + k] * Wf[9 * b + k];
+      B[6 * a + b] -= sum;
+    }
+}
+
+#endif

@@ -1,0 +1,138 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// Enhanced strain modes over volumetric patches (see modes.h). Every sum runs
+// in a fixed order (patch by patch, entries ascending), so the results are
+// bit-identical for any thread count.
+#include <stdlib.h>
+#include <string.h>
+
+#include "modes.h"
+#include "dilatation.h"
+
+// A mode column acts where its patch spans that direction: sum v xi_c^2
+// at least this share of sum v |xi|^2 (a flat patch has no modes across it).
+#define SPAN_SHARE 1e-10
+
+void fascia_modes_destroy(fascia_modes **modes) {
+  if (!modes || !*modes) return;
+  fascia_modes *md = *modes;
+  free(md->active);
+  free(md->xi_max);
+  free(md->sample_xi);
+  free(md->amplitude);
+  free(md->sample_enhanced);
+  free(md->entry_factor);
+  free(md->reduced);
+  free(md->failed);
+  free(md);
+  *modes = NULL;
+}
+
+fascia_status fascia_modes_create(fascia_system *sys, fascia_modes **out) {
+  *out = NULL;
+  const fascia_model *m = sys->model;
+  int32_t wanted = 0;
+  for (int32_t s = 0; s < m->sample_count && !wanted; ++s) wanted = m->sample_modes[s];
+  if (!wanted) return FASCIA_OK;
+  const struct fascia_dilatation *d = sys->dilatation;
+  FASCIA_CHECK(d, sys->ctx, FASCIA_ERR_FORMAT,
+               "the model asks for enhanced strain modes but has no volumetric patches (/samples/patch); they "
+               "live on the patches");
+  const fascia_patch_table *t = &d->table;
+  const int32_t P = t->patch_count, S = m->sample_count;
+  fascia_modes *md = calloc(1, sizeof *md);
+  FASCIA_CHECK(md, sys->ctx, FASCIA_ERR_MEMORY, "modes: out of memory");
+  md->active = fascia_calloc(P, sizeof(int32_t));
+  md->xi_max = fascia_calloc(3 * (int64_t)P, sizeof(fascia_real));
+  md->sample_xi = fascia_calloc(3 * (int64_t)S, sizeof(fascia_real));
+  md->amplitude = fascia_calloc(9 * (int64_t)P, sizeof(fascia_real));
+  md->sample_enhanced = fascia_calloc(9 * (int64_t)S, sizeof(fascia_real));
+  md->entry_factor = fascia_calloc(54 * (int64_t)t->entry_count, sizeof(fascia_real));
+  md->reduced = fascia_calloc(9 * (int64_t)P, sizeof(fascia_real));
+  md->failed = fascia_calloc(P, sizeof(int32_t));
+  if (!md->active || !md->xi_max || !md->sample_xi || !md->amplitude || !md->sample_enhanced ||
+      !md->entry_factor || !md->reduced || !md->failed) {
+    fascia_modes_destroy(&md);
+    return FASCIA_FAIL(sys->ctx, FASCIA_ERR_MEMORY, "modes: out of memory for %d patches", (int)P);
+  }
+  for (int32_t p = 0; p < P; ++p) {
+    fascia_real centre[3] = {0, 0, 0}, volume = 0, spread[3] = {0, 0, 0};
+    for (int32_t q = t->patch_offsets[p]; q < t->patch_offsets[p + 1]; ++q) {
+      const int32_t s = t->patch_samples[q];
+      volume += m->sample_volume[s];
+      for (int c = 0; c < 3; ++c) centre[c] += m->sample_volume[s] * m->sample_position[3 * (int64_t)s + c];
+    }
+    for (int c = 0; c < 3; ++c) centre[c] /= volume;
+    for (int32_t q = t->patch_offsets[p]; q < t->patch_offsets[p + 1]; ++q) {
+      const int32_t s = t->patch_samples[q];
+      for (int c = 0; c < 3; ++c) {
+        const fascia_real xi = m->sample_position[3 * (int64_t)s + c] - centre[c];
+        md->sample_xi[3 * (int64_t)s + c] = xi;
+        spread[c] += m->sample_volume[s] * xi * xi;
+        md->xi_max[3 * p + c] = fmax(md->xi_max[3 * p + c], fabs(xi));
+      }
+    }
+    const fascia_real total = spread[0] + spread[1] + spread[2];
+    const int with_modes = m->sample_modes[t->patch_samples[t->patch_offsets[p]]]; // the same for all its samples
+    for (int c = 0; c < 3; ++c)
+      if (with_modes && total > 0 && spread[c] > SPAN_SHARE * total) md->active[p] |= 1 << c;
+  }
+  fascia_pt_modes *v = &md->view;
+  v->active = md->active;
+  v->xi_max = md->xi_max;
+  v->sample_xi = md->sample_xi;
+  v->amplitude = md->amplitude;
+  v->failed = md->failed;
+  v->sample_enhanced = md->sample_enhanced;
+  v->entry_factor = md->entry_factor;
+  v->reduced = md->reduced;
+  sys->pm.sample_enhanced = md->sample_enhanced;
+  *out = md;
+  return FASCIA_OK;
+}
+
+int32_t fascia_modes_evaluate(fascia_system *sys, fascia_modes *md) {
+  const fascia_pt_state st = {sys->x, sys->A};
+  // the local problem brings its own pressure and enhanced part
+  fascia_pt_model own = sys->pm;
+  own.sample_pressure = NULL;
+  own.sample_enhanced = NULL;
+  const fascia_pt_patches *t = &sys->dilatation->view;
+#pragma omp parallel for num_threads(sys->threads) schedule(dynamic, 4)
+  for (int32_t p = 0; p < t->count; ++p) fascia_pt_modes_evaluate(&own, &st, t, &md->view, p);
+  md->tangent_current = 0;
+  for (int32_t p = 0; p < t->count; ++p)
+    if (md->failed[p]) return p;
+  return -1;
+}
+
+void fascia_modes_tangent(const fascia_system *sys, fascia_modes *md) {
+  if (md->tangent_current) return;
+  fascia_dilatation_gradients(sys, sys->dilatation);
+  const fascia_pt_state st = {sys->x, sys->A};
+  const fascia_pt_patches *t = &sys->dilatation->view;
+#pragma omp parallel for num_threads(sys->threads) schedule(dynamic, 4)
+  for (int32_t p = 0; p < t->count; ++p)
+    fascia_pt_modes_tangent(&sys->pm, &st, t, &md->view, p, sys->cache, sys->pair_buffer);
+  md->tangent_current = 1;
+}
+
+void fascia_modes_apply_add(const fascia_system *sys, fascia_modes *md, const fascia_real *v, fascia_real *out) {
+  fascia_modes_tangent(sys, md);
+  const fascia_pt_patches *t = &sys->dilatation->view;
+#pragma omp parallel for num_threads(sys->threads) schedule(static)
+  for (int32_t p = 0; p < t->count; ++p) fascia_pt_modes_reduce(t, &md->view, p, v);
+#pragma omp parallel for num_threads(sys->threads) schedule(static)
+  for (int32_t i = 0; i < sys->frame_count; ++i) fascia_pt_modes_frame_add(t, &md->view, i, out + 6 * (int64_t)i);
+}
+
+void fascia_modes_diagonal_add(const fascia_system *sys, fascia_modes *md, fascia_real *blocks) {
+  fascia_modes_tangent(sys, md);
+  const fascia_pt_patches *t = &sys->dilatation->view;
+#pragma omp parallel for num_threads(sys->threads) schedule(static)
+  for (int32_t i = 0; i < sys->frame_count; ++i)
+    for (int32_t r = t->frame_entry_offsets[i]; r < t->frame_entry_offsets[i + 1]; ++r) {
+      const int32_t e = t->frame_entries[r];
+      fascia_pt_modes_block_add(t, &md->view, e, e, blocks + 36 * (int64_t)i);
+    }
+}
