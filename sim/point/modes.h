@@ -13,7 +13,7 @@
 /// The local solve stops when its step changes no mode's strain (a_j |xi_c|)
 /// by more than this: near rounding, so that the energy's gradient and
 /// Hessian hold to rounding at the amplitudes found.
-#define FASCIA_PT_MODES_TOLERANCE FASCIA_R(1e-12)
+#define FASCIA_PT_MODES_TOLERANCE FASCIA_R(1e-14)
 #define FASCIA_PT_MODES_MAX_ITERATIONS 60
 
 /// The modes' tables (host or device arrays) and what an evaluation leaves.
@@ -141,6 +141,15 @@ static inline FASCIA_HD void fascia_pt_modes_evaluate(const fascia_pt_model *m, 
   fascia_real a[9] = {0}, trial[9], step[9], r[9], r_trial[9], H[81], inverse[81], e, e_trial;
   fascia_real last_change = 0, shrink = 1;
   int failed = 1, fresh = 1;
+  // the rounding error of the patch's energy, J (as the Newton solver's
+  // energy_roundoff): StVK's energy loses the digits of F^T F near rest, so
+  // a step whose energy rises by less than this is taken, not refused
+  fascia_real roundoff = t->volume[p] * fabs(t->lambda[p]);
+  for (int32_t q = t->patch_offsets[p]; q < t->patch_offsets[p + 1]; ++q) {
+    const int32_t s = t->patch_samples[q];
+    roundoff += m->sample_volume[s] * (fabs(m->sample_lambda[s]) + 2 * fabs(m->sample_mu[s]));
+  }
+  roundoff *= 8 * FASCIA_R(2.220446049250313e-16);
   if (fascia_pt_modes_local(m, st, t, md, p, a, &e, r, H) && fascia_pt_modes_inverse(md, p, H, inverse)) {
     for (int it = 0; it < FASCIA_PT_MODES_MAX_ITERATIONS; ++it) {
       fascia_real change = 0;
@@ -157,10 +166,13 @@ static inline FASCIA_HD void fascia_pt_modes_evaluate(const fascia_pt_model *m, 
         break;
       }
       const int ok = fascia_pt_modes_local(m, st, t, md, p, trial, &e_trial, r_trial, (fascia_real *)0);
-      if (!ok || e_trial > e + FASCIA_R(1e-13) * fabs(e)) {
+      if (!ok || e_trial > e + FASCIA_R(1e-13) * fabs(e) + roundoff) {
         if (fresh) { // a Newton step gains energy: shorten it
           shrink *= FASCIA_R(0.5);
-          if (shrink < FASCIA_R(1e-6)) break;
+          if (shrink < FASCIA_R(1e-6)) { // no step descends: a is the minimum to rounding
+            failed = !ok && it == 0;
+            break;
+          }
         } else if (!fascia_pt_modes_local(m, st, t, md, p, a, &e, r, H) ||
                    !fascia_pt_modes_inverse(md, p, H, inverse))
           break;
