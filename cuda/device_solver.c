@@ -13,6 +13,7 @@
 
 #include "backend.h"
 #include "launch.h"
+#include "modes.h"
 
 #define CG_CHUNK 8 // CG iterations per recorded chunk in tolerance mode
 #define MAX_BUFFERS 96 // the model, the state and work (about 50), the patches (16)
@@ -59,7 +60,6 @@ static int device_supports(const fascia_backend_setup *setup, char *why, size_t 
   if (def->linear_solver == FASCIA_LINEAR_DIRECT) reason = "the direct linear solver runs on the CPU only";
   else if (def->assembled == 1) reason = "the assembled matrix runs on the CPU only (the device is matrix-free)";
   else if (def->single_precision_matrix == 1) reason = "the float matrix runs on the CPU only";
-  else if (setup->sys->modes) reason = "enhanced strain modes (tetrahedral shape functions) run on the CPU only";
   if (reason && why) snprintf(why, size, "%s", reason);
   return reason == NULL;
 }
@@ -105,6 +105,25 @@ static fascia_status upload_patches(fascia_device *dev, const fascia_pt_patches 
   MAKE(patches.entry_gradient, 6 * E, fascia_real);
   MAKE(patches.sample_pressure, S, fascia_real);
   D->pm.sample_pressure = D->patches.sample_pressure;
+  return FASCIA_OK;
+}
+
+// The enhanced strain modes on the patches (sim/point/modes.h): their
+// tables, and the work the per-patch math writes; the samples' enhanced F
+// the per-sample math reads.
+static fascia_status upload_modes(fascia_device *dev, const fascia_modes *h, int64_t E) {
+  fascia_dev *D = &dev->D;
+  const int64_t P = D->patches.count, S = D->sample_count;
+  D->modes_count = D->patches.count;
+  PUT(modes.active, h->active, P, int32_t);
+  PUT(modes.xi_max, h->xi_max, 3 * P, fascia_real);
+  PUT(modes.sample_xi, h->sample_xi, 3 * S, fascia_real);
+  MAKE(modes.amplitude, 9 * P, fascia_real);
+  MAKE(modes.failed, P, int32_t);
+  PUT(modes.sample_enhanced, h->sample_enhanced, 9 * S, fascia_real); // zero outside the modes' patches
+  MAKE(modes.entry_factor, 54 * E, fascia_real);
+  MAKE(modes.reduced, 9 * P, fascia_real);
+  D->pm.sample_enhanced = D->modes.sample_enhanced;
   return FASCIA_OK;
 }
 
@@ -185,6 +204,7 @@ static fascia_status upload_model(fascia_device *dev, const fascia_backend_setup
   D->mask = D->full_mask = dev->mask;
   if (setup->bodies) FASCIA_TRY(upload_bodies(dev, setup));
   if (setup->patches->count > 0) FASCIA_TRY(upload_patches(dev, setup->patches, setup->patch_entries));
+  if (setup->sys->modes) FASCIA_TRY(upload_modes(dev, setup->sys->modes, setup->patch_entries));
   // state and work
   MAKE(x_base, 3 * N, fascia_real);
   MAKE(q_base, 4 * N, fascia_real);
@@ -321,6 +341,7 @@ static fascia_status objective(fascia_device *dev, fascia_real alpha, fascia_rea
   kernel(dev, FASCIA_K_TRIAL, n, NULL, NULL, alpha);
   if (D->bodies.count > 0) kernel(dev, FASCIA_K_BODY_EXPAND, N, NULL, NULL, 0); // slaves follow their master
   kernel(dev, FASCIA_K_STATE, N, NULL, NULL, 0);
+  if (D->modes_count > 0) kernel(dev, FASCIA_K_MODES_EVALUATE, D->modes_count, NULL, NULL, 0);
   if (D->patches.count > 0) kernel(dev, FASCIA_K_PATCH_EVALUATE, D->patches.count, NULL, NULL, 0);
   kernel(dev, FASCIA_K_SAMPLE_GRADIENT, S, NULL, NULL, 0);
   if (dev->set.consistent_mass && (dev->set.c1 != 0 || dev->set.c2 != 0))
@@ -333,6 +354,11 @@ static fascia_status objective(fascia_device *dev, fascia_real alpha, fascia_rea
   FASCIA_TRY(pull_scalars(dev));
   *phi = dev->sc.phi;
   *gg = dev->sc.gradient_norm2;
+  if (dev->sc.modes_failed > 0)
+    return FASCIA_FAIL(dev->ctx, FASCIA_ERR_NUMERIC,
+                       "%.0f patches: their enhanced strain modes found no minimum at this state; the step is too "
+                       "large or the model is unstable",
+                       dev->sc.modes_failed);
   if (dev->sc.nonfinite > 0 || !isfinite(dev->sc.energy_internal + dev->sc.energy_external)) {
     const int32_t s = first_flagged(dev, FASCIA_PT_FLAG_NONFINITE);
     return FASCIA_FAIL(dev->ctx, FASCIA_ERR_NUMERIC,
@@ -341,6 +367,12 @@ static fascia_status objective(fascia_device *dev, fascia_real alpha, fascia_rea
                        (int)(s >= 0 ? s : 0));
   }
   return isfinite(*phi) ? FASCIA_OK : FASCIA_FAIL(dev->ctx, FASCIA_ERR_NUMERIC, "solver: the energy is not finite");
+}
+
+// The modes' factors at the state of the last objective (the Hessian's
+// condensed terms read them).
+static void modes_tangent(fascia_device *dev) {
+  if (dev->D.modes_count > 0) kernel(dev, FASCIA_K_MODES_TANGENT, dev->D.modes_count, NULL, NULL, 0);
 }
 
 // Diagonal blocks and preconditioner of the Newton operator at the state of
@@ -379,6 +411,7 @@ static void operator_products(fascia_device *dev) {
   }
   kernel(dev, dev->stiffness, S, in, NULL, 0);
   if (D->patches.count > 0) kernel(dev, FASCIA_K_PATCH_RATE, D->patches.count, in, NULL, 0);
+  if (D->modes_count > 0) kernel(dev, FASCIA_K_MODES_REDUCE, D->modes_count, in, NULL, 0);
   if (dev->set.consistent_mass) kernel(dev, FASCIA_K_CG_SAMPLE_MASS, S, in, NULL, 0); // lumped: per frame
   if (D->bodies.count > 0) {
     kernel(dev, FASCIA_K_FRAME_OPERATOR, N, NULL, NULL, 0);
@@ -486,6 +519,7 @@ static fascia_status device_evaluate(fascia_backend *backend, fascia_real alpha,
 static fascia_status device_prepare(fascia_backend *backend, fascia_solve_report *rep) {
   fascia_device *dev = (fascia_device *)backend;
   const double t = fascia_now_ms();
+  modes_tangent(dev);
   build_precond(dev);
   build_damping(dev);
   FASCIA_TRY(dev->ops->finish(dev->L));
@@ -574,6 +608,7 @@ static fascia_status device_hessian_apply(fascia_backend *backend, const fascia_
   sc.cg.action = FASCIA_CG_NONE; // as in CG's first iteration: Ad = A z
   FASCIA_TRY(dev->ops->upload(dev->L, dev->sc_dev, &sc, sizeof sc));
   FASCIA_TRY(dev->ops->upload(dev->L, dev->D.z, v, 6 * N * sizeof(fascia_real)));
+  modes_tangent(dev);
   operator_products(dev);
   reduce(dev, FASCIA_T_OPERATOR, (int64_t)N, NULL, NULL, FASCIA_S_STORE);
   return dev->ops->download(dev->L, out, dev->D.Ad, 6 * N * sizeof(fascia_real));
@@ -583,6 +618,7 @@ static fascia_status device_hessian_diagonal(fascia_backend *backend, fascia_rea
   fascia_device *dev = (fascia_device *)backend;
   FASCIA_CHECK(dev->set.precond != FASCIA_PRECOND_NONE, dev->ctx, FASCIA_ERR_ARGUMENT,
                "device: no diagonal blocks without a preconditioner");
+  modes_tangent(dev);
   build_precond(dev);
   return dev->ops->download(dev->L, blocks, dev->D.blocks, 36 * (size_t)dev->frame_count * sizeof(fascia_real));
 }

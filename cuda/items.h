@@ -21,6 +21,7 @@
 #include "point/body.h"
 #include "point/cg.h"
 #include "point/frame.h"
+#include "point/modes.h"
 #include "point/patch.h"
 #include "point/sample.h"
 
@@ -41,6 +42,7 @@ typedef struct fascia_dev_scalars {
   fascia_real sum[4];           ///< last stored reduction
   fascia_real energy_internal, energy_external, phi, gradient_norm2;
   fascia_real inverted, nonfinite; ///< sample counts (exact in double)
+  fascia_real modes_failed;     ///< patches whose enhanced strain modes found no minimum
   fascia_real target_norm;      ///< (h u).M(h u) of the inertia target
   fascia_real scale;            ///< mean absolute tangent diagonal
   fascia_pt_cg cg;              ///< conjugate gradients (point/cg.h)
@@ -76,6 +78,8 @@ typedef struct fascia_dev {
   fascia_real *cache, *sample_energy;               ///< [S * FASCIA_PT_CACHE_SIZE], [S]
   int *sample_flags;                                ///< [S]
   fascia_pt_patches patches;                        ///< volumetric patches (count 0: none); pm.sample_pressure is theirs
+  fascia_pt_modes modes;                            ///< their enhanced strain modes; pm.sample_enhanced is theirs
+  int32_t modes_count;                              ///< patches.count with modes, 0 without
   const fascia_dev_settings *set;
   fascia_dev_scalars *sc;
 } fascia_dev;
@@ -104,6 +108,9 @@ typedef enum fascia_dev_kernel {
   FASCIA_K_ACCEPT_DYNAMIC,   ///< 6N: d = d_trial, g = g_trial
   FASCIA_K_PATCH_EVALUATE,   ///< patches: mean dilatation, energy, pressures, G_e (before the samples' gradient)
   FASCIA_K_PATCH_RATE,       ///< patches: rank-one coefficients of in (skipped when CG is not running)
+  FASCIA_K_MODES_EVALUATE,   ///< patches: enhanced strain modes' amplitudes, enhanced F (before FASCIA_K_PATCH_EVALUATE)
+  FASCIA_K_MODES_TANGENT,    ///< patches: the modes' factors W_e at the last objective's state
+  FASCIA_K_MODES_REDUCE,     ///< patches: the condensed terms' coefficients of in (skipped when CG is not running)
   FASCIA_K_SAVE,             ///< N: saved = the iterate (x_base, q_base, d)
   FASCIA_K_RESTORE,          ///< N: the iterate = saved
   // rigid organs (point/body.h); the operator's three run only inside CG
@@ -293,6 +300,7 @@ static inline FASCIA_HD void fascia_dev_frame_precond_item(const fascia_dev *D, 
   fascia_pt_frame_diagonal_finish(D->A + 9 * (int64_t)i, D->frame_moment + 3 * (int64_t)i, D->gravity,
                                   set->gravity_scale, D->torque + 3 * (int64_t)i, B);
   if (D->patches.count > 0) fascia_pt_patch_frame_diagonal_add(&D->patches, i, B);
+  if (D->modes_count > 0) fascia_pt_modes_frame_diagonal_add(&D->patches, &D->modes, i, B);
   if (set->mass_coefficient != 0) // lumped blocks stand in for consistent ones (precond.c)
     for (int c = 0; c < 36; ++c) B[c] += set->mass_coefficient * D->mass_blocks[36 * (int64_t)i + c];
   for (int c = 0; c < 6; ++c) B[7 * c] += set->shift * D->damping[6 * (int64_t)i + c];
@@ -340,6 +348,7 @@ static inline FASCIA_HD void fascia_dev_frame_operator(const fascia_dev *D, int3
   const int64_t i6 = 6 * (int64_t)i;
   fascia_dev_gather6(D, D->pair_buffer, i, out);
   if (D->patches.count > 0) fascia_pt_patch_frame_add(&D->patches, i, out);
+  if (D->modes_count > 0) fascia_pt_modes_frame_add(&D->patches, &D->modes, i, out);
   fascia_pt_frame_gravity_product(D->A + 9 * (int64_t)i, D->frame_moment + 3 * (int64_t)i, D->gravity,
                                   set->gravity_scale, v + i6, out);
   fascia_pt_frame_symmetrizing_product(D->torque + 3 * (int64_t)i, v + i6, out);
@@ -428,6 +437,20 @@ static inline FASCIA_HD void fascia_dev_item(const fascia_dev *D, int kernel, in
   }
   case FASCIA_K_PATCH_RATE:
     if (D->sc->cg.running) fascia_pt_patch_rate(&D->patches, i32, in);
+    break;
+  case FASCIA_K_MODES_EVALUATE: {
+    const fascia_pt_state st = fascia_dev_state(D);
+    const fascia_pt_model own = fascia_pt_modes_local_model(&D->pm);
+    fascia_pt_modes_evaluate(&own, &st, &D->patches, &D->modes, i32);
+    break;
+  }
+  case FASCIA_K_MODES_TANGENT: {
+    const fascia_pt_state st = fascia_dev_state(D);
+    fascia_pt_modes_tangent(&D->pm, &st, &D->patches, &D->modes, i32, D->cache, D->pair_buffer);
+    break;
+  }
+  case FASCIA_K_MODES_REDUCE:
+    if (D->sc->cg.running) fascia_pt_modes_reduce(&D->patches, &D->modes, i32, in);
     break;
   case FASCIA_K_SAVE:
   case FASCIA_K_RESTORE: fascia_dev_saved_item(D, i32, kernel == FASCIA_K_SAVE); break;
@@ -531,7 +554,10 @@ static inline FASCIA_HD void fascia_dev_term(const fascia_dev *D, int terms, int
     if (D->sc->cg.running) fascia_dev_operator_term(D, (int32_t)i, t);
     break;
   case FASCIA_T_CG_UPDATE: fascia_dev_cg_update_term(D, (int32_t)i, t); break;
-  case FASCIA_T_PATCHES: t[0] = D->patches.energy[i]; break;
+  case FASCIA_T_PATCHES:
+    t[0] = D->patches.energy[i];
+    t[1] = D->modes_count > 0 ? D->modes.failed[i] : 0;
+    break;
   default: break;
   }
 }
@@ -560,7 +586,10 @@ static inline FASCIA_HD void fascia_dev_scalar_step(const fascia_dev *D, int ste
     break;
   }
   case FASCIA_S_TARGET: sc->target_norm = sum[0]; break;
-  case FASCIA_S_PATCHES: sc->energy_internal += sum[0]; break;
+  case FASCIA_S_PATCHES:
+    sc->energy_internal += sum[0];
+    sc->modes_failed = sum[1];
+    break;
   case FASCIA_S_SCALE: {
     const fascia_real n = 6 * (fascia_real)D->frame_count;
     sc->scale = sum[0] > 0 ? sum[0] / n : 1;

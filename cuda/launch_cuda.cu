@@ -51,7 +51,8 @@ static constexpr __host__ __device__ int item_threads(int kernel) {
   return kernel == FASCIA_K_SAMPLE_GRADIENT || kernel == FASCIA_K_SAMPLE_STIFFNESS ||
                  kernel == FASCIA_K_SAMPLE_STIFFNESS_SMOOTHING || kernel == FASCIA_K_SAMPLE_STIFFNESS_PAPER ||
                  kernel == FASCIA_K_PAIR_DIAGONAL || kernel == FASCIA_K_CG_SAMPLE_MASS ||
-                 kernel == FASCIA_K_SAMPLE_MASS || kernel == FASCIA_K_PATCH_EVALUATE
+                 kernel == FASCIA_K_SAMPLE_MASS || kernel == FASCIA_K_PATCH_EVALUATE ||
+                 kernel == FASCIA_K_MODES_EVALUATE || kernel == FASCIA_K_MODES_TANGENT
              ? 128
              : 256;
 }
@@ -367,6 +368,9 @@ static void cuda_kernel(fascia_launcher *L, const fascia_dev *D, fascia_dev_kern
   case FASCIA_K_ACCEPT_DYNAMIC: launch_items<FASCIA_K_ACCEPT_DYNAMIC>(L, D, n, in, out, value); break;
   case FASCIA_K_PATCH_EVALUATE: launch_items<FASCIA_K_PATCH_EVALUATE>(L, D, n, in, out, value); break;
   case FASCIA_K_PATCH_RATE: launch_items<FASCIA_K_PATCH_RATE>(L, D, n, in, out, value); break;
+  case FASCIA_K_MODES_EVALUATE: launch_items<FASCIA_K_MODES_EVALUATE>(L, D, n, in, out, value); break;
+  case FASCIA_K_MODES_TANGENT: launch_items<FASCIA_K_MODES_TANGENT>(L, D, n, in, out, value); break;
+  case FASCIA_K_MODES_REDUCE: launch_items<FASCIA_K_MODES_REDUCE>(L, D, n, in, out, value); break;
   case FASCIA_K_SAVE: launch_items<FASCIA_K_SAVE>(L, D, n, in, out, value); break;
   case FASCIA_K_RESTORE: launch_items<FASCIA_K_RESTORE>(L, D, n, in, out, value); break;
   case FASCIA_K_BODY_EXPAND: launch_items<FASCIA_K_BODY_EXPAND>(L, D, n, in, out, value); break;

@@ -15,6 +15,9 @@
 //     no fixed frame at all (free fall);
 //   - volumetric patches (mean dilatation): random models, and the cantilever
 //     at nu = 0.49 in cell patches, in steps and static;
+//   - their enhanced strain modes (sim/src/modes.h): random models with
+//     coupling and smoothing, both laws, and the tetrahedral cantilever with
+//     its modes (fascia beam's default) in steps and static;
 //   - every run's sample strain and stress (the patches' pressure included);
 //   - rigid organs (the reduction P^T A P, sim/point/body.h): a rigid organ
 //     hanging from the tissue under gravity, in steps and static, and a
@@ -45,6 +48,9 @@ int main(int argc, char **argv) {
     random_model_patches(m); // the same in volumetric patches (mean dilatation)
     RUN(check_operators(ctx, law ? "random model in patches, Neo-Hookean" : "random model in patches, StVK", m,
                         97 + law));
+    for (int32_t s = 0; s < m->sample_count; ++s) m->sample_modes[s] = 1; // and their enhanced strain modes
+    RUN(check_operators(ctx, law ? "random model, patches with modes, Neo-Hookean" : "random model, patches with modes, StVK",
+                        m, 95 + law));
     fascia_model_destroy(&m);
   }
   // many neighbours: meshless beams, 20 and 80 frames per sample (no
@@ -112,6 +118,18 @@ int main(int argc, char **argv) {
   bd.poisson_ratio = 0.3; // at 0.49 CG stalls short of the static tolerance
   CHECK_OK(fascia_scene_beam_build(ctx, &bd, &m), ctx);
   RUN(check_run(ctx, "stiff cantilever in cell patches, nu 0.3, static", m, statics, 0, TOL_STEP, 0));
+  fascia_model_destroy(&m);
+  // tetrahedral, its cells' patches with enhanced strain modes
+  bd.shape = FASCIA_SCENE_TET;
+  bd.enhanced_modes = 1;
+  CHECK_OK(fascia_scene_beam_build(ctx, &bd, &m), ctx);
+  RUN(check_run(ctx, "stiff tet cantilever with enhanced modes, nu 0.3, static", m, statics, 0, TOL_STEP, 0));
+  fascia_model_destroy(&m);
+  bd.youngs_modulus = fascia_scene_beam_def_default().youngs_modulus;
+  bd.poisson_ratio = 0.45;
+  CHECK_OK(fascia_scene_beam_build(ctx, &bd, &m), ctx);
+  RUN(check_operators(ctx, "tet cantilever with enhanced modes, nu 0.45", m, 6));
+  RUN(check_run(ctx, "tet cantilever with enhanced modes, nu 0.45, 3 steps", m, def, 3, TOL_STEP, 0));
   fascia_model_destroy(&m);
   bd = fascia_scene_beam_def_default();
   bd.frames[0] = 10, bd.frames[1] = 2, bd.frames[2] = 2;

@@ -107,12 +107,12 @@ static fascia_status make_patches(fascia_ctx *ctx, const fascia_prep_scene *scen
   return status;
 }
 
-// Enhanced strain modes (docs/mechanics.md) on the patches of tetrahedral
-// regions: sample_modes holds 1 for the samples of such regions until the
-// patches are made; a patch keeps its modes where all its samples are so
-// (a patch that also holds samples of a meshless region of the same material
-// has none: their weights already vary the strain across it).
-static fascia_status modes_on_tet_patches(fascia_ctx *ctx, fascia_model *m) {
+// Enhanced strain modes (docs/mechanics.md) on the patches of the regions
+// that ask for them (by default the tetrahedral ones): sample_modes holds 1
+// for the samples of such regions until the patches are made; a patch keeps
+// its modes where all its samples ask (a patch that also holds samples of a
+// meshless region of the same material has none).
+static fascia_status modes_on_patches(fascia_ctx *ctx, fascia_model *m) {
   const int32_t S = m->sample_count;
   signed char *all_tet = malloc((size_t)S + 1);
   PREP_CHECK(all_tet, ctx, FASCIA_ERR_MEMORY, "package: out of memory");
@@ -161,6 +161,7 @@ static cJSON *provenance(const fascia_prep_scene *scene, const fascia_prep_meshe
       cJSON_AddStringToObject(e, "shape_functions", d->shape_kind == FASCIA_PREP_SHAPE_TET ? "tet" : "mls");
       cJSON_AddNumberToObject(e, "neighbours", d->neighbours);
       if (d->shape_kind == FASCIA_PREP_SHAPE_TET) cJSON_AddNumberToObject(e, "samples_per_tet", d->samples_per_tet);
+      cJSON_AddBoolToObject(e, "enhanced_modes", d->enhanced_modes);
       cJSON_AddNumberToObject(e, "min_component", d->min_component);
       cJSON_AddNumberToObject(e, "patch_radius", region_patch_radius(scene, d->material, d->patch_radius, d->frame_spacing));
     }
@@ -206,6 +207,7 @@ static cJSON *provenance(const fascia_prep_scene *scene, const fascia_prep_meshe
     cJSON_AddStringToObject(e, "shape_functions", td->shape_kind == FASCIA_PREP_SHAPE_TET ? "tet" : "mls");
     cJSON_AddNumberToObject(e, "neighbours", td->neighbours);
     if (td->shape_kind == FASCIA_PREP_SHAPE_TET) cJSON_AddNumberToObject(e, "samples_per_tet", td->samples_per_tet);
+    cJSON_AddBoolToObject(e, "enhanced_modes", td->enhanced_modes);
     cJSON_AddNumberToObject(e, "coupling_tolerance", td->coupling_tolerance);
     cJSON_AddNumberToObject(e, "min_component", td->min_component);
     cJSON_AddNumberToObject(e, "patch_radius", region_patch_radius(scene, td->material, td->patch_radius, td->frame_spacing));
@@ -559,9 +561,9 @@ fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_scene *scen
     m->sample_material[s] = points->sample_tissue[s] >= 0 ? scene->tissues[points->sample_tissue[s]].material
                                                           : scene->organs[points->sample_inside_organ[s]].material;
     m->sample_organ[s] = points->sample_inside_organ[s]; // model organs are the scene's, in order
-    const int32_t shape = points->sample_tissue[s] >= 0 ? scene->tissues[points->sample_tissue[s]].shape_kind
-                                                        : scene->organs[points->sample_inside_organ[s]].shape_kind;
-    m->sample_modes[s] = shape == FASCIA_PREP_SHAPE_TET; // settled on the patches below
+    m->sample_modes[s] = points->sample_tissue[s] >= 0 // settled on the patches below
+                             ? scene->tissues[points->sample_tissue[s]].enhanced_modes
+                             : scene->organs[points->sample_inside_organ[s]].enhanced_modes;
   }
   for (int32_t i = 0; i < points->frame_count; ++i) m->frame_organ[i] = points->frame_inside_organ[i];
   memcpy(m->sample_offsets, weights->sample_offsets, ((size_t)points->sample_count + 1) * sizeof(int32_t));
@@ -574,7 +576,7 @@ fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_scene *scen
   PREP_CHECK_GOTO(dropped, ctx, FASCIA_ERR_MEMORY, "package: out of memory");
   PREP_TRY_GOTO(drop_unheld(ctx, scene, points, &m, dropped));
   PREP_TRY_GOTO(make_patches(ctx, scene, m));
-  PREP_TRY_GOTO(modes_on_tet_patches(ctx, m));
+  PREP_TRY_GOTO(modes_on_patches(ctx, m));
   PREP_TRY_GOTO(prep_tissue_surface(ctx, scene, volume, &m->tissue_surface));
   // provenance (its counts are those before the unheld pieces were dropped)
   prov = provenance(scene, meshes, volume, points, weights, coupling, info);

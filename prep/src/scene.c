@@ -192,6 +192,21 @@ static fascia_status get_int(const reader *rd, const cJSON *obj, const char *pat
   return FASCIA_OK;
 }
 
+// A boolean (true or false), fallback when absent.
+static fascia_status get_bool(const reader *rd, const cJSON *obj, const char *path, const char *key, int fallback,
+                              int *out) {
+  char at[PATH_SIZE];
+  sub_key(at, path, key);
+  const cJSON *item = cJSON_GetObjectItemCaseSensitive(obj, key);
+  if (!item) {
+    *out = fallback;
+    return FASCIA_OK;
+  }
+  if (!cJSON_IsBool(item)) return key_fail(rd, at, "expected true or false, found %s", type_name(item));
+  *out = cJSON_IsTrue(item);
+  return FASCIA_OK;
+}
+
 // A string; *out points into the JSON tree (NULL when absent and optional).
 static fascia_status get_string(const reader *rd, const cJSON *obj, const char *path, const char *key, int required,
                                 const char **out) {
@@ -393,12 +408,13 @@ static fascia_status parse_motion(const reader *rd, const cJSON *organ, const ch
 }
 
 // The sampling keys a tissue and a deformable organ share: frame_spacing,
-// sample_spacing, shape_functions {kind, neighbours, samples_per_tet},
-// min_component (default frame_spacing^3).
+// sample_spacing, shape_functions {kind, neighbours, samples_per_tet,
+// enhanced_modes (default: true for tet)}, min_component (default
+// frame_spacing^3).
 static fascia_status parse_sampling(const reader *rd, const fascia_prep_scene *scene, const cJSON *item,
                                     const char *path, double *frame_spacing, double *sample_spacing,
                                     int32_t *shape_kind, int32_t *neighbours, int32_t *samples_per_tet,
-                                    double *min_component, double *patch_radius) {
+                                    int32_t *enhanced_modes, double *min_component, double *patch_radius) {
   char at[PATH_SIZE];
   PREP_TRY(get_number(rd, item, path, "frame_spacing", 1, 0, 0, 0, INFINITY, frame_spacing));
   PREP_TRY(get_number(rd, item, path, "sample_spacing", 1, 0, 0, 0, INFINITY, sample_spacing));
@@ -417,10 +433,11 @@ static fascia_status parse_sampling(const reader *rd, const fascia_prep_scene *s
   *shape_kind = FASCIA_PREP_SHAPE_MLS;
   *neighbours = 8;
   *samples_per_tet = 4;
+  *enhanced_modes = 0;
   const cJSON *shape = cJSON_GetObjectItemCaseSensitive(item, "shape_functions");
   if (shape) {
     sub_key(at, path, "shape_functions");
-    static const char *const known_s[] = {"kind", "neighbours", "samples_per_tet", NULL};
+    static const char *const known_s[] = {"kind", "neighbours", "samples_per_tet", "enhanced_modes", NULL};
     PREP_TRY(check_keys(rd, shape, at, known_s));
     const char *kind;
     PREP_TRY(get_string(rd, shape, at, "kind", 0, &kind));
@@ -441,6 +458,9 @@ static fascia_status parse_sampling(const reader *rd, const fascia_prep_scene *s
       return key_fail(rd, kk, "%d is not a tetrahedron rule (expected 4: degree 2, or 1: the centroid)", count);
     }
     *samples_per_tet = count;
+    int modes = 0;
+    PREP_TRY(get_bool(rd, shape, at, "enhanced_modes", *shape_kind == FASCIA_PREP_SHAPE_TET, &modes));
+    *enhanced_modes = modes;
   }
   const double fs = *frame_spacing;
   PREP_TRY(get_number(rd, item, path, "min_component", 0, fs * fs * fs, 0, 1, INFINITY, min_component));
@@ -713,7 +733,7 @@ static fascia_status parse_organ(const reader *rd, fascia_prep_scene *scene, con
     o->material = material_index(scene, material);
     if (o->material < 0) return key_fail(rd, at, "no material is named '%s' in \"materials\"", material);
     return parse_sampling(rd, scene, item, path, &o->frame_spacing, &o->sample_spacing, &o->shape_kind,
-                          &o->neighbours, &o->samples_per_tet, &o->min_component, &o->patch_radius);
+                          &o->neighbours, &o->samples_per_tet, &o->enhanced_modes, &o->min_component, &o->patch_radius);
   }
   if (material) return key_fail(rd, at, "only a \"deformable\" organ takes a material");
   static const char *const sampling_keys[] = {"frame_spacing", "sample_spacing", "shape_functions", "min_component",
@@ -833,7 +853,7 @@ static fascia_status parse_tissue(const reader *rd, const fascia_prep_scene *sce
   sub_key(at, path, "material");
   if (t->material < 0) return key_fail(rd, at, "no material is named '%s' in \"materials\"", material);
   PREP_TRY(parse_sampling(rd, scene, item, path, &t->frame_spacing, &t->sample_spacing, &t->shape_kind,
-                          &t->neighbours, &t->samples_per_tet, &t->min_component, &t->patch_radius));
+                          &t->neighbours, &t->samples_per_tet, &t->enhanced_modes, &t->min_component, &t->patch_radius));
   t->coupling_tolerance = scene->voxel_size;
   const cJSON *coupling = cJSON_GetObjectItemCaseSensitive(item, "coupling");
   if (coupling) {

@@ -135,7 +135,7 @@ static inline FASCIA_HD int fascia_pt_modes_inverse(const fascia_pt_modes *md, i
 /// m is the model without pressures or modes (the patch's pressure follows
 /// the amplitudes here).
 static inline FASCIA_HD void fascia_pt_modes_evaluate(const fascia_pt_model *m, const fascia_pt_state *st,
-                                                      const fascia_pt_patches *t, fascia_pt_modes *md, int32_t p) {
+                                                      const fascia_pt_patches *t, const fascia_pt_modes *md, int32_t p) {
   md->failed[p] = 0;
   if (!md->active[p]) return; // a patch without modes keeps its zero enhanced F
   fascia_real a[9] = {0}, trial[9], step[9], r[9], r_trial[9], H[81], inverse[81], e, e_trial;
@@ -211,7 +211,7 @@ static inline FASCIA_HD void fascia_pt_modes_evaluate(const fascia_pt_model *m, 
 /// rank-one term, into the factors W_e. pair_scratch: [6P] rows, each
 /// sample's own part written (where the rotation coupling acts).
 static inline FASCIA_HD void fascia_pt_modes_tangent(const fascia_pt_model *m, const fascia_pt_state *st,
-                                                     const fascia_pt_patches *t, fascia_pt_modes *md, int32_t p,
+                                                     const fascia_pt_patches *t, const fascia_pt_modes *md, int32_t p,
                                                      const fascia_real *cache, fascia_real *pair_scratch) {
   if (!md->active[p]) return; // its factors stay zero
   fascia_real K[81] = {0}, g[9] = {0};
@@ -283,7 +283,7 @@ static inline FASCIA_HD void fascia_pt_modes_tangent(const fascia_pt_model *m, c
 
 /// The condensed term's coefficient of patch p for the direction v [6N]:
 /// reduced_p = W_p^T v (= L^-1 K_au v).
-static inline FASCIA_HD void fascia_pt_modes_reduce(const fascia_pt_patches *t, fascia_pt_modes *md, int32_t p,
+static inline FASCIA_HD void fascia_pt_modes_reduce(const fascia_pt_patches *t, const fascia_pt_modes *md, int32_t p,
                                                     const fascia_real *v) {
   fascia_real y[9] = {0};
   for (int32_t e = md->active[p] ? t->support_offsets[p] : 0; e < (md->active[p] ? t->support_offsets[p + 1] : 0); ++e) {
@@ -321,6 +321,26 @@ static inline FASCIA_HD void fascia_pt_modes_block_add(const fascia_pt_patches *
       for (int k = 0; k < 9; ++k) sum += We[9 * a + k] * Wf[9 * b + k];
       B[6 * a + b] -= sum;
     }
+}
+
+/// B -= frame i's 6x6 diagonal block of the condensed terms: sum over its
+/// entries of W_e W_e^T.
+static inline FASCIA_HD void fascia_pt_modes_frame_diagonal_add(const fascia_pt_patches *t, const fascia_pt_modes *md,
+                                                                int32_t i, fascia_real *B) {
+  for (int32_t r = t->frame_entry_offsets[i]; r < t->frame_entry_offsets[i + 1]; ++r) {
+    const int32_t e = t->frame_entries[r];
+    fascia_pt_modes_block_add(t, md, e, e, B);
+  }
+}
+
+/// The model as patch p's local solve reads it: without the patches'
+/// pressures (the solve brings its own) and without the modes' enhanced F
+/// (it adds the amplitudes it tries).
+static inline FASCIA_HD fascia_pt_model fascia_pt_modes_local_model(const fascia_pt_model *m) {
+  fascia_pt_model own = *m;
+  own.sample_pressure = (const fascia_real *)0;
+  own.sample_enhanced = (const fascia_real *)0;
+  return own;
 }
 
 #endif

@@ -93,10 +93,7 @@ fascia_status fascia_modes_create(fascia_system *sys, fascia_modes **out) {
 
 int32_t fascia_modes_evaluate(fascia_system *sys, fascia_modes *md) {
   const fascia_pt_state st = {sys->x, sys->A};
-  // the local problem brings its own pressure and enhanced part
-  fascia_pt_model own = sys->pm;
-  own.sample_pressure = NULL;
-  own.sample_enhanced = NULL;
+  const fascia_pt_model own = fascia_pt_modes_local_model(&sys->pm);
   const fascia_pt_patches *t = &sys->dilatation->view;
 #pragma omp parallel for num_threads(sys->threads) schedule(dynamic, 4)
   for (int32_t p = 0; p < t->count; ++p) fascia_pt_modes_evaluate(&own, &st, t, &md->view, p);
@@ -130,9 +127,5 @@ void fascia_modes_diagonal_add(const fascia_system *sys, fascia_modes *md, fasci
   fascia_modes_tangent(sys, md);
   const fascia_pt_patches *t = &sys->dilatation->view;
 #pragma omp parallel for num_threads(sys->threads) schedule(static)
-  for (int32_t i = 0; i < sys->frame_count; ++i)
-    for (int32_t r = t->frame_entry_offsets[i]; r < t->frame_entry_offsets[i + 1]; ++r) {
-      const int32_t e = t->frame_entries[r];
-      fascia_pt_modes_block_add(t, &md->view, e, e, blocks + 36 * (int64_t)i);
-    }
+  for (int32_t i = 0; i < sys->frame_count; ++i) fascia_pt_modes_frame_diagonal_add(t, &md->view, i, blocks + 36 * (int64_t)i);
 }
