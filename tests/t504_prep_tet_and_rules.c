@@ -8,9 +8,13 @@
 // detail); a sphere region keeps every
 // sample inside it; coupling switched off for organ A shares no frame with A
 // (its surface frames stay free), coupling limited to a box for B shares
-// only frames inside the box.
+// only frames inside the box. At nu = 0.3 the tetrahedra's volumetric
+// patches carry enhanced strain modes (shape_functions.enhanced_modes,
+// default true for tet; docs/mechanics.md); with the key false they carry
+// none, and a key that is not a boolean is refused naming it.
 #define _POSIX_C_SOURCE 200809L // mkdtemp
 #include <math.h>
+#include <string.h>
 
 #include "check.h"
 #include "prep_fixture.h"
@@ -83,7 +87,34 @@ int main(void) {
     ++shared_b;
   }
   CHECK(on_a_surface > 0 && shared_b > 0 && r.coupling->per_organ[0] == 0);
+  int32_t with_modes = 0;
+  for (int32_t s = 0; s < m->sample_count; ++s) with_modes += m->sample_patch[s] >= 0 && m->sample_modes[s] == 1;
+  CHECK(with_modes == m->sample_count);
   fixture_free(&r);
+  // the key off: patches without modes; not a boolean: refused
+  char text[sizeof scene + 64];
+  const char *at = strstr(scene, "{\"kind\": \"tet\"}");
+  CHECK(at != NULL);
+  for (int k = 0; k < 2 && at; ++k) {
+    snprintf(text, sizeof text, "%.*s{\"kind\": \"tet\", \"enhanced_modes\": %s}%s", (int)(at - scene), scene,
+             k ? "1" : "false", at + strlen("{\"kind\": \"tet\"}"));
+    CHECK(fixture_two_boxes(dir, 0.0031, text, path));
+    if (k) {
+      CHECK(fixture_prep(ctx, path, &r) == FASCIA_ERR_FORMAT);
+      CHECK(strstr(fascia_ctx_message(ctx), "shape_functions.enhanced_modes") &&
+            strstr(fascia_ctx_message(ctx), "expected true or false"));
+      printf("t504: %s\n", fascia_ctx_message(ctx));
+      continue;
+    }
+    CHECK_OK(fixture_prep(ctx, path, &r), ctx);
+    int32_t patched = 0, moded = 0;
+    for (int32_t s = 0; r.model && s < r.model->sample_count; ++s) {
+      patched += r.model->sample_patch[s] >= 0;
+      moded += r.model->sample_modes[s];
+    }
+    CHECK(patched > 0 && moded == 0);
+    fixture_free(&r);
+  }
   fascia_ctx_destroy(&ctx);
   static const char *const files[] = {"a.obj", "b.obj", "scene.json", NULL};
   fixture_cleanup(dir, files);
