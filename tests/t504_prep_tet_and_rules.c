@@ -10,8 +10,9 @@
 // (its surface frames stay free), coupling limited to a box for B shares
 // only frames inside the box. At nu = 0.3 the tetrahedra's volumetric
 // patches carry enhanced strain modes (shape_functions.enhanced_modes,
-// default true for tet; docs/mechanics.md); with the key false they carry
-// none, and a key that is not a boolean is refused naming it.
+// default true for tet with 4 samples per tetrahedron; docs/mechanics.md);
+// with the key false, or the centroid rule, they carry none, and a key
+// that is not a boolean is refused naming it.
 #define _POSIX_C_SOURCE 200809L // mkdtemp
 #include <math.h>
 #include <string.h>
@@ -95,11 +96,12 @@ int main(void) {
   char text[sizeof scene + 64];
   const char *at = strstr(scene, "{\"kind\": \"tet\"}");
   CHECK(at != NULL);
-  for (int k = 0; k < 2 && at; ++k) {
-    snprintf(text, sizeof text, "%.*s{\"kind\": \"tet\", \"enhanced_modes\": %s}%s", (int)(at - scene), scene,
-             k ? "1" : "false", at + strlen("{\"kind\": \"tet\"}"));
+  static const char *const variants[] = {"\"enhanced_modes\": false", "\"samples_per_tet\": 1", "\"enhanced_modes\": 1"};
+  for (int k = 0; k < 3 && at; ++k) {
+    snprintf(text, sizeof text, "%.*s{\"kind\": \"tet\", %s}%s", (int)(at - scene), scene, variants[k],
+             at + strlen("{\"kind\": \"tet\"}"));
     CHECK(fixture_two_boxes(dir, 0.0031, text, path));
-    if (k) {
+    if (k == 2) {
       CHECK(fixture_prep(ctx, path, &r) == FASCIA_ERR_FORMAT);
       CHECK(strstr(fascia_ctx_message(ctx), "shape_functions.enhanced_modes") &&
             strstr(fascia_ctx_message(ctx), "expected true or false"));

@@ -409,8 +409,8 @@ static fascia_status parse_motion(const reader *rd, const cJSON *organ, const ch
 
 // The sampling keys a tissue and a deformable organ share: frame_spacing,
 // sample_spacing, shape_functions {kind, neighbours, samples_per_tet,
-// enhanced_modes (default: true for tet)}, min_component (default
-// frame_spacing^3).
+// enhanced_modes (default: true for tet with 4 samples per tetrahedron)},
+// min_component (default frame_spacing^3).
 static fascia_status parse_sampling(const reader *rd, const fascia_prep_scene *scene, const cJSON *item,
                                     const char *path, double *frame_spacing, double *sample_spacing,
                                     int32_t *shape_kind, int32_t *neighbours, int32_t *samples_per_tet,
@@ -459,7 +459,8 @@ static fascia_status parse_sampling(const reader *rd, const fascia_prep_scene *s
     }
     *samples_per_tet = count;
     int modes = 0;
-    PREP_TRY(get_bool(rd, shape, at, "enhanced_modes", *shape_kind == FASCIA_PREP_SHAPE_TET, &modes));
+    // by default on the tetrahedra's degree-2 rule (the centroid rule is soft already)
+    PREP_TRY(get_bool(rd, shape, at, "enhanced_modes", *shape_kind == FASCIA_PREP_SHAPE_TET && count == 4, &modes));
     *enhanced_modes = modes;
   }
   const double fs = *frame_spacing;

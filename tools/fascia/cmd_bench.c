@@ -78,8 +78,9 @@ static const char bench_usage[] =
     "  --nu LIST                  Poisson ratios with a converged reference: 0.3, 0.45, 0.49 (default 0.3)\n"
     "  --volumetric LIST          auto (cell patches from nu = 0.3, as fascia beam), full, cell, frame\n"
     "                             (default auto; docs/mechanics.md, \"Volumetric locking\")\n"
-    "  --modes LIST               enhanced strain modes on the patches: auto (on for tet, as fascia\n"
-    "                             beam), on, off (default auto; docs/mechanics.md)\n";
+    "  --modes LIST               enhanced strain modes on the patches: auto (on for tet with 4\n"
+    "                             samples per tetrahedron, as fascia beam), on, off (default auto;\n"
+    "                             docs/mechanics.md)\n";
 
 #define PAPER_WARMUP_STEPS 2
 #define PAPER_CG_ITERATIONS 60

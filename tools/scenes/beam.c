@@ -307,7 +307,8 @@ fascia_status fascia_scene_beam_build(fascia_ctx *ctx, const fascia_scene_beam_d
     resolved.volumetric_patch =
         resolved.poisson_ratio >= FASCIA_PATCH_MIN_POISSON ? FASCIA_SCENE_PATCH_CELL : FASCIA_SCENE_PATCH_NONE;
   if (resolved.enhanced_modes < 0)
-    resolved.enhanced_modes = resolved.shape == FASCIA_SCENE_TET && resolved.volumetric_patch != FASCIA_SCENE_PATCH_NONE;
+    resolved.enhanced_modes = resolved.shape == FASCIA_SCENE_TET && resolved.samples_per_tet == 4 &&
+                              resolved.volumetric_patch != FASCIA_SCENE_PATCH_NONE;
   def = &resolved;
   int32_t samples = 0, per_sample = 0;
   fascia_status status = check_beam(ctx, def, &samples, &per_sample);

@@ -79,7 +79,8 @@ typedef struct fascia_scene_beam_def {
   fascia_real patch_radius; ///< PATCH_POISSON: radius of the patches, m (default 0.5)
   /// Enhanced strain modes on the patches (fascia_model.enhanced_modes,
   /// docs/mechanics.md): 1 on (needs patches), 0 off, -1 auto (on for TET
-  /// with patches: the rule of fascia beam). Default 0.
+  /// with 4 samples per tetrahedron and patches: the rule of fascia beam;
+  /// the centroid rule is soft already). Default 0.
   int32_t enhanced_modes;
   fascia_real gravity[3];         ///< m/s^2; default (0, 0, -9.81)
   int cookie_;                    ///< private: set by fascia_scene_beam_def_default

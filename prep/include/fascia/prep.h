@@ -97,7 +97,7 @@ typedef struct fascia_prep_organ_def {
   int32_t shape_kind;         ///< fascia_prep_shape_kind
   int32_t neighbours;         ///< frames per sample (MLS), >= 4
   int32_t samples_per_tet;    ///< TET: quadrature points per tetrahedron, 4 (degree 2) or 1 (centroid)
-  int32_t enhanced_modes;     ///< 1: its volumetric patches carry enhanced strain modes (default for TET)
+  int32_t enhanced_modes;     ///< 1: its volumetric patches carry enhanced strain modes (default: TET, 4 per tet)
   fascia_real min_component;  ///< pieces of the inside smaller than this are dropped, m^3
   /// Radius of the volumetric patches (mean dilatation, docs/mechanics.md), m;
   /// 0: none; FASCIA_PREP_PATCH_AUTO: by the rule of fascia_prep_patch_radius.
@@ -129,7 +129,8 @@ typedef struct fascia_prep_tissue_def {
   int32_t samples_per_tet;   ///< TET: quadrature points per tetrahedron, 4 (degree 2) or 1 (centroid)
   /// 1: its volumetric patches carry nine enhanced strain modes each, the
   /// cure of the tetrahedra's stiffness in bending (docs/mechanics.md);
-  /// scene key shape_functions.enhanced_modes, default true for TET
+  /// scene key shape_functions.enhanced_modes, default true for TET with 4
+  /// samples per tetrahedron
   int32_t enhanced_modes;
   fascia_real coupling_tolerance; ///< frames this close to an organ surface are shared, m
   int32_t coupling_count;
