@@ -8,12 +8,15 @@
 # displacement at equilibrium (volume-weighted over samples, `fascia run
 # --json` displacement.mean) against the finest resolution. Writes CSV on
 # stdout (or to $1). NU sets the tissue's Poisson ratio, PATCH the radius of
-# its volumetric patches per frame spacing (0: none; unset: prep's default).
+# its volumetric patches per frame spacing (0: none; unset: prep's default),
+# SCENE another pelvis scene of data/scenes (pelvis-female-tet.json: the
+# tetrahedral shape functions), MODES=false its tetrahedra's patches
+# without enhanced strain modes (unset: prep's default, with).
 # Needs a build with prep (build/tools/fascia, or FASCIA=path).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/../.." && pwd)"
 fascia="${FASCIA:-$root/build/tools/fascia}"
-scene="$root/data/scenes/pelvis-female.json"
+scene="$root/data/scenes/${SCENE:-pelvis-female.json}"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 out="${1:-/dev/stdout}"
@@ -21,6 +24,7 @@ spacings="${SPACINGS:-0.008 0.006 0.005 0.004 0.003}" # m, coarse to fine; the l
 ratio="${RATIO:-3}"                                       # frame spacing / sample spacing
 nu="${NU:-}"                                              # Poisson ratio of the tissue (default: the scene's, 0.4)
 patch="${PATCH:-}"                                        # patch radius / frame spacing (default: prep's rule; 0: none)
+modes="${MODES:-}"                                        # tet: enhanced strain modes, true or false (default: prep's)
 rows=()
 # the first number under "key" in a JSON file (the top-level keys come first)
 value() { tr -d '\n ' < "$1" | grep -o "\"$2\":[-0-9.e+]*" | head -n 1 | sed 's/.*://'; }
@@ -32,6 +36,7 @@ for h in $spacings; do
   sed -e "s|\"frame_spacing\": [0-9.e-]*|\"frame_spacing\": $h$extra|" \
       -e "s|\"poisson_ratio\": [0-9.e-]*|\"poisson_ratio\": ${nu:-0.4}|" \
       -e "s|\"sample_spacing\": [0-9.e-]*|\"sample_spacing\": $half|" \
+      -e "s|\"samples_per_tet\": \([0-9]\)}|\"samples_per_tet\": \1${modes:+, \"enhanced_modes\": $modes}}|" \
       -e "s|\"\.\./meshes/|\"$root/data/meshes/|g" "$scene" > "$work/scene-$h.json"
   t0=$(date +%s.%N)
   "$fascia" prep "$work/scene-$h.json" -o "$work/model-$h.h5" --json > "$work/prep-$h.json" 2>/dev/null
