@@ -440,11 +440,16 @@ static fascia_status collect_tetrahedra(fascia_ctx *ctx, const fascia_prep_point
 // Tissue that no fixed or prescribed organ holds, directly or through other
 // tissue, a deformable or a rigid organ, would fall for ever in the simulation
 // (the model loader refuses it). Such pieces are dropped and listed in
-// `dropped` (one object each); a tissue left with nothing is refused.
+// `dropped` (one object each); a tissue left with nothing is refused. A free
+// frame that no sample weighs on (a tetrahedral region's frame whose
+// tetrahedra all lie outside the region) and that couples to no organ carries
+// nothing, and the solver refuses a free frame without mass: those go too,
+// counted in *empty.
 static fascia_status drop_unheld(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_points *pts,
-                                 fascia_model **mp, cJSON *dropped) {
+                                 fascia_model **mp, cJSON *dropped, int32_t *empty) {
   fascia_model *m = *mp;
   const int32_t N = m->frame_count;
+  *empty = 0;
   int32_t *frame_piece = malloc(((size_t)N + 1) * sizeof *frame_piece);
   fascia_model_piece *pieces = malloc(((size_t)N + 1) * sizeof *pieces);
   double *kept = calloc((size_t)scene->tissue_count + 1, sizeof *kept);
@@ -453,7 +458,19 @@ static fascia_status drop_unheld(fascia_ctx *ctx, const fascia_prep_scene *scene
   int32_t count = 0;
   PREP_CHECK_GOTO(frame_piece && pieces && kept && lost, ctx, FASCIA_ERR_MEMORY, "package: out of memory");
   PREP_TRY_GOTO(fascia_model_floating_components(ctx, m, frame_piece, pieces, N, &count));
-  if (count == 0) goto cleanup;
+  {
+    unsigned char *used = calloc((size_t)N + 1, 1); // weighed on by a sample, or coupled to an organ
+    PREP_CHECK_GOTO(used, ctx, FASCIA_ERR_MEMORY, "package: out of memory");
+    for (int32_t k = 0; k < m->pair_count; ++k) used[m->pair_frame[k]] = 1;
+    for (int32_t c = 0; c < m->coupling_count; ++c) used[m->coupling_frame[c]] = 1;
+    for (int32_t i = 0; i < N; ++i)
+      if (m->frame_kind[i] == FASCIA_FRAME_FREE && !used[i] && frame_piece[i] < 0) {
+        frame_piece[i] = count; // any piece number drops it (compact keeps -1 only)
+        ++*empty;
+      }
+    free(used);
+  }
+  if (count == 0 && *empty == 0) goto cleanup;
   for (int32_t s = 0; s < m->sample_count; ++s) {
     const int32_t t = pts->sample_tissue[s];
     if (t < 0) continue;
@@ -499,6 +516,7 @@ fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_scene *scen
   fascia_model *m = NULL;
   cJSON *prov = NULL, *dropped = NULL;
   char *prov_text = NULL;
+  int32_t empty_frames = 0;
   int32_t motions = 0;
   for (int32_t o = 0; o < scene->organ_count; ++o) motions += scene->organs[o].kind == FASCIA_ORGAN_PRESCRIBED;
   fascia_model_sizes z;
@@ -574,7 +592,7 @@ fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_scene *scen
   PREP_TRY_GOTO(collect_tetrahedra(ctx, points, m));
   dropped = cJSON_CreateArray();
   PREP_CHECK_GOTO(dropped, ctx, FASCIA_ERR_MEMORY, "package: out of memory");
-  PREP_TRY_GOTO(drop_unheld(ctx, scene, points, &m, dropped));
+  PREP_TRY_GOTO(drop_unheld(ctx, scene, points, &m, dropped, &empty_frames));
   PREP_TRY_GOTO(make_patches(ctx, scene, m));
   PREP_TRY_GOTO(modes_on_patches(ctx, m));
   PREP_TRY_GOTO(prep_tissue_surface(ctx, scene, volume, &m->tissue_surface));
@@ -583,6 +601,7 @@ fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_scene *scen
   cJSON *reports = prov ? cJSON_GetObjectItem(prov, "reports") : NULL;
   PREP_CHECK_GOTO(reports, ctx, FASCIA_ERR_MEMORY, "package: out of memory for the provenance");
   cJSON_AddItemToObject(reports, "unheld_pieces_dropped", dropped);
+  cJSON_AddNumberToObject(reports, "frames_without_samples_dropped", empty_frames);
   dropped = NULL;
   prov_text = prov ? cJSON_PrintUnformatted(prov) : NULL;
   PREP_CHECK_GOTO(prov_text, ctx, FASCIA_ERR_MEMORY, "package: out of memory for the provenance");
