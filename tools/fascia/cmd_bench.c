@@ -233,6 +233,11 @@ static int parse_options(int argc, char **argv, bench_options *opt) {
     }
   }
   if (opt->sweep) opt->cantilever = 1;
+  for (int a = 0; a < opt->modes.count; ++a) // modes live on patches: refused before any row runs
+    for (int b = 0; b < opt->volumetric.count; ++b)
+      if (opt->modes.real[a] == MODES_ON && opt->volumetric.real[b] == FASCIA_SCENE_PATCH_NONE)
+        return cli_usage_error("bench", "%s",
+                               "--modes on needs volumetric patches: it cannot go with --volumetric full");
   if (opt->table) opt->paper_all = 1;
   if (!opt->list && !opt->paper_all && !opt->large_all && !opt->cantilever && !opt->row_count) opt->paper_all = 1;
   const int paper = opt->paper_all || opt->large_all || opt->row_count;
