@@ -76,12 +76,17 @@ static inline FASCIA_HD int fascia_pt_modes_local(const fascia_pt_model *m, cons
       dF[k] = xi[k % 3];
       fascia_pt_sample_F_response(m, st, s, cache, dF, (fascia_real *)0, dP);
       fascia_pt_dilatation_diff_add(law, 1, F, dF, dd);
-      for (int j = 0; j < 9; ++j) {
+      for (int j = 0; j <= k; ++j) { // the upper triangle; both are symmetric
         H[9 * j + k] += v * xi[j % 3] * dP[j];
         D[9 * j + k] += v * xi[j % 3] * dd[j];
       }
     }
   }
+  for (int k = 0; k < 9 && H; ++k)
+    for (int j = 0; j < k; ++j) {
+      H[9 * k + j] = H[9 * j + k];
+      D[9 * k + j] = D[9 * j + k];
+    }
   const fascia_real theta = sum / t->volume[p], pressure = t->lambda[p] * theta, c = t->lambda[p] / t->volume[p];
   e += FASCIA_R(0.5) * t->volume[p] * pressure * theta;
   for (int j = 0; j < 9; ++j) {
