@@ -146,15 +146,12 @@ static inline FASCIA_HD void fascia_pt_modes_evaluate(const fascia_pt_model *m, 
   fascia_real a[9] = {0}, trial[9], step[9], r[9], r_trial[9], H[81], inverse[81], e, e_trial;
   fascia_real last_change = 0, shrink = 1;
   int failed = 1, fresh = 1;
-  // the rounding error of the patch's energy, J (as the Newton solver's
-  // energy_roundoff): StVK's energy loses the digits of F^T F near rest, so
-  // a step whose energy rises by less than this is taken, not refused
-  fascia_real roundoff = t->volume[p] * fabs(t->lambda[p]);
-  for (int32_t q = t->patch_offsets[p]; q < t->patch_offsets[p + 1]; ++q) {
-    const int32_t s = t->patch_samples[q];
-    roundoff += m->sample_volume[s] * (fabs(m->sample_lambda[s]) + 2 * fabs(m->sample_mu[s]));
-  }
-  roundoff *= 8 * FASCIA_R(2.220446049250313e-16);
+  // the rounding error of the patch's energy: a step whose energy rises by
+  // less than this is taken, not refused
+  fascia_real scale = t->volume[p] * fabs(t->lambda[p]);
+  for (int32_t q = t->patch_offsets[p]; q < t->patch_offsets[p + 1]; ++q)
+    scale += fascia_pt_sample_energy_scale(m, t->patch_samples[q]);
+  const fascia_real roundoff = fascia_pt_energy_roundoff(scale);
   if (fascia_pt_modes_local(m, st, t, md, p, a, &e, r, H) && fascia_pt_modes_inverse(md, p, H, inverse)) {
     for (int it = 0; it < FASCIA_PT_MODES_MAX_ITERATIONS; ++it) {
       fascia_real change = 0;

@@ -100,6 +100,19 @@ static inline FASCIA_HD void fascia_pt_coupling_K(const fascia_real *A, const fa
     for (int c = 0; c < 3; ++c) dK[3 * r + c] = FASCIA_R(0.5) * (H[3 * r + c] - H[3 * c + r]);
 }
 
+/// The rounding error of an energy evaluation, J, for a sum of
+/// fascia_pt_sample_energy_scale: 8 ulps of it, whatever the energy's value
+/// (StVK's E = (F^T F - I)/2 loses the digits of F^T F near rest). The
+/// Newton solver and the modes' local solve take changes within it.
+static inline FASCIA_HD fascia_real fascia_pt_energy_roundoff(fascia_real scale) {
+  return 8 * FASCIA_R(2.220446049250313e-16) * scale;
+}
+
+/// Sample s's share of that scale: v (|lambda| + 2 |mu|), J.
+static inline FASCIA_HD fascia_real fascia_pt_sample_energy_scale(const fascia_pt_model *m, int32_t s) {
+  return m->sample_volume[s] * (fabs(m->sample_lambda[s]) + 2 * fabs(m->sample_mu[s]));
+}
+
 /// Deformed position p_s (paper eq. 3) of sample s.
 static inline FASCIA_HD void fascia_pt_sample_position(const fascia_pt_model *m, const fascia_pt_state *st, int32_t s,
                                                        fascia_real *p) {

@@ -56,13 +56,12 @@ fascia_status fascia_modes_create(fascia_system *sys, fascia_modes **out) {
     return FASCIA_FAIL(sys->ctx, FASCIA_ERR_MEMORY, "modes: out of memory for %d patches", (int)P);
   }
   for (int32_t p = 0; p < P; ++p) {
-    fascia_real centre[3] = {0, 0, 0}, volume = 0, spread[3] = {0, 0, 0};
+    fascia_real centre[3] = {0, 0, 0}, spread[3] = {0, 0, 0};
     for (int32_t q = t->patch_offsets[p]; q < t->patch_offsets[p + 1]; ++q) {
       const int32_t s = t->patch_samples[q];
-      volume += m->sample_volume[s];
       for (int c = 0; c < 3; ++c) centre[c] += m->sample_volume[s] * m->sample_position[3 * (int64_t)s + c];
     }
-    for (int c = 0; c < 3; ++c) centre[c] /= volume;
+    for (int c = 0; c < 3; ++c) centre[c] /= d->patch_volume[p];
     for (int32_t q = t->patch_offsets[p]; q < t->patch_offsets[p + 1]; ++q) {
       const int32_t s = t->patch_samples[q];
       for (int c = 0; c < 3; ++c) {

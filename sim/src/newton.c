@@ -59,11 +59,9 @@ double fascia_now_ms(void) {
 // residual below it is converged whatever the tolerance asks, as when
 // nothing loads the tissue and the reference itself is round-off.)
 static fascia_real energy_roundoff(const fascia_solver *S) {
-  const fascia_system *sys = S->sys;
   fascia_real sum = 0;
-  for (int32_t s = 0; s < S->model->sample_count; ++s)
-    sum += S->model->sample_volume[s] * (fabs(sys->sample_lambda[s]) + 2 * fabs(sys->sample_mu[s]));
-  return 8 * FASCIA_R(2.220446049250313e-16) * sum;
+  for (int32_t s = 0; s < S->model->sample_count; ++s) sum += fascia_pt_sample_energy_scale(&S->sys->pm, s);
+  return fascia_pt_energy_roundoff(sum);
 }
 
 // The line search's verdict on a trial step alpha along a direction of
