@@ -439,18 +439,6 @@ static inline FASCIA_HD void fascia_pt_sample_stiffness(const fascia_pt_model *m
   fascia_pt_sample_stiffness_parts(m, st, s, cache, dq, slot, out6, FASCIA_PT_PART_ALL);
 }
 
-/// The paper's part of the stiffness of sample s as a dense local matrix:
-/// n x n blocks of 6x6, block (a, b) at out + 36 (a n + b), row-major, the
-/// derivative of the gradient on the a-th pair's frame with respect to the
-/// b-th pair's frame: v B_a^T D B_b (material, D = dP/dF, B the 9x6 map of
-/// paper eq. 11) plus, on diagonal blocks, the geometric v (M - tr(M) I) with
-/// M = C Pt^T; and the rotation smoothing's theta-theta blocks in closed form,
-///   v k_c [(g_a.g_b)(tr(A_a A_b^T) I - A_b A_a^T) + [a = b](A_a N_a^T - tr(.) I)].
-/// Equals fascia_pt_sample_stiffness_parts(.., BASE | SMOOTHING) applied to
-/// unit vectors; it is how the assembled matrix is built without 6n products
-/// per sample (the rotation coupling, when on, is added by such products).
-/// frame_moves ([frames], NULL: all): a block with a frame not in it is not
-/// written (the assembly leaves the blocks of frames a step holds).
 /// D = dPt/dF of sample s at its cache (9x9, D[9 row + col] = dP_row /
 /// dF_col): its law and its patch's pressure, not the rotation coupling.
 static inline FASCIA_HD void fascia_pt_sample_tangent(const fascia_pt_model *m, int32_t s, const fascia_real *cache,
@@ -487,51 +475,90 @@ static inline FASCIA_HD void fascia_pt_pair_BtD(const fascia_pt_model *m, const 
   }
 }
 
-static inline FASCIA_HD void fascia_pt_sample_local_stiffness(const fascia_pt_model *m, const fascia_pt_state *st,
-                                                              int32_t s, const fascia_real *cache,
-                                                              const unsigned char *frame_moves, fascia_real *out) {
+/// One row x (9) of B_a^T D times B_b for the pairs b0 <= b < n of a
+/// sample, laid out by component (gs[c n + b], Cs[q n + b]: g and C of pair
+/// b), into row x's place in consecutive 6x6 blocks: out[36 (b - b0) + k] is
+/// entry k of that row of block (a, b). Column x_k of B_b has g_c at F's
+/// entry (k c); column theta_k maps x to sum_c (c_c x x_c)_k, with c_c the
+/// columns of C_b and x_c = (x[c], x[3+c], x[6+c]). A loop over b, which
+/// the compiler makes wide.
+static inline FASCIA_HD void fascia_pt_row_times_pairs(const fascia_real *FASCIA_RESTRICT x, int32_t b0, int32_t n,
+                                                       const fascia_real *FASCIA_RESTRICT gs,
+                                                       const fascia_real *FASCIA_RESTRICT Cs,
+                                                       fascia_real *FASCIA_RESTRICT out) {
+  for (int32_t b = b0; b < n; ++b) {
+    const fascia_real g0 = gs[b], g1 = gs[n + b], g2 = gs[2 * n + b];
+    fascia_real *FASCIA_RESTRICT o = out + 36 * (b - b0);
+    o[0] = x[0] * g0 + x[1] * g1 + x[2] * g2;
+    o[1] = x[3] * g0 + x[4] * g1 + x[5] * g2;
+    o[2] = x[6] * g0 + x[7] * g1 + x[8] * g2;
+    const fascia_real c00 = Cs[b], c01 = Cs[n + b], c02 = Cs[2 * n + b];
+    const fascia_real c10 = Cs[3 * n + b], c11 = Cs[4 * n + b], c12 = Cs[5 * n + b];
+    const fascia_real c20 = Cs[6 * n + b], c21 = Cs[7 * n + b], c22 = Cs[8 * n + b];
+    o[3] = (c10 * x[6] - c20 * x[3]) + (c11 * x[7] - c21 * x[4]) + (c12 * x[8] - c22 * x[5]);
+    o[4] = (c20 * x[0] - c00 * x[6]) + (c21 * x[1] - c01 * x[7]) + (c22 * x[2] - c02 * x[8]);
+    o[5] = (c00 * x[3] - c10 * x[0]) + (c01 * x[4] - c11 * x[1]) + (c02 * x[5] - c12 * x[2]);
+  }
+}
+
+/// Where block (a, b), a <= b, of a sample's n x n blocks is among its
+/// upper blocks, row by row: n (n + 1) / 2 of them.
+static inline FASCIA_HD int32_t fascia_pt_upper_block(int32_t n, int32_t a, int32_t b) {
+  return a * n - a * (a - 1) / 2 + (b - a);
+}
+
+/// The paper's part of the stiffness of sample s as a dense local matrix:
+/// its upper blocks (a, b), a <= b, of 6x6, at out + 36
+/// fascia_pt_upper_block(n, a, b), row-major (block (b, a) is the
+/// transpose, but for the geometric part of a diagonal block), the
+/// derivative of the gradient on the a-th pair's frame with respect to the
+/// b-th pair's frame: v B_a^T D B_b (material, D = dP/dF, B the 9x6 map of
+/// paper eq. 11) plus, on diagonal blocks, the geometric v (M - tr(M) I) with
+/// M = C Pt^T; and the rotation smoothing's theta-theta blocks in closed form,
+///   v k_c [(g_a.g_b)(tr(A_a A_b^T) I - A_b A_a^T) + [a = b](A_a N_a^T - tr(.) I)].
+/// Equals fascia_pt_sample_stiffness_parts(.., BASE | SMOOTHING) applied to
+/// unit vectors; it is how the assembled matrix is built without 6n products
+/// per sample (the rotation coupling, when on, is added by such products).
+/// frame_moves ([frames], NULL: all): the rows of a frame not in it are not
+/// computed, and a block with such a frame is to be left unread (the
+/// assembly leaves the blocks of frames a step holds). scratch: 12 n reals
+/// (n the sample's pairs). Forced inline: its caller is compiled for AVX2 too.
+FASCIA_STATIC_FORCE_INLINE FASCIA_HD void
+fascia_pt_sample_local_stiffness(const fascia_pt_model *m, const fascia_pt_state *st, int32_t s,
+                                 const fascia_real *cache, const unsigned char *frame_moves,
+                                 fascia_real *FASCIA_RESTRICT scratch, fascia_real *FASCIA_RESTRICT out) {
   const fascia_real *P = cache + 9;
   const fascia_real v = m->sample_volume[s];
   const int32_t begin = m->sample_offsets[s], n = m->sample_offsets[s + 1] - begin;
   fascia_real D[81];
   fascia_pt_sample_tangent(m, s, cache, D);
+  for (int q = 0; q < 81; ++q) D[q] *= v;
+  // the pairs' g and C by component, for fascia_pt_row_times_pairs
+  fascia_real *FASCIA_RESTRICT gs = scratch, *FASCIA_RESTRICT Cs = scratch + 3 * n;
+  for (int b = 0; b < n; ++b) {
+    const int32_t kb = begin + b;
+    const fascia_real *gb = m->pair_gradient + 3 * kb;
+    fascia_real ab[3], Cb[9];
+    fascia_pt_pair_C(st->frame_A + 9 * m->pair_frame[kb], m->pair_offset + 3 * kb, gb, m->pair_weight[kb], ab, Cb);
+    for (int c = 0; c < 3; ++c) gs[c * n + b] = gb[c];
+    for (int q = 0; q < 9; ++q) Cs[q * n + b] = Cb[q];
+  }
   for (int a = 0; a < n; ++a) {
     const int32_t ka = begin + a;
     if (frame_moves && !frame_moves[m->pair_frame[ka]]) continue;
-    const fascia_real *Aa = st->frame_A + 9 * m->pair_frame[ka], *ga = m->pair_gradient + 3 * ka;
-    fascia_real aa[3], Ca[9], BtD[54];
-    fascia_pt_pair_C(Aa, m->pair_offset + 3 * ka, ga, m->pair_weight[ka], aa, Ca);
+    fascia_real BtD[54];
     fascia_pt_pair_BtD(m, st, ka, D, BtD);
-    for (int b = a; b < n; ++b) { // K_ba = K_ab^T (D is symmetric): mirrored below
-      // (B_a^T D) B_b: column x_k of B_b has g_c at row (k c); column
-      // theta_k maps x to sum_c (c_c x x_c)_k, x_c = (x[c], x[3+c], x[6+c])
-      const int32_t kb = begin + b;
-      if (frame_moves && !frame_moves[m->pair_frame[kb]]) continue;
-      const fascia_real *Ab = st->frame_A + 9 * m->pair_frame[kb], *gb = m->pair_gradient + 3 * kb;
-      fascia_real ab[3], Cb[9];
-      fascia_pt_pair_C(Ab, m->pair_offset + 3 * kb, gb, m->pair_weight[kb], ab, Cb);
-      fascia_real *K = out + 36 * (a * n + b);
-      for (int row = 0; row < 6; ++row) {
-        const fascia_real *x = BtD + 9 * row;
-        for (int k = 0; k < 3; ++k) K[6 * row + k] = v * (x[3 * k] * gb[0] + x[3 * k + 1] * gb[1] + x[3 * k + 2] * gb[2]);
-        fascia_real th[3] = {0, 0, 0};
-        for (int c = 0; c < 3; ++c) {
-          const fascia_real cc[3] = {Cb[c], Cb[3 + c], Cb[6 + c]}, xc[3] = {x[c], x[3 + c], x[6 + c]};
-          fascia_pt_cross_add(cc, xc, th);
-        }
-        for (int k = 0; k < 3; ++k) K[6 * row + 3 + k] = v * th[k];
-      }
-      if (b != a) {
-        fascia_real *Kt = out + 36 * (b * n + a);
-        for (int r = 0; r < 6; ++r)
-          for (int c = 0; c < 6; ++c) Kt[6 * c + r] = K[6 * r + c];
-      }
+    for (int row = 0; row < 6; ++row) {
+      // blocks (a, b), b >= a, are consecutive; K_ba = K_ab^T (D is
+      // symmetric) is not written
+      fascia_pt_row_times_pairs(BtD + 9 * row, a, n, gs, Cs, out + 36 * fascia_pt_upper_block(n, a, a) + 6 * row);
     }
     // geometric part on the diagonal block: v (M - tr(M) I), M = C Pt^T
-    fascia_real M[9];
+    fascia_real Ca[9], M[9];
+    for (int q = 0; q < 9; ++q) Ca[q] = Cs[q * n + a];
     fascia_pt_mat_mult(Ca, P, M);
     const fascia_real trM = fascia_pt_trace(M);
-    fascia_real *K = out + 36 * (a * n + a);
+    fascia_real *K = out + 36 * fascia_pt_upper_block(n, a, a);
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) K[6 * (3 + r) + 3 + c] += v * (M[3 * r + c] - (r == c ? trM : 0));
   }
@@ -554,19 +581,15 @@ static inline FASCIA_HD void fascia_pt_sample_local_stiffness(const fascia_pt_mo
       fascia_real Q[9]; // A_b A_a^T
       fascia_pt_mat_mult(Ab, Aa, Q);
       const fascia_real trQ = fascia_pt_trace(Q);
-      fascia_real *K = out + 36 * (a * n + b), *Kt = out + 36 * (b * n + a);
+      fascia_real *K = out + 36 * fascia_pt_upper_block(n, a, b);
       for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) {
-          const fascia_real e = gg * ((r == c ? trQ : 0) - Q[3 * r + c]);
-          K[6 * (3 + r) + 3 + c] += e;
-          if (b != a) Kt[6 * (3 + c) + 3 + r] += e;
-        }
+        for (int c = 0; c < 3; ++c) K[6 * (3 + r) + 3 + c] += gg * ((r == c ? trQ : 0) - Q[3 * r + c]);
     }
     fascia_real Nm[9], X[9];
     for (int q = 0; q < 9; ++q) Nm[q] = ga[0] * Mc[q] + ga[1] * Mc[9 + q] + ga[2] * Mc[18 + q];
     fascia_pt_mat_mult(Aa, Nm, X);
     const fascia_real trX = fascia_pt_trace(X);
-    fascia_real *K = out + 36 * (a * n + a);
+    fascia_real *K = out + 36 * fascia_pt_upper_block(n, a, a);
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) K[6 * (3 + r) + 3 + c] += v * kc * (X[3 * r + c] - (r == c ? trX : 0));
   }

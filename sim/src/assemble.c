@@ -14,6 +14,48 @@
 
 static int32_t find_block(const fascia_bsr *B, int32_t i, int32_t j);
 
+// The chunks of whole samples whose local blocks fit the scratch, and the
+// BSR blocks each chunk adds to (ascending).
+static fascia_status plan_chunks(fascia_ctx *ctx, const fascia_model *m, fascia_bsr *B) {
+  const int32_t S = m->sample_count;
+  int32_t chunks = 0;
+  for (int32_t s0 = 0, s1; s0 < S; s0 = s1, ++chunks)
+    for (s1 = s0 + 1; s1 < S && B->local_offsets[s1 + 1] - B->local_offsets[s0] <= B->chunk_capacity;) ++s1;
+  B->chunk_count = chunks;
+  B->chunk_samples = fascia_calloc((int64_t)chunks + 1, sizeof(int32_t));
+  B->chunk_block_offsets = fascia_calloc((int64_t)chunks + 1, sizeof(int64_t));
+  int32_t *seen = fascia_calloc(B->blocks, sizeof(int32_t)); // the last chunk + 1 that touched each block
+  FASCIA_CHECK(B->chunk_samples && B->chunk_block_offsets && seen, ctx, FASCIA_ERR_MEMORY,
+               "assembly: out of memory for the plan of %d chunks", (int)chunks);
+  // two walks: count each chunk's blocks, then list them
+  for (int walk = 0; walk < 2; ++walk) {
+    int64_t count = 0;
+    memset(seen, 0, (size_t)B->blocks * sizeof(int32_t));
+    for (int32_t k = 0, s0 = 0, s1; s0 < S; s0 = s1, ++k) {
+      for (s1 = s0 + 1; s1 < S && B->local_offsets[s1 + 1] - B->local_offsets[s0] <= B->chunk_capacity;) ++s1;
+      B->chunk_samples[k + 1] = s1;
+      const int64_t first = count;
+      for (int64_t e = B->local_offsets[s0]; e < B->local_offsets[s1]; ++e)
+        if (seen[B->local_block[e]] != k + 1) {
+          seen[B->local_block[e]] = k + 1;
+          if (walk) B->chunk_blocks[count] = B->local_block[e];
+          ++count;
+        }
+      if (walk) fascia_index_set_make(B->chunk_blocks + first, (int32_t)(count - first)); // unique already: sorts
+      B->chunk_block_offsets[k + 1] = count;
+    }
+    if (!walk) {
+      B->chunk_blocks = fascia_calloc(count, sizeof(int32_t));
+      if (!B->chunk_blocks) {
+        free(seen);
+        return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "assembly: out of memory for the plan of %d chunks", (int)chunks);
+      }
+    }
+  }
+  free(seen);
+  return FASCIA_OK;
+}
+
 // The assembly plan (see fascia_bsr in assemble.h).
 static fascia_status plan(fascia_ctx *ctx, const fascia_model *m, fascia_bsr *B) {
   const int32_t S = m->sample_count;
@@ -21,32 +63,54 @@ static fascia_status plan(fascia_ctx *ctx, const fascia_model *m, fascia_bsr *B)
   FASCIA_CHECK(B->local_offsets, ctx, FASCIA_ERR_MEMORY, "assembly: out of memory");
   for (int32_t s = 0; s < S; ++s) {
     const int64_t n = m->sample_offsets[s + 1] - m->sample_offsets[s];
-    B->local_offsets[s + 1] = B->local_offsets[s] + n * n;
+    B->local_offsets[s + 1] = B->local_offsets[s] + n * (n + 1) / 2;
   }
   const int64_t E = B->local_offsets[S];
   B->local_block = fascia_calloc(E, sizeof(int32_t));
   B->contrib_offsets = fascia_calloc(B->blocks + 1, sizeof(int64_t));
   B->contrib = fascia_calloc(E, sizeof(int64_t));
+  B->contrib_transposed = fascia_calloc(E, 1);
   B->cursor = fascia_calloc(B->blocks, sizeof(int64_t));
+  B->mirror = fascia_calloc(B->blocks, sizeof(int32_t));
   B->chunk_capacity = FASCIA_ASSEMBLY_CHUNK;
   for (int32_t s = 0; s < S; ++s)
     if (B->local_offsets[s + 1] - B->local_offsets[s] > B->chunk_capacity)
       B->chunk_capacity = B->local_offsets[s + 1] - B->local_offsets[s];
   B->chunk = fascia_calloc(36 * B->chunk_capacity, sizeof(fascia_real));
-  FASCIA_CHECK(B->local_block && B->contrib_offsets && B->contrib && B->cursor && B->chunk, ctx, FASCIA_ERR_MEMORY,
-               "assembly: out of memory for %lld local blocks", (long long)E);
+  FASCIA_CHECK(B->local_block && B->contrib_offsets && B->contrib && B->contrib_transposed && B->cursor && B->mirror &&
+                   B->chunk,
+               ctx, FASCIA_ERR_MEMORY, "assembly: out of memory for %lld local blocks", (long long)E);
+  // local block (a, b), a <= b, is K_ab: it adds to BSR block (i, j) of its
+  // frames as it is where i <= j, else transposed (to block (j, i))
+  unsigned char *transposed = fascia_calloc(E, 1);
+  FASCIA_CHECK(transposed, ctx, FASCIA_ERR_MEMORY, "assembly: out of memory for %lld local blocks", (long long)E);
   for (int32_t s = 0; s < S; ++s) {
     const int32_t begin = m->sample_offsets[s], n = m->sample_offsets[s + 1] - begin;
     for (int32_t a = 0; a < n; ++a)
-      for (int32_t b = 0; b < n; ++b) {
-        const int32_t blk = find_block(B, m->pair_frame[begin + a], m->pair_frame[begin + b]);
-        B->local_block[B->local_offsets[s] + a * n + b] = blk;
+      for (int32_t b = a; b < n; ++b) {
+        const int32_t fa = m->pair_frame[begin + a], fb = m->pair_frame[begin + b];
+        const int64_t e = B->local_offsets[s] + fascia_pt_upper_block(n, a, b);
+        const int32_t blk = fa <= fb ? find_block(B, fa, fb) : find_block(B, fb, fa);
+        B->local_block[e] = blk;
+        transposed[e] = fa > fb;
         B->contrib_offsets[blk + 1]++;
       }
   }
   for (int64_t b = 0; b < B->blocks; ++b) B->contrib_offsets[b + 1] += B->contrib_offsets[b];
   memcpy(B->cursor, B->contrib_offsets, (size_t)B->blocks * sizeof(int64_t));
-  for (int64_t e = 0; e < E; ++e) B->contrib[B->cursor[B->local_block[e]]++] = e; // ascending e per block
+  for (int64_t e = 0; e < E; ++e) { // ascending e per block
+    B->contrib_transposed[B->cursor[B->local_block[e]]] = transposed[e];
+    B->contrib[B->cursor[B->local_block[e]]++] = e;
+  }
+  free(transposed);
+  B->block_row = fascia_calloc(B->blocks, sizeof(int32_t));
+  FASCIA_CHECK(B->block_row, ctx, FASCIA_ERR_MEMORY, "assembly: out of memory for %lld blocks", (long long)B->blocks);
+  for (int32_t i = 0; i < B->rows; ++i)
+    for (int32_t b = B->row_offsets[i]; b < B->row_offsets[i + 1]; ++b) {
+      B->mirror[b] = B->cols[b] < i ? find_block(B, B->cols[b], i) : -1;
+      B->block_row[b] = i;
+    }
+  return plan_chunks(ctx, m, B);
   return FASCIA_OK;
 }
 
@@ -132,7 +196,13 @@ void fascia_bsr_destroy(fascia_bsr *bsr) {
   free(bsr->local_block);
   free(bsr->contrib_offsets);
   free(bsr->contrib);
+  free(bsr->contrib_transposed);
   free(bsr->cursor);
+  free(bsr->mirror);
+  free(bsr->block_row);
+  free(bsr->chunk_samples);
+  free(bsr->chunk_block_offsets);
+  free(bsr->chunk_blocks);
   free(bsr->chunk);
   free(bsr->row_offsets);
   free(bsr->cols);
@@ -180,15 +250,19 @@ static void mass_rows(fascia_system *sys, const unsigned char *moves, fascia_bsr
   }
 }
 
-// Local stiffness of sample s into out (n x n blocks): the paper's terms and
-// the rotation smoothing in closed form, the rotation coupling, when on, as
-// products with the 6n unit vectors of the sample. Blocks with a frame not
-// in moves are left unwritten.
-static void local_stiffness(const fascia_system *sys, const fascia_pt_state *st, const unsigned char *moves,
-                            int32_t s, fascia_real *out, fascia_real *dq, fascia_real *col) {
+// Local stiffness of sample s into out (its blocks (a, b), a <= b, at
+// fascia_pt_upper_block): the paper's terms and the rotation smoothing in
+// closed form, the rotation coupling, when on, as products with the 6n unit
+// vectors of the sample (its upper blocks: the assembled matrix is
+// symmetric). Blocks with a frame not in moves are left unwritten.
+// dq, col: 6 max_neighbours reals; scratch: 12 max_neighbours. Its loops
+// over the sample's pairs are wide (AVX2: 26 against 32 ms of assembly in
+// the static 20x3x3 hex cantilever).
+WIDE_CLONES static void local_stiffness(const fascia_system *sys, const fascia_pt_state *st, const unsigned char *moves,
+                            int32_t s, fascia_real *out, fascia_real *dq, fascia_real *col, fascia_real *scratch) {
   const fascia_model *m = sys->model;
   const fascia_real *cache = sys->cache + (int64_t)s * FASCIA_PT_CACHE_SIZE;
-  fascia_pt_sample_local_stiffness(&sys->pm, st, s, cache, moves, out);
+  fascia_pt_sample_local_stiffness(&sys->pm, st, s, cache, moves, scratch, out);
   if (sys->sample_coupling[s] == 0) return;
   const int32_t begin = m->sample_offsets[s], n = m->sample_offsets[s + 1] - begin;
   for (int32_t b = 0; b < n; ++b) {
@@ -197,13 +271,14 @@ static void local_stiffness(const fascia_system *sys, const fascia_pt_state *st,
       dq[6 * b + c] = 1;
       fascia_pt_sample_stiffness_parts(&sys->pm, st, s, cache, dq, sys->local_slot, col, FASCIA_PT_PART_COUPLING);
       dq[6 * b + c] = 0;
-      for (int32_t a = 0; a < n; ++a)
-        for (int r = 0; r < 6; ++r) out[36 * (a * n + b) + 6 * r + c] += col[6 * a + r];
+      for (int32_t a = 0; a <= b; ++a)
+        for (int r = 0; r < 6; ++r) out[36 * fascia_pt_upper_block(n, a, b) + 6 * r + c] += col[6 * a + r];
     }
   }
 }
 
-// The volumetric patches' rank-one terms lambda_p / V_p G_p G_p^T, row by row.
+// The volumetric patches' rank-one terms lambda_p / V_p G_p G_p^T, row by
+// row, on the upper blocks.
 static void dilatation_rows(const fascia_system *sys, const unsigned char *moves, fascia_bsr *B) {
   fascia_dilatation *d = sys->dilatation;
   fascia_dilatation_gradients(sys, d);
@@ -215,7 +290,7 @@ static void dilatation_rows(const fascia_system *sys, const unsigned char *moves
       const int32_t e = t->frame_entries[r], p = t->entry_patch[e];
       const fascia_real c = d->patch_lambda[p] / d->patch_volume[p], *Gi = d->entry_gradient + 6 * (int64_t)e;
       for (int32_t f = t->support_offsets[p]; f < t->support_offsets[p + 1]; ++f) {
-        if (!fascia_frame_moving(moves, t->entry_frame[f])) continue;
+        if (t->entry_frame[f] < i || !fascia_frame_moving(moves, t->entry_frame[f])) continue;
         const fascia_real *Gj = d->entry_gradient + 6 * (int64_t)f;
         fascia_real *blk = B->values + 36 * (int64_t)find_block(B, i, t->entry_frame[f]);
         for (int a = 0; a < 6; ++a)
@@ -225,7 +300,8 @@ static void dilatation_rows(const fascia_system *sys, const unsigned char *moves
   }
 }
 
-// The enhanced strain modes' condensed terms -K_ue K_aa^-1 K_uf^T, row by row.
+// The enhanced strain modes' condensed terms -K_ue K_aa^-1 K_uf^T, row by
+// row, on the upper blocks.
 static void modes_rows(const fascia_system *sys, const unsigned char *moves, fascia_bsr *B) {
   fascia_modes *md = sys->modes;
   fascia_modes_tangent(sys, md);
@@ -236,7 +312,7 @@ static void modes_rows(const fascia_system *sys, const unsigned char *moves, fas
     for (int32_t r = t->frame_entry_offsets[i]; r < t->frame_entry_offsets[i + 1]; ++r) {
       const int32_t e = t->frame_entries[r], p = t->entry_patch[e];
       for (int32_t f = t->support_offsets[p]; f < t->support_offsets[p + 1]; ++f) {
-        if (!fascia_frame_moving(moves, t->entry_frame[f])) continue;
+        if (t->entry_frame[f] < i || !fascia_frame_moving(moves, t->entry_frame[f])) continue;
         fascia_pt_modes_block_add(t, &md->view, e, f, B->values + 36 * (int64_t)find_block(B, i, t->entry_frame[f]));
       }
     }
@@ -254,46 +330,37 @@ void fascia_system_hessian_assemble(fascia_system *sys, const unsigned char *mov
   const fascia_pt_state st = {sys->x, sys->A};
   memset(B->values, 0, 36 * (size_t)B->blocks * sizeof(fascia_real));
   memcpy(B->cursor, B->contrib_offsets, (size_t)B->blocks * sizeof(int64_t));
-  for (int32_t s0 = 0; s0 < sys->sample_count;) {
-    // a chunk of whole samples whose local blocks fit the scratch
-    int32_t s1 = s0;
-    while (s1 < sys->sample_count && B->local_offsets[s1 + 1] - B->local_offsets[s0] <= B->chunk_capacity) ++s1;
-    const int64_t e0 = B->local_offsets[s0], e1 = B->local_offsets[s1];
-    // the block rows the chunk's samples touch (a narrow range where samples are ordered in space)
-    const fascia_model *m = sys->model;
-    int32_t first_row = B->rows, last_row = -1;
-    for (int32_t k = m->sample_offsets[s0]; k < m->sample_offsets[s1]; ++k) {
-      const int32_t i = m->pair_frame[k];
-      if (i < first_row) first_row = i;
-      if (i > last_row) last_row = i;
-    }
 #pragma omp parallel num_threads(sys->threads)
-    {
-      fascia_real *dq = calloc(6 * (size_t)sys->max_neighbours, sizeof(fascia_real));
-      fascia_real *col = calloc(6 * (size_t)sys->max_neighbours, sizeof(fascia_real));
+  {
+    fascia_real *dq = calloc(24 * (size_t)sys->max_neighbours, sizeof(fascia_real));
+    for (int32_t k = 0; k < B->chunk_count; ++k) {
+      const int32_t s0 = B->chunk_samples[k], s1 = B->chunk_samples[k + 1];
+      const int64_t e0 = B->local_offsets[s0], e1 = B->local_offsets[s1];
 #pragma omp for schedule(static)
       for (int32_t s = s0; s < s1; ++s)
-        if (dq && col && sample_moves(sys->model, moves, s))
-          local_stiffness(sys, &st, moves, s, B->chunk + 36 * (B->local_offsets[s] - e0), dq, col);
-      free(dq);
-      free(col);
-      // a block of two moving frames has contributions from moving samples only
+        if (dq && sample_moves(sys->model, moves, s))
+          local_stiffness(sys, &st, moves, s, B->chunk + 36 * (B->local_offsets[s] - e0), dq,
+                          dq + 6 * sys->max_neighbours, dq + 12 * sys->max_neighbours);
+      // the chunk's upper blocks (the lower ones are mirrored at the end); a
+      // block of two moving frames has contributions from moving samples only
 #pragma omp for schedule(static)
-      for (int32_t i = first_row; i <= last_row; ++i) {
-        if (!fascia_frame_moving(moves, i)) continue;
-        for (int32_t b = B->row_offsets[i]; b < B->row_offsets[i + 1]; ++b) {
-          if (!fascia_frame_moving(moves, B->cols[b])) continue;
-          fascia_real *dst = B->values + 36 * (int64_t)b;
-          int64_t c = B->cursor[b];
-          for (; c < B->contrib_offsets[b + 1] && B->contrib[c] < e1; ++c) {
-            const fascia_real *src = B->chunk + 36 * (B->contrib[c] - e0);
+      for (int64_t t = B->chunk_block_offsets[k]; t < B->chunk_block_offsets[k + 1]; ++t) {
+        const int32_t b = B->chunk_blocks[t];
+        if (!fascia_frame_moving(moves, B->block_row[b]) || !fascia_frame_moving(moves, B->cols[b])) continue;
+        fascia_real *dst = B->values + 36 * (int64_t)b;
+        int64_t c = B->cursor[b];
+        for (; c < B->contrib_offsets[b + 1] && B->contrib[c] < e1; ++c) {
+          const fascia_real *src = B->chunk + 36 * (B->contrib[c] - e0);
+          if (B->contrib_transposed[c])
+            for (int r = 0; r < 6; ++r)
+              for (int q = 0; q < 6; ++q) dst[6 * r + q] += src[6 * q + r];
+          else
             for (int q = 0; q < 36; ++q) dst[q] += src[q];
-          }
-          B->cursor[b] = c;
         }
+        B->cursor[b] = c;
       }
     }
-    s0 = s1;
+    free(dq);
   }
   if (sys->dilatation) dilatation_rows(sys, moves, B);
   if (sys->modes) modes_rows(sys, moves, B);
@@ -310,6 +377,15 @@ void fascia_system_hessian_assemble(fascia_system *sys, const unsigned char *mov
         D[6 * (3 + a) + 3 + c] += -gs * (b[a] * g[c] - (a == c ? bg : 0)) + FASCIA_R(0.5) * skew[3 * a + c];
     for (int a = 0; a < 6; ++a) // symmetric up to rounding: make it exactly so
       for (int c = a + 1; c < 6; ++c) D[6 * a + c] = D[6 * c + a] = FASCIA_R(0.5) * (D[6 * a + c] + D[6 * c + a]);
+  }
+  // the lower blocks: the upper ones transposed
+#pragma omp parallel for num_threads(sys->threads) schedule(static)
+  for (int64_t b = 0; b < B->blocks; ++b) {
+    if (B->mirror[b] < 0) continue;
+    const fascia_real *src = B->values + 36 * (int64_t)B->mirror[b];
+    fascia_real *dst = B->values + 36 * b;
+    for (int r = 0; r < 6; ++r)
+      for (int q = 0; q < 6; ++q) dst[6 * r + q] = src[6 * q + r];
   }
 }
 

@@ -20,27 +20,46 @@ typedef struct fascia_bsr {
   fascia_real *values;  ///< [36 blocks]
   float *values_single; ///< [36 blocks] a float copy for products, when asked for (NULL otherwise)
   int64_t blocks;
-  // Assembly plan: every sample's n x n local blocks, numbered e =
-  // local_offsets[s] + a n + b (sample order), are summed into their BSR
-  // block in ascending e, so the sums do not depend on the thread count.
-  int64_t *local_offsets;    ///< [S+1]
-  int32_t *local_block;      ///< [E] BSR block of local block e
-  int64_t *contrib_offsets;  ///< [blocks+1]
-  int64_t *contrib;          ///< [E] local blocks of each BSR block, ascending
-  int64_t *cursor;           ///< [blocks] scratch
-  fascia_real *chunk;        ///< [36 chunk_capacity] local blocks of one chunk of samples
-  int64_t chunk_capacity;    ///< FASCIA_ASSEMBLY_CHUNK, or the largest sample's n^2
+  // Assembly plan: every sample's local blocks (a, b), a <= b, numbered e =
+  // local_offsets[s] + fascia_pt_upper_block(n, a, b) (sample order), are
+  // summed into their upper BSR block (i <= j) in ascending e, so the sums
+  // do not depend on the thread count; the lower blocks are their mirror.
+  int64_t *local_offsets;            ///< [S+1]
+  int32_t *local_block;              ///< [E] BSR block of local block e
+  int64_t *contrib_offsets;          ///< [blocks+1]
+  int64_t *contrib;                  ///< [E] local blocks of each BSR block, ascending
+  unsigned char *contrib_transposed; ///< [E] whether contrib[c] adds transposed (its frames in falling order)
+  int32_t *mirror;                   ///< [blocks] the upper block a lower block is the transpose of, -1: upper
+  int32_t *block_row;                ///< [blocks] the row of each block
+  int32_t chunk_count;               ///< passes: chunks of whole samples whose local blocks fit the scratch
+  int32_t *chunk_samples;            ///< [chunk_count+1] first sample of each chunk
+  int64_t *chunk_block_offsets;      ///< [chunk_count+1]
+  int32_t *chunk_blocks;             ///< the upper BSR blocks each chunk adds to, ascending
+  int64_t *cursor;                   ///< [blocks] scratch
+  fascia_real *chunk;                ///< [36 chunk_capacity] local blocks of one chunk of samples
+  int64_t chunk_capacity;            ///< FASCIA_ASSEMBLY_CHUNK, or the largest sample's n (n + 1) / 2
 } fascia_bsr;
+
+/// A function compiled twice, for AVX2 and for the baseline; the loader
+/// picks one. Without fused multiply-adds (-ffp-contract=off, and "avx2"
+/// has none) both give the same bits: the wide loops only do at once what
+/// the baseline does one by one.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define WIDE_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define WIDE_CLONES
+#endif
 
 /// Whether frame i moves, for the moves arrays below (NULL: every frame).
 static inline int fascia_frame_moving(const unsigned char *moves, int32_t i) { return !moves || moves[i]; }
 
-/// Local blocks computed per pass of the assembly (bounds its scratch: 4.7 MB,
-/// which the last-level cache keeps between the pass that writes the blocks
-/// and the one that adds them up: the static 20x3x3 hex cantilever 28 -> 22
-/// ms of assembly against 32768; t3-s34610 31-33 ms either way; smaller
-/// chunks cost the paper rows more passes, 8192: 38 ms).
-#define FASCIA_ASSEMBLY_CHUNK 16384
+/// Local blocks computed per pass of the assembly (bounds its scratch to
+/// 0.6 MB, which a core's own cache keeps between the loop that writes the
+/// blocks and the one that adds them up). Each pass visits only the blocks
+/// its samples add to, so small passes cost little: the static 20x3x3 hex
+/// cantilever, one thread, 24 -> 20 ms of assembly against 16384 blocks;
+/// t3-s34610 the same within the machine's noise on one or two threads.
+#define FASCIA_ASSEMBLY_CHUNK 2048
 
 /// Pattern of frame pairs that share a sample (every frame has its diagonal).
 FASCIA_INTERN fascia_status fascia_bsr_create(fascia_ctx *ctx, const fascia_model *model, fascia_bsr *out);

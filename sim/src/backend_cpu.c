@@ -100,15 +100,16 @@ static void cpu_destroy(fascia_backend *backend) {
 #define AUTO_MAX_FLOPS 2e9
 
 // Bytes of the assembled matrix and its assembly plan, bounded from the
-// model: per local block (one per pair of frames of a sample) 36 values,
-// an index into the matrix and one into the plan.
+// model: per ordered pair of frames of a sample 36 values, and per
+// unordered pair an index into the matrix, one into the plan and a flag.
 static double assembled_bytes(const fascia_model *m) {
-  double local_blocks = 0;
+  double pairs = 0, upper = 0;
   for (int32_t s = 0; s < m->sample_count; ++s) {
     const double n = m->sample_offsets[s + 1] - m->sample_offsets[s];
-    local_blocks += n * n;
+    pairs += n * n;
+    upper += n * (n + 1) / 2;
   }
-  return local_blocks * (36 * sizeof(fascia_real) + sizeof(int32_t) + sizeof(int64_t));
+  return pairs * 36 * sizeof(fascia_real) + upper * (sizeof(int32_t) + sizeof(int64_t) + 1);
 }
 
 static fascia_status choose_linear_solver(cpu_backend *B, fascia_ctx *ctx, const fascia_organs *organs) {

@@ -14,13 +14,6 @@
 typedef double wide_real __attribute__((vector_size(32), aligned(8)));
 typedef float wide_float __attribute__((vector_size(16), aligned(4)));
 
-// Rows compiled twice, for AVX2 and for the baseline; the loader picks one.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define WIDE_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define WIDE_CLONES
-#endif
-
 #define ROWS_PER_TASK 64 // rows per unit of work: a thread's rows are contiguous
 
 // acc += the four numbers at p times x (pointers, not vector values: a
@@ -46,7 +39,8 @@ static inline void fold_rows(const wide_real acc[9], fascia_real *out) {
   }
 }
 
-// Rows [begin, end) of B v, with the float copy of the values where single.
+// Rows [begin, end) of B v, with the float copy of the values where single
+// (compiled for AVX2 and for the baseline).
 WIDE_CLONES static void rows(const fascia_bsr *B, int single, const unsigned char *moves, int32_t begin, int32_t end,
                              const fascia_real *v, fascia_real *out) {
   for (int32_t i = begin; i < end; ++i) {
