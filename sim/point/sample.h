@@ -454,14 +454,12 @@ static inline FASCIA_HD void fascia_pt_sample_tangent(const fascia_pt_model *m, 
   }
 }
 
-/// B_k^T D for pair k (6x9, row-major), B_k the 9x6 map of paper eq. 11
-/// from its frame's (dx, dtheta) to dF: rows x_r: sum_c g_c D[(r c), :];
-/// rows theta_r: sum_c (c_c x D[(. c), :])_r, c_c the columns of C.
-static inline FASCIA_HD void fascia_pt_pair_BtD(const fascia_pt_model *m, const fascia_pt_state *st, int32_t k,
-                                                const fascia_real *D, fascia_real *BtD) {
-  const fascia_real *A = st->frame_A + 9 * m->pair_frame[k], *g = m->pair_gradient + 3 * k;
-  fascia_real a[3], C[9];
-  fascia_pt_pair_C(A, m->pair_offset + 3 * k, g, m->pair_weight[k], a, C);
+/// B^T D (6x9, row-major) for the 9x6 map B of paper eq. 11 of a pair with
+/// weight gradient g and C = a g^T + w A, from its frame's (dx, dtheta) to
+/// dF: rows x_r: sum_c g_c D[(r c), :]; rows theta_r: sum_c (c_c x D[(. c),
+/// :])_r, c_c the columns of C.
+static inline FASCIA_HD void fascia_pt_BtD(const fascia_real *C, const fascia_real *g, const fascia_real *D,
+                                           fascia_real *BtD) {
   for (int j = 0; j < 9; ++j) {
     for (int r = 0; r < 3; ++r)
       BtD[9 * r + j] = g[0] * D[9 * (3 * r) + j] + g[1] * D[9 * (3 * r + 1) + j] + g[2] * D[9 * (3 * r + 2) + j];
@@ -473,6 +471,15 @@ static inline FASCIA_HD void fascia_pt_pair_BtD(const fascia_pt_model *m, const 
     }
     for (int r = 0; r < 3; ++r) BtD[9 * (3 + r) + j] = th[r];
   }
+}
+
+/// B_k^T D for pair k (fascia_pt_BtD at the state).
+static inline FASCIA_HD void fascia_pt_pair_BtD(const fascia_pt_model *m, const fascia_pt_state *st, int32_t k,
+                                                const fascia_real *D, fascia_real *BtD) {
+  const fascia_real *A = st->frame_A + 9 * m->pair_frame[k], *g = m->pair_gradient + 3 * k;
+  fascia_real a[3], C[9];
+  fascia_pt_pair_C(A, m->pair_offset + 3 * k, g, m->pair_weight[k], a, C);
+  fascia_pt_BtD(C, g, D, BtD);
 }
 
 /// One row x (9) of B_a^T D times B_b for the pairs b0 <= b < n of a
@@ -546,16 +553,16 @@ fascia_pt_sample_local_stiffness(const fascia_pt_model *m, const fascia_pt_state
   for (int a = 0; a < n; ++a) {
     const int32_t ka = begin + a;
     if (frame_moves && !frame_moves[m->pair_frame[ka]]) continue;
-    fascia_real BtD[54];
-    fascia_pt_pair_BtD(m, st, ka, D, BtD);
+    fascia_real Ca[9], BtD[54];
+    for (int q = 0; q < 9; ++q) Ca[q] = Cs[q * n + a];
+    fascia_pt_BtD(Ca, m->pair_gradient + 3 * ka, D, BtD);
     for (int row = 0; row < 6; ++row) {
       // blocks (a, b), b >= a, are consecutive; K_ba = K_ab^T (D is
       // symmetric) is not written
       fascia_pt_row_times_pairs(BtD + 9 * row, a, n, gs, Cs, out + 36 * fascia_pt_upper_block(n, a, a) + 6 * row);
     }
     // geometric part on the diagonal block: v (M - tr(M) I), M = C Pt^T
-    fascia_real Ca[9], M[9];
-    for (int q = 0; q < 9; ++q) Ca[q] = Cs[q * n + a];
+    fascia_real M[9];
     fascia_pt_mat_mult(Ca, P, M);
     const fascia_real trM = fascia_pt_trace(M);
     fascia_real *K = out + 36 * fascia_pt_upper_block(n, a, a);

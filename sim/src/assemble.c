@@ -18,38 +18,39 @@ static int32_t find_block(const fascia_bsr *B, int32_t i, int32_t j);
 // BSR blocks each chunk adds to (ascending).
 static fascia_status plan_chunks(fascia_ctx *ctx, const fascia_model *m, fascia_bsr *B) {
   const int32_t S = m->sample_count;
+  B->chunk_samples = fascia_calloc((int64_t)S + 1, sizeof(int32_t)); // at most one chunk per sample
+  FASCIA_CHECK(B->chunk_samples, ctx, FASCIA_ERR_MEMORY, "assembly: out of memory for the plan");
   int32_t chunks = 0;
-  for (int32_t s0 = 0, s1; s0 < S; s0 = s1, ++chunks)
-    for (s1 = s0 + 1; s1 < S && B->local_offsets[s1 + 1] - B->local_offsets[s0] <= B->chunk_capacity;) ++s1;
+  for (int32_t s0 = 0; s0 < S; ++chunks) {
+    int32_t s1 = s0 + 1;
+    while (s1 < S && B->local_offsets[s1 + 1] - B->local_offsets[s0] <= B->chunk_capacity) ++s1;
+    B->chunk_samples[chunks + 1] = s0 = s1;
+  }
   B->chunk_count = chunks;
-  B->chunk_samples = fascia_calloc((int64_t)chunks + 1, sizeof(int32_t));
   B->chunk_block_offsets = fascia_calloc((int64_t)chunks + 1, sizeof(int64_t));
-  int32_t *seen = fascia_calloc(B->blocks, sizeof(int32_t)); // the last chunk + 1 that touched each block
-  FASCIA_CHECK(B->chunk_samples && B->chunk_block_offsets && seen, ctx, FASCIA_ERR_MEMORY,
-               "assembly: out of memory for the plan of %d chunks", (int)chunks);
-  // two walks: count each chunk's blocks, then list them
+  int32_t *seen = fascia_calloc(B->blocks, sizeof(int32_t)); // the mark of the last chunk that touched each block
+  if (!B->chunk_block_offsets || !seen) {
+    free(seen);
+    return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "assembly: out of memory for the plan of %d chunks", (int)chunks);
+  }
+  // two walks, each chunk with its own mark: count each chunk's blocks, then list them
   for (int walk = 0; walk < 2; ++walk) {
     int64_t count = 0;
-    memset(seen, 0, (size_t)B->blocks * sizeof(int32_t));
-    for (int32_t k = 0, s0 = 0, s1; s0 < S; s0 = s1, ++k) {
-      for (s1 = s0 + 1; s1 < S && B->local_offsets[s1 + 1] - B->local_offsets[s0] <= B->chunk_capacity;) ++s1;
-      B->chunk_samples[k + 1] = s1;
+    for (int32_t k = 0; k < chunks; ++k) {
+      const int32_t mark = walk * chunks + k + 1;
       const int64_t first = count;
-      for (int64_t e = B->local_offsets[s0]; e < B->local_offsets[s1]; ++e)
-        if (seen[B->local_block[e]] != k + 1) {
-          seen[B->local_block[e]] = k + 1;
+      for (int64_t e = B->local_offsets[B->chunk_samples[k]]; e < B->local_offsets[B->chunk_samples[k + 1]]; ++e)
+        if (seen[B->local_block[e]] != mark) {
+          seen[B->local_block[e]] = mark;
           if (walk) B->chunk_blocks[count] = B->local_block[e];
           ++count;
         }
       if (walk) fascia_index_set_make(B->chunk_blocks + first, (int32_t)(count - first)); // unique already: sorts
       B->chunk_block_offsets[k + 1] = count;
     }
-    if (!walk) {
-      B->chunk_blocks = fascia_calloc(count, sizeof(int32_t));
-      if (!B->chunk_blocks) {
-        free(seen);
-        return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "assembly: out of memory for the plan of %d chunks", (int)chunks);
-      }
+    if (!walk && !(B->chunk_blocks = fascia_calloc(count, sizeof(int32_t)))) {
+      free(seen);
+      return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "assembly: out of memory for the plan of %d chunks", (int)chunks);
     }
   }
   free(seen);
