@@ -39,6 +39,7 @@
 #include <time.h>
 
 #include "backend.h"
+#include "dilatation.h"
 #include "organs.h"
 #include "solver_internal.h"
 
@@ -49,7 +50,8 @@ double fascia_now_ms(void) {
 }
 
 // Size of the rounding error of an energy evaluation, J: an absolute error of
-// a few ulps of sum_s v_s (lambda_s + 2 mu_s) whatever the energy's value
+// a few ulps of sum_s v_s (lambda_s + 2 mu_s) + sum_p V_p lambda_p (the
+// volumetric patches') whatever the energy's value
 // (StVK's E = (F^T F - I)/2 loses the digits of F^T F near rest; the
 // Neo-Hookean law is written free of such cancellation, material.h). 8 ulps
 // is the margin. Without this term a stiff StVK model (E = 1e8 Pa, t311)
@@ -58,9 +60,14 @@ double fascia_now_ms(void) {
 // (Its quotient by the model's size is the round-off of the forces: a
 // residual below it is converged whatever the tolerance asks, as when
 // nothing loads the tissue and the reference itself is round-off.)
+// The patches' energy V_p lambda_p thetabar_p^2 / 2 counts with its own
+// lambda_p (the samples keep only their share): at nu = 0.49 most of the
+// stiffness, and of the forces' round-off, is there (tests/t357).
 static fascia_real energy_roundoff(const fascia_solver *S) {
   fascia_real sum = 0;
   for (int32_t s = 0; s < S->model->sample_count; ++s) sum += fascia_pt_sample_energy_scale(&S->sys->pm, s);
+  const fascia_dilatation *d = S->sys->dilatation;
+  for (int32_t p = 0; d && p < d->table.patch_count; ++p) sum += d->patch_volume[p] * fabs(d->patch_lambda[p]);
   return fascia_pt_energy_roundoff(sum);
 }
 
