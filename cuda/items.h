@@ -446,7 +446,8 @@ static inline FASCIA_HD void fascia_dev_item(const fascia_dev *D, int kernel, in
   }
   case FASCIA_K_MODES_TANGENT: {
     const fascia_pt_state st = fascia_dev_state(D);
-    fascia_pt_modes_tangent(&D->pm, &st, &D->patches, &D->modes, i32, D->cache, D->pair_buffer);
+    fascia_pt_modes_tangent(&D->pm, &st, &D->patches, &D->modes, i32, D->cache, D->pair_buffer, (const fascia_real *)0,
+                            (const fascia_real *)0);
     break;
   }
   case FASCIA_K_MODES_REDUCE:

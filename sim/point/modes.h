@@ -42,12 +42,13 @@ static inline FASCIA_HD void fascia_pt_modes_F(const fascia_real *a, const fasci
 
 // Patch p's energy E_p(a) (J: its samples' own energies and its
 // mean-dilatation term), its gradient r and Hessian H (81) in the modes at
-// amplitudes a, the frames held. m is the model without pressures or modes.
-// Returns 0 where some sample's energy is not finite.
+// amplitudes a, the frames held. m is the model without pressures or modes;
+// F_frames [9S]: the frames' part of each sample's F, which the frames
+// held do not change. Returns 0 where some sample's energy is not finite.
 static inline FASCIA_HD int fascia_pt_modes_local(const fascia_pt_model *m, const fascia_pt_state *st,
                                                   const fascia_pt_patches *t, const fascia_pt_modes *md, int32_t p,
-                                                  const fascia_real *a, fascia_real *energy, fascia_real *r,
-                                                  fascia_real *H) {
+                                                  const fascia_real *F_frames, const fascia_real *a,
+                                                  fascia_real *energy, fascia_real *r, fascia_real *H) {
   // H NULL: energy and gradient only
   fascia_real g[9] = {0}, D[81] = {0}, sum = 0, e = 0;
   for (int j = 0; j < 9; ++j) r[j] = 0;
@@ -59,9 +60,8 @@ static inline FASCIA_HD int fascia_pt_modes_local(const fascia_pt_model *m, cons
     const fascia_real v = m->sample_volume[s], *xi = md->sample_xi + 3 * (int64_t)s;
     fascia_real cache[FASCIA_PT_CACHE_SIZE], E[9], dtheta[9];
     fascia_real *F = cache, *P = cache + 9, *aux = cache + 18;
-    fascia_pt_sample_F_frames(m, st, s, F);
     fascia_pt_modes_F(a, xi, E);
-    for (int j = 0; j < 9; ++j) F[j] += E[j];
+    for (int j = 0; j < 9; ++j) F[j] = F_frames[9 * (int64_t)s + j] + E[j];
     const fascia_real psi = fascia_pt_sample_law_stress(m, st, s, F, P, aux);
     if (!isfinite(psi)) ok = 0;
     e += v * psi;
@@ -70,11 +70,19 @@ static inline FASCIA_HD int fascia_pt_modes_local(const fascia_pt_model *m, cons
       r[j] += v * xi[j % 3] * P[j];
       g[j] += v * xi[j % 3] * dtheta[j];
     }
+    // without the rotation coupling a mode's stress response is a column
+    // of the law's tangent (m has no pressures)
+    const int closed = H && !(m->sample_coupling[s] > 0);
+    fascia_real Dlaw[81];
+    if (closed) fascia_pt_sample_tangent(m, s, cache, Dlaw);
     for (int k = 0; k < 9 && H; ++k) {
       if (!fascia_pt_mode_active(md, p, k)) continue;
       fascia_real dF[9] = {0}, dP[9], dd[9] = {0};
       dF[k] = xi[k % 3];
-      fascia_pt_sample_F_response(m, st, s, cache, dF, (fascia_real *)0, dP);
+      if (closed)
+        for (int j = 0; j < 9; ++j) dP[j] = Dlaw[9 * j + k] * dF[k];
+      else
+        fascia_pt_sample_F_response(m, st, s, cache, dF, (fascia_real *)0, dP);
       fascia_pt_dilatation_diff_add(law, 1, F, dF, dd);
       for (int j = 0; j <= k; ++j) { // the upper triangle; both are symmetric
         H[9 * j + k] += v * xi[j % 3] * dP[j];
@@ -138,7 +146,8 @@ static inline FASCIA_HD int fascia_pt_modes_inverse(const fascia_pt_modes *md, i
 /// energy or converges slowly; the last step, below the tolerance, is taken
 /// unevaluated. From 0 each time, so the result depends on the state alone.
 /// m is the model without pressures or modes (the patch's pressure follows
-/// the amplitudes here).
+/// the amplitudes here). The samples' sample_enhanced hold their frames'
+/// part of F during the solve (computed once, not at every trial).
 static inline FASCIA_HD void fascia_pt_modes_evaluate(const fascia_pt_model *m, const fascia_pt_state *st,
                                                       const fascia_pt_patches *t, const fascia_pt_modes *md, int32_t p) {
   md->failed[p] = 0;
@@ -152,7 +161,10 @@ static inline FASCIA_HD void fascia_pt_modes_evaluate(const fascia_pt_model *m, 
   for (int32_t q = t->patch_offsets[p]; q < t->patch_offsets[p + 1]; ++q)
     scale += fascia_pt_sample_energy_scale(m, t->patch_samples[q]);
   const fascia_real roundoff = fascia_pt_energy_roundoff(scale);
-  if (fascia_pt_modes_local(m, st, t, md, p, a, &e, r, H) && fascia_pt_modes_inverse(md, p, H, inverse)) {
+  fascia_real *F_frames = md->sample_enhanced;
+  for (int32_t q = t->patch_offsets[p]; q < t->patch_offsets[p + 1]; ++q)
+    fascia_pt_sample_F_frames(m, st, t->patch_samples[q], F_frames + 9 * (int64_t)t->patch_samples[q]);
+  if (fascia_pt_modes_local(m, st, t, md, p, F_frames, a, &e, r, H) && fascia_pt_modes_inverse(md, p, H, inverse)) {
     for (int it = 0; it < FASCIA_PT_MODES_MAX_ITERATIONS; ++it) {
       fascia_real change = 0;
       for (int j = 0; j < 9; ++j) {
@@ -167,7 +179,7 @@ static inline FASCIA_HD void fascia_pt_modes_evaluate(const fascia_pt_model *m, 
         failed = 0;
         break;
       }
-      const int ok = fascia_pt_modes_local(m, st, t, md, p, trial, &e_trial, r_trial, (fascia_real *)0);
+      const int ok = fascia_pt_modes_local(m, st, t, md, p, F_frames, trial, &e_trial, r_trial, (fascia_real *)0);
       if (!ok || e_trial > e + FASCIA_R(1e-13) * fabs(e) + roundoff) {
         if (fresh) { // a Newton step gains energy: shorten it
           shrink *= FASCIA_R(0.5);
@@ -175,7 +187,7 @@ static inline FASCIA_HD void fascia_pt_modes_evaluate(const fascia_pt_model *m, 
             failed = !ok && it == 0;
             break;
           }
-        } else if (!fascia_pt_modes_local(m, st, t, md, p, a, &e, r, H) ||
+        } else if (!fascia_pt_modes_local(m, st, t, md, p, F_frames, a, &e, r, H) ||
                    !fascia_pt_modes_inverse(md, p, H, inverse))
           break;
         else
@@ -192,7 +204,7 @@ static inline FASCIA_HD void fascia_pt_modes_evaluate(const fascia_pt_model *m, 
       shrink = 1;
       fresh = 0;
       if (slow) { // the chord converges slowly: the Hessian here
-        if (!fascia_pt_modes_local(m, st, t, md, p, a, &e, r, H) ||
+        if (!fascia_pt_modes_local(m, st, t, md, p, F_frames, a, &e, r, H) ||
             !fascia_pt_modes_inverse(md, p, H, inverse))
           break;
         fresh = 1;
@@ -207,14 +219,39 @@ static inline FASCIA_HD void fascia_pt_modes_evaluate(const fascia_pt_model *m, 
   }
 }
 
+/// A sample's share of its patch p's K_aa (81) from its v D (Dv), at rest
+/// offset xi: v D[j][k] xi_j xi_k in active mode columns k, else 0.
+static inline FASCIA_HD void fascia_pt_modes_sample_share(const fascia_pt_modes *md, int32_t p, const fascia_real *xi,
+                                                          const fascia_real *Dv, fascia_real *share) {
+  fascia_real column[9]; // xi_k in active columns, else 0
+  for (int k = 0; k < 9; ++k) column[k] = fascia_pt_mode_active(md, p, k) ? xi[k % 3] : 0;
+  for (int j = 0; j < 9; ++j)
+    for (int k = 0; k < 9; ++k) share[9 * j + k] = Dv[9 * j + k] * xi[j % 3] * column[k];
+}
+
+/// A pair's share of K_ue (6x9) from its B^T v D (BtDv): columns k scaled
+/// by xi_k, active mode columns only.
+static inline FASCIA_HD void fascia_pt_modes_pair_share(const fascia_pt_modes *md, int32_t p, const fascia_real *xi,
+                                                        const fascia_real *BtDv, fascia_real *share) {
+  fascia_real column[9];
+  for (int k = 0; k < 9; ++k) column[k] = fascia_pt_mode_active(md, p, k) ? xi[k % 3] : 0;
+  for (int row = 0; row < 6; ++row)
+    for (int k = 0; k < 9; ++k) share[9 * row + k] = BtDv[9 * row + k] * column[k];
+}
+
 /// Patch p at the state st (after its evaluation, its samples' cache and
 /// the patches' gradients G_e current): K_aa and the coupling K_ue of the
 /// modes with each support entry's frame, both including the patch's
 /// rank-one term, into the factors W_e. pair_scratch: [6P] rows, each
 /// sample's own part written (where the rotation coupling acts).
+/// sample_share [81 S] and pair_share [54 P], both or neither, hold the
+/// shares of the samples without rotation coupling at this state (the
+/// assembly, which has their D and B^T D, leaves them there); else they
+/// are computed here, the same way.
 static inline FASCIA_HD void fascia_pt_modes_tangent(const fascia_pt_model *m, const fascia_pt_state *st,
                                                      const fascia_pt_patches *t, const fascia_pt_modes *md, int32_t p,
-                                                     const fascia_real *cache, fascia_real *pair_scratch) {
+                                                     const fascia_real *cache, fascia_real *pair_scratch,
+                                                     const fascia_real *sample_share, const fascia_real *pair_share) {
   if (!md->active[p]) return; // its factors stay zero
   fascia_real K[81] = {0}, g[9] = {0};
   for (int64_t q = 54 * (int64_t)t->support_offsets[p]; q < 54 * (int64_t)t->support_offsets[p + 1]; ++q)
@@ -227,18 +264,22 @@ static inline FASCIA_HD void fascia_pt_modes_tangent(const fascia_pt_model *m, c
     fascia_real dtheta[9], *rows = pair_scratch + 6 * (int64_t)begin;
     fascia_pt_dilatation(law, c, dtheta);
     for (int j = 0; j < 9; ++j) g[j] += v * xi[j % 3] * dtheta[j];
-    if (!(m->sample_coupling[s] > 0)) { // D and B^T D, as the assembly's local blocks
-      fascia_real D[81], BtD[54];
-      fascia_pt_sample_tangent(m, s, c, D);
-      for (int j = 0; j < 9; ++j)
-        for (int k = 0; k < 9; ++k)
-          if (fascia_pt_mode_active(md, p, k)) K[9 * j + k] += v * xi[j % 3] * xi[k % 3] * D[9 * j + k];
+    if (!(m->sample_coupling[s] > 0)) { // from v D and B^T v D, as the assembly's local blocks
+      fascia_real Dv[81], own[81];
+      const fascia_real *share = sample_share ? sample_share + 81 * (int64_t)s : own;
+      if (!sample_share) {
+        fascia_pt_sample_tangent_volume(m, s, c, Dv);
+        fascia_pt_modes_sample_share(md, p, xi, Dv, own);
+      }
+      for (int u = 0; u < 81; ++u) K[u] += share[u];
       for (int32_t kk = begin; kk < end; ++kk) {
-        fascia_real *Ke = md->entry_factor + 54 * (int64_t)t->pair_entry[kk];
-        fascia_pt_pair_BtD(m, st, kk, D, BtD);
-        for (int row = 0; row < 6; ++row)
-          for (int k = 0; k < 9; ++k)
-            if (fascia_pt_mode_active(md, p, k)) Ke[9 * row + k] += v * xi[k % 3] * BtD[9 * row + k];
+        fascia_real *Ke = md->entry_factor + 54 * (int64_t)t->pair_entry[kk], BtDv[54];
+        const fascia_real *pshare = pair_share ? pair_share + 54 * (int64_t)kk : own;
+        if (!pair_share) {
+          fascia_pt_pair_BtD(m, st, kk, Dv, BtDv);
+          fascia_pt_modes_pair_share(md, p, xi, BtDv, own);
+        }
+        for (int u = 0; u < 54; ++u) Ke[u] += pshare[u];
       }
       continue;
     }

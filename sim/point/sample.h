@@ -443,15 +443,16 @@ static inline FASCIA_HD void fascia_pt_sample_stiffness(const fascia_pt_model *m
 /// dF_col): its law and its patch's pressure, not the rotation coupling.
 static inline FASCIA_HD void fascia_pt_sample_tangent(const fascia_pt_model *m, int32_t s, const fascia_real *cache,
                                                       fascia_real *D) {
-  const fascia_real *F = cache, *aux = cache + 18;
-  for (int col = 0; col < 9; ++col) {
-    fascia_real e[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0}, dP[9];
-    e[col] = 1;
-    fascia_pt_stress_diff(m->sample_law[s], m->sample_lambda[s], m->sample_mu[s], F, aux, e, dP);
-    if (m->sample_pressure && m->sample_pressure[s] != 0)
-      fascia_pt_dilatation_diff_add(m->sample_law[s], m->sample_pressure[s], F, e, dP);
-    for (int r = 0; r < 9; ++r) D[9 * r + col] = dP[r];
-  }
+  fascia_pt_stress_tangent(m->sample_law[s], m->sample_lambda[s], m->sample_mu[s],
+                           m->sample_pressure ? m->sample_pressure[s] : 0, cache, cache + 18, D);
+}
+
+/// v D: fascia_pt_sample_tangent times the sample's volume, as the
+/// assembly and the enhanced strain modes' terms both take it.
+static inline FASCIA_HD void fascia_pt_sample_tangent_volume(const fascia_pt_model *m, int32_t s,
+                                                             const fascia_real *cache, fascia_real *Dv) {
+  fascia_pt_sample_tangent(m, s, cache, Dv);
+  for (int q = 0; q < 81; ++q) Dv[q] *= m->sample_volume[s];
 }
 
 /// B^T D (6x9, row-major) for the 9x6 map B of paper eq. 11 of a pair with
@@ -529,17 +530,22 @@ static inline FASCIA_HD int32_t fascia_pt_upper_block(int32_t n, int32_t a, int3
 /// frame_moves ([frames], NULL: all): the rows of a frame not in it are not
 /// computed, and a block with such a frame is to be left unread (the
 /// assembly leaves the blocks of frames a step holds). scratch: 12 n reals
-/// (n the sample's pairs). Forced inline: its caller is compiled for AVX2 too.
+/// (n the sample's pairs). Dv (81) and BtDv (54 n), where not NULL: v D
+/// and every pair's B^T v D, moving or not (the enhanced strain modes'
+/// terms are made of them, sim/point/modes.h). Forced inline: its caller is
+/// compiled for AVX2 too.
 FASCIA_STATIC_FORCE_INLINE FASCIA_HD void
 fascia_pt_sample_local_stiffness(const fascia_pt_model *m, const fascia_pt_state *st, int32_t s,
                                  const fascia_real *cache, const unsigned char *frame_moves,
-                                 fascia_real *FASCIA_RESTRICT scratch, fascia_real *FASCIA_RESTRICT out) {
+                                 fascia_real *FASCIA_RESTRICT scratch, fascia_real *FASCIA_RESTRICT out,
+                                 fascia_real *FASCIA_RESTRICT Dv, fascia_real *FASCIA_RESTRICT BtDv) {
   const fascia_real *P = cache + 9;
   const fascia_real v = m->sample_volume[s];
   const int32_t begin = m->sample_offsets[s], n = m->sample_offsets[s + 1] - begin;
   fascia_real D[81];
-  fascia_pt_sample_tangent(m, s, cache, D);
-  for (int q = 0; q < 81; ++q) D[q] *= v;
+  fascia_pt_sample_tangent_volume(m, s, cache, D);
+  if (Dv)
+    for (int q = 0; q < 81; ++q) Dv[q] = D[q];
   // the pairs' g and C by component, for fascia_pt_row_times_pairs
   fascia_real *FASCIA_RESTRICT gs = scratch, *FASCIA_RESTRICT Cs = scratch + 3 * n;
   for (int b = 0; b < n; ++b) {
@@ -552,10 +558,12 @@ fascia_pt_sample_local_stiffness(const fascia_pt_model *m, const fascia_pt_state
   }
   for (int a = 0; a < n; ++a) {
     const int32_t ka = begin + a;
-    if (frame_moves && !frame_moves[m->pair_frame[ka]]) continue;
-    fascia_real Ca[9], BtD[54];
+    const int moving = !frame_moves || frame_moves[m->pair_frame[ka]];
+    if (!moving && !BtDv) continue;
+    fascia_real Ca[9], own[54], *BtD = BtDv ? BtDv + 54 * a : own;
     for (int q = 0; q < 9; ++q) Ca[q] = Cs[q * n + a];
     fascia_pt_BtD(Ca, m->pair_gradient + 3 * ka, D, BtD);
+    if (!moving) continue;
     for (int row = 0; row < 6; ++row) {
       // blocks (a, b), b >= a, are consecutive; K_ba = K_ab^T (D is
       // symmetric) is not written

@@ -78,8 +78,9 @@ FASCIA_INTERN void fascia_bsr_apply_single(const fascia_bsr *bsr, int threads, c
 /// fascia_system_evaluate (what fascia_system_hessian_apply applies).
 /// moves: [frames] nonzero for a frame the step may move; a block of any
 /// other frame is left zero, and no work is spent on it (in organ scenes
-/// most blocks couple a fixed frame). NULL: every frame.
-FASCIA_INTERN void fascia_system_hessian_assemble(fascia_system *sys, const unsigned char *moves, fascia_bsr *bsr);
+/// most blocks couple a fixed frame). NULL: every frame. Returns 0, the
+/// matrix incomplete, when out of memory for a thread's scratch.
+FASCIA_INTERN int fascia_system_hessian_assemble(fascia_system *sys, const unsigned char *moves, fascia_bsr *bsr);
 /// Adds coefficient * M (consistent mass at the snapshot) to bsr->values, on
 /// the blocks of moving frames (moves as above).
 FASCIA_INTERN void fascia_system_mass_assemble_add(fascia_system *sys, const unsigned char *moves,

@@ -336,7 +336,8 @@ static fascia_status cpu_evaluate(fascia_backend *backend, fascia_real alpha, in
 // K = H (+ (c1 + c2) M for a dynamic step) at the current iterate, and its
 // float copy when the products use one
 static fascia_status assemble(cpu_backend *B) {
-  fascia_system_hessian_assemble(B->sys, B->frame_moves, &B->K);
+  FASCIA_CHECK(fascia_system_hessian_assemble(B->sys, B->frame_moves, &B->K), B->sys->ctx, FASCIA_ERR_MEMORY,
+               "assembly: out of memory for a thread's scratch");
   const fascia_real c = B->values.c1 + B->values.c2;
   if (c != 0 && B->def->mass == FASCIA_MASS_CONSISTENT) {
     fascia_system_mass_assemble_add(B->sys, B->frame_moves, c, &B->K);

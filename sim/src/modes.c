@@ -24,6 +24,8 @@ void fascia_modes_destroy(fascia_modes **modes) {
   free(md->entry_factor);
   free(md->reduced);
   free(md->failed);
+  free(md->sample_share);
+  free(md->pair_share);
   free(md);
   *modes = NULL;
 }
@@ -50,8 +52,10 @@ fascia_status fascia_modes_create(fascia_system *sys, fascia_modes **out) {
   md->entry_factor = fascia_calloc(54 * (int64_t)t->entry_count, sizeof(fascia_real));
   md->reduced = fascia_calloc(9 * (int64_t)P, sizeof(fascia_real));
   md->failed = fascia_calloc(P, sizeof(int32_t));
+  md->sample_share = fascia_calloc(81 * (int64_t)S, sizeof(fascia_real));
+  md->pair_share = fascia_calloc(54 * (int64_t)m->sample_offsets[S], sizeof(fascia_real));
   if (!md->active || !md->xi_max || !md->sample_xi || !md->amplitude || !md->sample_enhanced ||
-      !md->entry_factor || !md->reduced || !md->failed) {
+      !md->entry_factor || !md->reduced || !md->failed || !md->sample_share || !md->pair_share) {
     fascia_modes_destroy(&md);
     return FASCIA_FAIL(sys->ctx, FASCIA_ERR_MEMORY, "modes: out of memory for %d patches", (int)P);
   }
@@ -96,7 +100,7 @@ int32_t fascia_modes_evaluate(fascia_system *sys, fascia_modes *md) {
   const fascia_pt_patches *t = &sys->dilatation->view;
 #pragma omp parallel for num_threads(sys->threads) schedule(dynamic, 4)
   for (int32_t p = 0; p < t->count; ++p) fascia_pt_modes_evaluate(&own, &st, t, &md->view, p);
-  md->tangent_current = 0;
+  md->tangent_current = md->shares_current = 0;
   for (int32_t p = 0; p < t->count; ++p)
     if (md->failed[p]) return p;
   return -1;
@@ -109,8 +113,17 @@ void fascia_modes_tangent(const fascia_system *sys, fascia_modes *md) {
   const fascia_pt_patches *t = &sys->dilatation->view;
 #pragma omp parallel for num_threads(sys->threads) schedule(dynamic, 4)
   for (int32_t p = 0; p < t->count; ++p)
-    fascia_pt_modes_tangent(&sys->pm, &st, t, &md->view, p, sys->cache, sys->pair_buffer);
+    fascia_pt_modes_tangent(&sys->pm, &st, t, &md->view, p, sys->cache, sys->pair_buffer,
+                            md->shares_current ? md->sample_share : NULL, md->shares_current ? md->pair_share : NULL);
   md->tangent_current = 1;
+}
+
+int32_t fascia_modes_sample_patch(const fascia_system *sys, const fascia_modes *md, int32_t s) {
+  const fascia_model *m = sys->model;
+  if (m->sample_offsets[s] == m->sample_offsets[s + 1] || sys->pm.sample_coupling[s] > 0) return -1;
+  const fascia_pt_patches *t = &sys->dilatation->view;
+  const int32_t e = t->pair_entry[m->sample_offsets[s]];
+  return e >= 0 && md->active[t->entry_patch[e]] ? t->entry_patch[e] : -1;
 }
 
 void fascia_modes_apply_add(const fascia_system *sys, fascia_modes *md, const fascia_real *v, fascia_real *out) {

@@ -44,6 +44,12 @@ typedef struct fascia_modes {
   int32_t *failed;
   fascia_pt_modes view;
   int tangent_current; ///< entry_factor is for the last evaluated state
+  /// [81 S] and [54 P]: the samples' and pairs' shares of K_aa and K_ue
+  /// (fascia_pt_modes_sample_share, _pair_share) that the assembly leaves
+  /// from the D and B^T D it computes anyway, so the tangent need not
+  /// compute them again; current: they are for the last evaluated state
+  fascia_real *sample_share, *pair_share;
+  int shares_current;
 } fascia_modes;
 
 /// Makes the modes for sys (NULL in *out when the model asks for none);
@@ -61,7 +67,11 @@ FASCIA_INTERN void fascia_modes_apply_add(const fascia_system *sys, fascia_modes
 /// Adds the condensed terms' 6x6 diagonal blocks [36N].
 FASCIA_INTERN void fascia_modes_diagonal_add(const fascia_system *sys, fascia_modes *md, fascia_real *blocks);
 /// The factors W_e = K_ue L^-T (L L^T = K_aa) at the last evaluated
-/// state, unless current (the assembly calls it, then reads md->view).
+/// state, unless current (the assembly calls it, then reads md->view);
+/// from the assembly's shares where they are current.
 FASCIA_INTERN void fascia_modes_tangent(const fascia_system *sys, fascia_modes *md);
+/// The patch of sample s whose modes act, or -1 (no patch, no active
+/// mode, or the rotation coupling, whose share the tangent computes).
+FASCIA_INTERN int32_t fascia_modes_sample_patch(const fascia_system *sys, const fascia_modes *md, int32_t s);
 
 #endif
