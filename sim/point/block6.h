@@ -50,13 +50,15 @@ static inline FASCIA_HD void fascia_pt_block6_precond(const fascia_real *B, int 
 /// inv NULL: no preconditioner (z = masked r).
 static inline FASCIA_HD void fascia_pt_block6_apply(const fascia_real *inv, const unsigned char *mask,
                                                     const fascia_real *r, fascia_real *z) {
+  fascia_real masked[6]; // r on the free entries: the mask read once, not per product term
+  for (int c = 0; c < 6; ++c) masked[c] = mask[c] ? r[c] : 0;
+  if (!inv) {
+    for (int a = 0; a < 6; ++a) z[a] = masked[a];
+    return;
+  }
   for (int a = 0; a < 6; ++a) {
-    if (!inv) {
-      z[a] = mask[a] ? r[a] : 0;
-      continue;
-    }
     fascia_real s = 0;
-    for (int c = 0; c < 6; ++c) s += inv[6 * a + c] * (mask[c] ? r[c] : 0);
+    for (int c = 0; c < 6; ++c) s += inv[6 * a + c] * masked[c];
     z[a] = mask[a] ? s : 0;
   }
 }

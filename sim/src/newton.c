@@ -152,9 +152,20 @@ fascia_status fascia_newton_minimize(fascia_solver *S, const fascia_step_values 
   int relaxed = 0;
   fascia_real watch_phi = now.phi, watch_slope = 0, watch_gg = now.gradient_norm2, watch_shift = 0;
   fascia_real last_phi = now.phi; // Phi of the previous iterate
+  // the round-off estimate is rough (within a few times, either way): a
+  // |gradient| that has stopped halving near it has reached the floor
+  fascia_real best = g0;
+  int stalled = 0;
   for (; iteration <= max_iterations; ++iteration) {
     gnorm = sqrt(now.gradient_norm2);
-    const int small = gnorm <= def->newton_tolerance * reference || gnorm <= force_roundoff;
+    if (gnorm < FASCIA_R(0.5) * best) {
+      best = gnorm;
+      stalled = 0;
+    } else if (iteration > 0) {
+      ++stalled;
+    }
+    const int small = gnorm <= def->newton_tolerance * reference || gnorm <= force_roundoff ||
+                      (stalled >= FASCIA_NEWTON_STALL && gnorm <= FASCIA_NEWTON_STALL_FLOOR * force_roundoff);
     if (relaxed > 0 && accepts(def, watch_phi, now.phi, 1, watch_slope, watch_gg, now.gradient_norm2, now.energy_size,
                                material_roundoff))
       relaxed = 0; // Phi came down enough: watch this iterate

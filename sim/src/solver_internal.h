@@ -124,5 +124,7 @@ FASCIA_INTERN fascia_status fascia_newton_minimize(fascia_solver *solver, const 
 #define FASCIA_NEWTON_MAX_CUTS 30    // step halvings before the Levenberg shift grows
 #define FASCIA_NEWTON_MAX_SHIFT 1e12 // relative Levenberg shift beyond which Newton gives up
 #define FASCIA_NEWTON_WATCHDOG 32    // full Newton steps tried before Phi must be below the watched iterate's
+#define FASCIA_NEWTON_STALL 4        // iterations without halving |gradient| ...
+#define FASCIA_NEWTON_STALL_FLOOR 100 // ... within this many times the forces' round-off: converged there
 
 #endif
