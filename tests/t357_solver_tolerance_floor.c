@@ -21,13 +21,20 @@
 #include "fascia/solver.h"
 #include "scenes.h"
 
-static int run(fascia_ctx *ctx, const fascia_model *m, fascia_linear_solver linear, int assembled, double *x) {
+// The CPU solver with this linear solver, double products, and a Newton
+// tolerance below the round-off floor
+static fascia_solver_def tight(fascia_linear_solver linear, int assembled, double newton_tolerance) {
   fascia_solver_def sd = fascia_solver_def_default();
   sd.backend = "cpu";
   sd.linear_solver = linear;
   sd.assembled = assembled;
   sd.single_precision_matrix = 0;
-  sd.newton_tolerance = 1e-10;
+  sd.newton_tolerance = newton_tolerance;
+  return sd;
+}
+
+static int run(fascia_ctx *ctx, const fascia_model *m, fascia_linear_solver linear, int assembled, double *x) {
+  fascia_solver_def sd = tight(linear, assembled, 1e-10);
   sd.cg_tolerance = 1e-6;
   fascia_solver *s = NULL;
   CHECK_OK(fascia_solver_create(ctx, m, &sd, &s), ctx);
@@ -58,12 +65,7 @@ static int static_floor(fascia_ctx *ctx, int shape, fascia_linear_solver linear,
   fascia_model *m = NULL;
   CHECK_OK(fascia_scene_beam_build(ctx, &def, &m), ctx);
   if (!m) return 1;
-  fascia_solver_def sd = fascia_solver_def_default();
-  sd.backend = "cpu";
-  sd.linear_solver = linear;
-  sd.assembled = assembled;
-  sd.single_precision_matrix = 0;
-  sd.newton_tolerance = 1e-14;
+  fascia_solver_def sd = tight(linear, assembled, 1e-14);
   sd.newton_iterations = 60;
   sd.cg_tolerance = 1e-12;
   sd.cg_iterations = 20000;
