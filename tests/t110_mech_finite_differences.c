@@ -136,7 +136,8 @@ static int run_case(fascia_ctx *ctx, unsigned long long seed, int law, double co
 
 // The law's 9x9 tangent in closed form (fascia_pt_stress_tangent, what
 // the assembly and the modes take) against central differences of the
-// stress plus pressure times the dilatation's gradient, both laws, at
+// stress plus pressure times the dilatation's gradient, and the
+// dilatation's Hessian against differences of its gradient, both laws, at
 // random F from stretched to nearly flat (det F 0.05).
 static int check_stress_tangent(unsigned long long seed, int law) {
   unsigned long long st = seed * 977 + 5;
@@ -168,6 +169,11 @@ static int check_stress_tangent(unsigned long long seed, int law) {
       fascia_pt_stress_diff(law, lambda, mu, F, aux, e, dP);
       fascia_pt_dilatation_diff_add(law, pressure, F, e, dP);
       for (int ij = 0; ij < 9; ++ij) CHECK_NEAR(D[9 * ij + kl], dP[ij], 0, 1e-13 * (1 + scale));
+      // the dilatation's Hessian against differences of its gradient
+      double Hd[81], hscale = 0;
+      fascia_pt_dilatation_hessian(law, F, Hd);
+      for (int ij = 0; ij < 9; ++ij) hscale = fmax(hscale, fabs(tp[ij] - tm[ij]) / (2 * H));
+      for (int ij = 0; ij < 9; ++ij) CHECK_NEAR(Hd[9 * ij + kl], (tp[ij] - tm[ij]) / (2 * H), 0, RTOL * (1 + hscale));
     }
   }
   return 0;

@@ -108,6 +108,28 @@ static inline FASCIA_HD fascia_real fascia_pt_stress(int law, fascia_real lambda
   return FASCIA_R(0.5) * lambda * trE * trE + mu * fascia_pt_ddot(E, E);
 }
 
+/// d^2 theta / dF^2 as a 9x9 matrix (H[9 (3i + j) + 3k + l]): the identity
+/// for StVK (theta = tr E), d cof_ij / dF_kl = e_ikn e_jlq F_nq for the
+/// Neo-Hookean law (theta = J - 1), e the permutation symbol: what
+/// fascia_pt_dilatation_diff_add gives for unit dF, in closed form.
+static inline FASCIA_HD void fascia_pt_dilatation_hessian(int law, const fascia_real *F, fascia_real *H) {
+  for (int q = 0; q < 81; ++q) H[q] = 0;
+  if (law != FASCIA_PT_LAW_NEOHOOKEAN) {
+    for (int q = 0; q < 9; ++q) H[10 * q] = 1;
+    return;
+  }
+  for (int i = 0; i < 3; ++i)
+    for (int k = 0; k < 3; ++k) {
+      if (i == k) continue;
+      const int n = 3 - i - k, ik = k == (i + 1) % 3 ? 1 : -1; // e_ikn
+      for (int j = 0; j < 3; ++j)
+        for (int jl = 1; jl < 3; ++jl) { // l != j
+          const int l = (j + jl) % 3, q = 3 - j - l;
+          H[9 * (3 * i + j) + 3 * k + l] = (jl == 1 ? ik : -ik) * F[3 * n + q];
+        }
+    }
+}
+
 /// D = dP/dF + pressure d^2 theta/dF^2 as a 9x9 matrix (D[9 (3i + j) + 3k
 /// + l] = dP_ij / dF_kl), aux from fascia_pt_stress at the same F: the
 /// nine columns fascia_pt_stress_diff and fascia_pt_dilatation_diff_add
@@ -120,19 +142,10 @@ static inline FASCIA_HD void fascia_pt_stress_tangent(int law, fascia_real lambd
                                                       const fascia_real *F, const fascia_real *aux, fascia_real *D) {
   if (law == FASCIA_PT_LAW_NEOHOOKEAN) {
     const fascia_real l = lambda + mu, a = l > 0 ? 1 + mu / l : 1, s = l * (aux[9] - a) + pressure;
+    fascia_real dcof[81];
+    fascia_pt_dilatation_hessian(law, F, dcof);
     for (int ij = 0; ij < 9; ++ij)
-      for (int kl = 0; kl < 9; ++kl) D[9 * ij + kl] = l * aux[ij] * aux[kl] + (ij == kl ? mu : 0);
-    for (int i = 0; i < 3; ++i)
-      for (int k = 0; k < 3; ++k) {
-        if (i == k) continue;
-        const int n = 3 - i - k;
-        const fascia_real ik = k == (i + 1) % 3 ? s : -s; // s e_ikn
-        for (int j = 0; j < 3; ++j)
-          for (int jl = 1; jl < 3; ++jl) { // l != j
-            const int ll = (j + jl) % 3, q = 3 - j - ll;
-            D[9 * (3 * i + j) + 3 * k + ll] += (jl == 1 ? ik : -ik) * F[3 * n + q];
-          }
-      }
+      for (int kl = 0; kl < 9; ++kl) D[9 * ij + kl] = l * aux[ij] * aux[kl] + (ij == kl ? mu : 0) + s * dcof[9 * ij + kl];
     return;
   }
   fascia_real B[9]; // F F^T

@@ -71,19 +71,27 @@ static inline FASCIA_HD int fascia_pt_modes_local(const fascia_pt_model *m, cons
       g[j] += v * xi[j % 3] * dtheta[j];
     }
     // without the rotation coupling a mode's stress response is a column
-    // of the law's tangent (m has no pressures)
+    // of the law's tangent (m has no pressures), its dilatation's a column
+    // of the dilatation's Hessian
     const int closed = H && !(m->sample_coupling[s] > 0);
-    fascia_real Dlaw[81];
-    if (closed) fascia_pt_sample_tangent(m, s, cache, Dlaw);
+    fascia_real Dlaw[81], Ddil[81];
+    if (closed) {
+      fascia_pt_sample_tangent(m, s, cache, Dlaw);
+      fascia_pt_dilatation_hessian(law, F, Ddil);
+    }
     for (int k = 0; k < 9 && H; ++k) {
       if (!fascia_pt_mode_active(md, p, k)) continue;
       fascia_real dF[9] = {0}, dP[9], dd[9] = {0};
       dF[k] = xi[k % 3];
-      if (closed)
-        for (int j = 0; j < 9; ++j) dP[j] = Dlaw[9 * j + k] * dF[k];
-      else
+      if (closed) {
+        for (int j = 0; j < 9; ++j) {
+          dP[j] = Dlaw[9 * j + k] * dF[k];
+          dd[j] = Ddil[9 * j + k] * dF[k];
+        }
+      } else {
         fascia_pt_sample_F_response(m, st, s, cache, dF, (fascia_real *)0, dP);
-      fascia_pt_dilatation_diff_add(law, 1, F, dF, dd);
+        fascia_pt_dilatation_diff_add(law, 1, F, dF, dd);
+      }
       for (int j = 0; j <= k; ++j) { // the upper triangle; both are symmetric
         H[9 * j + k] += v * xi[j % 3] * dP[j];
         D[9 * j + k] += v * xi[j % 3] * dd[j];
