@@ -256,18 +256,18 @@ static void mass_rows(fascia_system *sys, const unsigned char *moves, fascia_bsr
 // closed form, the rotation coupling, when on, as products with the 6n unit
 // vectors of the sample (its upper blocks: the assembled matrix is
 // symmetric). Blocks with a frame not in moves are left unwritten. A
-// sample in a patch with enhanced strain modes also leaves its shares of
-// the modes' terms (sim/src/modes.h) from its D and B^T D.
+// sample in patch p >= 0 with enhanced strain modes also leaves its shares
+// of the modes' terms (sim/src/modes.h) from its D and B^T D.
 // dq, col: 6 max_neighbours reals; scratch: 66 max_neighbours. Its loops
 // over the sample's pairs are wide (AVX2: 26 against 32 ms of assembly in
 // the static 20x3x3 hex cantilever).
 WIDE_CLONES static void local_stiffness(const fascia_system *sys, const fascia_pt_state *st, const unsigned char *moves,
-                            int32_t s, fascia_real *out, fascia_real *dq, fascia_real *col, fascia_real *scratch) {
+                            int32_t s, int32_t p, fascia_real *out, fascia_real *dq, fascia_real *col,
+                            fascia_real *scratch) {
   const fascia_model *m = sys->model;
   const fascia_real *cache = sys->cache + (int64_t)s * FASCIA_PT_CACHE_SIZE;
   const int32_t begin = m->sample_offsets[s], n = m->sample_offsets[s + 1] - begin;
   const fascia_modes *md = sys->modes;
-  const int32_t p = md ? fascia_modes_sample_patch(sys, md, s) : -1;
   fascia_real Dv[81], *BtDv = scratch + 12 * sys->max_neighbours;
   fascia_pt_sample_local_stiffness(&sys->pm, st, s, cache, moves, scratch, out, p >= 0 ? Dv : NULL,
                                    p >= 0 ? BtDv : NULL);
@@ -342,6 +342,8 @@ static int sample_moves(const fascia_model *m, const unsigned char *moves, int32
 int fascia_system_hessian_assemble(fascia_system *sys, const unsigned char *moves, fascia_bsr *B) {
   const fascia_pt_state st = {sys->x, sys->A};
   int out_of_memory = 0;
+  fascia_modes *md = sys->modes;
+  const int shares = md && fascia_modes_shares_ready(sys, md);
   memset(B->values, 0, 36 * (size_t)B->blocks * sizeof(fascia_real));
   memcpy(B->cursor, B->contrib_offsets, (size_t)B->blocks * sizeof(int64_t));
 #pragma omp parallel num_threads(sys->threads) reduction(| : out_of_memory)
@@ -353,10 +355,12 @@ int fascia_system_hessian_assemble(fascia_system *sys, const unsigned char *move
       const int64_t e0 = B->local_offsets[s0], e1 = B->local_offsets[s1];
       // a sample with modes leaves its shares even where no frame of it moves
 #pragma omp for schedule(static)
-      for (int32_t s = s0; s < s1; ++s)
-        if (dq && (sample_moves(sys->model, moves, s) || (sys->modes && fascia_modes_sample_patch(sys, sys->modes, s) >= 0)))
-          local_stiffness(sys, &st, moves, s, B->chunk + 36 * (B->local_offsets[s] - e0), dq,
+      for (int32_t s = s0; s < s1; ++s) {
+        const int32_t p = shares ? fascia_modes_sample_patch(sys, md, s) : -1;
+        if (dq && (p >= 0 || sample_moves(sys->model, moves, s)))
+          local_stiffness(sys, &st, moves, s, p, B->chunk + 36 * (B->local_offsets[s] - e0), dq,
                           dq + 6 * sys->max_neighbours, dq + 12 * sys->max_neighbours);
+      }
       // the chunk's upper blocks (the lower ones are mirrored at the end); a
       // block of two moving frames has contributions from moving samples only
 #pragma omp for schedule(static)
@@ -379,7 +383,7 @@ int fascia_system_hessian_assemble(fascia_system *sys, const unsigned char *move
     free(dq);
   }
   if (out_of_memory) return 0;
-  if (sys->modes) sys->modes->shares_current = 1;
+  if (shares) md->shares_current = 1;
   if (sys->dilatation) dilatation_rows(sys, moves, B);
   if (sys->modes) modes_rows(sys, moves, B);
   // frame-local terms: gravity (theta-theta) and the symmetrizing 1/2 [g_theta]x

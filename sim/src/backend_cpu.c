@@ -103,13 +103,14 @@ static void cpu_destroy(fascia_backend *backend) {
 // model: per ordered pair of frames of a sample 36 values, and per
 // unordered pair an index into the matrix, one into the plan and a flag.
 static double assembled_bytes(const fascia_model *m) {
-  double pairs = 0, upper = 0;
+  double pairs = 0, upper = 0, shares = 0;
   for (int32_t s = 0; s < m->sample_count; ++s) {
     const double n = m->sample_offsets[s + 1] - m->sample_offsets[s];
     pairs += n * n;
     upper += n * (n + 1) / 2;
+    if (m->sample_modes[s]) shares += 81 + 54 * n; // the enhanced strain modes' shares (modes.h)
   }
-  return pairs * 36 * sizeof(fascia_real) + upper * (sizeof(int32_t) + sizeof(int64_t) + 1);
+  return (pairs * 36 + shares) * sizeof(fascia_real) + upper * (sizeof(int32_t) + sizeof(int64_t) + 1);
 }
 
 static fascia_status choose_linear_solver(cpu_backend *B, fascia_ctx *ctx, const fascia_organs *organs) {

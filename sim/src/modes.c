@@ -52,10 +52,8 @@ fascia_status fascia_modes_create(fascia_system *sys, fascia_modes **out) {
   md->entry_factor = fascia_calloc(54 * (int64_t)t->entry_count, sizeof(fascia_real));
   md->reduced = fascia_calloc(9 * (int64_t)P, sizeof(fascia_real));
   md->failed = fascia_calloc(P, sizeof(int32_t));
-  md->sample_share = fascia_calloc(81 * (int64_t)S, sizeof(fascia_real));
-  md->pair_share = fascia_calloc(54 * (int64_t)m->sample_offsets[S], sizeof(fascia_real));
   if (!md->active || !md->xi_max || !md->sample_xi || !md->amplitude || !md->sample_enhanced ||
-      !md->entry_factor || !md->reduced || !md->failed || !md->sample_share || !md->pair_share) {
+      !md->entry_factor || !md->reduced || !md->failed) {
     fascia_modes_destroy(&md);
     return FASCIA_FAIL(sys->ctx, FASCIA_ERR_MEMORY, "modes: out of memory for %d patches", (int)P);
   }
@@ -116,6 +114,13 @@ void fascia_modes_tangent(const fascia_system *sys, fascia_modes *md) {
     fascia_pt_modes_tangent(&sys->pm, &st, t, &md->view, p, sys->cache, sys->pair_buffer,
                             md->shares_current ? md->sample_share : NULL, md->shares_current ? md->pair_share : NULL);
   md->tangent_current = 1;
+}
+
+int fascia_modes_shares_ready(const fascia_system *sys, fascia_modes *md) {
+  const fascia_model *m = sys->model;
+  if (!md->sample_share) md->sample_share = fascia_calloc(81 * (int64_t)m->sample_count, sizeof(fascia_real));
+  if (!md->pair_share) md->pair_share = fascia_calloc(54 * (int64_t)m->pair_count, sizeof(fascia_real));
+  return md->sample_share && md->pair_share;
 }
 
 int32_t fascia_modes_sample_patch(const fascia_system *sys, const fascia_modes *md, int32_t s) {

@@ -47,7 +47,8 @@ typedef struct fascia_modes {
   /// [81 S] and [54 P]: the samples' and pairs' shares of K_aa and K_ue
   /// (fascia_pt_modes_sample_share, _pair_share) that the assembly leaves
   /// from the D and B^T D it computes anyway, so the tangent need not
-  /// compute them again; current: they are for the last evaluated state
+  /// compute them again (made at the first assembly: the matrix-free path
+  /// has no use for them); current: they are for the last evaluated state
   fascia_real *sample_share, *pair_share;
   int shares_current;
 } fascia_modes;
@@ -70,6 +71,9 @@ FASCIA_INTERN void fascia_modes_diagonal_add(const fascia_system *sys, fascia_mo
 /// state, unless current (the assembly calls it, then reads md->view);
 /// from the assembly's shares where they are current.
 FASCIA_INTERN void fascia_modes_tangent(const fascia_system *sys, fascia_modes *md);
+/// Makes the shares' arrays where they are not yet; 0 when out of memory
+/// (the assembly then leaves no shares, and the tangent computes them).
+FASCIA_INTERN int fascia_modes_shares_ready(const fascia_system *sys, fascia_modes *md);
 /// The patch of sample s whose modes act, or -1 (no patch, no active
 /// mode, or the rotation coupling, whose share the tangent computes).
 FASCIA_INTERN int32_t fascia_modes_sample_patch(const fascia_system *sys, const fascia_modes *md, int32_t s);
