@@ -67,7 +67,9 @@ static int run_case(fascia_ctx *ctx, unsigned long long seed, int law, double co
                     int patches) {
   fascia_model *m = random_model(ctx, seed, 9, 14, law, coupling, smoothing);
   if (m && patches) random_model_patches(m);
-  for (int32_t s = 0; m && s < m->sample_count; ++s) m->sample_modes[s] = patches == 2;
+  // patches: 0 none, 1 without modes, 2 with the nine, 3 with the three normal ones
+  for (int32_t s = 0; m && s < m->sample_count; ++s)
+    m->sample_modes[s] = patches == 2 ? FASCIA_MODES_NINE : patches == 3 ? FASCIA_MODES_NORMAL : FASCIA_MODES_NONE;
   if (getenv("T112_VERBOSE")) fprintf(stderr, "case seed %llu law %d coupling %g smoothing %g\n", seed, law, coupling, smoothing);
   CHECK(m != NULL);
   if (!m) return 1;
@@ -158,6 +160,8 @@ int main(void) {
     failed |= run_case(ctx, seed, FASCIA_LAW_NEOHOOKEAN, 0.5, 0.3, 1);
     failed |= run_case(ctx, seed, FASCIA_LAW_STVK, 0, 0, 2);
     failed |= run_case(ctx, seed, FASCIA_LAW_NEOHOOKEAN, 0.5, 0.3, 2);
+    failed |= run_case(ctx, seed, FASCIA_LAW_STVK, 0, 0, 3);
+    failed |= run_case(ctx, seed, FASCIA_LAW_NEOHOOKEAN, 0.5, 0.3, 3);
   }
   fascia_ctx_destroy(&ctx);
   return failed | CHECK_RESULT();

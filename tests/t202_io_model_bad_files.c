@@ -161,7 +161,7 @@ static void bad_files(fascia_ctx *ctx, const fascia_model *m) {
 
   CHECK((file = corrupt_copy("version-99", path, sizeof path)) >= 0);
   CHECK(set_version(file, 99) == 0 && H5Fclose(file) >= 0);
-  expect_refused(ctx, path, FASCIA_ERR_FORMAT, FASCIA_OK, "version 99", "reads versions 1 to 3");
+  expect_refused(ctx, path, FASCIA_ERR_FORMAT, FASCIA_OK, "version 99", "reads versions 1 to 4");
 
   CHECK((file = corrupt_copy("no-version", path, sizeof path)) >= 0);
   CHECK(H5Adelete(file, "fascia_model_version") >= 0 && H5Fclose(file) >= 0);

@@ -8,7 +8,9 @@
 // Enhanced strain modes: a model whose patches carry them is version 3 with
 // /samples/modes and reads back the same; a version 3 file without the
 // dataset, modes on a sample in no patch, a patch whose samples disagree and
-// a value other than 0 or 1 are refused likewise.
+// a value other than 0, 1 or 2 are refused likewise. The three normal modes
+// (value 2, fascia beam's default on hexahedral cells) make it version 4;
+// a file that says version 3 and holds a 2 is refused, naming the version.
 #define _POSIX_C_SOURCE 200809L
 #include <hdf5.h>
 #include <stdlib.h>
@@ -37,17 +39,19 @@ static int has_dataset(const char *path, const char *name) {
 
 static int has_patch_dataset(const char *path) { return has_dataset(path, "/samples/patch"); }
 
-static fascia_model *beam_of(fascia_ctx *ctx, int shape, int patch) {
+// modes: -1 fascia beam's rule (the nine for tet, the normal three for hex, with patches), or a set
+static fascia_model *beam_of(fascia_ctx *ctx, int shape, int patch, int modes) {
   fascia_scene_beam_def def = fascia_scene_beam_def_default();
   def.frames[0] = 6;
   def.shape = shape;
   def.volumetric_patch = patch;
-  def.enhanced_modes = -1; // fascia beam's rule: on for tet with patches
+  def.enhanced_modes = modes;
   fascia_model *m = NULL;
   return fascia_scene_beam_build(ctx, &def, &m) == FASCIA_OK ? m : NULL;
 }
 
-static fascia_model *beam(fascia_ctx *ctx, int patch) { return beam_of(ctx, FASCIA_SCENE_HEX, patch); }
+// patches without modes
+static fascia_model *beam(fascia_ctx *ctx, int patch) { return beam_of(ctx, FASCIA_SCENE_HEX, patch, FASCIA_MODES_NONE); }
 
 // Saves m, expecting the validation to refuse it naming /samples/modes and what.
 static void expect_modes_refused(fascia_ctx *ctx, const fascia_model *m, const char *path, const char *what) {
@@ -59,7 +63,7 @@ static void expect_modes_refused(fascia_ctx *ctx, const fascia_model *m, const c
 static int modes_in_file(fascia_ctx *ctx, const char *dir) {
   char path[256];
   snprintf(path, sizeof path, "%s/modes.h5", dir);
-  fascia_model *m = beam_of(ctx, FASCIA_SCENE_TET, FASCIA_SCENE_PATCH_CELL), *back = NULL;
+  fascia_model *m = beam_of(ctx, FASCIA_SCENE_TET, FASCIA_SCENE_PATCH_CELL, -1), *back = NULL;
   CHECK(m != NULL);
   if (!m) return 1;
   int32_t with = 0;
@@ -82,7 +86,7 @@ static int modes_in_file(fascia_ctx *ctx, const char *dir) {
   CHECK(fascia_model_load(ctx, path, &back) == FASCIA_ERR_FORMAT && back == NULL);
   CHECK(strstr(fascia_ctx_message(ctx), path) && strstr(fascia_ctx_message(ctx), "/samples/modes"));
   // bad values
-  m->sample_modes[5] = 2;
+  m->sample_modes[5] = 3;
   expect_modes_refused(ctx, m, path, "sample 5");
   m->sample_modes[5] = 1;
   const int32_t patch = m->sample_patch[7];
@@ -91,6 +95,28 @@ static int modes_in_file(fascia_ctx *ctx, const char *dir) {
   m->sample_patch[7] = patch;
   m->sample_modes[7] = 0;
   expect_modes_refused(ctx, m, path, "share its modes");
+  fascia_model_destroy(&m);
+  // the three normal modes of hexahedral cells: version 4
+  m = beam_of(ctx, FASCIA_SCENE_HEX, FASCIA_SCENE_PATCH_CELL, -1);
+  CHECK(m != NULL);
+  if (!m) return 1;
+  int32_t normal = 0;
+  for (int32_t s = 0; s < m->sample_count; ++s) normal += m->sample_modes[s] == FASCIA_MODES_NORMAL;
+  CHECK(normal == m->sample_count);
+  CHECK_OK(fascia_model_save(ctx, m, path), ctx);
+  CHECK(version_of(path) == 4);
+  CHECK_OK(fascia_model_load(ctx, path, &back), ctx);
+  CHECK(back && !memcmp(back->sample_modes, m->sample_modes, (size_t)m->sample_count * sizeof(int32_t)));
+  fascia_model_destroy(&back);
+  // the same file claiming version 3, whose modes are only 0 or 1
+  file = H5Fopen(path, H5F_ACC_RDWR, H5P_DEFAULT);
+  hid_t attr = file >= 0 ? H5Aopen_by_name(file, "/", "fascia_model_version", H5P_DEFAULT, H5P_DEFAULT) : -1;
+  const int32_t three = 3;
+  CHECK(attr >= 0 && H5Awrite(attr, H5T_NATIVE_INT32, &three) >= 0 && H5Aclose(attr) >= 0 && H5Fclose(file) >= 0);
+  CHECK(fascia_model_load(ctx, path, &back) == FASCIA_ERR_FORMAT && back == NULL);
+  CHECK(strstr(fascia_ctx_message(ctx), path) && strstr(fascia_ctx_message(ctx), "/samples/modes") &&
+        strstr(fascia_ctx_message(ctx), "version 4"));
+  printf("t209: %s\n", fascia_ctx_message(ctx));
   fascia_model_destroy(&m);
   remove(path);
   return 0;

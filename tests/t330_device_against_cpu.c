@@ -15,9 +15,10 @@
 //     no fixed frame at all (free fall);
 //   - volumetric patches (mean dilatation): random models, and the cantilever
 //     at nu = 0.49 in cell patches, in steps and static;
-//   - their enhanced strain modes (sim/src/modes.h): random models with
-//     coupling and smoothing, both laws, and the tetrahedral cantilever with
-//     its modes (fascia beam's default) in steps and static;
+//   - their enhanced strain modes (sim/src/modes.h), the nine and the three
+//     normal ones: random models with coupling and smoothing, both laws, the
+//     tetrahedral cantilever with its nine (fascia beam's default) in steps
+//     and static, the hexahedral one with its three normal ones static;
 //   - every run's sample strain and stress (the patches' pressure included);
 //   - rigid organs (the reduction P^T A P, sim/point/body.h): a rigid organ
 //     hanging from the tissue under gravity, in steps and static, and a
@@ -48,9 +49,13 @@ int main(int argc, char **argv) {
     random_model_patches(m); // the same in volumetric patches (mean dilatation)
     RUN(check_operators(ctx, law ? "random model in patches, Neo-Hookean" : "random model in patches, StVK", m,
                         97 + law));
-    for (int32_t s = 0; s < m->sample_count; ++s) m->sample_modes[s] = 1; // and their enhanced strain modes
+    for (int32_t s = 0; s < m->sample_count; ++s) m->sample_modes[s] = FASCIA_MODES_NINE; // and their modes
     RUN(check_operators(ctx, law ? "random model, patches with modes, Neo-Hookean" : "random model, patches with modes, StVK",
                         m, 95 + law));
+    for (int32_t s = 0; s < m->sample_count; ++s) m->sample_modes[s] = FASCIA_MODES_NORMAL; // the three normal ones
+    RUN(check_operators(ctx, law ? "random model, patches with normal modes, Neo-Hookean"
+                                 : "random model, patches with normal modes, StVK",
+                        m, 93 + law));
     fascia_model_destroy(&m);
   }
   // many neighbours: meshless beams, 20 and 80 frames per sample (no
@@ -119,9 +124,14 @@ int main(int argc, char **argv) {
   CHECK_OK(fascia_scene_beam_build(ctx, &bd, &m), ctx);
   RUN(check_run(ctx, "stiff cantilever in cell patches, nu 0.3, static", m, statics, 0, TOL_STEP, 0));
   fascia_model_destroy(&m);
+  // hexahedral with its cells' three normal modes (fascia beam's default for hex)
+  bd.enhanced_modes = FASCIA_MODES_NORMAL;
+  CHECK_OK(fascia_scene_beam_build(ctx, &bd, &m), ctx);
+  RUN(check_run(ctx, "stiff hex cantilever with normal modes, nu 0.3, static", m, statics, 0, TOL_STEP, 0));
+  fascia_model_destroy(&m);
   // tetrahedral, its cells' patches with enhanced strain modes
   bd.shape = FASCIA_SCENE_TET;
-  bd.enhanced_modes = 1;
+  bd.enhanced_modes = FASCIA_MODES_NINE;
   CHECK_OK(fascia_scene_beam_build(ctx, &bd, &m), ctx);
   RUN(check_run(ctx, "stiff tet cantilever with enhanced modes, nu 0.3, static", m, statics, 0, TOL_STEP, 0));
   fascia_model_destroy(&m);

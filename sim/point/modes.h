@@ -18,7 +18,7 @@
 
 /// The modes' tables (host or device arrays) and what an evaluation leaves.
 typedef struct fascia_pt_modes {
-  const int32_t *active;       ///< [patches] bit c: the three modes of column c act (the patch spans X_c)
+  const int32_t *active;       ///< [patches] bit j: mode j acts (its set has it, the patch spans X_{j % 3})
   const fascia_real *xi_max;   ///< [3 patches] the largest |xi_c| of each patch's samples, m
   const fascia_real *sample_xi; ///< [3S] xi_s, m (0 outside patches)
   fascia_real *amplitude;      ///< [9 patches] a_p at the last evaluation, 1/m
@@ -32,7 +32,15 @@ typedef struct fascia_pt_modes {
 } fascia_pt_modes;
 
 static inline FASCIA_HD int fascia_pt_mode_active(const fascia_pt_modes *md, int32_t p, int j) {
-  return (md->active[p] >> (j % 3)) & 1;
+  return (md->active[p] >> j) & 1;
+}
+
+/// The sets of modes (fascia_modes_set's values: sim/src/modes.c checks).
+enum { FASCIA_PT_MODES_NINE = 1, FASCIA_PT_MODES_NORMAL = 2 };
+
+/// 1: mode j is in the set: all nine, or the normal ones j = 0, 4, 8.
+static inline FASCIA_HD int fascia_pt_modes_set_has(int32_t set, int j) {
+  return set == FASCIA_PT_MODES_NINE || (set == FASCIA_PT_MODES_NORMAL && j % 4 == 0);
 }
 
 // The enhanced part of F for amplitudes a at rest offset xi.

@@ -5,8 +5,9 @@
 // summary must stay in step with it. Bump the version (and the reader's
 // range) whenever a reader of the previous version would misread a new file.
 //
-// Schema, version 3 (version 2: the same without /samples/modes; version 1:
-// without /samples/patch either. A model is written
+// Schema, version 4 (version 3: /samples/modes only 0 or 1; version 2: the
+// same without /samples/modes; version 1: without /samples/patch either. A
+// model is written
 // with the lowest version that holds it, which older readers read the same
 // way). N frames, S samples, P sample-frame pairs, M materials,
 // Q probes, R probe-frame pairs, C coupling entries, K keys of a motion,
@@ -30,7 +31,8 @@
 //   /samples/volume       [S]    f64  m^3   > 0
 //   /samples/material     [S]    i32        material index
 //   /samples/patch        [S]    i32        volumetric patch, -1 none (version 2)
-//   /samples/modes        [S]    i32        1: the patch has enhanced strain modes, else 0 (version 3)
+//   /samples/modes        [S]    i32        the patch's enhanced strain modes: 0 none, 1 nine
+//                                           (version 3), 2 the three normal ones (version 4)
 //   /samples/offsets      [S+1]  i32        CSR into /pairs
 //   /pairs/frame          [P]    i32        frame index, ascending per sample
 //   /pairs/weight         [P]    f64  1     w_is, sum per sample = 1
@@ -79,9 +81,13 @@
 // version 3: a version 2 reader would drop the modes and compute a stiffer
 // answer without a word.
 #define MODEL_VERSION_MODES 3
+// A model with patches of the three normal modes (/samples/modes 2) is
+// version 4: a version 3 reader refuses the value with a message that
+// does not say a newer fascia reads it.
+#define MODEL_VERSION_MODE_SETS 4
 // Versions this reader understands.
 #define MODEL_VERSION_MIN 1
-#define MODEL_VERSION_MAX 3
+#define MODEL_VERSION_MAX 4
 #define MODEL_UNITS "SI: m, kg, s, Pa"
 #define REMEDY "re-run 'fascia prep' or 'fascia beam' with this version"
 #define PATH_SIZE 256
@@ -188,10 +194,13 @@ static int model_has_patches(const fascia_model *m) {
   return 0;
 }
 
-static int model_has_modes(const fascia_model *m) {
+// The version the modes need: 0 without modes.
+static int model_modes_version(const fascia_model *m) {
+  int version = 0;
   for (int32_t s = 0; s < m->sample_count; ++s)
-    if (m->sample_modes[s]) return 1;
-  return 0;
+    if (m->sample_modes[s] > FASCIA_MODES_NINE) return MODEL_VERSION_MODE_SETS;
+    else if (m->sample_modes[s]) version = MODEL_VERSION_MODES;
+  return version;
 }
 
 static fascia_status write_samples_pairs(writer *w, const fascia_model *m) {
@@ -202,7 +211,7 @@ static fascia_status write_samples_pairs(writer *w, const fascia_model *m) {
   WRITE1(w, "/samples/material", ELEM_INT, S, m->sample_material, NULL);
   WRITE1(w, "/samples/organ", ELEM_INT, S, m->sample_organ, NULL);
   if (model_has_patches(m)) WRITE1(w, "/samples/patch", ELEM_INT, S, m->sample_patch, NULL);
-  if (model_has_modes(m)) WRITE1(w, "/samples/modes", ELEM_INT, S, m->sample_modes, NULL);
+  if (model_modes_version(m)) WRITE1(w, "/samples/modes", ELEM_INT, S, m->sample_modes, NULL);
   WRITE1(w, "/samples/offsets", ELEM_INT, S + 1, m->sample_offsets, NULL);
   FASCIA_TRY(write_group(w, "/pairs", -1, -1, -1));
   WRITE1(w, "/pairs/frame", ELEM_INT, P, m->pair_frame, NULL);
@@ -306,7 +315,8 @@ static fascia_status write_model(writer *w, const fascia_model *m) {
   char creator[64];
   snprintf(creator, sizeof creator, "fascia %s", fascia_version());
   hid_t root = H5Gopen2(w->file, "/", H5P_DEFAULT);
-  const int version = model_has_modes(m) ? MODEL_VERSION_MODES : model_has_patches(m) ? MODEL_VERSION_PATCHES : 1;
+  const int modes = model_modes_version(m);
+  const int version = modes ? modes : model_has_patches(m) ? MODEL_VERSION_PATCHES : 1;
   const int ok = root >= 0 && fascia_h5_attr_int(root, "fascia_model_version", version) >= 0 &&
                  fascia_h5_attr_string(root, "units", MODEL_UNITS) >= 0 &&
                  fascia_h5_attr_string(root, "creator", creator) >= 0 &&
@@ -824,6 +834,10 @@ static fascia_status read_frames_samples(reader *r, fascia_model *m) {
   if (fascia_h5_link_exists(r->file, "/samples/organ")) READ(r, "/samples/organ", ELEM_INT, S, 0, m->sample_organ);
   if (r->version >= MODEL_VERSION_PATCHES) READ(r, "/samples/patch", ELEM_INT, S, 0, m->sample_patch);
   if (r->version >= MODEL_VERSION_MODES) READ(r, "/samples/modes", ELEM_INT, S, 0, m->sample_modes);
+  for (int64_t s = 0; s < S && r->version < MODEL_VERSION_MODE_SETS; ++s)
+    FASCIA_CHECK(m->sample_modes[s] <= FASCIA_MODES_NINE, r->ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' /samples/modes: sample %d has %d, which needs format version %d (the file says %d)",
+                 r->path, (int)s, (int)m->sample_modes[s], MODEL_VERSION_MODE_SETS, (int)r->version);
   READ(r, "/samples/offsets", ELEM_INT, S + 1, 0, m->sample_offsets);
   READ(r, "/pairs/frame", ELEM_INT, P, 0, m->pair_frame);
   READ(r, "/pairs/weight", ELEM_REAL, P, 0, m->pair_weight);

@@ -542,9 +542,9 @@ static fascia_status validate_patches(fascia_ctx *ctx, const fascia_model *m, co
     any = 1;
   }
   for (int32_t s = 0; s < S; ++s) {
-    FASCIA_CHECK(m->sample_modes[s] == 0 || m->sample_modes[s] == 1, ctx, FASCIA_ERR_FORMAT,
-                 "model '%s' /samples/modes: sample %d has %d, expected 0 or 1", origin, (int)s,
-                 (int)m->sample_modes[s]);
+    FASCIA_CHECK(m->sample_modes[s] >= 0 && m->sample_modes[s] < FASCIA_MODES_COUNT_, ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' /samples/modes: sample %d has %d, expected 0 (none), 1 (nine) or 2 (normal)", origin,
+                 (int)s, (int)m->sample_modes[s]);
     FASCIA_CHECK(!m->sample_modes[s] || m->sample_patch[s] >= 0, ctx, FASCIA_ERR_FORMAT,
                  "model '%s' /samples/modes: sample %d has enhanced strain modes but no volumetric patch; the modes "
                  "live on the patches",

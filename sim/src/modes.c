@@ -13,6 +13,9 @@
 // at least this share of sum v |xi|^2 (a flat patch has no modes across it).
 #define SPAN_SHARE 1e-10
 
+_Static_assert((int)FASCIA_PT_MODES_NINE == (int)FASCIA_MODES_NINE && (int)FASCIA_PT_MODES_NORMAL == (int)FASCIA_MODES_NORMAL,
+               "sim/point/modes.h names the model's sets of modes");
+
 void fascia_modes_destroy(fascia_modes **modes) {
   if (!modes || !*modes) return;
   fascia_modes *md = *modes;
@@ -74,9 +77,9 @@ fascia_status fascia_modes_create(fascia_system *sys, fascia_modes **out) {
       }
     }
     const fascia_real total = spread[0] + spread[1] + spread[2];
-    const int with_modes = m->sample_modes[t->patch_samples[t->patch_offsets[p]]]; // the same for all its samples
-    for (int c = 0; c < 3; ++c)
-      if (with_modes && total > 0 && spread[c] > SPAN_SHARE * total) md->active[p] |= 1 << c;
+    const int32_t set = m->sample_modes[t->patch_samples[t->patch_offsets[p]]]; // the same for all its samples
+    for (int j = 0; j < 9; ++j)
+      if (total > 0 && spread[j % 3] > SPAN_SHARE * total && fascia_pt_modes_set_has(set, j)) md->active[p] |= 1 << j;
   }
   fascia_pt_modes *v = &md->view;
   v->active = md->active;

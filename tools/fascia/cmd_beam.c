@@ -19,7 +19,7 @@ static const char beam_usage[] =
     "                   [--neighbours K] [--E PA --nu V | --lambda PA --mu PA] [--law stvk|neohookean]\n"
     "                   [--mass KG] [--density KG_M3] [--rotation-coupling R]\n"
     "                   [--rotation-smoothing R] [--volumetric auto|full|cell|frame|poisson|reduced]\n"
-    "                   [--patch-radius M] [--modes auto|on|off] -o BEAM.h5 [--json]\n"
+    "                   [--patch-radius M] [--modes auto|on|nine|normal|off] -o BEAM.h5 [--json]\n"
     "\n"
     "The cantilever of Bosman et al. 2013 sec. 4.1: 16 x 1 x 1 m along x, clamped at x = 0,\n"
     "loaded by gravity, probe 'tip' at (16, 0, 0).\n"
@@ -41,11 +41,13 @@ static const char beam_usage[] =
     "                          over Poisson-disk patches of --patch-radius (as fascia prep makes\n"
     "                          them); reduced: one extra sample per cell (per tetrahedron)\n"
     "  --patch-radius M        radius of the poisson patches, m (default 0.5)\n"
-    "  --modes auto|on|off     nine enhanced strain modes per volumetric patch, the cure of the\n"
-    "                          tetrahedra's stiffness in bending (docs/mechanics.md); auto\n"
-    "                          (default): on for tet with 4 samples per tetrahedron and patches\n"
-    "                          (hex, meshless and the centroid rule are soft enough already:\n"
-    "                          the modes make them too soft)\n"
+    "  --modes SET             enhanced strain modes per volumetric patch, the cure of the shape\n"
+    "                          functions' stiffness in bending (docs/mechanics.md): nine\n"
+    "                          (Wilson's: entry (r, c) of F varies along X_c), normal (the three\n"
+    "                          entries (c, c) only), on (the shape's set: nine for tet, normal\n"
+    "                          for hex and meshless) or off; auto (default): on for hex and for\n"
+    "                          tet with 4 samples per tetrahedron, where there are patches\n"
+    "                          (meshless and the centroid rule are soft enough already)\n"
     "  --rotation-smoothing R  rotation smoothing, relative to the frame spacing (default 0.1;\n"
     "                          0 is the paper's scheme, which has zero-energy twist modes)\n"
     "  -o PATH                 model file to write (required)\n"
@@ -83,7 +85,8 @@ int cmd_beam(int argc, char **argv) {
   double lambda = -1, mu = -1;
   int32_t samples_per_cell = 0;
   def.volumetric_patch = FASCIA_SCENE_PATCH_AUTO; // cell patches from FASCIA_PATCH_MIN_POISSON on
-  def.enhanced_modes = -1;                        // on the tetrahedra's patches
+  def.enhanced_modes = -1;                        // fascia beam's rule: hex and tet patches
+  int modes_on = 0;                               // --modes on: the shape's set, known after parsing
   for (int k = 1; k < argc; ++k) {
     const char *opt = argv[k];
     if (!strcmp(opt, "--help") || !strcmp(opt, "-h")) {
@@ -132,8 +135,13 @@ int cmd_beam(int argc, char **argv) {
     else if (!strcmp(opt, "--patch-radius"))
       ok = cli_parse_real(value, &def.patch_radius);
     else if (!strcmp(opt, "--modes")) {
-      def.enhanced_modes = !strcmp(value, "auto") ? -1 : !strcmp(value, "on") ? 1 : !strcmp(value, "off") ? 0 : -2;
-      ok = def.enhanced_modes != -2;
+      modes_on = !strcmp(value, "on");
+      def.enhanced_modes = !strcmp(value, "auto")     ? -1
+                           : !strcmp(value, "nine")   ? FASCIA_MODES_NINE
+                           : !strcmp(value, "normal") ? FASCIA_MODES_NORMAL
+                           : !strcmp(value, "off")    ? FASCIA_MODES_NONE
+                                                      : -2;
+      ok = modes_on || def.enhanced_modes != -2;
     } else if (!strcmp(opt, "--volumetric")) {
       def.reduced_volumetric = !strcmp(value, "reduced");
       def.volumetric_patch = def.reduced_volumetric ? FASCIA_SCENE_PATCH_NONE : fascia_scene_patch_from_name(value);
@@ -158,6 +166,7 @@ int cmd_beam(int argc, char **argv) {
     else
       def.samples_per_cell_dir = samples_per_cell;
   }
+  if (modes_on) def.enhanced_modes = fascia_scene_beam_modes_of_shape(def.shape);
   const cli_path output = {"-o", path, CLI_OUTPUT_FILE, NULL, NULL};
   const int paths_rc = cli_check_paths("beam", &output, 1);
   if (paths_rc >= 0) return paths_rc;

@@ -78,9 +78,10 @@ static const char bench_usage[] =
     "  --nu LIST                  Poisson ratios with a converged reference: 0.3, 0.45, 0.49 (default 0.3)\n"
     "  --volumetric LIST          auto (cell patches from nu = 0.3, as fascia beam), full, cell, frame\n"
     "                             (default auto; docs/mechanics.md, \"Volumetric locking\")\n"
-    "  --modes LIST               enhanced strain modes on the patches: auto (on for tet with 4\n"
-    "                             samples per tetrahedron, as fascia beam), on, off (default auto;\n"
-    "                             docs/mechanics.md)\n";
+    "  --modes LIST               enhanced strain modes on the patches: auto (on for hex and for\n"
+    "                             tet with 4 samples per tetrahedron, as fascia beam), on (the\n"
+    "                             shape's set: nine for tet, the three normal ones for hex and\n"
+    "                             meshless), off (default auto; docs/mechanics.md)\n";
 
 #define PAPER_WARMUP_STEPS 2
 #define PAPER_CG_ITERATIONS 60
@@ -97,7 +98,7 @@ typedef struct value_list {
 } value_list;
 
 // Enhanced strain modes of a cantilever row: fascia beam's rule (on for
-// tet with patches), or forced.
+// hex and tet with patches), or forced (on: the shape's set).
 enum { MODES_AUTO = 0, MODES_ON = 1, MODES_OFF = 2 };
 
 // kind: 's' shape name, 'g' grid, 'i' integer >= 1, 'r' real >= 0, 'v' volumetric integration,
@@ -653,7 +654,9 @@ static fascia_status bench_cantilever_case(fascia_ctx *ctx, const bench_options 
   bdef.rotation_smoothing = c->smoothing;
   bdef.poisson_ratio = c->nu;
   bdef.volumetric_patch = c->volumetric;
-  bdef.enhanced_modes = c->modes == MODES_ON ? 1 : c->modes == MODES_OFF ? 0 : -1;
+  bdef.enhanced_modes = c->modes == MODES_ON    ? fascia_scene_beam_modes_of_shape(c->shape)
+                       : c->modes == MODES_OFF ? FASCIA_MODES_NONE
+                                               : -1;
   const fascia_ccx_reference *ref = fascia_ccx_reference_find(&bdef);
   if (!ref)
     return fascia_ctx_fail(ctx, FASCIA_ERR_ARGUMENT, __FILE__, __LINE__,

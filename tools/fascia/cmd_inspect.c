@@ -81,10 +81,10 @@ static void print_provenance_text(const char *text) {
   cJSON_Delete(json);
 }
 
-// Samples whose patch carries enhanced strain modes.
-static int32_t samples_with_modes(const fascia_model *m) {
+// Samples whose patch carries enhanced strain modes of the set (0: any).
+static int32_t samples_with_modes(const fascia_model *m, int32_t set) {
   int32_t count = 0;
-  for (int32_t s = 0; s < m->sample_count; ++s) count += m->sample_modes[s] != 0;
+  for (int32_t s = 0; s < m->sample_count; ++s) count += set ? m->sample_modes[s] == set : m->sample_modes[s] != 0;
   return count;
 }
 
@@ -98,8 +98,9 @@ static void print_text(const char *path, const fascia_model *m, const summary *z
   if (patches > 0)
     printf("patches     %d volumetric patches over %d samples (mean dilatation: %.2f samples per patch)\n",
            (int)patches, (int)patched, (double)patched / patches);
-  const int32_t moded = samples_with_modes(m);
-  if (moded > 0) printf("modes       9 enhanced strain modes on the patches of %d samples\n", (int)moded);
+  const int32_t nine = samples_with_modes(m, FASCIA_MODES_NINE), normal = samples_with_modes(m, FASCIA_MODES_NORMAL);
+  if (nine > 0) printf("modes       9 enhanced strain modes on the patches of %d samples\n", (int)nine);
+  if (normal > 0) printf("modes       3 normal enhanced strain modes on the patches of %d samples\n", (int)normal);
   printf("pairs       %d (neighbours per sample: min %d, mean %.2f, max %d)\n", (int)m->pair_count,
          (int)z->neighbours_min, z->neighbours_mean, (int)z->neighbours_max);
   printf("volume      %.6g m^3 (tissue %.6g m^3, deformable organs %.6g m^3), mass %.6g kg\n", z->volume,
@@ -148,7 +149,8 @@ static char *make_json(const char *path, const fascia_model *m, const summary *z
   int32_t patched = 0;
   cJSON_AddNumberToObject(root, "volumetric_patches", fascia_model_patch_count(m, &patched));
   cJSON_AddNumberToObject(root, "patched_samples", patched);
-  cJSON_AddNumberToObject(root, "enhanced_mode_samples", samples_with_modes(m));
+  cJSON_AddNumberToObject(root, "enhanced_mode_samples", samples_with_modes(m, 0));
+  cJSON_AddNumberToObject(root, "normal_mode_samples", samples_with_modes(m, FASCIA_MODES_NORMAL));
   cJSON_AddNumberToObject(root, "pairs", m->pair_count);
   cJSON *neighbours = cJSON_AddObjectToObject(root, "neighbours");
   cJSON_AddNumberToObject(neighbours, "min", z->neighbours_min);

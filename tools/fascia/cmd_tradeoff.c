@@ -106,6 +106,7 @@ static fascia_scene_beam_def beam_def(const row *r) {
   if (r->problem == PROBLEM_INCOMPRESSIBLE) b.poisson_ratio = 0.49;
   b.reduced_volumetric = r->reduced;
   b.volumetric_patch = r->patch;
+  b.enhanced_modes = -1; // fascia beam's rule: hex and tet patches carry their modes
   return b;
 }
 

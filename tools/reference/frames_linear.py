@@ -22,8 +22,11 @@ dF_s += a_c (x) e_c (X_s - X_p)_c (c = x, y, z; X_p the patch's
 volume-weighted centre, so each mode averages to zero over the patch) as
 unknowns of their own: a linear trial of an enrichment before it is built
 (docs/mechanics.md, "Volumetric locking and volumetric patches").
+--normal-modes adds only the three with r = c (dF_cc += a_c (X_s - X_p)_c),
+the set fascia beam gives hexahedral cells (docs/mechanics.md, "Enhanced
+strain modes").
 
-usage: frames_linear.py MODEL.h5 [--enhanced-modes]
+usage: frames_linear.py MODEL.h5 [--enhanced-modes | --normal-modes]
 """
 import sys
 
@@ -55,7 +58,8 @@ def sample_map(d, g, w):
     return B.reshape(9, 6 * n)
 
 
-def solve(path, enhanced=False):
+def solve(path, modes=()):
+    """modes: the (r, c) entries of F that vary along X_c, one unknown each per patch."""
     f = h5py.File(path, "r")
     X = f["frames/position"][:]
     kind = f["frames/kind"][:]
@@ -77,7 +81,7 @@ def solve(path, enhanced=False):
         patch_volume[k] += V[s]
         patch_centre[k] += V[s] * P[s]
     patch_centre /= np.maximum(patch_volume, 1e-300)[:, None]
-    unknowns = 6 * N + (9 * len(patches) if enhanced else 0)
+    unknowns = 6 * N + len(modes) * len(patches)
 
     swap = np.zeros((9, 9))  # vec(A^T) = swap vec(A)
     for r in range(3):
@@ -102,14 +106,13 @@ def solve(path, enhanced=False):
             patch_lambda[k] = lam - lam_s
             for dof, value in zip(dofs, V[s] * (B.T @ identity)):
                 patch_gradient[k][dof] = patch_gradient[k].get(dof, 0) + value
-            if enhanced:
+            if modes:
                 xi = P[s] - patch_centre[k]
-                modes = np.zeros((9, 9))  # unknown 3c + r: dF_rc += a xi_c
-                for c in range(3):
-                    for r in range(3):
-                        modes[3 * r + c, 3 * c + r] = xi[c]
-                B = np.hstack([B, modes])
-                dofs = np.concatenate([dofs, 6 * N + 9 * k + np.arange(9)])
+                columns = np.zeros((9, len(modes)))  # unknown j: dF_rc += a_j xi_c
+                for j, (r, c) in enumerate(modes):
+                    columns[3 * r + c, j] = xi[c]
+                B = np.hstack([B, columns])
+                dofs = np.concatenate([dofs, 6 * N + len(modes) * k + np.arange(len(modes))])
         D = mu * (np.eye(9) + swap) + lam_s * np.outer(identity, identity)
         K = V[s] * B.T @ D @ B
         # rotation smoothing, k_c = mu (r h)^2 with h^2 the weighted squared distance to the frames
@@ -142,11 +145,17 @@ def solve(path, enhanced=False):
     return probes
 
 
+NINE_MODES = [(r, c) for c in range(3) for r in range(3)]
+NORMAL_MODES = [(c, c) for c in range(3)]
+
+
 def main(argv):
-    if len(argv) < 2 or argv[1] in ("-h", "--help") or any(a not in ("--enhanced-modes",) for a in argv[2:]):
+    if len(argv) < 2 or argv[1] in ("-h", "--help") or len(argv) > 3 or \
+            any(a not in ("--enhanced-modes", "--normal-modes") for a in argv[2:]):
         print(__doc__.strip().splitlines()[-1], file=sys.stderr)
         return 2
-    for name, u in solve(argv[1], enhanced="--enhanced-modes" in argv[2:]):
+    modes = NINE_MODES if "--enhanced-modes" in argv[2:] else NORMAL_MODES if "--normal-modes" in argv[2:] else ()
+    for name, u in solve(argv[1], modes):
         print("probe %s %.9e %.9e %.9e" % (name, u[0], u[1], u[2]))
     return 0
 

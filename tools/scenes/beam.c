@@ -54,6 +54,10 @@ int fascia_scene_patch_from_name(const char *name) {
   return -2;
 }
 
+int32_t fascia_scene_beam_modes_of_shape(int32_t shape) {
+  return shape == FASCIA_SCENE_TET ? FASCIA_MODES_NINE : FASCIA_MODES_NORMAL;
+}
+
 fascia_scene_beam_def fascia_scene_beam_def_default(void) {
   fascia_scene_beam_def def;
   memset(&def, 0, sizeof def);
@@ -130,9 +134,10 @@ static fascia_status check_beam(fascia_ctx *ctx, const fascia_scene_beam_def *de
   SCENE_CHECK(def->volumetric_patch >= FASCIA_SCENE_PATCH_AUTO && def->volumetric_patch <= FASCIA_SCENE_PATCH_POISSON,
               ctx, FASCIA_ERR_ARGUMENT, "%s: volumetric_patch %d, expected -1 (auto), 0 (none), 1 (cell), 2 (frame) or 3 (poisson)", who,
               (int)def->volumetric_patch);
-  SCENE_CHECK(def->enhanced_modes >= -1 && def->enhanced_modes <= 1, ctx, FASCIA_ERR_ARGUMENT,
-              "%s: enhanced_modes %d, expected -1 (auto), 0 or 1", who, (int)def->enhanced_modes);
-  SCENE_CHECK(def->enhanced_modes != 1 || def->volumetric_patch != FASCIA_SCENE_PATCH_NONE, ctx, FASCIA_ERR_ARGUMENT,
+  SCENE_CHECK(def->enhanced_modes >= -1 && def->enhanced_modes < FASCIA_MODES_COUNT_, ctx, FASCIA_ERR_ARGUMENT,
+              "%s: enhanced_modes %d, expected -1 (auto), 0 (off), 1 (nine) or 2 (normal)", who,
+              (int)def->enhanced_modes);
+  SCENE_CHECK(def->enhanced_modes <= 0 || def->volumetric_patch != FASCIA_SCENE_PATCH_NONE, ctx, FASCIA_ERR_ARGUMENT,
               "%s: enhanced strain modes live on volumetric patches: choose a volumetric_patch", who);
   SCENE_CHECK(!def->reduced_volumetric || def->volumetric_patch == FASCIA_SCENE_PATCH_NONE, ctx,
               FASCIA_ERR_ARGUMENT, "%s: reduced_volumetric and volumetric_patch are two cures of locking: choose one",
@@ -306,9 +311,13 @@ fascia_status fascia_scene_beam_build(fascia_ctx *ctx, const fascia_scene_beam_d
   if (resolved.volumetric_patch == FASCIA_SCENE_PATCH_AUTO)
     resolved.volumetric_patch =
         resolved.poisson_ratio >= FASCIA_PATCH_MIN_POISSON ? FASCIA_SCENE_PATCH_CELL : FASCIA_SCENE_PATCH_NONE;
-  if (resolved.enhanced_modes < 0)
-    resolved.enhanced_modes = resolved.shape == FASCIA_SCENE_TET && resolved.samples_per_tet == 4 &&
-                              resolved.volumetric_patch != FASCIA_SCENE_PATCH_NONE;
+  if (resolved.enhanced_modes < 0) { // not on meshless beams or the centroid rule: soft enough already
+    const int suits = resolved.shape == FASCIA_SCENE_HEX ||
+                      (resolved.shape == FASCIA_SCENE_TET && resolved.samples_per_tet == 4);
+    resolved.enhanced_modes = suits && resolved.volumetric_patch != FASCIA_SCENE_PATCH_NONE
+                                  ? fascia_scene_beam_modes_of_shape(resolved.shape)
+                                  : FASCIA_MODES_NONE;
+  }
   def = &resolved;
   int32_t samples = 0, per_sample = 0;
   fascia_status status = check_beam(ctx, def, &samples, &per_sample);
@@ -348,7 +357,7 @@ fascia_status fascia_scene_beam_build(fascia_ctx *ctx, const fascia_scene_beam_d
   }
   if (def->volumetric_patch == FASCIA_SCENE_PATCH_POISSON) SCENE_TRY_GOTO(fascia_model_make_patches(ctx, m, &def->patch_radius));
   else if (def->volumetric_patch != FASCIA_SCENE_PATCH_NONE) assign_patches(def, &g, m);
-  for (int32_t s = 0; s < m->sample_count; ++s) m->sample_modes[s] = def->enhanced_modes && m->sample_patch[s] >= 0;
+  for (int32_t s = 0; s < m->sample_count; ++s) m->sample_modes[s] = m->sample_patch[s] >= 0 ? def->enhanced_modes : FASCIA_MODES_NONE;
   beam_provenance(provenance, PROVENANCE_SIZE, def, m);
   SCENE_TRY_GOTO(scene_finish(ctx, m, def, &probe, provenance, "beam generator"));
   *out = m;

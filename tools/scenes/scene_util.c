@@ -262,7 +262,7 @@ void scene_append_body_json(char *buf, size_t size, const fascia_scene_beam_def 
   scene_append(buf, size, "\"reduced_volumetric\": %d, ", (int)def->reduced_volumetric);
   if (def->volumetric_patch != FASCIA_SCENE_PATCH_NONE)
     scene_append(buf, size, "\"volumetric_patch\": \"%s\", ", fascia_scene_patch_name(def->volumetric_patch));
-  if (def->enhanced_modes > 0) scene_append(buf, size, "\"enhanced_modes\": 1, ");
+  if (def->enhanced_modes > 0) scene_append(buf, size, "\"enhanced_modes\": %d, ", (int)def->enhanced_modes);
   scene_append(buf, size, "\"gravity\": [%.15g, %.15g, %.15g], ", def->gravity[0], def->gravity[1], def->gravity[2]);
   scene_append(buf, size, "\"fixed\": \"frames at x = 0\", \"probe\": \"tip at (%.15g, 0, 0)\"", def->length);
 }

@@ -77,16 +77,23 @@ typedef struct fascia_scene_beam_def {
   /// Default PATCH_NONE.
   int32_t volumetric_patch;
   fascia_real patch_radius; ///< PATCH_POISSON: radius of the patches, m (default 0.5)
-  /// Enhanced strain modes on the patches (fascia_model.enhanced_modes,
-  /// docs/mechanics.md): 1 on (needs patches), 0 off, -1 auto (on for TET
-  /// with 4 samples per tetrahedron and patches: the rule of fascia beam;
-  /// the centroid rule is soft already). Default 0.
+  /// Enhanced strain modes on the patches (a fascia_modes_set,
+  /// docs/mechanics.md): 1 the nine, 2 the three normal ones (both need
+  /// patches), 0 off, -1 auto (the rule of fascia beam: the nine for TET
+  /// with 4 samples per tetrahedron, the three normal ones for HEX, where
+  /// there are patches; the centroid rule and MLS are soft enough already).
+  /// Default 0.
   int32_t enhanced_modes;
   fascia_real gravity[3];         ///< m/s^2; default (0, 0, -9.81)
   int cookie_;                    ///< private: set by fascia_scene_beam_def_default
 } fascia_scene_beam_def;
 
 fascia_scene_beam_def fascia_scene_beam_def_default(void);
+
+/// The set of enhanced strain modes that suits a shape (a fascia_modes_set):
+/// the nine for TET (constant strain per tetrahedron), the three normal ones
+/// for HEX and MLS, whose weights already vary the strain across a cell.
+int32_t fascia_scene_beam_modes_of_shape(int32_t shape);
 
 /// Builds the cantilever. Samples: HEX and MESHLESS on the Gauss grid of the
 /// frame cells; TET on the tetrahedra of the 6-tetrahedron (Kuhn) split of

@@ -38,6 +38,22 @@ typedef enum fascia_material_part {
   FASCIA_PART_COUNT_
 } fascia_material_part;
 
+/// Which enhanced strain modes a volumetric patch carries (sample_modes;
+/// docs/mechanics.md, "Enhanced strain modes"). Mode j = 3 r + c adds a_j
+/// xi_c to entry (r, c) of each sample's F. Values are stored in model
+/// files: never renumber.
+typedef enum fascia_modes_set {
+  FASCIA_MODES_NONE = 0,
+  /// all nine, Wilson's incompatible modes: the cure of the tetrahedra's
+  /// constant strain in bending
+  FASCIA_MODES_NINE = 1,
+  /// the three normal ones, F_cc along X_c: the quadratic stretch along an
+  /// offset that a frame's rotation (which moves a sample across its offset)
+  /// cannot give; for weights that already vary the strain across a cell
+  FASCIA_MODES_NORMAL = 2,
+  FASCIA_MODES_COUNT_
+} fascia_modes_set;
+
 /// Largest Young's modulus (Pa) and density (kg/m^3) a model may hold: past
 /// any real solid (diamond: 1.2e12 Pa; osmium: 2.3e4 kg/m^3), and far enough
 /// below overflow that energies and forces stay meaningful in double.
@@ -144,10 +160,11 @@ typedef struct fascia_model {
   /// which cures volumetric locking as nu approaches 1/2 (docs/mechanics.md).
   /// A sample with -1 integrates its whole energy itself.
   int32_t *sample_patch;
-  /// [S] 1: the sample's patch carries nine enhanced strain modes, solved
+  /// [S] the enhanced strain modes of the sample's patch (fascia_modes_set:
+  /// 0, the default, none; 1 all nine; 2 the three normal ones), solved
   /// afresh at each evaluation (docs/mechanics.md, "Enhanced strain modes":
-  /// the cure of tetrahedral shape functions' stiffness in bending); every
-  /// sample of that patch says so. 0, the default: none.
+  /// the cure of the shape functions' stiffness in bending); every sample
+  /// of that patch says the same.
   int32_t *sample_modes;
 
   // Sample -> frames (CSR): pairs of sample s are sample_offsets[s] ..
