@@ -1006,7 +1006,8 @@ int cmd_bench(int argc, char **argv) {
       printf("cantilever 16 x 1 x 1 m, static; reference tip u = (%.4f, 0, %.4f) m at nu = 0.3 (CalculiX, converged:\n"
              "data/reference/, one per nu); err_uz%% > 0: too stiff; twist: largest |rotation about x| over frames;\n"
              "vol: volumetric integration (full, or mean dilatation over cell patches: fascia beam's default from\n"
-             "nu = 0.3; +m: with nine enhanced strain modes per patch, fascia beam's default for tet)\n",
+             "nu = 0.3; +m: with enhanced strain modes per patch, fascia beam's defaults: the nine for tet,\n"
+             "the three normal ones for hex)\n",
              cantilever_reference()->tip_ux, cantilever_reference()->tip_uz);
       shown[0] = '\0';
     }
