@@ -4,8 +4,14 @@
 // beam under its own weight, StVK and stable Neo-Hookean, takes every step
 // with finite values and without energy growth, and with dt = 1 s (20 steps,
 // far beyond the beam's period of about 1 s) it settles on the static
-// equilibrium instead of returning garbage.
+// equilibrium instead of returning garbage. The same for the beam at
+// nu = 0.49 in cell patches with the enhanced strain modes fascia beam puts
+// on them: hexahedral with its three normal modes, tetrahedral with its nine.
 #include "stability.h"
+
+// 0: the plain hexahedral beam; 1, 2: hex and tet at nu = 0.49 in cell
+// patches with fascia beam's modes
+static const char *const variant_names[] = {"", " hex nu 0.49 patches+modes", " tet nu 0.49 patches+modes"};
 
 int main(int argc, char **argv) {
   stab_backend = backend_arg(argc, argv, "cpu");
@@ -13,10 +19,19 @@ int main(int argc, char **argv) {
   fascia_ctx *ctx = stab_ctx();
   if (!ctx) return 1;
   const double dts[] = {1e-4, 1e-3, 1e-2, 0.1, 1.0};
-  for (int law = 0; law < FASCIA_LAW_COUNT_; ++law) {
+  for (int case_ = 0; case_ < 3 * FASCIA_LAW_COUNT_; ++case_) {
+    const int law = case_ % FASCIA_LAW_COUNT_, variant = case_ / FASCIA_LAW_COUNT_;
     fascia_scene_beam_def bd = stab_beam_def(6, law);
+    if (variant > 0) {
+      bd.shape = variant == 1 ? FASCIA_SCENE_HEX : FASCIA_SCENE_TET;
+      bd.poisson_ratio = 0.49;
+      bd.volumetric_patch = FASCIA_SCENE_PATCH_CELL;
+      bd.enhanced_modes = -1; // fascia beam's rule
+    }
     fascia_model *m = NULL;
     CHECK_OK(fascia_scene_beam_build(ctx, &bd, &m), ctx);
+    if (!m) continue;
+    if (variant > 0) CHECK(m->sample_modes[0] == (variant == 1 ? FASCIA_MODES_NORMAL : FASCIA_MODES_NINE));
     fascia_status st;
     const double tip_static = stab_static_tip(ctx, m, 100, &st);
     CHECK_OK(st, ctx);
@@ -24,7 +39,7 @@ int main(int argc, char **argv) {
       fascia_solver_def sd = stab_solver_def();
       sd.time_step = dts[k];
       char name[64];
-      snprintf(name, sizeof name, "%s dt %g", fascia_law_name(law), dts[k]);
+      snprintf(name, sizeof name, "%s%s dt %g", fascia_law_name(law), variant_names[variant], dts[k]);
       const stab_result r = stab_run(ctx, name, m, &sd, 20, 0, 1);
       CHECK(!r.bad);
       CHECK(r.steps == 20); // nothing here needs a refusal
