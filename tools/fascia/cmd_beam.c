@@ -48,8 +48,9 @@ static const char beam_usage[] =
     "                          for hex and meshless) or off; auto (default): on for hex and for\n"
     "                          tet with 4 samples per tetrahedron, where there are patches\n"
     "                          (meshless and the centroid rule are soft enough already)\n"
-    "  --rotation-smoothing R  rotation smoothing, relative to the frame spacing (default 0.1;\n"
-    "                          0 is the paper's scheme, which has zero-energy twist modes)\n"
+    "  --rotation-smoothing R  rotation smoothing, relative to the frame spacing (default 0.1, and\n"
+    "                          0.05 for tet, whose frames carry twice the rotation; 0 is the\n"
+    "                          paper's scheme, which has zero-energy twist modes)\n"
     "  -o PATH                 model file to write (required)\n"
     "  --json                  print a JSON summary on stdout\n";
 

@@ -74,14 +74,12 @@ static const char bench_usage[] =
     "  --frames LIST              frame grids NXxNYxNZ (default 20x3x3)\n"
     "  --samples-per-cell LIST    hex, meshless: N^3 per cell; tet: per tetrahedron (default 2; tet 4)\n"
     "  --neighbours LIST          meshless: frames per sample (default 8)\n"
-    "  --rotation-smoothing LIST  0 is the paper's scheme (default 0.1, the beam's default)\n"
+    "  --rotation-smoothing LIST  0 is the paper's scheme (default: the beam's, 0.05 tet, else 0.1)\n"
     "  --nu LIST                  Poisson ratios with a converged reference: 0.3, 0.45, 0.49 (default 0.3)\n"
     "  --volumetric LIST          auto (cell patches from nu = 0.3, as fascia beam), full, cell, frame\n"
     "                             (default auto; docs/mechanics.md, \"Volumetric locking\")\n"
-    "  --modes LIST               enhanced strain modes on the patches: auto (on for hex and for\n"
-    "                             tet with 4 samples per tetrahedron, as fascia beam), on (the\n"
-    "                             shape's set: nine for tet, the three normal ones for hex and\n"
-    "                             meshless), off (default auto; docs/mechanics.md)\n";
+    "  --modes LIST               enhanced strain modes on the patches: auto (as fascia beam), on\n"
+    "                             (the shape's set, fascia beam --modes on), off (default auto)\n";
 
 #define PAPER_WARMUP_STEPS 2
 #define PAPER_CG_ITERATIONS 60
@@ -568,21 +566,22 @@ static const fascia_ccx_reference *cantilever_reference(void) {
 static int default_cases(cantilever_case *cases) {
   const int H = FASCIA_SCENE_HEX, T = FASCIA_SCENE_TET, M = FASCIA_SCENE_MESHLESS, A = FASCIA_SCENE_PATCH_AUTO,
             F = FASCIA_SCENE_PATCH_NONE;
+  const double S = FASCIA_SCENE_SMOOTHING_AUTO; // fascia beam's rotation smoothing by shape kind
   const cantilever_case table[] = {
-      {H, 2, 0, {10, 2, 2}, 0.1, -1, 0.3, A, MODES_AUTO},  {H, 2, 0, {20, 3, 3}, 0.1, -1, 0.3, A, MODES_AUTO},
-      {H, 2, 0, {40, 5, 5}, 0.1, -1, 0.3, A, MODES_AUTO},  {H, 1, 0, {20, 3, 3}, 0.1, -1, 0.3, A, MODES_AUTO},
-      {H, 3, 0, {20, 3, 3}, 0.1, -1, 0.3, A, MODES_AUTO},  {H, 2, 0, {10, 2, 2}, 0, -1, 0.3, A, MODES_AUTO},
-      {H, 2, 0, {20, 3, 3}, 0, -1, 0.3, A, MODES_AUTO},    {H, 2, 0, {20, 3, 3}, 0.1, FASCIA_LINEAR_CG, 0.3, A, MODES_AUTO},
-      {T, 4, 0, {10, 2, 2}, 0.1, -1, 0.3, A, MODES_AUTO},  {T, 4, 0, {20, 3, 3}, 0.1, -1, 0.3, A, MODES_AUTO},
-      {T, 4, 0, {40, 5, 5}, 0.1, -1, 0.3, A, MODES_AUTO},  {T, 1, 0, {20, 3, 3}, 0.1, -1, 0.3, A, MODES_AUTO},
-      {M, 2, 8, {10, 2, 2}, 0.1, -1, 0.3, A, MODES_AUTO},  {M, 2, 8, {20, 3, 3}, 0.1, -1, 0.3, A, MODES_AUTO},
-      {M, 2, 16, {20, 3, 3}, 0.1, -1, 0.3, A, MODES_AUTO}, {M, 2, 8, {40, 5, 5}, 0.1, -1, 0.3, A, MODES_AUTO},
-      {H, 2, 0, {20, 3, 3}, 0.1, -1, 0.3, F, MODES_AUTO},  {T, 4, 0, {20, 3, 3}, 0.1, -1, 0.3, F, MODES_AUTO},
-      {M, 2, 8, {20, 3, 3}, 0.1, -1, 0.3, F, MODES_AUTO},  {M, 2, 16, {20, 3, 3}, 0.1, -1, 0.3, F, MODES_AUTO},
-      {T, 4, 0, {20, 3, 3}, 0.1, -1, 0.3, A, MODES_OFF}, {T, 4, 0, {20, 3, 3}, 0.1, -1, 0.49, A, MODES_OFF},
-      {H, 2, 0, {20, 3, 3}, 0.1, -1, 0.49, A, MODES_AUTO}, {T, 4, 0, {20, 3, 3}, 0.1, -1, 0.49, A, MODES_AUTO},
-      {M, 2, 8, {20, 3, 3}, 0.1, -1, 0.49, A, MODES_AUTO}, {M, 2, 16, {20, 3, 3}, 0.1, -1, 0.49, A, MODES_AUTO},
-      {H, 2, 0, {20, 3, 3}, 0.1, -1, 0.49, F, MODES_AUTO},
+      {H, 2, 0, {10, 2, 2}, S, -1, 0.3, A, MODES_AUTO},  {H, 2, 0, {20, 3, 3}, S, -1, 0.3, A, MODES_AUTO},
+      {H, 2, 0, {40, 5, 5}, S, -1, 0.3, A, MODES_AUTO},  {H, 1, 0, {20, 3, 3}, S, -1, 0.3, A, MODES_AUTO},
+      {H, 3, 0, {20, 3, 3}, S, -1, 0.3, A, MODES_AUTO},  {H, 2, 0, {10, 2, 2}, 0, -1, 0.3, A, MODES_AUTO},
+      {H, 2, 0, {20, 3, 3}, 0, -1, 0.3, A, MODES_AUTO},    {H, 2, 0, {20, 3, 3}, S, FASCIA_LINEAR_CG, 0.3, A, MODES_AUTO},
+      {T, 4, 0, {10, 2, 2}, S, -1, 0.3, A, MODES_AUTO},  {T, 4, 0, {20, 3, 3}, S, -1, 0.3, A, MODES_AUTO},
+      {T, 4, 0, {40, 5, 5}, S, -1, 0.3, A, MODES_AUTO},  {T, 1, 0, {20, 3, 3}, S, -1, 0.3, A, MODES_AUTO},
+      {M, 2, 8, {10, 2, 2}, S, -1, 0.3, A, MODES_AUTO},  {M, 2, 8, {20, 3, 3}, S, -1, 0.3, A, MODES_AUTO},
+      {M, 2, 16, {20, 3, 3}, S, -1, 0.3, A, MODES_AUTO}, {M, 2, 8, {40, 5, 5}, S, -1, 0.3, A, MODES_AUTO},
+      {H, 2, 0, {20, 3, 3}, S, -1, 0.3, F, MODES_AUTO},  {T, 4, 0, {20, 3, 3}, S, -1, 0.3, F, MODES_AUTO},
+      {M, 2, 8, {20, 3, 3}, S, -1, 0.3, F, MODES_AUTO},  {M, 2, 16, {20, 3, 3}, S, -1, 0.3, F, MODES_AUTO},
+      {T, 4, 0, {20, 3, 3}, S, -1, 0.3, A, MODES_OFF}, {T, 4, 0, {20, 3, 3}, S, -1, 0.49, A, MODES_OFF},
+      {H, 2, 0, {20, 3, 3}, S, -1, 0.49, A, MODES_AUTO}, {T, 4, 0, {20, 3, 3}, S, -1, 0.49, A, MODES_AUTO},
+      {M, 2, 8, {20, 3, 3}, S, -1, 0.49, A, MODES_AUTO}, {M, 2, 16, {20, 3, 3}, S, -1, 0.49, A, MODES_AUTO},
+      {H, 2, 0, {20, 3, 3}, S, -1, 0.49, F, MODES_AUTO},
   };
   const int count = (int)(sizeof table / sizeof table[0]);
   memcpy(cases, table, sizeof table);
@@ -599,7 +598,7 @@ static int sweep_cases(const bench_options *opt, cantilever_case *cases, int cap
   if (!shapes.count) shapes.count = 1, shapes.real[0] = FASCIA_SCENE_HEX;
   if (!grids.count) grids.count = 1, grids.grid[0][0] = 20, grids.grid[0][1] = 3, grids.grid[0][2] = 3;
   if (!kn.count) kn.count = 1, kn.real[0] = 8;
-  if (!sm.count) sm.count = 1, sm.real[0] = 0.1;
+  if (!sm.count) sm.count = 1, sm.real[0] = FASCIA_SCENE_SMOOTHING_AUTO;
   int count = 0;
   for (int a = 0; a < shapes.count; ++a)
     for (int b = 0; b < grids.count; ++b)
@@ -668,6 +667,7 @@ static fascia_status bench_cantilever_case(fascia_ctx *ctx, const bench_options 
   fascia_status st = fascia_scene_beam_build(ctx, &bdef, &model);
   if (st != FASCIA_OK) goto cleanup;
   out->patches = fascia_model_patch_count(model, NULL);
+  out->c.smoothing = model->materials[0].rotation_smoothing; // the rule's choice where the row left it to it
   for (int32_t s = 0; s < model->sample_count; ++s) out->modes |= model->sample_modes[s];
   fascia_solver_def def = fascia_solver_def_default();
   def.backend = opt->backend;

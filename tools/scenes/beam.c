@@ -77,7 +77,7 @@ fascia_scene_beam_def fascia_scene_beam_def_default(void) {
   def.mass = 5;
   def.density = 0;
   def.rotation_coupling = 0;
-  def.rotation_smoothing = 0.1;
+  def.rotation_smoothing = FASCIA_SCENE_SMOOTHING_AUTO;
   def.reduced_volumetric = 0;
   def.volumetric_patch = FASCIA_SCENE_PATCH_NONE;
   def.patch_radius = 0.5;

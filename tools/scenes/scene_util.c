@@ -184,11 +184,18 @@ fascia_status scene_check_body(fascia_ctx *ctx, const fascia_scene_beam_def *def
               def->mass, def->density);
   SCENE_CHECK(isfinite(def->rotation_coupling) && def->rotation_coupling >= 0, ctx, FASCIA_ERR_ARGUMENT,
               "%s: rotation coupling is %g, expected >= 0", who, def->rotation_coupling);
-  SCENE_CHECK(isfinite(def->rotation_smoothing) && def->rotation_smoothing >= 0, ctx, FASCIA_ERR_ARGUMENT,
-              "%s: rotation smoothing is %g, expected >= 0", who, def->rotation_smoothing);
+  SCENE_CHECK(isfinite(def->rotation_smoothing) &&
+                  (def->rotation_smoothing >= 0 || def->rotation_smoothing == FASCIA_SCENE_SMOOTHING_AUTO),
+              ctx, FASCIA_ERR_ARGUMENT, "%s: rotation smoothing is %g, expected >= 0 (or -1: by shape kind)", who,
+              def->rotation_smoothing);
   SCENE_CHECK(isfinite(def->gravity[0]) && isfinite(def->gravity[1]) && isfinite(def->gravity[2]), ctx,
               FASCIA_ERR_ARGUMENT, "%s: gravity is not finite", who);
   return FASCIA_OK;
+}
+
+fascia_real scene_smoothing(const fascia_scene_beam_def *def) {
+  if (def->rotation_smoothing >= 0) return def->rotation_smoothing;
+  return def->shape == FASCIA_SCENE_TET ? 0.05 : 0.1;
 }
 
 fascia_real scene_density(const fascia_scene_beam_def *def) {
@@ -204,7 +211,7 @@ fascia_status scene_finish(fascia_ctx *ctx, fascia_model *m, const fascia_scene_
   mat->poisson_ratio = def->poisson_ratio;
   mat->density = scene_density(def);
   mat->rotation_coupling = def->rotation_coupling;
-  mat->rotation_smoothing = def->rotation_smoothing;
+  mat->rotation_smoothing = scene_smoothing(def);
   if (m->material_count == 2) { // selective reduced integration: the same material split in two parts
     m->materials[1] = *mat;
     mat->part = FASCIA_PART_DEVIATORIC;
@@ -258,7 +265,7 @@ void scene_append_body_json(char *buf, size_t size, const fascia_scene_beam_def 
               ", ");
   append_real(buf, size, "density", scene_density(def), ", ");
   append_real(buf, size, "rotation_coupling", def->rotation_coupling, ", ");
-  append_real(buf, size, "rotation_smoothing", def->rotation_smoothing, ", ");
+  append_real(buf, size, "rotation_smoothing", scene_smoothing(def), ", ");
   scene_append(buf, size, "\"reduced_volumetric\": %d, ", (int)def->reduced_volumetric);
   if (def->volumetric_patch != FASCIA_SCENE_PATCH_NONE)
     scene_append(buf, size, "\"volumetric_patch\": \"%s\", ", fascia_scene_patch_name(def->volumetric_patch));

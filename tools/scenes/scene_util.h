@@ -98,6 +98,10 @@ fascia_status scene_check_body(fascia_ctx *ctx, const fascia_scene_beam_def *def
 /// Density the def asks for: def->density if > 0, else mass / box volume.
 fascia_real scene_density(const fascia_scene_beam_def *def);
 
+/// The rotation smoothing the def asks for, FASCIA_SCENE_SMOOTHING_AUTO
+/// resolved by its shape kind.
+fascia_real scene_smoothing(const fascia_scene_beam_def *def);
+
 /// Final steps shared by the builders, on a model whose frames, samples and
 /// pairs are filled and that was allocated with 1 material, 1 probe and
 /// probe->count probe pairs: material "beam" from def, gravity, frames with

@@ -62,7 +62,11 @@ typedef struct fascia_scene_beam_def {
   fascia_real mass;               ///< kg, total; used when density <= 0; default 5
   fascia_real density;            ///< kg/m^3; > 0 overrides mass; default 0 (from mass)
   fascia_real rotation_coupling;  ///< fascia_material.rotation_coupling; default 0
-  fascia_real rotation_smoothing; ///< fascia_material.rotation_smoothing; default 0.1 (see docs/mechanics.md)
+  /// fascia_material.rotation_smoothing (docs/mechanics.md), >= 0; the
+  /// default, FASCIA_SCENE_SMOOTHING_AUTO, is fascia beam's rule: 0.05 for
+  /// TET, whose frames carry the whole rotation of a bent beam (twice the
+  /// hexahedral and meshless frames'), so the same energy as 0.1 for the others
+  fascia_real rotation_smoothing;
   /// 1: selective reduced integration (beam only): the samples above carry
   /// the deviatoric energy, one more sample per cell (per tetrahedron for
   /// TET) at its centre carries the volumetric energy over the whole cell:
@@ -89,6 +93,9 @@ typedef struct fascia_scene_beam_def {
 } fascia_scene_beam_def;
 
 fascia_scene_beam_def fascia_scene_beam_def_default(void);
+
+/// rotation_smoothing's default: fascia beam's rule by shape kind.
+#define FASCIA_SCENE_SMOOTHING_AUTO (-1.0)
 
 /// The set of enhanced strain modes that suits a shape (a fascia_modes_set):
 /// the nine for TET (constant strain per tetrahedron), the three normal ones
