@@ -194,7 +194,7 @@ static fascia_status upload_model(fascia_device *dev, const fascia_backend_setup
   PUT(frame_pairs, m->frame_pairs, P, int32_t);
   PUT(pair_sample, sys->pair_sample, P, int32_t);
   PUT(sample_mass, sys->sample_mass, Sn, fascia_real);
-  PUT(pair_lumped_mass, sys->pair_lumped_mass, P, fascia_real);
+  PUT(frame_lumped_moments, sys->frame_lumped_moments, 13 * (int64_t)N, fascia_real);
   PUT(frame_mass, sys->frame_mass, N, fascia_real);
   PUT(frame_moment, sys->frame_moment, 3 * N, fascia_real);
   FASCIA_TRY(put(dev, m->frame_load, 6 * (size_t)N * sizeof(fascia_real), (void **)&dev->frame_load));

@@ -56,7 +56,7 @@ typedef struct fascia_dev {
   int64_t pair_count;
   const int32_t *frame_offsets, *frame_pairs, *pair_sample; ///< reverse table, pair -> sample
   const fascia_real *sample_mass;    ///< [S] kg
-  const fascia_real *pair_lumped_mass; ///< [P] kg, the lumped mass's share of each pair (system.c)
+  const fascia_real *frame_lumped_moments; ///< [13N] the lumped mass's rest moments per frame (system.h)
   const fascia_real *frame_mass;     ///< [N] sum_s m_s w_is
   const fascia_real *frame_moment;   ///< [3N] sum_s m_s w_is d_is
   const fascia_real *frame_load;     ///< [6N] force, torque
@@ -204,8 +204,8 @@ static inline FASCIA_HD void fascia_dev_state_item(const fascia_dev *D, int32_t 
 
 // lumped 6x6 mass block of frame i at A_mass (as system.c)
 static inline FASCIA_HD void fascia_dev_lumped_mass_item(const fascia_dev *D, int32_t i) {
-  fascia_pt_frame_lumped_mass(D->frame_offsets, D->frame_pairs, D->A_mass + 9 * (int64_t)i, D->pm.pair_offset,
-                              D->pair_lumped_mass, i, D->mass_blocks + 36 * (int64_t)i);
+  fascia_pt_frame_lumped_mass(D->frame_lumped_moments + 13 * (int64_t)i, D->A_mass + 9 * (int64_t)i,
+                              D->mass_blocks + 36 * (int64_t)i);
 }
 
 static inline FASCIA_HD void fascia_dev_sample_gradient_item(const fascia_dev *D, int32_t s) {

@@ -94,17 +94,29 @@ static inline FASCIA_HD void fascia_pt_frame_diagonal_finish(const fascia_real *
     }
 }
 
-/// Frame i's lumped 6x6 mass block B at orientation A (the mass snapshot):
-/// its pairs' point masses (pair_lumped_mass, at pair_offset from the frame).
-static inline FASCIA_HD void fascia_pt_frame_lumped_mass(const int32_t *frame_offsets, const int32_t *frame_pairs,
-                                                         const fascia_real *A, const fascia_real *pair_offset,
-                                                         const fascia_real *pair_lumped_mass, int32_t i,
+/// A frame's lumped 6x6 mass block B at orientation A (the mass snapshot):
+/// the sum over its pairs of point masses m_k at offsets a_k = A d_k,
+///   [m I, -m [a]x; m [a]x, m (|a|^2 I - a a^T)],
+/// made from the pairs' rest moments (system.h, frame_lumped_moments:
+/// M = sum m_k, D = sum m_k d_k, J = sum m_k (|d_k|^2 I - d_k d_k^T)), since
+/// sum m_k a_k = A D and |a_k| = |d_k|: [M I, -[A D]x; [A D]x, A J A^T].
+static inline FASCIA_HD void fascia_pt_frame_lumped_mass(const fascia_real *moments, const fascia_real *A,
                                                          fascia_real *B) {
-  for (int c = 0; c < 36; ++c) B[c] = 0;
-  for (int32_t r = frame_offsets[i]; r < frame_offsets[i + 1]; ++r) {
-    const int32_t k = frame_pairs[r];
-    fascia_pt_lumped_mass_add(A, pair_offset + 3 * (int64_t)k, pair_lumped_mass[k], B);
-  }
+  const fascia_real M = moments[0], *J = moments + 4;
+  fascia_real a[3], AJ[9], R[9];
+  fascia_pt_mat_vec(A, moments + 1, a);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) AJ[3 * r + c] = A[3 * r] * J[c] + A[3 * r + 1] * J[3 + c] + A[3 * r + 2] * J[6 + c];
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) R[3 * r + c] = AJ[3 * r] * A[3 * c] + AJ[3 * r + 1] * A[3 * c + 1] + AJ[3 * r + 2] * A[3 * c + 2];
+  const fascia_real skew[9] = {0, -a[2], a[1], a[2], 0, -a[0], -a[1], a[0], 0};
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) {
+      B[6 * r + c] = r == c ? M : 0;
+      B[6 * r + 3 + c] = -skew[3 * r + c];
+      B[6 * (3 + r) + c] = skew[3 * r + c];
+      B[6 * (3 + r) + 3 + c] = FASCIA_R(0.5) * (R[3 * r + c] + R[3 * c + r]); // symmetric to rounding: exactly so
+    }
 }
 
 /// The weight of a frame's unknown c (0-2 translation, 3-5 rotation) in the

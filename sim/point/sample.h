@@ -610,24 +610,6 @@ fascia_pt_sample_local_stiffness(const fascia_pt_model *m, const fascia_pt_state
   }
 }
 
-/// Adds one pair's share to its frame's lumped 6x6 mass block B: a point
-/// mass mw >= 0 (the pair's share of m_s) at offset a = A d from the frame,
-///   [mw I, -mw [a]x; mw [a]x, mw (|a|^2 I - a a^T)].
-static inline FASCIA_HD void fascia_pt_lumped_mass_add(const fascia_real *A, const fascia_real *d, fascia_real mw,
-                                                       fascia_real *B) {
-  fascia_real a[3];
-  fascia_pt_mat_vec(A, d, a);
-  const fascia_real aa = fascia_pt_dot3(a, a);
-  const fascia_real skew[9] = {0, -a[2], a[1], a[2], 0, -a[0], -a[1], a[0], 0};
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) {
-      B[6 * r + c] += mw * (r == c);
-      B[6 * r + 3 + c] -= mw * skew[3 * r + c];
-      B[6 * (3 + r) + c] += mw * skew[3 * r + c];
-      B[6 * (3 + r) + 3 + c] += mw * ((r == c) * aa - a[r] * a[c]);
-    }
-}
-
 /// Partial consistent-mass product of sample s with mass ms: velocity of the
 /// sample dp = sum_i w (dx_i + dtheta_i x a), then per pair ms w (dp, a x dp).
 /// dq, slot and out as in fascia_pt_sample_stiffness.

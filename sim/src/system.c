@@ -37,6 +37,20 @@ static void lumped_mass_shares(fascia_system *sys) {
     for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k)
       sys->pair_lumped_mass[k] = m->pair_weight[k] > 0 ? sys->sample_mass[s] * m->pair_weight[k] / positive : 0;
   }
+  for (int32_t i = 0; i < m->frame_count; ++i) {
+    fascia_real *M = sys->frame_lumped_moments + 13 * (int64_t)i;
+    for (int c = 0; c < 13; ++c) M[c] = 0;
+    for (int32_t r = m->frame_offsets[i]; r < m->frame_offsets[i + 1]; ++r) {
+      const int32_t k = m->frame_pairs[r];
+      const fascia_real mk = sys->pair_lumped_mass[k], *d = sys->pair_offset + 3 * (int64_t)k;
+      const fascia_real dd = fascia_pt_dot3(d, d);
+      M[0] += mk;
+      for (int a = 0; a < 3; ++a) {
+        M[1 + a] += mk * d[a];
+        for (int c = 0; c < 3; ++c) M[4 + 3 * a + c] += mk * ((a == c ? dd : 0) - d[a] * d[c]);
+      }
+    }
+  }
 }
 
 fascia_status fascia_system_create(fascia_ctx *ctx, const fascia_model *m, int threads, fascia_system **out) {
@@ -66,6 +80,7 @@ fascia_status fascia_system_create(fascia_ctx *ctx, const fascia_model *m, int t
   sys->local_slot = fascia_calloc(sys->max_neighbours, sizeof(int32_t));
   sys->pair_sample = fascia_calloc(P, sizeof(int32_t));
   sys->pair_lumped_mass = fascia_calloc(P, sizeof(fascia_real));
+  sys->frame_lumped_moments = fascia_calloc(13 * (int64_t)N, sizeof(fascia_real));
   sys->frame_mass = fascia_calloc(N, sizeof(fascia_real));
   sys->frame_moment = fascia_calloc(3 * N, sizeof(fascia_real));
   sys->x = fascia_calloc(3 * N, sizeof(fascia_real));
@@ -78,7 +93,7 @@ fascia_status fascia_system_create(fascia_ctx *ctx, const fascia_model *m, int t
   sys->conservative_torque = fascia_calloc(3 * N, sizeof(fascia_real));
   sys->gradient_scratch = fascia_calloc(6 * N, sizeof(fascia_real));
   if (!sys->pair_offset || !sys->sample_lambda || !sys->sample_mu || !sys->sample_coupling || !sys->sample_curvature || !sys->sample_mass ||
-      !sys->sample_law || !sys->local_slot || !sys->pair_sample || !sys->pair_lumped_mass || !sys->frame_mass || !sys->frame_moment || !sys->x || !sys->q ||
+      !sys->sample_law || !sys->local_slot || !sys->pair_sample || !sys->pair_lumped_mass || !sys->frame_lumped_moments || !sys->frame_mass || !sys->frame_moment || !sys->x || !sys->q ||
       !sys->A || !sys->A_mass || !sys->pair_buffer || !sys->cache || !sys->sample_flags ||
       !sys->conservative_torque || !sys->gradient_scratch) {
     fascia_system_destroy(&sys);
@@ -168,6 +183,7 @@ void fascia_system_destroy(fascia_system **sys) {
   free(s->local_slot);
   free(s->pair_sample);
   free(s->pair_lumped_mass);
+  free(s->frame_lumped_moments);
   free(s->frame_mass);
   free(s->frame_moment);
   free(s->x);
@@ -350,11 +366,10 @@ void fascia_system_mass_apply(fascia_system *sys, const fascia_real *v, fascia_r
 }
 
 void fascia_system_mass_lumped(fascia_system *sys, fascia_real *blocks) {
-  const fascia_model *m = sys->model;
 #pragma omp parallel for num_threads(sys->threads) schedule(static)
   for (int32_t i = 0; i < sys->frame_count; ++i)
-    fascia_pt_frame_lumped_mass(m->frame_offsets, m->frame_pairs, sys->A_mass + 9 * (int64_t)i, sys->pair_offset,
-                                sys->pair_lumped_mass, i, blocks + 36 * (int64_t)i);
+    fascia_pt_frame_lumped_mass(sys->frame_lumped_moments + 13 * (int64_t)i, sys->A_mass + 9 * (int64_t)i,
+                                blocks + 36 * (int64_t)i);
 }
 
 void fascia_system_sample_positions(const fascia_system *sys, fascia_real *out) {

@@ -37,6 +37,11 @@ typedef struct fascia_system {
   int32_t *local_slot;          ///< [max neighbours] 0, 1, 2, ..
   int32_t *pair_sample;         ///< [P] the sample each pair belongs to
   fascia_real *pair_lumped_mass; ///< [P] kg: the share of its sample's mass the lumped mass puts on the pair's frame
+  /// [13N] each frame's lumped mass as rest moments of its pairs' shares m_k
+  /// at their offsets d_k (pair_offset): sum m_k, sum m_k d_k (3), sum m_k
+  /// (|d_k|^2 I - d_k d_k^T) (9, row-major); the block at rotation A is made
+  /// of them (fascia_pt_frame_lumped_mass), so a step costs O(frames)
+  fascia_real *frame_lumped_moments;
   struct fascia_dilatation *dilatation; ///< the volumetric patches' term (dilatation.h), NULL without patches
   struct fascia_modes *modes;           ///< the patches' enhanced strain modes (modes.h), NULL without
 
