@@ -105,10 +105,8 @@ static inline FASCIA_HD void fascia_pt_frame_lumped_mass(const fascia_real *mome
   const fascia_real M = moments[0], *J = moments + 4;
   fascia_real a[3], AJ[9], R[9];
   fascia_pt_mat_vec(A, moments + 1, a);
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) AJ[3 * r + c] = A[3 * r] * J[c] + A[3 * r + 1] * J[3 + c] + A[3 * r + 2] * J[6 + c];
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) R[3 * r + c] = AJ[3 * r] * A[3 * c] + AJ[3 * r + 1] * A[3 * c + 1] + AJ[3 * r + 2] * A[3 * c + 2];
+  fascia_pt_mat_mul(A, J, AJ);
+  fascia_pt_mat_mult(AJ, A, R); // A J A^T
   const fascia_real skew[9] = {0, -a[2], a[1], a[2], 0, -a[0], -a[1], a[0], 0};
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) {

@@ -149,8 +149,7 @@ static inline FASCIA_HD void fascia_pt_stress_tangent(int law, fascia_real lambd
     return;
   }
   fascia_real B[9]; // F F^T
-  for (int i = 0; i < 3; ++i)
-    for (int k = 0; k < 3; ++k) B[3 * i + k] = F[3 * i] * F[3 * k] + F[3 * i + 1] * F[3 * k + 1] + F[3 * i + 2] * F[3 * k + 2];
+  fascia_pt_mat_mult(F, F, B);
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j)
       for (int k = 0; k < 3; ++k)
