@@ -522,11 +522,10 @@ static inline FASCIA_HD int32_t fascia_pt_upper_block(int32_t n, int32_t a, int3
 /// derivative of the gradient on the a-th pair's frame with respect to the
 /// b-th pair's frame: v B_a^T D B_b (material, D = dP/dF, B the 9x6 map of
 /// paper eq. 11) plus, on diagonal blocks, the geometric v (M - tr(M) I) with
-/// M = C Pt^T; and the rotation smoothing's theta-theta blocks in closed form,
-///   v k_c [(g_a.g_b)(tr(A_a A_b^T) I - A_b A_a^T) + [a = b](A_a N_a^T - tr(.) I)].
-/// Equals fascia_pt_sample_stiffness_parts(.., BASE | SMOOTHING) applied to
+/// M = C Pt^T. Equals fascia_pt_sample_stiffness_parts(.., BASE) applied to
 /// unit vectors; it is how the assembled matrix is built without 6n products
-/// per sample (the rotation coupling, when on, is added by such products).
+/// per sample (the rotation coupling, when on, is added by such products,
+/// the rotation smoothing per frame pair: fascia_pt_smoothing_block).
 /// frame_moves ([frames], NULL: all): the rows of a frame not in it are not
 /// computed, and a block with such a frame is to be left unread (the
 /// assembly leaves the blocks of frames a step holds). scratch: 12 n reals
@@ -576,37 +575,6 @@ fascia_pt_sample_local_stiffness(const fascia_pt_model *m, const fascia_pt_state
     fascia_real *K = out + 36 * fascia_pt_upper_block(n, a, a);
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) K[6 * (3 + r) + 3 + c] += v * (M[3 * r + c] - (r == c ? trM : 0));
-  }
-  const fascia_real kc = m->sample_curvature[s];
-  if (!(kc > 0)) return;
-  fascia_real Mc[27]; // M_c = sum_i g_c A_i
-  for (int q = 0; q < 27; ++q) Mc[q] = 0;
-  for (int a = 0; a < n; ++a) {
-    const fascia_real *A = st->frame_A + 9 * m->pair_frame[begin + a], *g = m->pair_gradient + 3 * (begin + a);
-    for (int c = 0; c < 3; ++c)
-      for (int q = 0; q < 9; ++q) Mc[9 * c + q] += g[c] * A[q];
-  }
-  for (int a = 0; a < n; ++a) {
-    if (frame_moves && !frame_moves[m->pair_frame[begin + a]]) continue;
-    const fascia_real *Aa = st->frame_A + 9 * m->pair_frame[begin + a], *ga = m->pair_gradient + 3 * (begin + a);
-    for (int b = a; b < n; ++b) { // block (b, a) is the transpose
-      if (frame_moves && !frame_moves[m->pair_frame[begin + b]]) continue;
-      const fascia_real *Ab = st->frame_A + 9 * m->pair_frame[begin + b], *gb = m->pair_gradient + 3 * (begin + b);
-      const fascia_real gg = v * kc * fascia_pt_dot3(ga, gb);
-      fascia_real Q[9]; // A_b A_a^T
-      fascia_pt_mat_mult(Ab, Aa, Q);
-      const fascia_real trQ = fascia_pt_trace(Q);
-      fascia_real *K = out + 36 * fascia_pt_upper_block(n, a, b);
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) K[6 * (3 + r) + 3 + c] += gg * ((r == c ? trQ : 0) - Q[3 * r + c]);
-    }
-    fascia_real Nm[9], X[9];
-    for (int q = 0; q < 9; ++q) Nm[q] = ga[0] * Mc[q] + ga[1] * Mc[9 + q] + ga[2] * Mc[18 + q];
-    fascia_pt_mat_mult(Aa, Nm, X);
-    const fascia_real trX = fascia_pt_trace(X);
-    fascia_real *K = out + 36 * fascia_pt_upper_block(n, a, a);
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) K[6 * (3 + r) + 3 + c] += v * kc * (X[3 * r + c] - (r == c ? trX : 0));
   }
 }
 

@@ -1,9 +1,10 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
 // The tangent and mass as assembled 6x6-block sparse matrices (block CSR over
-// frames). Blocks come from the same per-sample products as the matrix-free
-// operator (sim/point/sample.h applied to unit vectors), so the two can never
-// disagree; each row is filled by one thread from the reverse table, in a
+// frames). Blocks come from the per-sample terms of the matrix-free
+// operator (sim/point/sample.h), in closed form or applied to unit vectors,
+// and the rotation smoothing's from its frame graph (system.h); tests/t112
+// checks the two operators agree. Each row is filled by one thread, in a
 // fixed order (determinism).
 #ifndef FASCIA_SRC_ASSEMBLE_H
 #define FASCIA_SRC_ASSEMBLE_H

@@ -42,6 +42,16 @@ typedef struct fascia_system {
   /// (|d_k|^2 I - d_k d_k^T) (9, row-major); the block at rotation A is made
   /// of them (fascia_pt_frame_lumped_mass), so a step costs O(frames)
   fascia_real *frame_lumped_moments;
+  /// The rotation smoothing as a weighted graph on the frames: summed over
+  /// the samples, its energy is 1/2 sum_ij W_ij <A_i, A_j> (Frobenius), with
+  /// W_ij = sum over the samples holding frames i and j of v k_c (g_i . g_j),
+  /// rest quantities. Row i lists the frames that share such a sample with i
+  /// (i too), in the order met; NULL where no sample has smoothing. The
+  /// assembly adds the smoothing's blocks from it once per frame pair
+  /// instead of once per sample.
+  int32_t *smoothing_offsets;     ///< [N+1]
+  int32_t *smoothing_frames;      ///< [smoothing_offsets[N]]
+  fascia_real *smoothing_weight;  ///< [smoothing_offsets[N]] W_ij
   struct fascia_dilatation *dilatation; ///< the volumetric patches' term (dilatation.h), NULL without patches
   struct fascia_modes *modes;           ///< the patches' enhanced strain modes (modes.h), NULL without
 
