@@ -24,15 +24,36 @@ typedef struct fascia_pt_modes {
   fascia_real *amplitude;      ///< [9 patches] a_p at the last evaluation, 1/m
   int32_t *failed;             ///< [patches] 1: the last local solve found no minimum
   fascia_real *sample_enhanced; ///< [9S] the enhanced part of F (pm.sample_enhanced)
-  /// [54 entries] W_e = K_ue L^-T at the last tangent (6x9, row-major; 0 in
-  /// inactive modes): K_ue the change of entry e's gradient per mode, L L^T
-  /// = K_aa, so the condensed term is K_ue K_aa^-1 K_uf^T = W_e W_f^T
+  /// [54 entries] W_e = K_ue L^-T at the last tangent (6x9, row-major):
+  /// K_ue the change of entry e's gradient per active mode, L L^T = K_aa,
+  /// so the condensed term is K_ue K_aa^-1 K_uf^T = W_e W_f^T. Its columns
+  /// are L's, one per active mode in ascending order, first, then zeros
+  /// (fascia_pt_modes_count of them are read)
   fascia_real *entry_factor;
   fascia_real *reduced;        ///< [9 patches] W_p^T v of the last product
 } fascia_pt_modes;
 
 static inline FASCIA_HD int fascia_pt_mode_active(const fascia_pt_modes *md, int32_t p, int j) {
   return (md->active[p] >> j) & 1;
+}
+
+/// How many columns of patch p's W_e to read: 0 without modes, 3 for at
+/// most three active (the normal set), else 9. Constant loop bounds keep the
+/// products unrolled; the columns past the active modes are 0.
+static inline FASCIA_HD int fascia_pt_modes_width(const fascia_pt_modes *md, int32_t p) {
+  int n = 0;
+  for (int j = 0; j < 9; ++j) n += fascia_pt_mode_active(md, p, j);
+  return n == 0 ? 0 : n <= 3 ? 3 : 9;
+}
+
+/// sum_k x[k] y[k] over the first width (3 or 9) entries.
+static inline FASCIA_HD fascia_real fascia_pt_modes_dot(const fascia_real *x, const fascia_real *y, int width) {
+  fascia_real sum = 0;
+  if (width == 3)
+    for (int k = 0; k < 3; ++k) sum += x[k] * y[k];
+  else
+    for (int k = 0; k < 9; ++k) sum += x[k] * y[k];
+  return sum;
 }
 
 /// The sets of modes (fascia_modes_set's values: sim/src/modes.c checks).
@@ -335,7 +356,7 @@ static inline FASCIA_HD void fascia_pt_modes_tangent(const fascia_pt_model *m, c
         w[u] = sum / L[n * u + u];
       }
       for (int j = 0; j < 9; ++j) W[9 * row + j] = 0;
-      for (int u = 0; u < n && factored; ++u) W[9 * row + idx[u]] = w[u];
+      for (int u = 0; u < n && factored; ++u) W[9 * row + u] = w[u];
     }
   }
 }
@@ -358,11 +379,11 @@ static inline FASCIA_HD void fascia_pt_modes_frame_add(const fascia_pt_patches *
                                                        int32_t i, fascia_real *out) {
   for (int32_t r = t->frame_entry_offsets[i]; r < t->frame_entry_offsets[i + 1]; ++r) {
     const int32_t e = t->frame_entries[r];
-    if (!md->active[t->entry_patch[e]]) continue;
+    const int width = fascia_pt_modes_width(md, t->entry_patch[e]);
+    if (!width) continue;
     const fascia_real *W = md->entry_factor + 54 * (int64_t)e, *z = md->reduced + 9 * (int64_t)t->entry_patch[e];
     for (int row = 0; row < 6; ++row) {
-      fascia_real sum = 0;
-      for (int k = 0; k < 9; ++k) sum += W[9 * row + k] * z[k];
+      const fascia_real sum = fascia_pt_modes_dot(W + 9 * row, z, width);
       out[row] -= sum;
     }
   }
@@ -372,14 +393,11 @@ static inline FASCIA_HD void fascia_pt_modes_frame_add(const fascia_pt_patches *
 /// patch: W_e W_f^T (6x6, row-major).
 static inline FASCIA_HD void fascia_pt_modes_block_add(const fascia_pt_patches *t, const fascia_pt_modes *md,
                                                        int32_t e, int32_t f, fascia_real *B) {
-  if (!md->active[t->entry_patch[e]]) return;
+  const int width = fascia_pt_modes_width(md, t->entry_patch[e]);
+  if (!width) return;
   const fascia_real *We = md->entry_factor + 54 * (int64_t)e, *Wf = md->entry_factor + 54 * (int64_t)f;
   for (int a = 0; a < 6; ++a)
-    for (int b = 0; b < 6; ++b) {
-      fascia_real sum = 0;
-      for (int k = 0; k < 9; ++k) sum += We[9 * a + k] * Wf[9 * b + k];
-      B[6 * a + b] -= sum;
-    }
+    for (int b = 0; b < 6; ++b) B[6 * a + b] -= fascia_pt_modes_dot(We + 9 * a, Wf + 9 * b, width);
 }
 
 /// B -= frame i's 6x6 diagonal block of the condensed terms: sum over its
