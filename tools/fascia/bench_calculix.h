@@ -18,15 +18,19 @@ typedef struct bench_peer {
   double error_uz_percent; ///< against the reference; > 0: too stiff
 } bench_peer;
 
-/// Solves the ladder of `element` (coarsest first, each mesh `repeats`
-/// times keeping the least wall time, as fascia's rows are timed, with
+/// Solves the ladder of `element` (coarsest first, each mesh once, with
 /// ccx's default controls and `threads` threads) on the beam of `beam`'s
 /// law, E and nu until a mesh is within
 /// `target_percent` of `reference_uz` or the ladder ends. *count gets the
 /// meshes solved. Errors: those of fascia_ccx_beam_solve (message on ctx).
 fascia_status bench_calculix_ladder(fascia_ctx *ctx, const char *program, int element,
                                     const fascia_scene_beam_def *beam, double reference_uz, double target_percent,
-                                    int threads, int repeats, bench_peer *peers, int *count);
+                                    int threads, bench_peer *peers, int *count);
+
+/// Solves the `count` meshes of a ladder once more, each keeping the least
+/// of its wall times (the bench's repeats).
+fascia_status bench_calculix_retime(fascia_ctx *ctx, const char *program, const fascia_scene_beam_def *beam,
+                                    int threads, bench_peer *peers, int count);
 
 /// The fastest mesh of the ladder whose |error| is at most |error_percent|,
 /// NULL when none reached it.
