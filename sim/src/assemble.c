@@ -386,6 +386,24 @@ static int sample_moves(const fascia_model *m, const unsigned char *moves, int32
   return 0;
 }
 
+// Adds to BSR block b its local blocks among those of the chunk [e0, e1)
+// (B->chunk), from its cursor on, in ascending order. Its sums are wide
+// (AVX2: the static 20x3x3 hex cantilever 464 -> 445 million instructions,
+// its block sums 29 -> 10), the same bits as the baseline build's.
+WIDE_CLONES static void add_contributions(fascia_bsr *B, int32_t b, int64_t e0, int64_t e1) {
+  fascia_real *FASCIA_RESTRICT dst = B->values + 36 * (int64_t)b;
+  int64_t c = B->cursor[b];
+  for (; c < B->contrib_offsets[b + 1] && B->contrib[c] < e1; ++c) {
+    const fascia_real *FASCIA_RESTRICT src = B->chunk + 36 * (B->contrib[c] - e0);
+    if (B->contrib_transposed[c])
+      for (int r = 0; r < 6; ++r)
+        for (int q = 0; q < 6; ++q) dst[6 * r + q] += src[6 * q + r];
+    else
+      for (int q = 0; q < 36; ++q) dst[q] += src[q];
+  }
+  B->cursor[b] = c;
+}
+
 int fascia_system_hessian_assemble(fascia_system *sys, const unsigned char *moves, fascia_bsr *B) {
   const fascia_pt_state st = {sys->x, sys->A};
   int out_of_memory = 0;
@@ -414,17 +432,7 @@ int fascia_system_hessian_assemble(fascia_system *sys, const unsigned char *move
       for (int64_t t = B->chunk_block_offsets[k]; t < B->chunk_block_offsets[k + 1]; ++t) {
         const int32_t b = B->chunk_blocks[t];
         if (!fascia_frame_moving(moves, B->block_row[b]) || !fascia_frame_moving(moves, B->cols[b])) continue;
-        fascia_real *dst = B->values + 36 * (int64_t)b;
-        int64_t c = B->cursor[b];
-        for (; c < B->contrib_offsets[b + 1] && B->contrib[c] < e1; ++c) {
-          const fascia_real *src = B->chunk + 36 * (B->contrib[c] - e0);
-          if (B->contrib_transposed[c])
-            for (int r = 0; r < 6; ++r)
-              for (int q = 0; q < 6; ++q) dst[6 * r + q] += src[6 * q + r];
-          else
-            for (int q = 0; q < 36; ++q) dst[q] += src[q];
-        }
-        B->cursor[b] = c;
+        add_contributions(B, b, e0, e1);
       }
     }
     free(dq);
