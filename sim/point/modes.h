@@ -74,7 +74,7 @@ static inline FASCIA_HD void fascia_pt_modes_F(const fascia_real *a, const fasci
 // amplitudes a, the frames held. m is the model without pressures or modes;
 // F_frames [9S]: the frames' part of each sample's F, which the frames
 // held do not change. Returns 0 where some sample's energy is not finite.
-static inline FASCIA_HD int fascia_pt_modes_local(const fascia_pt_model *m, const fascia_pt_state *st,
+FASCIA_STATIC_FORCE_INLINE FASCIA_HD int fascia_pt_modes_local(const fascia_pt_model *m, const fascia_pt_state *st,
                                                   const fascia_pt_patches *t, const fascia_pt_modes *md, int32_t p,
                                                   const fascia_real *F_frames, const fascia_real *a,
                                                   fascia_real *energy, fascia_real *r, fascia_real *H) {
@@ -185,7 +185,7 @@ static inline FASCIA_HD int fascia_pt_modes_inverse(const fascia_pt_modes *md, i
 /// m is the model without pressures or modes (the patch's pressure follows
 /// the amplitudes here). The samples' sample_enhanced hold their frames'
 /// part of F during the solve (computed once, not at every trial).
-static inline FASCIA_HD void fascia_pt_modes_evaluate(const fascia_pt_model *m, const fascia_pt_state *st,
+FASCIA_STATIC_FORCE_INLINE FASCIA_HD void fascia_pt_modes_evaluate(const fascia_pt_model *m, const fascia_pt_state *st,
                                                       const fascia_pt_patches *t, const fascia_pt_modes *md, int32_t p) {
   md->failed[p] = 0;
   if (!md->active[p]) return; // a patch without modes keeps its zero enhanced F
@@ -285,7 +285,7 @@ static inline FASCIA_HD void fascia_pt_modes_pair_share(const fascia_pt_modes *m
 /// shares of the samples without rotation coupling at this state (the
 /// assembly, which has their D and B^T D, leaves them there); else they
 /// are computed here, the same way.
-static inline FASCIA_HD void fascia_pt_modes_tangent(const fascia_pt_model *m, const fascia_pt_state *st,
+FASCIA_STATIC_FORCE_INLINE FASCIA_HD void fascia_pt_modes_tangent(const fascia_pt_model *m, const fascia_pt_state *st,
                                                      const fascia_pt_patches *t, const fascia_pt_modes *md, int32_t p,
                                                      const fascia_real *cache, fascia_real *pair_scratch,
                                                      const fascia_real *sample_share, const fascia_real *pair_share) {

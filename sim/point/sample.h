@@ -176,7 +176,7 @@ static inline FASCIA_HD fascia_real fascia_pt_sample_law_stress(const fascia_pt_
 /// negative); the CPU backend passes pair_buffer + 6 sample_offsets[s].
 /// cache: [FASCIA_PT_CACHE_SIZE] for this sample, or NULL.
 /// Returns the sample's energy (J); *flags gets FASCIA_PT_FLAG_* bits.
-static inline FASCIA_HD fascia_real fascia_pt_sample_gradient(const fascia_pt_model *m, const fascia_pt_state *st,
+FASCIA_STATIC_FORCE_INLINE FASCIA_HD fascia_real fascia_pt_sample_gradient(const fascia_pt_model *m, const fascia_pt_state *st,
                                                               int32_t s, fascia_real *out6, fascia_real *cache,
                                                               int *flags) {
   fascia_real F[9], P[9], aux[FASCIA_PT_AUX_SIZE];

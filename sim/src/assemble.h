@@ -10,6 +10,7 @@
 #define FASCIA_SRC_ASSEMBLE_H
 
 #include "system.h"
+#include "wide.h"
 
 /// Block CSR: row i has blocks cols[row_offsets[i] .. row_offsets[i+1]-1]
 /// (ascending frame indices), values 36 per block, row-major.
@@ -40,16 +41,6 @@ typedef struct fascia_bsr {
   fascia_real *chunk;                ///< [36 chunk_capacity] local blocks of one chunk of samples
   int64_t chunk_capacity;            ///< FASCIA_ASSEMBLY_CHUNK, or the largest sample's n (n + 1) / 2
 } fascia_bsr;
-
-/// A function compiled twice, for AVX2 and for the baseline; the loader
-/// picks one. Without fused multiply-adds (-ffp-contract=off, and "avx2"
-/// has none) both give the same bits: the wide loops only do at once what
-/// the baseline does one by one.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define WIDE_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define WIDE_CLONES
-#endif
 
 /// Whether frame i moves, for the moves arrays below (NULL: every frame).
 static inline int fascia_frame_moving(const unsigned char *moves, int32_t i) { return !moves || moves[i]; }

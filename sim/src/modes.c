@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "modes.h"
+#include "wide.h"
 #include "dilatation.h"
 
 // A mode column acts where its patch spans that direction: sum v xi_c^2
@@ -95,12 +96,26 @@ fascia_status fascia_modes_create(fascia_system *sys, fascia_modes **out) {
   return FASCIA_OK;
 }
 
+// One patch's local solve and its tangent's factors, compiled wide (wide.h):
+// in the static 20x3x3 tet cantilever 133 -> 95 and 40 -> 29 million
+// instructions.
+WIDE_CLONES static void patch_evaluate(const fascia_pt_model *m, const fascia_pt_state *st, const fascia_pt_patches *t,
+                                       const fascia_pt_modes *md, int32_t p) {
+  fascia_pt_modes_evaluate(m, st, t, md, p);
+}
+
+WIDE_CLONES static void patch_tangent(const fascia_system *sys, const fascia_pt_state *st, const fascia_pt_patches *t,
+                                      const fascia_modes *md, int32_t p) {
+  fascia_pt_modes_tangent(&sys->pm, st, t, &md->view, p, sys->cache, sys->pair_buffer,
+                          md->shares_current ? md->sample_share : NULL, md->shares_current ? md->pair_share : NULL);
+}
+
 int32_t fascia_modes_evaluate(fascia_system *sys, fascia_modes *md) {
   const fascia_pt_state st = {sys->x, sys->A};
   const fascia_pt_model own = fascia_pt_modes_local_model(&sys->pm);
   const fascia_pt_patches *t = &sys->dilatation->view;
 #pragma omp parallel for num_threads(sys->threads) schedule(dynamic, 4)
-  for (int32_t p = 0; p < t->count; ++p) fascia_pt_modes_evaluate(&own, &st, t, &md->view, p);
+  for (int32_t p = 0; p < t->count; ++p) patch_evaluate(&own, &st, t, &md->view, p);
   md->tangent_current = md->shares_current = 0;
   for (int32_t p = 0; p < t->count; ++p)
     if (md->failed[p]) return p;
@@ -113,9 +128,7 @@ void fascia_modes_tangent(const fascia_system *sys, fascia_modes *md) {
   const fascia_pt_state st = {sys->x, sys->A};
   const fascia_pt_patches *t = &sys->dilatation->view;
 #pragma omp parallel for num_threads(sys->threads) schedule(dynamic, 4)
-  for (int32_t p = 0; p < t->count; ++p)
-    fascia_pt_modes_tangent(&sys->pm, &st, t, &md->view, p, sys->cache, sys->pair_buffer,
-                            md->shares_current ? md->sample_share : NULL, md->shares_current ? md->pair_share : NULL);
+  for (int32_t p = 0; p < t->count; ++p) patch_tangent(sys, &st, t, md, p);
   md->tangent_current = 1;
 }
 

@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "system.h"
+#include "wide.h"
 #include "dilatation.h"
 #include "modes.h"
 #include "point/frame.h"
@@ -299,6 +300,20 @@ fascia_real fascia_dot(const fascia_real *a, const fascia_real *b, int64_t n, in
   return sum;
 }
 
+// Samples [begin, end): their energy, summed in order, and their pairs'
+// gradients into the pair buffer, with their caches and flags. Compiled
+// wide (wide.h): in the static 20x3x3 cantilever 30 -> 26 million
+// instructions (hex), 58 -> 51 (tet).
+WIDE_CLONES static fascia_real samples_gradient(fascia_system *sys, const fascia_pt_state *st, int32_t begin,
+                                               int32_t end) {
+  const int32_t *offsets = sys->model->sample_offsets;
+  fascia_real e = 0;
+  for (int32_t s = begin; s < end; ++s)
+    e += fascia_pt_sample_gradient(&sys->pm, st, s, sys->pair_buffer + 6 * (int64_t)offsets[s],
+                                   sys->cache + (int64_t)s * FASCIA_PT_CACHE_SIZE, sys->sample_flags + s);
+  return e;
+}
+
 fascia_status fascia_system_evaluate(fascia_system *sys, fascia_real *gradient, fascia_real *energy) {
   const fascia_model *m = sys->model;
   const fascia_pt_state st = {sys->x, sys->A};
@@ -315,12 +330,8 @@ fascia_status fascia_system_evaluate(fascia_system *sys, fascia_real *gradient, 
   FASCIA_CHECK(partial, sys->ctx, FASCIA_ERR_MEMORY, "system: out of memory");
 #pragma omp parallel for num_threads(sys->threads) schedule(static)
   for (int64_t blk = 0; blk < blocks; ++blk) {
-    fascia_real e = 0;
     const int32_t end = (int32_t)((blk + 1) * DOT_BLOCK < S ? (blk + 1) * DOT_BLOCK : S);
-    for (int32_t s = (int32_t)(blk * DOT_BLOCK); s < end; ++s)
-      e += fascia_pt_sample_gradient(&sys->pm, &st, s, sys->pair_buffer + 6 * (int64_t)m->sample_offsets[s],
-                                     sys->cache + (int64_t)s * FASCIA_PT_CACHE_SIZE, sys->sample_flags + s);
-    partial[blk] = e;
+    partial[blk] = samples_gradient(sys, &st, (int32_t)(blk * DOT_BLOCK), end);
   }
   for (int64_t blk = 0; blk < blocks; ++blk) internal += partial[blk];
   if (partial != partial_stack) free(partial);
