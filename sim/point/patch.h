@@ -33,7 +33,7 @@ typedef struct fascia_pt_patches {
 
 /// Patch p at the state st: its mean dilatation, energy and its samples'
 /// pressure (what the gradient needs).
-static inline FASCIA_HD void fascia_pt_patch_evaluate(const fascia_pt_model *m, const fascia_pt_state *st,
+FASCIA_STATIC_FORCE_INLINE FASCIA_HD void fascia_pt_patch_evaluate(const fascia_pt_model *m, const fascia_pt_state *st,
                                                       const fascia_pt_patches *t, int32_t p) {
   fascia_real sum = 0;
   for (int32_t q = t->patch_offsets[p]; q < t->patch_offsets[p + 1]; ++q) {
@@ -50,7 +50,7 @@ static inline FASCIA_HD void fascia_pt_patch_evaluate(const fascia_pt_model *m, 
 
 /// Patch p at the state st: the gradient G_e of sum_{s in p} v_s theta_s on
 /// each support entry's frame (what the Hessian's rank-one term needs).
-static inline FASCIA_HD void fascia_pt_patch_gradient(const fascia_pt_model *m, const fascia_pt_state *st,
+FASCIA_STATIC_FORCE_INLINE FASCIA_HD void fascia_pt_patch_gradient(const fascia_pt_model *m, const fascia_pt_state *st,
                                                       const fascia_pt_patches *t, int32_t p) {
   for (int64_t q = 6 * (int64_t)t->support_offsets[p]; q < 6 * (int64_t)t->support_offsets[p + 1]; ++q)
     t->entry_gradient[q] = 0;

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "dilatation.h"
+#include "wide.h"
 #include "index_set.h"
 
 void fascia_patch_table_free(fascia_patch_table *t) {
@@ -198,10 +199,23 @@ void fascia_dilatation_destroy(fascia_dilatation **dilatation) {
   *dilatation = NULL;
 }
 
+// One patch's mean dilatation and its gradient, compiled wide (wide.h): the
+// demo tissue's 30 steps 338 -> 333 million instructions (its patches'
+// dilatations 41 -> 37).
+WIDE_CLONES static void patch_evaluate(const fascia_system *sys, const fascia_pt_state *st, fascia_dilatation *d,
+                                       int32_t p) {
+  fascia_pt_patch_evaluate(&sys->pm, st, &d->view, p);
+}
+
+WIDE_CLONES static void patch_gradient(const fascia_system *sys, const fascia_pt_state *st, fascia_dilatation *d,
+                                       int32_t p) {
+  fascia_pt_patch_gradient(&sys->pm, st, &d->view, p);
+}
+
 fascia_real fascia_dilatation_evaluate(fascia_system *sys, fascia_dilatation *d) {
   const fascia_pt_state st = {sys->x, sys->A};
 #pragma omp parallel for num_threads(sys->threads) schedule(static)
-  for (int32_t p = 0; p < d->view.count; ++p) fascia_pt_patch_evaluate(&sys->pm, &st, &d->view, p);
+  for (int32_t p = 0; p < d->view.count; ++p) patch_evaluate(sys, &st, d, p);
   d->gradients_current = 0;
   fascia_real energy = 0;
   for (int32_t p = 0; p < d->view.count; ++p) energy += d->patch_energy[p];
@@ -212,7 +226,7 @@ void fascia_dilatation_gradients(const fascia_system *sys, fascia_dilatation *d)
   if (d->gradients_current) return;
   const fascia_pt_state st = {sys->x, sys->A};
 #pragma omp parallel for num_threads(sys->threads) schedule(static)
-  for (int32_t p = 0; p < d->view.count; ++p) fascia_pt_patch_gradient(&sys->pm, &st, &d->view, p);
+  for (int32_t p = 0; p < d->view.count; ++p) patch_gradient(sys, &st, d, p);
   d->gradients_current = 1;
 }
 
