@@ -327,6 +327,57 @@ static void dilatation_rows(const fascia_system *sys, const unsigned char *moves
   }
 }
 
+// The rotation smoothing's frame graph (fascia_system: smoothing_offsets),
+// made by the first assembly (a solver that never assembles has no use for
+// it): counted, then filled, each row through the frame's reverse table in
+// a fixed order. Without smoothing only the offsets, all 0. Returns 0 when
+// out of memory.
+static int smoothing_graph(fascia_system *sys) {
+  const fascia_model *m = sys->model;
+  const int32_t N = m->frame_count;
+  int any = 0;
+  for (int32_t s = 0; s < m->sample_count; ++s) any |= sys->sample_curvature[s] > 0;
+  if (!any) return (sys->smoothing_offsets = fascia_calloc((int64_t)N + 1, sizeof(int32_t))) != NULL;
+  int32_t *row_of = fascia_calloc(N, sizeof(int32_t)), *place = fascia_calloc(N, sizeof(int32_t));
+  sys->smoothing_offsets = fascia_calloc((int64_t)N + 1, sizeof(int32_t));
+  if (!row_of || !place || !sys->smoothing_offsets) {
+    free(row_of), free(place);
+    return 0;
+  }
+  for (int32_t j = 0; j < N; ++j) row_of[j] = -1;
+  for (int pass = 0; pass < 2; ++pass) {
+    for (int32_t i = 0; i < N; ++i) {
+      int32_t count = 0;
+      const int32_t base = sys->smoothing_offsets[i];
+      for (int32_t r = m->frame_offsets[i]; r < m->frame_offsets[i + 1]; ++r) {
+        const int32_t k = m->frame_pairs[r], s = sys->pair_sample[k];
+        const fascia_real vk = m->sample_volume[s] * sys->sample_curvature[s];
+        if (!(vk > 0)) continue;
+        for (int32_t l = m->sample_offsets[s]; l < m->sample_offsets[s + 1]; ++l) {
+          const int32_t j = m->pair_frame[l];
+          if (row_of[j] != pass * N + i) { // first met in this row
+            row_of[j] = pass * N + i;
+            place[j] = count++;
+            if (pass) sys->smoothing_frames[base + place[j]] = j;
+          }
+          if (pass)
+            sys->smoothing_weight[base + place[j]] +=
+                vk * fascia_pt_dot3(m->pair_gradient + 3 * k, m->pair_gradient + 3 * l);
+        }
+      }
+      if (!pass) sys->smoothing_offsets[i + 1] = sys->smoothing_offsets[i] + count;
+    }
+    if (!pass) {
+      const int32_t E = sys->smoothing_offsets[N];
+      sys->smoothing_frames = fascia_calloc(E, sizeof(int32_t));
+      sys->smoothing_weight = fascia_calloc(E, sizeof(fascia_real));
+      if (!sys->smoothing_frames || !sys->smoothing_weight) break;
+    }
+  }
+  free(row_of), free(place);
+  return sys->smoothing_frames && sys->smoothing_weight;
+}
+
 // The rotation smoothing's theta-theta blocks from its frame graph
 // (system.h: 1/2 sum_ij W_ij <A_i, A_j>), row by row, on the upper blocks:
 // block (i, j) gets W_ij (tr(Q) I - Q), Q = A_j A_i^T, and the diagonal
@@ -409,6 +460,7 @@ int fascia_system_hessian_assemble(fascia_system *sys, const unsigned char *move
   int out_of_memory = 0;
   fascia_modes *md = sys->modes;
   const int shares = md && fascia_modes_shares_ready(sys, md);
+  if (!sys->smoothing_offsets && !smoothing_graph(sys)) return 0;
   memset(B->values, 0, 36 * (size_t)B->blocks * sizeof(fascia_real));
   memcpy(B->cursor, B->contrib_offsets, (size_t)B->blocks * sizeof(int64_t));
 #pragma omp parallel num_threads(sys->threads) reduction(| : out_of_memory)

@@ -54,55 +54,6 @@ static void lumped_mass_shares(fascia_system *sys) {
   }
 }
 
-// The rotation smoothing's frame graph (fascia_system: smoothing_offsets):
-// counted, then filled, each row through the frame's reverse table in a
-// fixed order. Returns 0 when out of memory.
-static int smoothing_graph(fascia_system *sys) {
-  const fascia_model *m = sys->model;
-  const int32_t N = m->frame_count;
-  int any = 0;
-  for (int32_t s = 0; s < m->sample_count; ++s) any |= sys->sample_curvature[s] > 0;
-  if (!any) return 1;
-  int32_t *row_of = fascia_calloc(N, sizeof(int32_t)), *place = fascia_calloc(N, sizeof(int32_t));
-  sys->smoothing_offsets = fascia_calloc((int64_t)N + 1, sizeof(int32_t));
-  if (!row_of || !place || !sys->smoothing_offsets) {
-    free(row_of), free(place);
-    return 0;
-  }
-  for (int32_t j = 0; j < N; ++j) row_of[j] = -1;
-  for (int pass = 0; pass < 2; ++pass) {
-    for (int32_t i = 0; i < N; ++i) {
-      int32_t count = 0;
-      const int32_t base = sys->smoothing_offsets[i];
-      for (int32_t r = m->frame_offsets[i]; r < m->frame_offsets[i + 1]; ++r) {
-        const int32_t k = m->frame_pairs[r], s = sys->pair_sample[k];
-        const fascia_real vk = m->sample_volume[s] * sys->sample_curvature[s];
-        if (!(vk > 0)) continue;
-        for (int32_t l = m->sample_offsets[s]; l < m->sample_offsets[s + 1]; ++l) {
-          const int32_t j = m->pair_frame[l];
-          if (row_of[j] != pass * N + i) { // first met in this row
-            row_of[j] = pass * N + i;
-            place[j] = count++;
-            if (pass) sys->smoothing_frames[base + place[j]] = j;
-          }
-          if (pass)
-            sys->smoothing_weight[base + place[j]] +=
-                vk * fascia_pt_dot3(m->pair_gradient + 3 * k, m->pair_gradient + 3 * l);
-        }
-      }
-      if (!pass) sys->smoothing_offsets[i + 1] = sys->smoothing_offsets[i] + count;
-    }
-    if (!pass) {
-      const int32_t E = sys->smoothing_offsets[N];
-      sys->smoothing_frames = fascia_calloc(E, sizeof(int32_t));
-      sys->smoothing_weight = fascia_calloc(E, sizeof(fascia_real));
-      if (!sys->smoothing_frames || !sys->smoothing_weight) break;
-    }
-  }
-  free(row_of), free(place);
-  return sys->smoothing_frames && sys->smoothing_weight;
-}
-
 fascia_status fascia_system_create(fascia_ctx *ctx, const fascia_model *m, int threads, fascia_system **out) {
   FASCIA_CHECK(m && out, ctx, FASCIA_ERR_ARGUMENT, "system: NULL argument");
   *out = NULL;
@@ -175,11 +126,6 @@ fascia_status fascia_system_create(fascia_ctx *ctx, const fascia_model *m, int t
   for (int32_t s = 0; s < m->sample_count; ++s)
     for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k) sys->pair_sample[k] = s;
   lumped_mass_shares(sys);
-  if (!smoothing_graph(sys)) {
-    fascia_system_destroy(&sys);
-    return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "system: out of memory for the rotation smoothing's graph of %lld frames",
-                       (long long)N);
-  }
   // gravity moments through the reverse table (fixed order)
   for (int32_t i = 0; i < m->frame_count; ++i)
     for (int32_t r = m->frame_offsets[i]; r < m->frame_offsets[i + 1]; ++r) {

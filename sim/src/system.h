@@ -46,9 +46,9 @@ typedef struct fascia_system {
   /// the samples, its energy is 1/2 sum_ij W_ij <A_i, A_j> (Frobenius), with
   /// W_ij = sum over the samples holding frames i and j of v k_c (g_i . g_j),
   /// rest quantities. Row i lists the frames that share such a sample with i
-  /// (i too), in the order met; NULL where no sample has smoothing. The
-  /// assembly adds the smoothing's blocks from it once per frame pair
-  /// instead of once per sample.
+  /// (i too), in the order met. Made by the first assembly, which adds the
+  /// smoothing's blocks from it once per frame pair instead of once per
+  /// sample; NULL before, and the weights NULL where no sample has smoothing.
   int32_t *smoothing_offsets;     ///< [N+1]
   int32_t *smoothing_frames;      ///< [smoothing_offsets[N]]
   fascia_real *smoothing_weight;  ///< [smoothing_offsets[N]] W_ij
