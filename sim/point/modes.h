@@ -28,7 +28,7 @@ typedef struct fascia_pt_modes {
   /// K_ue the change of entry e's gradient per active mode, L L^T = K_aa,
   /// so the condensed term is K_ue K_aa^-1 K_uf^T = W_e W_f^T. Its columns
   /// are L's, one per active mode in ascending order, first, then zeros
-  /// (fascia_pt_modes_count of them are read)
+  /// (fascia_pt_modes_width of them are read)
   fascia_real *entry_factor;
   fascia_real *reduced;        ///< [9 patches] W_p^T v of the last product
 } fascia_pt_modes;

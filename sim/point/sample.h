@@ -525,7 +525,7 @@ static inline FASCIA_HD int32_t fascia_pt_upper_block(int32_t n, int32_t a, int3
 /// M = C Pt^T. Equals fascia_pt_sample_stiffness_parts(.., BASE) applied to
 /// unit vectors; it is how the assembled matrix is built without 6n products
 /// per sample (the rotation coupling, when on, is added by such products,
-/// the rotation smoothing per frame pair: fascia_pt_smoothing_block).
+/// the rotation smoothing per frame pair: smoothing_rows in sim/src/assemble.c).
 /// frame_moves ([frames], NULL: all): the rows of a frame not in it are not
 /// computed, and a block with such a frame is to be left unread (the
 /// assembly leaves the blocks of frames a step holds). scratch: 12 n reals

@@ -85,10 +85,7 @@ static fascia_status check_mass(fascia_solver *S) {
   const fascia_model *m = S->model;
   for (int32_t i = 0; i < m->frame_count; ++i) {
     if (!S->mask[6 * (int64_t)i] || fascia_organs_frame_body(S->organs, i) >= 0) continue;
-    fascia_real mass = 0;
-    for (int32_t r = m->frame_offsets[i]; r < m->frame_offsets[i + 1]; ++r)
-      mass += S->sys->pair_lumped_mass[m->frame_pairs[r]];
-    if (mass > 0) continue;
+    if (S->sys->frame_lumped_moments[13 * (int64_t)i] > 0) continue; // its lumped mass, sum of its pairs' shares
     const fascia_real *x = m->frame_position + 3 * (int64_t)i;
     return FASCIA_FAIL(S->ctx, FASCIA_ERR_FORMAT,
                        "model: free frame %d (rest position %.4g %.4g %.4g m) has no mass: no sample puts weight on "
