@@ -35,7 +35,9 @@
 //   --static) converges in at most 25 Newton iterations for every kind,
 //   meshless k = 16 included (issue 13's goal): the Levenberg shift weighs
 //   the rotations only (fascia_pt_levenberg_weight). With the shift on every
-//   unknown: hex 24, tet 16, meshless k = 8 33, k = 16 95; now 12-14.
+//   unknown: hex 24, tet 16, meshless k = 8 33, k = 16 95; then 12-14;
+//   now 10-11, since a full step's successor starts from an unshifted
+//   tangent (at nu = 0.3: at most 8, hex 7, tet 7, meshless 8).
 // On a device backend (CG only), where the static solves at nu = 0.49 do
 // not converge: the coarse grid at nu = 0.3, the patches no worse than full
 // integration there and the same tip as the CPU's.
@@ -137,10 +139,17 @@ int main(int argc, char **argv) {
   CHECK(fabs(tip_error_of(ctx, FASCIA_SCENE_TET, grid, 4e6, 0.49, CELL)) < 2);
   beam_tip_tolerance = 1e-8;
   // Newton near incompressibility: at most 25 iterations for every kind
-  CHECK(static_newton_iterations(ctx, FASCIA_SCENE_HEX, 8, 0.49) <= 25);
-  CHECK(static_newton_iterations(ctx, FASCIA_SCENE_TET, 8, 0.49) <= 25);
-  CHECK(static_newton_iterations(ctx, FASCIA_SCENE_MESHLESS, 8, 0.49) <= 25);
-  CHECK(static_newton_iterations(ctx, FASCIA_SCENE_MESHLESS, 16, 0.49) <= 25);
+  // (the goal), and no more than the 10-11 that full steps taking their
+  // next tangent unshifted give (12, 11, 13, 14 when the shift decayed by tenths)
+  CHECK(static_newton_iterations(ctx, FASCIA_SCENE_HEX, 8, 0.49) <= 11);
+  CHECK(static_newton_iterations(ctx, FASCIA_SCENE_TET, 8, 0.49) <= 11);
+  CHECK(static_newton_iterations(ctx, FASCIA_SCENE_MESHLESS, 8, 0.49) <= 11);
+  CHECK(static_newton_iterations(ctx, FASCIA_SCENE_MESHLESS, 16, 0.49) <= 11);
+  // and at nu = 0.3 at most 8, as many as CalculiX's 6 and the one more that
+  // the tolerance 1e-6 asks (9, 10, 9 with the decaying shift)
+  CHECK(static_newton_iterations(ctx, FASCIA_SCENE_HEX, 8, 0.3) <= 8);
+  CHECK(static_newton_iterations(ctx, FASCIA_SCENE_TET, 8, 0.3) <= 8);
+  CHECK(static_newton_iterations(ctx, FASCIA_SCENE_MESHLESS, 8, 0.3) <= 8);
   // refinement, hex, nu = 0.3: the patches' error falls, below full integration's
   const double cell_coarse = tip_error(ctx, FASCIA_SCENE_HEX, coarse, 0.3, CELL);
   const double cell_grid = tip_error(ctx, FASCIA_SCENE_HEX, grid, 0.3, CELL);
