@@ -410,9 +410,13 @@ static fascia_status cpu_direction(fascia_backend *backend, fascia_real *shift, 
     int factored;
     const fascia_bsr *A = B->reduced ? &B->R : &B->K;
     ++report->factorizations;
+    // an unshifted tangent that fails goes on from a tenth of the last
+    // factored shift, not from 1e-8: one that needed a shift is likely
+    // to need one again, and a failed factorization can cost nearly a whole one
+    const fascia_real restart = B->factor_shift / 10 > FASCIA_R(1e-8) ? B->factor_shift / 10 : FASCIA_R(1e-8);
     while ((factored = fascia_direct_factor(B->direct, B->S->ctx, A, B->mask, B->damping, B->op.shift)) == 0) {
       ++report->negative_curvature;
-      B->op.shift = B->op.shift == 0 ? FASCIA_R(1e-8) : 10 * B->op.shift;
+      B->op.shift = B->op.shift == 0 ? restart : 10 * B->op.shift;
       if (B->op.shift > FASCIA_NEWTON_MAX_SHIFT)
         return FASCIA_FAIL(B->S->ctx, FASCIA_ERR_NUMERIC,
                            "solver: the tangent stays singular under any damping (a NaN, or a frame with no sample?)");

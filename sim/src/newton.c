@@ -218,7 +218,8 @@ fascia_status fascia_newton_minimize(fascia_solver *S, const fascia_step_values 
           // slowed three more iterations as it decayed by tenths (static
           // 20x3x3 hex 9 -> 7 iterations, tet 10 -> 7, meshless 9 -> 8, nu =
           // 0.49 12/11/13 -> 10/10/11); a tangent that is still indefinite
-          // fails its factorization at the first bad pivot, a tenth of the cost
+          // fails its factorization once and the direct solver goes on from a
+          // tenth of its last shift (backend_cpu.c)
           shift = 0;
           break;
         }
