@@ -311,18 +311,24 @@ static int factor_values(fascia_direct *d) {
   for (int64_t e = 0; e < d->entries; ++e)
     if (!isfinite(x[e])) return 0;
   // Debian's CHOLMOD asks OpenMP for teams of a fixed 4 threads in its
-  // supernodal factorization: on 2 cores each factorization started two
-  // extra threads that competed with the solver's (t3-row-sized scenes: 83
-  // against 30 ms of linear solves per step). With OpenMP's dynamic
-  // adjustment on, the runtime gives its teams no more threads than the
-  // cores are free for; its loops only copy, so the bits do not change.
+  // supernodal factorization, for loops that only copy (the BLAS runs on
+  // one thread). With dynamic adjustment on, the runtime gives a team no
+  // more threads than nthreads-var: one here. Teams of 4 had doubled the
+  // 950-frame abdomen's linear solves on 2 cores; teams fitted to the free
+  // cores (2) still cost the deformable pelvis 9.9 against 3.2 ms of linear
+  // solves per step, and waking their sleeping worker made a factorization
+  // after an idle second 3x slower (docs/mechanics.md, "CHOLMOD's threads").
+  // One thread was as fast or faster on every scene measured; the bits are
+  // the same.
   int factored;
 #ifdef _OPENMP
-  const int dynamic = omp_get_dynamic();
+  const int dynamic = omp_get_dynamic(), threads = omp_get_max_threads();
   omp_set_dynamic(1);
+  omp_set_num_threads(1);
 #endif
   factored = cholmod_l_factorize(d->matrix, d->factor, &d->common);
 #ifdef _OPENMP
+  omp_set_num_threads(threads);
   omp_set_dynamic(dynamic);
 #endif
   return factored && d->common.status == CHOLMOD_OK && d->factor->minor == d->factor->n;
