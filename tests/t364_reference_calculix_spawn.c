@@ -5,12 +5,14 @@
 // process, and the fascia row timed after a CalculiX run paid a page fault
 // for each page it wrote again (the 20x3x3 hex row 25 -> 59 ms on a machine
 // whose faults cost about 8 us). Here the program run is `true`, which
-// writes no results (so the solve reports its output unreadable), and a
-// program that does not exist is reported as not run. Needs neither ccx nor
+// writes no results (so the solve reports its output unreadable), also by
+// a path relative to the caller's folder, and a program that does not
+// exist is reported as not run. Needs neither ccx nor
 // a particular machine; skipped where getrusage counts no page faults.
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
+#include <unistd.h>
 
 #include "beam_calculix.h"
 #include "check.h"
@@ -49,8 +51,13 @@ int main(void) {
   printf("%u MB written: %ld page faults the first time, %ld again after running a program\n", HEAP_BYTES >> 20,
          written, again);
   CHECK(again < written / 10);
+  // a relative path is taken from the caller's folder, not the run folder
+  if (chdir("/") == 0) {
+    CHECK(fascia_ccx_beam_solve(ctx, &def, "bin/true", 1, &result) == FASCIA_ERR_FORMAT);
+    CHECK(fascia_ccx_beam_solve(ctx, &def, "bin/no-such-ccx", 1, &result) == FASCIA_ERR_IO);
+  }
   CHECK(fascia_ccx_beam_solve(ctx, &def, "/nonexistent/ccx", 1, &result) == FASCIA_ERR_IO);
-  CHECK(strstr(fascia_ctx_message(ctx), "could not run '/nonexistent/ccx'") != NULL);
+  CHECK(strstr(fascia_ctx_message(ctx), "could not run '/nonexistent/ccx' (No such file or directory)") != NULL);
   free(heap);
   fascia_ctx_destroy(&ctx);
   return check_failures_ != 0;

@@ -10,6 +10,7 @@
 #include "beam_calculix.h"
 
 #include <dirent.h>
+#include <limits.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
@@ -258,13 +259,15 @@ static void remove_folder(const char *dir) {
 
 extern char **environ;
 
-// Runs `program -i beam` in dir, output to ccx.log; its exit status or -1,
-// its processor time (user + system) in *cpu_ms. Spawned (glibc: a vfork),
+// Runs `program -i beam` in dir, output to ccx.log; its exit status, or -1
+// with why in *why when it could not be started; its processor time (user +
+// system) in *cpu_ms. Spawned (glibc: a vfork),
 // not forked: a fork write-protects every page of this process, and the
 // bench's next fascia row paid a page fault for each page it wrote again
 // (the 20x3x3 hex row 25 -> 59 ms on a machine whose faults cost about
 // 8 us).
-static int run_ccx(const char *dir, const char *program, int threads, double *cpu_ms) {
+static int run_ccx(const char *dir, const char *program, int threads, double *cpu_ms, const char **why) {
+  *why = "out of memory";
   static const char *const names[] = {"OMP_NUM_THREADS", "CCX_NPROC_EQUATION_SOLVER", "CCX_NPROC_STIFFNESS",
                                       "CCX_NPROC_RESULTS"};
   enum { NAMES = sizeof names / sizeof names[0] };
@@ -294,17 +297,26 @@ static int run_ccx(const char *dir, const char *program, int threads, double *cp
     failed = posix_spawn_file_actions_addchdir_np(&actions, dir) ||
              posix_spawn_file_actions_addopen(&actions, 1, "ccx.log", O_WRONLY | O_CREAT | O_TRUNC, 0644) ||
              posix_spawn_file_actions_adddup2(&actions, 1, 2);
-    char *const argv[] = {(char *)program, "-i", JOB, NULL};
-    if (!failed) failed = posix_spawnp(&pid, program, &actions, NULL, argv, env);
+    // a relative path (FASCIA_CCX=./ccx) names a file from here, not from the run folder
+    char absolute[PATH_MAX];
+    const char *file = strchr(program, '/') && program[0] != '/' && realpath(program, absolute) ? absolute : program;
+    char *const argv[] = {(char *)file, "-i", JOB, NULL};
+    if (!failed) failed = posix_spawnp(&pid, file, &actions, NULL, argv, env);
     posix_spawn_file_actions_destroy(&actions);
   }
   free(env);
-  if (failed) return -1;
+  if (failed) {
+    *why = strerror(failed);
+    return -1;
+  }
   int status = 0;
   struct rusage usage;
   memset(&usage, 0, sizeof usage);
   while (wait4(pid, &status, 0, &usage) < 0)
-    if (errno != EINTR) return -1;
+    if (errno != EINTR) {
+      *why = strerror(errno);
+      return -1;
+    }
   *cpu_ms = 1e3 * (double)(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
             1e-3 * (double)(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -400,14 +412,17 @@ fascia_status fascia_ccx_beam_solve(fascia_ctx *ctx, const fascia_ccx_beam_def *
   if (fclose(f) != 0 && status == FASCIA_OK)
     status = SCENE_FAIL(ctx, FASCIA_ERR_IO, WHO ": cannot write %s (%s)", deck, strerror(errno));
   if (status != FASCIA_OK) goto cleanup;
-  const int rc = run_ccx(dir, program, threads, &out->cpu_ms);
+  const char *why = "";
+  const int rc = run_ccx(dir, program, threads, &out->cpu_ms, &why);
   double time = 0;
   const int found = read_dat(dir, out->tip, &time);
   out->ms = now_ms() - t0;
   read_sta(dir, &out->increments, &out->iterations);
   char last[256];
   last_log_line(dir, last, sizeof last);
-  if (rc == 126 || rc == 127 || rc < 0)
+  if (rc < 0)
+    status = SCENE_FAIL(ctx, FASCIA_ERR_IO, "CalculiX: could not run '%s' (%s); install calculix-ccx", program, why);
+  else if (rc == 126 || rc == 127) // a shell script that could not run its ccx
     status = SCENE_FAIL(ctx, FASCIA_ERR_IO, "CalculiX: could not run '%s' (exit %d); install calculix-ccx", program, rc);
   else if (rc != 0 || (found && fabs(time - 1) > 1e-9))
     status = SCENE_FAIL(ctx, FASCIA_ERR_NUMERIC, "CalculiX: %s %dx%dx%d stopped (exit %d) at load %g: %s",
