@@ -6,12 +6,14 @@
 // for each page it wrote again (the 20x3x3 hex row 25 -> 59 ms on a machine
 // whose faults cost about 8 us). Here the program run is `true`, which
 // writes no results (so the solve reports its output unreadable), also by
-// a path relative to the caller's folder, and a program that does not
-// exist is reported as not run. Needs neither ccx nor
+// a path relative to the caller's folder; a program that does not exist is
+// reported as not run, one killed by a signal as stopped. Needs neither ccx nor
 // a particular machine; skipped where getrusage counts no page faults.
+#define _DEFAULT_SOURCE // mkstemp
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "beam_calculix.h"
@@ -51,6 +53,19 @@ int main(void) {
   printf("%u MB written: %ld page faults the first time, %ld again after running a program\n", HEAP_BYTES >> 20,
          written, again);
   CHECK(again < written / 10);
+  // a program ended by a signal stopped, it did not fail to start
+  char killed[] = "/tmp/t364-killed-XXXXXX";
+  const int fd = mkstemp(killed);
+  CHECK(fd >= 0);
+  if (fd >= 0) {
+    static const char script[] = "#!/bin/sh\nkill -KILL $$\n";
+    CHECK(write(fd, script, sizeof script - 1) == (ssize_t)(sizeof script - 1));
+    close(fd);
+    CHECK(chmod(killed, 0755) == 0);
+    CHECK(fascia_ccx_beam_solve(ctx, &def, killed, 1, &result) == FASCIA_ERR_NUMERIC);
+    CHECK(strstr(fascia_ctx_message(ctx), "stopped (exit 137)") != NULL);
+    unlink(killed);
+  }
   // a relative path is taken from the caller's folder, not the run folder
   if (chdir("/") == 0) {
     CHECK(fascia_ccx_beam_solve(ctx, &def, "bin/true", 1, &result) == FASCIA_ERR_FORMAT);

@@ -10,9 +10,9 @@
 #include "beam_calculix.h"
 
 #include <dirent.h>
-#include <limits.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <limits.h>
 #include <math.h>
 #include <spawn.h>
 #include <stdio.h>
@@ -259,13 +259,13 @@ static void remove_folder(const char *dir) {
 
 extern char **environ;
 
-// Runs `program -i beam` in dir, output to ccx.log; its exit status, or -1
-// with why in *why when it could not be started; its processor time (user +
-// system) in *cpu_ms. Spawned (glibc: a vfork),
-// not forked: a fork write-protects every page of this process, and the
-// bench's next fascia row paid a page fault for each page it wrote again
-// (the 20x3x3 hex row 25 -> 59 ms on a machine whose faults cost about
-// 8 us).
+// Runs `program -i beam` in dir, output to ccx.log; its exit status (128 +
+// the signal that ended it), or -1 with why in *why when it could not be
+// started; its processor time (user + system) in *cpu_ms. Spawned (glibc: a
+// vfork), not forked: a fork write-protects every page of this process, and
+// the bench's next fascia row paid a page fault for each page it wrote
+// again (the 20x3x3 hex row 25 -> 59 ms on a machine whose faults cost
+// about 8 us).
 static int run_ccx(const char *dir, const char *program, int threads, double *cpu_ms, const char **why) {
   *why = "out of memory";
   static const char *const names[] = {"OMP_NUM_THREADS", "CCX_NPROC_EQUATION_SOLVER", "CCX_NPROC_STIFFNESS",
@@ -319,7 +319,7 @@ static int run_ccx(const char *dir, const char *program, int threads, double *cp
     }
   *cpu_ms = 1e3 * (double)(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
             1e-3 * (double)(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
 // The last non-empty line of the log, for the message of a failed run.
