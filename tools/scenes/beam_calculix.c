@@ -259,6 +259,35 @@ static void remove_folder(const char *dir) {
 
 extern char **environ;
 
+// The threads settings ccx reads from its environment
+static const char *const ccx_thread_names[] = {"OMP_NUM_THREADS", "CCX_NPROC_EQUATION_SOLVER", "CCX_NPROC_STIFFNESS",
+                                               "CCX_NPROC_RESULTS"};
+enum { CCX_THREAD_NAMES = sizeof ccx_thread_names / sizeof ccx_thread_names[0] };
+
+// This process's environment with each of ccx_thread_names set to
+// `threads` (in `settings`); NULL when out of memory. Free the array only.
+static char **ccx_environment(int threads, char settings[CCX_THREAD_NAMES][64]) {
+  size_t count = 0;
+  while (environ && environ[count]) ++count;
+  char **env = malloc((count + CCX_THREAD_NAMES + 1) * sizeof *env);
+  if (!env) return NULL;
+  size_t used = 0;
+  for (size_t k = 0; k < count; ++k) { // getenv takes the first of a name: leave ours out
+    int ours = 0;
+    for (int j = 0; j < CCX_THREAD_NAMES; ++j) {
+      const size_t length = strlen(ccx_thread_names[j]);
+      ours |= !strncmp(environ[k], ccx_thread_names[j], length) && environ[k][length] == '=';
+    }
+    if (!ours) env[used++] = environ[k];
+  }
+  for (int j = 0; j < CCX_THREAD_NAMES; ++j) {
+    snprintf(settings[j], sizeof settings[j], "%s=%d", ccx_thread_names[j], threads);
+    env[used++] = settings[j];
+  }
+  env[used] = NULL;
+  return env;
+}
+
 // Runs `program -i beam` in dir, output to ccx.log; its exit status (128 +
 // the signal that ended it), or -1 with why in *why when it could not be
 // started; its processor time (user + system) in *cpu_ms. Spawned (glibc: a
@@ -267,36 +296,21 @@ extern char **environ;
 // again (the 20x3x3 hex row 25 -> 59 ms on a machine whose faults cost
 // about 8 us).
 static int run_ccx(const char *dir, const char *program, int threads, double *cpu_ms, const char **why) {
-  *why = "out of memory";
-  static const char *const names[] = {"OMP_NUM_THREADS", "CCX_NPROC_EQUATION_SOLVER", "CCX_NPROC_STIFFNESS",
-                                      "CCX_NPROC_RESULTS"};
-  enum { NAMES = sizeof names / sizeof names[0] };
-  char settings[NAMES][64];
-  size_t count = 0;
-  while (environ && environ[count]) ++count;
-  char **env = malloc((count + NAMES + 1) * sizeof *env);
-  if (!env) return -1;
-  size_t used = 0;
-  for (size_t k = 0; k < count; ++k) { // the caller's environment less the four set below
-    int ours = 0;
-    for (int j = 0; j < NAMES; ++j) {
-      const size_t length = strlen(names[j]);
-      ours |= !strncmp(environ[k], names[j], length) && environ[k][length] == '=';
-    }
-    if (!ours) env[used++] = environ[k];
+  char settings[CCX_THREAD_NAMES][64];
+  char **env = ccx_environment(threads, settings);
+  if (!env) {
+    *why = "out of memory";
+    return -1;
   }
-  for (int j = 0; j < NAMES; ++j) {
-    snprintf(settings[j], sizeof settings[j], "%s=%d", names[j], threads);
-    env[used++] = settings[j];
-  }
-  env[used] = NULL;
   posix_spawn_file_actions_t actions;
   pid_t pid = -1;
+  // each call returns 0 or an error number
   int failed = posix_spawn_file_actions_init(&actions);
   if (!failed) {
-    failed = posix_spawn_file_actions_addchdir_np(&actions, dir) ||
-             posix_spawn_file_actions_addopen(&actions, 1, "ccx.log", O_WRONLY | O_CREAT | O_TRUNC, 0644) ||
-             posix_spawn_file_actions_adddup2(&actions, 1, 2);
+    failed = posix_spawn_file_actions_addchdir_np(&actions, dir);
+    if (!failed)
+      failed = posix_spawn_file_actions_addopen(&actions, 1, "ccx.log", O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (!failed) failed = posix_spawn_file_actions_adddup2(&actions, 1, 2);
     // a relative path (FASCIA_CCX=./ccx) names a file from here, not from the run folder
     char absolute[PATH_MAX];
     const char *file = strchr(program, '/') && program[0] != '/' && realpath(program, absolute) ? absolute : program;
