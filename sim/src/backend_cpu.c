@@ -519,14 +519,14 @@ static void cpu_linear_state_save(fascia_backend *backend, fascia_real *out) {
   cpu_backend *B = (cpu_backend *)backend;
   out[0] = B->factor_mass;
   out[1] = B->factor_shift;
-  fascia_direct_values_save(B->direct, out + 2);
+  fascia_direct_values_save(B->direct, B->reduced ? &B->R : &B->K, out + 2);
 }
 
 static int cpu_linear_state_load(fascia_backend *backend, const fascia_real *in, int64_t count) {
   cpu_backend *B = (cpu_backend *)backend;
   B->factor_valid = 0;
   if (!B->direct || !fascia_direct_mask_is(B->direct, B->mask) || count != 2 + fascia_direct_values_count(B->direct) ||
-      !fascia_direct_values_load(B->direct, in + 2))
+      !fascia_direct_values_load(B->direct, B->reduced ? &B->R : &B->K, in + 2))
     return 0;
   B->factor_mass = in[0];
   B->factor_shift = in[1];

@@ -2,15 +2,19 @@
 // SPDX-FileCopyrightText: fascia developers
 // The direct solver on CHOLMOD (see direct.h). The fill-reducing ordering is
 // computed on the frame graph (6 times smaller than the unknowns': AMD, or
-// METIS where CHOLMOD finds AMD's fill large) and expanded to each frame's
-// free unknowns, which keeps a frame's 6 unknowns together in the
-// supernodes. The unknowns are then numbered in that order (postordered),
-// and CHOLMOD factors the matrix in its natural order: given the triangle
-// it works on (the lower one for a supernodal factor, the upper one for a
-// simplicial one), a factorization copies no matrix. With the ordering left
-// to CHOLMOD it transposed the matrix twice per factorization, which cost
-// more than the supernodal arithmetic on the 20x3x3 cantilever. The values
-// are gathered from the block rows through a map made once per analysis.
+// METIS where CHOLMOD finds AMD's fill large), postordered, and expanded to
+// each frame's free unknowns, numbered together: the unknowns' elimination
+// tree is then the frames' with each frame a chain, still postordered, and
+// a frame's unknowns stay together in the supernodes. CHOLMOD factors the
+// matrix in that natural order: given the triangle it works on (the lower
+// one for a supernodal factor, the upper one for a simplicial one), with
+// each column's rows ascending, a factorization copies no matrix. With the
+// ordering left to CHOLMOD it transposed the matrix twice per
+// factorization, which cost more than the supernodal arithmetic on the
+// 20x3x3 cantilever. The matrix is written once, column by column, with a
+// map from each stored value to the block values: the set-up's memory is
+// its own (three numbers per entry), because on fresh pages a set-up is
+// mostly page faults.
 #include <stdlib.h>
 #include <string.h>
 #ifdef _OPENMP
@@ -31,8 +35,7 @@ struct fascia_direct {
   unsigned char *mask;  // [6N] the mask the analysis is for
   int64_t entries;      // stored values
   int64_t *value_index; // [entries] where each stored value is in the block values (36 blk + 6 a + c)
-  int64_t *walk_place;  // [entries] the place of the pattern walk's j-th entry among the stored values
-  int64_t *diagonal;    // [free_count] the place of each diagonal entry
+  int lower;            // the matrix holds the lower triangle (a supernodal factor), else the upper (simplicial)
   cholmod_common common;
   cholmod_sparse *matrix; // [free_count^2] one triangle, pattern fixed at creation
   cholmod_factor *factor;
@@ -57,8 +60,9 @@ struct fascia_direct {
         }                                                                                                            \
     }
 
-// Fill-reducing order of the frames that have a free unknown, as frame
-// indices in *order (count in *frames).
+// Fill-reducing order of the frames that have a free unknown, postordered
+// (CHOLMOD's weighted postorder of the frame graph's elimination tree), as
+// frame indices in *order (count in *frames).
 static fascia_status order_frames(fascia_ctx *ctx, fascia_direct *d, const fascia_bsr *B, int64_t *order,
                                   int64_t *frames) {
   const int32_t N = B->rows;
@@ -66,7 +70,7 @@ static fascia_status order_frames(fascia_ctx *ctx, fascia_direct *d, const fasci
   FASCIA_CHECK(graph_index, ctx, FASCIA_ERR_MEMORY, "direct solver: out of memory for %d frames", (int)N);
   for (int32_t i = 0; i < N; ++i) {
     int free_unknowns = 0;
-    for (int a = 0; a < 6; ++a) free_unknowns += d->free_index[6 * (int64_t)i + a] >= 0;
+    for (int a = 0; a < 6; ++a) free_unknowns += d->mask[6 * (int64_t)i + a] != 0;
     graph_index[i] = free_unknowns ? F++ : -1;
   }
   for (int32_t i = 0; i < N; ++i)
@@ -88,6 +92,7 @@ static fascia_status order_frames(fascia_ctx *ctx, fascia_direct *d, const fasci
   }
   p[F] = k;
   d->common.nmethods = 0;                    // CHOLMOD's choice: AMD, or METIS where AMD fills much
+  d->common.postorder = 1;                   // so that each subtree's frames are numbered together
   d->common.supernodal = CHOLMOD_SIMPLICIAL; // only the ordering is wanted here
   cholmod_factor *L = cholmod_l_analyze(G, &d->common);
   cholmod_l_free_sparse(&G, &d->common);
@@ -113,13 +118,23 @@ static fascia_status order_frames(fascia_ctx *ctx, fascia_direct *d, const fasci
   return FASCIA_OK;
 }
 
-// The matrix and its maps (fill_pattern).
-static void free_pattern(fascia_direct *d) {
+// A block of the pattern as the frame whose columns hold it sees it: the
+// other frame's place in the order, and the block (in the row of the pair's
+// lower-indexed frame, j >= i).
+typedef struct {
+  int64_t place;
+  int64_t block;
+} frame_pair;
+
+static int pair_compare(const void *x, const void *y) {
+  const int64_t a = ((const frame_pair *)x)->place, b = ((const frame_pair *)y)->place;
+  return (a > b) - (a < b);
+}
+
+static void free_matrix(fascia_direct *d) {
   cholmod_l_free_sparse(&d->matrix, &d->common);
   free(d->value_index);
-  free(d->walk_place);
-  free(d->diagonal);
-  d->value_index = d->walk_place = d->diagonal = NULL;
+  d->value_index = NULL;
 }
 
 static void release(fascia_direct *d) {
@@ -130,7 +145,7 @@ static void release(fascia_direct *d) {
   cholmod_l_free_dense(&d->work_e, &d->common);
   free(d->free_index);
   free(d->mask);
-  free_pattern(d);
+  free_matrix(d);
   d->free_index = NULL;
   d->mask = NULL;
   d->free_count = d->entries = 0;
@@ -143,60 +158,94 @@ static fascia_status analysis_failed(fascia_ctx *ctx, const fascia_direct *d) {
                      (long long)d->free_count, (long long)d->entries, d->common.status);
 }
 
-// d->matrix in the unknowns' numbering: triangle stype (-1 lower, 1 upper),
-// rows ascending in each column; d->value_index, d->walk_place, d->diagonal.
-static fascia_status fill_pattern(fascia_ctx *ctx, fascia_direct *d, const fascia_bsr *B, int stype) {
-  const int64_t n = d->free_count, entries = d->entries, e1 = entries > 0 ? entries : 1;
-  d->matrix = cholmod_l_allocate_sparse((size_t)n, (size_t)n, (size_t)entries, 1, 1, stype, CHOLMOD_REAL, &d->common);
-  d->value_index = fascia_calloc(e1, sizeof(int64_t));
-  d->walk_place = fascia_calloc(e1, sizeof(int64_t));
-  d->diagonal = fascia_calloc(n > 0 ? n : 1, sizeof(int64_t));
-  // the entries bucketed by row first (column, value and walk index of each),
-  // then dealt to their columns row by row: each column's rows come out
-  // ascending, in time linear in the entries
-  int64_t *next = fascia_calloc(n + 1, sizeof(int64_t)), *by_row = fascia_calloc(n + 1, sizeof(int64_t));
-  int64_t *row_column = fascia_calloc(e1, sizeof(int64_t)), *row_value = fascia_calloc(e1, sizeof(int64_t));
-  int64_t *row_walk = fascia_calloc(e1, sizeof(int64_t));
+// d->matrix (triangle d->lower) and d->value_index, in the unknowns' final
+// numbering, where frame order[q]'s free unknowns are numbered together in
+// place q. Each frame's blocks are listed by the other frame's place; a
+// column is then its frame's blocks in that order, so the rows come out
+// ascending, written once, in the order CHOLMOD keeps them.
+static fascia_status fill_matrix(fascia_ctx *ctx, fascia_direct *d, const fascia_bsr *B, const int64_t *order,
+                                 int64_t frames) {
+  const int32_t N = B->rows;
+  const int lower = d->lower;
+  int64_t *place_of = fascia_calloc(N > 0 ? N : 1, sizeof(int64_t)), *pair_offsets = fascia_calloc(frames + 1,
+                                                                                                     sizeof(int64_t));
   fascia_status st = FASCIA_OK;
-  if (!d->matrix || !d->value_index || !d->walk_place || !d->diagonal || !next || !by_row || !row_column ||
-      !row_value || !row_walk) {
-    st = FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "direct solver: out of memory for a matrix of %lld entries",
-                     (long long)entries);
-    goto done;
-  }
-  SuiteSparse_long *p = d->matrix->p, *rows = d->matrix->i;
-  // an entry (column, row) of the walk's triangle goes to column min or max
-#define TARGET(column, row) (stype < 0 ? ((column) < (row) ? (column) : (row)) : ((column) < (row) ? (row) : (column)))
-#define OTHER(column, row) (stype < 0 ? ((column) < (row) ? (row) : (column)) : ((column) < (row) ? (column) : (row)))
-  FOR_EACH_ENTRY(d, B, {
-    ++next[TARGET(column, row) + 1];
-    ++by_row[OTHER(column, row) + 1];
-  });
-  for (int64_t c = 0; c < n; ++c) next[c + 1] += next[c], by_row[c + 1] += by_row[c];
-  for (int64_t c = 0; c <= n; ++c) p[c] = next[c];
-  int64_t j = 0;
-  FOR_EACH_ENTRY(d, B, {
-    const int64_t slot = by_row[OTHER(column, row)]++;
-    row_column[slot] = TARGET(column, row);
-    row_value[slot] = value_index;
-    row_walk[slot] = j++;
-  });
-#undef TARGET
-#undef OTHER
-  for (int64_t r = 0, slot = 0; r < n; ++r) // by_row[r] is now where row r + 1 starts
-    for (; slot < by_row[r]; ++slot) {
-      const int64_t c = row_column[slot], place = next[c]++;
-      rows[place] = r;
-      d->value_index[place] = row_value[slot];
-      d->walk_place[row_walk[slot]] = place;
-      if (r == c) d->diagonal[c] = place;
+  frame_pair *pairs = NULL;
+  if (!place_of || !pair_offsets) goto out_of_memory;
+  for (int32_t i = 0; i < N; ++i) place_of[i] = -1;
+  for (int64_t q = 0; q < frames; ++q) place_of[order[q]] = q;
+  // a pair's blocks go to the columns of its frame placed first (lower
+  // triangle) or last (upper)
+#define HOLDER(pi, pj) (lower ? ((pi) < (pj) ? (pi) : (pj)) : ((pi) < (pj) ? (pj) : (pi)))
+  int64_t pair_count = 0;
+  for (int32_t i = 0; i < N; ++i) {
+    if (place_of[i] < 0) continue;
+    for (int32_t blk = B->diagonal[i]; blk < B->row_offsets[i + 1]; ++blk) {
+      const int64_t pj = place_of[B->cols[blk]];
+      if (pj < 0) continue;
+      ++pair_offsets[HOLDER(place_of[i], pj) + 1];
+      ++pair_count;
     }
+  }
+  for (int64_t q = 0; q < frames; ++q) pair_offsets[q + 1] += pair_offsets[q];
+  pairs = malloc((size_t)(pair_count > 0 ? pair_count : 1) * sizeof *pairs);
+  if (!pairs) goto out_of_memory;
+  for (int32_t i = 0; i < N; ++i) {
+    const int64_t pi = place_of[i];
+    if (pi < 0) continue;
+    for (int32_t blk = B->diagonal[i]; blk < B->row_offsets[i + 1]; ++blk) {
+      const int64_t pj = place_of[B->cols[blk]];
+      if (pj < 0) continue;
+      const int64_t holder = HOLDER(pi, pj);
+      pairs[pair_offsets[holder]++] = (frame_pair){holder == pi ? pj : pi, blk};
+    }
+  }
+#undef HOLDER
+  for (int64_t q = frames; q > 0; --q) pair_offsets[q] = pair_offsets[q - 1]; // back to each frame's first pair
+  pair_offsets[0] = 0;
+  for (int64_t q = 0; q < frames; ++q)
+    qsort(pairs + pair_offsets[q], (size_t)(pair_offsets[q + 1] - pair_offsets[q]), sizeof *pairs, pair_compare);
+  const int64_t n = d->free_count, entries = d->entries;
+  d->matrix = cholmod_l_allocate_sparse((size_t)n, (size_t)n, (size_t)entries, 1, 1, lower ? -1 : 1, CHOLMOD_REAL,
+                                        &d->common);
+  d->value_index = fascia_calloc(entries > 0 ? entries : 1, sizeof(int64_t));
+  if (!d->matrix || !d->value_index) goto out_of_memory;
+  SuiteSparse_long *p = d->matrix->p, *rows = d->matrix->i;
+  int64_t k = 0;
+  for (int64_t q = 0; q < frames; ++q) {
+    const int64_t frame = order[q];
+    for (int a = 0; a < 6; ++a) {
+      const int64_t column = d->free_index[6 * frame + a];
+      if (column < 0) continue;
+      p[column] = k;
+      for (int64_t e = pair_offsets[q]; e < pair_offsets[q + 1]; ++e) {
+        const int64_t other = order[pairs[e].place], blk = pairs[e].block;
+        for (int c = 0; c < 6; ++c) {
+          const int64_t row = d->free_index[6 * other + c];
+          if (row < 0 || (other == frame && (lower ? row < column : row > column))) continue;
+          // the entry's place in the block, whose row is the pair's lower-indexed
+          // frame; of a frame's own block the upper triangle, as the walk reads it
+          int r = a, col = c;
+          if (other == frame) r = a < c ? a : c, col = a < c ? c : a;
+          else if (frame > other) r = c, col = a;
+          rows[k] = row;
+          d->value_index[k] = 36 * blk + 6 * r + col;
+          ++k;
+        }
+      }
+    }
+  }
+  p[n] = k;
+  if (k != entries) st = FASCIA_FAIL(ctx, FASCIA_ERR_INTERNAL, "direct solver: %lld entries filled of %lld",
+                                     (long long)k, (long long)entries);
+  goto done;
+out_of_memory:
+  st = FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "direct solver: out of memory for a matrix of %lld entries",
+                   (long long)d->entries);
 done:
-  free(next);
-  free(by_row);
-  free(row_column);
-  free(row_value);
-  free(row_walk);
+  free(place_of);
+  free(pair_offsets);
+  free(pairs);
   return st;
 }
 
@@ -205,62 +254,48 @@ static fascia_status create(fascia_ctx *ctx, const fascia_bsr *B, const unsigned
   d->unknowns = 6 * (int64_t)N;
   d->free_index = fascia_calloc(d->unknowns, sizeof(int64_t));
   d->mask = fascia_calloc(d->unknowns, 1);
-  int64_t *order = fascia_calloc(N, sizeof(int64_t)), frames = 0;
-  SuiteSparse_long *perm = fascia_calloc(d->unknowns, sizeof(SuiteSparse_long));
+  int64_t *order = fascia_calloc(N > 0 ? N : 1, sizeof(int64_t)), frames = 0;
   fascia_status st = FASCIA_OK;
-  if (!d->free_index || !d->mask || !order || !perm) {
+  if (!d->free_index || !d->mask || !order) {
     st = FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "direct solver: out of memory for %d frames", (int)N);
     goto done;
   }
   memcpy(d->mask, mask, (size_t)d->unknowns);
-  for (int64_t k = 0; k < d->unknowns; ++k) d->free_index[k] = mask[k] ? d->free_count++ : -1;
   if ((st = order_frames(ctx, d, B, order, &frames)) != FASCIA_OK) goto done;
-  int64_t count = 0;
+  // 1. the unknowns numbered in that order, a frame's free ones together:
+  // the frames' elimination tree with each frame a chain, still postordered
+  for (int64_t u = 0; u < d->unknowns; ++u) d->free_index[u] = -1;
   for (int64_t q = 0; q < frames; ++q)
     for (int a = 0; a < 6; ++a)
-      if (d->free_index[6 * order[q] + a] >= 0) perm[count++] = d->free_index[6 * order[q] + a];
-
+      if (mask[6 * order[q] + a]) d->free_index[6 * order[q] + a] = d->free_count++;
   int64_t entries = 0;
   FOR_EACH_ENTRY(d, B, ++entries);
   d->entries = entries;
   const size_t n = (size_t)d->free_count;
-  // 1. the given frame order, postordered, on the pattern in mask order
-  if ((st = fill_pattern(ctx, d, B, -1)) != FASCIA_OK) goto done;
+  // 2. the symbolic factor in that order: supernodal where the fronts are
+  // dense enough (it reads the lower triangle as it is), else simplicial
+  // (the upper one)
+  d->lower = 1;
+  if ((st = fill_matrix(ctx, d, B, order, frames)) != FASCIA_OK) goto done;
   d->common.nmethods = 1;
-  d->common.method[0].ordering = CHOLMOD_GIVEN;
-  d->common.postorder = 1;
-  d->common.supernodal = CHOLMOD_AUTO; // supernodal where the fronts are dense enough, else simplicial
-  d->common.final_ll = 1;              // LL^T, not LDL^T, so that a system not positive definite fails
-  cholmod_factor *ordered = cholmod_l_analyze_p(d->matrix, perm, NULL, 0, &d->common);
-  free_pattern(d);
-  if (!ordered) {
+  d->common.method[0].ordering = CHOLMOD_NATURAL;
+  d->common.postorder = 0;
+  d->common.supernodal = CHOLMOD_AUTO;
+  d->common.final_ll = 1; // LL^T, not LDL^T, so that a system not positive definite fails
+  d->factor = cholmod_l_analyze(d->matrix, &d->common);
+  if (!d->factor) {
     st = analysis_failed(ctx, d);
     goto done;
   }
-  // 2. number the unknowns in that order (perm is free now: its inverse)
-  const SuiteSparse_long *final_order = ordered->Perm;
-  for (size_t q = 0; q < n; ++q) perm[final_order[q]] = (SuiteSparse_long)q;
-  for (int64_t u = 0; u < d->unknowns; ++u)
-    if (d->free_index[u] >= 0) d->free_index[u] = perm[d->free_index[u]];
-  const int supernodal = ordered->is_super;
-  cholmod_l_free_factor(&ordered, &d->common);
-  // 3. the triangle CHOLMOD's natural order reads as it is, rows sorted per
-  // column, with the maps to the block values and from the walk
-  if ((st = fill_pattern(ctx, d, B, supernodal ? -1 : 1)) != FASCIA_OK) goto done;
-  d->rhs = cholmod_l_zeros(n, 1, CHOLMOD_REAL, &d->common);
-  if (!d->rhs) {
-    st = FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "direct solver: out of memory for %lld unknowns", (long long)n);
-    goto done;
+  if (!d->factor->is_super) {
+    free_matrix(d);
+    d->lower = 0;
+    if ((st = fill_matrix(ctx, d, B, order, frames)) != FASCIA_OK) goto done;
   }
-  // 4. the symbolic factor in that order: the same fill, no permutation
-  d->common.method[0].ordering = CHOLMOD_NATURAL;
-  d->common.postorder = 0;
-  d->common.supernodal = supernodal ? CHOLMOD_SUPERNODAL : CHOLMOD_SIMPLICIAL;
-  d->factor = cholmod_l_analyze(d->matrix, &d->common);
-  if (!d->factor) st = analysis_failed(ctx, d);
+  d->rhs = cholmod_l_zeros(n, 1, CHOLMOD_REAL, &d->common);
+  if (!d->rhs) st = FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "direct solver: out of memory for %lld unknowns", (long long)n);
 done:
   free(order);
-  free(perm);
   return st;
 }
 
@@ -342,23 +377,40 @@ int fascia_direct_factor(fascia_direct *d, fascia_ctx *ctx, const fascia_bsr *K,
   }
   double *x = d->matrix->x;
   for (int64_t k = 0; k < d->entries; ++k) x[k] = K->values[d->value_index[k]];
+  const SuiteSparse_long *p = d->matrix->p; // a column's diagonal entry: first in the lower triangle, last in the upper
   for (int64_t u = 0; u < d->unknowns; ++u) {
     const int64_t row = d->free_index[u];
-    if (row >= 0) x[d->diagonal[row]] += shift * damping[u];
+    if (row >= 0) x[d->lower ? p[row] : p[row + 1] - 1] += shift * damping[u];
   }
   return factor_values(d);
 }
 
 int64_t fascia_direct_values_count(const fascia_direct *d) { return d->entries; }
 
-void fascia_direct_values_save(const fascia_direct *d, double *out) {
-  const double *x = d->matrix->x;
-  for (int64_t j = 0; j < d->entries; ++j) out[j] = x[d->walk_place[j]];
+// The place among the stored values of the entry (column, row) of the
+// walk's triangle: its column's rows are ascending (fill_matrix).
+static int64_t stored_place(const fascia_direct *d, int64_t column, int64_t row) {
+  const int64_t target = d->lower == (column < row) ? column : row, other = target == column ? row : column;
+  const SuiteSparse_long *p = d->matrix->p, *rows = d->matrix->i;
+  int64_t lo = p[target], hi = p[target + 1] - 1;
+  while (lo < hi) {
+    const int64_t mid = lo + (hi - lo) / 2;
+    if (rows[mid] < other) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo;
 }
 
-int fascia_direct_values_load(fascia_direct *d, const double *in) {
+void fascia_direct_values_save(const fascia_direct *d, const fascia_bsr *pattern, double *out) {
+  const double *x = d->matrix->x;
+  int64_t j = 0;
+  FOR_EACH_ENTRY(d, pattern, out[j++] = x[stored_place(d, column, row)]);
+}
+
+int fascia_direct_values_load(fascia_direct *d, const fascia_bsr *pattern, const double *in) {
   double *x = d->matrix->x;
-  for (int64_t j = 0; j < d->entries; ++j) x[d->walk_place[j]] = in[j];
+  int64_t j = 0;
+  FOR_EACH_ENTRY(d, pattern, x[stored_place(d, column, row)] = in[j++]);
   return factor_values(d);
 }
 

@@ -30,13 +30,13 @@ FASCIA_INTERN double fascia_direct_factor_nonzeros(const fascia_direct *d);
 /// Whether the last analysis was for this mask (a factorization then still fits it).
 FASCIA_INTERN int fascia_direct_mask_is(const fascia_direct *d, const unsigned char *mask);
 /// The values the last fascia_direct_factor factored (the matrix with its
-/// shift), to store them: their count, and the values in the pattern's walk
-/// (frame i's row a, then its blocks with frames j >= i), which does not
-/// depend on the ordering; and factoring such values again: the same bits
-/// give the same factor (1; 0 if not positive definite).
+/// shift), to store them: their count, and the values in the walk of the
+/// creation's pattern (frame i's row a, then its blocks with frames j >= i),
+/// which does not depend on the ordering; and factoring such values again:
+/// the same bits give the same factor (1; 0 if not positive definite).
 FASCIA_INTERN int64_t fascia_direct_values_count(const fascia_direct *d);
-FASCIA_INTERN void fascia_direct_values_save(const fascia_direct *d, double *out);
-FASCIA_INTERN int fascia_direct_values_load(fascia_direct *d, const double *in);
+FASCIA_INTERN void fascia_direct_values_save(const fascia_direct *d, const fascia_bsr *pattern, double *out);
+FASCIA_INTERN int fascia_direct_values_load(fascia_direct *d, const fascia_bsr *pattern, const double *in);
 /// Factors K + diag(shift * damping) over the unknowns with mask set (K of
 /// the creation's pattern; one triangle of it is read; a mask other than the
 /// analysed one is analysed first). Returns 1 on success, 0 when it is not
