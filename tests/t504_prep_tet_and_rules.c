@@ -12,7 +12,9 @@
 // patches carry enhanced strain modes (shape_functions.enhanced_modes,
 // default true for tet with 4 samples per tetrahedron; docs/mechanics.md);
 // with the key false, or the centroid rule, they carry none, and a key
-// that is not a boolean is refused naming it.
+// that is not a boolean is refused naming it. The patch rule: below a
+// Poisson ratio of 0.3 (0.29) no sample is in a patch; an explicit
+// patch_radius makes them there, and 0 switches them off at 0.3.
 #define _POSIX_C_SOURCE 200809L // mkdtemp
 #include <math.h>
 #include <string.h>
@@ -115,6 +117,26 @@ int main(void) {
       moded += r.model->sample_modes[s];
     }
     CHECK(patched > 0 && moded == 0);
+    fixture_free(&r);
+  }
+  // the patch rule: none below nu = 0.3, unless the scene asks for them; 0 turns them off
+  static const struct {
+    const char *nu, *radius;
+    int patches;
+  } rules[] = {{"0.29", "", 0}, {"0.29", "\"patch_radius\": 0.003, ", 1}, {"0.3", "\"patch_radius\": 0, ", 0}};
+  const char *nu_at = strstr(scene, "\"poisson_ratio\": 0.3}"), *key_at = strstr(scene, "\"material\": \"soft\"");
+  CHECK(nu_at != NULL && key_at != NULL && nu_at < key_at);
+  for (int k = 0; k < 3 && nu_at && key_at; ++k) {
+    const char *after_nu = nu_at + strlen("\"poisson_ratio\": 0.3");
+    snprintf(text, sizeof text, "%.*s\"poisson_ratio\": %s%.*s%s%s", (int)(nu_at - scene), scene, rules[k].nu,
+             (int)(key_at - after_nu), after_nu, rules[k].radius, key_at);
+    CHECK(fixture_two_boxes(dir, 0.0031, text, path));
+    CHECK_OK(fixture_prep(ctx, path, &r), ctx);
+    int32_t patched = 0;
+    for (int32_t s = 0; r.model && s < r.model->sample_count; ++s) patched += r.model->sample_patch[s] >= 0;
+    printf("t504: nu %s, %s%d of %d samples in patches\n", rules[k].nu, rules[k].radius, (int)patched,
+           r.model ? (int)r.model->sample_count : 0);
+    CHECK(r.model && (rules[k].patches ? patched == r.model->sample_count : patched == 0));
     fixture_free(&r);
   }
   fascia_ctx_destroy(&ctx);
