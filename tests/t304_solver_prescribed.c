@@ -3,7 +3,9 @@
 // Frames with a prescribed rigid motion follow it exactly at every step
 // (translation linear, rotation interpolated along the shorter arc, about a
 // pivot), fixed frames do not move at all, and the motion reaches the free
-// frames through the material.
+// frames through the material. A step whose time would not advance (t =
+// 1e20 s, dt 0.1 s) or would overflow is refused with a message that says
+// so, and leaves the time and the frames as they were.
 #include <stdlib.h>
 #include <string.h>
 
@@ -85,6 +87,30 @@ int main(int argc, char **argv) {
   for (int i = 0; i < m->frame_count; ++i)
     if (fabs(m->frame_position[3 * i] - 0.8) < 1e-9) lift += (x[3 * i + 2] - m->frame_position[3 * i + 2]) / 4;
   CHECK(lift > 0.1 * LIFT);
+  // a step that cannot move the time on is refused, the state kept
+  const size_t bytes = 3 * sizeof(double) * (size_t)m->frame_count;
+  double *before = malloc(bytes);
+  static const struct {
+    double time, dt;
+    const char *says;
+  } stalls[] = {{1e20, 0.1, "does not advance"}, {1.7e308, 1e308, "overflows"}};
+  for (int k = 0; k < 2 && before; ++k) {
+    fascia_solver_def stalled = fascia_solver_def_default();
+    stalled.time_step = stalls[k].dt;
+    stalled.backend = backend;
+    fascia_solver *t = NULL;
+    CHECK_OK(fascia_solver_create(ctx, m, &stalled, &t), ctx);
+    if (!t) break;
+    CHECK_OK(fascia_solver_set_time(t, stalls[k].time), ctx);
+    memcpy(before, fascia_solver_frame_positions(t), bytes);
+    CHECK(fascia_solver_step(t, NULL) == FASCIA_ERR_ARGUMENT);
+    printf("t304: %s\n", fascia_ctx_message(ctx));
+    CHECK(strstr(fascia_ctx_message(ctx), stalls[k].says) != NULL);
+    CHECK(fascia_solver_time(t) == stalls[k].time);
+    CHECK(!memcmp(before, fascia_solver_frame_positions(t), bytes));
+    fascia_solver_destroy(&t);
+  }
+  free(before);
   fascia_solver_destroy(&s);
   fascia_model_destroy(&m);
   fascia_model_destroy(&src);

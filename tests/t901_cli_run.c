@@ -104,6 +104,10 @@ int main(int argc, char **argv) {
   snprintf(args, sizeof args, "run '%s' --steps 3 --dt -1", model);
   CHECK(cli_exec(fascia, args, err, &result) && result.status == 2);
   CHECK(strstr(result.err, "--dt") != NULL);
+  // a run whose end time overflows (it had run, and reported t = inf as done)
+  snprintf(args, sizeof args, "run '%s' --steps 3 --dt 1e308", model);
+  CHECK(cli_exec(fascia, args, err, &result) && result.status == 2);
+  CHECK(strstr(result.err, "--dt 1e+308") != NULL && strstr(result.err, "largest time") != NULL);
   CHECK(cli_exec(fascia, "run", err, &result) && result.status == 2);
 
   // a dynamic run writes the results and the XDMF sidecar

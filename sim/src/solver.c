@@ -471,6 +471,13 @@ fascia_status fascia_solver_step(fascia_solver *S, fascia_solve_report *report) 
   memset(report, 0, sizeof *report);
   S->sys->threads = fascia_threads_free(S->sys->threads_max, S->sys->pair_count); // fewer on busy cores if passes are short
   const fascia_real t0 = S->time, h = S->def.time_step;
+  // a step whose end overflows, or that a double cannot tell from its start,
+  // would evaluate the motions and loads at a time that is not the step's
+  const int overflows = !isfinite(t0 + h);
+  FASCIA_CHECK(!overflows && t0 + h > t0, S->ctx, FASCIA_ERR_ARGUMENT,
+               "solver: a step of %.6g s from t = %.6g s ends at %.6g s: the time %s; use a %s time step", h, t0,
+               t0 + h, overflows ? "overflows" : "does not advance in double precision",
+               overflows ? "shorter" : "longer");
   fascia_real *backup = NULL;
   FASCIA_TRY(save_state(S, &backup));
   fascia_real smallest = h;

@@ -275,6 +275,12 @@ static int parse_options(int argc, char **argv, run_options *opt, const fascia_s
   if (opt->static_time_given && opt->dynamic)
     return cli_usage_error("run", "%s", "--static-time is for a static solve; it excludes --steps");
   if (dt_given && !opt->dynamic) return cli_usage_error("run", "%s", "--dt needs --steps N (a dynamic run)");
+  if (opt->dynamic && !isfinite((fascia_real)opt->steps * opt->solver.time_step)) {
+    char what[160];
+    snprintf(what, sizeof what, "--steps %d --dt %g end past the largest time a double holds", opt->steps,
+             opt->solver.time_step);
+    return cli_usage_error("run", "%s", what);
+  }
   if (!opt->dynamic && !opt->newton_given) opt->solver.newton_iterations = 100;
   return -1;
 }
