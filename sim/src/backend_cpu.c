@@ -39,6 +39,9 @@ typedef struct cpu_backend {
   fascia_preconditioner pc;
   int use_direct;    ///< this step's linear systems by sparse Cholesky (direct.h)
   int direct_dynamic_only; ///< auto with rigid organs: the direct solver for dynamic steps, CG for static solves
+  int direct_on_stall;     ///< auto above AUTO_MAX_FLOPS: CG, and a static solve takes the direct solver once a CG
+                           ///< solve stops at its iteration cap
+  int static_stalled;      ///< it did: this solver's static solves take the direct solver from the start
   int use_assembled; ///< the block matrix K is assembled every Newton iteration
   int use_single;    ///< CG multiplies by K's float copy (fascia_solver_def.single_precision_matrix)
   fascia_bsr K;
@@ -96,7 +99,16 @@ static void cpu_destroy(fascia_backend *backend) {
 // The automatic choices, by measured cost (docs/mechanics.md, "Choosing the
 // linear solver"): the direct solver up to this factorization cost (about
 // 0.1-0.2 s on one core); CG's products on the assembled matrix where it
-// fits FASCIA_AUTO_MAX_MATRIX_BYTES.
+// fits FASCIA_AUTO_MAX_MATRIX_BYTES. Above that cost, where the factor fits
+// the same bound, the analysis is kept for static solves whose CG stalls:
+// a CG solve that stops at its iteration cap short of its tolerance hands
+// the rest of the solve to the direct solver. A slender beam's large
+// deflection needs about a thousand CG iterations per solve (the 60x8x8
+// cantilever, 8.2e9 flops per factorization: not converged after 100 Newton
+// iterations of 200 CG iterations, 14.6 s; 20 iterations and 8.6 s with a
+// cap of 3000; direct 7 iterations, 3.3 s), where a tissue's static solve
+// needs a few dozen (the pelvis tissue at 1.3 mm frames, 2,490 frames: CG
+// 3 iterations and 117 CG iterations, 0.45 s; direct 1.7 s).
 #define AUTO_MAX_FLOPS 2e9
 
 // Bytes of the assembled matrix and its assembly plan, bounded from the
@@ -138,6 +150,12 @@ static fascia_status choose_linear_solver(cpu_backend *B, fascia_ctx *ctx, const
     return FASCIA_OK;
   }
   if (!automatic) return st;
+  // above the bound: CG, the analysis kept for a static solve whose CG stalls
+  if (st == FASCIA_OK && !bodies && assembled &&
+      fascia_direct_factor_nonzeros(B->direct) * sizeof(double) <= FASCIA_AUTO_MAX_MATRIX_BYTES) {
+    B->direct_on_stall = 1;
+    return FASCIA_OK;
+  }
   // automatic: CG, with the product chosen above
   B->direct_dynamic_only = 0;
   fascia_ctx_clear(ctx);
@@ -223,7 +241,8 @@ static fascia_status cpu_begin(fascia_backend *backend, const fascia_step_values
   FASCIA_CHECK(v->x_base == S->x_base && v->q_base == S->q_base && v->d == S->d, S->ctx, FASCIA_ERR_INTERNAL,
                "cpu backend: the step's arrays are not the solver's");
   B->values = *v;
-  if (B->direct) B->use_direct = !B->direct_dynamic_only || v->dynamic;
+  if (B->direct)
+    B->use_direct = B->direct_on_stall ? !v->dynamic && B->static_stalled : v->dynamic || !B->direct_dynamic_only;
   // the last factorization fits this step when the mask and the mass coefficient are the same
   // (and a second Newton iteration to check it: with one per step, as the
   // interactive preset has, a kept factorization would never be checked)
@@ -432,6 +451,14 @@ static fascia_status cpu_direction(fascia_backend *backend, fascia_real *shift, 
                                                 B->def->cg_fixed, B->def->cg_tolerance, B->work + 2 * n);
     report->cg_iterations += cg.iterations;
     report->negative_curvature += cg.negative_curvature;
+    if (B->direct_on_stall && !B->values.dynamic && !B->def->cg_fixed && !cg.negative_curvature &&
+        cg.iterations >= B->def->cg_iterations && cg.residual > B->def->cg_tolerance) {
+      // a static solve whose CG stopped at its cap: the direct solver for the rest of it
+      B->use_direct = B->static_stalled = report->direct = 1;
+      B->use_single = B->op.single = 0;
+      FASCIA_TRY(prepare_tangent(B, report)); // the Levenberg scale from the factored diagonal
+      return cpu_direction(backend, shift, slope, report);
+    }
   }
   *slope = fascia_dot(p, g, n, B->sys->threads);
   if (!(*slope < 0)) { // not a descent direction: preconditioned gradient
