@@ -39,9 +39,9 @@ typedef struct cpu_backend {
   fascia_preconditioner pc;
   int use_direct;    ///< this step's linear systems by sparse Cholesky (direct.h)
   int direct_dynamic_only; ///< auto with rigid organs: the direct solver for dynamic steps, CG for static solves
-  int direct_on_stall;     ///< auto above AUTO_MAX_FLOPS: CG, and a static solve takes the direct solver once a CG
-                           ///< solve stops at its iteration cap
-  int static_stalled;      ///< it did: this solver's static solves take the direct solver from the start
+  int direct_on_stall;     ///< auto above AUTO_MAX_FLOPS: CG, and a solve takes the direct solver once a CG solve
+                           ///< stops at its iteration cap
+  int cg_stalled[2];       ///< it did, in a static [0] or dynamic [1] solve: later ones take the direct solver at once
   int use_assembled; ///< the block matrix K is assembled every Newton iteration
   int use_single;    ///< CG multiplies by K's float copy (fascia_solver_def.single_precision_matrix)
   fascia_bsr K;
@@ -100,15 +100,18 @@ static void cpu_destroy(fascia_backend *backend) {
 // linear solver"): the direct solver up to this factorization cost (about
 // 0.1-0.2 s on one core); CG's products on the assembled matrix where it
 // fits FASCIA_AUTO_MAX_MATRIX_BYTES. Above that cost, where the factor fits
-// the same bound, the analysis is kept for static solves whose CG stalls:
-// a CG solve that stops at its iteration cap short of its tolerance hands
-// the rest of the solve to the direct solver. A slender beam's large
-// deflection needs about a thousand CG iterations per solve (the 60x8x8
-// cantilever, 8.2e9 flops per factorization: not converged after 100 Newton
-// iterations of 200 CG iterations, 14.6 s; 20 iterations and 8.6 s with a
-// cap of 3000; direct 7 iterations, 3.3 s), where a tissue's static solve
-// needs a few dozen (the pelvis tissue at 1.3 mm frames, 2,490 frames: CG
-// 3 iterations and 117 CG iterations, 0.45 s; direct 1.7 s).
+// the same bound, the analysis is kept for solves whose CG stalls: a CG
+// solve that stops at its iteration cap short of its tolerance hands the
+// rest of the solve, and the later ones of its kind (static or dynamic), to
+// the direct solver. A slender beam's large deflection needs about a
+// thousand CG iterations per solve (the 60x8x8 cantilever, 8.2e9 flops per
+// factorization: statically not converged after 100 Newton iterations of
+// 200 CG iterations, 14.6 s, 20 iterations and 8.6 s with a cap of 3000,
+// direct 7 iterations, 3.3 s; a dynamic step of 0.1 s 54 Newton iterations
+// and 17 s), where a tissue's static solve needs a few dozen (the pelvis
+// tissue at 1.3 mm frames, 2,490 frames: 3 iterations and 117 CG
+// iterations, 0.45 s; direct 1.7 s). Not with one Newton iteration per step
+// (the interactive preset), whose CG cap bounds a step's cost.
 #define AUTO_MAX_FLOPS 2e9
 
 // Bytes of the assembled matrix and its assembly plan, bounded from the
@@ -150,7 +153,7 @@ static fascia_status choose_linear_solver(cpu_backend *B, fascia_ctx *ctx, const
     return FASCIA_OK;
   }
   if (!automatic) return st;
-  // above the bound: CG, the analysis kept for a static solve whose CG stalls
+  // above the bound: CG, the analysis kept for a solve whose CG stalls
   if (st == FASCIA_OK && !bodies && assembled &&
       fascia_direct_factor_nonzeros(B->direct) * sizeof(double) <= FASCIA_AUTO_MAX_MATRIX_BYTES) {
     B->direct_on_stall = 1;
@@ -242,7 +245,7 @@ static fascia_status cpu_begin(fascia_backend *backend, const fascia_step_values
                "cpu backend: the step's arrays are not the solver's");
   B->values = *v;
   if (B->direct)
-    B->use_direct = B->direct_on_stall ? !v->dynamic && B->static_stalled : v->dynamic || !B->direct_dynamic_only;
+    B->use_direct = B->direct_on_stall ? B->cg_stalled[v->dynamic != 0] : v->dynamic || !B->direct_dynamic_only;
   // the last factorization fits this step when the mask and the mass coefficient are the same
   // (and a second Newton iteration to check it: with one per step, as the
   // interactive preset has, a kept factorization would never be checked)
@@ -451,10 +454,10 @@ static fascia_status cpu_direction(fascia_backend *backend, fascia_real *shift, 
                                                 B->def->cg_fixed, B->def->cg_tolerance, B->work + 2 * n);
     report->cg_iterations += cg.iterations;
     report->negative_curvature += cg.negative_curvature;
-    if (B->direct_on_stall && !B->values.dynamic && !B->def->cg_fixed && !cg.negative_curvature &&
+    if (B->direct_on_stall && !B->def->cg_fixed && B->def->newton_iterations > 1 && !cg.negative_curvature &&
         cg.iterations >= B->def->cg_iterations && cg.residual > B->def->cg_tolerance) {
-      // a static solve whose CG stopped at its cap: the direct solver for the rest of it
-      B->use_direct = B->static_stalled = report->direct = 1;
+      // CG stopped at its cap: the direct solver for the rest of this solve and the later ones of its kind
+      B->use_direct = B->cg_stalled[B->values.dynamic != 0] = report->direct = 1;
       B->use_single = B->op.single = 0;
       FASCIA_TRY(prepare_tangent(B, report)); // the Levenberg scale from the factored diagonal
       return cpu_direction(backend, shift, slope, report);
