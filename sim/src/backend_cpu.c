@@ -562,6 +562,9 @@ static int cpu_linear_state_load(fascia_backend *backend, const fascia_real *in,
   B->factor_shift = in[1];
   B->factor_epoch = B->S->linear_epoch;
   B->factor_valid = 1;
+  // a kept factorization of a solver that takes CG first was made after its CG stalled (checkpoints are
+  // of dynamic runs): the resumed run goes on with the direct solver, as the run it continues did
+  if (B->direct_on_stall) B->cg_stalled[1] = 1;
   return 1;
 }
 
