@@ -12,9 +12,9 @@
 // ordering left to CHOLMOD it transposed the matrix twice per
 // factorization, which cost more than the supernodal arithmetic on the
 // 20x3x3 cantilever. The matrix is written once, column by column, with a
-// map from each stored value to the block values: the set-up's memory is
-// its own (three numbers per entry), because on fresh pages a set-up is
-// mostly page faults.
+// map from each stored value to the block values and no other array per
+// entry (row, value and map: three numbers each), because on fresh pages a
+// set-up is mostly page faults.
 #include <stdlib.h>
 #include <string.h>
 #ifdef _OPENMP
