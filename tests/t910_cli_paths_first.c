@@ -54,7 +54,7 @@ int main(int argc, char **argv) {
   snprintf(args, sizeof args, "run '%s' --static --threads 1 --history ''", model);
   failures += refused_early(fascia, args, 2, "--history needs a path", NULL, err);
   snprintf(args, sizeof args, "run '%s' --static --threads 1 --snapshots '%s'", model, file);
-  failures += refused_early(fascia, args, 2, "--snapshots", "not a folder", err);
+  failures += refused_early(fascia, args, 2, "--snapshots", "is a file, not a folder", err);
   snprintf(args, sizeof args, "run '%s' --static --threads 1 -o '%s/r.h5'", model, file);
   failures += refused_early(fascia, args, 1, file, "is not a folder", err);
   snprintf(args, sizeof args, "beam --frames 6x2x2 -o '%s/m.h5'", missing);
@@ -64,7 +64,7 @@ int main(int argc, char **argv) {
   snprintf(args, sizeof args, "bench cantilever --steps 1 --repeats 1 --threads 1 --csv '%s/b.csv'", missing);
   failures += refused_early(fascia, args, 1, missing, "does not exist", err);
   snprintf(args, sizeof args, "tradeoff --quick --out '%s'", file);
-  failures += refused_early(fascia, args, 2, "--out", "not a folder", err);
+  failures += refused_early(fascia, args, 2, "--out", "is a file, not a folder", err); // it said "is not a regular file"
   // 2e9 saved steps of this beam are about 1.4 TB: refused with that figure
   // (under a timeout: a run that went ahead would take years)
   snprintf(args, sizeof args, "timeout 60 '%s' run '%s' --steps 2000000000 --threads 1 -o '%s/r.h5'", fascia, model,
