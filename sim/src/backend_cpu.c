@@ -378,9 +378,9 @@ static fascia_status assemble(cpu_backend *B) {
 
 // The assembled matrix, the preconditioner and the Levenberg scale at the
 // current iterate (a kept factorization no longer fits)
+static void levenberg_damping(cpu_backend *B);
+
 static fascia_status prepare_tangent(cpu_backend *B, fascia_solve_report *report) {
-  const int32_t N = B->frame_count;
-  const int64_t n = 6 * (int64_t)N;
   B->factor_valid = B->reusing = 0;
   double t = fascia_now_ms();
   if (B->use_assembled) {
@@ -389,6 +389,16 @@ static fascia_status prepare_tangent(cpu_backend *B, fascia_solve_report *report
     t = fascia_now_ms();
   }
   if (!B->use_direct) fascia_precond_build(&B->pc, &B->op, B->blocks);
+  levenberg_damping(B);
+  report->profile.precond_ms += fascia_now_ms() - t;
+  return FASCIA_OK;
+}
+
+// The Levenberg shift's weights and scale, from the diagonal of what the
+// linear solver works on (the factored matrix, or the preconditioner's blocks)
+static void levenberg_damping(cpu_backend *B) {
+  const int32_t N = B->frame_count;
+  const int64_t n = 6 * (int64_t)N;
   fascia_real scale = 0;
   const fascia_bsr *factored = B->reduced ? &B->R : &B->K; // what the direct solver factors
   for (int32_t i = 0; i < N; ++i)
@@ -400,8 +410,6 @@ static fascia_status prepare_tangent(cpu_backend *B, fascia_solve_report *report
     }
   B->op.scale = scale > 0 ? scale / (fascia_real)n : 1;
   for (int64_t k = 0; k < n; ++k) B->damping[k] = fascia_pt_levenberg_weight(B->damping[k], (int)(k % 6), B->op.scale);
-  report->profile.precond_ms += fascia_now_ms() - t;
-  return FASCIA_OK;
 }
 
 // A new tangent, or the kept factorization where the last direction lowered
@@ -459,7 +467,7 @@ static fascia_status cpu_direction(fascia_backend *backend, fascia_real *shift, 
       // CG stopped at its cap: the direct solver for the rest of this solve and the later ones of its kind
       B->use_direct = B->cg_stalled[B->values.dynamic != 0] = report->direct = 1;
       B->use_single = B->op.single = 0;
-      FASCIA_TRY(prepare_tangent(B, report)); // the Levenberg scale from the factored diagonal
+      levenberg_damping(B); // from the factored diagonal; K was assembled for this iteration's CG
       return cpu_direction(backend, shift, slope, report);
     }
   }
