@@ -29,17 +29,21 @@ typedef struct fascia_pt_patches {
   fascia_real *rate;                   ///< [count] lambda_p / V_p G_p . v of the last product
   fascia_real *entry_gradient;         ///< [6 entries] G_e, (x, theta) world
   fascia_real *sample_pressure;        ///< [S] lambda_p thetabar_p on the samples of p (pm.sample_pressure)
+  const fascia_real *sample_F;         ///< [9 S] F of the samples of patches at the state, made before the patches'
+                                       ///< evaluation (in sample order, so the pairs' data stream), or NULL
 } fascia_pt_patches;
 
 /// Patch p at the state st: its mean dilatation, energy and its samples'
-/// pressure (what the gradient needs).
+/// pressure (what the gradient needs); their F from t->sample_F where it is
+/// made, else computed here.
 FASCIA_STATIC_FORCE_INLINE FASCIA_HD void fascia_pt_patch_evaluate(const fascia_pt_model *m, const fascia_pt_state *st,
                                                       const fascia_pt_patches *t, int32_t p) {
   fascia_real sum = 0;
   for (int32_t q = t->patch_offsets[p]; q < t->patch_offsets[p + 1]; ++q) {
     const int32_t s = t->patch_samples[q];
-    fascia_real F[9], dtheta[9];
-    fascia_pt_sample_F(m, st, s, F);
+    fascia_real own[9], dtheta[9];
+    const fascia_real *F = t->sample_F ? t->sample_F + 9 * (int64_t)s : own;
+    if (!t->sample_F) fascia_pt_sample_F(m, st, s, own);
     sum += m->sample_volume[s] * fascia_pt_dilatation(t->law[p], F, dtheta);
   }
   const fascia_real theta = sum / t->volume[p], pressure = t->lambda[p] * theta;
@@ -49,7 +53,8 @@ FASCIA_STATIC_FORCE_INLINE FASCIA_HD void fascia_pt_patch_evaluate(const fascia_
 }
 
 /// Patch p at the state st: the gradient G_e of sum_{s in p} v_s theta_s on
-/// each support entry's frame (what the Hessian's rank-one term needs).
+/// each support entry's frame (what the Hessian's rank-one term needs); F
+/// as in fascia_pt_patch_evaluate, at the same state.
 FASCIA_STATIC_FORCE_INLINE FASCIA_HD void fascia_pt_patch_gradient(const fascia_pt_model *m, const fascia_pt_state *st,
                                                       const fascia_pt_patches *t, int32_t p) {
   for (int64_t q = 6 * (int64_t)t->support_offsets[p]; q < 6 * (int64_t)t->support_offsets[p + 1]; ++q)
@@ -57,8 +62,9 @@ FASCIA_STATIC_FORCE_INLINE FASCIA_HD void fascia_pt_patch_gradient(const fascia_
   for (int32_t q = t->patch_offsets[p]; q < t->patch_offsets[p + 1]; ++q) {
     const int32_t s = t->patch_samples[q];
     const fascia_real v = m->sample_volume[s];
-    fascia_real F[9], dtheta[9];
-    fascia_pt_sample_F(m, st, s, F);
+    fascia_real own[9], dtheta[9];
+    const fascia_real *F = t->sample_F ? t->sample_F + 9 * (int64_t)s : own;
+    if (!t->sample_F) fascia_pt_sample_F(m, st, s, own);
     fascia_pt_dilatation(t->law[p], F, dtheta);
     // v grad theta_s on each frame of s: (dtheta g, axial(C dtheta^T)), as the stress gradient
     for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k) {

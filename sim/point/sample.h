@@ -174,13 +174,14 @@ static inline FASCIA_HD fascia_real fascia_pt_sample_law_stress(const fascia_pt_
 /// out: [6n] for the n pairs of s in order: (g_x, g_theta), the gradient of
 /// this sample's energy with respect to that pair's frame (the force is its
 /// negative); the CPU backend passes pair_buffer + 6 sample_offsets[s].
-/// cache: [FASCIA_PT_CACHE_SIZE] for this sample, or NULL.
+/// cache: [FASCIA_PT_CACHE_SIZE] for this sample, or NULL. F: the sample's
+/// F at st (fascia_pt_sample_F), where the caller has it already.
 /// Returns the sample's energy (J); *flags gets FASCIA_PT_FLAG_* bits.
-FASCIA_STATIC_FORCE_INLINE FASCIA_HD fascia_real fascia_pt_sample_gradient(const fascia_pt_model *m, const fascia_pt_state *st,
-                                                              int32_t s, fascia_real *out6, fascia_real *cache,
-                                                              int *flags) {
-  fascia_real F[9], P[9], aux[FASCIA_PT_AUX_SIZE];
-  fascia_pt_sample_F(m, st, s, F);
+FASCIA_STATIC_FORCE_INLINE FASCIA_HD fascia_real fascia_pt_sample_gradient_at(const fascia_pt_model *m,
+                                                                 const fascia_pt_state *st, int32_t s,
+                                                                 const fascia_real *F, fascia_real *out6,
+                                                                 fascia_real *cache, int *flags) {
+  fascia_real P[9], aux[FASCIA_PT_AUX_SIZE];
   const fascia_real v = m->sample_volume[s], muc = m->sample_coupling[s];
   fascia_real psi = fascia_pt_sample_law_stress(m, st, s, F, P, aux);
   const int32_t begin = m->sample_offsets[s], end = m->sample_offsets[s + 1];
@@ -241,6 +242,15 @@ FASCIA_STATIC_FORCE_INLINE FASCIA_HD fascia_real fascia_pt_sample_gradient(const
     for (int q = 0; q < FASCIA_PT_AUX_SIZE; ++q) cache[18 + q] = aux[q];
   }
   return v * psi;
+}
+
+/// fascia_pt_sample_gradient_at, F computed here.
+FASCIA_STATIC_FORCE_INLINE FASCIA_HD fascia_real fascia_pt_sample_gradient(const fascia_pt_model *m, const fascia_pt_state *st,
+                                                              int32_t s, fascia_real *out6, fascia_real *cache,
+                                                              int *flags) {
+  fascia_real F[9];
+  fascia_pt_sample_F(m, st, s, F);
+  return fascia_pt_sample_gradient_at(m, st, s, F, out6, cache, flags);
 }
 
 /// Partial stiffness product of sample s: for the j-th pair (i, s) writes

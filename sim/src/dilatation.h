@@ -64,6 +64,7 @@ typedef struct fascia_dilatation {
   fascia_real *patch_rate;      ///< [patches] scratch of the Hessian product
   fascia_real *entry_gradient;  ///< [6 entries] G_p restricted to the entry's frame (x then theta)
   fascia_real *sample_pressure; ///< [S] lambda_p thetabar_p on the samples of p, 0 elsewhere
+  fascia_real *sample_F;        ///< [9 S] F of the samples in patches at the last evaluation (the patches and the samples' gradient read it)
   fascia_pt_patches view;       ///< all of the above, as the per-patch math reads them
   int gradients_current;        ///< entry_gradient is for the last evaluated state
 } fascia_dilatation;

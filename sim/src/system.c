@@ -252,11 +252,16 @@ fascia_real fascia_dot(const fascia_real *a, const fascia_real *b, int64_t n, in
 // instructions (hex), 58 -> 51 (tet).
 WIDE_CLONES static fascia_real samples_gradient(fascia_system *sys, const fascia_pt_state *st, int32_t begin,
                                                int32_t end) {
-  const int32_t *offsets = sys->model->sample_offsets;
+  const int32_t *offsets = sys->model->sample_offsets, *patch = sys->model->sample_patch;
+  // the patches' evaluation at this state has the F of their samples
+  const fascia_real *known = sys->dilatation ? sys->dilatation->sample_F : NULL;
   fascia_real e = 0;
-  for (int32_t s = begin; s < end; ++s)
-    e += fascia_pt_sample_gradient(&sys->pm, st, s, sys->pair_buffer + 6 * (int64_t)offsets[s],
-                                   sys->cache + (int64_t)s * FASCIA_PT_CACHE_SIZE, sys->sample_flags + s);
+  for (int32_t s = begin; s < end; ++s) {
+    fascia_real *out = sys->pair_buffer + 6 * (int64_t)offsets[s], *cache = sys->cache + (int64_t)s * FASCIA_PT_CACHE_SIZE;
+    e += known && patch[s] >= 0
+             ? fascia_pt_sample_gradient_at(&sys->pm, st, s, known + 9 * (int64_t)s, out, cache, sys->sample_flags + s)
+             : fascia_pt_sample_gradient(&sys->pm, st, s, out, cache, sys->sample_flags + s);
+  }
   return e;
 }
 
