@@ -257,10 +257,11 @@ WIDE_CLONES static fascia_real samples_gradient(fascia_system *sys, const fascia
   const fascia_real *known = sys->dilatation ? sys->dilatation->sample_F : NULL;
   fascia_real e = 0;
   for (int32_t s = begin; s < end; ++s) {
-    fascia_real *out = sys->pair_buffer + 6 * (int64_t)offsets[s], *cache = sys->cache + (int64_t)s * FASCIA_PT_CACHE_SIZE;
-    e += known && patch[s] >= 0
-             ? fascia_pt_sample_gradient_at(&sys->pm, st, s, known + 9 * (int64_t)s, out, cache, sys->sample_flags + s)
-             : fascia_pt_sample_gradient(&sys->pm, st, s, out, cache, sys->sample_flags + s);
+    fascia_real own[9];
+    const fascia_real *F = known && patch[s] >= 0 ? known + 9 * (int64_t)s : own;
+    if (F == own) fascia_pt_sample_F(&sys->pm, st, s, own);
+    e += fascia_pt_sample_gradient_at(&sys->pm, st, s, F, sys->pair_buffer + 6 * (int64_t)offsets[s],
+                                      sys->cache + (int64_t)s * FASCIA_PT_CACHE_SIZE, sys->sample_flags + s);
   }
   return e;
 }
