@@ -306,25 +306,39 @@ WIDE_CLONES static void local_stiffness(const fascia_system *sys, const fascia_p
 
 // The volumetric patches' rank-one terms lambda_p / V_p G_p G_p^T, row by
 // row, on the upper blocks.
+// Frame i's row of the patches' rank-one terms. A patch's support frames
+// ascend, and so do row i's blocks: one merged walk finds each block (a
+// search per block was a quarter of this row's time), and the products are
+// made on local copies, which the compiler can make wide.
+WIDE_CLONES static void dilatation_row(const fascia_dilatation *d, const unsigned char *moves, fascia_bsr *B,
+                                       int32_t i) {
+  const fascia_patch_table *t = &d->table;
+  const int32_t row_end = B->row_offsets[i + 1];
+  for (int32_t r = t->frame_entry_offsets[i]; r < t->frame_entry_offsets[i + 1]; ++r) {
+    const int32_t e = t->frame_entries[r], p = t->entry_patch[e];
+    const fascia_real c = d->patch_lambda[p] / d->patch_volume[p];
+    fascia_real cGi[6];
+    for (int a = 0; a < 6; ++a) cGi[a] = c * d->entry_gradient[6 * (int64_t)e + a];
+    int32_t place = B->row_offsets[i];
+    // entries f > e of the support are the frames j > i; e itself is (i, i)
+    for (int32_t f = e; f < t->support_offsets[p + 1]; ++f) {
+      const int32_t j = t->entry_frame[f];
+      if (!fascia_frame_moving(moves, j)) continue;
+      while (place < row_end && B->cols[place] < j) ++place;
+      fascia_real Gj[6], *FASCIA_RESTRICT blk = B->values + 36 * (int64_t)place;
+      for (int b = 0; b < 6; ++b) Gj[b] = d->entry_gradient[6 * (int64_t)f + b];
+      for (int a = 0; a < 6; ++a)
+        for (int b = 0; b < 6; ++b) blk[6 * a + b] += cGi[a] * Gj[b];
+    }
+  }
+}
+
 static void dilatation_rows(const fascia_system *sys, const unsigned char *moves, fascia_bsr *B) {
   fascia_dilatation *d = sys->dilatation;
   fascia_dilatation_gradients(sys, d);
-  const fascia_patch_table *t = &d->table;
 #pragma omp parallel for num_threads(sys->threads) schedule(static)
-  for (int32_t i = 0; i < sys->frame_count; ++i) {
-    if (!fascia_frame_moving(moves, i)) continue;
-    for (int32_t r = t->frame_entry_offsets[i]; r < t->frame_entry_offsets[i + 1]; ++r) {
-      const int32_t e = t->frame_entries[r], p = t->entry_patch[e];
-      const fascia_real c = d->patch_lambda[p] / d->patch_volume[p], *Gi = d->entry_gradient + 6 * (int64_t)e;
-      for (int32_t f = t->support_offsets[p]; f < t->support_offsets[p + 1]; ++f) {
-        if (t->entry_frame[f] < i || !fascia_frame_moving(moves, t->entry_frame[f])) continue;
-        const fascia_real *Gj = d->entry_gradient + 6 * (int64_t)f;
-        fascia_real *blk = B->values + 36 * (int64_t)find_block(B, i, t->entry_frame[f]);
-        for (int a = 0; a < 6; ++a)
-          for (int b = 0; b < 6; ++b) blk[6 * a + b] += c * Gi[a] * Gj[b];
-      }
-    }
-  }
+  for (int32_t i = 0; i < sys->frame_count; ++i)
+    if (fascia_frame_moving(moves, i)) dilatation_row(d, moves, B, i);
 }
 
 // The rotation smoothing's frame graph (fascia_system: smoothing_offsets),
