@@ -217,8 +217,8 @@ WIDE_CLONES static void patch_gradient(const fascia_system *sys, const fascia_pt
 
 // F of the samples [begin, end) that are in patches, compiled wide. In sample
 // order the pairs' data stream from memory; patch by patch they were read
-// out of order, and computing F there took a quarter of a prepared scene's
-// evaluation (abdomen-female, one thread).
+// out of order, and computing F there took over a quarter of a prepared
+// scene's evaluation (abdomen-female, one thread).
 WIDE_CLONES static void samples_F(const fascia_system *sys, const fascia_pt_state *st, fascia_dilatation *d,
                                   int32_t begin, int32_t end) {
   const int32_t *patch = sys->model->sample_patch;
