@@ -33,17 +33,25 @@ typedef struct fascia_pt_patches {
                                        ///< evaluation (in sample order, so the pairs' data stream), or NULL
 } fascia_pt_patches;
 
+/// F of sample s of a patch at the state st: from t->sample_F where it is
+/// made, else computed into own (9).
+FASCIA_STATIC_FORCE_INLINE FASCIA_HD const fascia_real *
+fascia_pt_patch_sample_F(const fascia_pt_model *m, const fascia_pt_state *st, const fascia_pt_patches *t, int32_t s,
+                         fascia_real *own) {
+  if (t->sample_F) return t->sample_F + 9 * (int64_t)s;
+  fascia_pt_sample_F(m, st, s, own);
+  return own;
+}
+
 /// Patch p at the state st: its mean dilatation, energy and its samples'
-/// pressure (what the gradient needs); their F from t->sample_F where it is
-/// made, else computed here.
+/// pressure (what the gradient needs); their F by fascia_pt_patch_sample_F.
 FASCIA_STATIC_FORCE_INLINE FASCIA_HD void fascia_pt_patch_evaluate(const fascia_pt_model *m, const fascia_pt_state *st,
                                                       const fascia_pt_patches *t, int32_t p) {
   fascia_real sum = 0;
   for (int32_t q = t->patch_offsets[p]; q < t->patch_offsets[p + 1]; ++q) {
     const int32_t s = t->patch_samples[q];
     fascia_real own[9], dtheta[9];
-    const fascia_real *F = t->sample_F ? t->sample_F + 9 * (int64_t)s : own;
-    if (!t->sample_F) fascia_pt_sample_F(m, st, s, own);
+    const fascia_real *F = fascia_pt_patch_sample_F(m, st, t, s, own);
     sum += m->sample_volume[s] * fascia_pt_dilatation(t->law[p], F, dtheta);
   }
   const fascia_real theta = sum / t->volume[p], pressure = t->lambda[p] * theta;
@@ -63,8 +71,7 @@ FASCIA_STATIC_FORCE_INLINE FASCIA_HD void fascia_pt_patch_gradient(const fascia_
     const int32_t s = t->patch_samples[q];
     const fascia_real v = m->sample_volume[s];
     fascia_real own[9], dtheta[9];
-    const fascia_real *F = t->sample_F ? t->sample_F + 9 * (int64_t)s : own;
-    if (!t->sample_F) fascia_pt_sample_F(m, st, s, own);
+    const fascia_real *F = fascia_pt_patch_sample_F(m, st, t, s, own);
     fascia_pt_dilatation(t->law[p], F, dtheta);
     // v grad theta_s on each frame of s: (dtheta g, axial(C dtheta^T)), as the stress gradient
     for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k) {
