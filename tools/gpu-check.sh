@@ -19,7 +19,9 @@
 #                                  out/gpu-check)
 #
 # With the session's device tool: run(command="tools/gpu-check.sh run",
-# carry=["build-gpu/pack.tar.xz"]); it writes 8 files, what that tool brings back.
+# carry=["build-gpu/pack.tar.xz"]); it writes 7 files (that tool brings back
+# 8 at most): summary.txt, tests.log, bench.txt, bench-paper.csv,
+# bench-large.csv, ncu.txt, memcheck.log.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 pack="$root/build-gpu/pack"
@@ -68,40 +70,67 @@ run)
   [ -x "$pack/bin/fascia" ] ||
     { echo "gpu-check: $archive is missing: run 'tools/gpu-check.sh pack' first and carry it" >&2; exit 1; }
   export LD_LIBRARY_PATH="$pack/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+  bin="$pack/bin"
+  summary="$out/summary.txt"
   status=0
-  { nvidia-smi -L || true; date -u +%Y-%m-%dT%H:%MZ; "$pack/bin/fascia" info; } 2>&1 | tee "$out/device.txt"
-  echo "== t330: device against CPU (cantilever, random models, edge cases)"
-  "$pack/bin/t330_device_against_cpu" --backend cuda 2>&1 | tee "$out/tests.log" || status=1
-  echo "== t331: device against CPU on the demo tissue"
-  "$pack/bin/t331_device_tissue" --backend cuda "$pack/demo.h5" 2>&1 | tee -a "$out/tests.log" || status=1
-  echo "== the solver, stability and organ suites on the GPU (t301-t307, t310-t316, t320-t323)"
-  for t in "${solver_tests[@]}"; do
-    echo "-- $t" | tee -a "$out/tests.log"
-    rc=0
-    "$pack/bin/$t" --backend cuda 2>&1 | tee -a "$out/tests.log" || rc=$?
-    [ "$rc" = 0 ] || [ "$rc" = 77 ] || status=1 # 77: skipped on a device, with a line that says why
-  done
-  echo "== the paper's Table 2 and 3 rows on the GPU and the CPU"
-  "$pack/bin/fascia" bench paper --backend cuda --csv "$out/bench-paper.csv" 2>&1 | tee "$out/bench-paper.txt" || status=1
-  echo "== larger rows on the GPU"
-  "$pack/bin/fascia" bench large --backend cuda --no-cpu --csv "$out/bench-large.csv" 2>&1 |
-    tee "$out/bench-large.txt" || status=1
+  # Each stage runs under its own time limit, and all of them under
+  # GPU_CHECK_SECONDS (default 360), so that one that hangs costs its limit
+  # and not the whole lease; summary.txt gets one line per stage.
+  # Usage: stage NAME SECONDS LOG COMMAND...; 77 counts as skipped.
+  deadline=$((SECONDS + ${GPU_CHECK_SECONDS:-360}))
+  stage() {
+    local name="$1" limit="$2" log="$3" started=$SECONDS rc=0
+    shift 3
+    if [ $((deadline - SECONDS)) -lt "$limit" ]; then limit=$((deadline - SECONDS)); fi
+    if [ "$limit" -le 0 ]; then
+      printf '%-44s %-26s\n' "$name" "not run: GPU_CHECK_SECONDS spent" | tee -a "$summary"
+      status=1
+      return
+    fi
+    echo "== $name (at most ${limit} s)" | tee -a "$log"
+    timeout -k 5 "$limit" "$@" >>"$log" 2>&1 || rc=$?
+    local verdict=passed
+    case "$rc" in
+    0) ;;
+    77) verdict=skipped ;;
+    124 | 137) verdict="timed out after ${limit} s"; status=1 ;;
+    *) verdict="failed (exit $rc)"; status=1 ;;
+    esac
+    printf '%-44s %-26s %4d s\n' "$name" "$verdict" $((SECONDS - started)) | tee -a "$summary"
+  }
+  {
+    date -u +%Y-%m-%dT%H:%MZ
+    nvidia-smi -L || true
+    nvidia-smi --query-gpu=name,driver_version,memory.total,clocks.sm,clocks.max.sm,power.limit --format=csv || true
+    "$bin/fascia" info
+    echo "host: $(nproc) CPUs, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2-)"
+  } >"$summary" 2>&1
+  cat "$summary"
+  tests="$out/tests.log"
+  stage "t330 device against CPU" 90 "$tests" "$bin/t330_device_against_cpu" --backend cuda
+  stage "t331 device against CPU, demo tissue" 60 "$tests" "$bin/t331_device_tissue" --backend cuda "$pack/demo.h5"
+  for t in "${solver_tests[@]}"; do stage "$t" 30 "$tests" "$bin/$t" --backend cuda; done
+  bench="$out/bench.txt"
+  stage "bench paper, GPU and CPU" 150 "$bench" \
+    "$bin/fascia" bench paper --backend cuda --csv "$out/bench-paper.csv"
+  stage "bench large, GPU" 150 "$bench" "$bin/fascia" bench large --backend cuda --no-cpu --csv "$out/bench-large.csv"
   if command -v ncu >/dev/null 2>&1; then
     # where the time of a step goes, kernel by kernel (graph nodes profiled
-    # one by one): duration, occupancy, registers; a profile, not a timing
-    echo "== ncu: kernels of one paper-mode step of the 34610-sample row"
-    ncu --graph-profiling node --launch-count 600 --print-summary per-kernel \
-      --metrics gpu__time_duration.sum,sm__warps_active.avg.pct_of_peak_sustained_active,launch__registers_per_thread \
-      "$pack/bin/fascia" bench t3-s34610 --backend cuda --no-cpu --repeats 1 --steps 1 >"$out/ncu.txt" 2>&1 ||
-      echo "gpu-check: ncu failed (not counted; see ncu.txt)"
-    grep -E "k_item|k_reduce|gpu__time_duration" "$out/ncu.txt" | head -60 || true
+    # one by one): duration, occupancy, registers, bandwidth; a profile, not a
+    # timing. The clocks are left as they are.
+    stage "ncu kernels of t3-s34610 (a profile)" 120 "$out/ncu.txt" \
+      ncu --clock-control none --graph-profiling node --launch-count 400 --print-summary per-kernel \
+      --metrics gpu__time_duration.sum,sm__warps_active.avg.pct_of_peak_sustained_active,launch__registers_per_thread,dram__throughput.avg.pct_of_peak_sustained_elapsed \
+      "$bin/fascia" bench t3-s34610 --backend cuda --no-cpu --repeats 1 --steps 1
   fi
   if command -v compute-sanitizer >/dev/null 2>&1; then
-    echo "== compute-sanitizer memcheck of t330 (out-of-bounds and uninitialized device memory)"
-    compute-sanitizer --tool memcheck --leak-check full "$pack/bin/t330_device_against_cpu" --backend cuda \
-      >"$out/memcheck.log" 2>&1 || status=1
-    tail -3 "$out/memcheck.log"
+    # out-of-bounds and uninitialized device memory, and leaks
+    stage "compute-sanitizer memcheck of t330" 150 "$out/memcheck.log" \
+      compute-sanitizer --tool memcheck --leak-check full --error-exitcode 3 "$bin/t330_device_against_cpu" --backend cuda
   fi
+  echo "== summary"
+  cat "$summary"
+  grep -E "^(table|[023] )" "$bench" | head -40 || true
   exit $status
   ;;
 *)
