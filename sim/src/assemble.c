@@ -192,20 +192,14 @@ fascia_status fascia_bsr_create(fascia_ctx *ctx, const fascia_model *m, fascia_b
   return plan(ctx, m, out);
 }
 
-fascia_status fascia_bsr_make_single(fascia_ctx *ctx, fascia_bsr *B, int threads) {
-  if (!B->values_single) {
-    B->values_single = fascia_calloc(36 * B->blocks, sizeof(float));
-    FASCIA_CHECK(B->values_single, ctx, FASCIA_ERR_MEMORY, "assembly: out of memory for a float copy of %lld blocks",
-                 (long long)B->blocks);
-  }
-  const int64_t n = 36 * B->blocks;
-#pragma omp parallel for num_threads(threads) schedule(static)
-  for (int64_t k = 0; k < n; ++k) B->values_single[k] = (float)B->values[k];
-  return FASCIA_OK;
-}
-
 void fascia_bsr_destroy(fascia_bsr *bsr) {
   free(bsr->values_single);
+  free(bsr->single_offsets);
+  free(bsr->single_slot);
+  free(bsr->task_slots);
+  free(bsr->row_slot_offsets);
+  free(bsr->row_slots);
+  free(bsr->slot_sums);
   free(bsr->local_offsets);
   free(bsr->local_block);
   free(bsr->contrib_offsets);

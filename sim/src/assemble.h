@@ -20,8 +20,20 @@ typedef struct fascia_bsr {
   int32_t *cols;        ///< [blocks]
   int32_t *diagonal;    ///< [rows] position of the diagonal block
   fascia_real *values;  ///< [36 blocks]
-  float *values_single; ///< [36 blocks] a float copy for products, when asked for (NULL otherwise)
   int64_t blocks;
+  // The float copy for products, when asked for (NULL otherwise): the upper
+  // blocks alone (the matrix is symmetric), row i's blocks diagonal[i] ..
+  // row_offsets[i+1]-1 from single_offsets[i] on. Its product runs over
+  // fixed tasks of FASCIA_BSR_TASK_ROWS rows. What a task's blocks add,
+  // transposed, to a row past its end goes to a slot of the task's own (one
+  // per such row) and is added to the row once all tasks are done.
+  float *values_single;      ///< [36 upper blocks]
+  int64_t *single_offsets;   ///< [rows+1]
+  int32_t *single_slot;      ///< [upper blocks] slot of a block's transposed term, -1: none or in its task
+  int32_t *task_slots;       ///< [tasks+1] each task's slots, in task order
+  int32_t *row_slot_offsets; ///< [rows+1] the slots that add to each row, ascending
+  int32_t *row_slots;        ///< [slots]
+  fascia_real *slot_sums;    ///< [6 slots]
   // Assembly plan: every sample's local blocks (a, b), a <= b, numbered e =
   // local_offsets[s] + fascia_pt_upper_block(n, a, b) (sample order), are
   // summed into their upper BSR block (i <= j) in ascending e, so the sums
@@ -60,9 +72,14 @@ FASCIA_INTERN void fascia_bsr_destroy(fascia_bsr *bsr);
 /// moving frames (the others are not assembled): out is 0 on other rows.
 FASCIA_INTERN void fascia_bsr_apply(const fascia_bsr *bsr, int threads, const unsigned char *moves,
                                     const fascia_real *v, fascia_real *out);
-/// Rounds the values to the float copy (allocated on first use); FASCIA_ERR_MEMORY if it cannot be.
+/// Rows per task of the products: fixed, so that their sums do not depend
+/// on the thread count.
+#define FASCIA_BSR_TASK_ROWS 64
+/// Rounds the upper blocks of the values to the float copy (allocated on
+/// first use); FASCIA_ERR_MEMORY if it cannot be.
 FASCIA_INTERN fascia_status fascia_bsr_make_single(fascia_ctx *ctx, fascia_bsr *bsr, int threads);
-/// out = B v with the float copy (products summed in double); moves as above.
+/// out = B v with the float copy (products summed in double; each upper
+/// block applied as itself and as its transpose); moves as above.
 FASCIA_INTERN void fascia_bsr_apply_single(const fascia_bsr *bsr, int threads, const unsigned char *moves,
                                            const fascia_real *v, fascia_real *out);
 
