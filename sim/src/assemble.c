@@ -14,9 +14,11 @@
 
 static int32_t find_block(const fascia_bsr *B, int32_t i, int32_t j);
 
-// The chunks of whole samples whose local blocks fit the scratch, and the
-// BSR blocks each chunk adds to (ascending).
-static fascia_status plan_chunks(fascia_ctx *ctx, const fascia_model *m, fascia_bsr *B) {
+// The chunks of whole samples whose local blocks fit the scratch, the BSR
+// blocks each chunk adds to (ascending), and each one's entries: the chunk's
+// local blocks it adds, in ascending e (transposed[e]: added transposed).
+static fascia_status plan_chunks(fascia_ctx *ctx, const fascia_model *m, const unsigned char *transposed,
+                                 fascia_bsr *B) {
   const int32_t S = m->sample_count;
   B->chunk_samples = fascia_calloc((int64_t)S + 1, sizeof(int32_t)); // at most one chunk per sample
   FASCIA_CHECK(B->chunk_samples, ctx, FASCIA_ERR_MEMORY, "assembly: out of memory for the plan");
@@ -53,7 +55,36 @@ static fascia_status plan_chunks(fascia_ctx *ctx, const fascia_model *m, fascia_
       return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "assembly: out of memory for the plan of %d chunks", (int)chunks);
     }
   }
-  free(seen);
+  const int64_t T = B->chunk_block_offsets[chunks], E = B->local_offsets[m->sample_count];
+  B->chunk_entry_offsets = fascia_calloc(T + 1, sizeof(int64_t));
+  B->chunk_entries = fascia_calloc(E, sizeof(int32_t));
+  B->chunk_entry_transposed = fascia_calloc(E, 1);
+  int64_t *fill = fascia_calloc(T + 1, sizeof(int64_t));
+  if (!B->chunk_entry_offsets || !B->chunk_entries || !B->chunk_entry_transposed || !fill) {
+    free(seen), free(fill);
+    return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "assembly: out of memory for the plan of %lld local blocks",
+                       (long long)E);
+  }
+  // seen[b]: where block b is among the chunk's blocks, while the chunk is planned
+  for (int32_t k = 0; k < chunks; ++k) {
+    const int64_t e0 = B->local_offsets[B->chunk_samples[k]], e1 = B->local_offsets[B->chunk_samples[k + 1]];
+    for (int64_t t = B->chunk_block_offsets[k]; t < B->chunk_block_offsets[k + 1]; ++t)
+      seen[B->chunk_blocks[t]] = (int32_t)(t - B->chunk_block_offsets[k]);
+    for (int64_t e = e0; e < e1; ++e) ++B->chunk_entry_offsets[B->chunk_block_offsets[k] + seen[B->local_block[e]] + 1];
+  }
+  for (int64_t t = 0; t < T; ++t) B->chunk_entry_offsets[t + 1] += B->chunk_entry_offsets[t];
+  memcpy(fill, B->chunk_entry_offsets, (size_t)T * sizeof(int64_t));
+  for (int32_t k = 0; k < chunks; ++k) { // ascending e, so each block's entries ascend
+    const int64_t e0 = B->local_offsets[B->chunk_samples[k]], e1 = B->local_offsets[B->chunk_samples[k + 1]];
+    for (int64_t t = B->chunk_block_offsets[k]; t < B->chunk_block_offsets[k + 1]; ++t)
+      seen[B->chunk_blocks[t]] = (int32_t)(t - B->chunk_block_offsets[k]);
+    for (int64_t e = e0; e < e1; ++e) {
+      const int64_t c = fill[B->chunk_block_offsets[k] + seen[B->local_block[e]]]++;
+      B->chunk_entries[c] = (int32_t)(e - e0);
+      B->chunk_entry_transposed[c] = transposed[e];
+    }
+  }
+  free(seen), free(fill);
   return FASCIA_OK;
 }
 
@@ -68,18 +99,13 @@ static fascia_status plan(fascia_ctx *ctx, const fascia_model *m, fascia_bsr *B)
   }
   const int64_t E = B->local_offsets[S];
   B->local_block = fascia_calloc(E, sizeof(int32_t));
-  B->contrib_offsets = fascia_calloc(B->blocks + 1, sizeof(int64_t));
-  B->contrib = fascia_calloc(E, sizeof(int64_t));
-  B->contrib_transposed = fascia_calloc(E, 1);
-  B->cursor = fascia_calloc(B->blocks, sizeof(int64_t));
   B->mirror = fascia_calloc(B->blocks, sizeof(int32_t));
   B->chunk_capacity = FASCIA_ASSEMBLY_CHUNK;
   for (int32_t s = 0; s < S; ++s)
     if (B->local_offsets[s + 1] - B->local_offsets[s] > B->chunk_capacity)
       B->chunk_capacity = B->local_offsets[s + 1] - B->local_offsets[s];
   B->chunk = fascia_calloc(36 * B->chunk_capacity, sizeof(fascia_real));
-  FASCIA_CHECK(B->local_block && B->contrib_offsets && B->contrib && B->contrib_transposed && B->cursor && B->mirror &&
-                   B->chunk,
+  FASCIA_CHECK(B->local_block && B->mirror && B->chunk,
                ctx, FASCIA_ERR_MEMORY, "assembly: out of memory for %lld local blocks", (long long)E);
   // local block (a, b), a <= b, is K_ab: it adds to BSR block (i, j) of its
   // frames as it is where i <= j, else transposed (to block (j, i))
@@ -94,25 +120,21 @@ static fascia_status plan(fascia_ctx *ctx, const fascia_model *m, fascia_bsr *B)
         const int32_t blk = fa <= fb ? find_block(B, fa, fb) : find_block(B, fb, fa);
         B->local_block[e] = blk;
         transposed[e] = fa > fb;
-        B->contrib_offsets[blk + 1]++;
       }
   }
-  for (int64_t b = 0; b < B->blocks; ++b) B->contrib_offsets[b + 1] += B->contrib_offsets[b];
-  memcpy(B->cursor, B->contrib_offsets, (size_t)B->blocks * sizeof(int64_t));
-  for (int64_t e = 0; e < E; ++e) { // ascending e per block
-    B->contrib_transposed[B->cursor[B->local_block[e]]] = transposed[e];
-    B->contrib[B->cursor[B->local_block[e]]++] = e;
-  }
-  free(transposed);
   B->block_row = fascia_calloc(B->blocks, sizeof(int32_t));
-  FASCIA_CHECK(B->block_row, ctx, FASCIA_ERR_MEMORY, "assembly: out of memory for %lld blocks", (long long)B->blocks);
+  if (!B->block_row) {
+    free(transposed);
+    return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "assembly: out of memory for %lld blocks", (long long)B->blocks);
+  }
   for (int32_t i = 0; i < B->rows; ++i)
     for (int32_t b = B->row_offsets[i]; b < B->row_offsets[i + 1]; ++b) {
       B->mirror[b] = B->cols[b] < i ? find_block(B, B->cols[b], i) : -1;
       B->block_row[b] = i;
     }
-  return plan_chunks(ctx, m, B);
-  return FASCIA_OK;
+  const fascia_status status = plan_chunks(ctx, m, transposed, B);
+  free(transposed);
+  return status;
 }
 
 // Appends frame to row i's list unless the row has it (row_of: the row
@@ -202,10 +224,9 @@ void fascia_bsr_destroy(fascia_bsr *bsr) {
   free(bsr->slot_sums);
   free(bsr->local_offsets);
   free(bsr->local_block);
-  free(bsr->contrib_offsets);
-  free(bsr->contrib);
-  free(bsr->contrib_transposed);
-  free(bsr->cursor);
+  free(bsr->chunk_entry_offsets);
+  free(bsr->chunk_entries);
+  free(bsr->chunk_entry_transposed);
   free(bsr->mirror);
   free(bsr->block_row);
   free(bsr->chunk_samples);
@@ -445,22 +466,20 @@ static int sample_moves(const fascia_model *m, const unsigned char *moves, int32
   return 0;
 }
 
-// Adds to BSR block b its local blocks among those of the chunk [e0, e1)
-// (B->chunk), from its cursor on, in ascending order. Its sums are wide
-// (AVX2: the static 20x3x3 hex cantilever 464 -> 445 million instructions,
-// its block sums 29 -> 10), the same bits as the baseline build's.
-WIDE_CLONES static void add_contributions(fascia_bsr *B, int32_t b, int64_t e0, int64_t e1) {
-  fascia_real *FASCIA_RESTRICT dst = B->values + 36 * (int64_t)b;
-  int64_t c = B->cursor[b];
-  for (; c < B->contrib_offsets[b + 1] && B->contrib[c] < e1; ++c) {
-    const fascia_real *FASCIA_RESTRICT src = B->chunk + 36 * (B->contrib[c] - e0);
-    if (B->contrib_transposed[c])
+// Adds to BSR block chunk_blocks[t] its entries, local blocks of the
+// chunk in B->chunk, in ascending order. Its sums are wide (AVX2: the
+// static 20x3x3 hex cantilever 464 -> 445 million instructions, its block
+// sums 29 -> 10), the same bits as the baseline build's.
+WIDE_CLONES static void add_contributions(fascia_bsr *B, int64_t t) {
+  fascia_real *FASCIA_RESTRICT dst = B->values + 36 * (int64_t)B->chunk_blocks[t];
+  for (int64_t c = B->chunk_entry_offsets[t]; c < B->chunk_entry_offsets[t + 1]; ++c) {
+    const fascia_real *FASCIA_RESTRICT src = B->chunk + 36 * (int64_t)B->chunk_entries[c];
+    if (B->chunk_entry_transposed[c])
       for (int r = 0; r < 6; ++r)
         for (int q = 0; q < 6; ++q) dst[6 * r + q] += src[6 * q + r];
     else
       for (int q = 0; q < 36; ++q) dst[q] += src[q];
   }
-  B->cursor[b] = c;
 }
 
 int fascia_system_hessian_assemble(fascia_system *sys, const unsigned char *moves, fascia_bsr *B) {
@@ -470,14 +489,13 @@ int fascia_system_hessian_assemble(fascia_system *sys, const unsigned char *move
   const int shares = md && fascia_modes_shares_ready(sys, md);
   if (!sys->smoothing_offsets && !smoothing_graph(sys)) return 0;
   memset(B->values, 0, 36 * (size_t)B->blocks * sizeof(fascia_real));
-  memcpy(B->cursor, B->contrib_offsets, (size_t)B->blocks * sizeof(int64_t));
 #pragma omp parallel num_threads(sys->threads) reduction(| : out_of_memory)
   {
     fascia_real *dq = calloc(78 * (size_t)sys->max_neighbours, sizeof(fascia_real));
     out_of_memory = !dq;
     for (int32_t k = 0; k < B->chunk_count; ++k) {
       const int32_t s0 = B->chunk_samples[k], s1 = B->chunk_samples[k + 1];
-      const int64_t e0 = B->local_offsets[s0], e1 = B->local_offsets[s1];
+      const int64_t e0 = B->local_offsets[s0];
       // a sample with modes leaves its shares even where no frame of it moves
 #pragma omp for schedule(static)
       for (int32_t s = s0; s < s1; ++s) {
@@ -492,7 +510,7 @@ int fascia_system_hessian_assemble(fascia_system *sys, const unsigned char *move
       for (int64_t t = B->chunk_block_offsets[k]; t < B->chunk_block_offsets[k + 1]; ++t) {
         const int32_t b = B->chunk_blocks[t];
         if (!fascia_frame_moving(moves, B->block_row[b]) || !fascia_frame_moving(moves, B->cols[b])) continue;
-        add_contributions(B, b, e0, e1);
+        add_contributions(B, t);
       }
     }
     free(dq);

@@ -38,18 +38,19 @@ typedef struct fascia_bsr {
   // local_offsets[s] + fascia_pt_upper_block(n, a, b) (sample order), are
   // summed into their upper BSR block (i <= j) in ascending e, so the sums
   // do not depend on the thread count; the lower blocks are their mirror.
+  // A chunk's local blocks are listed by the BSR block they add to, in
+  // the order they are added: read in sequence, not looked up per block.
   int64_t *local_offsets;            ///< [S+1]
   int32_t *local_block;              ///< [E] BSR block of local block e
-  int64_t *contrib_offsets;          ///< [blocks+1]
-  int64_t *contrib;                  ///< [E] local blocks of each BSR block, ascending
-  unsigned char *contrib_transposed; ///< [E] whether contrib[c] adds transposed (its frames in falling order)
   int32_t *mirror;                   ///< [blocks] the upper block a lower block is the transpose of, -1: upper
   int32_t *block_row;                ///< [blocks] the row of each block
   int32_t chunk_count;               ///< passes: chunks of whole samples whose local blocks fit the scratch
   int32_t *chunk_samples;            ///< [chunk_count+1] first sample of each chunk
   int64_t *chunk_block_offsets;      ///< [chunk_count+1]
-  int32_t *chunk_blocks;             ///< the upper BSR blocks each chunk adds to, ascending
-  int64_t *cursor;                   ///< [blocks] scratch
+  int32_t *chunk_blocks;             ///< [T] the upper BSR blocks each chunk adds to, ascending
+  int64_t *chunk_entry_offsets;      ///< [T+1] the entries of chunk_blocks[t]
+  int32_t *chunk_entries;            ///< [E] local blocks of each, ascending e, counted from the chunk's first
+  unsigned char *chunk_entry_transposed; ///< [E] whether an entry adds transposed (its frames in falling order)
   fascia_real *chunk;                ///< [36 chunk_capacity] local blocks of one chunk of samples
   int64_t chunk_capacity;            ///< FASCIA_ASSEMBLY_CHUNK, or the largest sample's n (n + 1) / 2
 } fascia_bsr;
