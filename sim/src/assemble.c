@@ -14,6 +14,12 @@
 
 static int32_t find_block(const fascia_bsr *B, int32_t i, int32_t j);
 
+// position[b]: where BSR block b is among chunk k's blocks (for b in them).
+static void number_chunk_blocks(const fascia_bsr *B, int32_t k, int32_t *position) {
+  for (int64_t t = B->chunk_block_offsets[k]; t < B->chunk_block_offsets[k + 1]; ++t)
+    position[B->chunk_blocks[t]] = (int32_t)(t - B->chunk_block_offsets[k]);
+}
+
 // The chunks of whole samples whose local blocks fit the scratch, the BSR
 // blocks each chunk adds to (ascending), and each one's entries: the chunk's
 // local blocks it adds, in ascending e (transposed[e]: added transposed).
@@ -65,19 +71,17 @@ static fascia_status plan_chunks(fascia_ctx *ctx, const fascia_model *m, const u
     return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "assembly: out of memory for the plan of %lld local blocks",
                        (long long)E);
   }
-  // seen[b]: where block b is among the chunk's blocks, while the chunk is planned
+  // seen, no longer needed as marks, holds the blocks' positions in the chunk being planned
   for (int32_t k = 0; k < chunks; ++k) {
     const int64_t e0 = B->local_offsets[B->chunk_samples[k]], e1 = B->local_offsets[B->chunk_samples[k + 1]];
-    for (int64_t t = B->chunk_block_offsets[k]; t < B->chunk_block_offsets[k + 1]; ++t)
-      seen[B->chunk_blocks[t]] = (int32_t)(t - B->chunk_block_offsets[k]);
+    number_chunk_blocks(B, k, seen);
     for (int64_t e = e0; e < e1; ++e) ++B->chunk_entry_offsets[B->chunk_block_offsets[k] + seen[B->local_block[e]] + 1];
   }
   for (int64_t t = 0; t < T; ++t) B->chunk_entry_offsets[t + 1] += B->chunk_entry_offsets[t];
   memcpy(fill, B->chunk_entry_offsets, (size_t)T * sizeof(int64_t));
   for (int32_t k = 0; k < chunks; ++k) { // ascending e, so each block's entries ascend
     const int64_t e0 = B->local_offsets[B->chunk_samples[k]], e1 = B->local_offsets[B->chunk_samples[k + 1]];
-    for (int64_t t = B->chunk_block_offsets[k]; t < B->chunk_block_offsets[k + 1]; ++t)
-      seen[B->chunk_blocks[t]] = (int32_t)(t - B->chunk_block_offsets[k]);
+    number_chunk_blocks(B, k, seen);
     for (int64_t e = e0; e < e1; ++e) {
       const int64_t c = fill[B->chunk_block_offsets[k] + seen[B->local_block[e]]]++;
       B->chunk_entries[c] = (int32_t)(e - e0);
@@ -215,13 +219,7 @@ fascia_status fascia_bsr_create(fascia_ctx *ctx, const fascia_model *m, fascia_b
 }
 
 void fascia_bsr_destroy(fascia_bsr *bsr) {
-  free(bsr->values_single);
-  free(bsr->single_offsets);
-  free(bsr->single_slot);
-  free(bsr->task_slots);
-  free(bsr->row_slot_offsets);
-  free(bsr->row_slots);
-  free(bsr->slot_sums);
+  fascia_bsr_single_release(bsr);
   free(bsr->local_offsets);
   free(bsr->local_block);
   free(bsr->chunk_entry_offsets);

@@ -79,6 +79,8 @@ FASCIA_INTERN void fascia_bsr_apply(const fascia_bsr *bsr, int threads, const un
 /// Rounds the upper blocks of the values to the float copy (allocated on
 /// first use); FASCIA_ERR_MEMORY if it cannot be.
 FASCIA_INTERN fascia_status fascia_bsr_make_single(fascia_ctx *ctx, fascia_bsr *bsr, int threads);
+/// Frees the float copy and its plan (fascia_bsr_destroy does too).
+FASCIA_INTERN void fascia_bsr_single_release(fascia_bsr *bsr);
 /// out = B v with the float copy (products summed in double; each upper
 /// block applied as itself and as its transpose); moves as above.
 FASCIA_INTERN void fascia_bsr_apply_single(const fascia_bsr *bsr, int threads, const unsigned char *moves,

@@ -145,18 +145,20 @@ static fascia_status plan_single(fascia_ctx *ctx, fascia_bsr *B) {
   free(last_task);
   free(slot_of);
   if (fine) return FASCIA_OK;
-  free(B->values_single);
-  B->values_single = NULL; // planned again on the next call
+  fascia_bsr_single_release(B); // planned again on the next call
   return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "assembly: out of memory for a float copy of %lld blocks",
                      (long long)B->blocks);
 }
 
+void fascia_bsr_single_release(fascia_bsr *B) {
+  free(B->values_single), free(B->single_offsets), free(B->single_slot), free(B->task_slots);
+  free(B->row_slot_offsets), free(B->row_slots), free(B->slot_sums);
+  B->values_single = NULL, B->single_offsets = NULL, B->single_slot = NULL, B->task_slots = NULL;
+  B->row_slot_offsets = NULL, B->row_slots = NULL, B->slot_sums = NULL;
+}
+
 fascia_status fascia_bsr_make_single(fascia_ctx *ctx, fascia_bsr *B, int threads) {
   if (!B->values_single) {
-    free(B->single_offsets), free(B->single_slot), free(B->task_slots), free(B->row_slot_offsets);
-    free(B->row_slots), free(B->slot_sums);
-    B->single_offsets = NULL, B->single_slot = NULL, B->task_slots = NULL, B->row_slot_offsets = NULL;
-    B->row_slots = NULL, B->slot_sums = NULL;
     const fascia_status status = plan_single(ctx, B);
     if (status != FASCIA_OK) return status;
   }
