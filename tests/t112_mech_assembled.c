@@ -6,7 +6,8 @@
 // and without the rotation coupling and smoothing and volumetric patches
 // (whose rank-one terms widen the pattern) and their enhanced strain modes
 // (condensed, rank 9 per patch), at random states; and
-// the assembly gives bit-identical values for 1 and 2 threads; its float
+// the assembly gives bit-identical values for 1 and 2 threads (and teams of
+// 1 to 5 on a model of several chunks); its float
 // copy multiplies like it to float rounding. Assembled for some frames only
 // (the frames a step moves), a block of two such frames is bit-identical to
 // the full assembly's and every other block is zero, tangent and mass, and
@@ -173,6 +174,51 @@ static int run_case(fascia_ctx *ctx, unsigned long long seed, int law, double co
   return 0;
 }
 
+// Teams of any size, each thread adding the blocks it wrote most of
+// (fascia_bsr's add lists), give the one-thread assembly's bits, over
+// several chunks and with held frames; the lists are planned again as the
+// team changes, on the same matrix.
+static int check_teams(fascia_ctx *ctx, unsigned long long seed) {
+  fascia_model *m = random_model(ctx, seed, 48, 700, FASCIA_LAW_NEOHOOKEAN, 0.5, 0.3);
+  CHECK(m != NULL);
+  if (!m) return 1;
+  random_model_patches(m);
+  const int N = m->frame_count;
+  double *x = malloc(3 * N * sizeof(double)), *q = malloc(4 * N * sizeof(double));
+  unsigned char *moves = calloc(N, 1);
+  unsigned long long st = seed * 17 + 3;
+  for (int i = 0; i < N; ++i) {
+    for (int c = 0; c < 3; ++c) x[3 * i + c] = m->frame_position[3 * i + c] + rnd_uniform(&st, -0.1, 0.1);
+    double r[4];
+    rnd_rotation(&st, 1.0, r);
+    fascia_pt_quat_mul(r, m->frame_rotation + 4 * i, q + 4 * i);
+    moves[i] = i % 4 != 2;
+  }
+  fascia_bsr K, K1;
+  CHECK_OK(fascia_bsr_create(ctx, m, &K), ctx);
+  CHECK_OK(fascia_bsr_create(ctx, m, &K1), ctx);
+  CHECK(K.chunk_count > 1); // the test covers several chunks
+  const size_t bytes = 36 * (size_t)K.blocks * sizeof(double);
+  for (int held = 0; held < 2; ++held) {
+    const int teams[] = {1, 2, 3, 5, 2};
+    for (int t = 0; t < 5; ++t) {
+      fascia_system *sys = NULL;
+      CHECK_OK(fascia_system_create(ctx, m, teams[t], &sys), ctx);
+      if (!sys) break;
+      fascia_system_set_state(sys, x, q);
+      CHECK_OK(fascia_system_evaluate(sys, NULL, NULL), ctx);
+      CHECK(fascia_system_hessian_assemble(sys, held ? moves : NULL, t == 0 ? &K1 : &K));
+      if (t > 0) CHECK(memcmp(K.values, K1.values, bytes) == 0);
+      fascia_system_destroy(&sys);
+    }
+  }
+  fascia_bsr_destroy(&K);
+  fascia_bsr_destroy(&K1);
+  free(x), free(q), free(moves);
+  fascia_model_destroy(&m);
+  return 0;
+}
+
 int main(void) {
   fascia_ctx_def def = fascia_ctx_def_default();
   fascia_ctx *ctx = NULL;
@@ -189,6 +235,7 @@ int main(void) {
     failed |= run_case(ctx, seed, FASCIA_LAW_NEOHOOKEAN, 0.5, 0.3, 2);
     failed |= run_case(ctx, seed, FASCIA_LAW_STVK, 0, 0, 3);
     failed |= run_case(ctx, seed, FASCIA_LAW_NEOHOOKEAN, 0.5, 0.3, 3);
+    failed |= check_teams(ctx, seed);
   }
   fascia_ctx_destroy(&ctx);
   return failed | CHECK_RESULT();

@@ -6,6 +6,9 @@
 // frame i: so every row is built from the frame's own reverse table.
 #include <stdlib.h>
 #include <string.h>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 #include "assemble.h"
 #include "dilatation.h"
@@ -230,6 +233,8 @@ void fascia_bsr_destroy(fascia_bsr *bsr) {
   free(bsr->chunk_samples);
   free(bsr->chunk_block_offsets);
   free(bsr->chunk_blocks);
+  free(bsr->add_offsets);
+  free(bsr->add_blocks);
   free(bsr->chunk);
   free(bsr->row_offsets);
   free(bsr->cols);
@@ -464,6 +469,61 @@ static int sample_moves(const fascia_model *m, const unsigned char *moves, int32
   return 0;
 }
 
+// The u-th of T near-equal runs [*first, *end) of the count items from begin.
+static void team_share(int64_t begin, int64_t count, int u, int T, int64_t *first, int64_t *end) {
+  const int64_t q = count / T, r = count % T;
+  *first = begin + u * q + (u < r ? u : r);
+  *end = *first + q + (u < r);
+}
+
+// B->add_offsets and add_blocks for a team of T (fascia_bsr in assemble.h):
+// each block goes to the thread whose samples gave most of its entries
+// (the first such thread on a tie). 0: out of memory.
+static int plan_adds(fascia_bsr *B, int T) {
+  free(B->add_offsets), free(B->add_blocks);
+  B->adds_team = 0;
+  const int64_t total = B->chunk_block_offsets[B->chunk_count];
+  B->add_offsets = malloc(((size_t)B->chunk_count * (size_t)T + 1) * sizeof(int64_t));
+  B->add_blocks = malloc((size_t)(total > 0 ? total : 1) * sizeof(int32_t));
+  int32_t *owner = malloc((size_t)(total > 0 ? total : 1) * sizeof(int32_t));
+  int64_t *votes = malloc((size_t)T * sizeof(int64_t)), *run_end = malloc((size_t)T * sizeof(int64_t));
+  if (!B->add_offsets || !B->add_blocks || !owner || !votes || !run_end) {
+    free(owner), free(votes), free(run_end);
+    return 0;
+  }
+  int64_t count = 0;
+  B->add_offsets[0] = 0;
+  for (int32_t k = 0; k < B->chunk_count; ++k) {
+    const int32_t s0 = B->chunk_samples[k], s1 = B->chunk_samples[k + 1];
+    const int64_t e0 = B->local_offsets[s0], t0 = B->chunk_block_offsets[k], t1 = B->chunk_block_offsets[k + 1];
+    for (int u = 0; u < T; ++u) { // where each thread's samples' local blocks end
+      int64_t first, end;
+      team_share(s0, s1 - s0, u, T, &first, &end);
+      run_end[u] = B->local_offsets[end] - e0;
+    }
+    for (int64_t t = t0; t < t1; ++t) {
+      for (int u = 0; u < T; ++u) votes[u] = 0;
+      for (int64_t c = B->chunk_entry_offsets[t]; c < B->chunk_entry_offsets[t + 1]; ++c) {
+        int u = 0;
+        while (B->chunk_entries[c] >= run_end[u]) ++u;
+        ++votes[u];
+      }
+      int best = 0;
+      for (int u = 1; u < T; ++u)
+        if (votes[u] > votes[best]) best = u;
+      owner[t] = best;
+    }
+    for (int u = 0; u < T; ++u) {
+      for (int64_t t = t0; t < t1; ++t)
+        if (owner[t] == u) B->add_blocks[count++] = (int32_t)(t - t0);
+      B->add_offsets[(int64_t)k * T + u + 1] = count;
+    }
+  }
+  free(owner), free(votes), free(run_end);
+  B->adds_team = T;
+  return 1;
+}
+
 // Adds to BSR block chunk_blocks[t] its entries, local blocks of the
 // chunk in B->chunk, in ascending order. Its sums are wide (AVX2: the
 // static 20x3x3 hex cantilever 464 -> 445 million instructions, its block
@@ -489,27 +549,39 @@ int fascia_system_hessian_assemble(fascia_system *sys, const unsigned char *move
   memset(B->values, 0, 36 * (size_t)B->blocks * sizeof(fascia_real));
 #pragma omp parallel num_threads(sys->threads) reduction(| : out_of_memory)
   {
+#ifdef _OPENMP
+    const int T = omp_get_num_threads(), u = omp_get_thread_num(); // the team may be smaller than asked
+#else
+    const int T = 1, u = 0;
+#endif
     fascia_real *dq = calloc(78 * (size_t)sys->max_neighbours, sizeof(fascia_real));
     out_of_memory = !dq;
-    for (int32_t k = 0; k < B->chunk_count; ++k) {
+#pragma omp single
+    if (B->adds_team != T && !plan_adds(B, T)) out_of_memory = 1;
+    const int planned = B->adds_team == T; // read by all after the single's barrier
+    for (int32_t k = 0; planned && k < B->chunk_count; ++k) {
       const int32_t s0 = B->chunk_samples[k], s1 = B->chunk_samples[k + 1];
-      const int64_t e0 = B->local_offsets[s0];
+      const int64_t e0 = B->local_offsets[s0], t0 = B->chunk_block_offsets[k];
+      int64_t first, end;
+      team_share(s0, s1 - s0, u, T, &first, &end);
       // a sample with modes leaves its shares even where no frame of it moves
-#pragma omp for schedule(static)
-      for (int32_t s = s0; s < s1; ++s) {
+      for (int32_t s = (int32_t)first; s < end; ++s) {
         const int32_t p = shares ? fascia_modes_sample_patch(sys, md, s) : -1;
         if (dq && (p >= 0 || sample_moves(sys->model, moves, s)))
           local_stiffness(sys, &st, moves, s, p, B->chunk + 36 * (B->local_offsets[s] - e0), dq,
                           dq + 6 * sys->max_neighbours, dq + 12 * sys->max_neighbours);
       }
-      // the chunk's upper blocks (the lower ones are mirrored at the end); a
-      // block of two moving frames has contributions from moving samples only
-#pragma omp for schedule(static)
-      for (int64_t t = B->chunk_block_offsets[k]; t < B->chunk_block_offsets[k + 1]; ++t) {
+#pragma omp barrier
+      // the chunk's upper blocks this thread adds (the lower ones are
+      // mirrored at the end); a block of two moving frames has
+      // contributions from moving samples only
+      for (int64_t i = B->add_offsets[(int64_t)k * T + u]; i < B->add_offsets[(int64_t)k * T + u + 1]; ++i) {
+        const int64_t t = t0 + B->add_blocks[i];
         const int32_t b = B->chunk_blocks[t];
         if (!fascia_frame_moving(moves, B->block_row[b]) || !fascia_frame_moving(moves, B->cols[b])) continue;
         add_contributions(B, t);
       }
+#pragma omp barrier
     }
     free(dq);
   }
