@@ -476,9 +476,23 @@ static void team_share(int64_t begin, int64_t count, int u, int T, int64_t *firs
   *end = *first + q + (u < r);
 }
 
+// Which of the T runs of chunk k's samples gave each of block t's entries
+// (votes[u]: how many from run u; run_end: where each run's local blocks end).
+static void count_votes(const fascia_bsr *B, int64_t t, int T, const int64_t *run_end, int64_t *votes) {
+  for (int u = 0; u < T; ++u) votes[u] = 0;
+  for (int64_t c = B->chunk_entry_offsets[t]; c < B->chunk_entry_offsets[t + 1]; ++c) {
+    int u = 0;
+    while (B->chunk_entries[c] >= run_end[u]) ++u;
+    ++votes[u];
+  }
+}
+
 // B->add_offsets and add_blocks for a team of T (fascia_bsr in assemble.h):
-// each block goes to the thread whose samples gave most of its entries
-// (the first such thread on a tie). 0: out of memory.
+// each block goes to the thread whose samples gave most of its entries,
+// while that thread adds no more than its share of the chunk's entries (a
+// 32nd over an even share); the others, in a second pass, to the thread
+// with most of their entries that has room, or the one with the least.
+// 0: out of memory.
 static int plan_adds(fascia_bsr *B, int T) {
   free(B->add_offsets), free(B->add_blocks);
   B->adds_team = 0;
@@ -486,9 +500,9 @@ static int plan_adds(fascia_bsr *B, int T) {
   B->add_offsets = malloc(((size_t)B->chunk_count * (size_t)T + 1) * sizeof(int64_t));
   B->add_blocks = malloc((size_t)(total > 0 ? total : 1) * sizeof(int32_t));
   int32_t *owner = malloc((size_t)(total > 0 ? total : 1) * sizeof(int32_t));
-  int64_t *votes = malloc((size_t)T * sizeof(int64_t)), *run_end = malloc((size_t)T * sizeof(int64_t));
-  if (!B->add_offsets || !B->add_blocks || !owner || !votes || !run_end) {
-    free(owner), free(votes), free(run_end);
+  int64_t *votes = malloc(3 * (size_t)T * sizeof(int64_t)), *run_end = votes + T, *load = votes + 2 * T;
+  if (!B->add_offsets || !B->add_blocks || !owner || !votes) {
+    free(owner), free(votes);
     return 0;
   }
   int64_t count = 0;
@@ -496,30 +510,44 @@ static int plan_adds(fascia_bsr *B, int T) {
   for (int32_t k = 0; k < B->chunk_count; ++k) {
     const int32_t s0 = B->chunk_samples[k], s1 = B->chunk_samples[k + 1];
     const int64_t e0 = B->local_offsets[s0], t0 = B->chunk_block_offsets[k], t1 = B->chunk_block_offsets[k + 1];
+    const int64_t entries = B->chunk_entry_offsets[t1] - B->chunk_entry_offsets[t0];
+    const int64_t cap = (entries + T - 1) / T + entries / 32;
     for (int u = 0; u < T; ++u) { // where each thread's samples' local blocks end
       int64_t first, end;
       team_share(s0, s1 - s0, u, T, &first, &end);
       run_end[u] = B->local_offsets[end] - e0;
+      load[u] = 0;
     }
-    for (int64_t t = t0; t < t1; ++t) {
-      for (int u = 0; u < T; ++u) votes[u] = 0;
-      for (int64_t c = B->chunk_entry_offsets[t]; c < B->chunk_entry_offsets[t + 1]; ++c) {
-        int u = 0;
-        while (B->chunk_entries[c] >= run_end[u]) ++u;
-        ++votes[u];
+    for (int pass = 0; pass < 2; ++pass)
+      for (int64_t t = t0; t < t1; ++t) {
+        if (pass == 1 && owner[t] >= 0) continue;
+        const int64_t size = B->chunk_entry_offsets[t + 1] - B->chunk_entry_offsets[t];
+        count_votes(B, t, T, run_end, votes);
+        int best = -1;
+        if (pass == 0) { // the majority's thread, if it has room
+          int major = 0;
+          for (int u = 1; u < T; ++u)
+            if (votes[u] > votes[major]) major = u;
+          if (load[major] + size <= cap) best = major;
+        } else { // the thread with room that gave the most, else the least loaded
+          for (int u = 0; u < T; ++u)
+            if (load[u] + size <= cap && (best < 0 || votes[u] > votes[best])) best = u;
+          if (best < 0) {
+            best = 0;
+            for (int u = 1; u < T; ++u)
+              if (load[u] < load[best]) best = u;
+          }
+        }
+        owner[t] = best;
+        if (best >= 0) load[best] += size;
       }
-      int best = 0;
-      for (int u = 1; u < T; ++u)
-        if (votes[u] > votes[best]) best = u;
-      owner[t] = best;
-    }
     for (int u = 0; u < T; ++u) {
       for (int64_t t = t0; t < t1; ++t)
         if (owner[t] == u) B->add_blocks[count++] = (int32_t)(t - t0);
       B->add_offsets[(int64_t)k * T + u + 1] = count;
     }
   }
-  free(owner), free(votes), free(run_end);
+  free(owner), free(votes);
   B->adds_team = T;
   return 1;
 }
