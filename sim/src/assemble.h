@@ -56,11 +56,12 @@ typedef struct fascia_bsr {
   // Who adds what, for a team of adds_team threads: thread u of a team
   // of T computes the u-th of T near-equal runs of each chunk's samples
   // (team_share in assemble.c), then adds the chunk's blocks whose entries it
-  // wrote the most of, so that few of the entries it reads were written by
-  // another core (a cache line that changes cores costs far more than its
-  // arithmetic: on t3-s34610, 60 % of the entries crossed with both loops
-  // split in order, and 2 threads computed the local blocks slower than one).
-  // Who adds a block does not change its sum: it adds in ascending e.
+  // wrote the most of, up to its share of the chunk's entries (plan_adds),
+  // so that few of the entries it reads were written by another core (a
+  // cache line that changes cores costs far more than its arithmetic: on
+  // t3-s34610, 60 % of the entries crossed with both loops split in order,
+  // and 2 threads computed the local blocks slower than one). Who adds a
+  // block does not change its sum: it adds in ascending e.
   int32_t adds_team;                 ///< the team the lists are for, 0: none yet
   int64_t *add_offsets;              ///< [chunk_count adds_team + 1] each chunk's, then thread's, list
   int32_t *add_blocks;               ///< [T] positions t - chunk_block_offsets[k] in chunk k's blocks
