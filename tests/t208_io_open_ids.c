@@ -3,9 +3,13 @@
 // Readers close every HDF5 id on every path: a model file and a checkpoint
 // damaged byte by byte (every K-th byte replaced, and the file cut short at
 // many lengths) are loaded, and after each attempt, refused or not, no HDF5
-// object may be left open and a refusal must name the file.
+// object may be left open and a refusal must name the file. A version 0
+// superblock whose driver information block claims 4 GB (a fuzzer's
+// 50-byte file, also behind a 512-byte user block) is refused as damaged
+// before HDF5 reads it: the process never grows past 1 GB.
 #define _POSIX_C_SOURCE 200809L
 #include <hdf5.h>
+#include <sys/resource.h>
 
 #include "check.h"
 #include "io_fixture.h"
@@ -88,6 +92,27 @@ static void damage(fascia_ctx *ctx, const char *good, const char *name, long str
   free(bytes);
 }
 
+// The fuzzed superblock (tests/fuzz's model_raw harness found it): version
+// 0, the driver information block at byte 16 with a size of 0xff000400.
+static const unsigned char driver_block_superblock[50] = {
+    0x89, 0x48, 0x44, 0x46, 0x0d, 0x0a, 0x1a, 0x0a, 0x00, 0x00, 0x00, 0x00, 0x00, 0x08, 0x08, 0x08, 0x00,
+    0x08, 0x08, 0x08, 0x00, 0x04, 0x00, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff,
+    0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0xff, 0x10, 0x00};
+
+static void driver_block_refused(fascia_ctx *ctx, long user_block) {
+  unsigned char bytes[512 + sizeof driver_block_superblock] = {0};
+  memcpy(bytes + user_block, driver_block_superblock, sizeof driver_block_superblock);
+  char path[512];
+  snprintf(path, sizeof path, "%s/driver-block.h5", dir);
+  CHECK(write_file(path, bytes, user_block + (long)sizeof driver_block_superblock) == 0);
+  fascia_ctx_clear(ctx);
+  CHECK(load_model(ctx, path, NULL) == FASCIA_ERR_IO);
+  CHECK(strstr(fascia_ctx_message(ctx), path) && strstr(fascia_ctx_message(ctx), "driver information block"));
+  struct rusage usage;
+  CHECK(getrusage(RUSAGE_SELF, &usage) == 0 && usage.ru_maxrss < 1024 * 1024); // kB
+  CHECK(open_ids() == 0);
+}
+
 int main(void) {
   fascia_ctx_def def = fascia_ctx_def_default();
   def.threads = 1;
@@ -110,6 +135,8 @@ int main(void) {
   CHECK_OK(fascia_checkpoint_save(ctx, solver, 1, checkpoint_path), ctx);
   CHECK(open_ids() == 0);
 
+  driver_block_refused(ctx, 0);
+  driver_block_refused(ctx, 512);
   damage(ctx, model_path, "model.h5", 23, load_model, NULL);
   CHECK(refusals > 100);
   refusals = 0;

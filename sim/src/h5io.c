@@ -266,6 +266,68 @@ int fascia_h5_number_type_ok(hid_t type) {
          mantissa_bits > 0 && mantissa_at + mantissa_bits <= bits && H5Tget_ebias(type) < ((size_t)1 << exponent_bits);
 }
 
+// Bytes [at, at + count) of f into out, those past the end of the file as
+// zeros (as HDF5 reads them).
+static void read_zero_filled(FILE *f, long long at, unsigned char *out, size_t count) {
+  memset(out, 0, count);
+  if (at >= 0 && fseeko(f, (off_t)at, SEEK_SET) == 0 && fread(out, 1, count, f) == 0) clearerr(f);
+}
+
+// A little-endian address or length of `size` bytes (2 to 8; larger ones
+// count their low 8 bytes unless a higher byte is set: then all ones).
+static unsigned long long little_endian(const unsigned char *p, int size) {
+  unsigned long long v = 0;
+  for (int k = size - 1; k >= 0; --k) {
+    if (k >= 8) {
+      if (p[k]) return ~0ULL;
+      continue;
+    }
+    v = v << 8 | p[k];
+  }
+  return v;
+}
+
+// HDF5 1.10 reads a version 0 or 1 superblock's driver information block,
+// allocating and reading (zeros past the end) as many bytes as the block
+// says, before it compares the superblock's end-of-file address with the
+// file's length: a damaged size field made it fill 4 GB (a fuzzed 50-byte
+// file; tests/t208). 1 where that block, if any, fits in the file; else 0
+// and why in detail. Later reads stop at the checked end of the file.
+static int driver_block_fits(const char *path, char *detail, size_t detail_size) {
+  FILE *f = fopen(path, "rb");
+  if (!f) return 1; // H5Fopen reports it
+  struct stat st;
+  const long long length = fstat(fileno(f), &st) == 0 ? (long long)st.st_size : 0;
+  static const unsigned char signature[8] = {0x89, 'H', 'D', 'F', '\r', '\n', 0x1a, '\n'};
+  int fits = 1;
+  // the superblock is at 0, 512, 1024, 2048, ... (after a user block)
+  for (long long at = 0; fits && at + 8 <= length; at = at ? 2 * at : 512) {
+    unsigned char sb[128];
+    read_zero_filled(f, at, sb, sizeof sb);
+    if (memcmp(sb, signature, 8) != 0) continue;
+    const int version = sb[8], O = sb[13];
+    if (version <= 1 && O >= 2 && O <= 16) {
+      const unsigned char *addresses = sb + (version == 0 ? 24 : 28); // base, free space, end of file, driver block
+      const unsigned long long driver = little_endian(addresses + 3 * O, O);
+      if (driver != ~0ULL && driver < (unsigned long long)length) {
+        unsigned char header[16]; // version, 3 reserved, size (4), driver's name (8)
+        read_zero_filled(f, at + (long long)driver, header, sizeof header);
+        const unsigned long long size = little_endian(header + 4, 4);
+        if (at + (long long)driver + 16 + (long long)size > length) {
+          snprintf(detail, detail_size,
+                   "its superblock's driver information block says %llu bytes at byte %lld, past the end of "
+                   "the file at %lld bytes",
+                   size, at + (long long)driver + 16, length);
+          fits = 0;
+        }
+      }
+    }
+    break; // HDF5 takes the first signature
+  }
+  fclose(f);
+  return fits;
+}
+
 fascia_status fascia_h5_open_read(fascia_ctx *ctx, const char *what, const char *path, const char *remedy,
                                   hid_t *file) {
   *file = H5I_INVALID_HID;
@@ -279,6 +341,8 @@ fascia_status fascia_h5_open_read(fascia_ctx *ctx, const char *what, const char 
   const htri_t is_hdf5 = H5Fis_hdf5(path);
   FASCIA_CHECK(is_hdf5 > 0, ctx, FASCIA_ERR_IO, "%s '%s': not an HDF5 file (%s); %s", what, path,
                is_hdf5 < 0 ? fascia_h5_error(detail, sizeof detail) : "no HDF5 signature", remedy);
+  FASCIA_CHECK(driver_block_fits(path, detail, sizeof detail), ctx, FASCIA_ERR_IO,
+               "%s '%s': cannot open as HDF5 (%s); the file is damaged or truncated", what, path, detail);
   fascia_h5_scope scope = FASCIA_H5_SCOPE_INIT;
   const hid_t fapl = fascia_h5_keep(&scope, H5Pcreate(H5P_FILE_ACCESS));
   if (fapl >= 0) H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG);
