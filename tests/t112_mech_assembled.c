@@ -65,6 +65,17 @@ static int check_mode_shares(fascia_ctx *ctx, fascia_model *m, const double *x, 
   return 0;
 }
 
+// A random state near the model's rest: every frame moved by up to 0.1 m
+// along each axis and turned by up to 1 rad.
+static void random_state(const fascia_model *m, unsigned long long *st, double *x, double *q) {
+  for (int i = 0; i < m->frame_count; ++i) {
+    for (int c = 0; c < 3; ++c) x[3 * i + c] = m->frame_position[3 * i + c] + rnd_uniform(st, -0.1, 0.1);
+    double r[4];
+    rnd_rotation(st, 1.0, r);
+    fascia_pt_quat_mul(r, m->frame_rotation + 4 * i, q + 4 * i);
+  }
+}
+
 static int run_case(fascia_ctx *ctx, unsigned long long seed, int law, double coupling, double smoothing,
                     int patches) {
   fascia_model *m = random_model(ctx, seed, 9, 14, law, coupling, smoothing);
@@ -82,12 +93,7 @@ static int run_case(fascia_ctx *ctx, unsigned long long seed, int law, double co
   double *x = malloc(3 * N * sizeof(double)), *q = malloc(4 * N * sizeof(double));
   double *v = malloc(n * sizeof(double)), *a = malloc(n * sizeof(double)), *b = malloc(n * sizeof(double));
   unsigned long long st = seed * 31 + 7;
-  for (int i = 0; i < N; ++i) {
-    for (int c = 0; c < 3; ++c) x[3 * i + c] = m->frame_position[3 * i + c] + rnd_uniform(&st, -0.1, 0.1);
-    double r[4];
-    rnd_rotation(&st, 1.0, r);
-    fascia_pt_quat_mul(r, m->frame_rotation + 4 * i, q + 4 * i);
-  }
+  random_state(m, &st, x, q);
   fascia_bsr K, K1;
   CHECK_OK(fascia_bsr_create(ctx, m, &K), ctx);
   CHECK_OK(fascia_bsr_create(ctx, m, &K1), ctx);
@@ -187,13 +193,8 @@ static int check_teams(fascia_ctx *ctx, unsigned long long seed) {
   double *x = malloc(3 * N * sizeof(double)), *q = malloc(4 * N * sizeof(double));
   unsigned char *moves = calloc(N, 1);
   unsigned long long st = seed * 17 + 3;
-  for (int i = 0; i < N; ++i) {
-    for (int c = 0; c < 3; ++c) x[3 * i + c] = m->frame_position[3 * i + c] + rnd_uniform(&st, -0.1, 0.1);
-    double r[4];
-    rnd_rotation(&st, 1.0, r);
-    fascia_pt_quat_mul(r, m->frame_rotation + 4 * i, q + 4 * i);
-    moves[i] = i % 4 != 2;
-  }
+  random_state(m, &st, x, q);
+  for (int i = 0; i < N; ++i) moves[i] = i % 4 != 2;
   fascia_bsr K, K1;
   CHECK_OK(fascia_bsr_create(ctx, m, &K), ctx);
   CHECK_OK(fascia_bsr_create(ctx, m, &K1), ctx);
