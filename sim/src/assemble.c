@@ -487,20 +487,22 @@ static void count_votes(const fascia_bsr *B, int64_t t, int T, const int64_t *ru
   }
 }
 
-// B->add_offsets and add_blocks for a team of T (fascia_bsr in assemble.h):
-// each block goes to the thread whose samples gave most of its entries,
-// while that thread adds no more than its share of the chunk's entries (a
-// 32nd over an even share); the others, in a second pass, to the thread
-// with most of their entries that has room, or the one with the least.
+// B->add_offsets and add_blocks for a team of T > 1 (fascia_bsr in
+// assemble.h; one thread adds every block, in order, from no lists, so a
+// team that changes between one and more threads keeps its lists): each
+// block goes to the thread whose samples gave most of its entries, while
+// that thread adds no more than its share of the chunk's entries (a 32nd
+// over an even share); the others, in a second pass, to the thread with
+// most of their entries that has room, or the one with the least.
 // 0: out of memory.
 static int plan_adds(fascia_bsr *B, int T) {
   free(B->add_offsets), free(B->add_blocks);
   B->adds_team = 0;
   const int64_t total = B->chunk_block_offsets[B->chunk_count];
-  B->add_offsets = malloc(((size_t)B->chunk_count * (size_t)T + 1) * sizeof(int64_t));
-  B->add_blocks = malloc((size_t)(total > 0 ? total : 1) * sizeof(int32_t));
-  int32_t *owner = malloc((size_t)(total > 0 ? total : 1) * sizeof(int32_t));
-  int64_t *votes = malloc(3 * (size_t)T * sizeof(int64_t)), *run_end = votes + T, *load = votes + 2 * T;
+  B->add_offsets = fascia_calloc((int64_t)B->chunk_count * T + 1, sizeof(int64_t));
+  B->add_blocks = fascia_calloc(total, sizeof(int32_t));
+  int32_t *owner = fascia_calloc(total, sizeof(int32_t));
+  int64_t *votes = fascia_calloc(3 * (int64_t)T, sizeof(int64_t)), *run_end = votes + T, *load = votes + 2 * T;
   if (!B->add_offsets || !B->add_blocks || !owner || !votes) {
     free(owner), free(votes);
     return 0;
@@ -585,8 +587,8 @@ int fascia_system_hessian_assemble(fascia_system *sys, const unsigned char *move
     fascia_real *dq = calloc(78 * (size_t)sys->max_neighbours, sizeof(fascia_real));
     out_of_memory = !dq;
 #pragma omp single
-    if (B->adds_team != T && !plan_adds(B, T)) out_of_memory = 1;
-    const int planned = B->adds_team == T; // read by all after the single's barrier
+    if (T > 1 && B->adds_team != T && !plan_adds(B, T)) out_of_memory = 1;
+    const int planned = T == 1 || B->adds_team == T; // read by all after the single's barrier
     for (int32_t k = 0; planned && k < B->chunk_count; ++k) {
       const int32_t s0 = B->chunk_samples[k], s1 = B->chunk_samples[k + 1];
       const int64_t e0 = B->local_offsets[s0], t0 = B->chunk_block_offsets[k];
@@ -603,8 +605,10 @@ int fascia_system_hessian_assemble(fascia_system *sys, const unsigned char *move
       // the chunk's upper blocks this thread adds (the lower ones are
       // mirrored at the end); a block of two moving frames has
       // contributions from moving samples only
-      for (int64_t i = B->add_offsets[(int64_t)k * T + u]; i < B->add_offsets[(int64_t)k * T + u + 1]; ++i) {
-        const int64_t t = t0 + B->add_blocks[i];
+      const int64_t i0 = T == 1 ? 0 : B->add_offsets[(int64_t)k * T + u];
+      const int64_t i1 = T == 1 ? B->chunk_block_offsets[k + 1] - t0 : B->add_offsets[(int64_t)k * T + u + 1];
+      for (int64_t i = i0; i < i1; ++i) {
+        const int64_t t = t0 + (T == 1 ? i : B->add_blocks[i]);
         const int32_t b = B->chunk_blocks[t];
         if (!fascia_frame_moving(moves, B->block_row[b]) || !fascia_frame_moving(moves, B->cols[b])) continue;
         add_contributions(B, t);

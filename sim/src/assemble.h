@@ -62,7 +62,7 @@ typedef struct fascia_bsr {
   // t3-s34610, 60 % of the entries crossed with both loops split in order,
   // and 2 threads computed the local blocks slower than one). Who adds a
   // block does not change its sum: it adds in ascending e.
-  int32_t adds_team;                 ///< the team the lists are for, 0: none yet
+  int32_t adds_team;                 ///< the team (> 1) the lists are for, 0: none yet
   int64_t *add_offsets;              ///< [chunk_count adds_team + 1] each chunk's, then thread's, list
   int32_t *add_blocks;               ///< [T] positions t - chunk_block_offsets[k] in chunk k's blocks
 } fascia_bsr;

@@ -89,16 +89,16 @@ void fascia_bsr_apply(const fascia_bsr *B, int threads, const unsigned char *mov
 // any other at most one per upper block.
 static fascia_status plan_single(fascia_ctx *ctx, fascia_bsr *B) {
   const int32_t N = B->rows, tasks = (N + FASCIA_BSR_TASK_ROWS - 1) / FASCIA_BSR_TASK_ROWS;
-  B->single_offsets = malloc(((size_t)N + 1) * sizeof *B->single_offsets);
-  B->task_slots = malloc(((size_t)tasks + 1) * sizeof *B->task_slots);
-  B->row_slot_offsets = calloc((size_t)N + 1, sizeof *B->row_slot_offsets);
-  int32_t *last_task = malloc(((size_t)N + 1) * sizeof *last_task), *slot_of = malloc(((size_t)N + 1) * sizeof *slot_of);
+  B->single_offsets = fascia_calloc((int64_t)N + 1, sizeof *B->single_offsets);
+  B->task_slots = fascia_calloc((int64_t)tasks + 1, sizeof *B->task_slots);
+  B->row_slot_offsets = fascia_calloc((int64_t)N + 1, sizeof *B->row_slot_offsets);
+  int32_t *last_task = fascia_calloc((int64_t)N + 1, sizeof *last_task), *slot_of = fascia_calloc((int64_t)N + 1, sizeof *slot_of);
   int fine = B->single_offsets && B->task_slots && B->row_slot_offsets && last_task && slot_of;
   if (fine) {
     B->single_offsets[0] = 0;
     for (int32_t i = 0; i < N; ++i)
       B->single_offsets[i + 1] = B->single_offsets[i] + (B->row_offsets[i + 1] - B->diagonal[i]);
-    B->single_slot = malloc(((size_t)B->single_offsets[N] + 1) * sizeof *B->single_slot);
+    B->single_slot = fascia_calloc(B->single_offsets[N], sizeof *B->single_slot);
     fine = B->single_slot != NULL;
   }
   int32_t slots = 0;
@@ -124,9 +124,9 @@ static fascia_status plan_single(fascia_ctx *ctx, fascia_bsr *B) {
   if (fine) {
     B->task_slots[tasks] = slots;
     for (int32_t i = 0; i < N; ++i) B->row_slot_offsets[i + 1] += B->row_slot_offsets[i];
-    B->row_slots = malloc(((size_t)slots + 1) * sizeof *B->row_slots);
-    B->slot_sums = malloc((6 * (size_t)slots + 1) * sizeof *B->slot_sums);
-    B->values_single = malloc((36 * (size_t)B->single_offsets[N] + 1) * sizeof *B->values_single);
+    B->row_slots = fascia_calloc(slots, sizeof *B->row_slots);
+    B->slot_sums = fascia_calloc(6 * (int64_t)slots, sizeof *B->slot_sums);
+    B->values_single = fascia_calloc(36 * B->single_offsets[N], sizeof *B->values_single);
     fine = B->row_slots && B->slot_sums && B->values_single;
   }
   if (fine) { // slots ascend within a task and tasks in order: filling in slot order sorts each row's list
