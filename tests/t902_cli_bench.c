@@ -12,7 +12,11 @@
 // --modes on,off gives a 20x3x3 tet row with the enhanced strain modes and
 // one without (enhanced_modes true and false; within 1 % with them, more
 // than 5 % too stiff without);
-// --modes on with --volumetric full is refused before any row runs.
+// --modes on with --volumetric full is refused before any row runs. A
+// sweep whose lists make a row with no beam (a tetrahedral one with 2
+// samples per tetrahedron) reports that row with the builder's reason, in
+// the JSON and as a CSV line of the header's width, runs the others and
+// exits 1 saying how many rows failed (it had stopped at the first).
 // Usage: t902_cli_bench PATH/TO/fascia WORK_DIR
 #define _POSIX_C_SOURCE 200809L
 #include <cjson/cJSON.h>
@@ -77,6 +81,54 @@ static void check_paper(const char *fascia, const char *err, const char *csv) {
     CHECK(fgets(line, sizeof line, f) && !strncmp(line, "table,name,frames,", 18));
     for (lines = 1; fgets(line, sizeof line, f); ++lines) {}
     CHECK(lines == 3);
+    fclose(f);
+  }
+}
+
+// Counts the fields of a CSV line (quoted fields may hold commas).
+static int csv_fields(const char *line) {
+  int fields = 1, quoted = 0;
+  for (; *line && *line != '\n'; ++line) {
+    if (*line == '"') quoted = !quoted;
+    else if (*line == ',' && !quoted) ++fields;
+  }
+  return fields;
+}
+
+static void check_failed_row(const char *fascia, const char *err, const char *csv) {
+  char args[4096];
+  snprintf(args, sizeof args,
+           "bench cantilever --shapes hex,tet --frames 6x2x2 --samples-per-cell 2 --json --threads 1 --no-calculix "
+           "--csv '%s'",
+           csv);
+  remove(csv);
+  CHECK(cli_exec(fascia, args, err, &result));
+  CHECK(result.status == 1 && strstr(result.err, "1 of 2 cantilever rows could not be built"));
+  cJSON *rows = cJSON_Parse(result.out);
+  CHECK(cJSON_IsArray(rows) && cJSON_GetArraySize(rows) == 2);
+  const cJSON *hex = cJSON_GetArrayItem(rows, 0), *tet = cJSON_GetArrayItem(rows, 1);
+  if (hex && tet) {
+    CHECK(cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(hex, "converged")));
+    CHECK(!cJSON_GetObjectItemCaseSensitive(hex, "error"));
+    const cJSON *why = cJSON_GetObjectItemCaseSensitive(tet, "error");
+    CHECK(cJSON_IsString(why) && strstr(why->valuestring, "2 samples per tetrahedron"));
+    CHECK(!cJSON_GetObjectItemCaseSensitive(tet, "tip_uz"));
+  } else {
+    fprintf(stderr, "stdout: %.400s\nstderr: %.400s\n", result.out, result.err);
+  }
+  cJSON_Delete(rows);
+  FILE *f = fopen(csv, "r");
+  CHECK(f != NULL);
+  if (f) {
+    char header[4096], line[4096];
+    CHECK(fgets(header, sizeof header, f) && strstr(header, ",error\n"));
+    const int width = csv_fields(header);
+    int lines = 0, failed = 0;
+    for (; fgets(line, sizeof line, f); ++lines) {
+      CHECK(csv_fields(line) == width);
+      failed += strstr(line, "samples per tetrahedron") != NULL && !strncmp(line, "tet,6x2x2,", 10);
+    }
+    CHECK(lines == 2 && failed == 1);
     fclose(f);
   }
 }
@@ -214,6 +266,8 @@ int main(int argc, char **argv) {
   snprintf(csv, sizeof csv, "%s/t902_paper.csv", dir);
   check_paper(fascia, err, csv);
   check_cantilever(fascia, err);
+  snprintf(csv, sizeof csv, "%s/t902_sweep.csv", dir);
+  check_failed_row(fascia, err, csv);
   CHECK(cli_exec(fascia, "bench --list", err, &result) && result.status == 0);
   CHECK(strstr(result.out, "t3-s34610") != NULL);
   CHECK(strstr(result.out, "s1000000-k4") != NULL); // a large row of a million samples

@@ -69,7 +69,10 @@ static const char bench_usage[] =
     "                        default in the paper's mode and where the CG tolerance is 1e-6 or looser)\n"
     "  --double              ... stored in double\n"
     "  --linear-solver KIND  cantilever: cg, direct or auto (default: the solver's default)\n"
-    "  --no-calculix         cantilever: no CalculiX peer figures\n"
+    "  --no-calculix         cantilever: no CalculiX peer figures\n";
+
+// (a second string: ISO C bounds a string literal's length)
+static const char bench_usage_sweep[] =
     "cantilever sweep (any of these replaces the default rows by the product of the lists):\n"
     "  --shapes LIST              hex, tet, meshless (default hex)\n"
     "  --frames LIST              frame grids NXxNYxNZ (default 20x3x3)\n"
@@ -80,7 +83,9 @@ static const char bench_usage[] =
     "  --volumetric LIST          auto (cell patches from nu = 0.3, as fascia beam), full, cell, frame\n"
     "                             (default auto; docs/mechanics.md, \"Volumetric locking\")\n"
     "  --modes LIST               enhanced strain modes on the patches: auto (as fascia beam), on\n"
-    "                             (the shape's set, fascia beam --modes on), off (default auto)\n";
+    "                             (the shape's set, fascia beam --modes on), off (default auto)\n"
+    "  A row whose beam cannot be built (say MLS neighbours in one plane) is reported with the\n"
+    "  reason and the others still run; the exit status is then 1.\n";
 
 #define PAPER_WARMUP_STEPS 2
 #define PAPER_CG_ITERATIONS 60
@@ -175,6 +180,7 @@ static int parse_options(int argc, char **argv, bench_options *opt) {
     const char *o = argv[k];
     if (!strcmp(o, "--help") || !strcmp(o, "-h")) {
       fputs(bench_usage, stdout);
+      fputs(bench_usage_sweep, stdout);
       return 0;
     }
     if (o[0] != '-') {
@@ -549,6 +555,7 @@ typedef struct cantilever_result {
   int modes;           ///< 1: the patches carry enhanced strain modes
   char backend[16], device[256]; ///< where it ran (fascia_solver_backend, _device)
   const bench_peer *peer[FASCIA_CCX_ELEMENT_COUNT_]; ///< CalculiX at the same error, NULL: none or not run
+  char failed[320]; ///< why this row's beam could not be built ("": it was); the sweep goes on without it
 } cantilever_result;
 
 // The converged reference of the default cantilever (data/reference/).
@@ -640,7 +647,10 @@ static double max_twist(const fascia_real *q, int32_t frame_count) {
 
 // Builds one beam and solves it statically from rest, timed from a new
 // solver (the bench's repeats call it again and keep the least time). A
-// solve that does not converge is reported (converged 0), not an error.
+// solve that does not converge is reported (converged 0), not an error; a
+// beam that cannot be built (a combination of the sweep's lists that makes
+// no beam, or MLS neighbours that span no volume) is reported in
+// out->failed, and the other rows still run.
 static fascia_status bench_cantilever_case(fascia_ctx *ctx, const bench_options *opt, const cantilever_case *c,
                                            cantilever_result *out) {
   memset(out, 0, sizeof *out);
@@ -666,6 +676,11 @@ static fascia_status bench_cantilever_case(fascia_ctx *ctx, const bench_options 
   fascia_model *model = NULL;
   fascia_solver *solver = NULL;
   fascia_status st = fascia_scene_beam_build(ctx, &bdef, &model);
+  if (st == FASCIA_ERR_ARGUMENT || st == FASCIA_ERR_NUMERIC) {
+    snprintf(out->failed, sizeof out->failed, "%s", fascia_ctx_message(ctx));
+    fascia_ctx_clear(ctx);
+    return FASCIA_OK;
+  }
   if (st != FASCIA_OK) goto cleanup;
   out->patches = fascia_model_patch_count(model, NULL);
   out->c.smoothing = model->materials[0].rotation_smoothing; // the rule's choice where the row left it to it
@@ -736,6 +751,10 @@ static const char *row_volumetric_text(const cantilever_result *r, char *buf, si
 static void cantilever_text_row(const cantilever_result *r) {
   char grid[48], vol[16];
   grid_text(r->c.grid, grid, sizeof grid);
+  if (r->failed[0]) {
+    printf("%-8s %-8s failed: %s\n", fascia_scene_shape_name(r->c.shape), grid, r->failed);
+    return;
+  }
   printf("%-8s %-8s %6d %7d %3d %4d %6.3g %4.2f %-7s %-6s %9.4f %9.2e %9.4f %8.2f %9.2e %6d %6d %4s %10.1f\n",
          fascia_scene_shape_name(r->c.shape), grid, r->frames, r->samples, r->neighbours, r->c.spc, r->c.smoothing,
          r->c.nu, row_volumetric_text(r, vol, sizeof vol), r->direct ? "direct" : "cg", r->tip[0], r->tip[1], r->tip[2], r->error_uz_percent, r->twist, r->newton, r->cg,
@@ -750,6 +769,14 @@ static cJSON *cantilever_json(const cantilever_result *r) {
   cJSON_AddStringToObject(o, "bench", "cantilever");
   cJSON_AddStringToObject(o, "shape", fascia_scene_shape_name(r->c.shape));
   cJSON_AddStringToObject(o, "grid", grid);
+  if (r->failed[0]) { // the row's settings (those it gave) and why no beam was made of them
+    cJSON_AddNumberToObject(o, "samples_per_cell", r->c.spc);
+    if (r->c.shape == FASCIA_SCENE_MESHLESS) cJSON_AddNumberToObject(o, "neighbours", r->c.neighbours);
+    if (r->c.smoothing >= 0) cJSON_AddNumberToObject(o, "rotation_smoothing", r->c.smoothing);
+    cJSON_AddNumberToObject(o, "poisson_ratio", r->c.nu);
+    cJSON_AddStringToObject(o, "error", r->failed);
+    return o;
+  }
   cJSON_AddNumberToObject(o, "frames", r->frames);
   cJSON_AddNumberToObject(o, "samples", r->samples);
   cJSON_AddNumberToObject(o, "neighbours", r->neighbours);
@@ -800,11 +827,22 @@ static void cantilever_csv(FILE *f, const cantilever_result *rows, int count) {
              "linear_solver,tip_ux,tip_uy,"
              "tip_uz,reference_uz,error_uz_percent,error_ux_percent,twist_rad,newton_iterations,cg_iterations,"
              "converged,ms,threads,backend,device,calculix_c3d20r_mesh,calculix_c3d20r_error_uz_percent,"
-             "calculix_c3d20r_ms,calculix_c3d8i_mesh,calculix_c3d8i_error_uz_percent,calculix_c3d8i_ms,enhanced_modes\n");
+             "calculix_c3d20r_ms,calculix_c3d8i_mesh,calculix_c3d8i_error_uz_percent,calculix_c3d8i_ms,enhanced_modes,"
+             "error\n");
   for (int k = 0; k < count; ++k) {
     const cantilever_result *r = rows + k;
     char grid[48];
     grid_text(r->c.grid, grid, sizeof grid);
+    if (r->failed[0]) { // the row's settings (those it gave), no figures, and why
+      char neighbours[16] = "", smoothing[32] = "";
+      if (r->c.shape == FASCIA_SCENE_MESHLESS) snprintf(neighbours, sizeof neighbours, "%d", r->c.neighbours);
+      if (r->c.smoothing >= 0) snprintf(smoothing, sizeof smoothing, "%g", r->c.smoothing);
+      fprintf(f, "%s,%s,,,%s,%d,%s,%g,,,,,,,,,,,,,,,,,,,,,,,,", fascia_scene_shape_name(r->c.shape), grid, neighbours,
+              r->c.spc, smoothing, r->c.nu);
+      cli_csv_text(f, r->failed);
+      fputc('\n', f);
+      continue;
+    }
     fprintf(f, "%s,%s,%d,%d,%d,%d,%g,%g,%s,%s,%.6f,%.3e,%.6f,%.3f,%.3f,%.3f,%.3e,%d,%d,%d,%.1f,%d,%s,",
             fascia_scene_shape_name(r->c.shape), grid, r->frames, r->samples, r->neighbours, r->c.spc, r->c.smoothing,
             r->c.nu, row_volumetric(r), r->direct ? "direct" : "cg", r->tip[0], r->tip[1], r->tip[2], r->reference_uz,
@@ -818,7 +856,7 @@ static void cantilever_csv(FILE *f, const cantilever_result *rows, int count) {
       if (r->peer[e]) fprintf(f, "%.3f,%.1f", r->peer[e]->error_uz_percent, r->peer[e]->result.ms);
       else fputc(',', f);
     }
-    fprintf(f, ",%d\n", r->modes);
+    fprintf(f, ",%d,\n", r->modes);
   }
 }
 
@@ -844,6 +882,10 @@ static void peer_match_text(const cantilever_result *rows, int count) {
     const cantilever_result *r = rows + k;
     char grid[48], vol[16];
     grid_text(r->c.grid, grid, sizeof grid);
+    if (r->failed[0]) {
+      printf("%-8s %-8s %4.2f failed\n", fascia_scene_shape_name(r->c.shape), grid, r->c.nu);
+      continue;
+    }
     printf("%-8s %-8s %4.2f %-7s %8.3f %10.1f", fascia_scene_shape_name(r->c.shape), grid, r->c.nu,
            row_volumetric_text(r, vol, sizeof vol),
            r->error_uz_percent, r->ms);
@@ -1024,6 +1066,7 @@ int cmd_bench(int argc, char **argv) {
       grid_text(cases[k].grid, grid, sizeof grid);
       snprintf(what, sizeof what, "%s %s (%d of %d)", fascia_scene_shape_name(cases[k].shape), grid, pass + 1,
                opt.repeats);
+      if (pass > 0 && cant[k].failed[0]) continue; // its beam cannot be built: the same again
       if (show) progress_line("cantilever", k + 1, case_count, what);
       cantilever_result once;
       st = bench_cantilever_case(ctx, &opt, cases + k, &once);
@@ -1050,7 +1093,7 @@ int cmd_bench(int argc, char **argv) {
              cantilever_reference()->tip_ux, cantilever_reference()->tip_uz, opt.repeats);
       shown[0] = '\0';
     }
-    text_device_line(shown, sizeof shown, cant[k].backend, cant[k].device);
+    if (!cant[k].failed[0]) text_device_line(shown, sizeof shown, cant[k].backend, cant[k].device);
     if (k == 0) cantilever_text_header();
     cantilever_text_row(cant + k);
   }
@@ -1067,6 +1110,14 @@ int cmd_bench(int argc, char **argv) {
     cJSON_free(text);
   }
   rc = opt.csv ? write_csv_file(opt.csv, &opt, paper, paper_count, cant, case_count) : 0;
+  int failed_rows = 0;
+  for (int k = 0; k < case_count; ++k) failed_rows += cant[k].failed[0] != '\0';
+  if (failed_rows && !rc) { // the figures of the others are out; the exit status says some are missing
+    fflush(stdout);
+    fprintf(stderr, "fascia bench: %d of %d cantilever rows could not be built (their lines say why)\n", failed_rows,
+            case_count);
+    rc = 1;
+  }
 done:
   cJSON_Delete(array);
   free(paper);
