@@ -152,6 +152,10 @@ fascia_status fascia_newton_minimize(fascia_solver *S, const fascia_step_values 
   int relaxed = 0;
   fascia_real watch_phi = now.phi, watch_slope = 0, watch_gg = now.gradient_norm2, watch_shift = 0;
   fascia_real last_phi = now.phi; // Phi of the previous iterate
+  // whether a static solve's first tangent was positive definite (the
+  // solver's failure message names a mechanism where it was not)
+  int first_direction = !values->dynamic;
+  if (first_direction) S->start_indefinite = 0;
   // the round-off estimate is rough (within a few times, either way): a
   // |gradient| that has stopped halving near it has reached the floor
   fascia_real best = g0;
@@ -195,8 +199,11 @@ fascia_status fascia_newton_minimize(fascia_solver *S, const fascia_step_values 
     while (!accepted) {
       t = fascia_now_ms();
       fascia_real slope;
+      const int curvature_before = rep->negative_curvature;
       FASCIA_TRY(ops->direction(be, &shift, &slope, rep));
       rep->profile.cg_ms += fascia_now_ms() - t;
+      if (first_direction) S->start_indefinite = rep->negative_curvature > curvature_before;
+      first_direction = 0;
       // full steps only with iterations left to come back (a capped solve ends line-searched)
       if (watchdog && relaxed >= 0 && slope < 0 && max_iterations - iteration > FASCIA_NEWTON_WATCHDOG) {
         if (relaxed == 0) { // a new watched iterate

@@ -244,6 +244,7 @@ fascia_status fascia_solver_solve_static(fascia_solver *S, fascia_solve_report *
   place_prescribed(S, S->time);
   fascia_status status = FASCIA_OK;
   const int steps = S->def.load_steps;
+  int mechanism = 0; // the tangent where the solve started was not positive definite
   for (int l = 1; l <= steps && status == FASCIA_OK; ++l) {
     S->sys->gravity_scale = (fascia_real)l / steps;
     memcpy(S->x_base, S->x, 3 * (size_t)N * sizeof(fascia_real));
@@ -253,12 +254,27 @@ fascia_status fascia_solver_solve_static(fascia_solver *S, fascia_solve_report *
     snprintf(detail, sizeof detail, "load step %d of %d", l, steps);
     fascia_ctx_progress(S->ctx, "static solve", (double)(l - 1) / steps, detail);
     status = minimize(S, 0, report);
+    if (l == 1) mechanism = S->start_indefinite;
   }
   S->sys->gravity_scale = 1;
   S->energy_known = 0;
   memset(S->u, 0, 6 * (size_t)N * sizeof(fascia_real));
   if (status != FASCIA_OK) return status;
   fascia_ctx_progress(S->ctx, "static solve", 1.0, report->converged ? "converged" : "not converged");
+  // an unconverged solve whose starting tangent was singular or indefinite:
+  // a deformation that costs no energy, which no iteration limit or load
+  // step cures, or a load that makes the start unstable (the loads' own
+  // second derivative through the frames' rotations: the 20x3x3 beam at
+  // 10^5 times its weight)
+  if (!report->converged && mechanism)
+    return FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
+                       "static solve: %s after %d Newton iterations (|gradient| %.3g, load %.3g), and its tangent at "
+                       "the start was not positive definite: either the model has a deformation that costs no energy "
+                       "(a mechanism: too few samples per cell or per frame, or frame rotations nothing holds), which "
+                       "neither more iterations nor load steps cure, or the load is large enough to make the start "
+                       "unstable (use more load steps)",
+                       report->gradient_norm <= report->reference_norm ? "not converged" : "diverged",
+                       report->newton_iterations, report->gradient_norm, report->reference_norm);
   if (!report->converged && !(report->gradient_norm <= report->reference_norm))
     return FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
                        "static solve: diverged: after %d Newton iterations the residual %.3g is above the load %.3g; "

@@ -104,6 +104,9 @@ struct fascia_solver {
   fascia_real model_size;       ///< diagonal of the frames' bounding box, m (> 0)
   int energy_known;             ///< 1: energy_last is E_kin + E_pot of the current state
   fascia_real energy_last;
+  /// the last static Newton solve's first tangent was not positive definite
+  /// (a failed factorization, or CG's negative curvature): at rest, a mechanism
+  int start_indefinite;
   /// bumped where the state is set from outside or restored: a backend
   /// keeps no factorization across it (backend_cpu.c); a checkpoint carries
   /// the one kept (backend.h, linear_state_save)
