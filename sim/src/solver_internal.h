@@ -105,7 +105,8 @@ struct fascia_solver {
   int energy_known;             ///< 1: energy_last is E_kin + E_pot of the current state
   fascia_real energy_last;
   /// the last static Newton solve's first tangent was not positive definite
-  /// (a failed factorization, or CG's negative curvature): at rest, a mechanism
+  /// (a failed factorization, or CG's negative curvature): a mechanism, or a
+  /// load large enough to make the start unstable
   int start_indefinite;
   /// bumped where the state is set from outside or restored: a backend
   /// keeps no factorization across it (backend_cpu.c); a checkpoint carries
