@@ -347,24 +347,24 @@ static int factor_values(fascia_direct *d) {
     if (!isfinite(x[e])) return 0;
   // Debian's CHOLMOD asks OpenMP for teams of a fixed 4 threads in its
   // supernodal factorization, for loops that only copy (the BLAS runs on
-  // one thread). With dynamic adjustment on, the runtime gives a team no
-  // more threads than nthreads-var: one here. Teams of 4 had doubled the
-  // 950-frame abdomen's linear solves on 2 cores; teams fitted to the free
-  // cores (2) still cost the deformable pelvis 9.9 against 3.2 ms of linear
-  // solves per step, and waking their sleeping worker made a factorization
-  // after an idle second 3x slower (docs/mechanics.md, "CHOLMOD's threads").
-  // One thread was as fast or faster on every scene measured; the bits are
-  // the same.
+  // one thread). With no active level allowed, every one of its regions
+  // runs as a team of one. Teams of 4 had doubled the 950-frame abdomen's
+  // linear solves on 2 cores; teams fitted to the free cores (2) still cost
+  // the deformable pelvis 9.9 against 3.2 ms of linear solves per step, and
+  // waking their sleeping worker made a factorization after an idle second
+  // 3x slower (docs/mechanics.md, "CHOLMOD's threads"). One thread was as
+  // fast or faster on every scene measured; the bits are the same. (Dynamic
+  // adjustment with nthreads-var 1 did the same, but read the machine's
+  // load and affinity, two system calls, in each of its regions: about 44
+  // per factorization of the 20x3x3 cantilever.)
   int factored;
 #ifdef _OPENMP
-  const int dynamic = omp_get_dynamic(), threads = omp_get_max_threads();
-  omp_set_dynamic(1);
-  omp_set_num_threads(1);
+  const int levels = omp_get_max_active_levels();
+  omp_set_max_active_levels(0);
 #endif
   factored = cholmod_l_factorize(d->matrix, d->factor, &d->common);
 #ifdef _OPENMP
-  omp_set_num_threads(threads);
-  omp_set_dynamic(dynamic);
+  omp_set_max_active_levels(levels);
 #endif
   return factored && d->common.status == CHOLMOD_OK && d->factor->minor == d->factor->n;
 }
