@@ -4,7 +4,11 @@
 // of returning a solution: a negative pivot, a zero one, and a NaN or an
 // infinity in the matrix (which the BLAS's own Cholesky lets through); the
 // Levenberg shift the Newton loop then adds makes the same analysis factor
-// again; fixing more unknowns after the analysis analyses again.
+// again; fixing more unknowns after the analysis analyses again. A retry
+// with a larger shift (fascia_direct_refactor, which writes the diagonal
+// alone) solves to the same bits as a fresh factorization at that shift,
+// and still refuses a NaN under any shift, a diagonal the shift overflows,
+// and a solver that has factored nothing.
 #include <stdlib.h>
 #include <string.h>
 
@@ -49,6 +53,14 @@ int main(void) {
   CHECK(fascia_direct_factor(d, ctx, &K, mask, damping, 10) == 1); // shifted past it
   fascia_direct_solve(d, damping, x);
   CHECK_NEAR(x[6 * (frames / 2) + 2], 1.0 / 7, 1e-2, 0); // about 1 / (10 - 3)
+  // the same by retries: the diagonal alone written again, the same bits
+  double *retried = malloc((size_t)n * sizeof(double));
+  CHECK(fascia_direct_factor(d, ctx, &K, mask, damping, 0) == 0);
+  CHECK(fascia_direct_refactor(d, damping, 1) == 0);
+  CHECK(fascia_direct_refactor(d, damping, 10) == 1);
+  fascia_direct_solve(d, damping, retried);
+  CHECK(!memcmp(retried, x, (size_t)n * sizeof(double)));
+  free(retried);
   fill(&K, 1);
   K.values[middle + 7 * 3] = 0; // a zero pivot
   CHECK(fascia_direct_factor(d, ctx, &K, mask, damping, 0) == 0);
@@ -56,6 +68,14 @@ int main(void) {
   K.values[middle + 1] = K.values[middle + 6] = NAN; // a NaN off the diagonal
   CHECK(fascia_direct_factor(d, ctx, &K, mask, damping, 0) == 0);
   CHECK(fascia_direct_factor(d, ctx, &K, mask, damping, 1e6) == 0); // no shift cures it
+  CHECK(fascia_direct_refactor(d, damping, 1e6) == 0);             // nor a retry's
+  fill(&K, 1e308);
+  CHECK(fascia_direct_factor(d, ctx, &K, mask, damping, 0) == 1);
+  CHECK(fascia_direct_refactor(d, damping, 1e308) == 0); // the shifted diagonal overflows
+  fascia_direct *fresh = NULL;
+  CHECK_OK(fascia_direct_create(ctx, &K, mask, &fresh), ctx);
+  CHECK(fresh && fascia_direct_refactor(fresh, damping, 1) == 0); // nothing factored to retry
+  fascia_direct_destroy(&fresh);
   fill(&K, 1);
   K.values[middle + 7 * 5] = INFINITY;
   CHECK(fascia_direct_factor(d, ctx, &K, mask, damping, 0) == 0);

@@ -444,12 +444,14 @@ static fascia_status cpu_direction(fascia_backend *backend, fascia_real *shift, 
     // factored shift, not from 1e-8: one that needed a shift is likely
     // to need one again, and a failed factorization can cost nearly a whole one
     const fascia_real restart = B->factor_shift / 10 > FASCIA_R(1e-8) ? B->factor_shift / 10 : FASCIA_R(1e-8);
-    while ((factored = fascia_direct_factor(B->direct, B->S->ctx, A, B->mask, B->damping, B->op.shift)) == 0) {
+    factored = fascia_direct_factor(B->direct, B->S->ctx, A, B->mask, B->damping, B->op.shift);
+    while (factored == 0) { // the same matrix with a larger shift: only its diagonal is written again
       ++report->negative_curvature;
       B->op.shift = B->op.shift == 0 ? restart : 10 * B->op.shift;
       if (B->op.shift > FASCIA_NEWTON_MAX_SHIFT)
         return FASCIA_FAIL(B->S->ctx, FASCIA_ERR_NUMERIC,
                            "solver: the tangent stays singular under any damping (a NaN, or a frame with no sample?)");
+      factored = fascia_direct_refactor(B->direct, B->damping, B->op.shift);
     }
     if (factored < 0) return FASCIA_ERR_MEMORY; // the new analysis failed; the message says why
     *shift = B->factor_shift = B->op.shift;

@@ -40,6 +40,8 @@ struct fascia_direct {
   cholmod_sparse *matrix; // [free_count^2] one triangle, pattern fixed at creation
   cholmod_factor *factor;
   cholmod_dense *rhs, *solution, *work_y, *work_e;
+  double *diagonal; // [free_count] the unshifted diagonal of the last fascia_direct_factor (a retry's base)
+  int finite;       // its gathered values were all finite (1), or not (0), or no values yet (-1)
 };
 
 // Runs BODY for every entry of one triangle (column, row: the unknowns'
@@ -145,9 +147,12 @@ static void release(fascia_direct *d) {
   cholmod_l_free_dense(&d->work_e, &d->common);
   free(d->free_index);
   free(d->mask);
+  free(d->diagonal);
   free_matrix(d);
   d->free_index = NULL;
   d->mask = NULL;
+  d->diagonal = NULL;
+  d->finite = -1;
   d->free_count = d->entries = 0;
 }
 
@@ -293,7 +298,10 @@ static fascia_status create(fascia_ctx *ctx, const fascia_bsr *B, const unsigned
     if ((st = fill_matrix(ctx, d, B, order, frames)) != FASCIA_OK) goto done;
   }
   d->rhs = cholmod_l_zeros(n, 1, CHOLMOD_REAL, &d->common);
-  if (!d->rhs) st = FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "direct solver: out of memory for %lld unknowns", (long long)n);
+  d->diagonal = fascia_calloc(n > 0 ? n : 1, sizeof(double));
+  d->finite = -1;
+  if (!d->rhs || !d->diagonal)
+    st = FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "direct solver: out of memory for %lld unknowns", (long long)n);
 done:
   free(order);
   return st;
@@ -338,13 +346,33 @@ int fascia_direct_mask_is(const fascia_direct *d, const unsigned char *mask) {
   return !memcmp(mask, d->mask, (size_t)d->unknowns);
 }
 
-// Factors the values in d->matrix: 1, or 0 when not positive definite (or
-// not finite).
-static int factor_values(fascia_direct *d) {
+// 1 when every stored value is finite: OpenBLAS's Cholesky lets a NaN
+// through, so the numbers are looked at before they are factored
+static int values_finite(const fascia_direct *d) {
   const double *x = d->matrix->x;
-  // OpenBLAS's Cholesky lets a NaN through: look at the numbers first
   for (int64_t e = 0; e < d->entries; ++e)
     if (!isfinite(x[e])) return 0;
+  return 1;
+}
+
+// Writes the diagonal as the kept unshifted one plus shift * damping; 0
+// where a value is not finite.
+static int shift_diagonal(fascia_direct *d, const fascia_real *damping, fascia_real shift) {
+  double *x = d->matrix->x;
+  const SuiteSparse_long *p = d->matrix->p; // a column's diagonal entry: first in the lower triangle, last in the upper
+  int finite = 1;
+  for (int64_t u = 0; u < d->unknowns; ++u) {
+    const int64_t row = d->free_index[u];
+    if (row < 0) continue;
+    double *diagonal = x + (d->lower ? p[row] : p[row + 1] - 1);
+    *diagonal = d->diagonal[row] + shift * damping[u];
+    finite &= isfinite(*diagonal) != 0;
+  }
+  return finite;
+}
+
+// Factors the values in d->matrix (finite): 1, or 0 when not positive definite.
+static int factor_values(fascia_direct *d) {
   // Debian's CHOLMOD asks OpenMP for teams of a fixed 4 threads in its
   // supernodal factorization, for loops that only copy (the BLAS runs on
   // one thread). With no active level allowed, every one of its regions
@@ -377,12 +405,15 @@ int fascia_direct_factor(fascia_direct *d, fascia_ctx *ctx, const fascia_bsr *K,
   }
   double *x = d->matrix->x;
   for (int64_t k = 0; k < d->entries; ++k) x[k] = K->values[d->value_index[k]];
-  const SuiteSparse_long *p = d->matrix->p; // a column's diagonal entry: first in the lower triangle, last in the upper
-  for (int64_t u = 0; u < d->unknowns; ++u) {
-    const int64_t row = d->free_index[u];
-    if (row >= 0) x[d->lower ? p[row] : p[row + 1] - 1] += shift * damping[u];
-  }
-  return factor_values(d);
+  d->finite = values_finite(d);
+  const SuiteSparse_long *p = d->matrix->p;
+  for (int64_t row = 0; row < d->free_count; ++row) d->diagonal[row] = x[d->lower ? p[row] : p[row + 1] - 1];
+  return shift_diagonal(d, damping, shift) && d->finite && factor_values(d);
+}
+
+int fascia_direct_refactor(fascia_direct *d, const fascia_real *damping, fascia_real shift) {
+  if (d->finite != 1) return 0; // not finite under any shift (or nothing gathered)
+  return shift_diagonal(d, damping, shift) && factor_values(d);
 }
 
 int64_t fascia_direct_values_count(const fascia_direct *d) { return d->entries; }
@@ -411,7 +442,8 @@ int fascia_direct_values_load(fascia_direct *d, const fascia_bsr *pattern, const
   double *x = d->matrix->x;
   int64_t j = 0;
   FOR_EACH_ENTRY(d, pattern, x[stored_place(d, column, row)] = in[j++]);
-  return factor_values(d);
+  d->finite = -1; // shifted values, not a base for fascia_direct_refactor
+  return values_finite(d) && factor_values(d);
 }
 
 void fascia_direct_solve(fascia_direct *d, const fascia_real *rhs, fascia_real *x) {

@@ -44,6 +44,12 @@ FASCIA_INTERN int fascia_direct_values_load(fascia_direct *d, const fascia_bsr *
 /// message is in ctx).
 FASCIA_INTERN int fascia_direct_factor(fascia_direct *d, fascia_ctx *ctx, const fascia_bsr *K,
                                        const unsigned char *mask, const fascia_real *damping, fascia_real shift);
+/// Factors the matrix of the last fascia_direct_factor again with another
+/// shift: only its diagonal is written again, from the unshifted one kept
+/// (the same values as fascia_direct_factor with the same K; a retry costs
+/// the factorization alone). 1 on success, 0 when not positive definite,
+/// not finite, or nothing was factored since the creation or a values load.
+FASCIA_INTERN int fascia_direct_refactor(fascia_direct *d, const fascia_real *damping, fascia_real shift);
 /// x = A^-1 rhs on the free unknowns of the last successful factorization,
 /// 0 on the others; x may alias rhs. [6N]
 FASCIA_INTERN void fascia_direct_solve(fascia_direct *d, const fascia_real *rhs, fascia_real *x);
