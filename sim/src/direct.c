@@ -355,16 +355,21 @@ static int values_finite(const fascia_direct *d) {
   return 1;
 }
 
+// The stored value of a row's diagonal entry: first in its column of the
+// lower triangle, last in the upper
+static double *diagonal_entry(const fascia_direct *d, int64_t row) {
+  const SuiteSparse_long *p = d->matrix->p;
+  return (double *)d->matrix->x + (d->lower ? p[row] : p[row + 1] - 1);
+}
+
 // Writes the diagonal as the kept unshifted one plus shift * damping; 0
 // where a value is not finite.
 static int shift_diagonal(fascia_direct *d, const fascia_real *damping, fascia_real shift) {
-  double *x = d->matrix->x;
-  const SuiteSparse_long *p = d->matrix->p; // a column's diagonal entry: first in the lower triangle, last in the upper
   int finite = 1;
   for (int64_t u = 0; u < d->unknowns; ++u) {
     const int64_t row = d->free_index[u];
     if (row < 0) continue;
-    double *diagonal = x + (d->lower ? p[row] : p[row + 1] - 1);
+    double *diagonal = diagonal_entry(d, row);
     *diagonal = d->diagonal[row] + shift * damping[u];
     finite &= isfinite(*diagonal) != 0;
   }
@@ -406,8 +411,7 @@ int fascia_direct_factor(fascia_direct *d, fascia_ctx *ctx, const fascia_bsr *K,
   double *x = d->matrix->x;
   for (int64_t k = 0; k < d->entries; ++k) x[k] = K->values[d->value_index[k]];
   d->finite = values_finite(d);
-  const SuiteSparse_long *p = d->matrix->p;
-  for (int64_t row = 0; row < d->free_count; ++row) d->diagonal[row] = x[d->lower ? p[row] : p[row + 1] - 1];
+  for (int64_t row = 0; row < d->free_count; ++row) d->diagonal[row] = *diagonal_entry(d, row);
   return shift_diagonal(d, damping, shift) && d->finite && factor_values(d);
 }
 

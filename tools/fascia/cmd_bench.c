@@ -1062,11 +1062,11 @@ int cmd_bench(int argc, char **argv) {
   runs.program = case_count && !opt.no_calculix ? fascia_ccx_program() : NULL;
   for (int pass = 0; pass < (case_count ? opt.repeats : 0) && st == FASCIA_OK; ++pass) {
     for (int k = 0; k < case_count && st == FASCIA_OK; ++k) {
+      if (pass > 0 && cant[k].failed[0]) continue; // its beam cannot be built: the same again
       char what[96], grid[48];
       grid_text(cases[k].grid, grid, sizeof grid);
       snprintf(what, sizeof what, "%s %s (%d of %d)", fascia_scene_shape_name(cases[k].shape), grid, pass + 1,
                opt.repeats);
-      if (pass > 0 && cant[k].failed[0]) continue; // its beam cannot be built: the same again
       if (show) progress_line("cantilever", k + 1, case_count, what);
       cantilever_result once;
       st = bench_cantilever_case(ctx, &opt, cases + k, &once);
