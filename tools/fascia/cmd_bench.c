@@ -822,13 +822,18 @@ static cJSON *cantilever_json(const cantilever_result *r) {
   return o;
 }
 
+static const char cantilever_csv_header[] =
+    "shape,grid,frames,samples,neighbours,samples_per_cell,rotation_smoothing,poisson_ratio,volumetric,"
+    "linear_solver,tip_ux,tip_uy,"
+    "tip_uz,reference_uz,error_uz_percent,error_ux_percent,twist_rad,newton_iterations,cg_iterations,"
+    "converged,ms,threads,backend,device,calculix_c3d20r_mesh,calculix_c3d20r_error_uz_percent,"
+    "calculix_c3d20r_ms,calculix_c3d8i_mesh,calculix_c3d8i_error_uz_percent,calculix_c3d8i_ms,enhanced_modes,"
+    "error\n";
+
 static void cantilever_csv(FILE *f, const cantilever_result *rows, int count) {
-  fprintf(f, "shape,grid,frames,samples,neighbours,samples_per_cell,rotation_smoothing,poisson_ratio,volumetric,"
-             "linear_solver,tip_ux,tip_uy,"
-             "tip_uz,reference_uz,error_uz_percent,error_ux_percent,twist_rad,newton_iterations,cg_iterations,"
-             "converged,ms,threads,backend,device,calculix_c3d20r_mesh,calculix_c3d20r_error_uz_percent,"
-             "calculix_c3d20r_ms,calculix_c3d8i_mesh,calculix_c3d8i_error_uz_percent,calculix_c3d8i_ms,enhanced_modes,"
-             "error\n");
+  fputs(cantilever_csv_header, f);
+  int separators = 0; // the header's: a failed row's empty fields are counted from it, so the error stays last
+  for (const char *c = cantilever_csv_header; *c; ++c) separators += *c == ',';
   for (int k = 0; k < count; ++k) {
     const cantilever_result *r = rows + k;
     char grid[48];
@@ -837,8 +842,9 @@ static void cantilever_csv(FILE *f, const cantilever_result *rows, int count) {
       char neighbours[16] = "", smoothing[32] = "";
       if (r->c.shape == FASCIA_SCENE_MESHLESS) snprintf(neighbours, sizeof neighbours, "%d", r->c.neighbours);
       if (r->c.smoothing >= 0) snprintf(smoothing, sizeof smoothing, "%g", r->c.smoothing);
-      fprintf(f, "%s,%s,,,%s,%d,%s,%g,,,,,,,,,,,,,,,,,,,,,,,,", fascia_scene_shape_name(r->c.shape), grid, neighbours,
-              r->c.spc, smoothing, r->c.nu);
+      fprintf(f, "%s,%s,,,%s,%d,%s,%g", fascia_scene_shape_name(r->c.shape), grid, neighbours, r->c.spc, smoothing,
+              r->c.nu);
+      for (int c = 7; c < separators; ++c) fputc(',', f); // the 8 fields above, then empty ones up to the error
       cli_csv_text(f, r->failed);
       fputc('\n', f);
       continue;
