@@ -7,6 +7,11 @@
 // factorization, /state/linear, is under the checksum too), and the
 // solver is left unchanged. After every refusal no HDF5 object is left open.
 // The settings read back from a checkpoint are those it was written with.
+// The records a resume trusts besides the state (/settings, /run, /model) are
+// under a checksum of their own: a flipped bit in any setting attribute, a
+// step, time, time step, input digest, size or fingerprint rewritten is
+// refused by fascia_checkpoint_read_settings, _read_inputs and _load alike,
+// and a version 2 file (whose checksum left them out) is refused.
 #define _POSIX_C_SOURCE 200809L
 #include <hdf5.h>
 
@@ -91,6 +96,63 @@ static int flip_bit(const char *path, const char *name, long byte) {
   return fclose(f) != 0 || failed;
 }
 
+// Flips bit `bit` of the f64 attribute `attr` of /settings, in place in
+// the file's bytes (found by the value's bit pattern: the test's settings are
+// distinct enough that each pattern occurs once).
+static int flip_setting_bit(const char *path, const char *attr, int bit) {
+  hid_t file = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (file < 0) return 1;
+  double value = 0;
+  hid_t a = H5Aopen_by_name(file, "/settings", attr, H5P_DEFAULT, H5P_DEFAULT);
+  const int failed = a < 0 || H5Aread(a, H5T_NATIVE_DOUBLE, &value) < 0;
+  if (a >= 0) H5Aclose(a);
+  H5Fclose(file);
+  if (failed) return 1;
+  unsigned char pattern[8];
+  memcpy(pattern, &value, 8); // little-endian host, as the file
+  FILE *f = fopen(path, "r+b");
+  if (!f) return 1;
+  static unsigned char bytes[1 << 20];
+  const size_t n = fread(bytes, 1, sizeof bytes, f);
+  long at = -1;
+  int found = 0;
+  for (size_t k = 0; k + 8 <= n; ++k)
+    if (!memcmp(bytes + k, pattern, 8)) at = (long)k, ++found;
+  int bad = found != 1 || fseek(f, at + bit / 8, SEEK_SET) != 0 || fputc(bytes[at + bit / 8] ^ (1 << bit % 8), f) == EOF;
+  return fclose(f) != 0 || bad;
+}
+
+// Rewrites the scalar f64 attribute `attr` of /settings through the HDF5 API.
+static int set_setting(const char *path, const char *attr, double value) {
+  hid_t file = H5Fopen(path, H5F_ACC_RDWR, H5P_DEFAULT);
+  if (file < 0) return 1;
+  hid_t group = H5Gopen2(file, "/settings", H5P_DEFAULT);
+  hid_t a = group >= 0 ? H5Aopen(group, attr, H5P_DEFAULT) : H5I_INVALID_HID;
+  const int failed = a < 0 || H5Awrite(a, H5T_NATIVE_DOUBLE, &value) < 0;
+  if (a >= 0) H5Aclose(a);
+  if (group >= 0) H5Gclose(group);
+  return H5Fclose(file) < 0 || failed;
+}
+
+// The three readers all refuse path with FORMAT naming /run/checksum.
+static void expect_header_refused(fascia_ctx *ctx, fascia_solver *solver, const fascia_model *m, const char *path) {
+  expect_refused(ctx, solver, path, FASCIA_ERR_FORMAT, "/run/checksum", "do not match");
+  fascia_solver_def def = fascia_solver_def_default();
+  int64_t step = -1;
+  uint64_t inputs = 7;
+  fascia_ctx_clear(ctx);
+  const fascia_status a = fascia_checkpoint_read_settings(ctx, path, m, &def, &step);
+  const int named_a = strstr(fascia_ctx_message(ctx), "/run/checksum") != NULL;
+  fascia_ctx_clear(ctx);
+  const fascia_status b = fascia_checkpoint_read_inputs(ctx, path, NULL, &inputs);
+  const int named_b = strstr(fascia_ctx_message(ctx), "/run/checksum") != NULL;
+  if (a != FASCIA_ERR_FORMAT || b != FASCIA_ERR_FORMAT || !named_a || !named_b || step != -1 || inputs != 7) {
+    fprintf(stderr, "t207: '%s': read_settings gave %s, read_inputs %s (wanted FORMAT naming /run/checksum)\n", path,
+            fascia_status_name(a), fascia_status_name(b));
+    ++check_failures_;
+  }
+}
+
 static int set_version(hid_t file, int32_t version) {
   hid_t attr = H5Aopen_by_name(file, "/", "fascia_checkpoint_version", H5P_DEFAULT, H5P_DEFAULT);
   if (attr < 0) return 1;
@@ -169,6 +231,7 @@ int main(void) {
 
   char path[512];
   hid_t file;
+  int header_cases = 0;
   CHECK((file = corrupt_copy("bit-flip", path, sizeof path)) >= 0 && H5Fclose(file) >= 0);
   CHECK(flip_bit(path, "/state/position", 21) == 0);
   expect_refused(ctx, solver, path, FASCIA_ERR_FORMAT, "/state/checksum", "does not match");
@@ -188,15 +251,15 @@ int main(void) {
 
   CHECK((file = corrupt_copy("step-1e15", path, sizeof path)) >= 0);
   CHECK(edit(file, "/run/step", 1, 0, 0, 1e15) == 0 && H5Fclose(file) >= 0);
-  expect_refused(ctx, solver, path, FASCIA_ERR_FORMAT, "/run/step", "1000000000000000");
+  expect_refused(ctx, solver, path, FASCIA_ERR_FORMAT, "/run/checksum", "do not match");
 
   CHECK((file = corrupt_copy("time-negative", path, sizeof path)) >= 0);
   CHECK(edit(file, "/run/time", 0, 0, 0, -5) == 0 && H5Fclose(file) >= 0);
-  expect_refused(ctx, solver, path, FASCIA_ERR_FORMAT, "/run/time", "-5");
+  expect_refused(ctx, solver, path, FASCIA_ERR_FORMAT, "/run/checksum", "do not match");
 
   CHECK((file = corrupt_copy("step-and-time", path, sizeof path)) >= 0);
   CHECK(edit(file, "/run/step", 1, 0, 1, 1) == 0 && H5Fclose(file) >= 0); // 4 steps, the time of 3
-  expect_refused(ctx, solver, path, FASCIA_ERR_FORMAT, "/run/time", "4 steps");
+  expect_refused(ctx, solver, path, FASCIA_ERR_FORMAT, "/run/checksum", "do not match");
 
   CHECK((file = corrupt_copy("no-checksum", path, sizeof path)) >= 0);
   CHECK(H5Ldelete(file, "/state/checksum", H5P_DEFAULT) >= 0 && H5Fclose(file) >= 0);
@@ -205,6 +268,65 @@ int main(void) {
   CHECK((file = corrupt_copy("no-settings", path, sizeof path)) >= 0);
   CHECK(H5Ldelete(file, "/settings", H5P_DEFAULT) >= 0 && H5Fclose(file) >= 0);
   expect_refused(ctx, solver, path, FASCIA_ERR_FORMAT, "/settings", "missing");
+
+  // the records a resume trusts besides the state: every setting, bit by bit
+  // in the file's bytes (sign, exponent and mantissa bits) and rewritten
+  // through HDF5; each record of /run and /model rewritten
+  for (int k = 0; k < fascia_checkpoint_setting_count(); ++k) {
+    const char *name = fascia_checkpoint_setting_name(k);
+    for (int b = 0; b < 3; ++b) {
+      const int bit = (int[]){63, 60, 20}[b];
+      char what[64];
+      snprintf(what, sizeof what, "flip-%s-%d", name, bit);
+      CHECK((file = corrupt_copy(what, path, sizeof path)) >= 0 && H5Fclose(file) >= 0);
+      if (flip_setting_bit(path, name, bit) == 0) {
+        expect_header_refused(ctx, solver, m, path);
+        ++header_cases;
+      }
+    }
+    snprintf(path, sizeof path, "%s/set-%s.ck.h5", dir, name);
+    CHECK(fixture_copy(good, path, -1) == 0);
+    CHECK(set_setting(path, name, fascia_checkpoint_setting_get(&sd, k) + 1) == 0);
+    expect_header_refused(ctx, solver, m, path);
+    ++header_cases;
+  }
+  CHECK(header_cases >= 30); // most settings' bit patterns are unique in the file
+  CHECK((file = corrupt_copy("time-step", path, sizeof path)) >= 0);
+  CHECK(edit(file, "/run/time_step", 0, 0, 0, 0.02) == 0 && set_setting(path, "time_step", 0.02) == 0 &&
+        H5Fclose(file) >= 0); // time step and setting together, consistent
+  expect_header_refused(ctx, solver, m, path);
+  CHECK((file = corrupt_copy("inputs", path, sizeof path)) >= 0);
+  CHECK(edit(file, "/run/inputs", 1, 0, 0, 12345) == 0 && H5Fclose(file) >= 0);
+  expect_header_refused(ctx, solver, m, path);
+  CHECK((file = corrupt_copy("sizes", path, sizeof path)) >= 0);
+  CHECK(edit(file, "/model/sizes", 1, 8, 1, 1) == 0 && H5Fclose(file) >= 0);
+  expect_header_refused(ctx, solver, m, path);
+  CHECK((file = corrupt_copy("run-checksum", path, sizeof path)) >= 0);
+  CHECK(edit(file, "/run/checksum", 1, 0, 1, 1) == 0 && H5Fclose(file) >= 0);
+  expect_header_refused(ctx, solver, m, path);
+
+  // the caller's input digest comes back as saved, 0 from fascia_checkpoint_save
+  {
+    uint64_t inputs = 99;
+    CHECK_OK(fascia_checkpoint_read_inputs(ctx, good, m, &inputs), ctx);
+    CHECK(inputs == 0);
+    snprintf(path, sizeof path, "%s/inputs.ck.h5", dir);
+    fascia_solver *s2 = NULL;
+    CHECK_OK(fascia_solver_create(ctx, m, &sd, &s2), ctx);
+    const uint64_t digest = UINT64_C(0xfedcba9876543210);
+    CHECK_OK(fascia_checkpoint_save_inputs(ctx, s2, 0, digest, path), ctx);
+    CHECK_OK(fascia_checkpoint_read_inputs(ctx, path, m, &inputs), ctx);
+    CHECK(inputs == digest);
+    CHECK(fascia_checkpoint_read_inputs(ctx, path, other_model, &inputs) == FASCIA_ERR_ARGUMENT);
+    CHECK_OK(fascia_checkpoint_load(ctx, s2, path, &step), ctx);
+    CHECK(step == 0);
+    fascia_solver_destroy(&s2);
+    CHECK(open_ids() == 0);
+  }
+
+  CHECK((file = corrupt_copy("version-2", path, sizeof path)) >= 0);
+  CHECK(set_version(file, 2) == 0 && H5Fclose(file) >= 0);
+  expect_refused(ctx, solver, path, FASCIA_ERR_FORMAT, "version 2", "older fascia");
 
   CHECK((file = corrupt_copy("version-1", path, sizeof path)) >= 0);
   CHECK(set_version(file, 1) == 0 && H5Fclose(file) >= 0);

@@ -7,8 +7,8 @@
 // damaged or edited file, another model or other settings are refused
 // instead of resumed into a different trajectory.
 //
-// Schema, version 2 (N frames; reals f64 little endian):
-//   /                     attributes fascia_checkpoint_version (int32, = 2),
+// Schema, version 3 (N frames; reals f64 little endian):
+//   /                     attributes fascia_checkpoint_version (int32, = 3),
 //                         units ("SI: m, kg, s, Pa"), creator ("fascia X.Y.Z")
 //   /run/step             [1]   i64  completed steps, 0 <= step <= 2^31 - 1
 //   /run/time             [1]   f64  s, the solver's time after them; a run
@@ -17,6 +17,15 @@
 //   /run/time_step        [1]   f64  s, the run's time step (also a setting)
 //   /model/sizes          [9]   i64  frames, samples, pairs, materials, motions,
 //                                    probes, probe pairs, organs, couplings
+//   /run/inputs           [1]   u64  the caller's digest of what else the run
+//                                    depends on (drive files; 0: nothing),
+//                                    fascia_checkpoint_save_inputs
+//   /run/checksum         [1]   u64  FNV-1a of the version, step, time,
+//                                    time_step, inputs, the model's sizes and
+//                                    fingerprint and the settings (in the
+//                                    order of the table `settings`), as the
+//                                    native values: everything a resume trusts
+//                                    besides the state
 //   /model/fingerprint    [1]   u64  FNV-1a of the model's arrays (fascia_model_fingerprint)
 //   /settings             group, one f64 attribute per solver setting that
 //                         changes the trajectory (the table `settings`:
@@ -31,11 +40,14 @@
 //                                    none; absent in older files: none), so
 //                                    that the resumed run takes the saving
 //                                    run's path bit for bit
-//   /state/checksum       [1]   u64  FNV-1a of step, time, position, rotation,
+//   /state/checksum       [1]   u64  FNV-1a, continuing from /run/checksum's
+//                                    value, of step, time, position, rotation,
 //                                    velocity, organs and linear, in that
-//                                    order, as the native values
+//                                    order, as the native values (so a state
+//                                    cannot be moved under another header)
 //
-// Version 1 (no settings, no checksum) is refused with a message saying so.
+// Versions 1 (no settings, no checksum) and 2 (a checksum of the state only:
+// settings and run records unprotected) are refused with a message saying so.
 //
 // Why a checksum of our own and not HDF5's Fletcher32 filter: the filter
 // only sees damage below HDF5 (a flipped bit on disk) and needs chunked
@@ -58,7 +70,7 @@
 #include "organs.h"
 #include "solver_internal.h"
 
-#define CHECKPOINT_VERSION 2
+#define CHECKPOINT_VERSION 3
 #define CHECKPOINT_UNITS "SI: m, kg, s, Pa"
 #define SIZE_COUNT 9
 #define MAX_STEP INT64_C(2147483647) // fascia_solver_step counts in int; the CLI's --steps too
@@ -76,13 +88,13 @@ static void model_sizes(const fascia_model *m, int64_t *z) {
 }
 
 
-// The checksum of a state: step, time, x [3N], q [4N], u [6N], bodies [B],
-// linear [L] (L = 0 adds nothing: older files keep their sums).
-static uint64_t state_checksum(int64_t step, double time, int64_t N, const fascia_real *x, const fascia_real *q,
-                               const fascia_real *u, size_t B, const fascia_real *bodies, int64_t L,
-                               const fascia_real *linear) {
+// The checksum of a state, continuing from the header's: step, time, x [3N],
+// q [4N], u [6N], bodies [B], linear [L].
+static uint64_t state_checksum(uint64_t header, int64_t step, double time, int64_t N, const fascia_real *x,
+                               const fascia_real *q, const fascia_real *u, size_t B, const fascia_real *bodies,
+                               int64_t L, const fascia_real *linear) {
   const size_t R = sizeof(fascia_real);
-  uint64_t h = fascia_fnv(FASCIA_FNV_START, &step, sizeof step);
+  uint64_t h = fascia_fnv(header, &step, sizeof step);
   h = fascia_fnv(h, &time, sizeof time);
   h = fascia_fnv(h, x, 3 * (size_t)N * R);
   h = fascia_fnv(h, q, 4 * (size_t)N * R);
@@ -173,6 +185,40 @@ void fascia_checkpoint_setting_set(fascia_solver_def *d, int k, double v) {
 }
 
 // ---------------------------------------------------------------------------
+// What a resume trusts besides the state
+
+typedef struct header {
+  int64_t step;
+  double time, time_step;
+  uint64_t inputs, fingerprint;
+  int64_t sizes[SIZE_COUNT];
+  double settings[SETTING_COUNT];
+} header;
+
+static uint64_t header_checksum(const header *h) {
+  const int32_t version = CHECKPOINT_VERSION;
+  uint64_t c = fascia_fnv(FASCIA_FNV_START, &version, sizeof version);
+  c = fascia_fnv(c, &h->step, sizeof h->step);
+  c = fascia_fnv(c, &h->time, sizeof h->time);
+  c = fascia_fnv(c, &h->time_step, sizeof h->time_step);
+  c = fascia_fnv(c, &h->inputs, sizeof h->inputs);
+  c = fascia_fnv(c, h->sizes, sizeof h->sizes);
+  c = fascia_fnv(c, &h->fingerprint, sizeof h->fingerprint);
+  return fascia_fnv(c, h->settings, sizeof h->settings);
+}
+
+static void header_of(const fascia_solver *S, int64_t step, uint64_t inputs, header *h) {
+  memset(h, 0, sizeof *h);
+  h->step = step;
+  h->time = S->time;
+  h->time_step = S->def.time_step;
+  h->inputs = inputs;
+  h->fingerprint = fascia_model_fingerprint(S->model);
+  model_sizes(S->model, h->sizes);
+  for (int k = 0; k < SETTING_COUNT; ++k) h->settings[k] = fascia_checkpoint_setting_get(&S->def, k);
+}
+
+// ---------------------------------------------------------------------------
 // Writing
 
 static fascia_status write_failed(fascia_ctx *ctx, const char *path, const char *name) {
@@ -205,12 +251,12 @@ static int write_group(hid_t file, const char *name) {
 }
 
 // /settings: one scalar f64 attribute per entry of `settings`.
-static int write_settings(hid_t file, const fascia_solver_def *def) {
+static int write_settings(hid_t file, const header *h) {
   hid_t group = H5Gcreate2(file, "/settings", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
   hid_t space = H5Screate(H5S_SCALAR);
   int ok = group >= 0 && space >= 0;
   for (int k = 0; ok && k < SETTING_COUNT; ++k) {
-    const double value = fascia_checkpoint_setting_get(def, k);
+    const double value = h->settings[k];
     hid_t attr = H5Acreate2(group, settings[k].name, H5T_IEEE_F64LE, space, H5P_DEFAULT, H5P_DEFAULT);
     ok = attr >= 0 && H5Awrite(attr, H5T_NATIVE_DOUBLE, &value) >= 0;
     if (attr >= 0) H5Aclose(attr);
@@ -221,7 +267,7 @@ static int write_settings(hid_t file, const fascia_solver_def *def) {
 }
 
 static fascia_status write_checkpoint(fascia_ctx *ctx, hid_t file, const fascia_solver *S, int64_t step,
-                                      const char *path) {
+                                      uint64_t inputs, const char *path) {
   char creator[64];
   snprintf(creator, sizeof creator, "fascia %s", fascia_version());
   hid_t root = H5Gopen2(file, "/", H5P_DEFAULT);
@@ -231,10 +277,9 @@ static fascia_status write_checkpoint(fascia_ctx *ctx, hid_t file, const fascia_
   if (root >= 0) H5Gclose(root);
   if (!ok) return write_failed(ctx, path, "/");
   const hsize_t N = (hsize_t)S->frame_count;
-  int64_t sizes[SIZE_COUNT];
-  model_sizes(S->model, sizes);
-  const uint64_t print = fascia_model_fingerprint(S->model);
-  const double time_step = S->def.time_step, time = S->time;
+  header h;
+  header_of(S, step, inputs, &h);
+  const uint64_t head = header_checksum(&h);
   const size_t B = S->organs ? fascia_organs_state_size(S->organs) : 0;
   fascia_real *bodies = fascia_calloc((int64_t)B + 1, sizeof(fascia_real));
   FASCIA_CHECK(bodies, ctx, FASCIA_ERR_MEMORY, "checkpoint '%s': out of memory", path);
@@ -244,19 +289,22 @@ static fascia_status write_checkpoint(fascia_ctx *ctx, hid_t file, const fascia_
   if (!linear) free(bodies);
   FASCIA_CHECK(linear, ctx, FASCIA_ERR_MEMORY, "checkpoint '%s': out of memory", path);
   if (L) S->backend->ops->linear_state_save(S->backend, linear);
-  const uint64_t checksum = state_checksum(step, time, S->frame_count, S->x, S->q, S->u, B, bodies, L, linear);
+  const uint64_t checksum =
+      state_checksum(head, step, h.time, S->frame_count, S->x, S->q, S->u, B, bodies, L, linear);
   fascia_status status = FASCIA_OK;
   if (!write_group(file, "/run") || !write_group(file, "/model") || !write_group(file, "/state"))
     status = write_failed(ctx, path, "groups");
-  if (status == FASCIA_OK && !write_settings(file, &S->def)) status = write_failed(ctx, path, "/settings");
+  if (status == FASCIA_OK && !write_settings(file, &h)) status = write_failed(ctx, path, "/settings");
 #define PUT(name, rank, d0, d1, ftype, mtype, data)                                                                  \
   if (status == FASCIA_OK && !write_dataset(file, name, rank, d0, d1, ftype, mtype, data))                          \
   status = write_failed(ctx, path, name)
-  PUT("/run/step", 1, 1, 0, H5T_STD_I64LE, H5T_NATIVE_INT64, &step);
-  PUT("/run/time", 1, 1, 0, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &time);
-  PUT("/run/time_step", 1, 1, 0, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &time_step);
-  PUT("/model/sizes", 1, SIZE_COUNT, 0, H5T_STD_I64LE, H5T_NATIVE_INT64, sizes);
-  PUT("/model/fingerprint", 1, 1, 0, H5T_STD_U64LE, H5T_NATIVE_UINT64, &print);
+  PUT("/run/step", 1, 1, 0, H5T_STD_I64LE, H5T_NATIVE_INT64, &h.step);
+  PUT("/run/time", 1, 1, 0, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &h.time);
+  PUT("/run/time_step", 1, 1, 0, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &h.time_step);
+  PUT("/run/inputs", 1, 1, 0, H5T_STD_U64LE, H5T_NATIVE_UINT64, &h.inputs);
+  PUT("/run/checksum", 1, 1, 0, H5T_STD_U64LE, H5T_NATIVE_UINT64, &head);
+  PUT("/model/sizes", 1, SIZE_COUNT, 0, H5T_STD_I64LE, H5T_NATIVE_INT64, h.sizes);
+  PUT("/model/fingerprint", 1, 1, 0, H5T_STD_U64LE, H5T_NATIVE_UINT64, &h.fingerprint);
   PUT("/state/position", 2, N, 3, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, S->x);
   PUT("/state/rotation", 2, N, 4, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, S->q);
   PUT("/state/velocity", 2, N, 6, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, S->u);
@@ -269,7 +317,8 @@ static fascia_status write_checkpoint(fascia_ctx *ctx, hid_t file, const fascia_
   return status;
 }
 
-fascia_status fascia_checkpoint_save(fascia_ctx *ctx, const fascia_solver *solver, int64_t step, const char *path) {
+fascia_status fascia_checkpoint_save_inputs(fascia_ctx *ctx, const fascia_solver *solver, int64_t step,
+                                            uint64_t inputs, const char *path) {
   FASCIA_CHECK(solver && path && path[0], ctx, FASCIA_ERR_ARGUMENT,
                "fascia_checkpoint_save: NULL solver or empty path");
   FASCIA_CHECK(step >= 0 && step <= MAX_STEP, ctx, FASCIA_ERR_ARGUMENT,
@@ -280,12 +329,16 @@ fascia_status fascia_checkpoint_save(fascia_ctx *ctx, const fascia_solver *solve
   // built in memory, then written out: a full disk fails the write, not HDF5
   fascia_status status = fascia_h5_create_memory(ctx, "checkpoint", path, &file);
   if (status == FASCIA_OK) {
-    status = write_checkpoint(ctx, file, solver, step, path);
+    status = write_checkpoint(ctx, file, solver, step, inputs, path);
     if (status == FASCIA_OK) status = fascia_h5_finish_memory(ctx, "checkpoint", &file, path);
     else H5Fclose(file);
   }
   fascia_h5_quiet_end(&quiet);
   return status;
+}
+
+fascia_status fascia_checkpoint_save(fascia_ctx *ctx, const fascia_solver *solver, int64_t step, const char *path) {
+  return fascia_checkpoint_save_inputs(ctx, solver, step, 0, path);
 }
 
 // ---------------------------------------------------------------------------
@@ -355,11 +408,12 @@ static fascia_status open_checkpoint(reader *r) {
                "checkpoint '%s' /: not a fascia checkpoint (no root attribute 'fascia_checkpoint_version')", r->path);
   double version = 0;
   FASCIA_TRY(read_attr(r, "/", "fascia_checkpoint_version", &version));
-  FASCIA_CHECK(version != 1, r->ctx, FASCIA_ERR_FORMAT,
-               "checkpoint '%s' /: format version 1, written by an older fascia without a checksum or the solver "
-               "settings; this fascia (%s) reads version %d only: finish the run with the fascia that wrote it, or "
-               "start it again",
-               r->path, fascia_version(), CHECKPOINT_VERSION);
+  FASCIA_CHECK(version != 1 && version != 2, r->ctx, FASCIA_ERR_FORMAT,
+               "checkpoint '%s' /: format version %g, written by an older fascia whose checksum does not cover %s; "
+               "this fascia (%s) reads version %d only: finish the run with the fascia that wrote it, or start it "
+               "again",
+               r->path, version, version == 1 ? "the state or the solver settings" : "the solver settings and run records",
+               fascia_version(), CHECKPOINT_VERSION);
   FASCIA_CHECK(version == CHECKPOINT_VERSION, r->ctx, FASCIA_ERR_FORMAT,
                "checkpoint '%s' /: format version %g, this fascia (%s) reads version %d; resume with the fascia that "
                "wrote it",
@@ -367,51 +421,65 @@ static fascia_status open_checkpoint(reader *r) {
   return FASCIA_OK;
 }
 
+// Reads everything but the state into *h and checks it against
+// /run/checksum: nothing of it is trusted before that.
+static fascia_status read_header(reader *r, header *h) {
+  memset(h, 0, sizeof *h);
+  FASCIA_TRY(read_exact(r, "/run/step", H5T_INTEGER, H5T_NATIVE_INT64, 1, &h->step));
+  FASCIA_TRY(read_exact(r, "/run/time", H5T_FLOAT, H5T_NATIVE_DOUBLE, 1, &h->time));
+  FASCIA_TRY(read_exact(r, "/run/time_step", H5T_FLOAT, H5T_NATIVE_DOUBLE, 1, &h->time_step));
+  FASCIA_TRY(read_exact(r, "/run/inputs", H5T_INTEGER, H5T_NATIVE_UINT64, 1, &h->inputs));
+  FASCIA_TRY(read_exact(r, "/model/sizes", H5T_INTEGER, H5T_NATIVE_INT64, SIZE_COUNT, h->sizes));
+  FASCIA_TRY(read_exact(r, "/model/fingerprint", H5T_INTEGER, H5T_NATIVE_UINT64, 1, &h->fingerprint));
+  FASCIA_CHECK(fascia_h5_link_exists(r->file, "/settings"), r->ctx, FASCIA_ERR_FORMAT,
+               "checkpoint '%s' /settings: group missing; %s", r->path, DAMAGED);
+  for (int k = 0; k < SETTING_COUNT; ++k) FASCIA_TRY(read_attr(r, "/settings", settings[k].name, &h->settings[k]));
+  uint64_t stored = 0;
+  FASCIA_TRY(read_exact(r, "/run/checksum", H5T_INTEGER, H5T_NATIVE_UINT64, 1, &stored));
+  const uint64_t computed = header_checksum(h);
+  FASCIA_CHECK(stored == computed, r->ctx, FASCIA_ERR_FORMAT,
+               "checkpoint '%s' /run/checksum: the run, model and settings records (/run, /model, /settings) do not "
+               "match their checksum (stored %016llx, computed %016llx); %s",
+               r->path, (unsigned long long)stored, (unsigned long long)computed, DAMAGED);
+  return FASCIA_OK;
+}
+
 // The step count and time, checked against each other and the time step.
-static fascia_status read_run(reader *r, double time_step, int64_t *step, double *time) {
-  FASCIA_TRY(read_exact(r, "/run/step", H5T_INTEGER, H5T_NATIVE_INT64, 1, step));
-  FASCIA_TRY(read_exact(r, "/run/time", H5T_FLOAT, H5T_NATIVE_DOUBLE, 1, time));
-  FASCIA_CHECK(*step >= 0 && *step <= MAX_STEP, r->ctx, FASCIA_ERR_FORMAT,
-               "checkpoint '%s' /run/step: step %lld is outside 0..%lld; %s", r->path, (long long)*step,
+static fascia_status check_run(reader *r, const header *h) {
+  FASCIA_CHECK(h->step >= 0 && h->step <= MAX_STEP, r->ctx, FASCIA_ERR_FORMAT,
+               "checkpoint '%s' /run/step: step %lld is outside 0..%lld; %s", r->path, (long long)h->step,
                (long long)MAX_STEP, DAMAGED);
   // a run starts at t = 0 and adds time_step per step, rounding once per
   // step: the sum drifts from step * time_step by at most ~step^2 * eps / 4 steps
-  const double expected = (double)*step * time_step, n = (double)*step;
+  const double time_step = h->time_step, expected = (double)h->step * time_step, n = (double)h->step;
   const double tolerance = time_step * (1e-6 + n * n * DBL_EPSILON);
-  FASCIA_CHECK(isfinite(*time) && fabs(*time - expected) <= tolerance, r->ctx, FASCIA_ERR_FORMAT,
+  FASCIA_CHECK(isfinite(h->time) && fabs(h->time - expected) <= tolerance, r->ctx, FASCIA_ERR_FORMAT,
                "checkpoint '%s' /run/time: t = %.17g s after %lld steps of %.17g s, expected %.17g s; %s", r->path,
-               *time, (long long)*step, time_step, expected, DAMAGED);
+               h->time, (long long)h->step, time_step, expected, DAMAGED);
   return FASCIA_OK;
 }
 
 // The settings recorded in /settings, into def (others left as they are).
-static fascia_status read_settings(reader *r, fascia_solver_def *def) {
-  FASCIA_CHECK(fascia_h5_link_exists(r->file, "/settings"), r->ctx, FASCIA_ERR_FORMAT,
-               "checkpoint '%s' /settings: group missing; %s", r->path, DAMAGED);
+static fascia_status read_settings(reader *r, const header *h, fascia_solver_def *def) {
   for (int k = 0; k < SETTING_COUNT; ++k) {
-    double value = 0;
-    FASCIA_TRY(read_attr(r, "/settings", settings[k].name, &value));
+    const double value = h->settings[k];
     FASCIA_CHECK(isfinite(value) && (settings[k].kind == SETTING_REAL || (value == floor(value) && fabs(value) < 1e9)),
                  r->ctx, FASCIA_ERR_FORMAT, "checkpoint '%s' /settings: %s = %g is not a valid value; %s", r->path,
                  settings[k].name, value, DAMAGED);
     fascia_checkpoint_setting_set(def, k, value);
   }
-  double time_step = 0;
-  FASCIA_TRY(read_exact(r, "/run/time_step", H5T_FLOAT, H5T_NATIVE_DOUBLE, 1, &time_step));
-  FASCIA_CHECK(time_step == def->time_step && time_step > 0, r->ctx, FASCIA_ERR_FORMAT,
-               "checkpoint '%s' /run/time_step: %.17g s, but /settings says %.17g s; %s", r->path, time_step,
+  FASCIA_CHECK(h->time_step == def->time_step && h->time_step > 0, r->ctx, FASCIA_ERR_FORMAT,
+               "checkpoint '%s' /run/time_step: %.17g s, but /settings says %.17g s; %s", r->path, h->time_step,
                def->time_step, DAMAGED);
   return FASCIA_OK;
 }
 
 // Checks that the checkpoint belongs to this model.
-static fascia_status check_model(reader *r, const fascia_model *m) {
+static fascia_status check_model(reader *r, const header *h, const fascia_model *m) {
   static const char *const size_names[SIZE_COUNT] = {"frames", "samples", "pairs", "materials", "motions",
                                                      "probes", "probe pairs", "organs", "couplings"};
-  int64_t sizes[SIZE_COUNT], expected[SIZE_COUNT];
-  uint64_t print = 0;
-  FASCIA_TRY(read_exact(r, "/model/sizes", H5T_INTEGER, H5T_NATIVE_INT64, SIZE_COUNT, sizes));
-  FASCIA_TRY(read_exact(r, "/model/fingerprint", H5T_INTEGER, H5T_NATIVE_UINT64, 1, &print));
+  int64_t expected[SIZE_COUNT];
+  const int64_t *sizes = h->sizes;
   model_sizes(m, expected);
   for (int k = 0; k < SIZE_COUNT; ++k)
     FASCIA_CHECK(sizes[k] == expected[k], r->ctx, FASCIA_ERR_ARGUMENT,
@@ -420,17 +488,17 @@ static fascia_status check_model(reader *r, const fascia_model *m) {
                  r->path, (long long)sizes[k], size_names[k], (long long)expected[k], (long long)sizes[0],
                  (long long)sizes[1], (long long)expected[0], (long long)expected[1]);
   const uint64_t here = fascia_model_fingerprint(m);
-  FASCIA_CHECK(print == here, r->ctx, FASCIA_ERR_ARGUMENT,
+  FASCIA_CHECK(h->fingerprint == here, r->ctx, FASCIA_ERR_ARGUMENT,
                "checkpoint '%s' /model/fingerprint: belongs to another model: same sizes, different contents "
                "(fingerprint %016llx, this model %016llx); resume with the model the run started from",
-               r->path, (unsigned long long)print, (unsigned long long)here);
+               r->path, (unsigned long long)h->fingerprint, (unsigned long long)here);
   return FASCIA_OK;
 }
 
 // Checks that the checkpoint was written with this solver's settings.
-static fascia_status check_settings(reader *r, const fascia_solver_def *def) {
+static fascia_status check_settings(reader *r, const header *h, const fascia_solver_def *def) {
   fascia_solver_def recorded = *def;
-  FASCIA_TRY(read_settings(r, &recorded));
+  FASCIA_TRY(read_settings(r, h, &recorded));
   for (int k = 0; k < SETTING_COUNT; ++k) {
     const double there = fascia_checkpoint_setting_get(&recorded, k), mine = fascia_checkpoint_setting_get(def, k);
     FASCIA_CHECK(there == mine, r->ctx, FASCIA_ERR_ARGUMENT,
@@ -438,6 +506,18 @@ static fascia_status check_settings(reader *r, const fascia_solver_def *def) {
                  "started with (fascia_checkpoint_read_settings; 'fascia run --resume' takes them by default)",
                  r->path, settings[k].name, there, mine);
   }
+  return FASCIA_OK;
+}
+
+// Opens the checkpoint and checks everything but the state: version,
+// checksum of the records, step against time, the settings' values and,
+// when model is not NULL, that it belongs to it.
+static fascia_status read_checked_header(reader *r, const fascia_model *model, header *h, fascia_solver_def *def) {
+  FASCIA_TRY(open_checkpoint(r));
+  FASCIA_TRY(read_header(r, h));
+  FASCIA_TRY(read_settings(r, h, def));
+  FASCIA_TRY(check_run(r, h));
+  if (model) FASCIA_TRY(check_model(r, h, model));
   return FASCIA_OK;
 }
 
@@ -454,10 +534,8 @@ static int64_t dataset_length(reader *r, const char *name) {
 
 // Reads and checks the state into x, q, u ([3N], [4N], [6N]), bodies [B]
 // and the linear solver's kept state [L].
-static fascia_status read_state(reader *r, int64_t N, fascia_real *x, fascia_real *q, fascia_real *u,
-                                size_t B, fascia_real *bodies, int64_t L, fascia_real *linear, double time_step,
-                                double *time, int64_t *step) {
-  FASCIA_TRY(read_run(r, time_step, step, time));
+static fascia_status read_state(reader *r, const header *h, int64_t N, fascia_real *x, fascia_real *q,
+                                fascia_real *u, size_t B, fascia_real *bodies, int64_t L, fascia_real *linear) {
   FASCIA_TRY(read_exact(r, "/state/position", H5T_FLOAT, H5T_NATIVE_DOUBLE, (hsize_t)(3 * N), x));
   FASCIA_TRY(read_exact(r, "/state/rotation", H5T_FLOAT, H5T_NATIVE_DOUBLE, (hsize_t)(4 * N), q));
   FASCIA_TRY(read_exact(r, "/state/velocity", H5T_FLOAT, H5T_NATIVE_DOUBLE, (hsize_t)(6 * N), u));
@@ -465,7 +543,7 @@ static fascia_status read_state(reader *r, int64_t N, fascia_real *x, fascia_rea
   if (L) FASCIA_TRY(read_exact(r, "/state/linear", H5T_FLOAT, H5T_NATIVE_DOUBLE, (hsize_t)L, linear));
   uint64_t stored = 0;
   FASCIA_TRY(read_exact(r, "/state/checksum", H5T_INTEGER, H5T_NATIVE_UINT64, 1, &stored));
-  const uint64_t computed = state_checksum(*step, *time, N, x, q, u, B, bodies, L, linear);
+  const uint64_t computed = state_checksum(header_checksum(h), h->step, h->time, N, x, q, u, B, bodies, L, linear);
   FASCIA_CHECK(stored == computed, r->ctx, FASCIA_ERR_FORMAT,
                "checkpoint '%s' /state/checksum: the state does not match its checksum (stored %016llx, computed "
                "%016llx); %s",
@@ -496,18 +574,29 @@ fascia_status fascia_checkpoint_read_settings(fascia_ctx *ctx, const char *path,
   fascia_h5_quiet_begin(&quiet);
   reader r = {ctx, path, H5I_INVALID_HID};
   fascia_solver_def read = *def;
-  double time = 0;
-  int64_t steps = 0;
-  fascia_status status = open_checkpoint(&r);
-  if (status == FASCIA_OK && model) status = check_model(&r, model);
-  if (status == FASCIA_OK) status = read_settings(&r, &read);
-  if (status == FASCIA_OK) status = read_run(&r, read.time_step, &steps, &time);
+  header h;
+  const fascia_status status = read_checked_header(&r, model, &h, &read);
   if (r.file >= 0) H5Fclose(r.file);
   fascia_h5_quiet_end(&quiet);
   if (status == FASCIA_OK) {
     *def = read;
-    *step = steps;
+    *step = h.step;
   }
+  return status;
+}
+
+fascia_status fascia_checkpoint_read_inputs(fascia_ctx *ctx, const char *path, const fascia_model *model,
+                                            uint64_t *inputs) {
+  FASCIA_CHECK(path && inputs, ctx, FASCIA_ERR_ARGUMENT, "fascia_checkpoint_read_inputs: NULL argument");
+  fascia_h5_quiet quiet;
+  fascia_h5_quiet_begin(&quiet);
+  reader r = {ctx, path, H5I_INVALID_HID};
+  fascia_solver_def read = fascia_solver_def_default();
+  header h;
+  const fascia_status status = read_checked_header(&r, model, &h, &read);
+  if (r.file >= 0) H5Fclose(r.file);
+  fascia_h5_quiet_end(&quiet);
+  if (status == FASCIA_OK) *inputs = h.inputs;
   return status;
 }
 
@@ -520,20 +609,19 @@ fascia_status fascia_checkpoint_load(fascia_ctx *ctx, fascia_solver *solver, con
   fascia_h5_quiet quiet;
   fascia_h5_quiet_begin(&quiet);
   reader r = {ctx, path, H5I_INVALID_HID};
-  double time = 0;
-  int64_t steps = 0, L = 0;
+  header h;
+  fascia_solver_def recorded = solver->def;
+  int64_t L = 0;
   fascia_real *linear = NULL;
-  fascia_status status = open_checkpoint(&r);
-  if (status == FASCIA_OK) status = check_model(&r, solver->model);
-  if (status == FASCIA_OK) status = check_settings(&r, &solver->def);
+  fascia_status status = read_checked_header(&r, solver->model, &h, &recorded);
+  if (status == FASCIA_OK) status = check_settings(&r, &h, &solver->def);
   if (status == FASCIA_OK) {
     L = dataset_length(&r, "/state/linear");
     linear = fascia_calloc(L + 1, sizeof(fascia_real));
     if (!linear) status = FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "checkpoint '%s': out of memory for /state/linear", path);
   }
   if (status == FASCIA_OK)
-    status = read_state(&r, N, buffer, buffer + 3 * N, buffer + 7 * N, B, buffer + 13 * N, L, linear,
-                        solver->def.time_step, &time, &steps);
+    status = read_state(&r, &h, N, buffer, buffer + 3 * N, buffer + 7 * N, B, buffer + 13 * N, L, linear);
   if (r.file >= 0) H5Fclose(r.file);
   fascia_h5_quiet_end(&quiet);
   if (status == FASCIA_OK) {
@@ -541,14 +629,14 @@ fascia_status fascia_checkpoint_load(fascia_ctx *ctx, fascia_solver *solver, con
     memcpy(solver->x, buffer, 3 * (size_t)N * sizeof(fascia_real));
     memcpy(solver->q, buffer + 3 * N, 4 * (size_t)N * sizeof(fascia_real));
     memcpy(solver->u, buffer + 7 * N, 6 * (size_t)N * sizeof(fascia_real));
-    solver->time = time;
+    solver->time = h.time;
     if (B) fascia_organs_restore(solver->organs, buffer + 13 * N);
     fascia_system_set_state(solver->sys, solver->x, solver->q);
     ++solver->linear_epoch;
     // the factorization the saving run kept (where it fits: else the next step factors afresh)
     const fascia_backend_ops *ops = solver->backend->ops;
     if (L && ops->linear_state_load) ops->linear_state_load(solver->backend, linear, L);
-    *step = steps;
+    *step = h.step;
   }
   free(linear);
   free(buffer);

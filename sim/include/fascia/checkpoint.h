@@ -20,20 +20,25 @@ extern "C" {
 /// place once complete: a file at `path` is always a whole checkpoint, and a
 /// crash while writing leaves the previous one there. The file records the
 /// model's sizes and a fingerprint of its contents, every solver setting that
-/// changes the trajectory (see fascia_checkpoint_setting_name) and a checksum
-/// of the state, so that it is only ever resumed, intact, with the model and
-/// settings it belongs to. On error nothing is left behind, an older file at
+/// changes the trajectory (see fascia_checkpoint_setting_name) and two
+/// checksums, one over these records and one over the state, so that it is
+/// only ever resumed, intact, with the model and settings it belongs to. On error nothing is left behind, an older file at
 /// `path` is untouched, and the solver is unchanged.
 FASCIA_API fascia_status fascia_checkpoint_save(fascia_ctx *ctx, const fascia_solver *solver, int64_t step,
                                                 const char *path);
+
+/// Like fascia_checkpoint_save, also recording `inputs`: the caller's own 64-bit digest of what else the run depends on (e.g. drive files; 0 = nothing), covered by the checksum.
+FASCIA_API fascia_status fascia_checkpoint_save_inputs(fascia_ctx *ctx, const fascia_solver *solver, int64_t step,
+                                                       uint64_t inputs, const char *path);
 
 /// Restores the state saved by fascia_checkpoint_save into `solver` (made
 /// for the same model with the same settings) and gives the step count in
 /// *step. A checkpoint of another model, or written with other settings, is
 /// refused with FASCIA_ERR_ARGUMENT and a message naming the dataset and what
 /// differs; a damaged or edited file (checksum, step against time, shapes)
-/// with FASCIA_ERR_FORMAT (FASCIA_ERR_IO when unreadable); a checkpoint of
-/// schema version 1 with FASCIA_ERR_FORMAT. On error the solver is unchanged.
+/// with FASCIA_ERR_FORMAT (FASCIA_ERR_IO when unreadable, or not a regular
+/// file); a checkpoint of schema version 1 or 2 (older fascia, whose
+/// checksum left the settings out) with FASCIA_ERR_FORMAT. On error the solver is unchanged.
 FASCIA_API fascia_status fascia_checkpoint_load(fascia_ctx *ctx, fascia_solver *solver, const char *path,
                                                 int64_t *step);
 
@@ -47,6 +52,10 @@ FASCIA_API fascia_status fascia_checkpoint_load(fascia_ctx *ctx, fascia_solver *
 FASCIA_API fascia_status fascia_checkpoint_read_settings(fascia_ctx *ctx, const char *path,
                                                          const fascia_model *model, fascia_solver_def *def,
                                                          int64_t *step);
+
+/// The digest a checkpoint recorded (0 when saved by fascia_checkpoint_save), after the same checks as fascia_checkpoint_read_settings (model may be NULL).
+FASCIA_API fascia_status fascia_checkpoint_read_inputs(fascia_ctx *ctx, const char *path, const fascia_model *model,
+                                                       uint64_t *inputs);
 
 /// The settings a checkpoint records, by index 0..count-1: their names (the
 /// fascia_solver_def field names, as stored under /settings; NULL out of
