@@ -6,6 +6,13 @@
 // or conflicting options exit 2 naming the option; a dynamic run with -o
 // writes the results file and its XDMF sidecar; --backend emulated runs the
 // device solver in host loops and says so; an unknown backend is a usage error.
+// With --json, stdout holds one JSON object, valid UTF-8, that says how the
+// run ended whatever happened: a run whose second step fails says "failed"
+// and not converged, one that fails at its first step still prints its
+// object, a usage error or a model that cannot be read prints
+// {"command", "exit_status", "error"}; a model path that is not UTF-8 is
+// printed with U+FFFD in its place. Options given twice, or options that
+// contradict each other, are refused naming both.
 // Usage: t901_cli_run PATH/TO/fascia WORK_DIR
 #define _POSIX_C_SOURCE 200809L
 #include <cjson/cJSON.h>
@@ -64,6 +71,89 @@ static int check_static_json(const char *fascia, const char *model, const char *
   return 0;
 }
 
+// Every byte sequence of text is UTF-8 (no overlong forms or surrogates).
+static int is_utf8(const char *text) {
+  const unsigned char *s = (const unsigned char *)text;
+  while (*s) {
+    int n = *s < 0x80 ? 1 : *s >= 0xC2 && *s <= 0xDF ? 2 : *s >= 0xE0 && *s <= 0xEF ? 3 : *s >= 0xF0 && *s <= 0xF4 ? 4 : 0;
+    if (!n) return 0;
+    for (int k = 1; k < n; ++k)
+      if ((s[k] & 0xC0) != 0x80) return 0;
+    if ((s[0] == 0xE0 && s[1] < 0xA0) || (s[0] == 0xED && s[1] >= 0xA0) || (s[0] == 0xF0 && s[1] < 0x90) ||
+        (s[0] == 0xF4 && s[1] >= 0x90))
+      return 0;
+    s += n;
+  }
+  return 1;
+}
+
+// `fascia ARGS --json`: exit status `status`, stdout one line holding one
+// JSON object, valid UTF-8, whose "exit_status" is the status, with "ended"
+// as given (NULL: the object need not have one) and "converged" false
+// unless the run completed; the error, when the status is not 0, in it.
+static int json_ending(const char *fascia, const char *args, const char *err, int status, const char *ended,
+                       const char *error_part) {
+  CHECK(cli_exec(fascia, args, err, &result));
+  cJSON *root = cJSON_Parse(result.out);
+  const cJSON *exit_status = cJSON_GetObjectItemCaseSensitive(root, "exit_status");
+  const cJSON *error = cJSON_GetObjectItemCaseSensitive(root, "error");
+  const cJSON *how = cJSON_GetObjectItemCaseSensitive(root, "ended");
+  const cJSON *converged = cJSON_GetObjectItemCaseSensitive(root, "converged");
+  const char *newline = strchr(result.out, '\n');
+  const int ok = result.status == status && cJSON_IsObject(root) && is_utf8(result.out) && newline &&
+                 !newline[1] && cJSON_IsNumber(exit_status) && exit_status->valueint == status &&
+                 (status == 0 ? cJSON_IsNull(error)
+                              : cJSON_IsString(error) && strstr(error->valuestring, error_part) != NULL) &&
+                 (!ended || (cJSON_IsString(how) && !strcmp(how->valuestring, ended))) &&
+                 (!ended || (cJSON_IsBool(converged) && (cJSON_IsTrue(converged) == !strcmp(ended, "completed"))));
+  if (!ok) fprintf(stderr, "fascia %s: exit %d\nstdout: %.600s\nstderr: %.600s\n", args, result.status, result.out,
+                   result.err);
+  cJSON_Delete(root);
+  return ok ? 0 : 1;
+}
+
+static int check_json_endings(const char *fascia, const char *model, const char *dir, const char *err) {
+  char args[4096], odd[1024];
+  int failures = 0;
+  snprintf(args, sizeof args, "run '%s' --steps 3 --threads 1 --json", model);
+  failures += json_ending(fascia, args, err, 0, "completed", "");
+  // the second step blows up (the beam sags past a strain of 1e-4): failed, whatever the first did
+  snprintf(args, sizeof args, "run '%s' --steps 6 --blow-up-strain 1e-4 --step-retries 0 --threads 1 --json", model);
+  failures += json_ending(fascia, args, err, 1, "failed", "blew up");
+  snprintf(args, sizeof args, "run '%s' --steps 6 --blow-up-strain 1e-6 --step-retries 0 --threads 1 --json", model);
+  failures += json_ending(fascia, args, err, 1, "failed", "blew up");
+  snprintf(args, sizeof args, "run '%s' --steps 2 --json --bogus", model);
+  failures += json_ending(fascia, args, err, 2, NULL, "--bogus");
+  snprintf(args, sizeof args, "run '%s/none.h5' --json", dir);
+  failures += json_ending(fascia, args, err, 1, NULL, "none.h5");
+  snprintf(args, sizeof args, "inspect '%s/none.h5' --json", dir);
+  failures += json_ending(fascia, args, err, 1, NULL, "none.h5");
+  // a path that is not UTF-8 (a Latin-1 file name): the JSON carries U+FFFD for its byte
+  snprintf(odd, sizeof odd, "%s/caf\xe9.h5", dir);
+  char copy[4096];
+  snprintf(copy, sizeof copy, "cp '%s' '%s'", model, odd);
+  CHECK(system(copy) == 0);
+  snprintf(args, sizeof args, "run '%s' --static --threads 1 --json", odd);
+  failures += json_ending(fascia, args, err, 0, "completed", "");
+  CHECK(strstr(result.out, "caf\xef\xbf\xbd.h5") != NULL);
+  snprintf(args, sizeof args, "inspect '%s' --json", odd);
+  failures += json_ending(fascia, args, err, 0, NULL, "");
+  // contradictions and repeats: exit 2, one line naming the options
+  static const char *const twice[][2] = {{"--single --double", "--double"},  {"--assembled --matrix-free", "--matrix-free"},
+                                         {"--steps 2 --steps 3", "--steps"}, {"--steps 2 -o a.h5 -o b.h5", "-o"},
+                                         {"--steps 2 -o a.h5 --output b.h5", "--output"},
+                                         {"--steps 2 --require-convergence --accept-unconverged", "--accept-unconverged"}};
+  for (size_t k = 0; k < sizeof twice / sizeof twice[0]; ++k) {
+    snprintf(args, sizeof args, "run '%s' %s", model, twice[k][0]);
+    CHECK(cli_exec(fascia, args, err, &result));
+    if (result.status != 2 || cli_lines(result.err) != 1 || !strstr(result.err, twice[k][1])) {
+      fprintf(stderr, "fascia %s: exit %d, stderr: %.400s\n", args, result.status, result.err);
+      ++failures;
+    }
+  }
+  return failures;
+}
+
 int main(int argc, char **argv) {
   if (argc < 3) {
     fprintf(stderr, "usage: t901_cli_run PATH/TO/fascia WORK_DIR\n");
@@ -92,7 +182,7 @@ int main(int argc, char **argv) {
   CHECK(cli_exec(fascia, args, err, &result));
   CHECK(result.status == 1);
   CHECK(strstr(result.err, "t901_no_such_model.h5") != NULL);
-  CHECK(result.out[0] == '\0');
+  CHECK(strstr(result.out, "\"exit_status\":1") != NULL); // --json: the object that says so (check_json_endings)
 
   // usage errors (2) name the option
   snprintf(args, sizeof args, "run '%s' --no-such-option", model);
@@ -157,6 +247,7 @@ int main(int argc, char **argv) {
     CHECK(cJSON_IsString(product) && !strcmp(product->valuestring, products[k][1]));
     cJSON_Delete(root);
   }
+  CHECK(check_json_endings(fascia, model, argv[2], err) == 0);
   snprintf(args, sizeof args, "run '%s' --steps 1 --backend bogus", model);
   CHECK(cli_exec(fascia, args, err, &result));
   CHECK(result.status == 2);

@@ -245,7 +245,11 @@ static void check_device_backends(const char *fascia, const char *err) {
   } else {
     CHECK(result.status == 1 || result.status == 2);
     CHECK(contains_nocase(result.err, "cuda"));
-    CHECK(result.out[0] == '\0');
+    // --json: no rows, the object that says how the command ended
+    cJSON *ended = cJSON_Parse(result.out);
+    const cJSON *status = cJSON_GetObjectItemCaseSensitive(ended, "exit_status");
+    CHECK(cJSON_IsNumber(status) && status->valueint == result.status);
+    cJSON_Delete(ended);
   }
   // the device solver is matrix-free: the assembled matrix is refused as a usage error
   snprintf(args, sizeof args, "bench %s --backend emulated --assembled --steps 1 --repeats 1", row);

@@ -7,6 +7,13 @@
 // X`, `--snapshots` holding M under one of its names; `prep S -o S` and `-o`
 // naming one of the scene's meshes. A symbolic link, FIFO or device given as
 // an output is refused too instead of being replaced by a regular file.
+// Output folders are checked by the names they write by pattern too: a model
+// named like a per-step ParaView file in the --paraview folder, a mesh named
+// like a preview part in the --preview folder; an output folder and an
+// output file of one name (-o P --paraview P); the scene's label table as
+// the --labelmap's table. An input that is a FIFO, device or folder (the
+// model, --resume, --drive, inspect's model) is refused at once instead of
+// blocking the reader.
 // Continuing a checkpoint into the same file (--resume C --checkpoint C)
 // stays allowed.
 // Usage: t907_cli_output_is_input PATH/TO/fascia WORK_DIR
@@ -116,7 +123,75 @@ int main(int argc, char **argv) {
     fprintf(stderr, "t907: the device case is skipped: mknod needs root\n");
   }
 
+  // an input named like the files an output folder writes per step
+  snprintf(path, sizeof path, "%s/pv", dir);
+  CHECK(mkdir(path, 0777) == 0);
+  snprintf(path, sizeof path, "%s/pv/b-0000.vtp", dir);
+  CHECK(link(model, path) == 0);
+  snprintf(command, sizeof command, "'%s' run '%s' --steps 2 --paraview '%s/pv'", fascia, path, dir);
+  failures += refused(command, "--paraview", model, length);
+  // an output folder still to be made and an output file of the same name
+  snprintf(path, sizeof path, "%s/P.h5", dir);
+  snprintf(command, sizeof command, "'%s' run '%s' --steps 2 -o '%s' --paraview '%s'", fascia, model, path, path);
+  failures += refused(command, "--paraview", model, length);
+  CHECK(!cli_file_exists(path));
+  // inputs that are not regular files: refused at once, never read (a FIFO blocks its reader)
+  snprintf(path, sizeof path, "%s/in-fifo", dir);
+  CHECK(mkfifo(path, 0666) == 0);
+  static const char *const fifo_inputs[] = {"run '%s' --steps 2", "run '%2$s' --steps 2 --resume '%1$s'",
+                                            "run '%2$s' --steps 2 --drive A='%1$s'", "inspect '%s'",
+                                            "run '%2$s' --steps 2 --drive A='%3$s'"};
+  for (size_t k = 0; k < sizeof fifo_inputs / sizeof fifo_inputs[0]; ++k) {
+    char line[2048];
+    snprintf(line, sizeof line, fifo_inputs[k], path, model, dir); // the last one: a folder
+    snprintf(command, sizeof command, "timeout 20 '%s' %s", fascia, line);
+    failures += refused(command, k + 1 == sizeof fifo_inputs / sizeof fifo_inputs[0] ? "a folder" : "a FIFO", model,
+                        length);
+  }
+
 #ifdef FASCIA_HAVE_PREP
+  { // a mesh named like a preview part, in the --preview folder
+    char pdir[600], pscene[1024], pmesh[1024];
+    snprintf(pdir, sizeof pdir, "%s/preview", dir);
+    CHECK(mkdir(pdir, 0777) == 0);
+    CHECK(cli_write_tiny_scene(pdir, pscene, pmesh));
+    snprintf(path, sizeof path, "%s/A.vtp", pdir);
+    CHECK(rename(pmesh, path) == 0);
+    snprintf(command, sizeof command, "sed -i 's/a.obj/A.vtp/g' '%s'", pscene);
+    CHECK(system(command) == 0);
+    const long mesh_length = cli_read_file(path, original, sizeof original);
+    snprintf(command, sizeof command, "'%s' prep '%s' -o '%s/p.h5' --preview '%s'", fascia, pscene, dir, pdir);
+    failures += refused(command, "--preview", path, mesh_length);
+  }
+  { // the scene's own label table as the table written beside --labelmap
+    char ldir[600], lscene[1024], table[1024];
+    snprintf(ldir, sizeof ldir, "%s/labels", dir);
+    CHECK(mkdir(ldir, 0777) == 0);
+    snprintf(table, sizeof table, "%s/X.tsv", ldir);
+    FILE *f = fopen(table, "w");
+    CHECK(f);
+    fputs("1\tA\n2\tB\n", f);
+    fclose(f);
+    snprintf(path, sizeof path, "%s/X.nii.gz", ldir);
+    f = fopen(path, "w");
+    CHECK(f);
+    fputs("not read: the paths are refused first\n", f);
+    fclose(f);
+    snprintf(lscene, sizeof lscene, "%s/s.json", ldir);
+    f = fopen(lscene, "w");
+    CHECK(f);
+    fputs("{\"fascia_scene\": 1, \"voxel_size\": 0.02,\n"
+          " \"segmentation\": {\"file\": \"X.nii.gz\", \"labels\": \"X.tsv\"},\n"
+          " \"materials\": {\"soft\": {\"youngs_modulus\": 3000, \"poisson_ratio\": 0.3}},\n"
+          " \"organs\": [{\"name\": \"A\", \"labels\": \"A\"}, {\"name\": \"B\", \"labels\": \"B\"}],\n"
+          " \"tissues\": [{\"name\": \"gap\", \"connects\": [\"A\", \"B\"], \"max_gap\": 0.1,\n"
+          "  \"material\": \"soft\", \"frame_spacing\": 0.1, \"sample_spacing\": 0.05}]}\n",
+          f);
+    fclose(f);
+    const long table_length = cli_read_file(table, original, sizeof original);
+    snprintf(command, sizeof command, "'%s' prep '%s' -o '%s/l.h5' --labelmap '%s/X.nii'", fascia, lscene, dir, ldir);
+    failures += refused(command, "label table", table, table_length);
+  }
   // prep: the scene or one of its meshes as the model file
   char scene[1024], mesh[1024];
   CHECK(cli_write_tiny_scene(dir, scene, mesh));

@@ -23,6 +23,52 @@ int cli_usage_error(const char *command, const char *format, const char *what) {
   return 2;
 }
 
+// Options that say the same thing, or opposite things: at most one of each
+// group on a command line. Every other option at most once, except these.
+static const char *const option_groups[][3] = {
+    {"-o", "--output", NULL},           {"--paraview", "--organs", NULL},
+    {"--single", "--double", NULL},     {"--assembled", "--matrix-free", NULL},
+    {"--static", "--steps", NULL},      {"--require-convergence", "--accept-unconverged", NULL},
+    {"--static-time", "--steps", NULL},
+};
+static const char *const repeatable_options[] = {"--drive", "--drive-template", "--verbose"};
+
+static int is_option(const char *a) { return (a[0] == '-' && a[1] == '-' && a[2]) || !strcmp(a, "-o") || !strcmp(a, "-h"); }
+
+// The group of option a (its index), or -1.
+static int group_of(const char *a, int after) {
+  for (int g = after + 1; g < (int)(sizeof option_groups / sizeof option_groups[0]); ++g)
+    for (int k = 0; k < 3 && option_groups[g][k]; ++k)
+      if (!strcmp(a, option_groups[g][k])) return g;
+  return -1;
+}
+
+int cli_check_repeats(const char *command, int argc, char **argv) {
+  for (int k = 1; k < argc; ++k) {
+    const char *a = argv[k];
+    if (!is_option(a)) continue;
+    int repeatable = 0;
+    for (size_t r = 0; r < sizeof repeatable_options / sizeof repeatable_options[0]; ++r)
+      repeatable |= !strcmp(a, repeatable_options[r]);
+    for (int j = 1; j < k; ++j) {
+      const char *b = argv[j];
+      if (!is_option(b)) continue;
+      if (!strcmp(a, b) && !repeatable) {
+        fprintf(stderr, "fascia %s: option %s is given twice; give it once (see fascia %s --help)\n", command, a,
+                command);
+        return 2;
+      }
+      for (int g = group_of(a, -1); g >= 0; g = group_of(a, g))
+        if (strcmp(a, b) && group_of(b, g - 1) == g) {
+          fprintf(stderr, "fascia %s: options %s and %s exclude each other; give one (see fascia %s --help)\n",
+                  command, b, a, command);
+          return 2;
+        }
+    }
+  }
+  return -1;
+}
+
 int cli_parse_real(const char *text, fascia_real *out) {
   char *end = NULL;
   errno = 0;

@@ -1,13 +1,17 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
 // The check every command makes of its file arguments before any work: each
-// output can be written (its folder exists, is a folder, is writable; the
-// path is not a link, FIFO, device or folder that a rename would replace),
-// no output is one of the inputs or another output (compared by file
-// identity, device and inode, not by spelling), and temporary files that a
-// killed fascia left next to the outputs are removed.
+// input that exists is a regular file (a FIFO would block the reader
+// forever, a device or folder is no input); each output can be written (its
+// folder exists, is a folder, is writable; the path is not a link, FIFO,
+// device or folder that a rename would replace); no output is one of the
+// inputs or another output (compared by file identity, device and inode, not
+// by spelling), including the files an output folder will hold by pattern
+// (`<organ>-<k>.vtp`); and temporary files that a killed fascia left next to
+// the outputs are removed.
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
+#include <fnmatch.h>
 #include <stdio.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -36,6 +40,7 @@ const char *cli_folder_of(const char *path, char *out, size_t size) {
 }
 
 static void folder_of(const char *path, char *out) { cli_folder_of(path, out, PATH_TEXT); }
+static const char *folder_of_input(const char *path, char *out) { return cli_folder_of(path, out, PATH_TEXT); }
 
 static int same_key(const file_key *a, const file_key *b) {
   if (a->exists != b->exists || a->dev != b->dev || a->ino != b->ino) return 0;
@@ -105,6 +110,41 @@ static int check_output_dir(const char *command, const cli_path *p) {
   return -1;
 }
 
+// An input that exists must be a regular file (stat follows links: a link
+// to a file is fine). One that does not exist is left to its reader, which
+// says so with the reason.
+static int check_input(const char *command, const cli_path *p) {
+  struct stat st;
+  if (stat(p->path, &st) != 0 || S_ISREG(st.st_mode)) return -1;
+  return refuse(command, 2, "%s '%s' is %s, not a regular file; give the path of the file itself", p->option, p->path,
+                kind_of(st.st_mode));
+}
+
+// An input that lies in output folder p and whose name matches one of the
+// folder's patterns would be replaced by the files written there.
+static int check_folder_patterns(const char *command, const cli_path *paths, int count, const cli_path *p) {
+  struct stat dir;
+  if (!p->names || stat(p->path, &dir) != 0) return -1; // a folder still to be made holds no input
+  for (int j = 0; j < count; ++j) {
+    const cli_path *in = paths + j;
+    if (in->kind != CLI_INPUT || !in->path || !in->path[0]) continue;
+    char folder[PATH_TEXT];
+    struct stat st;
+    if (stat(folder_of_input(in->path, folder), &st) != 0 || st.st_dev != dir.st_dev || st.st_ino != dir.st_ino)
+      continue;
+    const char *slash = strrchr(in->path, '/');
+    const char *name = slash ? slash + 1 : in->path;
+    for (int n = 0; p->names[n]; ++n)
+      if (!fnmatch(p->names[n], name, 0)) {
+        char what[2 * PATH_TEXT];
+        snprintf(what, sizeof what, "'%s' writes files named '%s' there, and the %s", p->path, p->names[n], in->option);
+        return refuse(command, 2, "%s %s '%s' is one of them: writing would destroy that input; give another folder",
+                      p->option, what, in->path);
+      }
+  }
+  return -1;
+}
+
 // Refuses output key k (named option, path) when it is an input or an
 // earlier output.
 static int check_distinct(const char *command, const cli_path *paths, int count, int self, const char *path,
@@ -139,11 +179,30 @@ int cli_check_paths(const char *command, const cli_path *paths, int count) {
   int key_count = 0;
   for (int k = 0; k < count; ++k) {
     const cli_path *p = paths + k;
+    if (p->kind == CLI_INPUT && p->path && p->path[0]) {
+      const int rc = check_input(command, p);
+      if (rc >= 0) return rc;
+    }
+  }
+  for (int k = 0; k < count; ++k) {
+    const cli_path *p = paths + k;
     if (p->kind == CLI_INPUT || !p->path) continue;
     if (!p->path[0]) return refuse(command, 2, "%s needs a path, found an empty one%s%s", p->option, "", "");
     if (p->kind == CLI_OUTPUT_DIR) {
       int rc = check_output_dir(command, p);
+      if (rc < 0) rc = check_folder_patterns(command, paths, count, p);
       if (rc >= 0) return rc;
+      // the folder itself, when it is still to be made, against the other outputs (-o X --paraview X)
+      struct stat st;
+      if (stat(p->path, &st) != 0 && key_count < MAX_KEYS) {
+        file_key key;
+        snprintf(joined[key_count], PATH_TEXT, "%s", p->path);
+        rc = check_output_file(command, p, joined[key_count], &key);
+        if (rc < 0) rc = check_distinct(command, paths, count, k, joined[key_count], &key, keys, key_options, key_count);
+        if (rc >= 0) return rc;
+        keys[key_count] = key;
+        key_options[key_count++] = p->option;
+      }
     }
     // the files themselves: the path, or the names an output folder will hold
     for (int n = 0; p->kind == CLI_OUTPUT_FILE ? n < 1 : p->names && p->names[n]; ++n) {
@@ -153,6 +212,7 @@ int cli_check_paths(const char *command, const cli_path *paths, int count) {
       else snprintf(path, PATH_TEXT, "%s/%s", p->path, p->names[n]);
       struct stat st;
       if (p->kind == CLI_OUTPUT_DIR && stat(p->path, &st) != 0) continue; // a new folder holds nothing yet
+      if (p->kind == CLI_OUTPUT_DIR && strpbrk(p->names[n], "*?[")) continue; // a pattern: check_folder_patterns
       file_key key;
       int rc = check_output_file(command, p, path, &key);
       if (rc < 0) rc = check_distinct(command, paths, count, k, path, &key, keys, key_options, key_count);

@@ -69,15 +69,9 @@ static int print_json(const fascia_model *m, const char *path) {
   cJSON_AddNumberToObject(root, "volume", fascia_model_volume(m));
   cJSON_AddNumberToObject(root, "mass", fascia_model_mass(m));
   cJSON_AddStringToObject(root, "path", path);
-  char *text = cJSON_PrintUnformatted(root);
+  const int rc = cli_json_emit(root, 0);
   cJSON_Delete(root);
-  if (!text) {
-    fprintf(stderr, "fascia beam: out of memory\n");
-    return 1;
-  }
-  printf("%s\n", text);
-  cJSON_free(text);
-  return 0;
+  return rc;
 }
 
 int cmd_beam(int argc, char **argv) {

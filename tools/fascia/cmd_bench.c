@@ -1106,14 +1106,7 @@ int cmd_bench(int argc, char **argv) {
   if (case_count && !opt.no_calculix && !opt.json) cantilever_peers_text(&opt, cant, case_count, &runs);
   for (int k = 0; opt.json && k < case_count; ++k) cJSON_AddItemToArray(array, cantilever_json(cant + k));
   if (opt.json) {
-    char *text = cJSON_PrintUnformatted(array);
-    if (!text) {
-      fprintf(stderr, "fascia bench: out of memory\n");
-      rc = 1;
-      goto done;
-    }
-    printf("%s\n", text);
-    cJSON_free(text);
+    if ((rc = cli_json_emit(array, 0)) != 0) goto done;
   }
   rc = opt.csv ? write_csv_file(opt.csv, &opt, paper, paper_count, cant, case_count) : 0;
   int failed_rows = 0;

@@ -138,7 +138,7 @@ static void print_text(const char *path, const fascia_model *m, const summary *z
 
 // One JSON object; NULL when out of memory. cJSON_Add* on a NULL parent
 // returns NULL, so one check at the end covers every step.
-static char *make_json(const char *path, const fascia_model *m, const summary *z) {
+static cJSON *make_json(const char *path, const fascia_model *m, const summary *z) {
   cJSON *root = cJSON_CreateObject();
   cJSON_AddStringToObject(root, "file", path);
   cJSON_AddNumberToObject(root, "frames", m->frame_count);
@@ -197,11 +197,9 @@ static char *make_json(const char *path, const fascia_model *m, const summary *z
   cJSON *provenance = m->provenance ? cJSON_Parse(m->provenance) : NULL;
   if (!provenance) provenance = m->provenance ? cJSON_CreateString(m->provenance) : cJSON_CreateNull();
   cJSON_AddItemToObject(root, "provenance", provenance);
-  char *text = kinds && neighbours && materials && motions && probes && organs && coupling && provenance
-                   ? cJSON_Print(root)
-                   : NULL;
+  if (kinds && neighbours && materials && motions && probes && organs && coupling && provenance) return root;
   cJSON_Delete(root);
-  return text;
+  return NULL;
 }
 
 int cmd_inspect(int argc, char **argv) {
@@ -229,6 +227,9 @@ int cmd_inspect(int argc, char **argv) {
     fputs(inspect_usage, stderr);
     return 2;
   }
+  const cli_path input = {"model", path, CLI_INPUT, NULL, NULL};
+  const int paths_rc = cli_check_paths("inspect", &input, 1);
+  if (paths_rc >= 0) return paths_rc;
   fascia_ctx *ctx = cli_ctx(0, 0);
   fascia_model *model = NULL;
   const fascia_status status = fascia_model_load(ctx, path, &model);
@@ -243,13 +244,12 @@ int cmd_inspect(int argc, char **argv) {
     fprintf(stderr, "fascia inspect: out of memory\n");
     code = 1;
   } else if (json) {
-    char *text = make_json(path, model, &z);
-    if (text)
-      printf("%s\n", text);
+    cJSON *root = make_json(path, model, &z);
+    if (root)
+      code = cli_json_emit(root, 0);
     else
-      fprintf(stderr, "fascia inspect: out of memory\n");
-    code = text ? 0 : 1;
-    free(text);
+      fprintf(stderr, "fascia inspect: out of memory\n"), code = 1;
+    cJSON_Delete(root);
   } else {
     print_text(path, model, &z);
   }

@@ -419,9 +419,7 @@ static void print_json(const prep_run *r, const step_clock *c, const char *outpu
     total += c->seconds[k];
   }
   cJSON_AddNumberToObject(root, "seconds", total);
-  char *text = cJSON_PrintUnformatted(root);
-  if (text) printf("%s\n", text);
-  free(text);
+  (void)cli_json_emit(root, 0);
   cJSON_Delete(root);
 }
 
@@ -429,9 +427,10 @@ static void print_json(const prep_run *r, const step_clock *c, const char *outpu
 // folders they go to, before the first stage (cli_check_paths).
 static int check_prep_paths(const fascia_prep_scene *scene, const char *output, const char *preview,
                             const char *labelmap, const char *label_table) {
+  // each organ's surface is <organ>.vtp
   static const char *const preview_names[] = {"preview.pvd", "region.vti", "frames.vtu", "samples.vtu", "coupling.vtu",
-                                              NULL};
-  cli_path *paths = calloc((size_t)scene->organ_count + 5, sizeof *paths);
+                                              "*.vtp", NULL};
+  cli_path *paths = calloc((size_t)scene->organ_count + 7, sizeof *paths);
   if (!paths) {
     fprintf(stderr, "fascia prep: out of memory\n");
     return 1;
@@ -440,6 +439,15 @@ static int check_prep_paths(const fascia_prep_scene *scene, const char *output, 
   paths[n++] = (cli_path){"scene", scene->path, CLI_INPUT, NULL, NULL};
   for (int32_t o = 0; o < scene->organ_count; ++o)
     paths[n++] = (cli_path){"organ mesh", scene->organs[o].mesh_path, CLI_INPUT, NULL, NULL};
+  // the segmentation and its label table (a TSV named in the scene, against its folder; not a built-in table)
+  const fascia_prep_segmentation *seg = &scene->segmentation;
+  char table[4096] = "", folder[4096];
+  if (seg->file && seg->table && strncmp(seg->table, "totalsegmentator:", 17)) {
+    if (seg->table[0] == '/') snprintf(table, sizeof table, "%s", seg->table);
+    else snprintf(table, sizeof table, "%s/%s", cli_folder_of(scene->path, folder, sizeof folder), seg->table);
+  }
+  paths[n++] = (cli_path){"scene's label map", seg->file ? seg->file_path : NULL, CLI_INPUT, NULL, NULL};
+  paths[n++] = (cli_path){"scene's label table", table[0] ? table : NULL, CLI_INPUT, NULL, NULL};
   paths[n++] = (cli_path){"-o", output, CLI_OUTPUT_FILE, NULL, NULL};
   paths[n++] = (cli_path){"--preview", preview, CLI_OUTPUT_DIR, preview_names, NULL};
   paths[n++] = (cli_path){"--labelmap", labelmap, CLI_OUTPUT_FILE, NULL, NULL};

@@ -597,10 +597,13 @@ static void sample_displacements(const fascia_model *m, const fascia_solver *sol
   free(p);
 }
 
-static int print_json(const run_options *opt, const fascia_model *m, fascia_solver *solver, const run_totals *t,
-                      fascia_real max_strain, fascia_real max_stress) {
+// The summary as one JSON object, without how the run ended: cmd_run adds
+// that ("ended", "converged", "exit_status", "error") once it is known.
+static cJSON *summary_json(const run_options *opt, const fascia_model *m, fascia_solver *solver, const run_totals *t,
+                           fascia_real max_strain, fascia_real max_stress) {
   const int steps = t->steps > 0 ? t->steps : 1;
   cJSON *root = cJSON_CreateObject();
+  if (!root) return NULL;
   cJSON_AddStringToObject(root, "model", opt->model_path);
   cJSON_AddStringToObject(root, "mode", opt->dynamic ? "dynamic" : "static");
   if (!opt->dynamic) {
@@ -621,7 +624,6 @@ static int print_json(const run_options *opt, const fascia_model *m, fascia_solv
   cJSON_AddNumberToObject(root, "steps", t->steps);
   if (opt->dynamic) cJSON_AddNumberToObject(root, "dt", opt->solver.time_step);
   cJSON_AddNumberToObject(root, "time", fascia_solver_time(solver));
-  cJSON_AddBoolToObject(root, "converged", t->steps > 0 && t->converged_steps == t->steps);
   cJSON_AddNumberToObject(root, "converged_steps", t->converged_steps);
   cJSON_AddBoolToObject(root, "interrupted", t->interrupted);
   cJSON_AddNumberToObject(root, "ms_per_step", t->solve_ms / steps);
@@ -674,15 +676,19 @@ static int print_json(const run_options *opt, const fascia_model *m, fascia_solv
   } else {
     cJSON_AddNullToObject(root, "results");
   }
-  char *text = cJSON_PrintUnformatted(root);
-  cJSON_Delete(root);
-  if (!text) {
-    fprintf(stderr, "fascia run: out of memory\n");
-    return 1;
-  }
-  printf("%s\n", text);
-  cJSON_free(text);
-  return 0;
+  return root;
+}
+
+// How the run ended, added to its summary and printed: "completed" (every
+// step asked for was taken, and "converged" says whether each converged),
+// "interrupted" or "failed" (then "converged" is false whatever the steps
+// before the failure did, and "error" holds the reason).
+static int emit_json(cJSON *root, const run_options *opt, const run_totals *t, int exit_status) {
+  const char *ended = exit_status == 0 ? "completed" : t->interrupted ? "interrupted" : "failed";
+  const int all_done = opt->dynamic ? t->steps > 0 && t->steps + (opt->checkpoint ? opt->checkpoint->first_step - 1 : 0) == opt->steps : t->steps == 1;
+  cJSON_AddStringToObject(root, "ended", ended);
+  cJSON_AddBoolToObject(root, "converged", exit_status == 0 && all_done && t->converged_steps == t->steps);
+  return cli_json_emit(root, exit_status);
 }
 
 // --- resuming: the checkpoint's settings, the command line's --steps --------
@@ -765,7 +771,8 @@ static int take_resume_settings(int argc, char **argv, run_options *opt, const f
 // and the drive templates against the model, --resume and the drive files.
 static int check_run_paths(const run_options *opt, const checkpoint_options *ck, const run_outputs *outs,
                            const run_drive *drive) {
-  static const char *const organ_names[] = {"run.pvd", "organs.pvd", NULL};
+  // per saved step: <organ>-<k>.vtp, tissue-<k>.vtp, samples-<k>.vtu, frames-<k>.vtu, tetrahedra-<k>.vtu
+  static const char *const organ_names[] = {"run.pvd", "organs.pvd", "*-[0-9]*.vtp", "*-[0-9]*.vtu", NULL};
   static const char *const snapshot_names[] = {"tissue-rest.csv", "tissue-final.csv", "organs-rest.csv",
                                                "organs-final.csv", NULL};
   const int most = 8 + drive->count + drive->template_count;
@@ -855,6 +862,7 @@ int cmd_run(int argc, char **argv) {
   fascia_solver *solver = NULL;
   fascia_results *res = NULL;
   fascia_real *buffers[3] = {NULL, NULL, NULL}; // sample positions [3S], strain [S], stress [S]
+  cJSON *summary = NULL; // --json: printed once the exit status is known
   run_totals tot;
   memset(&tot, 0, sizeof tot);
   tot.ctx = ctx;
@@ -966,14 +974,16 @@ int cmd_run(int argc, char **argv) {
     fascia_status cst = fascia_results_close(&res);
     if (st == FASCIA_OK) st = cst;
   }
-  if (tot.steps > 0 || !opt.dynamic) {
+  if (tot.steps > 0 || !opt.dynamic || opt.json) { // JSON also for a run that failed at its first step
     fascia_solver_sample_strain(solver, buffers[1], buffers[2]);
     const fascia_real max_strain = largest(buffers[1], model->sample_count);
     const fascia_real max_stress = largest(buffers[2], model->sample_count);
-    if (opt.json)
-      rc = print_json(&opt, model, solver, &tot, max_strain, max_stress);
-    else
+    if (opt.json) {
+      summary = summary_json(&opt, model, solver, &tot, max_strain, max_stress);
+      if (!summary) st = fascia_ctx_fail(ctx, FASCIA_ERR_MEMORY, __FILE__, __LINE__, "run: out of memory for --json");
+    } else {
       print_text(&opt, model, solver, &tot, max_strain, max_stress);
+    }
     fflush(stdout);
   }
   if (tot.interrupted && st == FASCIA_OK) { // not what was asked: a failure, with the steps done kept
@@ -984,6 +994,8 @@ int cmd_run(int argc, char **argv) {
 done:
   if (st != FASCIA_OK && rc != 2) rc = cli_fail("run", ctx, st);
   else if (rc < 0) rc = 0;
+  if (summary) rc = emit_json(summary, &opt, &tot, rc); // else cli_json_finish says how it ended
+  cJSON_Delete(summary);
   (void)run_outputs_end(&outs, solver, 0); // closes what is still open after an error
   fascia_results_destroy(&res);
   // Every output is closed or removed. A run a signal stopped keeps catching

@@ -697,20 +697,18 @@ int cmd_tradeoff(int argc, char **argv) {
   cJSON *array = cJSON_CreateArray();
   for (int k = 0; k < count && array; ++k) cJSON_AddItemToArray(array, json_row(rows + k));
   char *text = array ? cJSON_Print(array) : NULL;
-  cJSON_Delete(array);
-  if (!text || !(file = open_out(&opt, "tradeoff.json"))) {
-    cJSON_free(text);
-    rc = 1;
-    goto done;
+  int written = text && (file = open_out(&opt, "tradeoff.json"));
+  if (written) {
+    fprintf(fascia_file_stream(file), "%s\n", text);
+    written = !close_out(&opt, file);
   }
-  fprintf(fascia_file_stream(file), "%s\n", text);
-  if (close_out(&opt, file)) {
-    cJSON_free(text);
-    rc = 1;
-    goto done;
-  }
-  if (opt.json) printf("%s\n", text);
+  if (written && opt.json) (void)cli_json_emit(array, 0);
   cJSON_free(text);
+  cJSON_Delete(array);
+  if (!written) {
+    rc = 1;
+    goto done;
+  }
   rc = 0;
   for (int p = 0; p < PROBLEM_COUNT; ++p) rc |= write_points(&opt, rows, count, 0, p);
   rc |= write_points(&opt, rows, count, 1, PROBLEM_CANTILEVER);

@@ -9,6 +9,8 @@
 
 #include "fascia/base.h"
 
+typedef struct cJSON cJSON;
+
 typedef int (*fascia_command_fn)(int argc, char **argv);
 
 typedef struct fascia_command {
@@ -42,6 +44,13 @@ int cli_fail(const char *command, fascia_ctx *ctx, fascia_status status);
 fascia_ctx *cli_ctx(int threads, int progress);
 /// "fascia COMMAND: <format with what> (see fascia COMMAND --help)" on stderr; returns 2.
 int cli_usage_error(const char *command, const char *format, const char *what);
+/// Before parsing, for every command: an option given twice (except --drive,
+/// --drive-template, --verbose), or two options that say the same or the
+/// opposite thing (-o and --output, --single and --double, --assembled and
+/// --matrix-free, ...), is refused. A value that looks like an option
+/// ("--...") counts as one. Returns -1 to go on, else 2 after one line on
+/// stderr.
+int cli_check_repeats(const char *command, int argc, char **argv);
 /// A finite number, the whole text: 1, else 0 (out untouched).
 int cli_parse_real(const char *text, fascia_real *out);
 /// A whole number >= minimum that fits an int: 1, else 0.
@@ -97,6 +106,24 @@ int cli_parse_threads(const char *text, int *out);
 /// OMP_NUM_THREADS, when set, must be a whole number 1 to CLI_MAX_THREADS
 /// (the first of a list). Returns -1 to go on, else 2 after one line on stderr.
 int cli_check_omp_threads(const char *command);
+
+/// --json (cli_json.c): when argv holds --json, stderr is teed so that the
+/// last "fascia ..." error line is known, and the command's JSON says it.
+void cli_json_setup(const char *command, int argc, char **argv);
+/// 1 when --json was given.
+int cli_json_on(void);
+/// Prints root on stdout as one line of valid UTF-8 (bytes that are not UTF-8
+/// replaced by U+FFFD), an object given "exit_status" and "error" (the last
+/// error line, null when exit_status is 0). Returns exit_status (1 when out
+/// of memory). root stays the caller's.
+int cli_json_emit(cJSON *root, int exit_status);
+/// After the command: where --json was given and nothing was emitted (a
+/// usage error, a file refused), prints {"command", "exit_status", "error"}.
+/// Returns exit_status.
+int cli_json_finish(int exit_status);
+/// A copy of text with each byte that is not UTF-8 replaced by U+FFFD
+/// (cJSON_malloc'd; NULL when out of memory).
+char *cli_utf8_copy(const char *text);
 
 /// 1 when --verbose was given anywhere on the command line.
 extern int cli_verbose;

@@ -135,8 +135,10 @@ int main(int argc, char **argv) {
   for (int k = 0; k < command_count; ++k)
     if (!strcmp(argv[1], commands[k].name)) {
       // before any parallel region: the OpenMP runtime crashes on a huge count
-      const int rc = cli_check_omp_threads(commands[k].name);
-      return rc >= 0 ? rc : commands[k].run(argc - 1, argv + 1);
+      cli_json_setup(commands[k].name, argc - 1, argv + 1);
+      int rc = cli_check_repeats(commands[k].name, argc - 1, argv + 1);
+      if (rc < 0) rc = cli_check_omp_threads(commands[k].name);
+      return cli_json_finish(rc >= 0 ? rc : commands[k].run(argc - 1, argv + 1));
     }
   fprintf(stderr, "fascia: unknown command '%s'\n", argv[1]);
   usage(stderr);
