@@ -12,8 +12,12 @@
 // step, time, time step, input digest, size or fingerprint rewritten is
 // refused by fascia_checkpoint_read_settings, _read_inputs and _load alike,
 // and a version 2 file (whose checksum left them out) is refused.
+// A FIFO given as the checkpoint is refused at once (an alarm fails the
+// test if the open blocks).
 #define _POSIX_C_SOURCE 200809L
 #include <hdf5.h>
+#include <signal.h>
+#include <sys/stat.h>
 
 #include "check.h"
 #include "io_fixture.h"
@@ -331,6 +335,23 @@ int main(void) {
   CHECK((file = corrupt_copy("version-1", path, sizeof path)) >= 0);
   CHECK(set_version(file, 1) == 0 && H5Fclose(file) >= 0);
   expect_refused(ctx, solver, path, FASCIA_ERR_FORMAT, "version 1", "older fascia");
+
+  // not a regular file: refused at once by load, read_settings and read_inputs
+  snprintf(path, sizeof path, "%s/fifo.ck.h5", dir);
+  CHECK(mkfifo(path, 0600) == 0);
+  alarm(20); // a blocking open kills the test instead of hanging it
+  expect_refused(ctx, solver, path, FASCIA_ERR_IO, "is a FIFO", "not a regular file");
+  {
+    fascia_solver_def def = sd;
+    uint64_t inputs = 0;
+    fascia_ctx_clear(ctx);
+    CHECK(fascia_checkpoint_read_settings(ctx, path, m, &def, &step) == FASCIA_ERR_IO &&
+          strstr(fascia_ctx_message(ctx), "FIFO"));
+    CHECK(fascia_checkpoint_read_inputs(ctx, path, NULL, &inputs) == FASCIA_ERR_IO);
+  }
+  expect_refused(ctx, solver, dir, FASCIA_ERR_IO, "is a folder", NULL);
+  alarm(0);
+  remove(path);
 
   snprintf(path, sizeof path, "%s/truncated.ck.h5", dir);
   CHECK(fixture_copy(good, path, 1000) == 0);

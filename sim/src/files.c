@@ -4,7 +4,7 @@
 // is complete (fascia/files.h), for every writer of fascia: the HDF5 ones
 // reserve their name here (h5io.c), the text and VTK ones write through
 // fascia_file. Also finds and removes the temporary files a killed writer
-// left behind.
+// left behind. And opens inputs without blocking on a FIFO.
 #define _POSIX_C_SOURCE 200809L
 #include "fascia/files.h"
 
@@ -110,6 +110,47 @@ fascia_status fascia_file_open(fascia_ctx *ctx, const char *what, const char *pa
   if (status != FASCIA_OK) {
     free(f);
     return status;
+  }
+  *out = f;
+  return FASCIA_OK;
+}
+
+static const char *file_kind(mode_t mode) {
+  if (S_ISFIFO(mode)) return "a FIFO (named pipe)";
+  if (S_ISDIR(mode)) return "a folder";
+  if (S_ISCHR(mode)) return "a character device";
+  if (S_ISBLK(mode)) return "a block device";
+  if (S_ISSOCK(mode)) return "a socket";
+  return "not a file";
+}
+
+fascia_status fascia_file_open_input(fascia_ctx *ctx, const char *what, const char *path, FILE **out) {
+  FASCIA_CHECK(out, ctx, FASCIA_ERR_ARGUMENT, "fascia_file_open_input: NULL out");
+  *out = NULL;
+  FASCIA_CHECK(what && path && path[0], ctx, FASCIA_ERR_ARGUMENT, "fascia_file_open_input: NULL name or empty path");
+  // O_NONBLOCK: opening a FIFO for reading would wait for a writer
+  const int fd = open(path, O_RDONLY | O_NONBLOCK | O_NOCTTY);
+  if (fd < 0) {
+    const int err = errno;
+    return FASCIA_FAIL(ctx, FASCIA_ERR_IO, "%s '%s': cannot open: %s", what, path, strerror(err));
+  }
+  struct stat st;
+  if (fstat(fd, &st) != 0) {
+    const int err = errno;
+    close(fd);
+    return FASCIA_FAIL(ctx, FASCIA_ERR_IO, "%s '%s': cannot stat: %s", what, path, strerror(err));
+  }
+  if (!S_ISREG(st.st_mode)) {
+    close(fd);
+    return FASCIA_FAIL(ctx, FASCIA_ERR_IO, "%s '%s' is %s, not a regular file; give the path of the %s file itself",
+                       what, path, file_kind(st.st_mode), what);
+  }
+  const int flags = fcntl(fd, F_GETFL);
+  FILE *f = flags >= 0 && fcntl(fd, F_SETFL, flags & ~O_NONBLOCK) == 0 ? fdopen(fd, "rb") : NULL;
+  if (!f) {
+    const int err = errno;
+    close(fd);
+    return FASCIA_FAIL(ctx, FASCIA_ERR_IO, "%s '%s': cannot open: %s", what, path, strerror(err));
   }
   *out = f;
   return FASCIA_OK;

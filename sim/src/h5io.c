@@ -13,6 +13,7 @@
 #include <sys/statvfs.h>
 #include <unistd.h>
 
+#include "fascia/files.h"
 #include "fascia/model.h"
 #include "h5io.h"
 
@@ -331,11 +332,9 @@ static int driver_block_fits(const char *path, char *detail, size_t detail_size)
 fascia_status fascia_h5_open_read(fascia_ctx *ctx, const char *what, const char *path, const char *remedy,
                                   hid_t *file) {
   *file = H5I_INVALID_HID;
-  FILE *probe = fopen(path, "rb");
-  if (!probe) {
-    const int err = errno;
-    return FASCIA_FAIL(ctx, FASCIA_ERR_IO, "%s '%s': cannot open: %s", what, path, strerror(err));
-  }
+  // HDF5's own open blocks forever on a FIFO: only a regular file goes on
+  FILE *probe = NULL;
+  FASCIA_TRY(fascia_file_open_input(ctx, what, path, &probe));
   fclose(probe);
   char detail[600];
   const htri_t is_hdf5 = H5Fis_hdf5(path);

@@ -38,6 +38,15 @@ FASCIA_API fascia_status fascia_file_commit(fascia_file **file);
 /// Accepts NULL and sets *file to NULL.
 FASCIA_API void fascia_file_discard(fascia_file **file);
 
+/// Opens the input file `path` for reading ("rb") without ever blocking:
+/// the path is opened non-blocking and refused unless it is a regular file
+/// (a FIFO would block the open, or the read, forever; a device or a folder
+/// is no input). `what` names the file in messages ("model", "drive"). On
+/// error *out is NULL and the status is FASCIA_ERR_IO with a message naming
+/// the path and what it is ("'P' is a FIFO, not a regular file") or why it
+/// cannot be opened.
+FASCIA_API fascia_status fascia_file_open_input(fascia_ctx *ctx, const char *what, const char *path, FILE **out);
+
 /// Removes the temporary files `path.tmp-PID-K` that a process of this host
 /// no longer running left next to `path` (a kill during a write). Files of
 /// running processes, of other users and other names are left alone.
