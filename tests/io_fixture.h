@@ -166,6 +166,90 @@ static inline int fixture_count_files(const char *dir, const char *part) {
   return count;
 }
 
+#define FIXTURE_DIFFERS_(a, b, count) ((count) > 0 && memcmp((a), (b), (size_t)(count) * sizeof *(a)) != 0)
+
+/// The first field in which two models differ ("frame_position"), bit for
+/// bit (doubles compared as bytes), or NULL when they hold the same: every
+/// field a model file stores.
+static inline const char *fixture_models_differ(const fascia_model *a, const fascia_model *b) {
+  if (a->frame_count != b->frame_count || a->sample_count != b->sample_count || a->pair_count != b->pair_count ||
+      a->material_count != b->material_count || a->motion_count != b->motion_count ||
+      a->probe_count != b->probe_count || a->probe_pair_count != b->probe_pair_count ||
+      a->organ_count != b->organ_count || a->coupling_count != b->coupling_count)
+    return "sizes";
+  const int64_t N = a->frame_count, S = a->sample_count, P = a->pair_count, Q = a->probe_count,
+                R = a->probe_pair_count, C = a->coupling_count;
+#define FIXTURE_FIELD_(f, count)                                                                                      \
+  if (FIXTURE_DIFFERS_(a->f, b->f, count)) return #f
+  FIXTURE_FIELD_(frame_position, 3 * N);
+  FIXTURE_FIELD_(frame_rotation, 4 * N);
+  FIXTURE_FIELD_(frame_kind, N);
+  FIXTURE_FIELD_(frame_motion, N);
+  FIXTURE_FIELD_(frame_load, 6 * N);
+  FIXTURE_FIELD_(frame_organ, N);
+  FIXTURE_FIELD_(frame_offsets, N + 1);
+  FIXTURE_FIELD_(frame_pairs, P);
+  FIXTURE_FIELD_(sample_position, 3 * S);
+  FIXTURE_FIELD_(sample_volume, S);
+  FIXTURE_FIELD_(sample_material, S);
+  FIXTURE_FIELD_(sample_organ, S);
+  FIXTURE_FIELD_(sample_patch, S);
+  FIXTURE_FIELD_(sample_modes, S);
+  FIXTURE_FIELD_(sample_offsets, S + 1);
+  FIXTURE_FIELD_(pair_frame, P);
+  FIXTURE_FIELD_(pair_weight, P);
+  FIXTURE_FIELD_(pair_gradient, 3 * P);
+  FIXTURE_FIELD_(probe_position, 3 * Q);
+  FIXTURE_FIELD_(probe_offsets, Q + 1);
+  FIXTURE_FIELD_(probe_frame, R);
+  FIXTURE_FIELD_(probe_weight, R);
+  FIXTURE_FIELD_(coupling_organ, C);
+  FIXTURE_FIELD_(coupling_frame, C);
+  FIXTURE_FIELD_(coupling_triangle, C);
+  FIXTURE_FIELD_(coupling_barycentric, 3 * C);
+  FIXTURE_FIELD_(gravity, 3);
+#undef FIXTURE_FIELD_
+  for (int64_t q = 0; q < Q; ++q)
+    if (strcmp(a->probe_name[q], b->probe_name[q])) return "probe_name";
+  for (int32_t k = 0; k < a->material_count; ++k) {
+    const fascia_material *x = a->materials + k, *y = b->materials + k;
+    const double vx[5] = {x->youngs_modulus, x->poisson_ratio, x->density, x->rotation_coupling, x->rotation_smoothing};
+    const double vy[5] = {y->youngs_modulus, y->poisson_ratio, y->density, y->rotation_coupling, y->rotation_smoothing};
+    if (strcmp(x->name, y->name) || x->law != y->law || x->part != y->part || memcmp(vx, vy, sizeof vx))
+      return "materials";
+  }
+  for (int32_t k = 0; k < a->motion_count; ++k) {
+    const fascia_motion *x = a->motions + k, *y = b->motions + k;
+    if (strcmp(x->name, y->name) || x->key_count != y->key_count || FIXTURE_DIFFERS_(x->pivot, y->pivot, 3) ||
+        FIXTURE_DIFFERS_(x->key_time, y->key_time, x->key_count) ||
+        FIXTURE_DIFFERS_(x->key_translation, y->key_translation, 3 * x->key_count) ||
+        FIXTURE_DIFFERS_(x->key_rotation, y->key_rotation, 4 * x->key_count))
+      return "motions";
+  }
+  for (int32_t k = 0; k < a->organ_count; ++k) {
+    const fascia_organ *x = a->organs + k, *y = b->organs + k;
+    if (strcmp(x->name, y->name) || x->kind != y->kind || x->motion != y->motion ||
+        x->vertex_count != y->vertex_count || x->triangle_count != y->triangle_count ||
+        FIXTURE_DIFFERS_(x->vertices, y->vertices, 3 * x->vertex_count) ||
+        FIXTURE_DIFFERS_(x->triangles, y->triangles, 3 * x->triangle_count))
+      return "organs";
+  }
+  if ((a->allow_floating != 0) != (b->allow_floating != 0)) return "allow_floating";
+  const fascia_surface *sa = &a->tissue_surface, *sb = &b->tissue_surface;
+  if (sa->triangle_count != sb->triangle_count ||
+      (sa->triangle_count > 0 && (sa->vertex_count != sb->vertex_count ||
+                                  FIXTURE_DIFFERS_(sa->vertices, sb->vertices, 3 * sa->vertex_count) ||
+                                  FIXTURE_DIFFERS_(sa->triangles, sb->triangles, 3 * sa->triangle_count))))
+    return "tissue_surface";
+  if (a->tetrahedron_count != b->tetrahedron_count ||
+      FIXTURE_DIFFERS_(a->tetrahedra, b->tetrahedra, 4 * a->tetrahedron_count))
+    return "tetrahedra";
+  if ((a->provenance == NULL) != (b->provenance == NULL) ||
+      (a->provenance && strcmp(a->provenance, b->provenance)))
+    return "provenance";
+  return NULL;
+}
+
 /// Removes every file in dir, then dir.
 static inline void fixture_remove_dir(const char *dir) {
   DIR *d = opendir(dir);

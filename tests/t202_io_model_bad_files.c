@@ -3,9 +3,15 @@
 // Every kind of bad model file is refused with FASCIA_ERR_FORMAT or _IO and a
 // message naming the file and the dataset, without crashing or leaking; a
 // failed save leaves neither a file nor a temporary behind and does not
-// clobber an existing good file.
+// clobber an existing good file. The file's checksum: values edited through
+// HDF5 that pass every other check, and a file without a checksum, are
+// refused; of random byte mutations of a saved model every one is either
+// refused or loads bit-identical. A FIFO, a folder or a device given as the
+// model is refused at once (an alarm fails the test if the open blocks).
 #define _POSIX_C_SOURCE 200809L
 #include <hdf5.h>
+#include <signal.h>
+#include <sys/stat.h>
 
 #include "check.h"
 #include "io_fixture.h"
@@ -179,10 +185,20 @@ static void bad_files(fascia_ctx *ctx, const fascia_model *m) {
 
 // Writers other than fascia (h5py writes variable-length strings by default)
 // are accepted: variable-length names and an ASCII variable-length provenance.
-static int other_writers(fascia_ctx *ctx, const fascia_model *m) {
-  char path[512];
+static int other_writers(fascia_ctx *ctx, fascia_model *m) {
+  char path[512], base[512];
   hid_t file;
-  CHECK((file = corrupt_copy("variable-strings", path, sizeof path)) >= 0);
+  // the same model with an ASCII provenance, its strings then rewritten in
+  // another storage: the values, and so the checksum, stay the same
+  snprintf(base, sizeof base, "%s/ascii-provenance.h5", dir);
+  fascia_model *ascii = NULL;
+  CHECK_OK(fascia_model_load(ctx, good, &ascii), ctx);
+  CHECK_OK(fascia_model_set_provenance(ctx, ascii, "{\"tool\": \"h5py\"}"), ctx);
+  CHECK_OK(fascia_model_save(ctx, ascii, base), ctx);
+  fascia_model_destroy(&ascii);
+  snprintf(path, sizeof path, "%s/variable-strings.h5", dir);
+  CHECK(fixture_copy(base, path, -1) == 0);
+  CHECK((file = H5Fopen(path, H5F_ACC_RDWR, H5P_DEFAULT)) >= 0);
   hid_t type = H5Tcopy(H5T_C_S1);
   H5Tset_size(type, H5T_VARIABLE);
   const hsize_t M = 2;
@@ -204,6 +220,103 @@ static int other_writers(fascia_ctx *ctx, const fascia_model *m) {
   CHECK(loaded->sample_count == m->sample_count);
   fascia_model_destroy(&loaded);
   return 0;
+}
+
+static int delete_attribute(const char *path, const char *name) {
+  hid_t file = H5Fopen(path, H5F_ACC_RDWR, H5P_DEFAULT);
+  if (file < 0) return 1;
+  const int failed = H5Adelete_by_name(file, "/", name, H5P_DEFAULT) < 0;
+  return H5Fclose(file) < 0 || failed;
+}
+
+// Values that every other check accepts, edited through HDF5 (which keeps
+// the file well formed), are refused by the checksum; so is a file without one.
+static void checksum_cases(fascia_ctx *ctx, int *cases) {
+  static const struct {
+    const char *dataset;
+    int is_int;
+    hsize_t index;
+    double value;
+  } edits[] = {
+      {"/materials/youngs_modulus", 0, 0, 1000},  {"/materials/density", 0, 1, 1234},
+      {"/materials/poisson_ratio", 0, 0, 0.3},    {"/gravity", 0, 2, -1.62},
+      {"/frames/load", 0, 3, 0.5},                {"/frames/position", 0, 3, 0.0005},
+      {"/samples/volume", 0, 1, 2e-5},            {"/motions/breathing/pivot", 0, 1, 0.25},
+      {"/motions/breathing/translation", 0, 4, 0.002}, {"/probes/position", 0, 0, 0.01},
+      {"/organs/liver/vertices", 0, 1, 0.0123},
+  };
+  char path[512], what[64];
+  hid_t file;
+  for (size_t k = 0; k < sizeof edits / sizeof edits[0]; ++k) {
+    snprintf(what, sizeof what, "edit-%zu", k);
+    CHECK((file = corrupt_copy(what, path, sizeof path)) >= 0);
+    CHECK(poke(file, edits[k].dataset, edits[k].is_int, edits[k].index, edits[k].value) == 0 && H5Fclose(file) >= 0);
+    expect_refused(ctx, path, FASCIA_ERR_FORMAT, FASCIA_OK, "checksum mismatch", "re-run fascia prep");
+    ++*cases;
+  }
+  CHECK((file = corrupt_copy("no-checksum", path, sizeof path)) >= 0 && H5Fclose(file) >= 0);
+  CHECK(delete_attribute(path, "fascia_model_checksum") == 0);
+  expect_refused(ctx, path, FASCIA_ERR_FORMAT, FASCIA_OK, "no checksum", "re-run 'fascia prep'");
+  ++*cases;
+}
+
+// Random byte mutations (1 to 3 bytes each) of the saved model: each one is
+// refused with a message naming the file, or loads to the very same model.
+static void mutations(fascia_ctx *ctx, const fascia_model *m, int count, int *refused, int *same) {
+  FILE *f = fopen(good, "rb");
+  static unsigned char bytes[1 << 20], copy[1 << 20];
+  const size_t size = f ? fread(bytes, 1, sizeof bytes, f) : 0;
+  if (f) fclose(f);
+  CHECK(size > 0 && size < sizeof bytes);
+  unsigned long long state = 0x9e3779b97f4a7c15ULL;
+  char path[512];
+  snprintf(path, sizeof path, "%s/mutated.h5", dir);
+  for (int k = 0; k < count && size > 0; ++k) {
+    memcpy(copy, bytes, size);
+    state ^= state << 13, state ^= state >> 7, state ^= state << 17;
+    const int n = 1 + (int)(state % 3);
+    for (int j = 0; j < n; ++j) {
+      state ^= state << 13, state ^= state >> 7, state ^= state << 17;
+      const size_t at = (size_t)(state % size);
+      const unsigned char to = (unsigned char)(state >> 40);
+      copy[at] = to != copy[at] ? to : (unsigned char)(to ^ 0x01);
+    }
+    FILE *out = fopen(path, "wb");
+    CHECK(out && fwrite(copy, 1, size, out) == size && fclose(out) == 0);
+    fascia_model *loaded = NULL;
+    fascia_ctx_clear(ctx);
+    const fascia_status st = fascia_model_load(ctx, path, &loaded);
+    if (st != FASCIA_OK) {
+      ++*refused;
+      if (loaded || !strstr(fascia_ctx_message(ctx), path)) {
+        fprintf(stderr, "t202: mutation %d refused without the file named: \"%s\"\n", k, fascia_ctx_message(ctx));
+        ++check_failures_;
+      }
+    } else {
+      const char *differs = fixture_models_differ(m, loaded);
+      if (differs) {
+        fprintf(stderr, "t202: mutation %d (%d bytes) loaded with a different %s\n", k, n, differs);
+        ++check_failures_;
+      } else {
+        ++*same;
+      }
+    }
+    fascia_model_destroy(&loaded);
+  }
+}
+
+// Not regular files: refused at once, naming what the path is.
+static void not_regular_files(fascia_ctx *ctx, int *cases) {
+  char path[512];
+  snprintf(path, sizeof path, "%s/fifo.h5", dir);
+  CHECK(mkfifo(path, 0600) == 0);
+  alarm(20); // a blocking open kills the test instead of hanging it
+  expect_refused(ctx, path, FASCIA_ERR_IO, FASCIA_OK, "is a FIFO", "not a regular file");
+  expect_refused(ctx, dir, FASCIA_ERR_IO, FASCIA_OK, "is a folder", "not a regular file");
+  expect_refused(ctx, "/dev/null", FASCIA_ERR_IO, FASCIA_OK, "character device", "not a regular file");
+  alarm(0);
+  remove(path);
+  *cases += 3;
 }
 
 // A failed save leaves nothing behind and keeps an existing file intact.
@@ -256,6 +369,14 @@ int main(void) {
   const ssize_t ids = open_ids();
   bad_files(ctx, m);
   CHECK(other_writers(ctx, m) == 0);
+  int cases = 0, refused = 0, same = 0;
+  checksum_cases(ctx, &cases);
+  not_regular_files(ctx, &cases);
+  mutations(ctx, m, 300, &refused, &same);
+  CHECK(refused >= 50 && refused + same == 300);
+  if (getenv("FASCIA_TEST_VERBOSE"))
+    fprintf(stderr, "t202: %d checksum and file-kind cases; mutations: %d refused, %d loaded the same\n", cases,
+            refused, same);
   failed_saves(ctx, m);
   CHECK(open_ids() == ids);
   fascia_model_destroy(&m);

@@ -17,6 +17,7 @@
 // present, also when it has 0 rows.
 //
 //   /                     attributes: fascia_model_version (int32, = 1),
+//                         fascia_model_checksum (u64, below),
 //                         units ("SI: m, kg, s, Pa"), creator ("fascia X.Y.Z"),
 //                         allow_floating (int32 1, optional: pieces held by
 //                         nothing are meant; absent = 0, such pieces refused)
@@ -60,6 +61,13 @@
 //                         the corners of a tet tissue's tetrahedra
 //   /provenance           scalar string, JSON text (absent when unknown)
 //
+// The checksum is FNV-1a 64 (fnv.h) of the model as a reader builds it from
+// the file (model_checksum below: the version, every count, array, name,
+// attribute, the optional parts and the provenance), so that a file damaged
+// or edited anywhere a load reads is refused instead of loaded as another
+// model. It is checked after every other check (those name what is wrong);
+// a file without it (written before it existed) is refused.
+//
 // Sizes come from the datasets' shapes; before anything is allocated for
 // them the reader checks that every dataset declaring values also stores
 // them (a small damaged or hostile file can declare a billion rows), and that
@@ -72,6 +80,7 @@
 #include <unistd.h>
 
 #include "fascia/model.h"
+#include "fnv.h"
 #include "h5io.h"
 
 // A model with volumetric patches is version 2: a version 1 reader would
@@ -91,11 +100,104 @@
 #define MODEL_UNITS "SI: m, kg, s, Pa"
 #define REMEDY "re-run 'fascia prep' or 'fascia beam' with this version"
 #define PATH_SIZE 256
+#define CHECKSUM_ATTR "fascia_model_checksum"
 
 _Static_assert(sizeof(fascia_real) == sizeof(double), "model files store fascia_real as f64");
 
 /// Element type of a dataset.
 typedef enum elem { ELEM_REAL, ELEM_INT, ELEM_NAME } elem;
+
+// ---------------------------------------------------------------------------
+// The checksum of what a file holds
+
+static uint64_t hash_name(uint64_t h, const char *name) {
+  const size_t n = strnlen(name, FASCIA_NAME_SIZE);
+  h = fascia_fnv(h, name, n);
+  return fascia_fnv(h, "", 1); // the end of the name: "ab"+"c" differs from "a"+"bc"
+}
+
+static uint64_t hash_count(uint64_t h, int64_t n) { return fascia_fnv(h, &n, sizeof n); }
+
+// Everything a load of this model from a file of version `version` gives:
+// what the writer stores, as the reader reads it back.
+static uint64_t model_checksum(const fascia_model *m, int32_t version) {
+  const size_t R = sizeof(fascia_real), I = sizeof(int32_t);
+  const size_t N = (size_t)m->frame_count, S = (size_t)m->sample_count, P = (size_t)m->pair_count;
+  const size_t Q = (size_t)m->probe_count, PR = (size_t)m->probe_pair_count, C = (size_t)m->coupling_count;
+  uint64_t h = fascia_fnv(FASCIA_FNV_START, &version, sizeof version);
+  const int32_t counts[9] = {m->frame_count, m->sample_count, m->pair_count, m->material_count, m->motion_count,
+                             m->probe_count, m->probe_pair_count, m->organ_count, m->coupling_count};
+  h = fascia_fnv(h, counts, sizeof counts);
+  h = fascia_fnv(h, m->frame_position, 3 * N * R);
+  h = fascia_fnv(h, m->frame_rotation, 4 * N * R);
+  h = fascia_fnv(h, m->frame_kind, N * I);
+  h = fascia_fnv(h, m->frame_motion, N * I);
+  h = fascia_fnv(h, m->frame_load, 6 * N * R);
+  h = fascia_fnv(h, m->frame_organ, N * I);
+  h = fascia_fnv(h, m->frame_offsets, (N + 1) * I);
+  h = fascia_fnv(h, m->frame_pairs, P * I);
+  h = fascia_fnv(h, m->sample_position, 3 * S * R);
+  h = fascia_fnv(h, m->sample_volume, S * R);
+  h = fascia_fnv(h, m->sample_material, S * I);
+  h = fascia_fnv(h, m->sample_organ, S * I);
+  h = fascia_fnv(h, m->sample_patch, S * I);
+  h = fascia_fnv(h, m->sample_modes, S * I);
+  h = fascia_fnv(h, m->sample_offsets, (S + 1) * I);
+  h = fascia_fnv(h, m->pair_frame, P * I);
+  h = fascia_fnv(h, m->pair_weight, P * R);
+  h = fascia_fnv(h, m->pair_gradient, 3 * P * R);
+  for (int32_t k = 0; k < m->material_count; ++k) {
+    const fascia_material *mat = m->materials + k;
+    const fascia_real values[5] = {mat->youngs_modulus, mat->poisson_ratio, mat->density, mat->rotation_coupling,
+                                   mat->rotation_smoothing};
+    const int32_t kinds[2] = {mat->law, mat->part};
+    h = hash_name(h, mat->name);
+    h = fascia_fnv(h, kinds, sizeof kinds);
+    h = fascia_fnv(h, values, sizeof values);
+  }
+  for (int32_t k = 0; k < m->motion_count; ++k) {
+    const fascia_motion *mo = m->motions + k;
+    const size_t K = (size_t)mo->key_count;
+    h = hash_name(h, mo->name);
+    h = hash_count(h, mo->key_count);
+    h = fascia_fnv(h, mo->pivot, 3 * R);
+    h = fascia_fnv(h, mo->key_time, K * R);
+    h = fascia_fnv(h, mo->key_translation, 3 * K * R);
+    h = fascia_fnv(h, mo->key_rotation, 4 * K * R);
+  }
+  for (size_t k = 0; k < Q; ++k) h = hash_name(h, m->probe_name[k]);
+  h = fascia_fnv(h, m->probe_position, 3 * Q * R);
+  h = fascia_fnv(h, m->probe_offsets, (Q + 1) * I);
+  h = fascia_fnv(h, m->probe_frame, PR * I);
+  h = fascia_fnv(h, m->probe_weight, PR * R);
+  for (int32_t k = 0; k < m->organ_count; ++k) {
+    const fascia_organ *o = m->organs + k;
+    const int32_t head[4] = {o->kind, o->motion, o->vertex_count, o->triangle_count};
+    h = hash_name(h, o->name);
+    h = fascia_fnv(h, head, sizeof head);
+    h = fascia_fnv(h, o->vertices, 3 * (size_t)o->vertex_count * R);
+    h = fascia_fnv(h, o->triangles, 3 * (size_t)o->triangle_count * I);
+  }
+  h = fascia_fnv(h, m->coupling_organ, C * I);
+  h = fascia_fnv(h, m->coupling_frame, C * I);
+  h = fascia_fnv(h, m->coupling_triangle, C * I);
+  h = fascia_fnv(h, m->coupling_barycentric, 3 * C * R);
+  h = fascia_fnv(h, m->gravity, 3 * R);
+  const int32_t floating = m->allow_floating != 0; // stored as 1 or not at all
+  h = fascia_fnv(h, &floating, sizeof floating);
+  // the optional parts as the writer stores them: a surface without triangles is not written
+  const fascia_surface *ts = &m->tissue_surface;
+  const int32_t surface[2] = {ts->triangle_count > 0 ? ts->vertex_count : 0, ts->triangle_count > 0 ? ts->triangle_count : 0};
+  h = fascia_fnv(h, surface, sizeof surface);
+  h = fascia_fnv(h, ts->vertices, 3 * (size_t)surface[0] * R);
+  h = fascia_fnv(h, ts->triangles, 3 * (size_t)surface[1] * I);
+  const int32_t tetrahedra = m->tetrahedron_count > 0 ? m->tetrahedron_count : 0;
+  h = fascia_fnv(h, &tetrahedra, sizeof tetrahedra);
+  h = fascia_fnv(h, m->tetrahedra, 4 * (size_t)tetrahedra * I);
+  h = hash_count(h, m->provenance ? (int64_t)strlen(m->provenance) : -1);
+  if (m->provenance) h = fascia_fnv(h, m->provenance, strlen(m->provenance));
+  return h;
+}
 
 // ---------------------------------------------------------------------------
 // Writing
@@ -311,13 +413,24 @@ static fascia_status write_organs_coupling(writer *w, const fascia_model *m) {
   return FASCIA_OK;
 }
 
+static herr_t attr_u64(hid_t loc, const char *name, uint64_t value) {
+  hid_t space = H5Screate(H5S_SCALAR);
+  hid_t attr = space >= 0 ? H5Acreate2(loc, name, H5T_STD_U64LE, space, H5P_DEFAULT, H5P_DEFAULT) : H5I_INVALID_HID;
+  const herr_t status = attr >= 0 ? H5Awrite(attr, H5T_NATIVE_UINT64, &value) : -1;
+  if (attr >= 0) H5Aclose(attr);
+  if (space >= 0) H5Sclose(space);
+  return status;
+}
+
 static fascia_status write_model(writer *w, const fascia_model *m) {
   char creator[64];
   snprintf(creator, sizeof creator, "fascia %s", fascia_version());
   hid_t root = H5Gopen2(w->file, "/", H5P_DEFAULT);
   const int modes = model_modes_version(m);
   const int version = modes ? modes : model_has_patches(m) ? MODEL_VERSION_PATCHES : 1;
+  const uint64_t checksum = model_checksum(m, version);
   const int ok = root >= 0 && fascia_h5_attr_int(root, "fascia_model_version", version) >= 0 &&
+                 attr_u64(root, CHECKSUM_ATTR, checksum) >= 0 &&
                  fascia_h5_attr_string(root, "units", MODEL_UNITS) >= 0 &&
                  fascia_h5_attr_string(root, "creator", creator) >= 0 &&
                  (!m->allow_floating || fascia_h5_attr_int(root, "allow_floating", 1) >= 0);
@@ -399,7 +512,8 @@ typedef struct reader {
   fascia_ctx *ctx;
   const char *path;
   hid_t file;
-  int32_t version; ///< the file's fascia_model_version
+  int32_t version;   ///< the file's fascia_model_version
+  uint64_t checksum; ///< the file's fascia_model_checksum
 } reader;
 
 static const char *class_phrase(H5T_class_t cls) {
@@ -683,6 +797,28 @@ static fascia_status read_version(reader *r) {
                "model '%s' /: format version %d is not supported, this fascia (%s) reads versions %d to %d; %s",
                r->path, (int)version, fascia_version(), MODEL_VERSION_MIN, MODEL_VERSION_MAX,
                version > MODEL_VERSION_MAX ? "use a newer fascia" : REMEDY);
+  return FASCIA_OK;
+}
+
+// The stored checksum, compared with the model's once everything is read.
+static fascia_status read_checksum(reader *r) {
+  const htri_t exists = H5Aexists_by_name(r->file, "/", CHECKSUM_ATTR, H5P_DEFAULT);
+  FASCIA_CHECK(exists > 0, r->ctx, FASCIA_ERR_FORMAT,
+               "model '%s' /: no checksum (root attribute '%s' missing): written by an older fascia, or edited; "
+               "re-run 'fascia prep' (or 'fascia beam') to write it again",
+               r->path, CHECKSUM_ATTR);
+  fascia_h5_scope scope = FASCIA_H5_SCOPE_INIT;
+  const hid_t attr = fascia_h5_keep(&scope, H5Aopen_by_name(r->file, "/", CHECKSUM_ATTR, H5P_DEFAULT, H5P_DEFAULT));
+  const hid_t type = attr >= 0 ? fascia_h5_keep(&scope, H5Aget_type(attr)) : H5I_INVALID_HID;
+  const hid_t space = attr >= 0 ? fascia_h5_keep(&scope, H5Aget_space(attr)) : H5I_INVALID_HID;
+  const int ok = type >= 0 && space >= 0 && H5Tget_class(type) == H5T_INTEGER && H5Tget_size(type) == 8 &&
+                 H5Tget_sign(type) == H5T_SGN_NONE && fascia_h5_number_type_ok(type) &&
+                 H5Sget_simple_extent_npoints(space) == 1 && H5Aread(attr, H5T_NATIVE_UINT64, &r->checksum) >= 0;
+  fascia_h5_scope_close(&scope);
+  FASCIA_CHECK(ok, r->ctx, FASCIA_ERR_FORMAT,
+               "model '%s' /: attribute '%s' is not one unsigned 64-bit integer: the file is damaged or was edited; "
+               "re-run 'fascia prep'",
+               r->path, CHECKSUM_ATTR);
   return FASCIA_OK;
 }
 
@@ -999,12 +1135,13 @@ fascia_status fascia_model_load(fascia_ctx *ctx, const char *path, fascia_model 
   *out = NULL;
   fascia_h5_quiet quiet;
   fascia_h5_quiet_begin(&quiet);
-  reader r = {ctx, path, H5I_INVALID_HID, 0};
+  reader r = {ctx, path, H5I_INVALID_HID, 0, 0};
   fascia_model *m = NULL;
   fascia_model_sizes sizes;
   fascia_status status = FASCIA_OK;
   FASCIA_TRY_GOTO(open_file(&r));
   FASCIA_TRY_GOTO(read_version(&r));
+  FASCIA_TRY_GOTO(read_checksum(&r));
   FASCIA_TRY_GOTO(read_sizes(&r, &sizes));
   FASCIA_TRY_GOTO(fascia_model_alloc(ctx, &sizes, &m));
   FASCIA_TRY_GOTO(read_frames_samples(&r, m));
@@ -1017,6 +1154,9 @@ cleanup:
   fascia_h5_quiet_end(&quiet);
   // index and value checks name the file through `path`
   if (status == FASCIA_OK) status = fascia_model_validate(ctx, m, path);
+  if (status == FASCIA_OK && model_checksum(m, r.version) != r.checksum)
+    status = FASCIA_FAIL(ctx, FASCIA_ERR_FORMAT,
+                         "model '%s': checksum mismatch: the file is damaged or was edited; re-run fascia prep", path);
   if (status == FASCIA_OK)
     *out = m;
   else
