@@ -6,9 +6,47 @@
 // image, a 4-D image, no affine (sform and qform codes 0), a label the image
 // lacks (the message lists those it holds), a name the table lacks, a table
 // that does not parse, a NRRD of overlapping layers, an unknown extension.
+// Damaged files whose damage the NIfTI library reads past: a gzip with a
+// flipped bit, cut by 1-8 bytes or followed by other bytes (two gzip members
+// are one file, accepted); a .nii cut short, longer than its header says, or
+// with vox_offset inside the header; header fields out of their defined set
+// (dim[0] 0 or 8, bad magic, sform/qform code 99, pixdim NaN or not
+// positive, bitpix against the datatype), each named for its own cause; a
+// big-endian file is read.
 #define _POSIX_C_SOURCE 200809L // mkdtemp, WEXITSTATUS
+#include <math.h>
+#include <zlib.h>
+
 #include "labelmap_fixture.h"
 #include "prep_cli_case.h"
+
+static size_t slurp(const char *path, unsigned char *buf, size_t cap) {
+  FILE *f = fopen(path, "rb");
+  const size_t n = f ? fread(buf, 1, cap, f) : 0;
+  if (f) fclose(f);
+  return n;
+}
+
+static int spit(const char *dir, const char *name, const unsigned char *bytes, size_t n) {
+  char path[512];
+  snprintf(path, sizeof path, "%s/%s", dir, name);
+  FILE *f = fopen(path, "wb");
+  const int ok = f && fwrite(bytes, 1, n, f) == n;
+  return f && fclose(f) == 0 && ok;
+}
+
+// bytes as gzip, in two members split at byte cut (0: one member)
+static int spit_gz(const char *dir, const char *name, const unsigned char *bytes, size_t n, size_t cut) {
+  char path[512];
+  snprintf(path, sizeof path, "%s/%s", dir, name);
+  gzFile g = gzopen(path, "wb");
+  int ok = g && gzwrite(g, bytes, (unsigned)(cut ? cut : n)) == (int)(cut ? cut : n) && gzclose(g) == Z_OK;
+  if (ok && cut) {
+    g = gzopen(path, "ab");
+    ok = g && gzwrite(g, bytes + cut, (unsigned)(n - cut)) == (int)(n - cut) && gzclose(g) == Z_OK;
+  }
+  return ok;
+}
 
 static uint8_t one_box(const double *x, const void *data) {
   (void)data;
@@ -86,10 +124,102 @@ int main(int argc, char **argv) {
   CHECK(labelmap_write_nrrd(path, &grid, one_box, NULL, 1, 2));
   refused(cli, dir, "overlapping layers", "layers.seg.nrrd", "1", "labels.tsv", "layers.seg.nrrd",
           "overlapping layers");
+  { // damage the NIfTI library reads past, and header fields out of their set
+    static unsigned char nii[8192], gz[8192], b[8192];
+    snprintf(path, sizeof path, "%s/raw.nii", dir);
+    CHECK(labelmap_write_nifti(path, &grid, one_box, NULL, 1, 0, 0, 1));
+    const size_t n = slurp(path, nii, sizeof nii);
+    CHECK(n == 352 + 512);
+    snprintf(path, sizeof path, "%s/good.nii.gz", dir);
+    const size_t m = slurp(path, gz, sizeof gz);
+    CHECK(m > 20);
+    memcpy(b, gz, m);
+    b[m - 6] ^= 0x10; // the CRC32
+    CHECK(spit(dir, "x.nii.gz", b, m));
+    refused(cli, dir, "gzip CRC flipped", "x.nii.gz", "1", "labels.tsv", "x.nii.gz", "damaged gzip data");
+    memcpy(b, gz, m);
+    b[m - 3] ^= 0x01; // the length
+    CHECK(spit(dir, "x.nii.gz", b, m));
+    refused(cli, dir, "gzip length flipped", "x.nii.gz", "1", "labels.tsv", "x.nii.gz", "damaged gzip data");
+    for (size_t cut = 1; cut <= 8; ++cut) {
+      CHECK(spit(dir, "x.nii.gz", gz, m - cut));
+      refused(cli, dir, "gzip cut by a few bytes", "x.nii.gz", "1", "labels.tsv", "x.nii.gz", "damaged gzip data");
+    }
+    memcpy(b, gz, m);
+    memcpy(b + m, "garbage", 7);
+    CHECK(spit(dir, "x.nii.gz", b, m + 7));
+    refused(cli, dir, "bytes after the gzip", "x.nii.gz", "1", "labels.tsv", "x.nii.gz", "not another gzip member");
+    CHECK(spit(dir, "x.nii.gz", nii, n));
+    refused(cli, dir, ".nii.gz not compressed", "x.nii.gz", "1", "labels.tsv", "x.nii.gz", "not gzip-compressed");
+    CHECK(spit_gz(dir, "two.nii.gz", nii, n, 100));
+    scene(dir, "two.nii.gz", "\"box_a\"", "labels.tsv", good);
+    prep_case_accepted(cli, dir, "two gzip members", good);
+    CHECK(spit_gz(dir, "x.nii.gz", nii, n - 1, 0));
+    refused(cli, dir, "gzip of a cut .nii", "x.nii.gz", "1", "labels.tsv", "x.nii.gz", "cut short");
+    CHECK(spit(dir, "x.nii", nii, n - 1));
+    refused(cli, dir, ".nii cut by a byte", "x.nii", "1", "labels.tsv", "x.nii", "cut short");
+    memcpy(b, nii, n);
+    b[n] = 0;
+    CHECK(spit(dir, "x.nii", b, n + 1));
+    refused(cli, dir, ".nii a byte longer", "x.nii", "1", "labels.tsv", "x.nii", "longer than its header says");
+    struct {
+      const char *name, *expect;
+      int field; // which header field is set to value
+      double value;
+    } const edits[] = {{"vox_offset 0", "vox_offset 0 lies inside the header", 0, 0},
+                       {"vox_offset 348", "vox_offset 348", 0, 348},
+                       {"dim[0] 0", "dim[0]", 1, 0},
+                       {"dim[0] 8", "dim[0]", 1, 8},
+                       {"dim[2] 0", "dim[2]", 2, 0},
+                       {"bad magic", "bad magic", 3, 0},
+                       {"sform_code 99", "sform_code 99", 4, 99},
+                       {"qform_code 99", "qform_code 99", 5, 99},
+                       {"qform_code -1", "qform_code -1", 5, -1},
+                       {"pixdim NaN", "pixdim[1]", 6, NAN},
+                       {"pixdim 0", "pixdim[2]", 7, 0},
+                       {"pixdim -2", "pixdim[3]", 8, -2},
+                       {"bitpix 16 for uint8", "bitpix 16", 9, 16},
+                       {"two-file header", "two-file NIfTI", 10, 0}};
+    for (size_t e = 0; e < sizeof edits / sizeof edits[0]; ++e) {
+      nifti_1_header h;
+      memcpy(&h, nii, sizeof h);
+      const double v = edits[e].value;
+      switch (edits[e].field) {
+      case 0: h.vox_offset = (float)v; break;
+      case 1: h.dim[0] = (short)v; break;
+      case 2: h.dim[2] = (short)v; break;
+      case 3: memcpy(h.magic, "n+2", 4); break;
+      case 4: h.sform_code = (short)v; break;
+      case 5: h.qform_code = (short)v; break;
+      case 6: h.pixdim[1] = (float)v; break;
+      case 7: h.pixdim[2] = (float)v; break;
+      case 8: h.pixdim[3] = (float)v; break;
+      case 9: h.bitpix = (short)v; break;
+      default: memcpy(h.magic, "ni1", 4); break;
+      }
+      memcpy(b, &h, sizeof h);
+      memcpy(b + sizeof h, nii + sizeof h, n - sizeof h);
+      CHECK(spit(dir, "x.nii", b, n));
+      refused(cli, dir, edits[e].name, "x.nii", "1", "labels.tsv", "x.nii", edits[e].expect);
+      CHECK(spit_gz(dir, "x.nii.gz", b, n, 0));
+      refused(cli, dir, edits[e].name, "x.nii.gz", "1", "labels.tsv", "x.nii.gz", edits[e].expect);
+    }
+    { // the same file big-endian: read as it is
+      nifti_1_header h;
+      memcpy(&h, nii, sizeof h);
+      swap_nifti_header(&h, 1);
+      memcpy(b, &h, sizeof h);
+      memcpy(b + sizeof h, nii + sizeof h, n - sizeof h);
+      CHECK(spit(dir, "swapped.nii", b, n));
+      scene(dir, "swapped.nii", "\"box_a\"", "labels.tsv", good);
+      prep_case_accepted(cli, dir, "big-endian", good);
+    }
+  }
   CHECK(fixture_write(dir, "image.png", "\x89PNG"));
   refused(cli, dir, "unknown extension", "image.png", "1", "labels.tsv", "image.png", "unknown format");
   const char *const names[] = {"b.obj", "labels.tsv", "bad.tsv", "good.nii.gz", "text.nii", "cut.nii.gz",
-                               "float.nii", "four.nii", "placeless.nii", "layers.seg.nrrd", "image.png",
+                               "float.nii", "four.nii", "placeless.nii", "layers.seg.nrrd", "image.png", "raw.nii",
+                               "x.nii.gz", "x.nii", "two.nii.gz", "swapped.nii",
                                "scene.json", "model.h5", "stderr.txt", NULL};
   fixture_cleanup(dir, names);
   return CHECK_RESULT();

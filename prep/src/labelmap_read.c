@@ -7,10 +7,12 @@
 // by definition; NRRD: its space field) to the scene's frame, in metres
 // (docs/labelmaps.md).
 #include <math.h>
+#include <stdint.h>
 #include <nifti2_io.h>
 #include <stdlib.h>
 #include <string.h>
 #include <teem/nrrd.h>
+#include <zlib.h>
 
 #include "labels.h"
 
@@ -27,16 +29,28 @@ static int ends_with(const char *s, const char *tail) {
 }
 
 // Copies n integer values of a type (bytes per value, signed or not) into labels.
+// swap: the file's byte order is not this machine's.
 static fascia_status copy_labels(fascia_ctx *ctx, const char *path, const void *data, int64_t n, int bytes,
-                                 int is_signed, int32_t *labels) {
+                                 int is_signed, int swap, int32_t *labels) {
   for (int64_t k = 0; k < n; ++k) {
     int64_t v;
-    const unsigned char *p = (const unsigned char *)data + k * bytes;
+    union {
+      unsigned char b[8];
+      int8_t i8;
+      uint8_t u8;
+      int16_t i16;
+      uint16_t u16;
+      int32_t i32;
+      uint32_t u32;
+      int64_t i64;
+    } p;
+    const unsigned char *src = (const unsigned char *)data + k * bytes;
+    for (int b = 0; b < bytes; ++b) p.b[b] = src[swap ? bytes - 1 - b : b];
     switch (bytes) {
-    case 1: v = is_signed ? (int64_t) * (const int8_t *)p : (int64_t) * (const uint8_t *)p; break;
-    case 2: v = is_signed ? (int64_t) * (const int16_t *)(const void *)p : (int64_t) * (const uint16_t *)(const void *)p; break;
-    case 4: v = is_signed ? (int64_t) * (const int32_t *)(const void *)p : (int64_t) * (const uint32_t *)(const void *)p; break;
-    default: v = *(const int64_t *)(const void *)p; break; // 8: unsigned above INT64_MAX reads negative, refused
+    case 1: v = is_signed ? (int64_t)p.i8 : (int64_t)p.u8; break;
+    case 2: v = is_signed ? (int64_t)p.i16 : (int64_t)p.u16; break;
+    case 4: v = is_signed ? (int64_t)p.i32 : (int64_t)p.u32; break;
+    default: v = p.i64; break; // 8: unsigned above INT64_MAX reads negative, refused
     }
     if (v < 0 || v > PREP_MAX_LABEL)
       return PREP_FAIL(ctx, FASCIA_ERR_FORMAT,
@@ -76,38 +90,280 @@ static fascia_status alloc_labels(fascia_ctx *ctx, const char *path, prep_labelm
   return FASCIA_OK;
 }
 
+// A gzip file inflated member after member to its end: zlib checks each
+// member's CRC32 and length there, so a flipped bit or a cut file is caught
+// even when the voxels were all read before the damage.
+typedef struct gz_reader {
+  z_stream z;
+  const unsigned char *in; // bytes not yet given to zlib
+  size_t left;
+  int end;          // the last member ended with the file
+  int after_member; // at least one member ended: more bytes must be another member
+} gz_reader;
+
+static void gz_feed(gz_reader *g) {
+  if (g->z.avail_in == 0 && g->left) {
+    const size_t n = g->left > ((size_t)1 << 30) ? (size_t)1 << 30 : g->left;
+    g->z.next_in = (Bytef *)(uintptr_t)g->in;
+    g->z.avail_in = (uInt)n;
+    g->in += n;
+    g->left -= n;
+  }
+}
+
+// Up to want bytes into out (fewer only at the end of the file); NULL, or
+// why the stream is bad.
+static const char *gz_pull(gz_reader *g, unsigned char *out, size_t want, size_t *got) {
+  *got = 0;
+  while (*got < want && !g->end) {
+    gz_feed(g);
+    const size_t chunk = want - *got > ((size_t)1 << 30) ? (size_t)1 << 30 : want - *got;
+    g->z.next_out = out + *got;
+    g->z.avail_out = (uInt)chunk;
+    const int rc = inflate(&g->z, Z_NO_FLUSH);
+    *got += chunk - g->z.avail_out;
+    if (rc == Z_STREAM_END) {
+      gz_feed(g);
+      if (g->z.avail_in == 0) {
+        g->end = 1;
+        break;
+      }
+      g->after_member = 1; // concatenated members are one gzip file (RFC 1952)
+      if (inflateReset(&g->z) != Z_OK) return "zlib could not restart";
+      continue;
+    }
+    if (rc == Z_DATA_ERROR && g->after_member && g->z.total_in <= 10)
+      return "bytes after the end of the gzip stream that are not another gzip member";
+    if (rc == Z_BUF_ERROR && g->z.avail_in == 0 && g->left == 0)
+      return "the gzip stream is cut short (the file ends before the stream's end)";
+    if (rc != Z_OK && rc != Z_BUF_ERROR) return g->z.msg ? g->z.msg : "damaged gzip data";
+  }
+  return NULL;
+}
+
+// The header fields fascia trusts, read from the raw bytes before nifti2_io
+// interprets them, so each damage is named for what it is.
+typedef struct nifti_head {
+  int version, swap, bytes, is_signed;
+  nifti_1_header h1; // as in the file, for nifti2_io
+  nifti_2_header h2;
+  int64_t dim[8], vox_offset, total; // total: vox_offset + the voxels' bytes
+  int datatype, bitpix, qform_code, sform_code;
+  double pixdim[8];
+} nifti_head;
+
+static uint32_t swap32(uint32_t v) {
+  return (v >> 24) | ((v >> 8) & 0xff00u) | ((v << 8) & 0xff0000u) | (v << 24);
+}
+
+// sizeof_hdr (the first 4 bytes): the version and byte order.
+static fascia_status nifti_version(fascia_ctx *ctx, const char *path, const unsigned char *b, size_t have,
+                                   nifti_head *h) {
+  PREP_CHECK(have >= 4, ctx, FASCIA_ERR_FORMAT, "label map '%s': not a NIfTI-1 or NIfTI-2 file (%zu bytes)", path,
+             have);
+  uint32_t v;
+  memcpy(&v, b, 4);
+  if (v == 348 || swap32(v) == 348) h->version = 1;
+  else if (v == 540 || swap32(v) == 540) h->version = 2;
+  else
+    return PREP_FAIL(ctx, FASCIA_ERR_FORMAT,
+                     "label map '%s': not a NIfTI-1 or NIfTI-2 file (its first 4 bytes, sizeof_hdr, read %lld; "
+                     "expected 348 or 540)",
+                     path, (long long)(int32_t)v);
+  h->swap = v != 348 && v != 540;
+  return FASCIA_OK;
+}
+
+static fascia_status nifti_header(fascia_ctx *ctx, const char *path, const unsigned char *b, size_t have,
+                                  nifti_head *h) {
+  const size_t size = h->version == 1 ? sizeof(nifti_1_header) : sizeof(nifti_2_header);
+  PREP_CHECK(have >= size, ctx, FASCIA_ERR_FORMAT,
+             "label map '%s': cut short inside its header (%zu bytes, a NIfTI-%d header has %zu)", path, have,
+             h->version, size);
+  if (h->version == 1) {
+    memcpy(&h->h1, b, sizeof h->h1);
+    nifti_1_header c = h->h1;
+    if (h->swap) swap_nifti_header(&c, 1);
+    if (!memcmp(c.magic, "ni1", 4))
+      return PREP_FAIL(ctx, FASCIA_ERR_FORMAT,
+                       "label map '%s': the header of a two-file NIfTI (magic 'ni1': voxels in a separate .img); "
+                       "save it as one .nii or .nii.gz",
+                       path);
+    PREP_CHECK(!memcmp(c.magic, "n+1", 4), ctx, FASCIA_ERR_FORMAT,
+               "label map '%s': bad magic at byte 344 (expected 'n+1'): not a NIfTI-1 file, or its header is "
+               "damaged",
+               path);
+    for (int d = 0; d < 8; ++d) h->dim[d] = c.dim[d], h->pixdim[d] = c.pixdim[d];
+    h->datatype = c.datatype, h->bitpix = c.bitpix, h->qform_code = c.qform_code, h->sform_code = c.sform_code;
+    PREP_CHECK(isfinite(c.vox_offset) && c.vox_offset == floor(c.vox_offset) && c.vox_offset < 0x1p62, ctx,
+               FASCIA_ERR_FORMAT, "label map '%s': vox_offset %g is not a byte offset; the header is damaged", path,
+               (double)c.vox_offset);
+    h->vox_offset = (int64_t)c.vox_offset;
+  } else {
+    memcpy(&h->h2, b, sizeof h->h2);
+    nifti_2_header c = h->h2;
+    if (h->swap) swap_nifti_header(&c, 2);
+    PREP_CHECK(!memcmp(c.magic, "n+2\0\r\n\032\n", 8), ctx, FASCIA_ERR_FORMAT,
+               "label map '%s': bad magic at byte 4 (expected 'n+2' and its 4 check bytes): not a single-file "
+               "NIfTI-2, or its header is damaged",
+               path);
+    for (int d = 0; d < 8; ++d) h->dim[d] = c.dim[d], h->pixdim[d] = c.pixdim[d];
+    h->datatype = c.datatype, h->bitpix = c.bitpix, h->qform_code = c.qform_code, h->sform_code = c.sform_code;
+    h->vox_offset = c.vox_offset;
+  }
+  const int64_t ndim = h->dim[0];
+  PREP_CHECK(ndim >= 1 && ndim <= 7, ctx, FASCIA_ERR_FORMAT,
+             "label map '%s': dim[0] (the number of dimensions) is %lld, expected 1 to 7; the header is damaged", path,
+             (long long)ndim);
+  int64_t nvox = 1;
+  for (int d = 1; d <= ndim; ++d) {
+    PREP_CHECK(h->dim[d] >= 1 && h->dim[d] <= INT32_MAX, ctx, FASCIA_ERR_FORMAT,
+               "label map '%s': dim[%d] is %lld voxels, expected at least 1; the header is damaged", path, d,
+               (long long)h->dim[d]);
+    PREP_CHECK(nvox <= INT64_MAX / 16 / h->dim[d], ctx, FASCIA_ERR_FORMAT,
+               "label map '%s': dim[1..%lld] give more voxels than a file can hold; the header is damaged", path,
+               (long long)ndim);
+    nvox *= h->dim[d];
+  }
+  int64_t extra = 1;
+  for (int d = 4; d <= ndim; ++d) extra *= h->dim[d];
+  PREP_CHECK(extra == 1, ctx, FASCIA_ERR_FORMAT,
+             "label map '%s': a %lld-D image (%lld volumes); a label map has one 3-D volume (save the segmentation "
+             "as one label map)",
+             path, (long long)ndim, (long long)extra);
+  switch (h->datatype) {
+  case DT_UINT8: h->bytes = 1; break;
+  case DT_INT8: h->bytes = 1, h->is_signed = 1; break;
+  case DT_UINT16: h->bytes = 2; break;
+  case DT_INT16: h->bytes = 2, h->is_signed = 1; break;
+  case DT_UINT32: h->bytes = 4; break;
+  case DT_INT32: h->bytes = 4, h->is_signed = 1; break;
+  case DT_UINT64:
+  case DT_INT64: h->bytes = 8, h->is_signed = 1; break;
+  default:
+    return PREP_FAIL(ctx, FASCIA_ERR_FORMAT,
+                     "label map '%s': voxels are %s (datatype %d), not integers; a label map holds integer labels",
+                     path, nifti_datatype_string(h->datatype), h->datatype);
+  }
+  PREP_CHECK(h->bitpix == 8 * h->bytes, ctx, FASCIA_ERR_FORMAT,
+             "label map '%s': bitpix %d does not match datatype %s (%d bits); the header is damaged", path, h->bitpix,
+             nifti_datatype_string(h->datatype), 8 * h->bytes);
+  for (int d = 1; d <= 3 && d <= ndim; ++d)
+    PREP_CHECK(isfinite(h->pixdim[d]) && h->pixdim[d] > 0, ctx, FASCIA_ERR_FORMAT,
+               "label map '%s': pixdim[%d] (the voxel size along axis %d) is %g, expected a positive size; the header "
+               "is damaged",
+               path, d, d, h->pixdim[d]);
+  PREP_CHECK(h->qform_code >= NIFTI_XFORM_UNKNOWN && h->qform_code <= NIFTI_XFORM_TEMPLATE_OTHER, ctx,
+             FASCIA_ERR_FORMAT, "label map '%s': qform_code %d is not a NIfTI code (expected 0 to 5); the header is "
+             "damaged", path, h->qform_code);
+  PREP_CHECK(h->sform_code >= NIFTI_XFORM_UNKNOWN && h->sform_code <= NIFTI_XFORM_TEMPLATE_OTHER, ctx,
+             FASCIA_ERR_FORMAT, "label map '%s': sform_code %d is not a NIfTI code (expected 0 to 5); the header is "
+             "damaged", path, h->sform_code);
+  PREP_CHECK(h->vox_offset >= (int64_t)size + 4 && h->vox_offset <= INT64_MAX / 2, ctx, FASCIA_ERR_FORMAT,
+             "label map '%s': vox_offset %lld lies inside the header (a single-file NIfTI-%d's voxels start at byte "
+             "%zu or later); the header is damaged",
+             path, (long long)h->vox_offset, h->version, size + 4);
+  h->total = h->vox_offset + nvox * h->bytes;
+  return FASCIA_OK;
+}
+
+// The whole file's bytes in *data (*size of them) after its header checks:
+// .nii.gz inflated to the end of its last member, and either form exactly
+// as long as the header declares.
+static fascia_status nifti_bytes(fascia_ctx *ctx, const char *path, nifti_head *h, unsigned char **data) {
+  *data = NULL;
+  char *raw;
+  size_t n;
+  PREP_TRY(prep_read_file(ctx, path, "label map", INT64_MAX / 4, &raw, &n));
+  const unsigned char *file = (const unsigned char *)raw;
+  fascia_status status = FASCIA_OK;
+  if (!prep_nifti_ending(path) || strcmp(prep_nifti_ending(path), ".nii.gz")) {
+    PREP_TRY_GOTO(nifti_version(ctx, path, file, n, h));
+    PREP_TRY_GOTO(nifti_header(ctx, path, file, n, h));
+    PREP_CHECK_GOTO((int64_t)n == h->total, ctx, FASCIA_ERR_FORMAT,
+                    "label map '%s': %zu bytes, but its header declares %lld (voxels from byte %lld, %lld x %lld x "
+                    "%lld of %d bytes); the file is %s",
+                    path, n, (long long)h->total, (long long)h->vox_offset, (long long)h->dim[1],
+                    (long long)(h->dim[0] >= 2 ? h->dim[2] : 1), (long long)(h->dim[0] >= 3 ? h->dim[3] : 1),
+                    h->bytes, (int64_t)n < h->total ? "cut short" : "longer than its header says (damaged)");
+    *data = (unsigned char *)raw;
+    return FASCIA_OK;
+  }
+  PREP_CHECK_GOTO(n >= 2 && file[0] == 0x1f && file[1] == 0x8b, ctx, FASCIA_ERR_FORMAT,
+                  "label map '%s': named .nii.gz but not gzip-compressed (no gzip signature); rename it .nii or "
+                  "compress it",
+                  path);
+  gz_reader g = {.in = file, .left = n};
+  PREP_CHECK_GOTO(inflateInit2(&g.z, 15 + 16) == Z_OK, ctx, FASCIA_ERR_MEMORY,
+                  "label map '%s': out of memory for zlib", path);
+  unsigned char head[sizeof(nifti_2_header)];
+  size_t got = 0, more = 0;
+  const char *why = gz_pull(&g, head, 4, &got);
+  if (!why && got == 4) status = nifti_version(ctx, path, head, got, h);
+  if (!why && !status) {
+    const size_t size = h->version == 1 ? sizeof(nifti_1_header) : sizeof(nifti_2_header);
+    why = gz_pull(&g, head + 4, size - 4, &more);
+    got += more;
+    if (!why) status = nifti_header(ctx, path, head, got, h);
+  }
+  unsigned char *full = NULL;
+  if (!why && !status) {
+    // a gzip stream inflates at most about 1032 times: a larger declared size is a damaged header
+    const double most = 1100.0 * (double)n + 4096;
+    if ((double)h->total > most)
+      status = PREP_FAIL(ctx, FASCIA_ERR_FORMAT,
+                         "label map '%s': its header declares %lld bytes, more than its %zu compressed bytes can hold; "
+                         "the header is damaged",
+                         path, (long long)h->total, n);
+    else if (!(full = malloc((size_t)h->total)))
+      status = PREP_FAIL(ctx, FASCIA_ERR_MEMORY, "label map '%s': out of memory for its %lld bytes", path,
+                         (long long)h->total);
+  }
+  if (!why && !status) {
+    memcpy(full, head, got);
+    why = gz_pull(&g, full + got, (size_t)h->total - got, &more);
+    got += more;
+  }
+  if (!why && !status && (int64_t)got == h->total) {
+    unsigned char extra[4096];
+    do { // the rest: none expected, but the members' checks come at their ends
+      why = gz_pull(&g, extra, sizeof extra, &more);
+      got += more;
+    } while (!why && more == sizeof extra);
+  }
+  inflateEnd(&g.z);
+  if (!status && why)
+    status = PREP_FAIL(ctx, FASCIA_ERR_FORMAT,
+                       "label map '%s': damaged gzip data (%s); the file is corrupt or incomplete: copy or export it "
+                       "again",
+                       path, why);
+  if (!status && (int64_t)got != h->total)
+    status = PREP_FAIL(ctx, FASCIA_ERR_FORMAT,
+                       "label map '%s': %zu bytes once inflated, but its header declares %lld (voxels from byte %lld, "
+                       "%d bytes each); the file is %s",
+                       path, got, (long long)h->total, (long long)h->vox_offset, h->bytes,
+                       (int64_t)got < h->total ? "cut short" : "longer than its header says (damaged)");
+  if (status) free(full);
+  else *data = full;
+cleanup:
+  free(raw);
+  return status;
+}
+
 static fascia_status read_nifti(fascia_ctx *ctx, const char *path, int32_t frame, prep_labelmap *map) {
   nifti_set_debug_level(0); // its messages go to stderr; ours name the file
-  nifti_image *nim = nifti_image_read(path, 0);
-  PREP_CHECK(nim, ctx, FASCIA_ERR_FORMAT, "label map '%s': not a NIfTI-1 or NIfTI-2 file (no valid header)", path);
+  nifti_head h = {0};
+  unsigned char *data;
+  PREP_TRY(nifti_bytes(ctx, path, &h, &data));
+  nifti_image *nim = h.version == 1 ? nifti_convert_n1hdr2nim(h.h1, path) : nifti_convert_n2hdr2nim(h.h2, path);
   fascia_status status = FASCIA_OK;
-  snprintf(map->format, sizeof map->format, "%s", nim->nifti_type >= NIFTI_FTYPE_NIFTI2_1 ? "NIfTI-2" : "NIfTI-1");
-  int64_t extra = 1;
-  for (int d = 4; d <= 7 && d <= nim->ndim; ++d) extra *= nim->dim[d] > 0 ? nim->dim[d] : 1;
-  PREP_CHECK_GOTO(nim->ndim <= 3 || extra == 1, ctx, FASCIA_ERR_FORMAT,
-                  "label map '%s': a %d-D image (%lld volumes); a label map has one 3-D volume (save the "
-                  "segmentation as one label map)",
-                  path, (int)nim->ndim, (long long)extra);
-  int bytes = 0, is_signed = 0;
-  switch (nim->datatype) {
-  case DT_UINT8: bytes = 1; break;
-  case DT_INT8: bytes = 1, is_signed = 1; break;
-  case DT_UINT16: bytes = 2; break;
-  case DT_INT16: bytes = 2, is_signed = 1; break;
-  case DT_UINT32: bytes = 4; break;
-  case DT_INT32: bytes = 4, is_signed = 1; break;
-  case DT_UINT64:
-  case DT_INT64: bytes = 8, is_signed = 1; break;
-  default:
-    PREP_CHECK_GOTO(0, ctx, FASCIA_ERR_FORMAT,
-                    "label map '%s': voxels are %s, not integers; a label map holds integer labels", path,
-                    nifti_datatype_string(nim->datatype));
-  }
+  PREP_CHECK_GOTO(nim, ctx, FASCIA_ERR_FORMAT, "label map '%s': the NIfTI library cannot read its header", path);
+  snprintf(map->format, sizeof map->format, "NIfTI-%d", h.version);
   double affine[3][4];
-  if (nim->sform_code > 0) {
+  if (h.sform_code > 0) {
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 4; ++c) affine[r][c] = nim->sto_xyz.m[r][c];
-  } else if (nim->qform_code > 0) {
+  } else if (h.qform_code > 0) {
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 4; ++c) affine[r][c] = nim->qto_xyz.m[r][c];
   } else {
@@ -118,17 +374,16 @@ static fascia_status read_nifti(fascia_ctx *ctx, const char *path, int32_t frame
   const double scale = nim->xyz_units == NIFTI_UNITS_METER ? 1 : nim->xyz_units == NIFTI_UNITS_MICRON ? 1e-6 : 1e-3;
   place(map, affine, 0, frame, scale);
   PREP_TRY_GOTO(check_affine(ctx, path, map->to_world));
-  const int64_t dims[3] = {nim->nx, nim->ny > 0 ? nim->ny : 1, nim->nz > 0 ? nim->nz : 1};
+  const int64_t dims[3] = {h.dim[1], h.dim[0] >= 2 ? h.dim[2] : 1, h.dim[0] >= 3 ? h.dim[3] : 1};
   PREP_TRY_GOTO(alloc_labels(ctx, path, map, dims));
-  PREP_CHECK_GOTO(nifti_image_load(nim) == 0 && nim->data, ctx, FASCIA_ERR_FORMAT,
-                  "label map '%s': its voxel data is cut short or damaged (%lld voxels of %d bytes expected)", path,
-                  (long long)(dims[0] * dims[1] * dims[2]), bytes);
   PREP_CHECK_GOTO(nim->scl_slope == 0 || (nim->scl_slope == 1 && nim->scl_inter == 0), ctx, FASCIA_ERR_FORMAT,
                   "label map '%s': its values are scaled (scl_slope %g, scl_inter %g); labels must be stored as they are",
                   path, nim->scl_slope, nim->scl_inter);
-  PREP_TRY_GOTO(copy_labels(ctx, path, nim->data, dims[0] * dims[1] * dims[2], bytes, is_signed, map->labels));
+  PREP_TRY_GOTO(copy_labels(ctx, path, data + h.vox_offset, dims[0] * dims[1] * dims[2], h.bytes, h.is_signed, h.swap,
+                            map->labels));
 cleanup:
-  nifti_image_free(nim);
+  if (nim) nifti_image_free(nim);
+  free(data);
   return status;
 }
 
@@ -192,7 +447,7 @@ static fascia_status read_nrrd(fascia_ctx *ctx, const char *path, int32_t frame,
   PREP_TRY_GOTO(check_affine(ctx, path, map->to_world));
   const int64_t dims[3] = {(int64_t)nrrd->axis[0].size, (int64_t)nrrd->axis[1].size, (int64_t)nrrd->axis[2].size};
   PREP_TRY_GOTO(alloc_labels(ctx, path, map, dims));
-  PREP_TRY_GOTO(copy_labels(ctx, path, nrrd->data, dims[0] * dims[1] * dims[2], bytes, is_signed, map->labels));
+  PREP_TRY_GOTO(copy_labels(ctx, path, nrrd->data, dims[0] * dims[1] * dims[2], bytes, is_signed, 0, map->labels));
 cleanup:
   nrrdNuke(nrrd);
   return status;
