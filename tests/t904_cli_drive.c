@@ -8,7 +8,9 @@
 // way and on the last row after it; bad files (missing, wrong column count,
 // not a number, NaN, zero quaternion, unknown organ, times going back, wrong
 // header) exit 1 naming the file (and row and column) and leave no results
-// file.
+// file. A checkpoint of a driven run records its drive: resuming it without
+// --drive, or with a file whose rows differ, is refused (exit 2); with the
+// same drive it continues.
 // Usage: t904_cli_drive PATH/TO/fascia WORK_DIR
 #define _POSIX_C_SOURCE 200809L
 #include <hdf5.h>
@@ -253,6 +255,31 @@ int main(int argc, char **argv) {
   { // an organ the model lacks
     const char *const needles[] = {"t904_drive.csv", "no organ 'liver'", "a, b"};
     CHECK(!expect_failure(fascia, model_path, "liver", csv, results, err, needles, 3));
+  }
+  { // a resume drives the organs as the run that saved the checkpoint did
+    char checkpoint[2048], other[2048], body[8192];
+    snprintf(checkpoint, sizeof checkpoint, "%s/t904_checkpoint.h5", argv[2]);
+    snprintf(other, sizeof other, "%s/t904_other.csv", argv[2]);
+    size_t k = (size_t)snprintf(body, sizeof body, "%s\n", header);
+    k += drive_row(m, fb, 0, 0, rest_q, body + k, sizeof body - k);
+    drive_row(m, fb, 0.04, 2 * PUSH, q_end, body + k, sizeof body - k); // pushed twice as far
+    CHECK(write_text(other, body));
+    remove(checkpoint);
+    snprintf(args, sizeof args, "run '%s' --steps 3 --dt 0.01 --threads 1 --drive 'b=%s' --checkpoint '%s'",
+             model_path, csv, checkpoint);
+    CHECK(cli_exec(fascia, args, err, &result) && result.status == 0);
+    static const char *const resumes[][2] = {{"", "drove organs from --drive files"},
+                                             {"--drive 'b=%s'", "other --drive files"}};
+    for (int r = 0; r < 2; ++r) {
+      char extra[2048];
+      snprintf(extra, sizeof extra, resumes[r][0], other);
+      snprintf(args, sizeof args, "run '%s' --steps 6 --threads 1 --resume '%s' %s", model_path, checkpoint, extra);
+      CHECK(cli_exec(fascia, args, err, &result) && result.status == 2 && strstr(result.err, resumes[r][1]));
+      if (result.status != 2) fprintf(stderr, "%s: exit %d: %s\n", args, result.status, result.err);
+    }
+    snprintf(args, sizeof args, "run '%s' --steps 6 --threads 1 --resume '%s' --drive 'b=%s'", model_path, checkpoint,
+             csv);
+    CHECK(cli_exec(fascia, args, err, &result) && result.status == 0);
   }
   // usage errors (2): no '=', or no dynamic run
   snprintf(args, sizeof args, "run '%s' --steps 2 --drive b", model_path);

@@ -139,6 +139,7 @@ typedef struct checkpoint_options {
   int first_step;  ///< first step to take: 1, or the resumed step + 1
   int help;        ///< --help was given
   fascia_ctx *ctx; ///< for fascia_checkpoint_save in run_steps
+  uint64_t inputs; ///< run_drive_digest, recorded with each checkpoint
 } checkpoint_options;
 
 // Removes --checkpoint, --checkpoint-every and --resume (with their values)
@@ -171,7 +172,7 @@ static int take_checkpoint_options(int *argc, char **argv, checkpoint_options *c
 // After step n: a checkpoint every K steps, after the last and on a stop.
 static fascia_status checkpoint_after(const checkpoint_options *c, const fascia_solver *solver, int n, int last) {
   if (!c || !c->path || (n % c->every != 0 && !last)) return FASCIA_OK;
-  return fascia_checkpoint_save(c->ctx, solver, n, c->path);
+  return fascia_checkpoint_save_inputs(c->ctx, solver, n, c->inputs, c->path);
 }
 
 /// Everything the command line sets.
@@ -919,6 +920,20 @@ int cmd_run(int argc, char **argv) {
   }
   // every drive file is read and checked before any output is opened
   if ((st = run_drive_load(&drive, ctx, model, solver)) != FASCIA_OK) goto done;
+  ck.inputs = run_drive_digest(&drive);
+  if (ck.resume) { // the organs driven as the run that saved the checkpoint drove them
+    uint64_t recorded = 0;
+    if ((st = fascia_checkpoint_read_inputs(ctx, ck.resume, model, &recorded)) != FASCIA_OK) goto done;
+    if (recorded != ck.inputs) {
+      fprintf(stderr, "fascia run: --resume '%s': %s; resume with the same --drive ORGAN=FILE.csv options and "
+              "unchanged files, or start the run again\n", ck.resume,
+              !recorded ? "the run that saved it drove no organ from a file, and this one gives --drive"
+              : !ck.inputs ? "the run that saved it drove organs from --drive files, and this one gives none"
+                           : "the run that saved it drove its organs from other --drive files or other rows");
+      rc = 2;
+      goto done;
+    }
+  }
   if ((st = check_results_size(ctx, &opt, &ck, model)) != FASCIA_OK) goto done;
   const size_t S = (size_t)model->sample_count + 1;
   buffers[0] = malloc(3 * S * sizeof(fascia_real));

@@ -393,3 +393,25 @@ fascia_status run_drive_before_step(run_drive *drive, fascia_solver *solver, fas
   }
   return FASCIA_OK;
 }
+
+// FNV-1a over bytes, as the checkpoint's own checksum is made.
+static uint64_t fnv(uint64_t h, const void *data, size_t bytes) {
+  const unsigned char *p = data;
+  for (size_t k = 0; k < bytes; ++k) h = (h ^ p[k]) * UINT64_C(0x100000001b3);
+  return h;
+}
+
+uint64_t run_drive_digest(const run_drive *drive) {
+  uint64_t digest = 0;
+  for (int k = 0; k < drive->count; ++k) { // summed: the order of the options does not matter
+    const drive_organ *d = drive->organs + k;
+    const size_t T = (size_t)d->row_count, C = (size_t)d->frame_count;
+    uint64_t h = fnv(UINT64_C(0xcbf29ce484222325), d->organ_name, strlen(d->organ_name) + 1);
+    h = fnv(h, &d->row_count, sizeof d->row_count);
+    h = fnv(h, &d->frame_count, sizeof d->frame_count);
+    h = fnv(h, d->time, T * sizeof *d->time);
+    h = fnv(h, d->position, 3 * C * T * sizeof *d->position);
+    digest += fnv(h, d->rotation, 4 * C * T * sizeof *d->rotation);
+  }
+  return drive->count && !digest ? 1 : digest; // 0 means "no drive"
+}

@@ -57,6 +57,12 @@ fascia_status run_drive_load(run_drive *drive, fascia_ctx *ctx, const fascia_mod
 /// first row before the first time, the last row after the last).
 fascia_status run_drive_before_step(run_drive *drive, fascia_solver *solver, fascia_real t_end);
 
+/// A 64-bit digest of what the loaded --drive files feed the run (each
+/// driven organ and its rows, in any order of the options); 0 without
+/// --drive. A checkpoint records it, so that a resume drives the organs as
+/// the run that saved it did.
+uint64_t run_drive_digest(const run_drive *drive);
+
 /// Frees the rows and the option lists; accepts a zeroed run_drive.
 void run_drive_free(run_drive *drive);
 
