@@ -5,7 +5,68 @@
 // into FASCIA_ERR_NUMERIC with a message naming the cause and the state left
 // as before the step; values out of any physical range are refused before
 // any step. Each case passed silently (status OK) before the check existed.
+// A static solve obeys the same rules: a beam pulled far past the strain
+// limit (which converges, and was reported converged) is FASCIA_ERR_NUMERIC
+// naming the strain, def.blow_up_strain applies to it, and a Newton
+// tolerance of 1 or more (under which the loaded start counted as converged
+// after 0 iterations) is refused.
 #include "stability.h"
+
+// A static solve of sd on m at time t; the status, the report in *r.
+static fascia_status static_at(fascia_ctx *ctx, const fascia_model *m, const fascia_solver_def *sd, double t,
+                               fascia_solve_report *r) {
+  fascia_solver *s = NULL;
+  fascia_status st = fascia_solver_create(ctx, m, sd, &s);
+  if (st == FASCIA_OK) st = fascia_solver_set_time(s, t);
+  if (st == FASCIA_OK) st = fascia_solver_solve_static(s, r);
+  fascia_solver_destroy(&s);
+  return st;
+}
+
+static int static_cases(fascia_ctx *ctx) {
+  fascia_solve_report r;
+  // the 4 m beam's end pulled 20 m along x: a stretch of about 6
+  fascia_model *pulled = stab_pushed_beam(ctx, FASCIA_LAW_NEOHOOKEAN, 4, -20, 1);
+  CHECK(pulled != NULL);
+  if (!pulled) return 1;
+  fascia_solver_def sd = stab_solver_def();
+  sd.newton_iterations = 200;
+  sd.blow_up_strain = 0; // the rule off: the solve itself converges
+  CHECK_OK(static_at(ctx, pulled, &sd, 1, &r), ctx);
+  CHECK(r.converged);
+  sd.blow_up_strain = 10;
+  fascia_ctx_clear(ctx);
+  const fascia_status st = static_at(ctx, pulled, &sd, 1, &r);
+  if (getenv("T341_VERBOSE")) fprintf(stderr, "pulled: %s: %s\n", fascia_status_name(st), fascia_ctx_message(ctx));
+  CHECK(st == FASCIA_ERR_NUMERIC);
+  CHECK(strstr(fascia_ctx_message(ctx), "static solve") && strstr(fascia_ctx_message(ctx), "strain") &&
+        strstr(fascia_ctx_message(ctx), "past the limit 10"));
+  // pulled less (0.4 m) it is healthy, and fails only under a limit it passes
+  fascia_model *healthy = stab_pushed_beam(ctx, FASCIA_LAW_NEOHOOKEAN, 4, -0.4, 1);
+  CHECK(healthy != NULL);
+  CHECK_OK(static_at(ctx, healthy, &sd, 1, &r), ctx);
+  sd.blow_up_strain = 1e-6;
+  fascia_ctx_clear(ctx);
+  CHECK(static_at(ctx, healthy, &sd, 1, &r) == FASCIA_ERR_NUMERIC);
+  CHECK(strstr(fascia_ctx_message(ctx), "past the limit 1e-06") != NULL);
+  // a relative Newton tolerance of 1 or more is refused (it passed the loaded start)
+  const double tolerances[] = {1, 1.5, 1e300};
+  for (int k = 0; k < 3; ++k) {
+    sd = stab_solver_def();
+    sd.newton_tolerance = tolerances[k];
+    fascia_ctx_clear(ctx);
+    CHECK(static_at(ctx, healthy, &sd, 1, &r) == FASCIA_ERR_ARGUMENT);
+    CHECK(strstr(fascia_ctx_message(ctx), "Newton tolerance") != NULL);
+  }
+  // just below 1 the loaded start is not converged: the solve iterates
+  sd = stab_solver_def();
+  sd.newton_tolerance = 0.999;
+  CHECK_OK(static_at(ctx, healthy, &sd, 1, &r), ctx);
+  CHECK(r.converged && r.newton_iterations >= 1);
+  fascia_model_destroy(&pulled);
+  fascia_model_destroy(&healthy);
+  return 0;
+}
 
 // One step of sd on m from the state (x, q) (NULL: rest). Returns the
 // status; *moved is 1 when the state or time changed.
@@ -104,6 +165,7 @@ int main(void) {
   m->materials[0].density = 1e40;
   CHECK(fascia_model_validate(ctx, m, "t341") == FASCIA_ERR_FORMAT);
   fascia_model_destroy(&m);
+  CHECK(static_cases(ctx) == 0);
   fascia_ctx_destroy(&ctx);
   return CHECK_RESULT();
 }

@@ -136,7 +136,8 @@ fascia_status fascia_newton_minimize(fascia_solver *S, const fascia_step_values 
   FASCIA_TRY(ops->evaluate(be, 0, 1, &now));
   rep->profile.evaluate_ms += fascia_now_ms() - t;
   const fascia_real g0 = sqrt(now.gradient_norm2);
-  fascia_real reference = load_norm(S);
+  const fascia_real load = load_norm(S);
+  fascia_real reference = load;
   if (values->dynamic || reference == 0) reference = reference > g0 ? reference : g0;
   if (reference == 0) reference = 1;
   rep->reference_norm = reference;
@@ -168,7 +169,10 @@ fascia_status fascia_newton_minimize(fascia_solver *S, const fascia_step_values 
     } else if (iteration > 0) {
       ++stalled;
     }
-    const int small = gnorm <= def->newton_tolerance * reference || gnorm <= force_roundoff ||
+    // the start is converged only against the load itself (a reference
+    // taken from its own residual would pass it vacuously) or the floor
+    const int small = gnorm <= def->newton_tolerance * (iteration == 0 ? load : reference) ||
+                      gnorm <= force_roundoff ||
                       (stalled >= FASCIA_NEWTON_STALL && gnorm <= FASCIA_NEWTON_STALL_FLOOR * force_roundoff);
     if (relaxed > 0 && accepts(def, watch_phi, now.phi, 1, watch_slope, watch_gg, now.gradient_norm2, now.energy_size,
                                material_roundoff))

@@ -48,8 +48,13 @@ static fascia_status check_def(fascia_ctx *ctx, const fascia_solver_def *d) {
                "solver: blow-up strain %g must be >= 0 (0: off)", d->blow_up_strain);
   FASCIA_CHECK(d->newton_iterations >= 1 && d->newton_iterations <= 100000, ctx, FASCIA_ERR_ARGUMENT,
                "solver: %d Newton iterations; give 1 to 100000", d->newton_iterations);
-  FASCIA_CHECK(isfinite(d->newton_tolerance) && d->newton_tolerance >= 0, ctx, FASCIA_ERR_ARGUMENT,
-               "solver: Newton tolerance %g must be >= 0", d->newton_tolerance);
+  // relative to the load: at 1 or more the starting state, carrying the
+  // whole load as its residual, would count as converged
+  FASCIA_CHECK(isfinite(d->newton_tolerance) && d->newton_tolerance >= 0 && d->newton_tolerance < 1, ctx,
+               FASCIA_ERR_ARGUMENT,
+               "solver: Newton tolerance %g must be in [0, 1): it is relative to the load, and at 1 or more a state "
+               "carrying the whole load unbalanced counts as converged; give e.g. 1e-6",
+               d->newton_tolerance);
   FASCIA_CHECK(d->cg_iterations >= 1 && d->cg_iterations <= 10000000, ctx, FASCIA_ERR_ARGUMENT,
                "solver: %d CG iterations; give at least 1", d->cg_iterations);
   FASCIA_CHECK(isfinite(d->cg_tolerance) && d->cg_tolerance >= 0 && d->cg_tolerance < 1, ctx, FASCIA_ERR_ARGUMENT,
@@ -226,6 +231,9 @@ static void restore_state(fascia_solver *S, fascia_real *backup) {
   fascia_system_set_state(S->sys, S->x, S->q);
 }
 
+static fascia_status check_blow_up(fascia_solver *S, const fascia_solve_report *r, int energy_before_known,
+                                   fascia_real energy_before);
+
 // The Newton minimization of a step's objective: a static one (h = 0) or
 // an implicit Euler step of length h
 static fascia_status minimize(fascia_solver *S, fascia_real h, fascia_solve_report *report) {
@@ -255,6 +263,16 @@ fascia_status fascia_solver_solve_static(fascia_solver *S, fascia_solve_report *
     fascia_ctx_progress(S->ctx, "static solve", (double)(l - 1) / steps, detail);
     status = minimize(S, 0, report);
     if (l == 1) mechanism = S->start_indefinite;
+    // the blow-up rule of a dynamic step, on each converged load step (an
+    // unconverged one is judged below); no energy rule: nothing to compare with
+    if (status == FASCIA_OK && report->converged && check_blow_up(S, report, 0, 0) != FASCIA_OK) {
+      char cause[1024];
+      snprintf(cause, sizeof cause, "%s", fascia_ctx_message(S->ctx));
+      status = FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
+                           "static solve, load step %d of %d: %s; the load or the prescribed motion is more than "
+                           "the tissue can take (or raise the blow-up strain limit; 0 turns that rule off)",
+                           l, steps, cause);
+    }
   }
   S->sys->gravity_scale = 1;
   S->energy_known = 0;
@@ -290,7 +308,8 @@ fascia_status fascia_solver_solve_static(fascia_solver *S, fascia_solve_report *
 }
 
 // The rule for a step that has blown up (docs/mechanics.md, "When a run has
-// diverged"), applied to every dynamic step the Newton solve returns from:
+// diverged"), applied to every dynamic step the Newton solve returns from,
+// and (1 to 3) to every converged load step of a static solve:
 //  1. a number in the state is not finite;
 //  2. the solve ended unconverged with a residual above the load it started
 //     from: it made the step worse, so the state is no approximation at all;

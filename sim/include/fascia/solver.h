@@ -60,7 +60,7 @@ typedef struct fascia_solver_def {
   int threads;                   ///< 0: the context's
   fascia_real time_step;         ///< s, dynamic steps (default 0.01; at least FASCIA_MIN_TIME_STEP)
   int newton_iterations;         ///< most Newton iterations per solve (default 20; static 100)
-  fascia_real newton_tolerance;  ///< stop when |gradient| <= tol * |external load| (default 1e-6)
+  fascia_real newton_tolerance;  ///< stop when |gradient| <= tol * |external load|, in [0, 1) (default 1e-6)
   int cg_iterations;             ///< most CG iterations per linear solve (default 200)
   int cg_fixed;                  ///< 1: always exactly cg_iterations (the paper's benchmark mode)
   fascia_real cg_tolerance;      ///< relative residual of each linear solve (default 1e-3)
@@ -93,11 +93,11 @@ typedef struct fascia_solver_def {
   /// a solution); 0 accepts it (the paper's fixed-cost mode and the
   /// interactive presets, where a capped Newton count per step is the point).
   int require_convergence;
-  /// Dynamic steps: a step after which some sample's Green-Lagrange strain
-  /// norm exceeds this has blown up and is failed like an unsolvable one
-  /// (default 10, a stretch of about 4.6; tissue tears long before). 0 turns
-  /// this rule off; the others stay (docs/mechanics.md, "When a run has
-  /// diverged").
+  /// Dynamic steps and static solves: a step (or a load step of a static
+  /// solve) after which some sample's Green-Lagrange strain norm exceeds
+  /// this has blown up and is failed like an unsolvable one (default 10, a
+  /// stretch of about 4.6; tissue tears long before). 0 turns this rule off;
+  /// the others stay (docs/mechanics.md, "When a run has diverged").
   fascia_real blow_up_strain;
   int cookie_;                   ///< private
 } fascia_solver_def;
@@ -152,7 +152,10 @@ FASCIA_API void fascia_solver_destroy(fascia_solver **solver);
 FASCIA_API fascia_status fascia_solver_step(fascia_solver *solver, fascia_solve_report *report);
 /// Static equilibrium under gravity and loads at the current time, starting
 /// from the current state; velocities are set to zero. Not converging within
-/// newton_iterations returns FASCIA_ERR_NUMERIC with the state reached kept.
+/// newton_iterations returns FASCIA_ERR_NUMERIC with the state reached kept;
+/// so does a load step whose converged state has blown up by the rules of
+/// a dynamic step (a non-finite value, a strain past blow_up_strain), the
+/// message naming the load step, the sample and its strain.
 FASCIA_API fascia_status fascia_solver_solve_static(fascia_solver *solver, fascia_solve_report *report);
 
 FASCIA_API fascia_real fascia_solver_time(const fascia_solver *solver);
