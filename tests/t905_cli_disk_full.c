@@ -6,7 +6,9 @@
 // path. Two ways to fill it: a file size limit of 0 (`ulimit -f 0`, SIGXFSZ
 // ignored: writes fail with EFBIG) everywhere, and a full 2 MiB tmpfs (real
 // ENOSPC) where this process may mount one (root); otherwise that part is
-// skipped with a line saying why.
+// skipped with a line saying why. On the nearly full tmpfs, a run whose
+// results do not fit fails before its first step and leaves an older
+// --history file of the same name as it was.
 // Usage: t905_cli_disk_full PATH/TO/fascia WORK_DIR
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
@@ -88,6 +90,25 @@ int main(int argc, char **argv) {
   int failures = run_cases(fascia, "trap '' XFSZ; ulimit -f 0;", model, dir);
   if (mount_full_tmpfs(dir)) {
     failures += run_cases(fascia, "", model, dir);
+    // nearly full: room for a text file, not for the results' margin. The run
+    // fails before its first step and an older --history stays as it was.
+    snprintf(command, sizeof command, "rm -f '%s/fill' && dd if=/dev/zero of='%s/fill' bs=64k count=26 2>/dev/null",
+             dir, dir);
+    CHECK(system(command) == 0);
+    char history[1100], old_text[64], now_text[64];
+    snprintf(history, sizeof history, "%s/h.csv", dir);
+    FILE *f = fopen(history, "w");
+    CHECK(f && fputs("an older history, kept\n", f) >= 0 && fclose(f) == 0);
+    snprintf(args, sizeof args, "run '%s' --steps 3 --threads 1 -o '%s/r.h5' --history '%s'", model, dir, history);
+    snprintf(command, sizeof command, "'%s' %s", fascia, args);
+    CHECK(cli_shell(command, &result));
+    const long n = cli_read_file(history, now_text, sizeof now_text);
+    snprintf(old_text, sizeof old_text, "an older history, kept\n");
+    if (result.status != 1 || n != (long)strlen(old_text) || memcmp(now_text, old_text, (size_t)n)) {
+      fprintf(stderr, "nearly full: exit %d, --history %s; stderr: %.600s\n", result.status,
+              n == (long)strlen(old_text) && !memcmp(now_text, old_text, (size_t)n) ? "kept" : "REPLACED", result.err);
+      ++failures;
+    }
     snprintf(command, sizeof command, "umount '%s'", dir);
     CHECK(system(command) == 0);
   }

@@ -9,6 +9,7 @@
 
 #include <hdf5.h>
 
+#include "fascia/results.h"
 #include "status.h"
 #include "tempfile.h"
 
@@ -48,7 +49,7 @@ FASCIA_INTERN fascia_status fascia_h5_finish_memory(fascia_ctx *ctx, const char 
 
 /// Free space, bytes, kept beyond the next write of a growing HDF5 file:
 /// room for the metadata HDF5 writes when it flushes.
-#define FASCIA_H5_SPACE_MARGIN ((int64_t)1 << 20)
+#define FASCIA_H5_SPACE_MARGIN FASCIA_RESULTS_SPACE_MARGIN
 /// FASCIA_ERR_IO with a message naming the folder and the free space when
 /// the disk holding tmp has less than bytes + FASCIA_H5_SPACE_MARGIN free.
 FASCIA_INTERN fascia_status fascia_h5_space_check(fascia_ctx *ctx, const char *what, const char *path,

@@ -819,7 +819,7 @@ static fascia_status check_results_size(fascia_ctx *ctx, const run_options *opt,
   const double steps = opt->dynamic ? (double)opt->steps - ck->first_step + 1 : 1;
   const double saved = opt->dynamic ? floor(steps / opt->save_every) + 2 : 2; // the rest state and the last too
   const double row = 8.0 * (1 + 7.0 * m->frame_count + (opt->samples ? 5.0 * m->sample_count : 0));
-  const double bytes = saved * row;
+  const double bytes = saved * row + (double)FASCIA_RESULTS_SPACE_MARGIN; // as the writer will ask for
   char folder[4096];
   cli_folder_of(opt->results_path, folder, sizeof folder);
   struct statvfs fs;
@@ -948,11 +948,13 @@ int cmd_run(int argc, char **argv) {
   rdef.write_samples = opt.samples != 0;
   rdef.every = opt.dynamic ? opt.save_every : 1;
   if (opt.dynamic) catch_stop_signals(old_signals), signals_caught = 1;
+  // the results file first: its space check is the strictest, and it fails
+  // before a text output has been started
+  if (opt.results_path && (st = open_results(ctx, &opt, model, &rdef, &res)) != FASCIA_OK) goto done;
   // a static run saves two steps, the rest state (0) and the equilibrium (1)
   if ((st = run_outputs_begin(&outs, ctx, model, solver, opt.dynamic ? step_time(&opt, ck.first_step - 1) : 0)) !=
       FASCIA_OK)
     goto done;
-  if (opt.results_path && (st = open_results(ctx, &opt, model, &rdef, &res)) != FASCIA_OK) goto done;
   tot.organ_force_start = malloc(3 * ((size_t)model->organ_count + 1) * sizeof *tot.organ_force_start);
   if (tot.organ_force_start && organ_forces(solver, model, tot.organ_force_start) != FASCIA_OK)
     free(tot.organ_force_start), tot.organ_force_start = NULL; // a state not finite: no forces to report
@@ -1011,7 +1013,10 @@ done:
   else if (rc < 0) rc = 0;
   if (summary) rc = emit_json(summary, &opt, &tot, rc); // else cli_json_finish says how it ended
   cJSON_Delete(summary);
-  (void)run_outputs_end(&outs, solver, 0); // closes what is still open after an error
+  // closes what is still open after an error; a run that took no step keeps
+  // the older files of those names rather than replace them with nothing
+  if (tot.steps > 0) (void)run_outputs_end(&outs, solver, 0);
+  else run_outputs_discard(&outs);
   fascia_results_destroy(&res);
   // Every output is closed or removed. A run a signal stopped keeps catching
   // them until it exits: a repeated Ctrl-C that lands after the outputs are

@@ -287,6 +287,13 @@ static fascia_real largest(const fascia_real *values, int32_t count) {
   return x;
 }
 
+static void free_arrays(run_outputs *out) {
+  free(out->strain), free(out->stress), free(out->positions), free(out->scratch), free(out->axes),
+      free(out->coupled_organ);
+  out->coupled_organ = NULL;
+  out->strain = out->stress = out->positions = out->scratch = out->axes = NULL;
+}
+
 fascia_status run_outputs_begin(run_outputs *out, fascia_ctx *ctx, const fascia_model *m, fascia_solver *solver,
                                 fascia_real time) {
   out->ctx = ctx;
@@ -343,6 +350,13 @@ fascia_status run_outputs_step(run_outputs *out, fascia_solver *solver, int step
   return FASCIA_OK;
 }
 
+void run_outputs_discard(run_outputs *out) {
+  fascia_file_discard(&out->history);
+  fascia_file_discard(&out->pvd);
+  fascia_file_discard(&out->run_pvd);
+  free_arrays(out);
+}
+
 fascia_status run_outputs_end(run_outputs *out, fascia_solver *solver, int ok) {
   fascia_ctx *ctx = out->ctx;
   const fascia_model *m = out->model;
@@ -354,9 +368,6 @@ fascia_status run_outputs_end(run_outputs *out, fascia_solver *solver, int ok) {
   if (out->run_pvd) fprintf(fascia_file_stream(out->run_pvd), "  </Collection>\n</VTKFile>\n");
   fascia_status pst = fascia_file_commit(&out->pvd), rst = fascia_file_commit(&out->run_pvd);
   if (st == FASCIA_OK) st = hst != FASCIA_OK ? hst : pst != FASCIA_OK ? pst : rst;
-  free(out->strain), free(out->stress), free(out->positions), free(out->scratch), free(out->axes),
-      free(out->coupled_organ);
-  out->coupled_organ = NULL;
-  out->strain = out->stress = out->positions = out->scratch = out->axes = NULL;
+  free_arrays(out);
   return st;
 }

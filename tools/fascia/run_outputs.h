@@ -45,5 +45,10 @@ fascia_status run_outputs_step(run_outputs *out, fascia_solver *solver, int step
 /// After the last step: the final snapshot; closes everything (also after
 /// an error, then with status ignored).
 fascia_status run_outputs_end(run_outputs *out, fascia_solver *solver, int ok);
+/// Removes what run_outputs_begin started (the history, the .pvd
+/// collections) without writing it, so that a run that failed before its
+/// first step leaves older files of those names as they were; frees the
+/// buffers. A no-op after run_outputs_end.
+void run_outputs_discard(run_outputs *out);
 
 #endif

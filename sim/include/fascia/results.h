@@ -34,6 +34,12 @@ typedef struct fascia_results_def {
 
 FASCIA_API fascia_results_def fascia_results_def_default(void);
 
+/// Free space, bytes, the results writer keeps beyond each step it writes
+/// (room for the metadata HDF5 writes when it flushes): a step that would
+/// leave less fails before writing. A caller estimating up front whether a
+/// run's results fit adds it to the steps' bytes.
+#define FASCIA_RESULTS_SPACE_MARGIN ((int64_t)1 << 20)
+
 /// Starts a results file for `model` at `path` (conventionally *.h5; the
 /// XDMF sidecar goes to the same path with .xdmf instead of .h5). Nothing
 /// appears at `path` before fascia_results_close. The model is only read
