@@ -280,11 +280,9 @@ static fascia_status parse_row(fascia_ctx *ctx, drive_organ *d, const int32_t *f
 
 // Reads one drive file (d's organ resolved) into d.
 static fascia_status read_file(fascia_ctx *ctx, drive_organ *d, const int32_t *frames) {
-  FILE *f = fopen(d->path, "r");
-  if (!f)
-    return fascia_ctx_fail(ctx, FASCIA_ERR_IO, __FILE__, __LINE__,
-                           "drive '%s': cannot open: %s; give the CSV that drives organ '%s'", d->path,
-                           strerror(errno), d->organ_name);
+  FILE *f = NULL; // a regular file only, opened without blocking (a FIFO put there after the path check)
+  const fascia_status opened = fascia_file_open_input(ctx, "drive", d->path, &f);
+  if (opened != FASCIA_OK) return opened;
   const int columns = 1 + 7 * d->frame_count;
   char **cells = malloc(sizeof(char *) * (size_t)columns);
   char *buffer = NULL;
