@@ -12,7 +12,10 @@
 // step, time, time step, input digest, size or fingerprint rewritten is
 // refused by fascia_checkpoint_read_settings, _read_inputs and _load alike,
 // and a version 2 file (whose checksum left them out) is refused.
-// A FIFO given as the checkpoint is refused at once (an alarm fails the
+// Of random byte mutations of a checkpoint, every one is either refused
+// (by fascia_checkpoint_read_settings or _load) or resumes the very same
+// state with the very same settings. A FIFO given as the checkpoint is
+// refused at once (an alarm fails the
 // test if the open blocks).
 #define _POSIX_C_SOURCE 200809L
 #include <hdf5.h>
@@ -205,6 +208,76 @@ static void other_settings(fascia_ctx *ctx, const fascia_model *m, const fascia_
   }
 }
 
+// The state a checkpoint restores, bytes: x, q, u, time.
+static size_t state_bytes(const fascia_solver *s, int32_t N, unsigned char *out) {
+  size_t n = 0;
+  memcpy(out + n, fascia_solver_frame_positions(s), 3 * (size_t)N * sizeof(fascia_real)), n += 3 * (size_t)N * sizeof(fascia_real);
+  memcpy(out + n, fascia_solver_frame_rotations(s), 4 * (size_t)N * sizeof(fascia_real)), n += 4 * (size_t)N * sizeof(fascia_real);
+  memcpy(out + n, fascia_solver_frame_velocities(s), 6 * (size_t)N * sizeof(fascia_real)), n += 6 * (size_t)N * sizeof(fascia_real);
+  const fascia_real t = fascia_solver_time(s);
+  memcpy(out + n, &t, sizeof t), n += sizeof t;
+  return n;
+}
+
+static int mutations(fascia_ctx *ctx, const fascia_model *m, const fascia_solver_def *sd, int count, int *refused,
+                     int *same) {
+  static unsigned char bytes[1 << 20], copy[1 << 20], want[1 << 16], got[1 << 16];
+  FILE *f = fopen(good, "rb");
+  const size_t size = f ? fread(bytes, 1, sizeof bytes, f) : 0;
+  if (f) fclose(f);
+  CHECK(size > 0 && size < sizeof bytes && 14 * (size_t)m->frame_count * sizeof(fascia_real) < sizeof want);
+  fascia_solver *ref = NULL;
+  int64_t step = 0;
+  CHECK_OK(fascia_solver_create(ctx, m, sd, &ref), ctx);
+  CHECK_OK(fascia_checkpoint_load(ctx, ref, good, &step), ctx);
+  const size_t n = state_bytes(ref, m->frame_count, want);
+  fascia_solver_destroy(&ref);
+  char path[512];
+  snprintf(path, sizeof path, "%s/mutated.ck.h5", dir);
+  unsigned long long state = 0x2545f4914f6cdd1dULL;
+  for (int k = 0; k < count && size > 0; ++k) {
+    memcpy(copy, bytes, size);
+    state ^= state << 13, state ^= state >> 7, state ^= state << 17;
+    const int flips = 1 + (int)(state % 3);
+    for (int j = 0; j < flips; ++j) {
+      state ^= state << 13, state ^= state >> 7, state ^= state << 17;
+      const size_t at = (size_t)(state % size);
+      const unsigned char to = (unsigned char)(state >> 40);
+      copy[at] = to != copy[at] ? to : (unsigned char)(to ^ 0x01);
+    }
+    f = fopen(path, "wb");
+    CHECK(f && fwrite(copy, 1, size, f) == size && fclose(f) == 0);
+    fascia_solver_def def = fascia_solver_def_default();
+    def.backend = sd->backend;
+    int64_t at_step = -1;
+    fascia_solver *s = NULL;
+    fascia_ctx_clear(ctx);
+    fascia_status st = fascia_checkpoint_read_settings(ctx, path, m, &def, &at_step);
+    if (st == FASCIA_OK) st = fascia_solver_create(ctx, m, &def, &s);
+    if (st == FASCIA_OK) st = fascia_checkpoint_load(ctx, s, path, &at_step);
+    if (st != FASCIA_OK) {
+      ++*refused;
+      if (!fascia_ctx_message(ctx)[0]) {
+        fprintf(stderr, "t207: mutation %d refused without a message\n", k);
+        ++check_failures_;
+      }
+    } else {
+      int differs = at_step != step || state_bytes(s, m->frame_count, got) != n || memcmp(want, got, n) != 0;
+      for (int j = 0; j < fascia_checkpoint_setting_count(); ++j)
+        differs |= fascia_checkpoint_setting_get(&def, j) != fascia_checkpoint_setting_get(sd, j);
+      if (differs) {
+        fprintf(stderr, "t207: mutation %d (%d bytes) resumed a different state or settings\n", k, flips);
+        ++check_failures_;
+      } else {
+        ++*same;
+      }
+    }
+    fascia_solver_destroy(&s);
+    CHECK(open_ids() == 0);
+  }
+  return 0;
+}
+
 int main(void) {
   fascia_ctx_def cdef = fascia_ctx_def_default();
   cdef.threads = 1;
@@ -376,6 +449,12 @@ int main(void) {
   fascia_ctx_clear(ctx);
   CHECK(fascia_checkpoint_read_settings(ctx, good, other_model, &read, &step) == FASCIA_ERR_ARGUMENT);
   CHECK(open_ids() == 0);
+
+  int refused = 0, same = 0;
+  CHECK(mutations(ctx, m, &sd, 300, &refused, &same) == 0);
+  CHECK(refused >= 50 && refused + same == 300);
+  if (getenv("FASCIA_TEST_VERBOSE"))
+    fprintf(stderr, "t207: %d header cases; mutations: %d refused, %d resumed the same\n", header_cases, refused, same);
 
   fascia_solver_destroy(&solver);
   fascia_model_destroy(&m);
