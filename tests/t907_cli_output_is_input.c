@@ -130,6 +130,12 @@ int main(int argc, char **argv) {
   CHECK(link(model, path) == 0);
   snprintf(command, sizeof command, "'%s' run '%s' --steps 2 --paraview '%s/pv'", fascia, path, dir);
   failures += refused(command, "--paraview", model, length);
+  // another output named like the per-step files of an output folder
+  snprintf(path, sizeof path, "%s/pv/c-0001.vtu", dir);
+  snprintf(command, sizeof command, "'%s' run '%s' --steps 2 --paraview '%s/pv' --checkpoint '%s'", fascia, model,
+           dir, path);
+  failures += refused(command, "--checkpoint", model, length);
+  CHECK(!cli_file_exists(path));
   // an output folder still to be made and an output file of the same name
   snprintf(path, sizeof path, "%s/P.h5", dir);
   snprintf(command, sizeof command, "'%s' run '%s' --steps 2 -o '%s' --paraview '%s'", fascia, model, path, path);

@@ -120,26 +120,29 @@ static int check_input(const char *command, const cli_path *p) {
                 kind_of(st.st_mode));
 }
 
-// An input that lies in output folder p and whose name matches one of the
-// folder's patterns would be replaced by the files written there.
+// An input, or another output file, that lies in output folder p and whose
+// name matches one of the folder's patterns would be replaced by (or would
+// replace) the files written there.
 static int check_folder_patterns(const char *command, const cli_path *paths, int count, const cli_path *p) {
   struct stat dir;
-  if (!p->names || stat(p->path, &dir) != 0) return -1; // a folder still to be made holds no input
+  if (!p->names || stat(p->path, &dir) != 0) return -1; // a folder still to be made holds nothing yet
   for (int j = 0; j < count; ++j) {
-    const cli_path *in = paths + j;
-    if (in->kind != CLI_INPUT || !in->path || !in->path[0]) continue;
+    const cli_path *other = paths + j;
+    if (other == p || other->kind == CLI_OUTPUT_DIR || !other->path || !other->path[0]) continue;
     char folder[PATH_TEXT];
     struct stat st;
-    if (stat(folder_of_input(in->path, folder), &st) != 0 || st.st_dev != dir.st_dev || st.st_ino != dir.st_ino)
+    if (stat(folder_of_input(other->path, folder), &st) != 0 || st.st_dev != dir.st_dev || st.st_ino != dir.st_ino)
       continue;
-    const char *slash = strrchr(in->path, '/');
-    const char *name = slash ? slash + 1 : in->path;
+    const char *slash = strrchr(other->path, '/');
+    const char *name = slash ? slash + 1 : other->path;
     for (int n = 0; p->names[n]; ++n)
       if (!fnmatch(p->names[n], name, 0)) {
         char what[2 * PATH_TEXT];
-        snprintf(what, sizeof what, "'%s' writes files named '%s' there, and the %s", p->path, p->names[n], in->option);
-        return refuse(command, 2, "%s %s '%s' is one of them: writing would destroy that input; give another folder",
-                      p->option, what, in->path);
+        snprintf(what, sizeof what, "'%s' writes files named '%s' there, and %s '%s'", p->path, p->names[n],
+                 other->option, other->path);
+        return refuse(command, 2, "%s %s is one of them: %s; give another folder", p->option, what,
+                      other->kind == CLI_INPUT ? "writing would destroy that input"
+                                               : "one output would overwrite the other");
       }
   }
   return -1;
