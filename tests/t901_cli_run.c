@@ -11,8 +11,9 @@
 // and not converged, one that fails at its first step still prints its
 // object, a usage error or a model that cannot be read prints
 // {"command", "exit_status", "error"}; a model path that is not UTF-8 is
-// printed with U+FFFD in its place. Options given twice, or options that
-// contradict each other, are refused naming both.
+// printed with U+FFFD in its place; the text summary of a failed static
+// solve says FAILED. Options given twice, or options that contradict each
+// other, are refused naming both.
 // Usage: t901_cli_run PATH/TO/fascia WORK_DIR
 #define _POSIX_C_SOURCE 200809L
 #include <cjson/cJSON.h>
@@ -138,6 +139,13 @@ static int check_json_endings(const char *fascia, const char *model, const char 
   CHECK(strstr(result.out, "caf\xef\xbf\xbd.h5") != NULL);
   snprintf(args, sizeof args, "inspect '%s' --json", odd);
   failures += json_ending(fascia, args, err, 0, NULL, "");
+  // the text summary of a failed static solve says so, and not "converged"
+  snprintf(args, sizeof args, "run '%s' --static --blow-up-strain 1e-9 --threads 1", model);
+  CHECK(cli_exec(fascia, args, err, &result));
+  if (result.status != 1 || !strstr(result.out, "FAILED") || strstr(result.out, "converged")) {
+    fprintf(stderr, "fascia %s: exit %d, stdout: %.600s\n", args, result.status, result.out);
+    ++failures;
+  }
   // contradictions and repeats: exit 2, one line naming the options
   static const char *const twice[][2] = {{"--single --double", "--double"},  {"--assembled --matrix-free", "--matrix-free"},
                                          {"--steps 2 --steps 3", "--steps"}, {"--steps 2 -o a.h5 -o b.h5", "-o"},

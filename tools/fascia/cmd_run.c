@@ -514,7 +514,7 @@ static const char *linear_name(const run_totals *t) {
 }
 
 static void print_text(const run_options *opt, const fascia_model *m, fascia_solver *solver,
-                       const run_totals *t, fascia_real max_strain, fascia_real max_stress) {
+                       const run_totals *t, fascia_real max_strain, fascia_real max_stress, int failed) {
   const int steps = t->steps > 0 ? t->steps : 1;
   printf("model       %s (%d frames, %d samples)\n", opt->model_path, (int)m->frame_count, (int)m->sample_count);
   if (opt->dynamic)
@@ -522,7 +522,9 @@ static void print_text(const run_options *opt, const fascia_model *m, fascia_sol
            opt->solver.time_step, t->interrupted ? " (interrupted)" : "", fascia_solver_time(solver));
   else
     printf("run         static equilibrium at t = %g s (%s), %s\n", opt->static_time, opt->static_time_why,
-           t->converged_steps == t->steps ? "converged" : "NOT converged");
+           failed ? "FAILED" : t->converged_steps == t->steps ? "converged" : "NOT converged");
+  if (failed) // the figures below are of the last good state; the reason follows on stderr
+    printf("ended       failed%s\n", opt->dynamic ? " (the state after the last step taken)" : " (the state reached)");
   printf("backend     %s\n", fascia_solver_backend(solver));
   printf("device      %s\n", fascia_solver_device(solver));
   printf("linear      %s%s\n", linear_name(t),
@@ -999,7 +1001,7 @@ int cmd_run(int argc, char **argv) {
       summary = summary_json(&opt, model, solver, &tot, max_strain, max_stress);
       if (!summary) st = fascia_ctx_fail(ctx, FASCIA_ERR_MEMORY, __FILE__, __LINE__, "run: out of memory for --json");
     } else {
-      print_text(&opt, model, solver, &tot, max_strain, max_stress);
+      print_text(&opt, model, solver, &tot, max_strain, max_stress, st != FASCIA_OK);
     }
     fflush(stdout);
   }
