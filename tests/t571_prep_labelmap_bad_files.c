@@ -12,9 +12,13 @@
 // with vox_offset inside the header; header fields out of their defined set
 // (dim[0] 0 or 8, bad magic, sform/qform code 99, pixdim NaN or not
 // positive, bitpix against the datatype), each named for its own cause; a
-// big-endian file is read.
-#define _POSIX_C_SOURCE 200809L // mkdtemp, WEXITSTATUS
+// big-endian file is read. NRRD: gzip and bzip2 data checked whole (a
+// flipped length, a cut stream, bytes after it), raw data longer than its
+// header says, a detached data file that is a FIFO (refused, not a hang).
+#define _POSIX_C_SOURCE 200809L // mkdtemp, mkfifo, WEXITSTATUS
+#include <bzlib.h>
 #include <math.h>
+#include <sys/stat.h>
 #include <zlib.h>
 
 #include "labelmap_fixture.h"
@@ -215,11 +219,73 @@ int main(int argc, char **argv) {
       prep_case_accepted(cli, dir, "big-endian", good);
     }
   }
+  { // NRRD data: each encoding's stream checked whole
+    static unsigned char raw[8192], packed[8192], file[16384];
+    snprintf(path, sizeof path, "%s/raw.nrrd", dir);
+    CHECK(labelmap_write_nrrd(path, &grid, one_box, NULL, 0, 1));
+    const size_t n = slurp(path, raw, sizeof raw);
+    const unsigned char *blank = NULL;
+    for (size_t k = 0; k + 1 < n && !blank; ++k)
+      if (raw[k] == '\n' && raw[k + 1] == '\n') blank = raw + k + 2;
+    CHECK(blank && n - (size_t)(blank - raw) == 512);
+    const size_t head = blank ? (size_t)(blank - raw) : 0;
+    char text[4096];
+    memcpy(text, raw, head);
+    text[head] = 0;
+    char *enc = strstr(text, "encoding: raw\n");
+    CHECK(enc);
+    for (int e = 0; e < 2 && enc; ++e) { // gzip, bzip2
+      char header[4096];
+      snprintf(header, sizeof header, "%.*sencoding: %s\n%s", (int)(enc - text), text, e ? "bzip2" : "gzip",
+               enc + strlen("encoding: raw\n"));
+      size_t m = 0;
+      if (e) {
+        unsigned int out = sizeof packed;
+        CHECK(BZ2_bzBuffToBuffCompress((char *)packed, &out, (char *)(raw + head), 512, 9, 0, 0) == BZ_OK);
+        m = out;
+      } else {
+        CHECK(spit_gz(dir, "x.gz", raw + head, 512, 0));
+        snprintf(path, sizeof path, "%s/x.gz", dir);
+        m = slurp(path, packed, sizeof packed);
+      }
+      const size_t h = strlen(header);
+      memcpy(file, header, h);
+      memcpy(file + h, packed, m);
+      CHECK(spit(dir, "x.nrrd", file, h + m));
+      scene(dir, "x.nrrd", "\"box_a\"", "labels.tsv", good);
+      prep_case_accepted(cli, dir, e ? "bzip2 NRRD" : "gzip NRRD", good);
+      for (size_t cut = 1; cut <= 4; ++cut) {
+        CHECK(spit(dir, "x.nrrd", file, h + m - cut));
+        refused(cli, dir, "compressed NRRD cut", "x.nrrd", "1", "labels.tsv", "x.nrrd", "label map");
+      }
+      memcpy(file + h + m, "garbage", 7);
+      CHECK(spit(dir, "x.nrrd", file, h + m + 7));
+      refused(cli, dir, "bytes after the NRRD's stream", "x.nrrd", "1", "labels.tsv", "x.nrrd", "after the end");
+      if (!e) {
+        file[h + m - 3] ^= 1; // the length
+        CHECK(spit(dir, "x.nrrd", file, h + m));
+        refused(cli, dir, "gzip NRRD length flipped", "x.nrrd", "1", "labels.tsv", "x.nrrd", "damaged gzip data");
+      }
+    }
+    memcpy(file, raw, n);
+    memcpy(file + n, "xx", 2);
+    CHECK(spit(dir, "x.nrrd", file, n + 2));
+    refused(cli, dir, "raw NRRD longer", "x.nrrd", "1", "labels.tsv", "x.nrrd", "longer than its header says");
+    char header[4096];
+    text[head - 1] = 0; // no blank line: a detached header
+    snprintf(header, sizeof header, "%.3000sdata file: fifo.raw\n", text);
+    CHECK(fixture_write(dir, "fifo.nhdr", header));
+    snprintf(path, sizeof path, "%s/fifo.raw", dir);
+    remove(path);
+    CHECK(mkfifo(path, 0600) == 0);
+    refused(cli, dir, "NRRD data file a FIFO", "fifo.nhdr", "1", "labels.tsv", "fifo.raw", "FIFO");
+  }
   CHECK(fixture_write(dir, "image.png", "\x89PNG"));
   refused(cli, dir, "unknown extension", "image.png", "1", "labels.tsv", "image.png", "unknown format");
   const char *const names[] = {"b.obj", "labels.tsv", "bad.tsv", "good.nii.gz", "text.nii", "cut.nii.gz",
                                "float.nii", "four.nii", "placeless.nii", "layers.seg.nrrd", "image.png", "raw.nii",
-                               "x.nii.gz", "x.nii", "two.nii.gz", "swapped.nii",
+                               "x.nii.gz", "x.nii", "two.nii.gz", "swapped.nii", "raw.nrrd", "x.gz", "x.nrrd",
+                               "fifo.nhdr", "fifo.raw",
                                "scene.json", "model.h5", "stderr.txt", NULL};
   fixture_cleanup(dir, names);
   return CHECK_RESULT();

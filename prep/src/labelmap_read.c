@@ -13,6 +13,7 @@
 #include <string.h>
 #include <teem/nrrd.h>
 #include <zlib.h>
+#include <bzlib.h>
 
 #include "labels.h"
 
@@ -387,12 +388,224 @@ cleanup:
   return status;
 }
 
-static fascia_status read_nrrd(fascia_ctx *ctx, const char *path, int32_t frame, prep_labelmap *map) {
-  Nrrd *nrrd = nrrdNew();
-  PREP_CHECK(nrrd, ctx, FASCIA_ERR_MEMORY, "label map '%s': out of memory", path);
+// A whole compressed stream, inflated to scratch: NULL when every gzip
+// member (or the one bzip2 stream) ends with the data and passes its checks,
+// *length the bytes it holds; else why not.
+static const char *gzip_whole(const unsigned char *in, size_t n, int64_t *length) {
+  *length = 0;
+  if (n < 2 || in[0] != 0x1f || in[1] != 0x8b) return "no gzip signature";
+  gz_reader g = {.in = in, .left = n};
+  if (inflateInit2(&g.z, 15 + 16) != Z_OK) return "zlib could not start";
+  static unsigned char scratch[1 << 16];
+  const char *why;
+  size_t got;
+  do {
+    why = gz_pull(&g, scratch, sizeof scratch, &got);
+    *length += (int64_t)got;
+  } while (!why && !g.end);
+  inflateEnd(&g.z);
+  return why;
+}
+
+static const char *bzip2_whole(const unsigned char *in, size_t n, int64_t *length) {
+  *length = 0;
+  bz_stream b = {0};
+  if (BZ2_bzDecompressInit(&b, 0, 0) != BZ_OK) return "libbz2 could not start";
+  static char scratch[1 << 16];
+  const char *why = NULL;
+  b.next_in = (char *)(uintptr_t)in;
+  size_t left = n;
+  for (;;) {
+    if (b.avail_in == 0 && left) {
+      const size_t k = left > ((size_t)1 << 30) ? (size_t)1 << 30 : left;
+      b.avail_in = (unsigned)k;
+      left -= k;
+    }
+    b.next_out = scratch;
+    b.avail_out = sizeof scratch;
+    const int rc = BZ2_bzDecompress(&b);
+    *length += (int64_t)(sizeof scratch - b.avail_out);
+    if (rc == BZ_STREAM_END) {
+      if (b.avail_in || left) why = "bytes after the end of the bzip2 stream";
+      break;
+    }
+    if (rc != BZ_OK) {
+      why = rc == BZ_DATA_ERROR ? "a bzip2 block's CRC does not match" : "damaged bzip2 data";
+      break;
+    }
+    if (b.avail_in == 0 && left == 0 && b.avail_out == sizeof scratch) {
+      why = "the bzip2 stream is cut short (the file ends before the stream's end)";
+      break;
+    }
+  }
+  BZ2_bzDecompressEnd(&b);
+  return why;
+}
+
+// The detached data files an NRRD header names ("data file:" one name, a
+// numbered format "name%03d.raw min max step", or LIST then one name a line
+// to the end of the header), relative to the header's folder; each must be
+// a regular file before teem opens it (a FIFO would block). *count of them
+// in *names.
+static fascia_status nrrd_data_files(fascia_ctx *ctx, const char *path, const char *header, size_t size,
+                                     char ***names, int32_t *count) {
+  *names = NULL;
+  *count = 0;
+  char dir[4096] = "";
+  const char *slash = strrchr(path, '/');
+  if (slash) snprintf(dir, sizeof dir, "%.*s/", (int)(slash - path), path);
   fascia_status status = FASCIA_OK;
+  int listing = 0;
+  char **list = NULL;
+  int32_t n = 0, cap = 0;
+  for (size_t at = 0; at < size;) {
+    size_t end = at;
+    while (end < size && header[end] != '\n') ++end;
+    size_t len = end - at;
+    if (len && header[at + len - 1] == '\r') --len;
+    char line[4096];
+    PREP_CHECK_GOTO(len < sizeof line, ctx, FASCIA_ERR_FORMAT, "label map '%s': a header line of %zu characters", path,
+                    len);
+    memcpy(line, header + at, len);
+    line[len] = 0;
+    at = end + 1;
+    const char *value = NULL;
+    if (!strncmp(line, "data file:", 10)) value = line + 10;
+    else if (!strncmp(line, "datafile:", 9)) value = line + 9;
+    char names_here[1][4096];
+    int64_t first = 0, last = -1, step = 1;
+    const char *pattern = NULL;
+    int numbered = 0;
+    if (listing) {
+      if (!len) continue;
+      pattern = line, first = last = 0;
+    } else if (value) {
+      while (*value == ' ' || *value == '\t') ++value;
+      char fmt[4096];
+      long long lo, hi, st;
+      if (!strncmp(value, "LIST", 4) && (value[4] == 0 || value[4] == ' ')) {
+        listing = 1;
+        continue;
+      }
+      if (strchr(value, '%') && sscanf(value, "%4095s %lld %lld %lld", fmt, &lo, &hi, &st) == 4) {
+        snprintf(names_here[0], sizeof names_here[0], "%s", fmt);
+        pattern = names_here[0], first = lo, last = hi, step = st, numbered = 1;
+        PREP_CHECK_GOTO(step != 0 && (last - first) / step >= 0 && (last - first) / step < 100000, ctx,
+                        FASCIA_ERR_FORMAT, "label map '%s': data file numbers %lld to %lld by %lld", path, lo, hi, st);
+      } else {
+        pattern = value, first = last = 0;
+      }
+    } else {
+      continue;
+    }
+    // pattern: a name with at most one %[0]<width>d
+    const char *pc = strchr(pattern, '%');
+    int width = 0, zero = 0;
+    size_t head_len = pc ? (size_t)(pc - pattern) : strlen(pattern);
+    const char *tail = "";
+    if (numbered) {
+      const char *q = pc + 1;
+      if (*q == '0') zero = 1, ++q;
+      while (*q >= '0' && *q <= '9' && width < 100) width = width * 10 + (*q++ - '0');
+      PREP_CHECK_GOTO(*q == 'd' && !strchr(q + 1, '%'), ctx, FASCIA_ERR_FORMAT,
+                      "label map '%s': data file format '%s' is not a name with one %%d", path, pattern);
+      tail = q + 1;
+    } else {
+      pc = NULL, head_len = strlen(pattern);
+    }
+    for (int64_t k = first; step > 0 ? k <= last : k >= last; k += step) {
+      char name[4096], number[128] = "";
+      if (pc) snprintf(number, sizeof number, zero ? "%0*lld" : "%*lld", width, (long long)k);
+      snprintf(name, sizeof name, "%s%.*s%s%s", pattern[0] == '/' ? "" : dir, (int)head_len, pattern, number, tail);
+      if (n == cap) {
+        cap = cap ? 2 * cap : 4;
+        char **grown = realloc(list, (size_t)cap * sizeof *grown);
+        PREP_CHECK_GOTO(grown, ctx, FASCIA_ERR_MEMORY, "label map '%s': out of memory", path);
+        list = grown;
+      }
+      list[n] = prep_strdup(name);
+      PREP_CHECK_GOTO(list[n], ctx, FASCIA_ERR_MEMORY, "label map '%s': out of memory", path);
+      ++n;
+      FILE *f;
+      int64_t bytes;
+      PREP_TRY_GOTO(prep_open_regular(ctx, name, "label map data", &f, &bytes));
+      fclose(f);
+      if (!pc) break;
+    }
+  }
+cleanup:
+  if (status) {
+    for (int32_t k = 0; k < n; ++k) free(list[k]);
+    free(list);
+    return status;
+  }
+  *names = list;
+  *count = n;
+  return FASCIA_OK;
+}
+
+// After teem read the data: every compressed stream whole and as long as
+// the header declares, raw data not longer than declared.
+static fascia_status nrrd_verify_data(fascia_ctx *ctx, const char *path, const NrrdIoState *nio,
+                                      const unsigned char *file, size_t file_size, size_t data_at, char **names,
+                                      int32_t count, int64_t need) {
+  const int gz = nio->encoding == nrrdEncodingGzip, bz = nio->encoding == nrrdEncodingBzip2;
+  if (!gz && !bz && nio->encoding != nrrdEncodingRaw) return FASCIA_OK; // text: parsed value by value
+  if (gz || bz)
+    PREP_CHECK(nio->lineSkip == 0, ctx, FASCIA_ERR_FORMAT,
+               "label map '%s': compressed data after a line skip, which fascia cannot verify; save it without "
+               "'line skip'",
+               path);
+  if (nio->lineSkip || nio->dataFSkip || nio->byteSkip < 0) return FASCIA_OK; // position not known here
+  int64_t total = 0;
+  fascia_status status = FASCIA_OK;
+  for (int32_t k = 0; k < (count ? count : 1) && !status; ++k) {
+    char *text = NULL;
+    size_t n = file_size - data_at;
+    const unsigned char *data = file + data_at;
+    const char *where = path;
+    if (count) {
+      PREP_TRY(prep_read_file(ctx, names[k], "label map data", INT64_MAX / 4, &text, &n));
+      data = (const unsigned char *)text, where = names[k];
+    }
+    int64_t length = (int64_t)n;
+    const char *why = gz ? gzip_whole(data, n, &length) : bz ? bzip2_whole(data, n, &length) : NULL;
+    if (why)
+      status = PREP_FAIL(ctx, FASCIA_ERR_FORMAT,
+                         "label map '%s': damaged %s data in '%s' (%s); the file is corrupt or incomplete: copy or "
+                         "export it again",
+                         path, gz ? "gzip" : "bzip2", where, why);
+    total += length - nio->byteSkip;
+    free(text);
+  }
+  if (status) return status;
+  PREP_CHECK(total == need, ctx, FASCIA_ERR_FORMAT,
+             "label map '%s': its data holds %lld bytes%s, but its header declares %lld; the file is %s", path,
+             (long long)total, gz || bz ? " once inflated" : "", (long long)need,
+             total < need ? "cut short" : "longer than its header says (damaged)");
+  return FASCIA_OK;
+}
+
+static fascia_status read_nrrd(fascia_ctx *ctx, const char *path, int32_t frame, prep_labelmap *map) {
+  char *raw, **names = NULL;
+  size_t size;
+  int32_t count = 0;
+  PREP_TRY(prep_read_file(ctx, path, "label map", INT64_MAX / 4, &raw, &size));
+  // the header ends at its first empty line; attached data follow it
+  size_t data_at = size;
+  for (size_t k = 0; k + 1 < size; ++k)
+    if (raw[k] == '\n' && (raw[k + 1] == '\n' || (raw[k + 1] == '\r' && k + 2 < size && raw[k + 2] == '\n'))) {
+      data_at = k + (raw[k + 1] == '\n' ? 2 : 3);
+      break;
+    }
+  Nrrd *nrrd = nrrdNew();
+  NrrdIoState *nio = nrrdIoStateNew();
+  fascia_status status = FASCIA_OK;
+  PREP_CHECK_GOTO(nrrd && nio, ctx, FASCIA_ERR_MEMORY, "label map '%s': out of memory", path);
   snprintf(map->format, sizeof map->format, "NRRD");
-  if (nrrdLoad(nrrd, path, NULL)) {
+  PREP_TRY_GOTO(nrrd_data_files(ctx, path, raw, data_at, &names, &count));
+  nrrdStateVerboseIO = 0; // teem's warnings go to stderr; ours name the file
+  if (nrrdLoad(nrrd, path, nio)) {
     char *err = biffGetDone(NRRD);
     char reason[256] = "";
     if (err) { // teem's messages are several lines: keep the innermost reason on one line
@@ -446,10 +659,16 @@ static fascia_status read_nrrd(fascia_ctx *ctx, const char *path, int32_t frame,
   place(map, affine, lps, frame, scale);
   PREP_TRY_GOTO(check_affine(ctx, path, map->to_world));
   const int64_t dims[3] = {(int64_t)nrrd->axis[0].size, (int64_t)nrrd->axis[1].size, (int64_t)nrrd->axis[2].size};
+  PREP_TRY_GOTO(nrrd_verify_data(ctx, path, nio, (const unsigned char *)raw, size, data_at, names, count,
+                                 dims[0] * dims[1] * dims[2] * bytes));
   PREP_TRY_GOTO(alloc_labels(ctx, path, map, dims));
   PREP_TRY_GOTO(copy_labels(ctx, path, nrrd->data, dims[0] * dims[1] * dims[2], bytes, is_signed, 0, map->labels));
 cleanup:
-  nrrdNuke(nrrd);
+  if (nrrd) nrrdNuke(nrrd);
+  if (nio) nrrdIoStateNix(nio);
+  for (int32_t k = 0; k < count; ++k) free(names[k]);
+  free(names);
+  free(raw);
   return status;
 }
 
