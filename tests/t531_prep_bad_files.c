@@ -6,7 +6,10 @@
 // a mesh, a scene far larger than any scene, and STL files cut short or garbled (ASCII without "endsolid" or
 // with a facet cut short, binary whose size disagrees with its triangle
 // count) and PLY files whose body holds less than their header declares.
-// The complete files, ASCII and binary, are accepted.
+// The complete files, ASCII and binary, are accepted. A face index out of
+// range, which assimp clamps or drops silently, is refused: OFF (the vertex
+// count, -1, 2^32, 99999, fewer faces than declared), glTF (an index past
+// the vertices), OBJ (a NUL inside a face line, index 0, past the end).
 #define _POSIX_C_SOURCE 200809L // mkdtemp, mkfifo, WEXITSTATUS
 #include <sys/stat.h>
 #include <unistd.h>
@@ -109,6 +112,95 @@ static int write_ply(const char *name, int binary, int cut) {
   return fclose(f) == 0 && ok;
 }
 
+// Box B as 8 corners and 12 triangles; bad: replaces face 5's second index.
+static void box_indexed(float v[8][3], int f[12][3]) {
+  static const int quads[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1}, {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
+  for (int c = 0; c < 8; ++c) {
+    v[c][0] = (c & 1) ? 0.02f : 0.003f;
+    v[c][1] = (c & 2) ? 0.01f : -0.01f;
+    v[c][2] = (c & 4) ? 0.01f : -0.01f;
+  }
+  for (int q = 0; q < 6; ++q)
+    for (int h = 0; h < 2; ++h) f[2 * q + h][0] = quads[q][0], f[2 * q + h][1] = quads[q][1 + h], f[2 * q + h][2] = quads[q][2 + h];
+}
+
+// OFF of box B; face 5's second index is the text bad when given; faces: the count declared
+static int write_off(const char *name, const char *bad, int faces) {
+  float v[8][3];
+  int f[12][3];
+  box_indexed(v, f);
+  char text[4096];
+  int n = snprintf(text, sizeof text, "OFF\n8 %d 0\n", faces);
+  for (int c = 0; c < 8; ++c) n += snprintf(text + n, sizeof text - (size_t)n, "%g %g %g\n", v[c][0], v[c][1], v[c][2]);
+  for (int k = 0; k < 12; ++k) {
+    char second[32];
+    snprintf(second, sizeof second, "%d", f[k][1]);
+    n += snprintf(text + n, sizeof text - (size_t)n, "3 %d %s %d\n", f[k][0], k == 5 && bad ? bad : second, f[k][2]);
+  }
+  return fixture_write(dir, name, text);
+}
+
+// OBJ of box B; face 5's line is bad (n bytes, may hold a NUL) when given
+static int write_obj(const char *name, const char *bad, size_t bad_size) {
+  float v[8][3];
+  int f[12][3];
+  box_indexed(v, f);
+  char text[4096];
+  size_t n = 0;
+  for (int c = 0; c < 8; ++c) n += (size_t)snprintf(text + n, sizeof text - n, "v %g %g %g\n", v[c][0], v[c][1], v[c][2]);
+  for (int k = 0; k < 12; ++k) {
+    if (k == 5 && bad) {
+      memcpy(text + n, bad, bad_size);
+      n += bad_size;
+      text[n++] = '\n';
+    } else {
+      n += (size_t)snprintf(text + n, sizeof text - n, "f %d %d %d\n", f[k][0] + 1, f[k][1] + 1, f[k][2] + 1);
+    }
+  }
+  char path[512];
+  snprintf(path, sizeof path, "%s/%s", dir, name);
+  FILE *out = fopen(path, "wb");
+  const int ok = out && fwrite(text, 1, n, out) == n;
+  return out && fclose(out) == 0 && ok;
+}
+
+// glTF of box B with its buffer inline (base64); face 5's second index is bad when >= 0
+static int write_gltf(const char *name, int bad) {
+  float v[8][3];
+  int f[12][3];
+  box_indexed(v, f);
+  unsigned char buf[8 * 12 + 36 * 2];
+  memcpy(buf, v, sizeof v); // little-endian floats, as glTF stores them
+  for (int k = 0; k < 36; ++k) {
+    const int i = (k == 16 && bad >= 0) ? bad : f[k / 3][k % 3];
+    buf[96 + 2 * k] = (unsigned char)(i & 255), buf[96 + 2 * k + 1] = (unsigned char)(i >> 8);
+  }
+  static const char b64[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  char enc[256];
+  size_t e = 0;
+  for (size_t k = 0; k < sizeof buf; k += 3) {
+    const unsigned w = (unsigned)buf[k] << 16 | (unsigned)(k + 1 < sizeof buf ? buf[k + 1] : 0) << 8 |
+                       (unsigned)(k + 2 < sizeof buf ? buf[k + 2] : 0);
+    enc[e++] = b64[w >> 18 & 63], enc[e++] = b64[w >> 12 & 63];
+    enc[e++] = k + 1 < sizeof buf ? b64[w >> 6 & 63] : '=';
+    enc[e++] = k + 2 < sizeof buf ? b64[w & 63] : '=';
+  }
+  enc[e] = 0;
+  char text[4096];
+  snprintf(text, sizeof text,
+           "{\"asset\": {\"version\": \"2.0\"}, \"scene\": 0, \"scenes\": [{\"nodes\": [0]}],\n"
+           " \"nodes\": [{\"mesh\": 0, \"name\": \"b\"}],\n"
+           " \"meshes\": [{\"name\": \"b\", \"primitives\": [{\"attributes\": {\"POSITION\": 0}, \"indices\": 1, \"mode\": 4}]}],\n"
+           " \"buffers\": [{\"byteLength\": 168, \"uri\": \"data:application/octet-stream;base64,%s\"}],\n"
+           " \"bufferViews\": [{\"buffer\": 0, \"byteOffset\": 0, \"byteLength\": 96},\n"
+           "                 {\"buffer\": 0, \"byteOffset\": 96, \"byteLength\": 72}],\n"
+           " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 8, \"type\": \"VEC3\",\n"
+           "                \"min\": [0.003, -0.01, -0.01], \"max\": [0.02, 0.01, 0.01]},\n"
+           "               {\"bufferView\": 1, \"componentType\": 5123, \"count\": 36, \"type\": \"SCALAR\"}]}\n",
+           enc);
+  return fixture_write(dir, name, text);
+}
+
 static void refused(const char *cli, const char *name, const char *mesh_b, const char *e1, const char *e2,
                     const char *e3) {
   prep_case_mesh(cli, dir, name, mesh_b, (const char *const[]){"organs[1].mesh", e1, e2, e3, NULL});
@@ -184,7 +276,32 @@ int main(int argc, char **argv) {
   CHECK(fixture_write(dir, "header.ply", "ply\nformat ascii 1.0\nelement vertex eight\nend_header\n"));
   refused(cli, "PLY header garbled", "header.ply", "PLY header line 3", "element NAME COUNT", 0);
 
-  static const char *const files[] = {"a.obj", "b.stl", "bin.stl", "solid.STL", "noend.stl", "cut.stl",
+  // face indices out of range: refused, not clamped or dropped
+  CHECK(write_off("b.off", NULL, 12) && write_obj("box.obj", NULL, 0) && write_gltf("b.gltf", -1));
+  accepted(cli, "OFF", "b.off");
+  accepted(cli, "OBJ", "box.obj");
+  accepted(cli, "glTF", "b.gltf");
+  static const char *const off_bad[] = {"8", "-1", "4294967296", "99999", "x"};
+  for (int k = 0; k < 5; ++k) {
+    CHECK(write_off("bad.off", off_bad[k], 12));
+    refused(cli, "OFF face index out of range", "bad.off", "bad.off", "face 5", off_bad[k]);
+  }
+  CHECK(write_off("bad.off", NULL, 13));
+  refused(cli, "OFF with fewer faces than declared", "bad.off", "bad.off", "12 faces of the 13", 0);
+  CHECK(write_gltf("bad.gltf", 8) && write_gltf("big.gltf", 60000));
+  refused(cli, "glTF index = vertex count", "bad.gltf", "bad.gltf", "out-of-range", 0);
+  refused(cli, "glTF index far past the vertices", "big.gltf", "big.gltf", "out-of-range", 0);
+  static const struct {
+    const char *line;
+    size_t size;
+  } obj_bad[] = {{"f 1 3\0 4", 9}, {"f\0 1 3 4", 9}, {"\0f 1 3 4", 9}, {"f 1 3 4\0", 9}, {"f 1 0 4", 7},
+                 {"f 1 9 4", 7},    {"f 1 -9 4", 8},  {"f 1 99999999999 4", 17}};
+  for (size_t k = 0; k < sizeof obj_bad / sizeof obj_bad[0]; ++k) {
+    CHECK(write_obj("bad.obj", obj_bad[k].line, obj_bad[k].size));
+    refused(cli, "OBJ face line damaged", "bad.obj", "bad.obj", 0, 0);
+  }
+
+  static const char *const files[] = {"b.off", "box.obj", "b.gltf", "bad.off", "bad.gltf", "big.gltf", "bad.obj", "a.obj", "b.stl", "bin.stl", "solid.STL", "noend.stl", "cut.stl",
                                       "garbled.stl", "short.stl", "long.stl", "solidshort.stl", "tiny.stl",
                                       "pipe.obj", "b.ply", "bin.ply", "cut.ply", "cutbin.ply", "header.ply", "big.json", "scene.json", "model.h5", "stderr.txt", NULL};
   rmdir(sub);

@@ -3,19 +3,67 @@
 // assimp adapter: every (node, triangle mesh) pair of a file becomes one part,
 // with the node's accumulated transform applied, so that parts can be picked
 // by node or mesh name in C.
+#include <assimp/DefaultLogger.hpp>
 #include <assimp/Importer.hpp>
+#include <assimp/LogStream.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
 #include <cstdlib>
 #include <cstring>
 #include <exception>
+#include <mutex>
 #include <string>
 #include <vector>
 
 #include "adapters.h"
 
 namespace {
+
+// assimp's importers repair some damage and say so only in their log: an
+// OFF index past the vertices is clamped, a glTF face with one is dropped,
+// an OBJ face cut by a NUL is ignored. Its errors, and its warnings about
+// faces dropped or indices out of range, reach the read that caused them
+// (per thread) and refuse the file.
+thread_local std::string *assimp_complaint = nullptr;
+
+void keep_complaint(const char *message) {
+  if (!assimp_complaint || !assimp_complaint->empty() || !message) return;
+  std::string m(message);
+  const size_t tag = m.find(','); // "Error, T0: " or "Warn,  T0: " before the text
+  const size_t colon = tag < 8 ? m.find(": ", tag) : std::string::npos;
+  if (colon != std::string::npos) m = m.substr(colon + 2);
+  while (!m.empty() && (m.back() == '\n' || m.back() == '\r')) m.pop_back();
+  for (char &c : m)
+    if (c == '\n' || c == '\r' || c == '\t') c = ' ';
+  *assimp_complaint = m.empty() ? std::string("an error without text") : m;
+}
+
+struct ErrorStream : Assimp::LogStream {
+  void write(const char *message) override { keep_complaint(message); }
+};
+
+struct WarningStream : Assimp::LogStream {
+  void write(const char *message) override {
+    static const char *const damage[] = {"out-of-range", "out of range", "dropped", "Ignoring", "ignoring",
+                                         "Skipping face", "skipping face", "invalid index", "Invalid index"};
+    for (const char *d : damage)
+      if (message && std::strstr(message, d)) {
+        keep_complaint(message);
+        return;
+      }
+  }
+};
+
+void listen_to_assimp() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    if (!Assimp::DefaultLogger::isNullLogger()) return; // the application has its own: leave it
+    Assimp::Logger *log = Assimp::DefaultLogger::create(nullptr, Assimp::Logger::NORMAL, 0);
+    log->attachStream(new ErrorStream, Assimp::Logger::Err);
+    log->attachStream(new WarningStream, Assimp::Logger::Warn);
+  });
+}
 
 struct Collected {
   std::vector<std::string> node_names, mesh_names;
@@ -89,7 +137,14 @@ extern "C" void fascia_assimp_free(fascia_assimp_file **file) {
 extern "C" fascia_status fascia_assimp_read(fascia_ctx *ctx, const char *path, fascia_assimp_file **out) {
   *out = nullptr;
   fascia_assimp_file *f = nullptr;
+  std::string complaint;
+  struct Listening { // the complaint pointer is cleared on every way out
+    explicit Listening(std::string *c) { assimp_complaint = c; }
+    ~Listening() { assimp_complaint = nullptr; }
+  };
   try {
+    listen_to_assimp();
+    Listening listening(&complaint);
     Assimp::Importer importer;
     // no vertex joining here: the CGAL repair merges duplicates and reports it.
     // ValidateDataStructure runs first and refuses what the loader built from a
@@ -106,6 +161,11 @@ extern "C" fascia_status fascia_assimp_read(fascia_ctx *ctx, const char *path, f
                              "mesh '%s': cannot be read as a mesh (assimp: %s); check the file and its format", path,
                              why);
     }
+    if (!complaint.empty())
+      return fascia_ctx_fail(ctx, FASCIA_ERR_FORMAT, __FILE__, __LINE__,
+                             "mesh '%s': damaged, assimp read it only by changing it (assimp: %s); repair or export "
+                             "the file again",
+                             path, complaint.c_str());
     Collected c;
     collect(scene, scene->mRootNode, aiMatrix4x4(), c);
     f = (fascia_assimp_file *)std::calloc(1, sizeof *f);

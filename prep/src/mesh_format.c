@@ -6,10 +6,14 @@
 // PLY with fewer faces than its header declares, as a smaller mesh, without
 // a word. An STL is binary exactly when its size is 84 + 50 n bytes for the
 // n triangles its header counts (assimp's own test); otherwise it must be a
-// complete ASCII STL. OBJ and OFF have no count or end to check against
-// (OFF's counts are checked by assimp's validation).
+// complete ASCII STL. OBJ and OFF are text: a NUL or other control byte
+// (which assimp's parsers read as a line's or the file's end, dropping the
+// rest of a face) is refused; an OFF's faces are read against its header
+// (assimp clamps an index past the vertices to the last one, and reads a
+// negative one as another vertex).
 #define _POSIX_C_SOURCE 200809L // strcasecmp
 #include <ctype.h>
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -264,6 +268,123 @@ static fascia_status check_ply(fascia_ctx *ctx, const char *path, FILE *f, int64
   return FASCIA_OK;
 }
 
+// A control byte in a text mesh: its line, 0 if none.
+static int64_t control_byte_line(const char *text, size_t size, unsigned *byte) {
+  int64_t line = 1;
+  for (size_t k = 0; k < size; ++k) {
+    const unsigned char c = (unsigned char)text[k];
+    if (c == '\n') ++line;
+    else if ((c < 32 && c != '\t' && c != '\r' && c != '\f' && c != '\v') || c == 127) {
+      *byte = c;
+      return line;
+    }
+  }
+  return 0;
+}
+
+typedef struct off_reader {
+  const char *text;
+  size_t size, at;
+  int64_t line;
+  char token[TOKEN_SIZE];
+} off_reader;
+
+// The next token (comments from # to the line's end skipped); 0 at the end.
+// same_line: 0 when it must stay on the current line (returns 0 at its end).
+static int off_token(off_reader *rd, int same_line) {
+  for (;;) {
+    while (rd->at < rd->size && isspace((unsigned char)rd->text[rd->at]) && rd->text[rd->at] != '\n') ++rd->at;
+    if (rd->at < rd->size && rd->text[rd->at] == '#')
+      while (rd->at < rd->size && rd->text[rd->at] != '\n') ++rd->at;
+    if (rd->at >= rd->size) return 0;
+    if (rd->text[rd->at] != '\n') break;
+    if (same_line) return 0;
+    ++rd->at, ++rd->line;
+  }
+  size_t n = 0;
+  while (rd->at < rd->size && !isspace((unsigned char)rd->text[rd->at])) {
+    if (n + 1 < TOKEN_SIZE) rd->token[n++] = rd->text[rd->at];
+    ++rd->at;
+  }
+  rd->token[n] = 0;
+  return 1;
+}
+
+static void off_skip_line(off_reader *rd) {
+  while (rd->at < rd->size && rd->text[rd->at] != '\n') ++rd->at;
+}
+
+static int off_integer(const char *token, int64_t *value) {
+  char *end;
+  errno = 0;
+  const long long v = strtoll(token, &end, 10);
+  *value = v;
+  return end != token && *end == 0 && errno == 0;
+}
+
+// An ASCII OFF ("OFF" then vertex, face and edge counts): every face's
+// vertex count and indices read and checked against the vertex count.
+static fascia_status check_off(fascia_ctx *ctx, const char *path, const char *text, size_t size) {
+  off_reader rd = {.text = text, .size = size, .line = 1};
+  if (!off_token(&rd, 0) || strcmp(rd.token, "OFF")) return FASCIA_OK; // COFF, NOFF, binary: assimp's checks
+  int64_t counts[3];
+  for (int k = 0; k < 3; ++k)
+    PREP_CHECK(off_token(&rd, 0) && off_integer(rd.token, counts + k) && counts[k] >= 0, ctx, FASCIA_ERR_FORMAT,
+               "mesh '%s' line %lld: OFF header's %s count is '%s', expected a whole number; the file is damaged",
+               path, (long long)rd.line, k == 0 ? "vertex" : k == 1 ? "face" : "edge", rd.token);
+  const int64_t nv = counts[0], nf = counts[1];
+  for (int64_t v = 0; v < nv; ++v) {
+    for (int c = 0; c < 3; ++c)
+      PREP_CHECK(off_token(&rd, c > 0) && is_number(rd.token), ctx, FASCIA_ERR_FORMAT,
+                 "mesh '%s' line %lld: vertex %lld of the %lld the OFF header declares %s; the file is truncated or "
+                 "damaged",
+                 path, (long long)rd.line, (long long)v, (long long)nv,
+                 rd.at >= rd.size ? "is missing" : "does not hold 3 coordinates");
+    off_skip_line(&rd); // colours may follow
+  }
+  for (int64_t f = 0; f < nf; ++f) {
+    int64_t n;
+    PREP_CHECK(off_token(&rd, 0), ctx, FASCIA_ERR_FORMAT,
+               "mesh '%s': the file ends after %lld faces of the %lld its OFF header declares; the file is truncated",
+               path, (long long)f, (long long)nf);
+    PREP_CHECK(off_integer(rd.token, &n) && n >= 3 && n <= 1000000, ctx, FASCIA_ERR_FORMAT,
+               "mesh '%s' line %lld: face %lld starts with '%s', expected its vertex count (3 or more); the file is "
+               "damaged",
+               path, (long long)rd.line, (long long)f, rd.token);
+    for (int64_t i = 0; i < n; ++i) {
+      int64_t index;
+      PREP_CHECK(off_token(&rd, 1), ctx, FASCIA_ERR_FORMAT,
+                 "mesh '%s' line %lld: face %lld has %lld vertex indices, its count says %lld; the file is damaged",
+                 path, (long long)rd.line, (long long)f, (long long)i, (long long)n);
+      PREP_CHECK(off_integer(rd.token, &index) && index >= 0 && index < nv, ctx, FASCIA_ERR_FORMAT,
+                 "mesh '%s' line %lld: face %lld has vertex index '%s', expected 0 to %lld (the file declares %lld "
+                 "vertices); the file is damaged",
+                 path, (long long)rd.line, (long long)f, rd.token, (long long)nv - 1, (long long)nv);
+    }
+    off_skip_line(&rd); // colours may follow
+  }
+  return FASCIA_OK;
+}
+
+// OBJ and OFF: no control bytes; an OFF's faces within its vertices.
+static fascia_status check_text_mesh(fascia_ctx *ctx, const char *path, int off) {
+  char *text;
+  size_t size;
+  PREP_TRY(prep_read_file(ctx, path, "mesh", INT64_MAX / 4, &text, &size));
+  unsigned byte = 0;
+  const int64_t line = control_byte_line(text, size, &byte);
+  fascia_status status = FASCIA_OK;
+  if (line)
+    status = PREP_FAIL(ctx, FASCIA_ERR_FORMAT,
+                       "mesh '%s' line %lld: a control byte (0x%02x) in a text mesh, which the reader would take for the "
+                       "line's or the file's end; the file is damaged",
+                       path, (long long)line, byte);
+  else if (off)
+    status = check_off(ctx, path, text, size);
+  free(text);
+  return status;
+}
+
 static int has_extension(const char *path, const char *ext) {
   const char *dot = strrchr(path, '.'), *slash = strrchr(path, '/');
   return dot && (!slash || dot > slash) && !strcasecmp(dot + 1, ext);
@@ -271,6 +392,7 @@ static int has_extension(const char *path, const char *ext) {
 
 fascia_status prep_mesh_precheck(fascia_ctx *ctx, const char *path, FILE *f, int64_t size) {
   if (has_extension(path, "ply")) return check_ply(ctx, path, f, size);
+  if (has_extension(path, "obj") || has_extension(path, "off")) return check_text_mesh(ctx, path, has_extension(path, "off"));
   if (!has_extension(path, "stl")) return FASCIA_OK;
   unsigned char header[STL_HEADER];
   const size_t got = fread(header, 1, sizeof header, f);
