@@ -76,6 +76,21 @@ int main(int argc, char **argv) {
       {"not JSON", 0, 0, 0, 0, 0, 0, "{\"fascia_scene\": 1,\n \"voxel_size\": }", {"scene.json", "not valid JSON", "line 2"}},
   };
   for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) run_case(cases + k);
+  { // a coupling tolerance of 1 m: OpenVDB's band stays within what the grid can see (in 4 GB, not an abort)
+    char scene[4096], path[512], command[2048];
+    prep_case_scene(scene, sizeof scene, 0, 0, 0, 0, ", \"coupling\": {\"tolerance\": 1}", 0);
+    CHECK(fixture_write(dir, "scene.json", scene));
+    snprintf(path, sizeof path, "%s/scene.json", dir);
+    snprintf(command, sizeof command,
+             "ulimit -v 4000000; FASCIA_PROGRESS=0 timeout 120 '%s' prep '%s' -o '%s/model.h5' > /dev/null 2> "
+             "'%s/stderr.txt'",
+             cli, path, dir, dir);
+    const int status = system(command);
+    if (!(status >= 0 && WIFEXITED(status) && WEXITSTATUS(status) == 0)) {
+      fprintf(stderr, "case 'coupling tolerance 1 m': exit status %d, it should be accepted\n", status);
+      ++check_failures_;
+    }
+  }
   static const char *const files[] = {"a.obj", "b.obj", "far.obj", "nan.obj", "empty.obj", "garbage.glb",
                                       "scene.json", "model.h5", "stderr.txt", NULL};
   fixture_cleanup(dir, files);

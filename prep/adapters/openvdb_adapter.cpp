@@ -11,12 +11,53 @@
 #include <openvdb/tools/Morphology.h>
 #include <openvdb/tools/VolumeToMesh.h>
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <exception>
 #include <vector>
 
 #include "adapters.h"
+
+// OpenVDB runs out of memory inside its worker threads, where a bad_alloc
+// can end in a destructor and abort the process: the narrow band's size is
+// estimated first (voxels within band of the surface: at most the surface
+// area times the band's thickness, at most the grown box) and refused when
+// it cannot fit this machine's memory.
+static bool band_fits(fascia_ctx *ctx, const char *stage, int32_t vertex_count, const double *vertices,
+                      int32_t triangle_count, const int32_t *triangles, double h, double band_voxels,
+                      fascia_status *status) {
+  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY}, area = 0;
+  for (int32_t v = 0; v < vertex_count; ++v)
+    for (int r = 0; r < 3; ++r) lo[r] = std::min(lo[r], vertices[3 * v + r]), hi[r] = std::max(hi[r], vertices[3 * v + r]);
+  for (int32_t t = 0; t < triangle_count; ++t) {
+    const double *a = vertices + 3 * triangles[3 * t], *b = vertices + 3 * triangles[3 * t + 1],
+                 *c = vertices + 3 * triangles[3 * t + 2];
+    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    const double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+    area += 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  }
+  double box = 1;
+  for (int r = 0; r < 3; ++r) box *= (hi[r] - lo[r]) / h + 2 * band_voxels + 1;
+  const double shell = (area / (h * h) + 1) * (2 * band_voxels + 1) + 8.0 * triangle_count;
+  const double voxels = std::min(box, shell);
+  const double bytes = 12.0 * voxels; // a float, the masks and the tree's nodes
+  double memory = 0;
+#if defined(_SC_PHYS_PAGES) && defined(_SC_PAGESIZE)
+  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+  if (pages > 0 && page > 0) memory = (double)pages * (double)page;
+#endif
+  if (std::isfinite(bytes) && (memory <= 0 || bytes < 0.8 * memory)) return true;
+  *status = fascia_ctx_fail(ctx, FASCIA_ERR_MEMORY, __FILE__, __LINE__,
+                            "OpenVDB, %s: a distance band %.3g voxels wide (%.3g m) around %d triangles at voxel size "
+                            "%g m needs about %.3g GiB, more than this machine's %.3g GiB; lower the tissues' max_gap "
+                            "or coupling tolerance, or raise voxel_size",
+                            stage, band_voxels, band_voxels * h, (int)triangle_count, h, bytes / 1073741824.0,
+                            memory / 1073741824.0);
+  return false;
+}
 
 // A triangle soup in index space (world / h), which keeps float precision
 // relative to the voxel.
@@ -36,6 +77,18 @@ extern "C" fascia_status fascia_vdb_unsigned_distance(fascia_ctx *ctx, int32_t v
                                                       float band_voxels, const int32_t lo[3], const int32_t dims[3],
                                                       float *out) {
   try {
+    // a voxel of the box is never farther from the mesh than the diagonal of
+    // the box and the mesh's box together: a wider band changes no value
+    double span = 0;
+    for (int r = 0; r < 3; ++r) {
+      double a = lo[r], b = lo[r] + dims[r];
+      for (int32_t v = 0; v < vertex_count; ++v) a = std::min(a, vertices[3 * v + r] / h), b = std::max(b, vertices[3 * v + r] / h);
+      span += (b - a + 2) * (b - a + 2);
+    }
+    const float reach = (float)std::min((double)band_voxels, std::sqrt(span) + 2);
+    fascia_status status;
+    if (!band_fits(ctx, "distance field", vertex_count, vertices, triangle_count, triangles, h, reach, &status))
+      return status;
     openvdb::initialize();
     std::vector<openvdb::Vec3s> points;
     std::vector<openvdb::Vec3I> tris;
@@ -43,11 +96,11 @@ extern "C" fascia_status fascia_vdb_unsigned_distance(fascia_ctx *ctx, int32_t v
     in_voxels(vertex_count, vertices, triangle_count, triangles, h, points, tris);
     auto xform = openvdb::math::Transform::createLinearTransform(1.0);
     openvdb::FloatGrid::Ptr grid =
-        openvdb::tools::meshToUnsignedDistanceField<openvdb::FloatGrid>(*xform, points, tris, quads, band_voxels);
+        openvdb::tools::meshToUnsignedDistanceField<openvdb::FloatGrid>(*xform, points, tris, quads, reach);
     const openvdb::CoordBBox box(openvdb::Coord(lo[0], lo[1], lo[2]),
                                  openvdb::Coord(lo[0] + dims[0] - 1, lo[1] + dims[1] - 1, lo[2] + dims[2] - 1));
     openvdb::tools::Dense<float, openvdb::tools::LayoutXYZ> dense(box, out);
-    dense.fill(band_voxels);
+    dense.fill(reach);
     openvdb::tools::copyToDense(*grid, dense);
     const size_t count = (size_t)dims[0] * (size_t)dims[1] * (size_t)dims[2];
     const float hf = (float)h;
@@ -154,8 +207,13 @@ extern "C" fascia_status fascia_vdb_carve(fascia_ctx *ctx, int32_t vertex_count,
                                           double depth, double **out_vertices, int32_t *out_vertex_count,
                                           int32_t **out_triangles, int32_t *out_triangle_count) {
   try {
-    openvdb::initialize();
     const float reach = (float)(depth / h) + 3.0f; // voxels: the carve and the band around its surface
+    fascia_status status;
+    if (!band_fits(ctx, "carving", vertex_count, vertices, triangle_count, triangles, h, reach, &status) ||
+        !band_fits(ctx, "carving", other_vertex_count, other_vertices, other_triangle_count, other_triangles, h, reach,
+                   &status))
+      return status;
+    openvdb::initialize();
     openvdb::FloatGrid::Ptr grid = signed_distance(vertex_count, vertices, triangle_count, triangles, h, 3.0f, reach);
     openvdb::FloatGrid::Ptr other = signed_distance(other_vertex_count, other_vertices, other_triangle_count,
                                                     other_triangles, h, reach, 3.0f);
