@@ -3,7 +3,9 @@
 // Bad input to `fascia prep` (the CLI, argv[1]): each case fails with exit
 // status 1, one line on stderr that names the file or the scene key and what
 // is wrong, and no model file (an older file at the output path is left as it
-// was).
+// was). Strings the scene gives are whole UTF-8: a \u0000 escape (which
+// would cut a mesh path short) and invalid UTF-8 in keys, names and paths
+// are refused.
 #define _POSIX_C_SOURCE 200809L // mkdtemp, WEXITSTATUS
 #include <math.h>
 
@@ -74,6 +76,13 @@ int main(int argc, char **argv) {
        "\"sample_spacing\": 0.002}]}",
        {"tissues[0].connects[1]", "no organ is named 'C'", 0}},
       {"not JSON", 0, 0, 0, 0, 0, 0, "{\"fascia_scene\": 1,\n \"voxel_size\": }", {"scene.json", "not valid JSON", "line 2"}},
+      {"NUL escape in a mesh path", 0, "b.obj\\u0000.x", 0, 0, 0, 0, 0, {"scene.json", "\\u0000", "line 3"}},
+      {"invalid UTF-8 in a key", 0, 0, 0, 0, 0, ", \"max\xe9gap\": 1", 0, {"scene.json", "tissues[0]", "UTF-8"}},
+      {"invalid UTF-8 in a name", 0, 0, 0, 0, 0, 0,
+       "{\"fascia_scene\": 1, \"voxel_size\": 0.001, \"materials\": {\"m\": {\"youngs_modulus\": 1, "
+       "\"poisson_ratio\": 0.3}}, \"organs\": [{\"name\": \"A\xff\", \"mesh\": \"a.obj\"}], \"tissues\": []}",
+       {"scene.json", "organs[0].name", "UTF-8"}},
+      {"overlong UTF-8 in a path", 0, "b\xc0\xae.obj", 0, 0, 0, 0, 0, {"scene.json", "organs[1].mesh", "UTF-8"}},
   };
   for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) run_case(cases + k);
   { // a coupling tolerance of 1 m: OpenVDB's band stays within what the grid can see (in 4 GB, not an abort)

@@ -1062,6 +1062,73 @@ static fascia_status json_error(fascia_ctx *ctx, const char *origin, const char 
   return PREP_FAIL(ctx, FASCIA_ERR_FORMAT, "scene '%s': not valid JSON near line %d, column %d", origin, line, column);
 }
 
+// 1 when s is valid UTF-8 (no overlong forms, surrogates or code points
+// past U+10FFFF): names and paths go into files and JSON output as they are.
+static int valid_utf8(const unsigned char *s) {
+  while (*s) {
+    const unsigned c = *s;
+    int n;
+    unsigned min;
+    if (c < 0x80) {
+      ++s;
+      continue;
+    } else if ((c & 0xE0) == 0xC0) n = 1, min = 0x80;
+    else if ((c & 0xF0) == 0xE0) n = 2, min = 0x800;
+    else if ((c & 0xF8) == 0xF0) n = 3, min = 0x10000;
+    else return 0;
+    unsigned v = c & (0x3Fu >> n);
+    for (int k = 1; k <= n; ++k) {
+      if ((s[k] & 0xC0) != 0x80) return 0;
+      v = v << 6 | (s[k] & 0x3Fu);
+    }
+    if (v < min || v > 0x10FFFF || (v >= 0xD800 && v <= 0xDFFF)) return 0;
+    s += n + 1;
+  }
+  return 1;
+}
+
+// Every key and string of the scene valid UTF-8, named by its path.
+static fascia_status check_strings(const reader *rd, const cJSON *item, const char *path) {
+  int index = 0;
+  for (const cJSON *c = item->child; c; c = c->next, ++index) {
+    char at[PATH_SIZE];
+    if (cJSON_IsObject(item)) {
+      if (c->string && !valid_utf8((const unsigned char *)c->string))
+        return key_fail(rd, path, "a key is not valid UTF-8; write names and paths in UTF-8");
+      sub_key(at, path, c->string ? c->string : "");
+    } else {
+      sub_index(at, path, index);
+    }
+    if (cJSON_IsString(c) && c->valuestring && !valid_utf8((const unsigned char *)c->valuestring))
+      return key_fail(rd, at, "not valid UTF-8; write names and paths in UTF-8");
+    PREP_TRY(check_strings(rd, c, at));
+  }
+  return FASCIA_OK;
+}
+
+// A string escape \u0000 becomes a NUL that ends the C string early (a mesh
+// path would read a shorter name): refused where it stands.
+static fascia_status check_nul_escapes(const reader *rd, const char *text) {
+  int in_string = 0, line = 1, column = 1;
+  for (const char *c = text; *c; ++c, ++column) {
+    if (*c == '\n') line++, column = 0;
+    if (!in_string) {
+      in_string = *c == '"';
+      continue;
+    }
+    if (*c == '"') in_string = 0;
+    else if (*c == '\\' && c[1]) {
+      if (c[1] == 'u' && c[2] == '0' && c[3] == '0' && c[4] == '0' && c[5] == '0')
+        return PREP_FAIL(rd->ctx, FASCIA_ERR_FORMAT,
+                         "scene '%s' line %d, column %d: a string holds \\u0000 (a NUL character), which would cut it "
+                         "short; remove it",
+                         rd->file, line, column);
+      ++c, ++column;
+    }
+  }
+  return FASCIA_OK;
+}
+
 fascia_status fascia_prep_scene_parse(fascia_ctx *ctx, const char *text, const char *origin, const char *base_dir,
                                       fascia_prep_scene **out) {
   PREP_CHECK(out && text, ctx, FASCIA_ERR_ARGUMENT, "fascia_prep_scene_parse: NULL argument");
@@ -1072,6 +1139,10 @@ fascia_status fascia_prep_scene_parse(fascia_ctx *ctx, const char *text, const c
   const char *end = NULL;
   cJSON *root = cJSON_ParseWithOpts(text, &end, 1);
   if (!root) return json_error(ctx, origin, text, end);
+  if (check_nul_escapes(&rd, text) != FASCIA_OK || check_strings(&rd, root, "") != FASCIA_OK) {
+    cJSON_Delete(root);
+    return FASCIA_ERR_FORMAT;
+  }
   fascia_prep_scene *s = calloc(1, sizeof *s);
   fascia_status status = FASCIA_OK;
   PREP_CHECK_GOTO(s, ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", origin);
@@ -1094,7 +1165,16 @@ fascia_status fascia_prep_scene_load(fascia_ctx *ctx, const char *path, fascia_p
   PREP_CHECK(out && path, ctx, FASCIA_ERR_ARGUMENT, "fascia_prep_scene_load: NULL argument");
   *out = NULL;
   char *text = NULL;
-  PREP_TRY(prep_read_file(ctx, path, "scene", MAX_SCENE_BYTES, &text, NULL));
+  size_t size = 0;
+  PREP_TRY(prep_read_file(ctx, path, "scene", MAX_SCENE_BYTES, &text, &size));
+  const char *nul = memchr(text, 0, size);
+  if (nul) {
+    int line = 1;
+    for (const char *c = text; c < nul; ++c) line += *c == '\n';
+    free(text);
+    return PREP_FAIL(ctx, FASCIA_ERR_FORMAT, "scene '%s' line %d: a NUL byte, which JSON text never holds; the file is "
+                     "damaged or not a scene", path, line);
+  }
   char *dir = prep_strdup(path);
   if (!dir) {
     free(text);
