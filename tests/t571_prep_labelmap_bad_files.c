@@ -208,6 +208,26 @@ int main(int argc, char **argv) {
       CHECK(spit_gz(dir, "x.nii.gz", b, n, 0));
       refused(cli, dir, edits[e].name, "x.nii.gz", "1", "labels.tsv", "x.nii.gz", edits[e].expect);
     }
+    { // in micrometres: the organ is far too small, and its size is the map's, not "units"
+      nifti_1_header h;
+      memcpy(&h, nii, sizeof h);
+      h.xyzt_units = NIFTI_UNITS_MICRON;
+      memcpy(b, &h, sizeof h);
+      memcpy(b + sizeof h, nii + sizeof h, n - sizeof h);
+      CHECK(spit(dir, "x.nii", b, n));
+      scene(dir, "x.nii", "1", "labels.tsv", good);
+      char command[2048], message[4096] = "";
+      snprintf(command, sizeof command, "FASCIA_PROGRESS=0 timeout 60 '%s' prep '%s' -o '%s/model.h5' > /dev/null 2> "
+               "'%s/stderr.txt'", cli, good, dir, dir);
+      const int status = system(command);
+      snprintf(path, sizeof path, "%s/stderr.txt", dir);
+      message[slurp(path, (unsigned char *)message, sizeof message - 1)] = 0;
+      if (status == 0 || !strstr(message, "segmentation.file 'x.nii'") ||
+          !strstr(message, "takes its size from the label map") || strstr(message, "\"units\"")) {
+        fprintf(stderr, "case 'label organ in micrometres': status %d, message:\n%s\n", status, message);
+        ++check_failures_;
+      }
+    }
     { // the same file big-endian: read as it is
       nifti_1_header h;
       memcpy(&h, nii, sizeof h);

@@ -45,6 +45,12 @@ void prep_units_hint_organ(const fascia_prep_scene *scene, int32_t k, double ext
   const fascia_prep_organ_def *d = scene->organs + k;
   out[0] = 0;
   if (extent >= ORGAN_SMALLEST && extent <= BODY_SIZE) return;
+  if (d->label_count) { // its size comes from the label map's affine and units, not from "units"
+    snprintf(out, size,
+             "; the size looks wrong: an organ of labels takes its size from the label map (its affine and its "
+             "units field); check the map's header or voxel_size");
+    return;
+  }
   // the other units that bring the organ closest to a typical organ's size
   int better = -1;
   double miss = INFINITY, fixed = 0;
@@ -142,20 +148,22 @@ fascia_status prep_check_magnitudes(fascia_ctx *ctx, const fascia_prep_scene *sc
     const double *b = m->bounds, extent = prep_mesh_extent(m);
     for (int r = 0; r < 3; ++r) all[r] = fmin(all[r], b[r]), all[3 + r] = fmax(all[3 + r], b[3 + r]);
     smallest = fmin(smallest, extent);
+    // an organ of labels comes from segmentation.file, not from a mesh key
+    const char *source_key = scene->organs[k].label_count ? "segmentation.file" : "mesh";
     if (extent > BODY_SIZE) {
       prep_units_hint_organ(scene, k, extent, hint, sizeof hint);
       return PREP_FAIL(ctx, FASCIA_ERR_FORMAT,
-                       "organ '%s' (scene '%s' organs[%d].mesh '%s'): it is %.3g x %.3g x %.3g m, larger than a body "
+                       "organ '%s' (scene '%s' organs[%d] %s '%s'): it is %.3g x %.3g x %.3g m, larger than a body "
                        "(%g m)%s",
-                       m->name, scene->path, (int)k, scene->organs[k].mesh, b[3] - b[0], b[4] - b[1], b[5] - b[2],
-                       BODY_SIZE, hint);
+                       m->name, scene->path, (int)k, source_key, scene->organs[k].mesh, b[3] - b[0], b[4] - b[1],
+                       b[5] - b[2], BODY_SIZE, hint);
     }
     if (extent < ORGAN_SMALLEST) {
       prep_units_hint_organ(scene, k, extent, hint, sizeof hint);
       PREP_TRY(warn(ctx, meshes,
-                    "organ '%s' (scene '%s' organs[%d].mesh '%s'): it is %.3g x %.3g x %.3g mm, smaller than any "
+                    "organ '%s' (scene '%s' organs[%d] %s '%s'): it is %.3g x %.3g x %.3g mm, smaller than any "
                     "organ (%g mm)%s",
-                    m->name, scene->path, (int)k, scene->organs[k].mesh, 1e3 * (b[3] - b[0]), 1e3 * (b[4] - b[1]),
+                    m->name, scene->path, (int)k, source_key, scene->organs[k].mesh, 1e3 * (b[3] - b[0]), 1e3 * (b[4] - b[1]),
                     1e3 * (b[5] - b[2]), 1e3 * ORGAN_SMALLEST, hint));
     }
   }
