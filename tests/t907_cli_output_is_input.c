@@ -27,18 +27,23 @@
 static cli_result result;
 static char original[CLI_TEXT_SIZE], now[CLI_TEXT_SIZE];
 
-// Runs `command`: exit 2, one line containing `expect`, and `keep` unchanged
-// (its bytes as `original` holds them, `length` of them).
-static int refused(const char *command, const char *expect, const char *keep, long length) {
+// Runs `command`: exit `status`, one line containing `expect`, and `keep`
+// unchanged (its bytes as `original` holds them, `length` of them).
+static int refused_with(int status, const char *command, const char *expect, const char *keep, long length) {
   CHECK(cli_shell(command, &result));
   const long n = cli_read_file(keep, now, sizeof now);
   const int same = n == length && !memcmp(now, original, (size_t)length);
-  if (result.status != 2 || cli_lines(result.err) != 1 || !strstr(result.err, expect) || !same) {
+  if (result.status != status || cli_lines(result.err) != 1 || !strstr(result.err, expect) || !same) {
     fprintf(stderr, "%s\n  exit %d, %s %s, stderr:\n%.800s\n", command, result.status, keep,
             same ? "unchanged" : "CHANGED", result.err);
     return 1;
   }
   return 0;
+}
+
+// The same with exit 2: a path given wrongly.
+static int refused(const char *command, const char *expect, const char *keep, long length) {
+  return refused_with(2, command, expect, keep, length);
 }
 
 // Runs `command`: exit 2 and `path` is still what it was: a symbolic link
@@ -151,8 +156,8 @@ int main(int argc, char **argv) {
     char line[2048];
     snprintf(line, sizeof line, fifo_inputs[k], path, model, dir); // the last one: a folder
     snprintf(command, sizeof command, "timeout 20 '%s' %s", fascia, line);
-    failures += refused(command, k + 1 == sizeof fifo_inputs / sizeof fifo_inputs[0] ? "a folder" : "a FIFO", model,
-                        length);
+    failures += refused_with(1, command, k + 1 == sizeof fifo_inputs / sizeof fifo_inputs[0] ? "a directory" : "FIFO",
+                             model, length);
   }
 
 #ifdef FASCIA_HAVE_PREP
@@ -196,7 +201,7 @@ int main(int argc, char **argv) {
     fclose(f);
     const long table_length = cli_read_file(table, original, sizeof original);
     snprintf(command, sizeof command, "'%s' prep '%s' -o '%s/l.h5' --labelmap '%s/X.nii'", fascia, lscene, dir, ldir);
-    failures += refused(command, "label table", table, table_length);
+    failures += refused(command, "segmentation.labels", table, table_length);
   }
   // prep: the scene or one of its meshes as the model file
   char scene[1024], mesh[1024];

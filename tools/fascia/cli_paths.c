@@ -48,9 +48,10 @@ static int same_key(const file_key *a, const file_key *b) {
 }
 
 static const char *kind_of(mode_t mode) {
-  if (S_ISDIR(mode)) return "a folder";
-  if (S_ISFIFO(mode)) return "a FIFO";
-  if (S_ISCHR(mode) || S_ISBLK(mode)) return "a device";
+  if (S_ISDIR(mode)) return "a directory";
+  if (S_ISFIFO(mode)) return "a named pipe (FIFO)";
+  if (S_ISCHR(mode)) return "a character device";
+  if (S_ISBLK(mode)) return "a block device";
   if (S_ISSOCK(mode)) return "a socket";
   if (S_ISLNK(mode)) return "a symbolic link";
   if (S_ISREG(mode)) return "a file";
@@ -111,12 +112,12 @@ static int check_output_dir(const char *command, const cli_path *p) {
 }
 
 // An input that exists must be a regular file (stat follows links: a link
-// to a file is fine). One that does not exist is left to its reader, which
-// says so with the reason.
+// to a file is fine); exit 1, as when its reader refuses it. One that does
+// not exist is left to its reader, which says so with the reason.
 static int check_input(const char *command, const cli_path *p) {
   struct stat st;
   if (stat(p->path, &st) != 0 || S_ISREG(st.st_mode)) return -1;
-  return refuse(command, 2, "%s '%s' is %s, not a regular file; give the path of the file itself", p->option, p->path,
+  return refuse(command, 1, "%s '%s' is %s, not a regular file; give the path of the file itself", p->option, p->path,
                 kind_of(st.st_mode));
 }
 

@@ -431,14 +431,19 @@ static int check_prep_paths(const fascia_prep_scene *scene, const char *output, 
   static const char *const preview_names[] = {"preview.pvd", "region.vti", "frames.vtu", "samples.vtu", "coupling.vtu",
                                               "*.vtp", NULL};
   cli_path *paths = calloc((size_t)scene->organ_count + 7, sizeof *paths);
-  if (!paths) {
+  char(*keys)[48] = calloc((size_t)scene->organ_count + 1, sizeof *keys); // "organs[k].mesh", as the scene says
+  if (!paths || !keys) {
+    free(paths), free(keys);
     fprintf(stderr, "fascia prep: out of memory\n");
     return 1;
   }
   int n = 0;
   paths[n++] = (cli_path){"scene", scene->path, CLI_INPUT, NULL, NULL};
-  for (int32_t o = 0; o < scene->organ_count; ++o)
-    paths[n++] = (cli_path){"organ mesh", scene->organs[o].mesh_path, CLI_INPUT, NULL, NULL};
+  for (int32_t o = 0; o < scene->organ_count; ++o) { // a label organ's file is the segmentation, below
+    snprintf(keys[o], sizeof keys[o], "organs[%d].mesh", (int)o);
+    if (!scene->organs[o].label_count)
+      paths[n++] = (cli_path){keys[o], scene->organs[o].mesh_path, CLI_INPUT, NULL, NULL};
+  }
   // the segmentation and its label table (a TSV named in the scene, against its folder; not a built-in table)
   const fascia_prep_segmentation *seg = &scene->segmentation;
   char table[4096] = "", folder[4096];
@@ -446,14 +451,15 @@ static int check_prep_paths(const fascia_prep_scene *scene, const char *output, 
     if (seg->table[0] == '/') snprintf(table, sizeof table, "%s", seg->table);
     else snprintf(table, sizeof table, "%s/%s", cli_folder_of(scene->path, folder, sizeof folder), seg->table);
   }
-  paths[n++] = (cli_path){"scene's label map", seg->file ? seg->file_path : NULL, CLI_INPUT, NULL, NULL};
-  paths[n++] = (cli_path){"scene's label table", table[0] ? table : NULL, CLI_INPUT, NULL, NULL};
+  paths[n++] = (cli_path){"segmentation.file", seg->file ? seg->file_path : NULL, CLI_INPUT, NULL, NULL};
+  paths[n++] = (cli_path){"segmentation.labels", table[0] ? table : NULL, CLI_INPUT, NULL, NULL};
   paths[n++] = (cli_path){"-o", output, CLI_OUTPUT_FILE, NULL, NULL};
   paths[n++] = (cli_path){"--preview", preview, CLI_OUTPUT_DIR, preview_names, NULL};
   paths[n++] = (cli_path){"--labelmap", labelmap, CLI_OUTPUT_FILE, NULL, NULL};
   paths[n++] = (cli_path){"--labelmap's table", label_table, CLI_OUTPUT_FILE, NULL, NULL};
   const int rc = cli_check_paths("prep", paths, n);
   free(paths);
+  free(keys);
   return rc;
 }
 

@@ -83,14 +83,17 @@ typedef struct cli_path {
   const char *may_be;       ///< option of an input this output may be (--checkpoint may be --resume); NULL
 } cli_path;
 
-/// Before any work: every output can be written (its folder exists and is
-/// writable; it is not a link, FIFO, device or folder that the rename of the
-/// finished file would replace), none is one of the inputs or another output
-/// (same device and inode, or the same name in the same folder), and the
-/// temporary files `NAME.tmp-PID-K` that a killed fascia left next to the
-/// outputs are removed (fascia_file_remove_stale). Returns -1 to go on, else
-/// the exit status after one line on stderr: 2 for a path given wrongly
-/// (empty, an input, a link), 1 for a folder that is missing or read-only.
+/// Before any work: every input that exists is a regular file; every output
+/// can be written (its folder exists and is writable; it is not a link,
+/// FIFO, device or folder that the rename of the finished file would
+/// replace), none is one of the inputs or another output (same device and
+/// inode, or the same name in the same folder, or in an output folder a name
+/// matching one of its patterns, fnmatch), and the temporary files
+/// `NAME.tmp-PID-K` that a killed fascia left next to the outputs are
+/// removed (fascia_file_remove_stale). Returns -1 to go on, else the exit
+/// status after one line on stderr: 2 for a path given wrongly (empty, an
+/// input, a link), 1 for an input that is not a regular file or a folder
+/// that is missing or read-only.
 int cli_check_paths(const char *command, const cli_path *paths, int count);
 
 /// The folder of path ("." when it names none, "/" for the root), into out.
