@@ -96,19 +96,19 @@ fascia_real fascia_shape_kernel(fascia_real q) {
   return a2 * a2 * (4 * q + 1);
 }
 
-// Cholesky factor of a symmetric 4x4 matrix (lower, row-major). Returns the
-// smallest pivot L_jj^2 relative to `scale`, or -1 when a pivot is not
-// positive.
-static fascia_real cholesky4(const fascia_real M[16], fascia_real L[16], fascia_real scale) {
+// Cholesky factor of the leading m x m block (m <= 4) of a symmetric matrix
+// stored 4 x 4 (lower, row-major, stride 4). Returns the smallest pivot
+// L_jj^2 relative to `scale`, or -1 when a pivot is not positive.
+static fascia_real cholesky4(const fascia_real M[16], fascia_real L[16], fascia_real scale, int m) {
   fascia_real smallest = INFINITY;
   memset(L, 0, 16 * sizeof L[0]);
-  for (int j = 0; j < 4; ++j) {
+  for (int j = 0; j < m; ++j) {
     fascia_real d = M[5 * j];
     for (int k = 0; k < j; ++k) d -= L[4 * j + k] * L[4 * j + k];
     if (!(d > 0)) return -1;
     smallest = fmin(smallest, d / scale);
     L[5 * j] = sqrt(d);
-    for (int i = j + 1; i < 4; ++i) {
+    for (int i = j + 1; i < m; ++i) {
       fascia_real s = M[4 * i + j];
       for (int k = 0; k < j; ++k) s -= L[4 * i + k] * L[4 * j + k];
       L[4 * i + j] = s / L[5 * j];
@@ -117,32 +117,32 @@ static fascia_real cholesky4(const fascia_real M[16], fascia_real L[16], fascia_
   return smallest;
 }
 
-// Solves M x = b with the Cholesky factor L and one step of iterative
-// refinement against M (keeps the residual, hence the partition of unity, at
-// rounding level even for a moderately conditioned M).
+// Solves M x = b (leading m x m block) with the Cholesky factor L and one
+// step of iterative refinement against M (keeps the residual, hence the
+// partition of unity, at rounding level even for a moderately conditioned M).
 static void cholesky4_solve(const fascia_real M[16], const fascia_real L[16], const fascia_real b[4],
-                            fascia_real x[4]) {
+                            fascia_real x[4], int m) {
   fascia_real rhs[4], y[4], dx[4];
   memcpy(rhs, b, sizeof rhs);
   for (int pass = 0; pass < 2; ++pass) {
-    for (int i = 0; i < 4; ++i) {
+    for (int i = 0; i < m; ++i) {
       fascia_real s = rhs[i];
       for (int k = 0; k < i; ++k) s -= L[4 * i + k] * y[k];
       y[i] = s / L[5 * i];
     }
-    for (int i = 3; i >= 0; --i) {
+    for (int i = m - 1; i >= 0; --i) {
       fascia_real s = y[i];
-      for (int k = i + 1; k < 4; ++k) s -= L[4 * k + i] * dx[k];
+      for (int k = i + 1; k < m; ++k) s -= L[4 * k + i] * dx[k];
       dx[i] = s / L[5 * i];
     }
     if (pass == 0) {
-      memcpy(x, dx, 4 * sizeof x[0]);
-      for (int i = 0; i < 4; ++i) {
+      memcpy(x, dx, (size_t)m * sizeof x[0]);
+      for (int i = 0; i < m; ++i) {
         rhs[i] = b[i];
-        for (int k = 0; k < 4; ++k) rhs[i] -= M[4 * i + k] * x[k];
+        for (int k = 0; k < m; ++k) rhs[i] -= M[4 * i + k] * x[k];
       }
     } else {
-      for (int i = 0; i < 4; ++i) x[i] += dx[i];
+      for (int i = 0; i < m; ++i) x[i] += dx[i];
     }
   }
 }
@@ -186,7 +186,7 @@ fascia_status fascia_shape_mls(fascia_ctx *ctx, int32_t n, const fascia_real *fr
       }
   }
   fascia_real L[16];
-  const fascia_real pivot = inside >= 4 ? cholesky4(M, L, phi_sum) : -1;
+  const fascia_real pivot = inside >= 4 ? cholesky4(M, L, phi_sum, 4) : -1;
   FASCIA_CHECK(pivot > MLS_PIVOT_TOLERANCE, ctx, FASCIA_ERR_NUMERIC,
                "MLS at point (%.9g %.9g %.9g): the moment matrix of the %d frames within radius %g m is singular "
                "(relative pivot %.3g, %d frames in the support); the frames are coplanar, collinear or too few: use "
@@ -194,14 +194,14 @@ fascia_status fascia_shape_mls(fascia_ctx *ctx, int32_t n, const fascia_real *fr
                p[0], p[1], p[2], (int)n, radius, pivot, (int)inside);
   const fascia_real e0[4] = {1, 0, 0, 0};
   fascia_real a[4], g[3][4];
-  cholesky4_solve(M, L, e0, a);
+  cholesky4_solve(M, L, e0, a, 4);
   for (int r = 0; r < 3; ++r) {
     fascia_real rhs[4];
     for (int j = 0; j < 4; ++j) {
       rhs[j] = (j == r + 1 ? 1 / radius : 0);
       for (int k = 0; k < 4; ++k) rhs[j] -= dM[r][4 * j + k] * a[k];
     }
-    cholesky4_solve(M, L, rhs, g[r]);
+    cholesky4_solve(M, L, rhs, g[r], 4);
   }
   for (int32_t i = 0; i < n; ++i) {
     const fascia_real phi = w[i];
@@ -220,6 +220,167 @@ fascia_status fascia_shape_mls(fascia_ctx *ctx, int32_t n, const fascia_real *fr
     }
   }
   return FASCIA_OK;
+}
+
+// Principal axes of n points: the eigenvectors of their covariance by
+// cyclic Jacobi rotations, ordered by decreasing variance. axis: [9], row k
+// the k-th unit axis; variance: [3], in the units of x squared.
+static void principal_axes(int32_t n, const fascia_real *x, fascia_real axis[9], fascia_real variance[3]) {
+  fascia_real c[3] = {0, 0, 0}, C[9] = {0}, V[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  for (int32_t i = 0; i < n; ++i)
+    for (int r = 0; r < 3; ++r) c[r] += x[3 * i + r] / n;
+  for (int32_t i = 0; i < n; ++i)
+    for (int r = 0; r < 3; ++r)
+      for (int q = 0; q < 3; ++q) C[3 * r + q] += (x[3 * i + r] - c[r]) * (x[3 * i + q] - c[q]) / n;
+  for (int sweep = 0; sweep < 32; ++sweep) {
+    const fascia_real off = C[1] * C[1] + C[2] * C[2] + C[5] * C[5];
+    if (!(off > 1e-30 * (C[0] * C[0] + C[4] * C[4] + C[8] * C[8]))) break;
+    for (int a = 0; a < 2; ++a)
+      for (int b = a + 1; b < 3; ++b) {
+        const fascia_real cab = C[3 * a + b];
+        if (cab == 0) continue;
+        // the rotation in plane (a, b) that zeroes C_ab
+        const fascia_real theta = (C[3 * b + b] - C[3 * a + a]) / (2 * cab);
+        const fascia_real t = (theta >= 0 ? 1 : -1) / (fabs(theta) + sqrt(theta * theta + 1));
+        const fascia_real cs = 1 / sqrt(t * t + 1), sn = t * cs;
+        for (int k = 0; k < 3; ++k) { // C <- C J (columns a, b)
+          const fascia_real ka = C[3 * k + a], kb = C[3 * k + b];
+          C[3 * k + a] = cs * ka - sn * kb;
+          C[3 * k + b] = sn * ka + cs * kb;
+        }
+        for (int k = 0; k < 3; ++k) { // C <- J^T C (rows a, b)
+          const fascia_real ak = C[3 * a + k], bk = C[3 * b + k];
+          C[3 * a + k] = cs * ak - sn * bk;
+          C[3 * b + k] = sn * ak + cs * bk;
+        }
+        for (int k = 0; k < 3; ++k) { // V <- V J: columns of V are the axes
+          const fascia_real ka = V[3 * k + a], kb = V[3 * k + b];
+          V[3 * k + a] = cs * ka - sn * kb;
+          V[3 * k + b] = sn * ka + cs * kb;
+        }
+      }
+  }
+  int order[3] = {0, 1, 2};
+  for (int a = 0; a < 3; ++a)
+    for (int b = a + 1; b < 3; ++b)
+      if (C[4 * order[b]] > C[4 * order[a]]) {
+        const int t = order[a];
+        order[a] = order[b];
+        order[b] = t;
+      }
+  for (int k = 0; k < 3; ++k) {
+    variance[k] = fmax(C[4 * order[k]], 0);
+    for (int r = 0; r < 3; ++r) axis[3 * k + r] = V[3 * r + order[k]];
+  }
+}
+
+// MLS with a linear basis in the span of the frames: b(x) = (1, E (x - c) / r)
+// with the rows of E the dim principal axes of the frames, c = p held fixed,
+// and the kernel on the distance within that span. The formulas are those of
+// fascia_shape_mls with e_{k+1} / r replaced by E e_k / r on the right-hand
+// side of g_k and the kernel's gradient projected on the span.
+static fascia_status mls_in_span(fascia_ctx *ctx, int32_t n, const fascia_real *frame, const fascia_real p[3],
+                                 fascia_real radius, int dim, const fascia_real *E, fascia_real *w,
+                                 fascia_real *grad) {
+  const int m = dim + 1;
+  fascia_real M[16] = {0}, dM[3][16], phi_sum = 0;
+  memset(dM, 0, sizeof dM);
+  int32_t inside = 0;
+  for (int32_t i = 0; i < n; ++i) {
+    fascia_real b[4] = {1, 0, 0, 0}, dist2 = 0;
+    for (int a = 0; a < dim; ++a) {
+      for (int r = 0; r < 3; ++r) b[a + 1] += E[3 * a + r] * (frame[3 * i + r] - p[r]);
+      b[a + 1] /= radius;
+      dist2 += b[a + 1] * b[a + 1];
+    }
+    const fascia_real q = sqrt(dist2), phi = fascia_shape_kernel(q);
+    const fascia_real h = q < 1 ? 1 - q : 0, dphi_scale = 20 * h * h * h / radius;
+    w[i] = phi;
+    for (int r = 0; r < 3; ++r) {
+      grad[3 * i + r] = 0;
+      for (int a = 0; a < dim; ++a) grad[3 * i + r] += dphi_scale * b[a + 1] * E[3 * a + r];
+    }
+    if (phi <= 0) continue;
+    ++inside;
+    phi_sum += phi;
+    for (int j = 0; j < m; ++j)
+      for (int k = 0; k < m; ++k) {
+        M[4 * j + k] += phi * b[j] * b[k];
+        for (int r = 0; r < 3; ++r) dM[r][4 * j + k] += grad[3 * i + r] * b[j] * b[k];
+      }
+  }
+  fascia_real L[16];
+  const fascia_real pivot = inside >= m ? cholesky4(M, L, phi_sum, m) : -1;
+  FASCIA_CHECK(pivot > MLS_PIVOT_TOLERANCE, ctx, FASCIA_ERR_NUMERIC,
+               "MLS at point (%.9g %.9g %.9g): the moment matrix of the %d frames within radius %g m along their "
+               "%s is singular (relative pivot %.3g, %d frames in the support, %d needed); use more neighbours or a "
+               "larger radius",
+               p[0], p[1], p[2], (int)n, radius, dim == 1 ? "line" : "plane", pivot, (int)inside, m);
+  const fascia_real e0[4] = {1, 0, 0, 0};
+  fascia_real a[4], g[3][4];
+  cholesky4_solve(M, L, e0, a, m);
+  for (int r = 0; r < 3; ++r) {
+    fascia_real rhs[4];
+    for (int j = 0; j < m; ++j) {
+      rhs[j] = j == 0 ? 0 : E[3 * (j - 1) + r] / radius;
+      for (int k = 0; k < m; ++k) rhs[j] -= dM[r][4 * j + k] * a[k];
+    }
+    cholesky4_solve(M, L, rhs, g[r], m);
+  }
+  for (int32_t i = 0; i < n; ++i) {
+    const fascia_real phi = w[i];
+    if (phi <= 0) {
+      w[i] = 0;
+      grad[3 * i] = grad[3 * i + 1] = grad[3 * i + 2] = 0;
+      continue;
+    }
+    fascia_real b[4] = {1, 0, 0, 0};
+    for (int k = 0; k < dim; ++k) {
+      for (int r = 0; r < 3; ++r) b[k + 1] += E[3 * k + r] * (frame[3 * i + r] - p[r]);
+      b[k + 1] /= radius;
+    }
+    fascia_real ba = 0;
+    for (int j = 0; j < m; ++j) ba += b[j] * a[j];
+    w[i] = phi * ba;
+    for (int r = 0; r < 3; ++r) {
+      fascia_real bg = 0;
+      for (int j = 0; j < m; ++j) bg += b[j] * g[r][j];
+      grad[3 * i + r] = phi * bg + grad[3 * i + r] * ba;
+    }
+  }
+  return FASCIA_OK;
+}
+
+fascia_status fascia_shape_mls_adaptive(fascia_ctx *ctx, int32_t n, const fascia_real *frame, const fascia_real p[3],
+                                        fascia_real radius, fascia_real flatness, fascia_real *w, fascia_real *grad,
+                                        int32_t *dimension) {
+  FASCIA_CHECK(frame && p && w && grad, ctx, FASCIA_ERR_ARGUMENT, "fascia_shape_mls_adaptive: NULL argument");
+  FASCIA_CHECK(n >= 2, ctx, FASCIA_ERR_ARGUMENT,
+               "MLS at point (%g %g %g): %d frames, a linear basis needs at least 2 (on a line)", p[0], p[1], p[2],
+               (int)n);
+  FASCIA_CHECK(isfinite(radius) && radius > 0, ctx, FASCIA_ERR_ARGUMENT,
+               "MLS at point (%g %g %g): kernel radius %g, expected > 0", p[0], p[1], p[2], radius);
+  FASCIA_CHECK(isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]), ctx, FASCIA_ERR_ARGUMENT,
+               "MLS: the point is not finite");
+  if (flatness == 0) flatness = FASCIA_SHAPE_FLATNESS;
+  FASCIA_CHECK(isfinite(flatness) && flatness > 0 && flatness < 1, ctx, FASCIA_ERR_ARGUMENT,
+               "MLS at point (%g %g %g): flatness %g, expected in (0, 1) (0: the default %g)", p[0], p[1], p[2],
+               flatness, FASCIA_SHAPE_FLATNESS);
+  for (int32_t i = 0; i < 3 * n; ++i)
+    FASCIA_CHECK(isfinite(frame[i]), ctx, FASCIA_ERR_ARGUMENT,
+                 "MLS at point (%g %g %g): frame %d of %d has a non-finite coordinate", p[0], p[1], p[2],
+                 (int)(i / 3), (int)n);
+  fascia_real axis[9], variance[3];
+  principal_axes(n, frame, axis, variance);
+  FASCIA_CHECK(variance[0] > 0, ctx, FASCIA_ERR_ARGUMENT,
+               "MLS at point (%g %g %g): the %d frames all sit at one place; expected frames spread along a line, a "
+               "plane or a volume",
+               p[0], p[1], p[2], (int)n);
+  int dim = 1;
+  while (dim < 3 && variance[dim] > flatness * flatness * variance[0]) ++dim;
+  if (dimension) *dimension = dim;
+  if (dim == 3) return fascia_shape_mls(ctx, n, frame, p, radius, w, grad);
+  return mls_in_span(ctx, n, frame, p, radius, dim, axis, w, grad);
 }
 
 fascia_status fascia_shape_gauss_legendre(fascia_ctx *ctx, int n, fascia_real *point, fascia_real *weight) {

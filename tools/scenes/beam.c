@@ -22,11 +22,22 @@
 #define BEAM_MAX_PAIRS ((int64_t)1 << 28)
 #define PROVENANCE_SIZE 4096
 
+// Points across y of a sheet's cell with n along x: one point along the
+// axis is free of shear locking; two across leave no mode of zero energy.
+static int reduced_across(int n) { return n > 2 ? n : 2; }
+// Kernel support of the weights over a sample's own interval or cell, times
+// the distance to its farthest frame: a kernel nearly flat over the cell
+// gives smooth weights (a support just past the frames makes them peak at
+// each frame, and the sheet stiffer in bending).
+#define CELL_SUPPORT_FACTOR 2.0
+
 const char *fascia_scene_shape_name(int shape) {
   switch (shape) {
   case FASCIA_SCENE_HEX: return "hex";
   case FASCIA_SCENE_TET: return "tet";
   case FASCIA_SCENE_MESHLESS: return "meshless";
+  case FASCIA_SCENE_STRAND: return "strand";
+  case FASCIA_SCENE_SHEET: return "sheet";
   default: return "unknown";
   }
 }
@@ -35,6 +46,24 @@ int fascia_scene_shape_from_name(const char *name) {
   for (int k = 0; name && k < FASCIA_SCENE_SHAPE_COUNT_; ++k)
     if (!strcmp(name, fascia_scene_shape_name(k))) return k;
   return -1;
+}
+
+int fascia_scene_shape_dimension(int shape) {
+  return shape == FASCIA_SCENE_STRAND ? 1 : shape == FASCIA_SCENE_SHEET ? 2 : 3;
+}
+
+int fascia_scene_frames_parse(const char *text, int32_t frames[3]) {
+  int n[3] = {1, 1, 1}, used = 0;
+  char extra;
+  if (!text) return 0;
+  if (sscanf(text, "%dx%dx%d%c", &n[0], &n[1], &n[2], &extra) == 3) used = 3;
+  else if (sscanf(text, "%dx%d%c", &n[0], &n[1], &extra) == 2) used = 2;
+  else if (sscanf(text, "%d%c", &n[0], &extra) == 1) used = 1;
+  for (int d = 0; d < used; ++d)
+    if (n[d] < 2) return 0;
+  if (used)
+    for (int d = 0; d < 3; ++d) frames[d] = n[d];
+  return used;
 }
 
 const char *fascia_scene_patch_name(int patch) {
@@ -71,6 +100,7 @@ fascia_scene_beam_def fascia_scene_beam_def_default(void) {
   def.samples_per_cell_dir = 2;
   def.samples_per_tet = 4;
   def.neighbours = 8;
+  def.section_points = 2;
   def.law = FASCIA_LAW_STVK;
   def.youngs_modulus = 40000;
   def.poisson_ratio = 0.3;
@@ -87,6 +117,57 @@ fascia_scene_beam_def fascia_scene_beam_def_default(void) {
   return def;
 }
 
+fascia_scene_beam_def fascia_scene_beam_def_of_shape(int shape) {
+  fascia_scene_beam_def def = fascia_scene_beam_def_default();
+  def.shape = shape;
+  if (shape == FASCIA_SCENE_STRAND || shape == FASCIA_SCENE_SHEET) {
+    if (shape == FASCIA_SCENE_STRAND) def.frames[1] = 1;
+    def.frames[2] = 1;
+    def.neighbours = 0;           // the frames of the sample's interval or cell
+    def.samples_per_cell_dir = 1; // one station per interval: no shear locking
+  }
+  return def;
+}
+
+// Checks the grid and shape fields of a strand or a sheet (see check_beam).
+static fascia_status check_reduced(fascia_ctx *ctx, const fascia_scene_beam_def *def, int32_t *samples,
+                                   int32_t *per_sample) {
+  const char *who = def->shape == FASCIA_SCENE_STRAND ? "beam generator (strand)" : "beam generator (sheet)";
+  const int dim = fascia_scene_shape_dimension(def->shape);
+  int64_t frames = 1, cells = 1;
+  for (int d = 0; d < dim; ++d) {
+    SCENE_CHECK(def->frames[d] >= 2 && def->frames[d] <= 100000, ctx, FASCIA_ERR_ARGUMENT,
+                "%s: %d frames along %c, expected 2 .. 100000 (frames sit on both ends)", who, (int)def->frames[d],
+                "xyz"[d]);
+    frames *= def->frames[d];
+    cells *= def->frames[d] - 1;
+  }
+  const int64_t n = def->samples_per_cell_dir, q = def->section_points;
+  SCENE_CHECK(n >= 1 && n <= 4, ctx, FASCIA_ERR_ARGUMENT,
+              "%s: %d samples per cell direction, expected 1 .. 4 (Gauss-Legendre points)", who, (int)n);
+  SCENE_CHECK(q >= 1 && q <= 4, ctx, FASCIA_ERR_ARGUMENT,
+              "%s: %d section points, expected 1 .. 4 (Gauss-Legendre points per direction of the section)", who,
+              (int)q);
+  SCENE_CHECK(def->neighbours == 0 || (def->neighbours >= dim + 1 && def->neighbours <= FASCIA_SHAPE_MAX_NEIGHBOURS),
+              ctx, FASCIA_ERR_ARGUMENT, "%s: %d neighbours per sample, expected 0 (the frames of its %s) or %d .. %d",
+              who, (int)def->neighbours, dim == 1 ? "interval" : "cell", dim + 1, FASCIA_SHAPE_MAX_NEIGHBOURS);
+  SCENE_CHECK(def->reduced_volumetric == 0 && def->volumetric_patch == FASCIA_SCENE_PATCH_NONE, ctx,
+              FASCIA_ERR_ARGUMENT,
+              "%s: volumetric patches and reduced volumetric integration are cures of volume locking; a %s has "
+              "none: choose full (or auto)",
+              who, fascia_scene_shape_name(def->shape));
+  SCENE_CHECK(def->enhanced_modes <= 0, ctx, FASCIA_ERR_ARGUMENT,
+              "%s: enhanced strain modes live on volumetric patches, which a %s has not: choose off (or auto)", who,
+              fascia_scene_shape_name(def->shape));
+  const int64_t per_cell = dim == 1 ? n * q * q : n * reduced_across((int)n) * q;
+  *per_sample = def->neighbours == 0 ? (dim == 1 ? 2 : 4) : def->neighbours < frames ? def->neighbours : (int32_t)frames;
+  SCENE_CHECK(frames <= BEAM_MAX_PAIRS && cells * per_cell * *per_sample <= BEAM_MAX_PAIRS, ctx, FASCIA_ERR_MEMORY,
+              "%s: %lld frames and %lld sample-frame pairs is too large (at most %lld)", who, (long long)frames,
+              (long long)(cells * per_cell * *per_sample), (long long)BEAM_MAX_PAIRS);
+  *samples = (int32_t)(cells * per_cell);
+  return FASCIA_OK;
+}
+
 // Checks the grid and shape fields; on success *samples and *per_sample hold
 // the model's sample count and neighbours per sample.
 static fascia_status check_beam(fascia_ctx *ctx, const fascia_scene_beam_def *def, int32_t *samples,
@@ -94,6 +175,9 @@ static fascia_status check_beam(fascia_ctx *ctx, const fascia_scene_beam_def *de
   const char *who = "beam generator";
   fascia_status st = scene_check_body(ctx, def, who);
   if (st != FASCIA_OK) return st;
+  SCENE_CHECK(def->shape >= 0 && def->shape < FASCIA_SCENE_SHAPE_COUNT_, ctx, FASCIA_ERR_ARGUMENT,
+              "%s: shape %d, expected 0 (hex), 1 (tet), 2 (meshless), 3 (strand) or 4 (sheet)", who, (int)def->shape);
+  if (fascia_scene_shape_dimension(def->shape) < 3) return check_reduced(ctx, def, samples, per_sample);
   int64_t frames = 1, cells = 1;
   for (int d = 0; d < 3; ++d) {
     SCENE_CHECK(def->frames[d] >= 2 && def->frames[d] <= 100000, ctx, FASCIA_ERR_ARGUMENT,
@@ -102,8 +186,6 @@ static fascia_status check_beam(fascia_ctx *ctx, const fascia_scene_beam_def *de
     frames *= def->frames[d];
     cells *= def->frames[d] - 1;
   }
-  SCENE_CHECK(def->shape >= 0 && def->shape < FASCIA_SCENE_SHAPE_COUNT_, ctx, FASCIA_ERR_ARGUMENT,
-              "%s: shape %d, expected 0 (hex), 1 (tet) or 2 (meshless)", who, (int)def->shape);
   int64_t per_cell;
   if (def->shape == FASCIA_SCENE_TET) {
     SCENE_CHECK(def->samples_per_tet == 1 || def->samples_per_tet == 4, ctx, FASCIA_ERR_ARGUMENT,
@@ -148,6 +230,109 @@ static fascia_status check_beam(fascia_ctx *ctx, const fascia_scene_beam_def *de
   return FASCIA_OK;
 }
 
+// ------------------------------------------------ strands and sheets --
+// A reduced shape's frames span the axis (strand) or the mid-plane (sheet);
+// every point p gets the MLS weights of its station, p with the coordinates
+// across the span set to 0: the k nearest frames and the kernel radius of
+// the station, fascia_shape_mls_adaptive at p (which depends on p only
+// through the station).
+
+// Frames per sample: those of the sample's interval (2) or cell (4), or the
+// k nearest (at most all).
+static int32_t reduced_neighbours(const fascia_scene_beam_def *def, const fascia_frame_grid *grid) {
+  if (def->neighbours == 0) return def->shape == FASCIA_SCENE_STRAND ? 2 : 4;
+  const int32_t count = fascia_frame_grid_count(grid);
+  return def->neighbours < count ? def->neighbours : count;
+}
+
+static fascia_status reduced_weights_at(fascia_ctx *ctx, const fascia_scene_beam_def *def, const scene_grid *g,
+                                        const fascia_frame_grid *grid, const fascia_real p[3], int32_t *frame,
+                                        fascia_real *w, fascia_real *grad) {
+  const int dim = fascia_scene_shape_dimension(def->shape);
+  const int32_t k = reduced_neighbours(def, grid);
+  fascia_real station[3] = {p[0], dim == 2 ? p[1] : 0, 0}, radius, x[3 * FASCIA_SHAPE_MAX_NEIGHBOURS];
+  const fascia_real *position = fascia_frame_grid_positions(grid);
+  if (def->neighbours == 0) { // the frames of the station's interval or cell
+    int32_t cell[3];
+    scene_grid_cell_of(g, station, cell);
+    const int32_t ny = dim == 2 ? g->n[1] : 1;
+    for (int32_t c = 0; c < k; ++c) frame[c] = (cell[0] + (c & 1)) * ny + (dim == 2 ? cell[1] + (c >> 1) : 0);
+    fascia_real reach = 0;
+    for (int32_t c = 0; c < k; ++c) {
+      fascia_real d2 = 0;
+      for (int d = 0; d < 2; ++d) d2 += (position[3 * frame[c] + d] - station[d]) * (position[3 * frame[c] + d] - station[d]);
+      reach = fmax(reach, sqrt(d2));
+    }
+    radius = CELL_SUPPORT_FACTOR * reach;
+  } else {
+    SCENE_TRY(fascia_frame_grid_nearest(ctx, grid, station, k, frame, &radius));
+  }
+  for (int32_t j = 0; j < k; ++j)
+    for (int d = 0; d < 3; ++d) x[3 * j + d] = position[3 * (int64_t)frame[j] + d];
+  int32_t found = 0;
+  SCENE_TRY(fascia_shape_mls_adaptive(ctx, k, x, p, radius, 0, w, grad, &found));
+  SCENE_CHECK(found == dim, ctx, FASCIA_ERR_NUMERIC,
+              "beam generator (%s): the %d nearest frames of (%g %g %g) span %d dimension(s), expected %d; use the "
+              "frames of the %s (neighbours 0) or more neighbours",
+              fascia_scene_shape_name(def->shape), (int)k, p[0], p[1], p[2], (int)found, dim,
+              dim == 1 ? "interval" : "cell");
+  return FASCIA_OK;
+}
+
+// Frame positions of a strand (on the axis) or a sheet (in the mid-plane).
+static void reduced_positions(const fascia_scene_beam_def *def, const scene_grid *g, fascia_real *position) {
+  const int32_t ny = def->shape == FASCIA_SCENE_SHEET ? g->n[1] : 1;
+  for (int32_t ix = 0; ix < g->n[0]; ++ix)
+    for (int32_t iy = 0; iy < ny; ++iy) {
+      fascia_real *x = position + 3 * ((int64_t)ix * ny + iy);
+      x[0] = scene_grid_coord(g, 0, ix);
+      x[1] = def->shape == FASCIA_SCENE_SHEET ? scene_grid_coord(g, 1, iy) : 0;
+      x[2] = 0;
+    }
+}
+
+// Samples of a strand (per interval: n stations x q^2 section points) or a
+// sheet (per cell: n^2 in-plane points x q through the thickness), from
+// sample *first on; volume = Gauss weights x interval (cell) x section.
+static fascia_status fill_reduced_samples(fascia_ctx *ctx, const fascia_scene_beam_def *def, const scene_grid *g,
+                                          const fascia_frame_grid *grid, fascia_model *m, int32_t *first) {
+  fascia_real gp[4], gw[4], qp[4], qw[4];
+  const int n = def->samples_per_cell_dir, q = def->section_points;
+  SCENE_TRY(fascia_shape_gauss_legendre(ctx, n, gp, gw));
+  SCENE_TRY(fascia_shape_gauss_legendre(ctx, q, qp, qw));
+  const int strand = def->shape == FASCIA_SCENE_STRAND;
+  const int32_t k = reduced_neighbours(def, grid), cy = strand ? 1 : g->n[1] - 1;
+  // a sheet's cell: n points along x, reduced_across(n) across y
+  const int ny = strand ? 1 : reduced_across(n), qy = strand ? q : 1;
+  fascia_real yp[4], yw[4];
+  SCENE_TRY(fascia_shape_gauss_legendre(ctx, ny, yp, yw));
+  int32_t frame[FASCIA_SHAPE_MAX_NEIGHBOURS];
+  fascia_real w[FASCIA_SHAPE_MAX_NEIGHBOURS], grad[3 * FASCIA_SHAPE_MAX_NEIGHBOURS];
+  int32_t s = *first;
+  for (int32_t cx = 0; cx < g->n[0] - 1; ++cx)
+    for (int32_t j = 0; j < cy; ++j) {
+      const fascia_real x0 = scene_grid_coord(g, 0, cx), x1 = scene_grid_coord(g, 0, cx + 1);
+      const fascia_real y0 = strand ? -def->width / 2 : scene_grid_coord(g, 1, j);
+      const fascia_real y1 = strand ? def->width / 2 : scene_grid_coord(g, 1, j + 1);
+      const fascia_real z0 = -def->height / 2, z1 = def->height / 2;
+      for (int a = 0; a < n; ++a)
+        for (int b = 0; b < (strand ? qy : ny); ++b)
+          for (int c = 0; c < q; ++c, ++s) {
+            fascia_real *p = m->sample_position + 3 * (int64_t)s;
+            const fascia_real ty = strand ? qp[b] : yp[b], wy = strand ? qw[b] : yw[b];
+            p[0] = x0 + (x1 - x0) * gp[a];
+            p[1] = y0 + (y1 - y0) * ty;
+            p[2] = z0 + (z1 - z0) * qp[c];
+            m->sample_volume[s] = gw[a] * wy * qw[c] * (x1 - x0) * (y1 - y0) * (z1 - z0);
+            m->sample_material[s] = 0;
+            SCENE_TRY(reduced_weights_at(ctx, def, g, grid, p, frame, w, grad));
+            scene_set_pairs(m, s, k, frame, w, grad);
+          }
+    }
+  *first = s;
+  return FASCIA_OK;
+}
+
 // Probe "tip" at (length, 0, 0) with the beam's own shape function. MLS
 // grows k past the samples' neighbour count if the k nearest frames are
 // coplanar (at an end face of a 3 x 3 section the 9 nearest all are).
@@ -164,6 +349,9 @@ static fascia_status tip_probe(fascia_ctx *ctx, const fascia_scene_beam_def *def
   } else if (def->shape == FASCIA_SCENE_TET) {
     st = scene_tet_at(ctx, g, tip, frame, w, grad);
     n = 4;
+  } else if (fascia_scene_shape_dimension(def->shape) < 3) {
+    st = reduced_weights_at(ctx, def, g, grid, tip, frame, w, grad);
+    n = reduced_neighbours(def, grid);
   } else {
     const int32_t most = fascia_frame_grid_count(grid) < SCENE_PROBE_MAX ? fascia_frame_grid_count(grid)
                                                                          : SCENE_PROBE_MAX;
@@ -288,8 +476,21 @@ static void beam_provenance(char *buf, size_t size, const fascia_scene_beam_def 
   scene_append(buf, size,
                "{\"generator\": \"fascia_scene_beam_build\", \"fascia_version\": \"%s\", \"scene\": \"beam\", "
                "\"reference\": \"Bosman et al. 2013 sec. 4.1\", \"frames\": [%d, %d, %d], \"shape\": \"%s\", ",
-               fascia_version(), (int)def->frames[0], (int)def->frames[1], (int)def->frames[2],
+               fascia_version(), (int)def->frames[0],
+               fascia_scene_shape_dimension(def->shape) > 1 ? (int)def->frames[1] : 1,
+               fascia_scene_shape_dimension(def->shape) > 2 ? (int)def->frames[2] : 1,
                fascia_scene_shape_name(def->shape));
+  if (fascia_scene_shape_dimension(def->shape) < 3) {
+    fascia_real E, nu;
+    scene_section_moduli(def, &E, &nu);
+    scene_append(buf, size,
+                 "\"section_points\": %d, \"section\": \"%s\", \"neighbours\": %d, \"kernel\": \"wendland-c2\", "
+                 "\"mls_basis\": \"linear in the frames' span\", \"section_youngs_modulus\": %.17g, "
+                 "\"section_poisson_ratio\": %.17g, ",
+                 (int)def->section_points,
+                 def->shape == FASCIA_SCENE_STRAND ? "rigid, uniaxial stress moduli" : "rigid normal, plane stress moduli",
+                 (int)def->neighbours, E, nu);
+  }
   if (def->shape == FASCIA_SCENE_TET)
     scene_append(buf, size, "\"tet_split\": \"kuhn6\", \"samples_per_tet\": %d, ", (int)def->samples_per_tet);
   else
@@ -308,6 +509,8 @@ fascia_status fascia_scene_beam_build(fascia_ctx *ctx, const fascia_scene_beam_d
   *out = NULL;
   // the rule of PATCH_AUTO, once: the def used from here on names its choice
   fascia_scene_beam_def resolved = *def;
+  if (resolved.volumetric_patch == FASCIA_SCENE_PATCH_AUTO && fascia_scene_shape_dimension(resolved.shape) < 3)
+    resolved.volumetric_patch = FASCIA_SCENE_PATCH_NONE; // a section carried by rotations does not lock
   if (resolved.volumetric_patch == FASCIA_SCENE_PATCH_AUTO)
     resolved.volumetric_patch =
         resolved.poisson_ratio >= FASCIA_PATCH_MIN_POISSON ? FASCIA_SCENE_PATCH_CELL : FASCIA_SCENE_PATCH_NONE;
@@ -322,8 +525,14 @@ fascia_status fascia_scene_beam_build(fascia_ctx *ctx, const fascia_scene_beam_d
   int32_t samples = 0, per_sample = 0;
   fascia_status status = check_beam(ctx, def, &samples, &per_sample);
   if (status != FASCIA_OK) return status;
-  const scene_grid g = scene_grid_of_beam(def, def->frames);
-  const int32_t frames = scene_grid_frame_count(&g);
+  const int reduced = fascia_scene_shape_dimension(def->shape) < 3;
+  int32_t grid_frames[3];
+  memcpy(grid_frames, def->frames, sizeof grid_frames);
+  for (int d = fascia_scene_shape_dimension(def->shape); d < 3; ++d) grid_frames[d] = 2; // not used: no division by 0
+  const scene_grid g = scene_grid_of_beam(def, grid_frames);
+  const int32_t frames = def->shape == FASCIA_SCENE_STRAND  ? g.n[0]
+                         : def->shape == FASCIA_SCENE_SHEET ? g.n[0] * g.n[1]
+                                                            : scene_grid_frame_count(&g);
   fascia_real *position = malloc(3 * (size_t)frames * sizeof *position);
   char *provenance = malloc(PROVENANCE_SIZE);
   fascia_frame_grid *grid = NULL;
@@ -335,8 +544,9 @@ fascia_status fascia_scene_beam_build(fascia_ctx *ctx, const fascia_scene_beam_d
     status = SCENE_FAIL(ctx, FASCIA_ERR_MEMORY, "beam generator: out of memory for %d frames", (int)frames);
     goto cleanup;
   }
-  scene_grid_positions(&g, position);
-  if (def->shape == FASCIA_SCENE_MESHLESS) SCENE_TRY_GOTO(fascia_frame_grid_create(ctx, frames, position, &grid));
+  if (reduced) reduced_positions(def, &g, position);
+  else scene_grid_positions(&g, position);
+  if (def->shape == FASCIA_SCENE_MESHLESS || reduced) SCENE_TRY_GOTO(fascia_frame_grid_create(ctx, frames, position, &grid));
   SCENE_TRY_GOTO(tip_probe(ctx, def, &g, grid, &probe));
   sizes.frames = frames;
   sizes.samples = samples;
@@ -348,7 +558,9 @@ fascia_status fascia_scene_beam_build(fascia_ctx *ctx, const fascia_scene_beam_d
   memcpy(m->frame_position, position, 3 * (size_t)frames * sizeof *position);
   // samples are written in order: the (deviatoric) rule, then the volumetric centres
   int32_t next = 0;
-  if (def->shape == FASCIA_SCENE_TET) {
+  if (reduced) {
+    SCENE_TRY_GOTO(fill_reduced_samples(ctx, def, &g, grid, m, &next));
+  } else if (def->shape == FASCIA_SCENE_TET) {
     SCENE_TRY_GOTO(fill_tet_samples(ctx, &g, m, def->samples_per_tet, 0, &next));
     if (def->reduced_volumetric) SCENE_TRY_GOTO(fill_tet_samples(ctx, &g, m, 1, 1, &next));
   } else {

@@ -195,7 +195,18 @@ fascia_status scene_check_body(fascia_ctx *ctx, const fascia_scene_beam_def *def
 
 fascia_real scene_smoothing(const fascia_scene_beam_def *def) {
   if (def->rotation_smoothing >= 0) return def->rotation_smoothing;
+  if (def->shape == FASCIA_SCENE_STRAND || def->shape == FASCIA_SCENE_SHEET) return 0;
   return def->shape == FASCIA_SCENE_TET ? 0.05 : 0.1;
+}
+
+void scene_section_moduli(const fascia_scene_beam_def *def, fascia_real *youngs_modulus, fascia_real *poisson_ratio) {
+  const fascia_real E = def->youngs_modulus, nu = def->poisson_ratio;
+  // mu kept; lambda' + 2 mu = E (strand) or lambda' = E nu / (1 - nu^2) (sheet)
+  fascia_real nu_s = nu;
+  if (def->shape == FASCIA_SCENE_STRAND) nu_s = nu / (1 + 2 * nu);
+  else if (def->shape == FASCIA_SCENE_SHEET) nu_s = nu / (1 + nu);
+  *poisson_ratio = nu_s;
+  *youngs_modulus = E * (1 + nu_s) / (1 + nu);
 }
 
 fascia_real scene_density(const fascia_scene_beam_def *def) {
@@ -207,8 +218,7 @@ fascia_status scene_finish(fascia_ctx *ctx, fascia_model *m, const fascia_scene_
   fascia_material *mat = &m->materials[0];
   snprintf(mat->name, sizeof mat->name, "beam");
   mat->law = def->law;
-  mat->youngs_modulus = def->youngs_modulus;
-  mat->poisson_ratio = def->poisson_ratio;
+  scene_section_moduli(def, &mat->youngs_modulus, &mat->poisson_ratio);
   mat->density = scene_density(def);
   mat->rotation_coupling = def->rotation_coupling;
   mat->rotation_smoothing = scene_smoothing(def);

@@ -102,6 +102,14 @@ fascia_real scene_density(const fascia_scene_beam_def *def);
 /// resolved by its shape kind.
 fascia_real scene_smoothing(const fascia_scene_beam_def *def);
 
+/// The moduli of the material of a def's samples: E and nu for the volume
+/// shapes; for STRAND and SHEET, whose section is carried by the frames'
+/// rotations and keeps its shape, those for which the constrained law is
+/// the unconstrained one: the shear modulus kept and lambda' = E nu / (1 +
+/// nu) (uniaxial stress along a strand: lambda' + 2 mu = E), or lambda' = E
+/// nu / (1 - nu^2) (plane stress in a sheet).
+void scene_section_moduli(const fascia_scene_beam_def *def, fascia_real *youngs_modulus, fascia_real *poisson_ratio);
+
 /// Final steps shared by the builders, on a model whose frames, samples and
 /// pairs are filled and that was allocated with 1 material, 1 probe and
 /// probe->count probe pairs: material "beam" from def, gravity, frames with

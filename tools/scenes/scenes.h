@@ -20,13 +20,25 @@ typedef enum fascia_scene_shape {
   FASCIA_SCENE_HEX = 0,      ///< trilinear weights of the grid cell, 8 neighbours
   FASCIA_SCENE_TET = 1,      ///< barycentric weights of a tetrahedral split of the grid, 4 neighbours
   FASCIA_SCENE_MESHLESS = 2, ///< moving least squares over the k nearest frames
+  /// A 1-D model: frames on the axis, MLS along it (fascia_shape_mls_adaptive),
+  /// samples at points of the section carried by the frames' rotations
+  FASCIA_SCENE_STRAND = 3,
+  /// A 2-D model: frames in the mid-plane z = 0, MLS in the plane, samples
+  /// through the thickness carried by the frames' rotations
+  FASCIA_SCENE_SHEET = 4,
   FASCIA_SCENE_SHAPE_COUNT_
 } fascia_scene_shape;
 
-/// "hex", "tet", "meshless"; "unknown" otherwise.
+/// "hex", "tet", "meshless", "strand", "sheet"; "unknown" otherwise.
 const char *fascia_scene_shape_name(int shape);
 /// Shape from its name; -1 if unknown.
 int fascia_scene_shape_from_name(const char *name);
+/// Dimension of a shape's frame layout: 1 strand, 2 sheet, 3 the others.
+int fascia_scene_shape_dimension(int shape);
+/// A frame grid from text: "NX" (strand), "NXxNY" (sheet) or "NXxNYxNZ",
+/// each count >= 2; the missing counts are set to 1. Returns the number of
+/// counts read (1 to 3), or 0 for text that is none of these.
+int fascia_scene_frames_parse(const char *text, int32_t frames[3]);
 
 /// The cantilever of paper sec. 4.1: a box [0, length] x [-width/2, width/2]
 /// x [-height/2, height/2] (m), frames on a regular nx x ny x nz grid that
@@ -55,7 +67,15 @@ typedef struct fascia_scene_beam_def {
   int32_t samples_per_cell_dir;
   /// TET: samples per tetrahedron, 1 (centroid) or 4 (degree-2 rule); default 4.
   int32_t samples_per_tet;
-  int32_t neighbours;             ///< MESHLESS: k nearest frames per sample (4 .. 128); default 8
+  /// MESHLESS: k nearest frames per sample (4 .. 128); STRAND, SHEET: the
+  /// same (2 .. 128; 3 .. 128 for SHEET), at most the frame count, which a
+  /// larger k is cut to; default 8 (fascia_scene_beam_def_of_shape: 4 for
+  /// STRAND)
+  int32_t neighbours;
+  /// STRAND: the section is integrated on n x n Gauss-Legendre points over
+  /// width x height; SHEET: on n points through the height (the thickness);
+  /// n = 1..4, default 2 (exact for the bending energy of small strains)
+  int32_t section_points;
   int32_t law;                    ///< fascia_law; default FASCIA_LAW_STVK
   fascia_real youngs_modulus;     ///< Pa; default 40000
   fascia_real poisson_ratio;      ///< default 0.3
@@ -93,6 +113,10 @@ typedef struct fascia_scene_beam_def {
 } fascia_scene_beam_def;
 
 fascia_scene_beam_def fascia_scene_beam_def_default(void);
+/// The default def with `shape` and that shape's frame grid and neighbours
+/// (fascia beam's defaults): 20 x 3 x 3 for the volume shapes, 20 x 1 x 1
+/// and k = 4 for STRAND, 20 x 3 x 1 and k = 8 for SHEET.
+fascia_scene_beam_def fascia_scene_beam_def_of_shape(int shape);
 
 /// rotation_smoothing's default: fascia beam's rule by shape kind.
 #define FASCIA_SCENE_SMOOTHING_AUTO (-1.0)
@@ -103,7 +127,21 @@ fascia_scene_beam_def fascia_scene_beam_def_default(void);
 int32_t fascia_scene_beam_modes_of_shape(int32_t shape);
 
 /// Builds the cantilever. Samples: HEX and MESHLESS on the Gauss grid of the
-/// frame cells; TET on the tetrahedra of the 6-tetrahedron (Kuhn) split of
+/// frame cells; STRAND: frames[0] frames on the axis (y = z = 0; the other
+/// counts are not used), samples_per_cell_dir Gauss stations per interval, each
+/// with section_points^2 points over the section; SHEET: frames[0] x
+/// frames[1] frames in the mid-plane z = 0 (frames[2] not used),
+/// samples_per_cell_dir^2 Gauss points per cell, each with section_points
+/// points through the thickness. STRAND and SHEET weights: MLS in the
+/// frames' span over the k nearest frames of the sample's station (its
+/// projection on the axis or the mid-plane), so a station's section points
+/// share its weights; their section is carried by the frames' rotations and
+/// cannot deform, so the material gets the moduli for which that
+/// constrained law is the unconstrained one (uniaxial stress along a
+/// strand, plane stress in a sheet, shear modulus kept: docs/mechanics.md),
+/// named in the provenance; no volumetric patches, no enhanced modes, and
+/// rotation smoothing 0 by default (the section's points make twisting a
+/// frame cost energy). TET on the tetrahedra of the 6-tetrahedron (Kuhn) split of
 /// every cell along its main diagonal (conforming: every cell is split the
 /// same way). One material "beam", gravity from the def, one probe "tip" at
 /// (length, 0, 0) carried by the shape function there (trilinear weights of

@@ -65,6 +65,38 @@ FASCIA_API fascia_status fascia_shape_mls(fascia_ctx *ctx, int32_t n, const fasc
                                           const fascia_real p[3], fascia_real radius, fascia_real *w,
                                           fascia_real *grad);
 
+/// Default flatness of fascia_shape_mls_adaptive: frames whose spread
+/// across a direction is at most this fraction of their largest spread lie
+/// in a line or a plane.
+#define FASCIA_SHAPE_FLATNESS 1e-6
+
+/// Moving least squares whose linear basis follows the dimension of the
+/// frames: for strands (frames on a curve) and sheets (frames on a
+/// surface), where the 3-D basis of fascia_shape_mls is singular. The
+/// principal axes of the n frames (frame[3n], m; eigenvectors of their
+/// covariance) decide: axes whose RMS spread is at most `flatness` (0: the
+/// default FASCIA_SHAPE_FLATNESS) times the largest are dropped. With all
+/// three kept this is fascia_shape_mls, to the bit. With one (a line) or two
+/// (a plane) the basis is (1, the coordinates of x along the kept axes) and
+/// the kernel (fascia_shape_kernel, support `radius`) takes the distance
+/// along them: the weights depend only on where p projects, so samples
+/// across a strand's section or a sheet's thickness share their station's
+/// weights, and grad (d w_i / d p, exact, radius and frames fixed) lies in
+/// the span. On that span the weights are a partition of unity that
+/// reproduces linear fields: sum w_i = 1, sum grad w_i = 0,
+/// sum w_i x_i = p and sum x_i (x) grad w_i = I on the span's coordinates;
+/// across it, sum x_i (x) grad w_i = P, the projector on the span (the
+/// frames' rotations carry the section: docs/mechanics.md). *dimension
+/// (may be NULL) gets 1, 2 or 3. Errors: FASCIA_ERR_ARGUMENT (n < 2, or < 4
+/// for a volume; radius not positive; flatness outside (0, 1); a non-finite
+/// input; all frames at one point); FASCIA_ERR_NUMERIC when the moment
+/// matrix in the span is singular (fewer frames in the support than the
+/// basis has terms), naming the point. w and grad are undefined after an
+/// error.
+FASCIA_API fascia_status fascia_shape_mls_adaptive(fascia_ctx *ctx, int32_t n, const fascia_real *frame,
+                                                   const fascia_real p[3], fascia_real radius, fascia_real flatness,
+                                                   fascia_real *w, fascia_real *grad, int32_t *dimension);
+
 /// Gauss-Legendre rule with n = 1..4 points on [0, 1]: point[n] ascending,
 /// weight[n] summing to 1. Exact for polynomials of degree 2n - 1.
 /// Errors: FASCIA_ERR_ARGUMENT for other n.
