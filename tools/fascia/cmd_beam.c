@@ -15,21 +15,35 @@
 #include "scenes.h"
 
 static const char beam_usage[] =
-    "usage: fascia beam [--frames NXxNYxNZ] [--shape hex|tet|meshless] [--samples-per-cell N]\n"
-    "                   [--neighbours K] [--E PA --nu V | --lambda PA --mu PA] [--law stvk|neohookean]\n"
+    "usage: fascia beam [--frames NXxNYxNZ] [--shape hex|tet|meshless|strand|sheet] [--samples-per-cell N]\n"
+    "                   [--neighbours K] [--section-points Q]\n"
+    "                   [--E PA --nu V | --lambda PA --mu PA] [--law stvk|neohookean]\n"
     "                   [--mass KG] [--density KG_M3] [--rotation-coupling R]\n"
     "                   [--rotation-smoothing R] [--volumetric auto|full|cell|frame|poisson|reduced]\n"
     "                   [--patch-radius M] [--modes auto|on|nine|normal|off] -o BEAM.h5 [--json]\n"
     "\n"
     "The cantilever of Bosman et al. 2013 sec. 4.1: 16 x 1 x 1 m along x, clamped at x = 0,\n"
     "loaded by gravity, probe 'tip' at (16, 0, 0).\n"
-    "  --frames NXxNYxNZ       frame grid, faces included (default 20x3x3)\n"
+    "  --frames NXxNYxNZ       frame grid, faces included (default 20x3x3); strand: NX frames on\n"
+    "                          the axis (default 20); sheet: NXxNY in the mid-plane (default 20x3)\n"
     "  --shape KIND            hex: trilinear, 8 neighbours; tet: barycentric on the 6-tet split\n"
-    "                          of each cell, 4 neighbours; meshless: MLS over K nearest (default hex)\n"
+    "                          of each cell, 4 neighbours; meshless: MLS over K nearest (default hex);\n"
+    "                          strand: a 1-D model, frames on the axis, MLS along it, the 1 x 1 m\n"
+    "                          section carried by the frames' rotations; sheet: a 2-D model, frames\n"
+    "                          in the mid-plane, MLS in it, the 1 m thickness carried by the\n"
+    "                          rotations (docs/mechanics.md, \"Strands and sheets\")\n"
     "  --samples-per-cell N    hex, meshless: N^3 Gauss points per cell, N = 1..4 (default 2;\n"
     "                          1 leaves hex hourglass modes that cost no energy: no static solve);\n"
-    "                          tet: samples per tetrahedron, 1 or 4 (default 4)\n"
-    "  --neighbours K          meshless: frames per sample (default 8)\n"
+    "                          tet: samples per tetrahedron, 1 or 4 (default 4); strand: stations\n"
+    "                          per interval, sheet: N along x and max(N, 2) across per cell\n"
+    "                          (default 1: more stiffen them, shear locking)\n"
+    "  --neighbours K          meshless: frames per sample (default 8); strand, sheet: 0, the\n"
+    "                          frames of the sample's interval or cell (default), or K nearest\n"
+    "  --section-points Q      strand: Q x Q Gauss points over the section; sheet: Q through the\n"
+    "                          thickness (1 .. 4, default 2)\n"
+    ;
+// (a second string: ISO C bounds a string literal's length)
+static const char beam_usage_more[] =
     "  --E PA, --nu V          Young's modulus (default 40000) and Poisson ratio (default 0.3)\n"
     "  --lambda PA, --mu PA    or the Lame parameters instead (both, and neither --E nor --nu)\n"
     "  --law NAME              stvk (default) or neohookean\n"
@@ -75,8 +89,12 @@ static int print_json(const fascia_model *m, const char *path) {
 }
 
 int cmd_beam(int argc, char **argv) {
-  fascia_scene_beam_def def = fascia_scene_beam_def_default();
-  const char *path = NULL;
+  // the shape decides the defaults of the frame grid, neighbours and samples
+  int shape = FASCIA_SCENE_HEX;
+  for (int k = 1; k + 1 < argc; ++k)
+    if (!strcmp(argv[k], "--shape")) shape = fascia_scene_shape_from_name(argv[k + 1]);
+  fascia_scene_beam_def def = fascia_scene_beam_def_of_shape(shape < 0 ? FASCIA_SCENE_HEX : shape);
+  const char *path = NULL, *frames_text = NULL;
   int json = 0, samples_given = 0, young_given = 0;
   double lambda = -1, mu = -1;
   int32_t samples_per_cell = 0;
@@ -87,6 +105,7 @@ int cmd_beam(int argc, char **argv) {
     const char *opt = argv[k];
     if (!strcmp(opt, "--help") || !strcmp(opt, "-h")) {
       fputs(beam_usage, stdout);
+      fputs(beam_usage_more, stdout);
       return 0;
     }
     if (!strcmp(opt, "--json")) {
@@ -95,7 +114,7 @@ int cmd_beam(int argc, char **argv) {
     }
     if (!strcmp(opt, "--verbose")) continue;
     static const char *const valued[] = {"--frames", "--shape", "--samples-per-cell", "--neighbours", "--E", "--nu", "--lambda", "--mu",
-                                         "--law", "--mass", "--density", "--rotation-coupling", "--rotation-smoothing", "--volumetric", "--patch-radius", "--modes", "-o", "--output"};
+                                         "--law", "--mass", "--density", "--rotation-coupling", "--rotation-smoothing", "--volumetric", "--patch-radius", "--modes", "--section-points", "-o", "--output"};
     int known = 0;
     for (size_t j = 0; j < sizeof valued / sizeof valued[0]; ++j) known |= !strcmp(opt, valued[j]);
     if (!known) return cli_usage_error("beam", "unknown option '%s'", opt);
@@ -103,7 +122,9 @@ int cmd_beam(int argc, char **argv) {
     const char *value = argv[++k];
     int ok = 1;
     if (!strcmp(opt, "--frames"))
-      ok = cli_parse_grid(value, def.frames, -2147483647);
+      ok = (frames_text = value) != NULL; // read once the shape is known
+    else if (!strcmp(opt, "--section-points"))
+      ok = cli_parse_count(value, &def.section_points, -2147483647L);
     else if (!strcmp(opt, "--shape"))
       ok = (def.shape = fascia_scene_shape_from_name(value)) >= 0;
     else if (!strcmp(opt, "--samples-per-cell"))
@@ -151,6 +172,20 @@ int cmd_beam(int argc, char **argv) {
     }
   }
   if (!path) return cli_usage_error("beam", "%s", "missing -o PATH, the model file to write");
+  if (frames_text) {
+    const int dim = fascia_scene_shape_dimension(def.shape);
+    int32_t grid[3];
+    const int counts = fascia_scene_frames_parse(frames_text, grid);
+    if (counts != dim && !(dim == 3 && cli_parse_grid(frames_text, grid, -2147483647))) {
+      char what[256];
+      snprintf(what, sizeof what, "--frames '%.60s': a %s takes %s", frames_text, fascia_scene_shape_name(def.shape),
+               dim == 1   ? "one count >= 2, the frames on the axis (e.g. 20)"
+               : dim == 2 ? "NXxNY, counts >= 2, the frames in the mid-plane (e.g. 20x3)"
+                          : "NXxNYxNZ frames (e.g. 20x3x3)");
+      return cli_usage_error("beam", "%s", what);
+    }
+    memcpy(def.frames, grid, sizeof grid);
+  }
   if (lambda >= 0 || mu >= 0) { // Lame parameters: both, instead of E and nu
     if (young_given) return cli_usage_error("beam", "%s", "give either --E/--nu or --lambda/--mu, not both");
     if (!(lambda >= 0 && mu > 0)) return cli_usage_error("beam", "%s", "--lambda needs a value >= 0 and --mu one > 0, both given");

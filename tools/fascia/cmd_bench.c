@@ -36,7 +36,7 @@ static const char bench_usage[] =
     "                    [--backend cpu|cuda|auto|emulated [--no-cpu]]\n"
     "                    [--threads T] [--repeats R] [--steps S] [--json] [--csv FILE]\n"
     "                    [--assembled [--single|--double]] [--linear-solver cg|direct|auto] [--no-calculix]\n"
-    "                    [--shapes hex,tet,meshless] [--frames 10x2x2,20x3x3,...]\n"
+    "                    [--shapes hex,tet,meshless,strand,sheet] [--frames 10x2x2,20x3x3,...]\n"
     "                    [--samples-per-cell N,...] [--neighbours K,...] [--rotation-smoothing R,...]\n"
     "\n"
     "  paper                 every row of the paper's Tables 2 and 3 (the default), in the paper's\n"
@@ -74,10 +74,13 @@ static const char bench_usage[] =
 // (a second string: ISO C bounds a string literal's length)
 static const char bench_usage_sweep[] =
     "cantilever sweep (any of these replaces the default rows by the product of the lists):\n"
-    "  --shapes LIST              hex, tet, meshless (default hex)\n"
-    "  --frames LIST              frame grids NXxNYxNZ (default 20x3x3)\n"
-    "  --samples-per-cell LIST    hex, meshless: N^3 per cell; tet: per tetrahedron (default 2; tet 4)\n"
-    "  --neighbours LIST          meshless: frames per sample (default 8)\n"
+    "  --shapes LIST              hex, tet, meshless, strand (1-D), sheet (2-D) (default hex)\n"
+    "  --frames LIST              frame grids NXxNYxNZ (default 20x3x3); a strand takes NX and a sheet\n"
+    "                             NXxNY, or the leading counts of a longer grid\n"
+    "  --samples-per-cell LIST    hex, meshless: N^3 per cell; tet: per tetrahedron; strand, sheet:\n"
+    "                             stations along the axis (default 2; tet 4; strand, sheet 1)\n"
+    "  --neighbours LIST          meshless: frames per sample (default 8); strand, sheet: 0, the\n"
+    "                             frames of the sample's interval or cell (default), or K nearest\n"
     "  --rotation-smoothing LIST  0 is the paper's scheme (default: the beam's, 0.05 tet, else 0.1)\n"
     "  --nu LIST                  Poisson ratios with a converged reference: 0.3, 0.45, 0.49 (default 0.3)\n"
     "  --volumetric LIST          auto (cell patches from nu = 0.3, as fascia beam), full, cell, frame\n"
@@ -124,7 +127,7 @@ static int parse_list(const char *text, char kind, value_list *out) {
       if (shape < 0) return 0;
       *v = shape;
     } else if (kind == 'g') {
-      if (!cli_parse_grid(item, out->grid[out->count], 2)) return 0;
+      if (!fascia_scene_frames_parse(item, out->grid[out->count])) return 0;
     } else if (kind == 'm') {
       *v = !strcmp(item, "auto") ? MODES_AUTO : !strcmp(item, "on") ? MODES_ON : !strcmp(item, "off") ? MODES_OFF : -1;
       if (*v < 0) return 0;
@@ -568,11 +571,13 @@ static const fascia_ccx_reference *cantilever_reference(void) {
 // kind, then one knob at a time on the 20 x 3 x 3 hexahedral beam: samples,
 // the paper's scheme (rotation smoothing 0), CG instead of the default
 // linear solver; full integration against the default volumetric patches;
-// tet without its enhanced strain modes; and the nearly incompressible beam
-// (nu = 0.49). The paper's scheme on
+// tet without its enhanced strain modes; the nearly incompressible beam
+// (nu = 0.49); the strand (1-D) and the sheet (2-D) at two resolutions and
+// at nu = 0.49. The paper's scheme on
 // 40 x 5 x 5 is left out: minutes.
 static int default_cases(cantilever_case *cases) {
-  const int H = FASCIA_SCENE_HEX, T = FASCIA_SCENE_TET, M = FASCIA_SCENE_MESHLESS, A = FASCIA_SCENE_PATCH_AUTO,
+  const int H = FASCIA_SCENE_HEX, T = FASCIA_SCENE_TET, M = FASCIA_SCENE_MESHLESS, L = FASCIA_SCENE_STRAND,
+            P = FASCIA_SCENE_SHEET, A = FASCIA_SCENE_PATCH_AUTO,
             F = FASCIA_SCENE_PATCH_NONE;
   const double S = FASCIA_SCENE_SMOOTHING_AUTO; // fascia beam's rotation smoothing by shape kind
   const cantilever_case table[] = {
@@ -590,6 +595,9 @@ static int default_cases(cantilever_case *cases) {
       {H, 2, 0, {20, 3, 3}, S, -1, 0.49, A, MODES_AUTO}, {T, 4, 0, {20, 3, 3}, S, -1, 0.49, A, MODES_AUTO},
       {M, 2, 8, {20, 3, 3}, S, -1, 0.49, A, MODES_AUTO}, {M, 2, 16, {20, 3, 3}, S, -1, 0.49, A, MODES_AUTO},
       {H, 2, 0, {20, 3, 3}, S, -1, 0.49, F, MODES_AUTO},
+      {L, 1, 0, {20, 1, 1}, S, -1, 0.3, A, MODES_AUTO},  {L, 1, 0, {40, 1, 1}, S, -1, 0.3, A, MODES_AUTO},
+      {P, 1, 0, {20, 3, 1}, S, -1, 0.3, A, MODES_AUTO},  {P, 1, 0, {40, 5, 1}, S, -1, 0.3, A, MODES_AUTO},
+      {L, 1, 0, {20, 1, 1}, S, -1, 0.49, A, MODES_AUTO}, {P, 1, 0, {20, 3, 1}, S, -1, 0.49, A, MODES_AUTO},
   };
   const int count = (int)(sizeof table / sizeof table[0]);
   memcpy(cases, table, sizeof table);
@@ -605,13 +613,18 @@ static int sweep_cases(const bench_options *opt, cantilever_case *cases, int cap
   if (!vol.count) vol.count = 1, vol.real[0] = FASCIA_SCENE_PATCH_AUTO;
   if (!shapes.count) shapes.count = 1, shapes.real[0] = FASCIA_SCENE_HEX;
   if (!grids.count) grids.count = 1, grids.grid[0][0] = 20, grids.grid[0][1] = 3, grids.grid[0][2] = 3;
+  const int reduced_kn = kn.count > 0; // strands and sheets: their own frames unless K is given
   if (!kn.count) kn.count = 1, kn.real[0] = 8;
   if (!sm.count) sm.count = 1, sm.real[0] = FASCIA_SCENE_SMOOTHING_AUTO;
   int count = 0;
   for (int a = 0; a < shapes.count; ++a)
-    for (int b = 0; b < grids.count; ++b)
+    for (int b = 0; b < grids.count; ++b) {
+      // a grid with fewer counts than the shape has dimensions is not this shape's
+      const int dim = fascia_scene_shape_dimension((int)shapes.real[a]);
+      if (dim > 1 && grids.grid[b][dim - 1] < 2) continue;
+      const int reduced = dim < 3, ks = shapes.real[a] == FASCIA_SCENE_MESHLESS || (reduced && reduced_kn) ? kn.count : 1;
       for (int c = 0; c < (spc.count ? spc.count : 1); ++c)
-        for (int d = 0; d < (shapes.real[a] == FASCIA_SCENE_MESHLESS ? kn.count : 1); ++d)
+        for (int d = 0; d < ks; ++d)
           for (int e = 0; e < sm.count; ++e)
             for (int f = 0; f < nus.count; ++f)
               for (int g = 0; g < vol.count * modes.count; ++g) {
@@ -620,13 +633,15 @@ static int sweep_cases(const bench_options *opt, cantilever_case *cases, int cap
                 x->modes = (int)modes.real[g % modes.count];
                 x->shape = (int)shapes.real[a];
                 memcpy(x->grid, grids.grid[b], sizeof x->grid);
-                x->spc = spc.count ? (int)spc.real[c] : x->shape == FASCIA_SCENE_TET ? 4 : 2;
-                x->neighbours = x->shape == FASCIA_SCENE_MESHLESS ? (int)kn.real[d] : 0;
+                for (int k = dim; k < 3; ++k) x->grid[k] = 1;
+                x->spc = spc.count ? (int)spc.real[c] : x->shape == FASCIA_SCENE_TET ? 4 : reduced ? 1 : 2;
+                x->neighbours = x->shape == FASCIA_SCENE_MESHLESS || (reduced && reduced_kn) ? (int)kn.real[d] : 0;
                 x->smoothing = sm.real[e];
                 x->linear = -1;
                 x->nu = nus.real[f];
                 x->volumetric = (int)vol.real[g / modes.count];
               }
+    }
   return count;
 }
 
@@ -655,12 +670,12 @@ static fascia_status bench_cantilever_case(fascia_ctx *ctx, const bench_options 
                                            cantilever_result *out) {
   memset(out, 0, sizeof *out);
   out->c = *c;
-  fascia_scene_beam_def bdef = fascia_scene_beam_def_default();
+  fascia_scene_beam_def bdef = fascia_scene_beam_def_of_shape(c->shape);
   memcpy(bdef.frames, c->grid, sizeof bdef.frames);
   bdef.shape = c->shape;
   if (c->shape == FASCIA_SCENE_TET) bdef.samples_per_tet = c->spc;
   else bdef.samples_per_cell_dir = c->spc;
-  if (c->shape == FASCIA_SCENE_MESHLESS) bdef.neighbours = c->neighbours;
+  if (c->shape == FASCIA_SCENE_MESHLESS || fascia_scene_shape_dimension(c->shape) < 3) bdef.neighbours = c->neighbours;
   bdef.rotation_smoothing = c->smoothing;
   bdef.poisson_ratio = c->nu;
   bdef.volumetric_patch = c->volumetric;
@@ -726,8 +741,11 @@ cleanup:
   return st;
 }
 
+// NXxNYxNZ; a strand's NX, a sheet's NXxNY (the counts it does not use are 1)
 static void grid_text(const int32_t grid[3], char *out, size_t size) {
-  snprintf(out, size, "%dx%dx%d", (int)grid[0], (int)grid[1], (int)grid[2]);
+  if (grid[1] == 1) snprintf(out, size, "%d", (int)grid[0]);
+  else if (grid[2] == 1) snprintf(out, size, "%dx%d", (int)grid[0], (int)grid[1]);
+  else snprintf(out, size, "%dx%dx%d", (int)grid[0], (int)grid[1], (int)grid[2]);
 }
 
 static void cantilever_text_header(void) {

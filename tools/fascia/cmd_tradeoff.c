@@ -96,9 +96,8 @@ static const char *precond_name(fascia_precond p) {
 }
 
 static fascia_scene_beam_def beam_def(const row *r) {
-  fascia_scene_beam_def b = fascia_scene_beam_def_default();
+  fascia_scene_beam_def b = fascia_scene_beam_def_of_shape(r->shape); // strands and sheets: their own frames
   memcpy(b.frames, r->grid, sizeof b.frames);
-  b.shape = r->shape;
   if (r->shape == FASCIA_SCENE_TET) b.samples_per_tet = r->spc;
   else b.samples_per_cell_dir = r->spc;
   if (r->shape == FASCIA_SCENE_MESHLESS) b.neighbours = r->neighbours;
@@ -174,8 +173,7 @@ static row *add_row(row *rows, int *count, const char *group, int problem, int d
   memset(r, 0, sizeof *r);
   r->group = group, r->problem = problem, r->dynamic = dynamic, r->shape = shape, r->spc = spc;
   r->neighbours = shape == FASCIA_SCENE_MESHLESS ? neighbours : 0;
-  int a = 0, b = 0, c = 0;
-  if (sscanf(grid, "%dx%dx%d", &a, &b, &c) == 3) r->grid[0] = a, r->grid[1] = b, r->grid[2] = c;
+  fascia_scene_frames_parse(grid, r->grid); // "NX" strand, "NXxNY" sheet, "NXxNYxNZ"
   r->solver = fascia_solver_def_default();
   if (!dynamic) r->solver.newton_iterations = 100; // the static solve's limit (solver.h)
   return r;
@@ -210,6 +208,12 @@ static void discretization_rows(row *rows, int *count, int problem, int quick) {
     add_row(rows, count, "discretization", problem, 0, FASCIA_SCENE_MESHLESS, grids[g], 2, 8)->patch = FASCIA_SCENE_PATCH_CELL;
   }
   add_row(rows, count, "discretization", problem, 0, FASCIA_SCENE_MESHLESS, "20x3x3", 2, 16)->patch = FASCIA_SCENE_PATCH_CELL;
+  // lower dimensions: the strand (1-D) and the sheet (2-D), one station per interval
+  static const char *const strands[] = {"10", "20", "40"}, *const sheets[] = {"10x2", "20x3", "40x5"};
+  for (int g = quick ? 1 : 0; g < 3; ++g) {
+    add_row(rows, count, "discretization", problem, 0, FASCIA_SCENE_STRAND, strands[g], 1, 0);
+    add_row(rows, count, "discretization", problem, 0, FASCIA_SCENE_SHEET, sheets[g], 1, 0);
+  }
   if (!main_problem) return;
   add_row(rows, count, "discretization", problem, 0, FASCIA_SCENE_HEX, "20x3x3", 1, 0);
   add_row(rows, count, "discretization", problem, 0, FASCIA_SCENE_HEX, "20x3x3", 3, 0);
@@ -509,7 +513,8 @@ static int write_convergence(const tradeoff_options *opt, const row *rows, int c
     for (int k = 0; k < count; ++k) {
       const row *r = rows + k;
       if (r->dynamic || r->problem != PROBLEM_CANTILEVER || r->shape != s || r->reduced ||
-          r->spc != (s == FASCIA_SCENE_TET ? 4 : 2) || (s == FASCIA_SCENE_MESHLESS && r->neighbours != 8))
+          r->spc != (s == FASCIA_SCENE_TET ? 4 : fascia_scene_shape_dimension(s) < 3 ? 1 : 2) ||
+          (s == FASCIA_SCENE_MESHLESS && r->neighbours != 8))
         continue;
       fprintf(f, "fascia-%s%s,%dx%dx%d,%d,%.6f,%.4f\n", fascia_scene_shape_name(s), r->patch ? "-patches" : "",
               (int)r->grid[0], (int)r->grid[1],
