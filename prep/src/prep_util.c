@@ -158,12 +158,18 @@ int prep_region_contains(const fascia_prep_region *region, const double *p) {
   }
 }
 
+int fascia_prep_tissue_connects(const fascia_prep_tissue_def *td, int32_t organ) {
+  for (int32_t k = 0; k < td->organ_count; ++k)
+    if (td->organs[k] == organ) return 1;
+  return 0;
+}
+
 int prep_coupling_allowed(const fascia_prep_tissue_def *td, int32_t organ, const fascia_prep_mesh *mesh,
                           int32_t triangle, const double *x) {
   const fascia_prep_coupling_def *rule = NULL;
   for (int32_t k = 0; k < td->coupling_count && !rule; ++k)
     if (td->coupling[k].organ == organ) rule = td->coupling + k;
-  if (!rule) return 1;
+  if (!rule) return td->couple_others || fascia_prep_tissue_connects(td, organ);
   if (!rule->enabled) return 0;
   if (!prep_region_contains(&rule->region, x)) return 0;
   if (rule->parts.count == 0) return 1;

@@ -106,7 +106,8 @@ FASCIA_PREP_INTERN prep_grid prep_volume_grid(const fascia_prep_volume *volume);
 /// 1 when p is inside region (a NONE region contains everything).
 FASCIA_PREP_INTERN int prep_region_contains(const fascia_prep_region *region, const double *p);
 /// 1 when tissue td's coupling rules let its frame at x on organ's triangle
-/// be shared with that organ (no rule for the organ: shared anywhere).
+/// be shared with that organ (no rule for the organ: shared anywhere, an
+/// organ it does not connect only when td->couple_others).
 FASCIA_PREP_INTERN int prep_coupling_allowed(const fascia_prep_tissue_def *td, int32_t organ,
                                              const fascia_prep_mesh *mesh, int32_t triangle, const double *x);
 /// Deformable organ whose inside has region label (> 0), -1 for a tissue label.

@@ -7,6 +7,13 @@
 //                   that frames shared with an organ lie exactly on it;
 //   interior frames candidates are jittered centres of region voxels farther
 //                   than the coupling tolerance from every organ;
+//   mid-layer frames where a gap is thinner than the frame spacing (the
+//                   surface frames on both sides refuse every interior
+//                   candidate), centres of its medial voxels (about as far
+//                   from the two nearest organs), thrown against the
+//                   interior frames only: a thin tissue keeps a layer of
+//                   free frames instead of being all surface frames that
+//                   move with the organs;
 //   samples         candidates are region voxel centres (meshless regions;
 //                   mesh-based ones: see below).
 //
@@ -250,6 +257,51 @@ static fascia_status throw_darts(fascia_ctx *ctx, prep_rng *rng, const point_lis
   }
   free(order);
   return FASCIA_OK;
+}
+
+// Mid-layer frames of a tissue (the header): candidates are the region
+// voxels on the medial layer between the two nearest organs (their
+// distances within about a voxel of each other) where the gap is thinner
+// than the frame spacing (nearer than half of it to both), off the
+// surfaces. There interior frames are refused: the surface frames on both
+// sides lie within a spacing of every point. Mid-layer frames are thrown
+// with the frame spacing against the frames from index `first` on (the
+// interior ones) only.
+static fascia_status mid_layer_frames(fascia_ctx *ctx, const fascia_prep_volume *vol, const int64_t *voxels,
+                                      int64_t voxel_count,
+                                      double spacing, prep_rng *rng, int64_t first, point_list *frames) {
+  const prep_grid g = prep_volume_grid(vol);
+  const double h = g.h;
+  point_list cand = {0};
+  dart_grid darts = {0};
+  fascia_status status = FASCIA_OK;
+  for (int64_t k = 0; k < voxel_count; ++k) {
+    const int64_t v = voxels[k];
+    double d1 = INFINITY, d2 = INFINITY; // the two nearest organs' distances
+    for (int32_t o = 0; o < vol->organ_count; ++o) {
+      if (!vol->distance[o]) continue;
+      const double d = vol->distance[o][v];
+      if (d < d1) d2 = d1, d1 = d;
+      else if (d < d2) d2 = d;
+    }
+    // (a margin of a quarter voxel on each bound: a mid-plane halfway between voxel centres puts two layers
+    // at exactly one voxel of difference, and the distances are floats)
+    if (d1 >= 0.5 * spacing || d1 < 0.25 * h || d2 - d1 > 1.25 * h) continue;
+    double x[3];
+    prep_grid_center(&g, v, x);
+    PREP_CHECK_GOTO(list_push(&cand, x, -1, -1, v), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  }
+  if (cand.count == 0) goto cleanup;
+  PREP_CHECK_GOTO(dart_init(&darts, spacing, frames->count - first + cand.count), ctx, FASCIA_ERR_MEMORY,
+                  "sample: out of memory");
+  darts.points = frames;
+  for (int64_t k = first; k < frames->count; ++k)
+    PREP_CHECK_GOTO(dart_add(&darts, k), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  PREP_TRY_GOTO(throw_darts(ctx, rng, &cand, &darts, frames));
+cleanup:
+  list_free(&cand);
+  dart_free(&darts);
+  return status;
 }
 
 // 26-connected pieces of tissue label; comp[v] = piece index + 1 on the grid.
@@ -670,6 +722,7 @@ static fascia_status sample_region(fascia_ctx *ctx, const fascia_prep_scene *sce
         PREP_CHECK_GOTO(dart_add(&darts, k), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
   }
   cand.count = 0;
+  const int64_t first_interior = frames->count;
   for (int64_t k = 0; k < voxel_count; ++k) {
     const int64_t v = voxels[k];
     if (td) {
@@ -684,6 +737,8 @@ static fascia_status sample_region(fascia_ctx *ctx, const fascia_prep_scene *sce
     PREP_CHECK_GOTO(list_push(&cand, x, -1, -1, v), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
   }
   PREP_TRY_GOTO(throw_darts(ctx, &rng, &cand, &darts, frames));
+  if (td)
+    PREP_TRY_GOTO(mid_layer_frames(ctx, vol, voxels, voxel_count, frame_spacing, &rng, first_interior, frames));
   PREP_TRY_GOTO(fill_thin_pieces(ctx, vol, label, frame_spacing, frames));
   dart_free(&darts);
   if (shape_kind == FASCIA_PREP_SHAPE_TET) {

@@ -750,9 +750,12 @@ static fascia_status parse_organ(const reader *rd, fascia_prep_scene *scene, con
 
 static fascia_status parse_coupling(const reader *rd, const fascia_prep_scene *scene, const cJSON *item,
                                     const char *path, fascia_prep_tissue_def *t) {
-  static const char *const known[] = {"tolerance", "organs", NULL};
+  static const char *const known[] = {"tolerance", "organs", "others", NULL};
   PREP_TRY(check_keys(rd, item, path, known));
   PREP_TRY(get_number(rd, item, path, "tolerance", 0, scene->voxel_size, 0, 1, INFINITY, &t->coupling_tolerance));
+  int others = 1;
+  PREP_TRY(get_bool(rd, item, path, "others", 1, &others));
+  t->couple_others = others;
   const cJSON *organs = cJSON_GetObjectItemCaseSensitive(item, "organs");
   if (!organs) return FASCIA_OK;
   char at[PATH_SIZE];
@@ -856,6 +859,7 @@ static fascia_status parse_tissue(const reader *rd, const fascia_prep_scene *sce
   PREP_TRY(parse_sampling(rd, scene, item, path, &t->frame_spacing, &t->sample_spacing, &t->shape_kind,
                           &t->neighbours, &t->samples_per_tet, &t->enhanced_modes, &t->min_component, &t->patch_radius));
   t->coupling_tolerance = scene->voxel_size;
+  t->couple_others = 1;
   const cJSON *coupling = cJSON_GetObjectItemCaseSensitive(item, "coupling");
   if (coupling) {
     sub_key(at, path, "coupling");

@@ -127,6 +127,56 @@ static void thin_gap_warning(const prep_run *r, int32_t a, int32_t b, char *line
            r->meshes->organs[a].name, r->meshes->organs[b].name, 1e3 * d, 1e3 * v->voxel_size, r->scene->path, d / 3);
 }
 
+// How tissue t is held: its frames, the free ones (simulated), and per
+// organ [organ_count] the frames it shares with it and, for organs it
+// touches but does not connect, the frames on them left free by its
+// coupling rules (touched_free). Returns the free count.
+typedef struct tissue_hold {
+  int32_t frames, free;
+  int32_t *shared, *touched_free; ///< [organ_count]
+} tissue_hold;
+
+static int tissue_hold_count(const prep_run *r, int32_t t, tissue_hold *hold) {
+  const int32_t organs = r->meshes->count;
+  memset(hold, 0, sizeof *hold);
+  hold->shared = calloc((size_t)organs + 1, sizeof *hold->shared);
+  hold->touched_free = calloc((size_t)organs + 1, sizeof *hold->touched_free);
+  if (!hold->shared || !hold->touched_free) return 0;
+  const fascia_prep_points *p = r->points;
+  uint8_t *shared = calloc((size_t)p->frame_count + 1, 1);
+  if (!shared) return 0;
+  for (int32_t c = 0; c < r->coupling->count; ++c)
+    if (p->frame_tissue[r->coupling->frame[c]] == t) {
+      hold->shared[r->coupling->organ[c]]++;
+      shared[r->coupling->frame[c]] = 1;
+    }
+  for (int32_t i = 0; i < p->frame_count; ++i) {
+    if (p->frame_tissue[i] != t) continue;
+    hold->frames++;
+    if (shared[i]) continue;
+    hold->free++;
+    if (p->frame_organ[i] >= 0) hold->touched_free[p->frame_organ[i]]++; // on an organ, left free by the rules
+  }
+  free(shared);
+  return 1;
+}
+
+static void tissue_hold_free(tissue_hold *hold) {
+  free(hold->shared), free(hold->touched_free);
+  hold->shared = hold->touched_free = NULL;
+}
+
+// The warning when tissue t has no free frame: every frame moves with an
+// organ, so the tissue carries no deformation of its own.
+static void no_free_frame_warning(const prep_run *r, int32_t t, int32_t frames, char *line, size_t size) {
+  const fascia_prep_tissue_def *td = r->scene->tissues + t;
+  snprintf(line, size,
+           "tissue '%s' has no free frame: all %d of its frames lie on organ surfaces and move with them, so nothing "
+           "of it is simulated (its gaps are thinner than about twice the coupling tolerance, %.3g mm, plus a "
+           "voxel); lower voxel_size and coupling.tolerance (scene '%s')",
+           td->name, (int)frames, 1e3 * td->coupling_tolerance, r->scene->path);
+}
+
 // Sizes import found off anatomy's (fascia_prep_meshes.warnings).
 static void print_warnings(const fascia_prep_meshes *meshes) {
   for (int32_t k = 0; meshes && k < meshes->warning_count; ++k) fprintf(stderr, "warning: %s\n", meshes->warnings[k]);
@@ -203,6 +253,31 @@ static void print_summary(const prep_run *r, const step_clock *c, const char *ou
             "%d frames, %d samples\n",
             sc->tissues[t].name, (long long)tr->voxels, 1e3 * h, 1e6 * tr->volume, (int)tr->components,
             (int)tr->dropped_components, 1e6 * tr->dropped_volume, (int)frames, (int)samples);
+    tissue_hold hold;
+    if (tissue_hold_count(r, t, &hold)) {
+      fprintf(stderr, "  form volume; %d free frames; shared with", (int)hold.free);
+      int printed = 0;
+      for (int32_t o = 0; o < r->meshes->count; ++o)
+        if (hold.shared[o] && fascia_prep_tissue_connects(sc->tissues + t, o))
+          fprintf(stderr, "%s %s %d", printed++ ? "," : "", r->meshes->organs[o].name, (int)hold.shared[o]);
+      fprintf(stderr, "%s\n", printed ? "" : " no organ");
+      for (int32_t o = 0; o < r->meshes->count; ++o) {
+        if (fascia_prep_tissue_connects(sc->tissues + t, o) || (!hold.shared[o] && !hold.touched_free[o])) continue;
+        if (hold.shared[o])
+          fprintf(stderr, "  also touches '%s', which it does not connect: %d frames shared with it (scene key "
+                          "tissues[%d].coupling.others: false, or coupling.organs.%s: false, leaves them free)\n",
+                  r->meshes->organs[o].name, (int)hold.shared[o], (int)t, r->meshes->organs[o].name);
+        else
+          fprintf(stderr, "  also touches '%s', which it does not connect: its %d frames there left free\n",
+                  r->meshes->organs[o].name, (int)hold.touched_free[o]);
+      }
+      if (hold.frames > 0 && hold.free == 0) {
+        char line[768];
+        no_free_frame_warning(r, t, hold.frames, line, sizeof line);
+        fprintf(stderr, "warning: %s\n", line);
+      }
+    }
+    tissue_hold_free(&hold);
     if (sc->tissues[t].organ_count > 2) {
       fprintf(stderr, "  by the organs each voxel bridges:");
       const fascia_prep_tissue_def *td = sc->tissues + t;
@@ -326,6 +401,9 @@ static void print_json(const prep_run *r, const step_clock *c, const char *outpu
   cJSON *dropped = cJSON_DetachItemFromObject(cJSON_GetObjectItem(prov, "reports"), "unheld_pieces_dropped");
   cJSON_AddItemToObject(root, "unheld_pieces_dropped", dropped ? dropped : cJSON_CreateArray());
   cJSON_Delete(prov);
+  cJSON *warnings = cJSON_AddArrayToObject(root, "warnings"); // the meshes' first, then the tissues'
+  for (int32_t k = 0; k < r->meshes->warning_count; ++k)
+    cJSON_AddItemToArray(warnings, cJSON_CreateString(r->meshes->warnings[k]));
   cJSON *tissues = cJSON_AddArrayToObject(root, "tissues");
   for (int32_t t = 0; t < v->tissue_count; ++t) {
     cJSON *e = cJSON_CreateObject();
@@ -346,6 +424,28 @@ static void print_json(const prep_run *r, const step_clock *c, const char *outpu
         cJSON_AddItemToArray(pairs, pair);
       }
     occupied_json(e, r->scene, v->tissues + t);
+    tissue_hold hold;
+    if (tissue_hold_count(r, t, &hold)) {
+      cJSON_AddStringToObject(e, "form", "volume");
+      cJSON_AddNumberToObject(e, "frames", hold.frames);
+      cJSON_AddNumberToObject(e, "free_frames", hold.free);
+      cJSON *shared = cJSON_AddObjectToObject(e, "shared_frames"); // organ name -> frames shared with it
+      cJSON *others = cJSON_AddObjectToObject(e, "touches_unconnected"); // organ -> {shared, free}
+      for (int32_t o = 0; o < r->meshes->count; ++o) {
+        if (hold.shared[o]) cJSON_AddNumberToObject(shared, r->meshes->organs[o].name, hold.shared[o]);
+        if (fascia_prep_tissue_connects(td, o) || (!hold.shared[o] && !hold.touched_free[o])) continue;
+        cJSON *other = cJSON_AddObjectToObject(others, r->meshes->organs[o].name);
+        cJSON_AddNumberToObject(other, "shared_frames", hold.shared[o]);
+        cJSON_AddNumberToObject(other, "free_frames", hold.touched_free[o]);
+      }
+      cJSON_AddBoolToObject(e, "couple_others", td->couple_others);
+      if (hold.frames > 0 && hold.free == 0) {
+        char line[768];
+        no_free_frame_warning(r, t, hold.frames, line, sizeof line);
+        cJSON_AddItemToArray(warnings, cJSON_CreateString(line));
+      }
+    }
+    tissue_hold_free(&hold);
     double sample_volume = 0;
     for (int32_t s = 0; s < r->points->sample_count; ++s)
       if (r->points->sample_tissue[s] == t) sample_volume += r->points->sample_volume[s];
@@ -387,9 +487,6 @@ static void print_json(const prep_run *r, const step_clock *c, const char *outpu
     cJSON_AddItemToArray(contacts, e);
   }
   cJSON *gaps = cJSON_AddArrayToObject(root, "gaps");
-  cJSON *warnings = cJSON_AddArrayToObject(root, "warnings");
-  for (int32_t k = 0; k < r->meshes->warning_count; ++k)
-    cJSON_AddItemToArray(warnings, cJSON_CreateString(r->meshes->warnings[k]));
   static const char *const kinds[] = {"", "overlap", "contact", "thin", "gap"};
   for (int32_t a = 0; a < v->organ_count; ++a)
     for (int32_t b = a + 1; b < v->organ_count; ++b) {

@@ -135,9 +135,18 @@ typedef struct fascia_prep_tissue_def {
   fascia_real coupling_tolerance; ///< frames this close to an organ surface are shared, m
   int32_t coupling_count;
   fascia_prep_coupling_def *coupling; ///< [coupling_count] per-organ rules (absent organs: share everywhere)
+  /// Organs the tissue touches but does not connect, with no rule of their
+  /// own: 1 (scene key coupling.others, default true) they share frames
+  /// where the tissue lies on them, as connective tissue adheres to what it
+  /// touches; 0 the frames there stay free.
+  int32_t couple_others;
   fascia_real min_component;  ///< pieces of region smaller than this are dropped, m^3
   fascia_real patch_radius;   ///< as for a deformable organ
 } fascia_prep_tissue_def;
+
+/// 1 when organ (an index into the scene's organs) is one of those tissue td
+/// connects (its "connects" list), else 0.
+FASCIA_API int fascia_prep_tissue_connects(const fascia_prep_tissue_def *td, int32_t organ);
 
 /// World frames a label map can be placed in (docs/labelmaps.md).
 typedef enum fascia_prep_frame {
