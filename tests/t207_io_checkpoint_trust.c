@@ -71,7 +71,8 @@ static int edit(hid_t file, const char *name, int is_int, size_t index, int add,
   if (!failed && is_int) {
     int64_t *v = calloc((size_t)count, sizeof *v);
     failed = !v || H5Dread(dset, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, v) < 0;
-    if (!failed) v[index] = add ? v[index] + (int64_t)value : (int64_t)value;
+    // wrapping, as the stored bits of a u64 digest read as int64 may be the largest int64
+    if (!failed) v[index] = add ? (int64_t)((uint64_t)v[index] + (uint64_t)(int64_t)value) : (int64_t)value;
     failed = failed || H5Dwrite(dset, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, v) < 0;
     free(v);
   } else if (!failed) {
@@ -278,7 +279,9 @@ static int mutations(fascia_ctx *ctx, const fascia_model *m, const fascia_solver
   return 0;
 }
 
-int main(void) {
+int main(int argc, char **argv) {
+  // --no-mutations: the cases whose files HDF5 reads safely (the sanitized run)
+  const int random_mutations = !(argc > 1 && !strcmp(argv[1], "--no-mutations"));
   fascia_ctx_def cdef = fascia_ctx_def_default();
   cdef.threads = 1;
   fascia_ctx *ctx = NULL;
@@ -451,8 +454,10 @@ int main(void) {
   CHECK(open_ids() == 0);
 
   int refused = 0, same = 0;
-  CHECK(mutations(ctx, m, &sd, 300, &refused, &same) == 0);
-  CHECK(refused >= 50 && refused + same == 300);
+  if (random_mutations) {
+    CHECK(mutations(ctx, m, &sd, 300, &refused, &same) == 0);
+    CHECK(refused >= 50 && refused + same == 300);
+  }
   if (getenv("FASCIA_TEST_VERBOSE"))
     fprintf(stderr, "t207: %d header cases; mutations: %d refused, %d resumed the same\n", header_cases, refused, same);
 
