@@ -11,6 +11,7 @@
 
 #include "labels.h"
 #include "prep_util.h"
+#include "reduced.h"
 
 void fascia_prep_meshes_destroy(fascia_prep_meshes **meshes) {
   if (!meshes || !*meshes) return;
@@ -24,6 +25,14 @@ void fascia_prep_meshes_destroy(fascia_prep_meshes **meshes) {
     free(o->part_names);
   }
   free(m->organs);
+  for (int32_t k = 0; m->sheets && k < m->sheet_slots; ++k) {
+    free(m->sheets[k].vertices);
+    free(m->sheets[k].triangles);
+    free(m->sheets[k].triangle_part);
+    for (int32_t p = 0; m->sheets[k].part_names && p < m->sheets[k].part_count; ++p) free(m->sheets[k].part_names[p]);
+    free(m->sheets[k].part_names);
+  }
+  free(m->sheets);
   for (int32_t k = 0; m->warnings && k < m->warning_count; ++k) free(m->warnings[k]);
   free(m->warnings);
   free(m->contacts);
@@ -185,6 +194,37 @@ fascia_status fascia_prep_import(fascia_ctx *ctx, const fascia_prep_scene *scene
     fascia_assimp_free(&file);
     prep_mesh_bounds(o);
     o->report.parts_used = o->part_count;
+  }
+  // the sheets' surfaces, read and placed as an organ's
+  m->sheets = prep_calloc(scene->tissue_count, sizeof *m->sheets);
+  PREP_CHECK_GOTO(m->sheets, ctx, FASCIA_ERR_MEMORY, "import: out of memory");
+  m->sheet_slots = scene->tissue_count;
+  for (int32_t t = 0; t < scene->tissue_count; ++t) {
+    const fascia_prep_tissue_def *td = scene->tissues + t;
+    if (td->form != FASCIA_PREP_FORM_SHEET) continue;
+    fascia_prep_mesh *o = m->sheets + t;
+    snprintf(o->name, sizeof o->name, "%s", td->name);
+    fascia_ctx_progress(ctx, "import", 1, td->name);
+    status = check_and_read(ctx, td->mesh_path, o->sha256, &file);
+    if (status != FASCIA_OK) {
+      char reason[1024];
+      snprintf(reason, sizeof reason, "%s", fascia_ctx_message(ctx));
+      PREP_FAIL(ctx, status, "scene '%s' tissues[%d].mesh: %s", scene->path, (int)t, reason);
+      goto cleanup;
+    }
+    PREP_CHECK_GOTO(file->part_count > 0 && file->triangle_offset[file->part_count] > 0, ctx, FASCIA_ERR_FORMAT,
+                    "scene '%s' tissues[%d].mesh: '%s' has no triangles (%d points or lines skipped); a sheet needs "
+                    "a triangulated surface",
+                    scene->path, (int)t, td->mesh_path, (int)file->skipped_primitives);
+    fascia_prep_organ_def def;
+    memset(&def, 0, sizeof def);
+    snprintf(def.name, sizeof def.name, "%s", td->name);
+    def.mesh_path = td->mesh_path;
+    def.scale = td->mesh_scale;
+    memcpy(def.transform, td->mesh_transform, sizeof def.transform);
+    PREP_TRY_GOTO(pick_parts(ctx, scene->path, &def, file, t, o));
+    fascia_assimp_free(&file);
+    PREP_TRY_GOTO(prep_sheet_prepare(ctx, scene, t, o));
   }
   PREP_TRY_GOTO(prep_label_organs(ctx, scene, m));
   PREP_TRY_GOTO(prep_check_magnitudes(ctx, scene, m));

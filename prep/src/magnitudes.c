@@ -129,6 +129,17 @@ static double motion_reach(const fascia_motion *mo, const double *bounds) {
   return reach;
 }
 
+// The gap tissue t bridges: its max_gap, a strand's span between its
+// points, at most a sheet's size.
+static double tissue_span(const fascia_prep_scene *scene, const fascia_prep_meshes *meshes, int32_t t) {
+  const fascia_prep_tissue_def *td = scene->tissues + t;
+  if (td->form != FASCIA_PREP_FORM_SHEET || !meshes->sheets) return td->max_gap;
+  const double *b = meshes->sheets[t].bounds;
+  double d2 = 0;
+  for (int r = 0; r < 3; ++r) d2 += (b[3 + r] - b[r]) * (b[3 + r] - b[r]);
+  return sqrt(d2);
+}
+
 // A Poisson-disk spacing or max_gap larger than every organ it concerns.
 static fascia_status length_warning(fascia_ctx *ctx, const fascia_prep_scene *scene, fascia_prep_meshes *meshes,
                                     const char *owner, const char *key, double value, int32_t organ) {
@@ -180,10 +191,14 @@ fascia_status prep_check_magnitudes(fascia_ctx *ctx, const fascia_prep_scene *sc
       if (prep_mesh_extent(meshes->organs + td->organs[k]) > prep_mesh_extent(meshes->organs + largest))
         largest = td->organs[k];
     snprintf(owner, sizeof owner, "tissue '%s'", td->name);
-    snprintf(key, sizeof key, "tissues[%d].max_gap", (int)t);
-    PREP_TRY(length_warning(ctx, scene, meshes, owner, key, td->max_gap, largest));
-    snprintf(key, sizeof key, "tissues[%d].frame_spacing", (int)t);
-    PREP_TRY(length_warning(ctx, scene, meshes, owner, key, td->frame_spacing, largest));
+    if (td->form == FASCIA_PREP_FORM_VOLUME) {
+      snprintf(key, sizeof key, "tissues[%d].max_gap", (int)t);
+      PREP_TRY(length_warning(ctx, scene, meshes, owner, key, td->max_gap, largest));
+    }
+    if (td->form != FASCIA_PREP_FORM_SHEET) { // a sheet's frames are its mesh's vertices
+      snprintf(key, sizeof key, "tissues[%d].frame_spacing", (int)t);
+      PREP_TRY(length_warning(ctx, scene, meshes, owner, key, td->frame_spacing, largest));
+    }
   }
   double scene_size = 0;
   for (int r = 0; r < 3; ++r) scene_size += (all[3 + r] - all[r]) * (all[3 + r] - all[r]);
@@ -204,18 +219,20 @@ fascia_status prep_check_magnitudes(fascia_ctx *ctx, const fascia_prep_scene *sc
                d->name, scene->path, (int)k, reach, scene_size);
     // the widest tissue the organ pulls, whose stretch is the least
     int32_t widest = -1;
+    double widest_gap = 0;
     for (int32_t t = 0; t < scene->tissue_count; ++t)
-      for (int32_t j = 0; j < scene->tissues[t].organ_count; ++j)
-        if (scene->tissues[t].organs[j] == k && (widest < 0 || scene->tissues[t].max_gap > scene->tissues[widest].max_gap))
-          widest = t;
-    if (widest >= 0 && reach > RUN_STRAIN_LIMIT * scene->tissues[widest].max_gap)
+      for (int32_t j = 0; j < scene->tissues[t].organ_count; ++j) {
+        const double gap = tissue_span(scene, meshes, t);
+        if (scene->tissues[t].organs[j] == k && (widest < 0 || gap > widest_gap)) widest = t, widest_gap = gap;
+      }
+    if (widest >= 0 && reach > RUN_STRAIN_LIMIT * widest_gap)
       PREP_TRY(warn(ctx, meshes,
                     "organ '%s' (scene '%s' organs[%d].motion): it moves the organ up to %.3g mm, %.0f times the "
                     "max_gap of the widest tissue it pulls ('%s', %.3g mm): the tissue would stretch past a strain of "
                     "%g, where a run stops as diverged; the units look wrong? the motion's translations and pivot are "
                     "metres (3 mm is 0.003)",
-                    d->name, scene->path, (int)k, 1e3 * reach, reach / scene->tissues[widest].max_gap,
-                    scene->tissues[widest].name, 1e3 * scene->tissues[widest].max_gap, RUN_STRAIN_LIMIT));
+                    d->name, scene->path, (int)k, 1e3 * reach, reach / widest_gap, scene->tissues[widest].name,
+                    1e3 * widest_gap, RUN_STRAIN_LIMIT));
   }
   return FASCIA_OK;
 }

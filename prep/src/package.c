@@ -93,6 +93,7 @@ static fascia_status make_patches(fascia_ctx *ctx, const fascia_prep_scene *scen
   PREP_CHECK(radius, ctx, FASCIA_ERR_MEMORY, "package: out of memory");
   for (int32_t t = 0; t < scene->tissue_count; ++t) {
     const fascia_prep_tissue_def *d = scene->tissues + t;
+    if (d->form != FASCIA_PREP_FORM_VOLUME) continue; // a section carried by rotations does not lock
     const fascia_real r = region_patch_radius(scene, d->material, d->patch_radius, d->frame_spacing);
     if (r > radius[d->material]) radius[d->material] = r;
   }
@@ -192,6 +193,40 @@ static cJSON *provenance(const fascia_prep_scene *scene, const fascia_prep_meshe
     const fascia_prep_tissue_def *td = scene->tissues + t;
     cJSON *e = cJSON_CreateObject();
     cJSON_AddStringToObject(e, "name", td->name);
+    cJSON_AddStringToObject(e, "form", fascia_prep_form_name(td->form));
+    if (td->form != FASCIA_PREP_FORM_VOLUME) {
+      cJSON_AddNumberToObject(e, "section_points", td->section_points);
+      cJSON_AddStringToObject(e, "section", td->form == FASCIA_PREP_FORM_STRAND
+                                                ? "square of the strand's area, carried by the frames' rotations; "
+                                                  "uniaxial stress moduli"
+                                                : "thickness along the normal, carried by the frames' rotations; "
+                                                  "plane stress moduli");
+      double E, nu;
+      fascia_shape_section_moduli(td->form == FASCIA_PREP_FORM_STRAND ? 1 : 2,
+                                  scene->materials[td->material].youngs_modulus,
+                                  scene->materials[td->material].poisson_ratio, &E, &nu);
+      cJSON_AddNumberToObject(e, "section_youngs_modulus", E);
+      cJSON_AddNumberToObject(e, "section_poisson_ratio", nu);
+    }
+    if (td->form == FASCIA_PREP_FORM_STRAND) {
+      const fascia_prep_attachment *ends[2] = {&td->from, &td->to};
+      for (int k = 0; k < 2; ++k) {
+        cJSON *a = cJSON_AddObjectToObject(e, k ? "to" : "from");
+        cJSON_AddStringToObject(a, "organ", scene->organs[ends[k]->organ].name);
+        cJSON_AddItemToObject(a, "point", vector(ends[k]->point, 3));
+        cJSON_AddNumberToObject(a, "radius", ends[k]->radius);
+      }
+      cJSON_AddNumberToObject(e, "area", td->area);
+      cJSON_AddNumberToObject(e, "radius", td->radius);
+      cJSON_AddStringToObject(e, "curve", "straight between the attachments' closest surface points");
+    } else if (td->form == FASCIA_PREP_FORM_SHEET) {
+      cJSON_AddStringToObject(e, "mesh", td->mesh_path);
+      cJSON_AddStringToObject(e, "mesh_sha256", meshes->sheets[t].sha256);
+      cJSON_AddItemToObject(e, "transform_3x4", vector(td->mesh_transform, 12));
+      cJSON_AddNumberToObject(e, "mesh_scale", td->mesh_scale);
+      cJSON_AddNumberToObject(e, "thickness", td->thickness);
+      cJSON_AddStringToObject(e, "frames", "the mesh's vertices");
+    }
     cJSON *con = cJSON_AddArrayToObject(e, "connects");
     for (int32_t k = 0; k < td->organ_count; ++k)
       cJSON_AddItemToArray(con, cJSON_CreateString(scene->organs[td->organs[k]].name));
@@ -288,7 +323,13 @@ static cJSON *provenance(const fascia_prep_scene *scene, const fascia_prep_meshe
     for (int32_t s = 0; s < pts->sample_count; ++s) samples += pts->sample_tissue[s] == t;
     cJSON_AddNumberToObject(e, "frames", frames);
     cJSON_AddNumberToObject(e, "samples", samples);
+    cJSON_AddStringToObject(e, "form", fascia_prep_form_name(scene->tissues[t].form));
     sample_volume_json(e, pts, t, -1, scene->tissues[t].shape_kind, scene->tissues[t].samples_per_tet);
+    if (scene->tissues[t].form != FASCIA_PREP_FORM_VOLUME)
+      cJSON_ReplaceItemInObject(e, "sample_volume_of",
+                                cJSON_CreateString(scene->tissues[t].form == FASCIA_PREP_FORM_STRAND
+                                                       ? "length x cross-section area"
+                                                       : "mesh area x thickness"));
     cJSON_AddItemToArray(trep, e);
   }
   cJSON *ov = cJSON_AddArrayToObject(rep, "overlaps");
@@ -524,13 +565,31 @@ fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_scene *scen
   z.frames = points->frame_count;
   z.samples = points->sample_count;
   z.pairs = weights->pair_count;
-  z.materials = scene->material_count;
+  // a strand's or a sheet's samples get their section's moduli: a material of their own
+  int32_t *section_material = prep_calloc(scene->tissue_count, sizeof(int32_t));
+  PREP_CHECK(section_material, ctx, FASCIA_ERR_MEMORY, "package: out of memory");
+  int32_t sections = 0;
+  for (int32_t t = 0; t < scene->tissue_count; ++t)
+    section_material[t] = scene->tissues[t].form == FASCIA_PREP_FORM_VOLUME ? -1 : scene->material_count + sections++;
+  z.materials = scene->material_count + sections;
   z.motions = motions;
   z.organs = scene->organ_count;
   z.couplings = coupling->count;
-  PREP_TRY(fascia_model_alloc(ctx, &z, &m));
+  PREP_TRY_GOTO(fascia_model_alloc(ctx, &z, &m));
   memcpy(m->gravity, scene->gravity, sizeof m->gravity);
   memcpy(m->materials, scene->materials, (size_t)scene->material_count * sizeof *m->materials);
+  for (int32_t t = 0; t < scene->tissue_count; ++t) {
+    if (section_material[t] < 0) continue;
+    const fascia_prep_tissue_def *td = scene->tissues + t;
+    fascia_material *mat = m->materials + section_material[t];
+    *mat = scene->materials[td->material];
+    fascia_shape_section_moduli(td->form == FASCIA_PREP_FORM_STRAND ? 1 : 2, mat->youngs_modulus, mat->poisson_ratio,
+                                &mat->youngs_modulus, &mat->poisson_ratio);
+    mat->rotation_smoothing = 0; // the rotations carry the section: smoothing would stiffen its bending
+    char name[2 * FASCIA_NAME_SIZE + 16];
+    snprintf(name, sizeof name, "%s/%s", scene->materials[td->material].name, td->name);
+    snprintf(mat->name, sizeof mat->name, "%.*s", (int)sizeof mat->name - 1, name);
+  }
   // organs and their motions
   for (int32_t o = 0, motion = 0; o < scene->organ_count; ++o) {
     const fascia_prep_organ_def *d = scene->organs + o;
@@ -576,11 +635,12 @@ fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_scene *scen
   memcpy(m->sample_position, points->sample_position, 3 * (size_t)points->sample_count * sizeof(double));
   memcpy(m->sample_volume, points->sample_volume, (size_t)points->sample_count * sizeof(double));
   for (int32_t s = 0; s < points->sample_count; ++s) {
-    m->sample_material[s] = points->sample_tissue[s] >= 0 ? scene->tissues[points->sample_tissue[s]].material
-                                                          : scene->organs[points->sample_inside_organ[s]].material;
+    const int32_t t = points->sample_tissue[s];
+    m->sample_material[s] = t >= 0 ? (section_material[t] >= 0 ? section_material[t] : scene->tissues[t].material)
+                                   : scene->organs[points->sample_inside_organ[s]].material;
     m->sample_organ[s] = points->sample_inside_organ[s]; // model organs are the scene's, in order
-    m->sample_modes[s] = points->sample_tissue[s] >= 0 // settled on the patches below
-                             ? scene->tissues[points->sample_tissue[s]].enhanced_modes
+    m->sample_modes[s] = t >= 0 // settled on the patches below
+                             ? scene->tissues[t].form == FASCIA_PREP_FORM_VOLUME && scene->tissues[t].enhanced_modes
                              : scene->organs[points->sample_inside_organ[s]].enhanced_modes;
   }
   for (int32_t i = 0; i < points->frame_count; ++i) m->frame_organ[i] = points->frame_inside_organ[i];
@@ -610,6 +670,7 @@ fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_scene *scen
   *out = m;
   m = NULL;
 cleanup:
+  free(section_material);
   cJSON_Delete(prov);
   cJSON_Delete(dropped);
   free(prov_text);

@@ -55,6 +55,7 @@
 
 #include "fascia/shape.h"
 #include "prep_util.h"
+#include "reduced.h"
 
 void fascia_prep_points_destroy(fascia_prep_points **points) {
   if (!points || !*points) return;
@@ -72,6 +73,7 @@ void fascia_prep_points_destroy(fascia_prep_points **points) {
   free(p->sample_inside_organ);
   free(p->sample_voxel);
   free(p->sample_tet_frame);
+  free(p->sample_cell_frame);
   free(p);
   *points = NULL;
 }
@@ -350,7 +352,7 @@ static double spread(const double *const *x, int32_t n, double spacing) {
 // The voxel through which frame k belongs to the region with this label: its
 // own voxel, or the organ voxel it is shared with; -1 if neither is labelled.
 static int64_t frame_voxel_in(const fascia_prep_volume *vol, const point_list *frames, int64_t k, uint8_t label) {
-  if (vol->region[frames->voxel[k]] == label) return frames->voxel[k];
+  if (frames->voxel[k] >= 0 && vol->region[frames->voxel[k]] == label) return frames->voxel[k]; // -1: a strand's, a sheet's
   if (frames->attach[k] >= 0 && vol->region[frames->attach[k]] == label) return frames->attach[k];
   return -1;
 }
@@ -497,10 +499,13 @@ cleanup:
 
 // What a region adds per sample besides its point: volume[s] (m^3) and
 // tet_frame[4s..4s+3] (its tet's frames ascending, -1 for MLS samples).
+// cell_frame[3s..3s+2]: a strand's or sheet's sample's interval or triangle
+// (-1 for the others: what a new entry holds).
 typedef struct sample_data {
   int64_t capacity;
   double *volume;
   int32_t *tet_frame;
+  int32_t *cell_frame;
 } sample_data;
 
 static int data_reserve(sample_data *d, int64_t count) {
@@ -512,8 +517,43 @@ static int data_reserve(sample_data *d, int64_t count) {
   int32_t *t = realloc(d->tet_frame, (size_t)(4 * cap) * sizeof(int32_t));
   if (!t) return 0;
   d->tet_frame = t;
+  int32_t *c = realloc(d->cell_frame, (size_t)(3 * cap) * sizeof(int32_t));
+  if (!c) return 0;
+  d->cell_frame = c;
+  for (int64_t k = 3 * d->capacity; k < 3 * cap; ++k) c[k] = -1;
   d->capacity = cap;
   return 1;
+}
+
+// A strand or a sheet (reduced.c): its frames and samples appended, with
+// no voxel; each sample keeps its interval's or triangle's frames.
+static fascia_status sample_reduced(fascia_ctx *ctx, const fascia_prep_scene *scene,
+                                    const fascia_prep_meshes *meshes, const fascia_prep_volume *vol, int32_t t,
+                                    fascia_cgal_tree **trees, point_list *frames, point_list *samples,
+                                    sample_data *data) {
+  prep_reduced r;
+  PREP_TRY(prep_reduced_build(ctx, scene, meshes, vol, t, trees, &r));
+  fascia_status status = FASCIA_OK;
+  const int64_t first_frame = frames->count, first_sample = samples->count;
+  for (int32_t i = 0; i < r.frame_count; ++i)
+    PREP_CHECK_GOTO(list_push(frames, r.frame_position + 3 * (int64_t)i, r.frame_organ[i], r.frame_triangle[i], -1),
+                    ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  for (int32_t s = 0; s < r.sample_count; ++s)
+    PREP_CHECK_GOTO(list_push(samples, r.sample_position + 3 * (int64_t)s, -1, -1, -1), ctx, FASCIA_ERR_MEMORY,
+                    "sample: out of memory");
+  PREP_CHECK_GOTO(data_reserve(data, samples->count), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  for (int32_t s = 0; s < r.sample_count; ++s) {
+    const int64_t k = first_sample + s;
+    data->volume[k] = r.sample_volume[s];
+    for (int j = 0; j < 4; ++j) data->tet_frame[4 * k + j] = -1;
+    for (int j = 0; j < 3; ++j) {
+      const int32_t c = r.sample_cell[3 * (int64_t)s + j];
+      data->cell_frame[3 * k + j] = c < 0 ? -1 : (int32_t)(first_frame + c);
+    }
+  }
+cleanup:
+  prep_reduced_free(&r);
+  return status;
 }
 
 // ------------------------------------------------------------ TET samples
@@ -789,8 +829,11 @@ fascia_status fascia_prep_sample(fascia_ctx *ctx, const fascia_prep_scene *scene
                   "sample: out of memory");
   for (int32_t t = 0; t < T; ++t) {
     fascia_ctx_progress(ctx, "sample", (double)t / (T + O), scene->tissues[t].name);
-    PREP_TRY_GOTO(
-        sample_region(ctx, scene, meshes, volume, (uint8_t)(t + 1), trees, &frames, &samples, &data));
+    if (scene->tissues[t].form != FASCIA_PREP_FORM_VOLUME)
+      PREP_TRY_GOTO(sample_reduced(ctx, scene, meshes, volume, t, trees, &frames, &samples, &data));
+    else
+      PREP_TRY_GOTO(
+          sample_region(ctx, scene, meshes, volume, (uint8_t)(t + 1), trees, &frames, &samples, &data));
     region_organ[regions] = -1;
     frame_end[regions] = (int32_t)frames.count;
     sample_end[regions++] = (int32_t)samples.count;
@@ -828,10 +871,11 @@ fascia_status fascia_prep_sample(fascia_ctx *ctx, const fascia_prep_scene *scene
   p->sample_inside_organ = prep_calloc(S, sizeof(int32_t));
   p->sample_voxel = prep_calloc(S, sizeof(int64_t));
   p->sample_tet_frame = prep_calloc(4 * S, sizeof(int32_t));
+  p->sample_cell_frame = prep_calloc(3 * S, sizeof(int32_t));
   PREP_CHECK_GOTO(p->frame_position && p->frame_tissue && p->frame_inside_organ && p->frame_organ &&
                       p->frame_triangle && p->frame_voxel && p->frame_organ_voxel && p->sample_position &&
                       p->sample_volume && p->sample_tissue && p->sample_inside_organ && p->sample_voxel &&
-                      p->sample_tet_frame,
+                      p->sample_tet_frame && p->sample_cell_frame,
                   ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
   if (N) {
     memcpy(p->frame_position, frames.position, (size_t)(3 * N) * sizeof(double));
@@ -845,6 +889,7 @@ fascia_status fascia_prep_sample(fascia_ctx *ctx, const fascia_prep_scene *scene
     memcpy(p->sample_voxel, samples.voxel, (size_t)S * sizeof(int64_t));
     memcpy(p->sample_volume, data.volume, (size_t)S * sizeof(double));
     memcpy(p->sample_tet_frame, data.tet_frame, (size_t)(4 * S) * sizeof(int32_t));
+    memcpy(p->sample_cell_frame, data.cell_frame, (size_t)(3 * S) * sizeof(int32_t));
   }
   for (int32_t r = 0, i = 0, s = 0; r < regions; ++r) {
     const int32_t o = region_organ[r], t = o < 0 ? r : -1;
@@ -865,6 +910,7 @@ cleanup:
   list_free(&samples);
   free(data.volume);
   free(data.tet_frame);
+  free(data.cell_frame);
   fascia_prep_points_destroy(&p);
   return status;
 }

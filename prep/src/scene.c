@@ -641,6 +641,50 @@ static fascia_status parse_segmentation(const reader *rd, fascia_prep_scene *sce
   return FASCIA_OK;
 }
 
+// "units" and "transform" of a mesh (an organ's or a sheet's): file units
+// to metres, then x' = translation + rotation (scale x).
+static fascia_status parse_placement(const reader *rd, const cJSON *item, const char *path, double *scale,
+                                     char *units_out, size_t units_size, int32_t *units_given, double *transform) {
+  const char *units;
+  char at[PATH_SIZE];
+  PREP_TRY(get_string(rd, item, path, "units", 0, &units));
+  snprintf(units_out, units_size, "%s", units ? units : "m");
+  *units_given = units != NULL;
+  if (!units || !strcmp(units, "m"))
+    *scale = 1;
+  else if (!strcmp(units, "cm"))
+    *scale = 0.01;
+  else if (!strcmp(units, "mm"))
+    *scale = 0.001;
+  else {
+    sub_key(at, path, "units");
+    return key_fail(rd, at, "unknown units '%s' (known: m, cm, mm)", units);
+  }
+  for (int r = 0; r < 12; ++r) transform[r] = (r % 4 == r / 4) ? 1 : 0;
+  const cJSON *tr = cJSON_GetObjectItemCaseSensitive(item, "transform");
+  if (tr) {
+    sub_key(at, path, "transform");
+    static const char *const known_tr[] = {"translation", "rotation", "scale", NULL};
+    PREP_TRY(check_keys(rd, tr, at, known_tr));
+    double t[3] = {0, 0, 0}, q[4] = {1, 0, 0, 0}, sc = 1;
+    PREP_TRY(get_vector(rd, tr, at, "translation", 0, 3, t));
+    PREP_TRY(get_vector(rd, tr, at, "rotation", 0, 4, q));
+    PREP_TRY(get_number(rd, tr, at, "scale", 0, 1, 0, 0, INFINITY, &sc));
+    const double norm = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    if (!(norm > 0.5 && norm < 2))
+      return key_fail(rd, at, "rotation must be a unit quaternion (w, x, y, z); its norm is %g (expected > 0.5 and < "
+                      "2; it is then normalised)", norm);
+    for (int r = 0; r < 4; ++r) q[r] /= norm;
+    double R[9];
+    prep_quat_matrix(q, R);
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) transform[4 * r + c] = sc * R[3 * r + c];
+      transform[4 * r + 3] = t[r];
+    }
+  }
+  return FASCIA_OK;
+}
+
 static fascia_status parse_organ(const reader *rd, fascia_prep_scene *scene, const cJSON *item, const char *path,
                                  const char *base_dir, fascia_prep_organ_def *o) {
   static const char *const known[] = {"name",          "mesh",           "labels",          "parts",
@@ -649,7 +693,7 @@ static fascia_status parse_organ(const reader *rd, fascia_prep_scene *scene, con
                                       "min_component", "patch_radius",   "description",    NULL};
   PREP_TRY(check_keys(rd, item, path, known));
   PREP_TRY(get_name(rd, item, path, "name", o->name));
-  const char *mesh, *units, *model, *description;
+  const char *mesh, *model, *description;
   PREP_TRY(get_string(rd, item, path, "description", 0, &description));
   const cJSON *labels = cJSON_GetObjectItemCaseSensitive(item, "labels");
   PREP_TRY(get_string(rd, item, path, "mesh", !labels, &mesh));
@@ -670,42 +714,7 @@ static fascia_status parse_organ(const reader *rd, fascia_prep_scene *scene, con
   PREP_CHECK(o->mesh && o->mesh_path, rd->ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", rd->file);
   PREP_TRY(get_parts(rd, item, path, "parts", &o->parts));
   char at[PATH_SIZE];
-  PREP_TRY(get_string(rd, item, path, "units", 0, &units));
-  snprintf(o->units, sizeof o->units, "%s", units ? units : "m");
-  o->units_given = units != NULL;
-  if (!units || !strcmp(units, "m"))
-    o->scale = 1;
-  else if (!strcmp(units, "cm"))
-    o->scale = 0.01;
-  else if (!strcmp(units, "mm"))
-    o->scale = 0.001;
-  else {
-    sub_key(at, path, "units");
-    return key_fail(rd, at, "unknown units '%s' (known: m, cm, mm)", units);
-  }
-  // transform: x' = translation + rotation (scale x)
-  for (int r = 0; r < 12; ++r) o->transform[r] = (r % 4 == r / 4) ? 1 : 0;
-  const cJSON *tr = cJSON_GetObjectItemCaseSensitive(item, "transform");
-  if (tr) {
-    sub_key(at, path, "transform");
-    static const char *const known_tr[] = {"translation", "rotation", "scale", NULL};
-    PREP_TRY(check_keys(rd, tr, at, known_tr));
-    double t[3] = {0, 0, 0}, q[4] = {1, 0, 0, 0}, s = 1;
-    PREP_TRY(get_vector(rd, tr, at, "translation", 0, 3, t));
-    PREP_TRY(get_vector(rd, tr, at, "rotation", 0, 4, q));
-    PREP_TRY(get_number(rd, tr, at, "scale", 0, 1, 0, 0, INFINITY, &s));
-    const double norm = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    if (!(norm > 0.5 && norm < 2))
-      return key_fail(rd, at, "rotation must be a unit quaternion (w, x, y, z); its norm is %g (expected > 0.5 and < "
-                      "2; it is then normalised)", norm);
-    for (int r = 0; r < 4; ++r) q[r] /= norm;
-    double R[9];
-    prep_quat_matrix(q, R);
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) o->transform[4 * r + c] = s * R[3 * r + c];
-      o->transform[4 * r + 3] = t[r];
-    }
-  }
+  PREP_TRY(parse_placement(rd, item, path, &o->scale, o->units, sizeof o->units, &o->units_given, o->transform));
   PREP_TRY(get_string(rd, item, path, "model", 0, &model));
   o->material = -1;
   o->motion.key_count = 0;
@@ -794,11 +803,138 @@ static fascia_status parse_coupling(const reader *rd, const fascia_prep_scene *s
   return FASCIA_OK;
 }
 
+#define SCENE_PI 3.14159265358979323846
+
+// A strand's end: {"organ", "point", "radius"}.
+static fascia_status parse_attachment(const reader *rd, const fascia_prep_scene *scene, const cJSON *item,
+                                      const char *path, const char *key, fascia_prep_attachment *a) {
+  char at[PATH_SIZE], ok[PATH_SIZE];
+  sub_key(at, path, key);
+  const cJSON *e = cJSON_GetObjectItemCaseSensitive(item, key);
+  if (!cJSON_IsObject(e))
+    return key_fail(rd, at, "expected an attachment {\"organ\": name, \"point\": [x, y, z], \"radius\": r}, found %s",
+                    type_name(e));
+  static const char *const known[] = {"organ", "point", "radius", NULL};
+  PREP_TRY(check_keys(rd, e, at, known));
+  const char *organ;
+  PREP_TRY(get_string(rd, e, at, "organ", 1, &organ));
+  sub_key(ok, at, "organ");
+  PREP_TRY(need_organ(rd, scene, ok, organ, &a->organ));
+  PREP_TRY(get_vector(rd, e, at, "point", 1, 3, a->point));
+  PREP_TRY(get_number(rd, e, at, "radius", 0, 2 * scene->voxel_size, 0, 0, INFINITY, &a->radius));
+  return FASCIA_OK;
+}
+
+// A strand or a sheet (the keys of parse_tissue that apply, and their own).
+static fascia_status parse_reduced_tissue(const reader *rd, const fascia_prep_scene *scene, const cJSON *item,
+                                          const char *path, const char *base_dir, fascia_prep_tissue_def *t) {
+  static const char *const known_strand[] = {"name", "form", "from", "to", "radius", "area", "material",
+                                             "frame_spacing", "section_points", "description", NULL};
+  static const char *const known_sheet[] = {"name", "form", "mesh", "units", "transform", "thickness", "connects",
+                                            "material", "section_points", "coupling", "description", NULL};
+  const int strand = t->form == FASCIA_PREP_FORM_STRAND;
+  PREP_TRY(check_keys(rd, item, path, strand ? known_strand : known_sheet));
+  char at[PATH_SIZE];
+  const char *material;
+  PREP_TRY(get_string(rd, item, path, "material", 1, &material));
+  t->material = material_index(scene, material);
+  sub_key(at, path, "material");
+  if (t->material < 0) return key_fail(rd, at, "no material is named '%s' in \"materials\"", material);
+  int q;
+  PREP_TRY(get_int(rd, item, path, "section_points", 0, 2, 1, 4, &q));
+  t->section_points = q;
+  t->shape_kind = FASCIA_PREP_SHAPE_MLS;
+  t->neighbours = strand ? 2 : 3;
+  t->region_organ = -1;
+  t->coupling_tolerance = scene->voxel_size;
+  t->couple_others = 1;
+  if (strand) {
+    t->organs = prep_calloc(2, sizeof(int32_t));
+    PREP_CHECK(t->organs, rd->ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", rd->file);
+    PREP_TRY(parse_attachment(rd, scene, item, path, "from", &t->from));
+    PREP_TRY(parse_attachment(rd, scene, item, path, "to", &t->to));
+    t->organs[0] = t->from.organ;
+    t->organs[1] = t->to.organ;
+    t->organ_count = t->from.organ == t->to.organ ? 1 : 2;
+    const cJSON *radius = cJSON_GetObjectItemCaseSensitive(item, "radius"), *area = cJSON_GetObjectItemCaseSensitive(item, "area");
+    if (!!radius == !!area)
+      return key_fail(rd, path, "give the cross-section as either \"radius\" (m) or \"area\" (m^2)%s",
+                      radius ? ", not both" : "");
+    if (radius) {
+      PREP_TRY(get_number(rd, item, path, "radius", 1, 0, 0, 0, INFINITY, &t->radius));
+      t->area = SCENE_PI * t->radius * t->radius;
+    } else {
+      PREP_TRY(get_number(rd, item, path, "area", 1, 0, 0, 0, INFINITY, &t->area));
+      t->radius = sqrt(t->area / SCENE_PI);
+    }
+    PREP_TRY(get_number(rd, item, path, "frame_spacing", 1, 0, 0, 0, INFINITY, &t->frame_spacing));
+    t->sample_spacing = t->frame_spacing;
+    double d2 = 0;
+    for (int r = 0; r < 3; ++r) d2 += (t->to.point[r] - t->from.point[r]) * (t->to.point[r] - t->from.point[r]);
+    t->max_gap = sqrt(d2); // the gap it bridges: what a motion's stretch is judged by
+    if (!(sqrt(d2) > t->from.radius + t->to.radius)) {
+      sub_key(at, path, "to");
+      return key_fail(rd, at, "the strand's ends are %g m apart, within their attachment radii (%g + %g m); give "
+                      "points farther apart or smaller radii", sqrt(d2), t->from.radius, t->to.radius);
+    }
+    return FASCIA_OK;
+  }
+  const char *mesh;
+  PREP_TRY(get_string(rd, item, path, "mesh", 1, &mesh));
+  t->mesh = prep_strdup(mesh);
+  t->mesh_path = resolve_path(base_dir, mesh);
+  PREP_CHECK(t->mesh && t->mesh_path, rd->ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", rd->file);
+  char units[8];
+  int32_t units_given;
+  PREP_TRY(parse_placement(rd, item, path, &t->mesh_scale, units, sizeof units, &units_given, t->mesh_transform));
+  PREP_TRY(get_number(rd, item, path, "thickness", 1, 0, 0, 0, INFINITY, &t->thickness));
+  t->area = t->thickness;
+  sub_key(at, path, "connects");
+  const cJSON *connects = cJSON_GetObjectItemCaseSensitive(item, "connects");
+  if (!cJSON_IsArray(connects) || cJSON_GetArraySize(connects) < 1)
+    return key_fail(rd, at, "expected an array of one or more organ names (those the sheet joins), found %s",
+                    type_name(connects));
+  t->organs = prep_calloc(cJSON_GetArraySize(connects), sizeof(int32_t));
+  PREP_CHECK(t->organs, rd->ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", rd->file);
+  const cJSON *e;
+  cJSON_ArrayForEach(e, connects) {
+    char ek[PATH_SIZE];
+    sub_index(ek, at, t->organ_count);
+    if (!cJSON_IsString(e)) return key_fail(rd, ek, "expected an organ name, found %s", type_name(e));
+    PREP_TRY(need_organ(rd, scene, ek, e->valuestring, &t->organs[t->organ_count]));
+    for (int32_t k = 0; k < t->organ_count; ++k)
+      if (t->organs[k] == t->organs[t->organ_count])
+        return key_fail(rd, ek, "organ '%s' is given twice; each organ once", e->valuestring);
+    t->organ_count++;
+  }
+  const cJSON *coupling = cJSON_GetObjectItemCaseSensitive(item, "coupling");
+  if (coupling) {
+    sub_key(at, path, "coupling");
+    PREP_TRY(parse_coupling(rd, scene, coupling, at, t));
+  }
+  return FASCIA_OK;
+}
+
 static fascia_status parse_tissue(const reader *rd, const fascia_prep_scene *scene, const cJSON *item,
-                                  const char *path, fascia_prep_tissue_def *t) {
-  static const char *const known[] = {"name",           "connects", "max_gap",         "region",
-                                      "material",       "frame_spacing", "sample_spacing", "shape_functions",
-                                      "coupling",       "min_component", "patch_radius",  "description", NULL};
+                                  const char *path, const char *base_dir, fascia_prep_tissue_def *t) {
+  PREP_TRY(get_name(rd, item, path, "name", t->name));
+  const char *form;
+  PREP_TRY(get_string(rd, item, path, "form", 0, &form));
+  t->form = FASCIA_PREP_FORM_VOLUME;
+  if (form && !strcmp(form, "strand"))
+    t->form = FASCIA_PREP_FORM_STRAND;
+  else if (form && !strcmp(form, "sheet"))
+    t->form = FASCIA_PREP_FORM_SHEET;
+  else if (form && strcmp(form, "volume")) {
+    char at[PATH_SIZE];
+    sub_key(at, path, "form");
+    return key_fail(rd, at, "unknown form '%s' (known: volume, strand, sheet)", form);
+  }
+  if (t->form != FASCIA_PREP_FORM_VOLUME) return parse_reduced_tissue(rd, scene, item, path, base_dir, t);
+  static const char *const known[] = {"name",           "form",          "connects",       "max_gap",
+                                      "region",         "material",      "frame_spacing",  "sample_spacing",
+                                      "shape_functions", "coupling",     "min_component",  "patch_radius",
+                                      "description",    NULL};
   PREP_TRY(check_keys(rd, item, path, known));
   PREP_TRY(get_name(rd, item, path, "name", t->name));
   const char *description;
@@ -944,7 +1080,7 @@ static fascia_status parse_root(const reader *rd, const cJSON *root, const char 
     sub_index(at, "tissues", s->tissue_count);
     fascia_prep_tissue_def *t = s->tissues + s->tissue_count;
     s->tissue_count++;
-    PREP_TRY(parse_tissue(rd, s, e, at, t));
+    PREP_TRY(parse_tissue(rd, s, e, at, base_dir, t));
   }
   PREP_TRY(unique_names(rd, "tissues", s->tissue_count, s->tissues[0].name, sizeof *s->tissues));
   return FASCIA_OK;
@@ -1222,6 +1358,8 @@ void fascia_prep_scene_destroy(fascia_prep_scene **scene) {
     free_parts(&t->region_parts);
     for (int32_t c = 0; t->coupling && c < t->coupling_count; ++c) free_parts(&t->coupling[c].parts);
     free(t->coupling);
+    free(t->mesh);
+    free(t->mesh_path);
   }
   fascia_prep_segmentation *seg = &s->segmentation;
   prep_label_table table;
@@ -1239,4 +1377,13 @@ void fascia_prep_scene_destroy(fascia_prep_scene **scene) {
   free(s->output);
   free(s);
   *scene = NULL;
+}
+
+const char *fascia_prep_form_name(int32_t form) {
+  switch (form) {
+  case FASCIA_PREP_FORM_VOLUME: return "volume";
+  case FASCIA_PREP_FORM_STRAND: return "strand";
+  case FASCIA_PREP_FORM_SHEET: return "sheet";
+  default: return "unknown";
+  }
 }

@@ -486,6 +486,7 @@ static fascia_status tet_weights(fascia_ctx *ctx, const fascia_prep_scene *scene
                                  const fascia_prep_points *pts, int32_t *pair_frame, double *pair_w, double *pair_g,
                                  int32_t *pair_count) {
   for (int32_t s = 0; s < pts->sample_count; ++s) {
+    if (pts->sample_voxel[s] < 0) continue; // a strand's or a sheet's
     const uint8_t label = vol->region[pts->sample_voxel[s]];
     int32_t kind;
     prep_label_sampling(scene, vol, label, NULL, NULL, &kind, NULL);
@@ -507,6 +508,75 @@ static fascia_status tet_weights(fascia_ctx *ctx, const fascia_prep_scene *scene
     pair_count[s] = 4;
   }
   return FASCIA_OK;
+}
+
+// ------------------------------------------------------------ strands and sheets
+
+// Kernel support over a sample's own interval or triangle, times the
+// distance to its farthest frame (as the beam's strand and sheet): every
+// frame well inside it.
+#define CELL_SUPPORT_FACTOR 2.0
+
+// A strand's or a sheet's samples (no voxel): fascia_shape_mls_adaptive
+// over the frames of the sample's interval or triangle
+// (points->sample_cell_frame), linear in the span of those frames; the
+// frames must span a line or a plane.
+static fascia_status cell_weights(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_points *pts,
+                                  int32_t *pair_frame, double *pair_w, double *pair_g, int32_t *pair_count) {
+  for (int32_t s = 0; s < pts->sample_count; ++s) {
+    if (pts->sample_voxel[s] >= 0) continue;
+    const int32_t *c = pts->sample_cell_frame + 3 * (int64_t)s;
+    const int32_t t = pts->sample_tissue[s];
+    PREP_CHECK(c[0] >= 0 && c[1] >= 0 && t >= 0, ctx, FASCIA_ERR_INTERNAL,
+               "sample %d: neither a voxel nor a strand's or sheet's cell recorded by the sampling stage", (int)s);
+    int32_t frame[3];
+    const int32_t k = c[2] >= 0 ? 3 : 2;
+    memcpy(frame, c, (size_t)k * sizeof(int32_t));
+    for (int32_t i = 1; i < k; ++i) // ascending, as the model's pairs
+      for (int32_t j = i; j > 0 && frame[j - 1] > frame[j]; --j) {
+        const int32_t tmp = frame[j];
+        frame[j] = frame[j - 1];
+        frame[j - 1] = tmp;
+      }
+    const double *p = pts->sample_position + 3 * (int64_t)s;
+    double x[9], reach = 0;
+    for (int32_t j = 0; j < k; ++j) {
+      memcpy(x + 3 * j, pts->frame_position + 3 * (int64_t)frame[j], 3 * sizeof(double));
+      double d2 = 0;
+      for (int r = 0; r < 3; ++r) d2 += (x[3 * j + r] - p[r]) * (x[3 * j + r] - p[r]);
+      reach = fmax(reach, sqrt(d2));
+    }
+    const int64_t base = (int64_t)MAX_PAIRS * s;
+    int32_t dim = 0;
+    const fascia_status st =
+        fascia_shape_mls_adaptive(ctx, k, x, p, CELL_SUPPORT_FACTOR * reach, 0, pair_w + base, pair_g + 3 * base, &dim);
+    PREP_CHECK(st == FASCIA_OK && dim == k - 1, ctx, FASCIA_ERR_NUMERIC,
+               "tissue '%s' (%s) sample %d at (%.4g %.4g %.4g) m: the frames of its %s span %d dimension(s), expected "
+               "%d (frames at one point or in a line); repair the geometry there",
+               scene->tissues[t].name, fascia_prep_form_name(scene->tissues[t].form), (int)s, p[0], p[1], p[2],
+               k == 2 ? "interval" : "triangle", (int)dim, (int)(k - 1));
+    memcpy(pair_frame + base, frame, (size_t)k * sizeof(int32_t));
+    pair_count[s] = k;
+  }
+  return FASCIA_OK;
+}
+
+// e without its part across the span of sample s's interval or triangle.
+static void in_span(const fascia_prep_points *pts, int32_t s, double *e) {
+  const int32_t *c = pts->sample_cell_frame + 3 * (int64_t)s;
+  const double *x0 = pts->frame_position + 3 * (int64_t)c[0], *x1 = pts->frame_position + 3 * (int64_t)c[1];
+  double a[3], n[3];
+  for (int r = 0; r < 3; ++r) a[r] = x1[r] - x0[r];
+  if (c[2] >= 0) { // a triangle: drop the normal part
+    const double *x2 = pts->frame_position + 3 * (int64_t)c[2];
+    const double b[3] = {x2[0] - x0[0], x2[1] - x0[1], x2[2] - x0[2]};
+    n[0] = a[1] * b[2] - a[2] * b[1], n[1] = a[2] * b[0] - a[0] * b[2], n[2] = a[0] * b[1] - a[1] * b[0];
+    const double nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2], en = (e[0] * n[0] + e[1] * n[1] + e[2] * n[2]) / nn;
+    for (int r = 0; r < 3; ++r) e[r] -= en * n[r];
+  } else { // an interval: keep the part along it
+    const double aa = a[0] * a[0] + a[1] * a[1] + a[2] * a[2], ea = (e[0] * a[0] + e[1] * a[1] + e[2] * a[2]) / aa;
+    for (int r = 0; r < 3; ++r) e[r] = ea * a[r];
+  }
 }
 
 // ------------------------------------------------------------ the stage
@@ -554,10 +624,12 @@ fascia_status fascia_prep_shape_functions(fascia_ctx *ctx, const fascia_prep_sce
   // TET samples: barycentric in their own tets; then MLS samples
   fascia_ctx_progress(ctx, "shape functions", 0, "tet");
   PREP_TRY_GOTO(tet_weights(ctx, scene, volume, points, pair_frame, pair_w, pair_g, pair_count));
+  PREP_TRY_GOTO(cell_weights(ctx, scene, points, pair_frame, pair_w, pair_g, pair_count));
   {
     int64_t mls_count = 0, done = 0, next_report = 1;
     for (int32_t s = 0; s < S; ++s) {
       int32_t kind;
+      if (points->sample_voxel[s] < 0) continue;
       prep_label_sampling(scene, volume, volume->region[points->sample_voxel[s]], NULL, NULL, &kind, NULL);
       mls_count += kind == FASCIA_PREP_SHAPE_MLS;
     }
@@ -578,6 +650,7 @@ fascia_status fascia_prep_shape_functions(fascia_ctx *ctx, const fascia_prep_sce
 #pragma omp for schedule(dynamic, 16)
       for (int32_t s = 0; s < S; ++s) {
         int32_t kind, neighbours;
+        if (points->sample_voxel[s] < 0) continue;
         prep_label_sampling(scene, volume, volume->region[points->sample_voxel[s]], NULL, NULL, &kind, &neighbours);
         if (kind != FASCIA_PREP_SHAPE_MLS) continue;
         if (!ready) {
@@ -643,9 +716,10 @@ fascia_status fascia_prep_shape_functions(fascia_ctx *ctx, const fascia_prep_sce
       for (int r = 0; r < 3; ++r) reproduced[r] += pair_w[src] * points->frame_position[3 * (int64_t)pair_frame[src] + r];
     }
     W->sample_offsets[s + 1] = (int32_t)k;
-    for (int r = 0; r < 3; ++r)
-      W->max_linear_error =
-          fmax(W->max_linear_error, fabs(reproduced[r] - points->sample_position[3 * (int64_t)s + r]));
+    double e[3];
+    for (int r = 0; r < 3; ++r) e[r] = reproduced[r] - points->sample_position[3 * (int64_t)s + r];
+    if (points->sample_voxel[s] < 0) in_span(points, s, e); // a strand's section, a sheet's thickness: the rotations'
+    for (int r = 0; r < 3; ++r) W->max_linear_error = fmax(W->max_linear_error, fabs(e[r]));
   }
   fascia_ctx_progress(ctx, "shape functions", 1, "done");
   *out = W;

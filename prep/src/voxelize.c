@@ -360,6 +360,7 @@ cleanup:
 // organ's distance band covers it (organ_band), so every organ a tissue
 // connects has a distance field wherever the tissue can be.
 static double tissue_reach(const fascia_prep_scene *scene, const fascia_prep_tissue_def *td) {
+  if (td->form != FASCIA_PREP_FORM_VOLUME) return 2 * scene->voxel_size; // its own box: reduced_box
   return td->max_gap + 2 * scene->voxel_size;
 }
 
@@ -420,6 +421,25 @@ static int tissue_box(const fascia_prep_scene *scene, const fascia_prep_meshes *
   for (int r = 0; r < 3; ++r)
     if (!(hi[r] > lo[r])) return 0;
   return 1;
+}
+
+// The space a strand or a sheet takes, with room for its attachments and
+// thickness and a few voxels: the grid covers it, so the organs' distances
+// are known along it (the checks of reduced.c).
+static void reduced_box(const fascia_prep_scene *scene, const fascia_prep_meshes *meshes, int32_t t, double *lo,
+                        double *hi) {
+  const fascia_prep_tissue_def *td = scene->tissues + t;
+  const double h = scene->voxel_size;
+  if (td->form == FASCIA_PREP_FORM_STRAND) {
+    const double grow = fmax(td->from.radius, td->to.radius) + td->radius + 3 * h;
+    for (int r = 0; r < 3; ++r) {
+      lo[r] = fmin(td->from.point[r], td->to.point[r]) - grow;
+      hi[r] = fmax(td->from.point[r], td->to.point[r]) + grow;
+    }
+    return;
+  }
+  const double *b = meshes->sheets[t].bounds, grow = td->thickness + td->coupling_tolerance + 3 * h;
+  for (int r = 0; r < 3; ++r) lo[r] = b[r] - grow, hi[r] = b[3 + r] + grow;
 }
 
 static const char *organ_list(const fascia_prep_scene *scene, const fascia_prep_tissue_def *td, char *out,
@@ -940,6 +960,12 @@ fascia_status fascia_prep_voxelize(fascia_ctx *ctx, const fascia_prep_scene *sce
   double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
   for (int32_t t = 0; t < scene->tissue_count; ++t) {
     const fascia_prep_tissue_def *td = scene->tissues + t;
+    if (td->form != FASCIA_PREP_FORM_VOLUME) { // no region: the grid covers it for the organs' distances
+      double a[3], b[3];
+      reduced_box(scene, meshes, t, a, b);
+      for (int r = 0; r < 3; ++r) lo[r] = fmin(lo[r], a[r]), hi[r] = fmax(hi[r], b[r]);
+      continue;
+    }
     char names[256], hint[512];
     prep_units_hint_voxel(scene, hint, sizeof hint);
     PREP_CHECK_GOTO(td->max_gap >= 3 * h, ctx, FASCIA_ERR_ARGUMENT,
@@ -1040,7 +1066,7 @@ fascia_status fascia_prep_voxelize(fascia_ctx *ctx, const fascia_prep_scene *sce
     udf = NULL;
   }
   for (int32_t t = 0; t < scene->tissue_count; ++t)
-    for (int32_t k = 0; k < scene->tissues[t].organ_count; ++k)
+    for (int32_t k = 0; scene->tissues[t].form == FASCIA_PREP_FORM_VOLUME && k < scene->tissues[t].organ_count; ++k)
       PREP_CHECK_GOTO(vol->distance[scene->tissues[t].organs[k]], ctx, FASCIA_ERR_INTERNAL,
                       "voxelize: organ %d of tissue '%s' has no distance field", (int)scene->tissues[t].organs[k],
                       scene->tissues[t].name);
@@ -1049,7 +1075,7 @@ fascia_status fascia_prep_voxelize(fascia_ctx *ctx, const fascia_prep_scene *sce
   PREP_TRY_GOTO(measure_pairs(ctx, meshes, vol, insides, organ_grids));
   for (int32_t t = 0; t < scene->tissue_count; ++t) {
     fascia_ctx_progress(ctx, "voxelize", 0.9, scene->tissues[t].name);
-    PREP_TRY_GOTO(build_region(ctx, scene, meshes, vol, t));
+    if (scene->tissues[t].form == FASCIA_PREP_FORM_VOLUME) PREP_TRY_GOTO(build_region(ctx, scene, meshes, vol, t));
   }
   for (int32_t o = 0, label = scene->tissue_count + 1; o < scene->organ_count; ++o)
     if (scene->organs[o].kind == FASCIA_ORGAN_DEFORMABLE) {

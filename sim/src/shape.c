@@ -639,3 +639,37 @@ fascia_status fascia_frame_grid_nearest(fascia_ctx *ctx, const fascia_frame_grid
   *radius = FASCIA_SHAPE_SUPPORT_MARGIN * reach;
   return FASCIA_OK;
 }
+
+void fascia_shape_section_moduli(int dimension, fascia_real youngs_modulus, fascia_real poisson_ratio,
+                                 fascia_real *section_youngs_modulus, fascia_real *section_poisson_ratio) {
+  const fascia_real E = youngs_modulus, nu = poisson_ratio;
+  // mu kept; lambda' + 2 mu = E (strand) or lambda' = E nu / (1 - nu^2) (sheet)
+  fascia_real nu_s = nu;
+  if (dimension == 1) nu_s = nu / (1 + 2 * nu);
+  else if (dimension == 2) nu_s = nu / (1 + nu);
+  *section_poisson_ratio = nu_s;
+  *section_youngs_modulus = E * (1 + nu_s) / (1 + nu);
+}
+
+fascia_status fascia_shape_section_points(fascia_ctx *ctx, int dimension, int q, const fascia_real u[3],
+                                          const fascia_real v[3], fascia_real width, fascia_real height,
+                                          fascia_real *offset, fascia_real *fraction) {
+  FASCIA_CHECK(u && offset && fraction && (dimension == 2 || v), ctx, FASCIA_ERR_ARGUMENT,
+               "fascia_shape_section_points: NULL argument");
+  FASCIA_CHECK(dimension == 1 || dimension == 2, ctx, FASCIA_ERR_ARGUMENT,
+               "section points of dimension %d: expected 1 (strand) or 2 (sheet)", dimension);
+  FASCIA_CHECK(width > 0 && isfinite(width) && (dimension == 2 || (height > 0 && isfinite(height))), ctx,
+               FASCIA_ERR_ARGUMENT, "section of %g x %g m: expected positive finite sizes", width, height);
+  fascia_real qp[4], qw[4];
+  const fascia_status st = fascia_shape_gauss_legendre(ctx, q, qp, qw);
+  if (st != FASCIA_OK) return st;
+  const int across = dimension == 1 ? q : 1;
+  for (int b = 0, k = 0; b < q; ++b)
+    for (int c = 0; c < across; ++c, ++k) {
+      const fascia_real a = -width / 2 + width * qp[b];
+      const fascia_real e = dimension == 1 ? -height / 2 + height * qp[c] : 0;
+      for (int r = 0; r < 3; ++r) offset[3 * k + r] = u[r] * a + (dimension == 1 ? v[r] * e : 0);
+      fraction[k] = dimension == 1 ? qw[b] * qw[c] : qw[b];
+    }
+  return FASCIA_OK;
+}

@@ -170,6 +170,16 @@ static void tissue_hold_free(tissue_hold *hold) {
 // organ, so the tissue carries no deformation of its own.
 static void no_free_frame_warning(const prep_run *r, int32_t t, int32_t frames, char *line, size_t size) {
   const fascia_prep_tissue_def *td = r->scene->tissues + t;
+  if (td->form != FASCIA_PREP_FORM_VOLUME) {
+    snprintf(line, size,
+             "tissue '%s' (%s) has no free frame: all %d of its frames are shared with organs and move with them, so "
+             "nothing of it is simulated; %s (scene '%s')",
+             td->name, fascia_prep_form_name(td->form), (int)frames,
+             td->form == FASCIA_PREP_FORM_STRAND ? "lower its frame_spacing below its length"
+                                                  : "refine its mesh away from the organs, or lower coupling.tolerance",
+             r->scene->path);
+    return;
+  }
   snprintf(line, size,
            "tissue '%s' has no free frame: all %d of its frames lie on organ surfaces and move with them, so nothing "
            "of it is simulated (its gaps are thinner than about twice the coupling tolerance, %.3g mm, plus a "
@@ -248,14 +258,29 @@ static void print_summary(const prep_run *r, const step_clock *c, const char *ou
     for (int32_t s = 0; s < r->points->sample_count; ++s)
       if (r->points->sample_tissue[s] == t) ++samples, sample_volume += r->points->sample_volume[s];
     voxels += tr->voxels;
-    fprintf(stderr,
-            "tissue '%s': %lld voxels of %.3g mm, %.4g cm^3 in %d piece(s) (%d smaller pieces, %.3g cm^3, dropped); "
-            "%d frames, %d samples\n",
-            sc->tissues[t].name, (long long)tr->voxels, 1e3 * h, 1e6 * tr->volume, (int)tr->components,
-            (int)tr->dropped_components, 1e6 * tr->dropped_volume, (int)frames, (int)samples);
+    const fascia_prep_tissue_def *tdef = sc->tissues + t;
+    if (tdef->form == FASCIA_PREP_FORM_STRAND)
+      fprintf(stderr,
+              "tissue '%s': strand from '%s' to '%s', straight, %.4g mm long, section %.4g mm^2 (radius %.3g mm), "
+              "%.4g cm^3 (samples: length x area); %d frames, %d samples\n",
+              tdef->name, sc->organs[tdef->from.organ].name, sc->organs[tdef->to.organ].name,
+              1e3 * sample_volume / tdef->area, 1e6 * tdef->area, 1e3 * tdef->radius, 1e6 * sample_volume, (int)frames,
+              (int)samples);
+    else if (tdef->form == FASCIA_PREP_FORM_SHEET)
+      fprintf(stderr,
+              "tissue '%s': sheet '%s', %.4g cm^2 x thickness %.3g mm, %.4g cm^3 (samples: area x thickness); %d "
+              "frames (the mesh's vertices), %d samples\n",
+              tdef->name, tdef->mesh, 1e4 * sample_volume / tdef->thickness, 1e3 * tdef->thickness,
+              1e6 * sample_volume, (int)frames, (int)samples);
+    else
+      fprintf(stderr,
+              "tissue '%s': %lld voxels of %.3g mm, %.4g cm^3 in %d piece(s) (%d smaller pieces, %.3g cm^3, dropped); "
+              "%d frames, %d samples\n",
+              sc->tissues[t].name, (long long)tr->voxels, 1e3 * h, 1e6 * tr->volume, (int)tr->components,
+              (int)tr->dropped_components, 1e6 * tr->dropped_volume, (int)frames, (int)samples);
     tissue_hold hold;
     if (tissue_hold_count(r, t, &hold)) {
-      fprintf(stderr, "  form volume; %d free frames; shared with", (int)hold.free);
+      fprintf(stderr, "  form %s; %d free frames; shared with", fascia_prep_form_name(tdef->form), (int)hold.free);
       int printed = 0;
       for (int32_t o = 0; o < r->meshes->count; ++o)
         if (hold.shared[o] && fascia_prep_tissue_connects(sc->tissues + t, o))
@@ -278,7 +303,7 @@ static void print_summary(const prep_run *r, const step_clock *c, const char *ou
       }
     }
     tissue_hold_free(&hold);
-    if (sc->tissues[t].organ_count > 2) {
+    if (sc->tissues[t].organ_count > 2 && tdef->form == FASCIA_PREP_FORM_VOLUME) {
       fprintf(stderr, "  by the organs each voxel bridges:");
       const fascia_prep_tissue_def *td = sc->tissues + t;
       int printed = 0;
@@ -415,7 +440,7 @@ static void print_json(const prep_run *r, const step_clock *c, const char *outpu
     cJSON_AddNumberToObject(e, "organ_face_voxels", (double)v->tissues[t].organ_face_voxels);
     cJSON *pairs = cJSON_AddArrayToObject(e, "pairs"); // the volume each pair of its organs bridges
     const fascia_prep_tissue_def *td = r->scene->tissues + t;
-    for (int32_t i = 0, p = 0; i < td->organ_count; ++i)
+    for (int32_t i = 0, p = 0; td->form == FASCIA_PREP_FORM_VOLUME && i < td->organ_count; ++i)
       for (int32_t j = i + 1; j < td->organ_count; ++j, ++p) {
         cJSON *pair = cJSON_CreateObject();
         const char *names[2] = {r->scene->organs[td->organs[i]].name, r->scene->organs[td->organs[j]].name};
@@ -426,7 +451,7 @@ static void print_json(const prep_run *r, const step_clock *c, const char *outpu
     occupied_json(e, r->scene, v->tissues + t);
     tissue_hold hold;
     if (tissue_hold_count(r, t, &hold)) {
-      cJSON_AddStringToObject(e, "form", "volume");
+      cJSON_AddStringToObject(e, "form", fascia_prep_form_name(td->form));
       cJSON_AddNumberToObject(e, "frames", hold.frames);
       cJSON_AddNumberToObject(e, "free_frames", hold.free);
       cJSON *shared = cJSON_AddObjectToObject(e, "shared_frames"); // organ name -> frames shared with it
@@ -451,7 +476,18 @@ static void print_json(const prep_run *r, const step_clock *c, const char *outpu
       if (r->points->sample_tissue[s] == t) sample_volume += r->points->sample_volume[s];
     const int tet = r->scene->tissues[t].shape_kind == FASCIA_PREP_SHAPE_TET;
     cJSON_AddNumberToObject(e, "sample_volume", sample_volume);
-    cJSON_AddStringToObject(e, "sample_volume_of", tet ? "tetrahedra kept inside the region" : "region voxels");
+    if (td->form == FASCIA_PREP_FORM_STRAND) {
+      cJSON_AddStringToObject(e, "sample_volume_of", "length x cross-section area");
+      cJSON_AddNumberToObject(e, "length", sample_volume / td->area);
+      cJSON_AddNumberToObject(e, "area", td->area);
+      cJSON_AddNumberToObject(e, "radius", td->radius);
+    } else if (td->form == FASCIA_PREP_FORM_SHEET) {
+      cJSON_AddStringToObject(e, "sample_volume_of", "mesh area x thickness");
+      cJSON_AddNumberToObject(e, "area", sample_volume / td->thickness);
+      cJSON_AddNumberToObject(e, "thickness", td->thickness);
+    } else {
+      cJSON_AddStringToObject(e, "sample_volume_of", tet ? "tetrahedra kept inside the region" : "region voxels");
+    }
     cJSON_AddItemToArray(tissues, e);
   }
   cJSON *organs = cJSON_AddArrayToObject(root, "organs");

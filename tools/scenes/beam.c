@@ -296,34 +296,38 @@ static void reduced_positions(const fascia_scene_beam_def *def, const scene_grid
 // sample *first on; volume = Gauss weights x interval (cell) x section.
 static fascia_status fill_reduced_samples(fascia_ctx *ctx, const fascia_scene_beam_def *def, const scene_grid *g,
                                           const fascia_frame_grid *grid, fascia_model *m, int32_t *first) {
-  fascia_real gp[4], gw[4], qp[4], qw[4];
+  fascia_real gp[4], gw[4];
   const int n = def->samples_per_cell_dir, q = def->section_points;
   SCENE_TRY(fascia_shape_gauss_legendre(ctx, n, gp, gw));
-  SCENE_TRY(fascia_shape_gauss_legendre(ctx, q, qp, qw));
   const int strand = def->shape == FASCIA_SCENE_STRAND;
   const int32_t k = reduced_neighbours(def, grid), cy = strand ? 1 : g->n[1] - 1;
   // a sheet's cell: n points along x, reduced_across(n) across y
-  const int ny = strand ? 1 : reduced_across(n), qy = strand ? q : 1;
-  fascia_real yp[4], yw[4];
-  SCENE_TRY(fascia_shape_gauss_legendre(ctx, ny, yp, yw));
+  const int ny = strand ? 1 : reduced_across(n);
+  fascia_real yp[4] = {0.5}, yw[4] = {1};
+  if (!strand) SCENE_TRY(fascia_shape_gauss_legendre(ctx, ny, yp, yw));
+  // the section, shared with prep's strands and sheets: q x q over width x
+  // height (strand), q through the thickness (sheet)
+  const fascia_real ey[3] = {0, 1, 0}, ez[3] = {0, 0, 1};
+  fascia_real offset[3 * 16], fraction[16];
+  const int across = strand ? q * q : q;
+  if (strand) SCENE_TRY(fascia_shape_section_points(ctx, 1, q, ey, ez, def->width, def->height, offset, fraction));
+  else SCENE_TRY(fascia_shape_section_points(ctx, 2, q, ez, NULL, def->height, 0, offset, fraction));
+  const fascia_real section = strand ? def->width * def->height : def->height;
   int32_t frame[FASCIA_SHAPE_MAX_NEIGHBOURS];
   fascia_real w[FASCIA_SHAPE_MAX_NEIGHBOURS], grad[3 * FASCIA_SHAPE_MAX_NEIGHBOURS];
   int32_t s = *first;
   for (int32_t cx = 0; cx < g->n[0] - 1; ++cx)
     for (int32_t j = 0; j < cy; ++j) {
       const fascia_real x0 = scene_grid_coord(g, 0, cx), x1 = scene_grid_coord(g, 0, cx + 1);
-      const fascia_real y0 = strand ? -def->width / 2 : scene_grid_coord(g, 1, j);
-      const fascia_real y1 = strand ? def->width / 2 : scene_grid_coord(g, 1, j + 1);
-      const fascia_real z0 = -def->height / 2, z1 = def->height / 2;
+      const fascia_real y0 = strand ? 0 : scene_grid_coord(g, 1, j), y1 = strand ? 0 : scene_grid_coord(g, 1, j + 1);
+      const fascia_real span = strand ? 1 : y1 - y0;
       for (int a = 0; a < n; ++a)
-        for (int b = 0; b < (strand ? qy : ny); ++b)
-          for (int c = 0; c < q; ++c, ++s) {
+        for (int b = 0; b < ny; ++b)
+          for (int c = 0; c < across; ++c, ++s) {
             fascia_real *p = m->sample_position + 3 * (int64_t)s;
-            const fascia_real ty = strand ? qp[b] : yp[b], wy = strand ? qw[b] : yw[b];
-            p[0] = x0 + (x1 - x0) * gp[a];
-            p[1] = y0 + (y1 - y0) * ty;
-            p[2] = z0 + (z1 - z0) * qp[c];
-            m->sample_volume[s] = gw[a] * wy * qw[c] * (x1 - x0) * (y1 - y0) * (z1 - z0);
+            const fascia_real station[3] = {x0 + (x1 - x0) * gp[a], strand ? 0 : y0 + (y1 - y0) * yp[b], 0};
+            for (int r = 0; r < 3; ++r) p[r] = station[r] + offset[3 * c + r];
+            m->sample_volume[s] = gw[a] * yw[b] * fraction[c] * (x1 - x0) * span * section;
             m->sample_material[s] = 0;
             SCENE_TRY(reduced_weights_at(ctx, def, g, grid, p, frame, w, grad));
             scene_set_pairs(m, s, k, frame, w, grad);

@@ -200,13 +200,8 @@ fascia_real scene_smoothing(const fascia_scene_beam_def *def) {
 }
 
 void scene_section_moduli(const fascia_scene_beam_def *def, fascia_real *youngs_modulus, fascia_real *poisson_ratio) {
-  const fascia_real E = def->youngs_modulus, nu = def->poisson_ratio;
-  // mu kept; lambda' + 2 mu = E (strand) or lambda' = E nu / (1 - nu^2) (sheet)
-  fascia_real nu_s = nu;
-  if (def->shape == FASCIA_SCENE_STRAND) nu_s = nu / (1 + 2 * nu);
-  else if (def->shape == FASCIA_SCENE_SHEET) nu_s = nu / (1 + nu);
-  *poisson_ratio = nu_s;
-  *youngs_modulus = E * (1 + nu_s) / (1 + nu);
+  fascia_shape_section_moduli(fascia_scene_shape_dimension(def->shape), def->youngs_modulus, def->poisson_ratio,
+                              youngs_modulus, poisson_ratio);
 }
 
 fascia_real scene_density(const fascia_scene_beam_def *def) {

@@ -112,8 +112,37 @@ typedef struct fascia_prep_coupling_def {
   fascia_prep_parts parts;   ///< share only on these parts (0: all)
 } fascia_prep_coupling_def;
 
+/// Forms of a tissue (docs/scenes.md, "Strands and sheets").
+typedef enum fascia_prep_tissue_form {
+  FASCIA_PREP_FORM_VOLUME = 0, ///< the space between its organs, voxelized
+  FASCIA_PREP_FORM_STRAND = 1, ///< a ligament: a straight curve between two attachments, a cross-section
+  FASCIA_PREP_FORM_SHEET = 2   ///< a membrane: a surface mesh given in the scene, a thickness
+} fascia_prep_tissue_form;
+
+/// "volume", "strand" or "sheet".
+FASCIA_API const char *fascia_prep_form_name(int32_t form);
+
+/// Where a strand ends: a point near an organ's surface (within radius).
+typedef struct fascia_prep_attachment {
+  int32_t organ;        ///< organ index
+  fascia_real point[3]; ///< as given, m
+  fascia_real radius;   ///< the point lies within this of the organ's surface, m
+} fascia_prep_attachment;
+
 /// One tissue: the connective tissue between two or more organs.
 typedef struct fascia_prep_tissue_def {
+  int32_t form;              ///< fascia_prep_tissue_form
+  /// STRAND: its two ends (organs[0] = from.organ, organs[1] = to.organ).
+  fascia_prep_attachment from, to;
+  /// STRAND: cross-section area, m^2 (a disc of "radius", or "area");
+  /// SHEET: thickness, m. Its section is carried by the frames' rotations.
+  fascia_real area, thickness;
+  fascia_real radius;          ///< STRAND: radius of the disc of that area, m (drawing)
+  int32_t section_points;      ///< Gauss points per direction of the section (strand: q x q, sheet: q)
+  char *mesh, *mesh_path;      ///< SHEET: its surface as written and resolved
+  fascia_real mesh_scale;      ///< SHEET: file units to metres
+  fascia_real mesh_transform[12]; ///< SHEET: row-major [A | t] after scaling
+
   char name[FASCIA_NAME_SIZE];
   int32_t organ_count;
   int32_t *organs;           ///< [organ_count] organs it connects
@@ -249,6 +278,10 @@ typedef struct fascia_prep_meshes {
   fascia_prep_mesh *organs;
   int32_t warning_count;
   char **warnings; ///< [warning_count] one line each: sizes that look like a units mistake (set by import)
+  /// [count tissues of the scene] a SHEET tissue's surface (vertices merged,
+  /// in metres, world); vertex_count 0 for other forms
+  fascia_prep_mesh *sheets;
+  int32_t sheet_slots;                 ///< entries of sheets (the scene's tissue_count)
   int32_t contact_count;               ///< pairs of label organs that touch in the label map
   fascia_prep_label_contact *contacts; ///< [contact_count]
   /// The segmentation's voxels that keep tissue out: those of labels that
@@ -389,6 +422,11 @@ typedef struct fascia_prep_points {
   /// [4S] TET regions: the frames at the vertices of the tetrahedron whose
   /// quadrature point the sample is, ascending; -1 (all four) for MLS samples
   int32_t *sample_tet_frame;
+  /// [3S] STRAND and SHEET samples: the frames of its interval (two, then
+  /// -1) or triangle (three), whose weights it takes; -1 (all three) for
+  /// volume samples. Such samples and frames have no voxel (sample_voxel,
+  /// frame_voxel -1).
+  int32_t *sample_cell_frame;
 } fascia_prep_points;
 
 /// Poisson-disk sampling in each tissue region (fixed seed: same input, same

@@ -103,6 +103,26 @@ FASCIA_API fascia_status fascia_shape_mls_adaptive(fascia_ctx *ctx, int32_t n, c
 FASCIA_API fascia_status fascia_shape_gauss_legendre(fascia_ctx *ctx, int n, fascia_real *point,
                                                      fascia_real *weight);
 
+/// Moduli of a section carried by the frames' rotations (strands and
+/// sheets, docs/mechanics.md "Strands and sheets"): the shear modulus is
+/// kept and Poisson's ratio chosen so that the law, its section held by the
+/// frames, is uniaxial stress along a strand (dimension 1) or plane stress
+/// in a sheet (dimension 2); dimension 3 returns E and nu unchanged.
+FASCIA_API void fascia_shape_section_moduli(int dimension, fascia_real youngs_modulus, fascia_real poisson_ratio,
+                                            fascia_real *section_youngs_modulus, fascia_real *section_poisson_ratio);
+
+/// Sample points across the section at one station of a strand or a sheet,
+/// Gauss-Legendre with q = 1..4 points per direction. Strand (dimension 1):
+/// q x q points over a width x height rectangle centred on the station and
+/// spanned by the unit vectors u (width) and v (height), u slow. Sheet
+/// (dimension 2): q points through its thickness `width` along its unit
+/// normal u (v and height are not used). offset[3 m] from the station (m)
+/// and fraction[m] of the section each point stands for (summing to 1),
+/// m = q^2 (strand) or q (sheet). Errors: FASCIA_ERR_ARGUMENT.
+FASCIA_API fascia_status fascia_shape_section_points(fascia_ctx *ctx, int dimension, int q, const fascia_real u[3],
+                                                     const fascia_real v[3], fascia_real width, fascia_real height,
+                                                     fascia_real *offset, fascia_real *fraction);
+
 /// Quadrature on a tetrahedron in barycentric coordinates: n = 1 (centroid,
 /// degree 1) or n = 4 (degree 2). bary: [4n], weight: [n] fractions of the
 /// tetrahedron's volume, summing to 1. Errors: FASCIA_ERR_ARGUMENT for other n.

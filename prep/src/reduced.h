@@ -1,0 +1,37 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// Strands and sheets of a scene (reduced.c): their frames and samples.
+#ifndef FASCIA_PREP_REDUCED_H
+#define FASCIA_PREP_REDUCED_H
+#include "prep_util.h"
+
+/// The frames and samples of one strand or sheet tissue. Frame indices in
+/// sample_cell are local (0 .. frame_count - 1).
+typedef struct prep_reduced {
+  int32_t frame_count, sample_count;
+  double *frame_position;  ///< [3 frame_count] m
+  int32_t *frame_organ;    ///< [frame_count] organ it sits on (shared), or -1
+  int32_t *frame_triangle; ///< [frame_count] that organ's triangle, or -1
+  double *sample_position; ///< [3 sample_count] m
+  double *sample_volume;   ///< [sample_count] m^3
+  int32_t *sample_cell;    ///< [3 sample_count] frames of its interval (two, -1) or triangle
+  double length;           ///< strand: m; sheet: its area, m^2
+} prep_reduced;
+
+/// Builds tissue t (a strand or a sheet; its sheet mesh in meshes->sheets)
+/// and refuses what cannot be one with a line naming the scene key: an
+/// attachment farther than its radius from its organ, a straight strand
+/// through an organ, a sheet thicker than the gap it fills. trees: one per
+/// organ, created here when NULL (the caller destroys them).
+FASCIA_PREP_INTERN fascia_status prep_reduced_build(fascia_ctx *ctx, const fascia_prep_scene *scene,
+                                                    const fascia_prep_meshes *meshes, const fascia_prep_volume *vol,
+                                                    int32_t t, fascia_cgal_tree **trees, prep_reduced *out);
+FASCIA_PREP_INTERN void prep_reduced_free(prep_reduced *r);
+
+/// A sheet's mesh as read: merges vertices at the same position, drops
+/// triangles with a repeated corner, refuses a mesh with no triangle left, a
+/// closed surface and edges of more than two triangles (naming
+/// tissues[t].mesh); sets the bounds.
+FASCIA_PREP_INTERN fascia_status prep_sheet_prepare(fascia_ctx *ctx, const fascia_prep_scene *scene, int32_t t,
+                                                    fascia_prep_mesh *m);
+#endif
