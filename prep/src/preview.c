@@ -3,7 +3,8 @@
 // A preview for ParaView of what prep built, as VTK XML files
 // (fascia/vtk_xml.h): each organ's surface, the region grid, the frames
 // (with what holds each), the samples and the shared (coupling) frames, and
-// preview.pvd, which opens them all as blocks named after them. Each file is
+// preview.pvd, which opens them all as blocks named after them; strands as
+// lines and sheets as surfaces. Each file is
 // written under a temporary name and renamed (fascia/files.h), so a reader
 // never sees half a file.
 #include <errno.h>
@@ -156,6 +157,80 @@ cleanup:
   return status;
 }
 
+// Strands as lines and sheets as surfaces over their frames, one file
+// each (strands.vtp, sheets.vtp; ASCII VTK XML): point data tissue, free
+// (1: a free frame, 0: shared with an organ) and radius (a strand's
+// cross-section radius, a sheet's half thickness), m. Written only when the
+// scene has them.
+static fascia_status write_reduced(preview *p, const fascia_prep_scene *scene, const fascia_prep_meshes *meshes,
+                                   const fascia_prep_points *pts, const fascia_prep_coupling *cpl, int form) {
+  const int strand = form == FASCIA_PREP_FORM_STRAND;
+  int64_t points = 0, cells = 0;
+  for (int32_t t = 0; t < scene->tissue_count; ++t) {
+    if (scene->tissues[t].form != form) continue;
+    int64_t n = 0;
+    for (int32_t i = 0; i < pts->frame_count; ++i) n += pts->frame_tissue[i] == t;
+    points += n;
+    cells += strand ? (n > 0 ? n - 1 : 0) : meshes->sheets[t].triangle_count;
+  }
+  if (points == 0) return FASCIA_OK;
+  uint8_t *coupled = prep_calloc(pts->frame_count, 1);
+  PREP_CHECK(coupled, p->ctx, FASCIA_ERR_MEMORY, "preview: out of memory");
+  for (int32_t c = 0; c < cpl->count; ++c) coupled[cpl->frame[c]] = 1;
+  const char *name = strand ? "strands.vtp" : "sheets.vtp";
+  fascia_file *file = NULL;
+  fascia_status status = open_part(p, name, &file);
+  if (status != FASCIA_OK) {
+    free(coupled);
+    return status;
+  }
+  FILE *f = fascia_file_stream(file);
+  fprintf(f, "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"0.1\">\n<PolyData>\n<Piece "
+             "NumberOfPoints=\"%lld\" NumberOfLines=\"%lld\" NumberOfPolys=\"%lld\">\n",
+          (long long)points, strand ? (long long)cells : 0LL, strand ? 0LL : (long long)cells);
+  // the pass over the tissues is repeated per section: the frames of a
+  // strand or a sheet are one contiguous range, in the order it built them
+  fprintf(f, "<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n");
+  for (int32_t i = 0; i < pts->frame_count; ++i)
+    if (pts->frame_tissue[i] >= 0 && scene->tissues[pts->frame_tissue[i]].form == form)
+      fprintf(f, "%.9g %.9g %.9g\n", pts->frame_position[3 * (int64_t)i], pts->frame_position[3 * (int64_t)i + 1],
+              pts->frame_position[3 * (int64_t)i + 2]);
+  fprintf(f, "</DataArray></Points>\n<%s><DataArray type=\"Int32\" Name=\"connectivity\" format=\"ascii\">\n",
+          strand ? "Lines" : "Polys");
+  int64_t base = 0;
+  for (int32_t t = 0; t < scene->tissue_count; ++t) {
+    if (scene->tissues[t].form != form) continue;
+    int64_t n = 0;
+    for (int32_t i = 0; i < pts->frame_count; ++i) n += pts->frame_tissue[i] == t;
+    if (strand)
+      for (int64_t k = 0; k + 1 < n; ++k) fprintf(f, "%lld %lld\n", (long long)(base + k), (long long)(base + k + 1));
+    else
+      for (int32_t k = 0; k < meshes->sheets[t].triangle_count; ++k) {
+        const int32_t *c = meshes->sheets[t].triangles + 3 * (int64_t)k;
+        fprintf(f, "%lld %lld %lld\n", (long long)(base + c[0]), (long long)(base + c[1]), (long long)(base + c[2]));
+      }
+    base += n;
+  }
+  fprintf(f, "</DataArray><DataArray type=\"Int32\" Name=\"offsets\" format=\"ascii\">\n");
+  for (int64_t c = 1; c <= cells; ++c) fprintf(f, "%lld\n", (long long)(c * (strand ? 2 : 3)));
+  fprintf(f, "</DataArray></%s>\n<PointData>\n", strand ? "Lines" : "Polys");
+  static const char *const arrays[3] = {"tissue", "free", "radius"};
+  for (int a = 0; a < 3; ++a) {
+    fprintf(f, "<DataArray type=\"%s\" Name=\"%s\" format=\"ascii\">\n", a == 2 ? "Float64" : "Int32", arrays[a]);
+    for (int32_t i = 0; i < pts->frame_count; ++i) {
+      const int32_t t = pts->frame_tissue[i];
+      if (t < 0 || scene->tissues[t].form != form) continue;
+      if (a == 0) fprintf(f, "%d\n", (int)t);
+      else if (a == 1) fprintf(f, "%d\n", !coupled[i]);
+      else fprintf(f, "%.9g\n", strand ? scene->tissues[t].radius : scene->tissues[t].thickness / 2);
+    }
+    fprintf(f, "</DataArray>\n");
+  }
+  fprintf(f, "</PointData>\n</Piece>\n</PolyData>\n</VTKFile>\n");
+  free(coupled);
+  return close_part(p, &file, name, strand ? "strands" : "sheets");
+}
+
 fascia_status fascia_prep_preview(fascia_ctx *ctx, const char *dir, const fascia_prep_scene *scene,
                                   const fascia_prep_meshes *meshes, const fascia_prep_volume *volume,
                                   const fascia_prep_points *points, const fascia_prep_coupling *coupling) {
@@ -177,6 +252,8 @@ fascia_status fascia_prep_preview(fascia_ctx *ctx, const char *dir, const fascia
   fascia_status status = write_organs(&p, meshes);
   if (status == FASCIA_OK) status = write_region(&p, volume);
   if (status == FASCIA_OK) status = write_points(&p, scene, points, coupling);
+  if (status == FASCIA_OK) status = write_reduced(&p, scene, meshes, points, coupling, FASCIA_PREP_FORM_STRAND);
+  if (status == FASCIA_OK) status = write_reduced(&p, scene, meshes, points, coupling, FASCIA_PREP_FORM_SHEET);
   if (status != FASCIA_OK) {
     fascia_file_discard(&p.pvd);
     return status;

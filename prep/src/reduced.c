@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// Strands and sheets in a scene (docs/scenes.md, "Strands and sheets"): the
+// Strands and sheets in a scene (data/scenes/README.md, "Strands and sheets"): the
 // frames and samples of a tissue whose form is a curve or a surface, built
 // from the scene's geometry instead of a voxel region.
 //

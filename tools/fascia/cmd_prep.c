@@ -372,9 +372,13 @@ static void print_summary(const prep_run *r, const step_clock *c, const char *ou
                     "in the scene, docs/mechanics.md)\n",
             (int)patches, (int)patched, FASCIA_PATCH_MIN_POISSON);
   else
-    fprintf(stderr, "volumetric patches: none (every material's Poisson ratio is below %.2g, or patch_radius is 0)\n",
+    fprintf(stderr, "volumetric patches: none (every material's Poisson ratio is below %.2g, or patch_radius is 0; "
+                    "strands and sheets have none)\n",
             FASCIA_PATCH_MIN_POISSON);
-  if (preview) fprintf(stderr, "preview: open %s/preview.pvd in ParaView (the organs, region, frames, samples, coupling)\n", preview);
+  if (preview)
+    fprintf(stderr, "preview: open %s/preview.pvd in ParaView (the organs, region, frames, samples, coupling; strands "
+                    "and sheets)\n",
+            preview);
   double total = 0;
   fprintf(stderr, "steps (peak resident memory %s)\n", c->resettable ? "per step" : "since start");
   for (int k = 0; k < c->count; ++k) {

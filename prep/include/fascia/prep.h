@@ -112,7 +112,7 @@ typedef struct fascia_prep_coupling_def {
   fascia_prep_parts parts;   ///< share only on these parts (0: all)
 } fascia_prep_coupling_def;
 
-/// Forms of a tissue (docs/scenes.md, "Strands and sheets").
+/// Forms of a tissue (data/scenes/README.md, "Strands and sheets").
 typedef enum fascia_prep_tissue_form {
   FASCIA_PREP_FORM_VOLUME = 0, ///< the space between its organs, voxelized
   FASCIA_PREP_FORM_STRAND = 1, ///< a ligament: a straight curve between two attachments, a cross-section
