@@ -11,8 +11,8 @@
 //    moves half of B's pull;
 //  - every refusal is one line naming the scene key: an attachment on no
 //    organ, an unknown organ, a strand through an organ, radius and area
-//    both, a closed sheet mesh, a mesh without triangles, a thickness that
-//    reaches into an organ;
+//    both, a closed sheet mesh, a mesh without triangles, a sheet vertex
+//    inside an organ, a thickness that reaches into an organ;
 //  - the shipped scene (argv[2]) preps through the CLI and --json reports
 //    the forms, free frames and shared frames per organ.
 // Usage: t591_prep_strand_sheet PATH/TO/fascia PATH/TO/abdomen-ligaments.json
@@ -31,8 +31,8 @@ static const char scene_format[] =
     " \"materials\": {\"soft\": {\"youngs_modulus\": 3000, \"poisson_ratio\": 0.3},\n"
     "               \"lig\": {\"youngs_modulus\": 100000, \"poisson_ratio\": 0.3}},\n"
     " \"organs\": [{\"name\": \"A\", \"mesh\": \"a.obj\", \"model\": \"fixed\"},\n"
-    "              {\"name\": \"B\", \"mesh\": \"b.obj\", \"model\": \"prescribed\", \"motion\": {\"pivot\": [0, 0, 0], "
-    "\"keys\": [\n"
+    "              {\"name\": \"B\", \"mesh\": \"b.obj\", \"model\": \"prescribed\",\n"
+    "               \"motion\": {\"pivot\": [0, 0, 0], \"keys\": [\n"
     "                {\"time\": 0}, {\"time\": 1, \"translation\": [0.001, 0, 0]}]}}%s],\n"
     " \"tissues\": [%s]}\n";
 
@@ -202,6 +202,9 @@ static void check_refusals(const char *dir) {
   refused(dir, "", replaced(sheet, "sheet.obj", "a.obj", text, sizeof text), "tissues[0].mesh", "closed surface");
   CHECK(fixture_write(dir, "lines.obj", "v 0 0 0\nv 0.01 0 0\nv 0.01 0.01 0\nl 1 2\nl 2 3\n"));
   refused(dir, "", replaced(sheet, "sheet.obj", "lines.obj", text, sizeof text), "tissues[0].mesh", "triangle");
+  CHECK(fixture_write(dir, "inside.obj", "v -0.02 0 0\nv -0.005 0.005 0.005\nv -0.005 -0.005 0.005\nf 1 2 3\n"));
+  refused(dir, "", replaced(sheet, "sheet.obj", "inside.obj", text, sizeof text), "tissues[0].mesh",
+          "inside organ 'A'");
   // box C just above the sheet (3 mm over its mid-surface): 1 mm thick fits, 8 mm does not
   const double c_lo[3] = {-0.01, -0.01, 0.008}, c_hi[3] = {0.01, 0.01, 0.02};
   CHECK(fixture_box(dir, "c.obj", c_lo, c_hi) && write_sheet(dir, "sheet.obj", 5));
@@ -257,7 +260,7 @@ int main(int argc, char **argv) {
   check_sheet(dir);
   check_refusals(dir);
   check_shipped(argv[1], dir, argv[2]);
-  static const char *const files[] = {"a.obj", "b.obj", "c.obj", "sheet.obj", "lines.obj", "scene.json",
+  static const char *const files[] = {"a.obj", "b.obj", "c.obj", "sheet.obj", "lines.obj", "inside.obj", "scene.json",
                                       "shipped.h5", "stderr.txt", NULL};
   fixture_cleanup(dir, files);
   return CHECK_RESULT();

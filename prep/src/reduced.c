@@ -178,7 +178,8 @@ static fascia_status build_strand(fascia_ctx *ctx, const fascia_prep_scene *scen
 // ------------------------------------------------------------ sheets
 
 // Degree-2 rule on a triangle: three points, weight 1/3 each.
-static const double TRI_RULE[3][3] = {{2.0 / 3, 1.0 / 6, 1.0 / 6}, {1.0 / 6, 2.0 / 3, 1.0 / 6}, {1.0 / 6, 1.0 / 6, 2.0 / 3}};
+static const double TRI_RULE[3][3] = {
+    {2.0 / 3, 1.0 / 6, 1.0 / 6}, {1.0 / 6, 2.0 / 3, 1.0 / 6}, {1.0 / 6, 1.0 / 6, 2.0 / 3}};
 
 static fascia_status build_sheet(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_meshes *meshes,
                                  const fascia_prep_volume *vol, int32_t t, fascia_cgal_tree **trees,
@@ -241,6 +242,14 @@ static fascia_status build_sheet(fascia_ctx *ctx, const fascia_prep_scene *scene
       const double len = norm3(n);
       if (!(len > 0)) continue;
       const double *x = out->frame_position + 3 * (int64_t)i;
+      for (int32_t o = 0; o < scene->organ_count; ++o) {
+        const double d0 = distance_at(vol, &g, o, x);
+        PREP_CHECK_GOTO(!(d0 < -h), ctx, FASCIA_ERR_ARGUMENT,
+                        "scene '%s' tissues[%d].mesh: vertex %d (%g %g %g) lies %.3g mm inside organ '%s', farther "
+                        "than the coupling tolerance %.3g mm from its surface; a sheet lies between organs: move or "
+                        "cut the mesh there",
+                        scene->path, (int)t, (int)i, x[0], x[1], x[2], -1e3 * d0, scene->organs[o].name, 1e3 * tol);
+      }
       for (int side = -1; side <= 1; side += 2) {
         double y[3];
         for (int r = 0; r < 3; ++r) y[r] = x[r] + side * 0.5 * td->thickness * n[r] / len;
