@@ -115,6 +115,15 @@ static void check_strand(const char *dir) {
     int free_frames = 0;
     for (int32_t i = 0; i < m->frame_count; ++i) free_frames += m->frame_kind[i] == FASCIA_FRAME_FREE;
     CHECK(free_frames == 9);
+    // drawn as a tube: an octagon of its radius around each of its 11 frames
+    const fascia_surface *ts = &m->tissue_surface;
+    CHECK(ts->vertex_count == 8 * 11 && ts->triangle_count == 16 * 10);
+    double off_radius = 0;
+    for (int32_t v = 0; v < ts->vertex_count; ++v) {
+      const double *p = ts->vertices + 3 * v;
+      off_radius = fmax(off_radius, fabs(sqrt(p[1] * p[1] + p[2] * p[2]) - 0.001));
+    }
+    CHECK(off_radius < 1e-9);
     // the end on B was given 0.5 mm off its face: moved onto it
     double largest_x = -1;
     for (int32_t i = 0; i < m->frame_count; ++i) largest_x = fmax(largest_x, m->frame_position[3 * i]);
@@ -151,6 +160,8 @@ static void check_sheet(const char *dir) {
             (int)m->frame_count, free_frames, (int)m->sample_count, volume, expected);
     CHECK(m->frame_count == 25 && free_frames == 15 && coupled_to(m, 0) == 5 && coupled_to(m, 1) == 5);
     CHECK(fabs(volume - expected) < 1e-6 * expected); // the boxes are read as float32
+    // drawn as its mesh over its frames (5 x 5 vertices, 32 triangles)
+    CHECK(m->tissue_surface.vertex_count == 25 && m->tissue_surface.triangle_count == 32);
     double u[32], worst = 0;
     CHECK(pulled(ctx, m, u));
     for (int32_t i = 0; i < m->frame_count; ++i)

@@ -655,7 +655,7 @@ fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_scene *scen
   PREP_TRY_GOTO(drop_unheld(ctx, scene, points, &m, dropped, &empty_frames));
   PREP_TRY_GOTO(make_patches(ctx, scene, m));
   PREP_TRY_GOTO(modes_on_patches(ctx, m));
-  PREP_TRY_GOTO(prep_tissue_surface(ctx, scene, volume, &m->tissue_surface));
+  PREP_TRY_GOTO(prep_tissue_surface(ctx, scene, meshes, volume, points, &m->tissue_surface));
   // provenance (its counts are those before the unheld pieces were dropped)
   prov = provenance(scene, meshes, volume, points, weights, coupling, info);
   cJSON *reports = prov ? cJSON_GetObjectItem(prov, "reports") : NULL;

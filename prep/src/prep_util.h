@@ -148,10 +148,13 @@ FASCIA_PREP_INTERN void prep_units_hint_box(double extent, char *out, size_t siz
 /// Rotation matrix R (row-major) of the unit quaternion q = (w, x, y, z).
 FASCIA_PREP_INTERN void prep_quat_matrix(const double *q, double *R);
 
-/// The boundary of the tissues' regions (labels 1 .. tissue_count), smoothed
-/// and meshed, in the world (tissue_surface.c).
+/// What the tissues look like, in the world (tissue_surface.c): the boundary
+/// of the volume tissues' regions (labels 1 .. tissue_count), smoothed and
+/// meshed; each strand as a tube of its radius through its frames; each
+/// sheet as its mesh over its frames.
 FASCIA_PREP_INTERN fascia_status prep_tissue_surface(fascia_ctx *ctx, const fascia_prep_scene *scene,
-                                                     const fascia_prep_volume *vol, fascia_surface *out);
+                                                     const fascia_prep_meshes *meshes, const fascia_prep_volume *vol,
+                                                     const fascia_prep_points *points, fascia_surface *out);
 
 /// Heap of (distance, voxel) for Dijkstra over voxels.
 typedef struct prep_heap {
