@@ -10,12 +10,14 @@
 #                            (data/scenes/abdomen-female.json), into out/abdomen-female/
 #   --scene abdomen-totalsegmentator   the upper abdomen straight from a CT
 #                            segmentation label map, into out/abdomen-totalsegmentator/
+#   --scene abdomen-ligaments  a ligament (strand) and a membrane (sheet)
+#                            between HRA organs, into out/abdomen-ligaments/
 # Other arguments go to cmake's configure step.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 name=pelvis-female-demo
 if [[ "${1:-}" == "--scene" ]]; then
-  name="${2:?--scene needs a name: pelvis-female-demo, abdomen-female or abdomen-totalsegmentator}"
+  name="${2:?--scene needs a name: pelvis-female-demo, abdomen-female, abdomen-totalsegmentator or abdomen-ligaments}"
   shift 2
 fi
 case "$name" in
@@ -31,8 +33,12 @@ abdomen-totalsegmentator)
   out="$root/out/abdomen-totalsegmentator" view=coronal-ras
   what="upper abdomen from a CT label map, vertebrae and five organs fixed, duodenum and gallbladder rigid, stomach retracted"
   motion="stomach retracted 3 mm anteriorly, duodenum and gallbladder rigid, the rest fixed" ;;
+abdomen-ligaments)
+  out="$root/out/abdomen-ligaments" view=coronal
+  what="splenorenal ligament (a strand) and hepatocolic membrane (a sheet) between HRA organs"
+  motion="liver and kidney fixed, spleen drawn along its ligament, colon pulled 3 mm down and 2 mm forward" ;;
 *)
-  echo "run-demo.sh: unknown scene '$name' (known: pelvis-female-demo, abdomen-female, abdomen-totalsegmentator)" >&2
+  echo "run-demo.sh: unknown scene '$name' (known: pelvis-female-demo, abdomen-female, abdomen-totalsegmentator, abdomen-ligaments)" >&2
   exit 2 ;;
 esac
 "$root/tools/setup/debian-packages.sh"
