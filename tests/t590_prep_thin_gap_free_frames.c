@@ -6,7 +6,7 @@
 // from an organ, so without its mid-layer every frame would lie on a box and
 // move with it, and nothing would be simulated. Each gap must have free
 // frames between the faces, each on the gap's mid-layer (within a voxel of
-// the middle, at least about half a voxel from both faces), and a static solve
+// the middle, at least a voxel from both faces), and a static solve
 // with box B pulled must iterate and move them. `fascia prep --json` reports the tissue's
 // form, its free frames and its shared frames per organ; a third box that
 // the tissue touches but does not connect is reported, coupled by default
@@ -51,7 +51,7 @@ static int check_gap(const char *dir, double gap) {
       const double *x = m->frame_position + 3 * i;
       if (m->frame_kind[i] != FASCIA_FRAME_FREE || fabs(x[1]) >= W || fabs(x[2]) >= W) continue;
       ++free_frames;
-      const int off = fabs(x[0]) > 0.001 + 1e-9 || gap / 2 - fabs(x[0]) < 0.00045 - 1e-9;
+      const int off = fabs(x[0]) > 0.001 + 1e-9 || gap / 2 - fabs(x[0]) < 0.001 - 1e-9;
       if (off) fprintf(stderr, "  free frame off the mid-layer at %g %g %g mm\n", 1e3 * x[0], 1e3 * x[1], 1e3 * x[2]);
       off_layer += off;
     }

@@ -286,9 +286,10 @@ static fascia_status mid_layer_frames(fascia_ctx *ctx, const fascia_prep_volume 
       if (d < d1) d2 = d1, d1 = d;
       else if (d < d2) d2 = d;
     }
-    // (at least about half a voxel off the surfaces; a quarter voxel more on the medial bound: a mid-plane
-    // halfway between voxel centres puts two layers at exactly one voxel of difference, and distances are floats)
-    if (d1 >= 0.5 * spacing || d1 < 0.45 * h || d2 - d1 > 1.25 * h) continue;
+    // (a voxel off the surfaces at least: nearer, a frame beside a surface frame made the wedges where organs
+    // meet stiff and strained; a quarter voxel more on the medial bound: a mid-plane halfway between voxel
+    // centres puts two layers at exactly one voxel of difference, and distances are floats)
+    if (d1 >= 0.5 * spacing || d1 < 1.0 * h || d2 - d1 > 1.25 * h) continue;
     double x[3];
     prep_grid_center(&g, v, x);
     PREP_CHECK_GOTO(list_push(&cand, x, -1, -1, v), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
