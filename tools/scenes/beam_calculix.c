@@ -449,6 +449,81 @@ cleanup:
   return status;
 }
 
+// The whole text of a file, NUL-terminated (malloc'd); NULL when unreadable.
+static char *read_text(const char *path) {
+  FILE *f = fopen(path, "rb");
+  if (!f) return NULL;
+  size_t size = 0, capacity = 1 << 16;
+  char *text = malloc(capacity);
+  for (size_t n; text && (n = fread(text + size, 1, capacity - size - 1, f)) > 0;) {
+    size += n;
+    if (capacity - size < 2) {
+      char *bigger = realloc(text, 2 * capacity);
+      if (!bigger) free(text);
+      text = bigger, capacity *= 2;
+    }
+  }
+  fclose(f);
+  if (text) text[size] = '\0';
+  return text;
+}
+
+// The load time of the last output block ("... for set X and time  T") in
+// a .dat text; -1 when it has none.
+static double last_output_time(const char *dat) {
+  double t = -1;
+  for (const char *p = strstr(dat, "and time"); p; p = strstr(p + 8, "and time")) sscanf(p + 8, "%lf", &t);
+  return t;
+}
+
+fascia_status fascia_ccx_run_deck(fascia_ctx *ctx, const char *what, fascia_ccx_deck_writer write, const void *arg,
+                                  const char *program, int threads, char **dat, double *cpu_ms) {
+  SCENE_CHECK(dat && cpu_ms && write && what && program, ctx, FASCIA_ERR_ARGUMENT,
+              "CalculiX: NULL program, writer or output");
+  SCENE_CHECK(threads >= 1, ctx, FASCIA_ERR_ARGUMENT, "CalculiX: %d threads, expected >= 1", threads);
+  *dat = NULL;
+  *cpu_ms = 0;
+  const char *tmp = getenv("TMPDIR");
+  char dir[DIR_SIZE], path[PATH_SIZE];
+  const int n = snprintf(dir, sizeof dir, "%s/fascia-ccx-XXXXXX", tmp && tmp[0] ? tmp : "/tmp");
+  if (n < 0 || n >= (int)sizeof dir || !mkdtemp(dir))
+    return SCENE_FAIL(ctx, FASCIA_ERR_IO, "CalculiX %s: cannot make a folder %s (%s)", what, dir, strerror(errno));
+  snprintf(path, sizeof path, "%s/" JOB ".inp", dir);
+  fascia_status status = FASCIA_OK;
+  FILE *f = fopen(path, "w");
+  if (!f) {
+    status = SCENE_FAIL(ctx, FASCIA_ERR_IO, "CalculiX %s: cannot write %s (%s)", what, path, strerror(errno));
+    goto cleanup;
+  }
+  status = write(ctx, arg, f);
+  if (fclose(f) != 0 && status == FASCIA_OK)
+    status = SCENE_FAIL(ctx, FASCIA_ERR_IO, "CalculiX %s: cannot write %s (%s)", what, path, strerror(errno));
+  if (status != FASCIA_OK) goto cleanup;
+  const char *why = "";
+  const int rc = run_ccx(dir, program, threads, cpu_ms, &why);
+  snprintf(path, sizeof path, "%s/" JOB ".dat", dir);
+  char *text = read_text(path);
+  const double time = text ? last_output_time(text) : -1;
+  char last[256];
+  last_log_line(dir, last, sizeof last);
+  if (rc < 0)
+    status = SCENE_FAIL(ctx, FASCIA_ERR_IO, "CalculiX %s: could not run '%s' (%s); install calculix-ccx", what,
+                        program, why);
+  else if (rc == 126 || rc == 127)
+    status = SCENE_FAIL(ctx, FASCIA_ERR_IO, "CalculiX %s: could not run '%s' (exit %d); install calculix-ccx", what,
+                        program, rc);
+  else if (rc != 0 || (text && fabs(time - 1) > 1e-9))
+    status = SCENE_FAIL(ctx, FASCIA_ERR_NUMERIC, "CalculiX %s: stopped (exit %d) at load %g: %s", what, rc, time,
+                        last);
+  else if (!text)
+    status = SCENE_FAIL(ctx, FASCIA_ERR_FORMAT, "CalculiX %s: no output %s: %s", what, path, last);
+  if (status == FASCIA_OK) *dat = text;
+  else free(text);
+cleanup:
+  remove_folder(dir);
+  return status;
+}
+
 // Copied from data/reference/cantilever-calculix.csv (tests/t361 checks the copy).
 static const fascia_ccx_reference references[] = {
     {FASCIA_LAW_STVK, 40000, 0, -1.61135, -6.53479, 0.0002},

@@ -89,6 +89,21 @@ const char *fascia_ccx_program(void);
 fascia_status fascia_ccx_beam_solve(fascia_ctx *ctx, const fascia_ccx_beam_def *def, const char *program,
                                     int threads, fascia_ccx_result *out);
 
+/// Writes a deck to `out`; `arg` is the writer's own definition.
+typedef fascia_status (*fascia_ccx_deck_writer)(fascia_ctx *ctx, const void *arg, FILE *out);
+
+/// Any deck: written by `write` into a fresh temporary folder (under $TMPDIR
+/// or /tmp), `program` run on it with `threads` threads as
+/// fascia_ccx_beam_solve does, the whole text of its .dat output returned in
+/// *dat (malloc'd, the caller frees it), the folder removed. `what` names the
+/// model in messages. ccx must reach the end of its step (load time 1).
+/// Errors: those of `write`, FASCIA_ERR_IO (the folder, the deck, starting
+/// the program), FASCIA_ERR_NUMERIC (ccx failed or stopped short of the full
+/// load, with the last line it printed), FASCIA_ERR_FORMAT (no .dat);
+/// *dat is then NULL.
+fascia_status fascia_ccx_run_deck(fascia_ctx *ctx, const char *what, fascia_ccx_deck_writer write, const void *arg,
+                                  const char *program, int threads, char **dat, double *cpu_ms);
+
 /// A converged reference of the tip of fascia's cantilever (the box, mass
 /// and gravity of fascia_scene_beam_def_default()), stored in
 /// data/reference/cantilever-calculix.csv with how it was refined.
