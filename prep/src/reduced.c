@@ -14,9 +14,9 @@
 //           strand), each of volume interval x area x its fraction;
 //   sheet   the mesh's (merged) vertices are its frames, a vertex within the
 //           coupling tolerance of an organ moved onto it (shared); per
-//           triangle the three points of the degree-2 rule, each with q
-//           points through the thickness along the triangle's normal,
-//           volume triangle area x thickness x weights.
+//           triangle its centroid, with q points through the thickness
+//           along the triangle's normal, volume triangle area x thickness x
+//           weights.
 //
 // Each sample records the frames of its interval or triangle; the shape
 // functions stage gives it fascia_shape_mls_adaptive's weights over them
@@ -177,9 +177,13 @@ static fascia_status build_strand(fascia_ctx *ctx, const fascia_prep_scene *scen
 
 // ------------------------------------------------------------ sheets
 
-// Degree-2 rule on a triangle: three points, weight 1/3 each.
-static const double TRI_RULE[3][3] = {
-    {2.0 / 3, 1.0 / 6, 1.0 / 6}, {1.0 / 6, 2.0 / 3, 1.0 / 6}, {1.0 / 6, 1.0 / 6, 2.0 / 3}};
+// One point per triangle, its centroid (times the points through the
+// thickness): with weights linear on the triangle, the degree-2 rule's three
+// points locked the sheet in bending (as two stations per interval lock a
+// strand), and the centroid leaves no mode without stiffness where frames
+// carry rotations (docs/mechanics.md, "Strands and sheets").
+static const double TRI_RULE[1][3] = {{1.0 / 3, 1.0 / 3, 1.0 / 3}};
+#define TRI_POINTS 1
 
 static fascia_status build_sheet(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_meshes *meshes,
                                  const fascia_prep_volume *vol, int32_t t, fascia_cgal_tree **trees,
@@ -188,7 +192,7 @@ static fascia_status build_sheet(fascia_ctx *ctx, const fascia_prep_scene *scene
   const fascia_prep_mesh *m = meshes->sheets + t;
   const int32_t V = m->vertex_count, T = m->triangle_count;
   const int q = td->section_points;
-  PREP_TRY(reserve(ctx, out, V, 3 * (int64_t)T * q));
+  PREP_TRY(reserve(ctx, out, V, TRI_POINTS * (int64_t)T * q));
   out->frame_count = V;
   memcpy(out->frame_position, m->vertices, 3 * (size_t)V * sizeof(double));
   // vertex normals (area-weighted) for the thickness check
@@ -283,12 +287,12 @@ static fascia_status build_sheet(fascia_ctx *ctx, const fascia_prep_scene *scene
     PREP_TRY_GOTO(fascia_shape_section_points(ctx, 2, q, n, NULL, td->thickness, 0, offset, fraction));
     const double area = 0.5 * twice;
     area_sum += area;
-    for (int a = 0; a < 3; ++a) {
+    for (int a = 0; a < TRI_POINTS; ++a) {
       double station[3];
       for (int r = 0; r < 3; ++r) station[r] = TRI_RULE[a][0] * p0[r] + TRI_RULE[a][1] * p1[r] + TRI_RULE[a][2] * p2[r];
       for (int j = 0; j < q; ++j, ++s) {
         for (int r = 0; r < 3; ++r) out->sample_position[3 * (int64_t)s + r] = station[r] + offset[3 * j + r];
-        out->sample_volume[s] = area / 3 * fraction[j] * td->thickness;
+        out->sample_volume[s] = area / TRI_POINTS * fraction[j] * td->thickness;
         memcpy(out->sample_cell + 3 * (int64_t)s, c, 3 * sizeof(int32_t));
       }
     }
