@@ -826,6 +826,36 @@ static fascia_status parse_attachment(const reader *rd, const fascia_prep_scene 
 }
 
 // A strand or a sheet (the keys of parse_tissue that apply, and their own).
+// A tissue's "connects": at least `minimum` organ names, each once, into
+// t->organs (the sheet's organs, a volume tissue's two or more).
+static fascia_status get_connects(const reader *rd, const fascia_prep_scene *scene, const cJSON *item,
+                                  const char *path, int minimum, fascia_prep_tissue_def *t) {
+  char at[PATH_SIZE];
+  sub_key(at, path, "connects");
+  const cJSON *connects = cJSON_GetObjectItemCaseSensitive(item, "connects");
+  if (!cJSON_IsArray(connects) || cJSON_GetArraySize(connects) < minimum)
+    return key_fail(rd, at, "expected an array of %s organ names, found %s%s",
+                    minimum == 1 ? "one or more" : "two or more", type_name(connects),
+                    cJSON_IsArray(connects) ? " with fewer" : "");
+  t->organs = prep_calloc(cJSON_GetArraySize(connects), sizeof(int32_t));
+  PREP_CHECK(t->organs, rd->ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", rd->file);
+  const cJSON *e;
+  cJSON_ArrayForEach(e, connects) {
+    char ek[PATH_SIZE];
+    sub_index(ek, at, t->organ_count);
+    if (!cJSON_IsString(e)) return key_fail(rd, ek, "expected an organ name, found %s", type_name(e));
+    PREP_TRY(need_organ(rd, scene, ek, e->valuestring, &t->organs[t->organ_count]));
+    for (int32_t k = 0; k < t->organ_count; ++k)
+      if (t->organs[k] == t->organs[t->organ_count]) {
+        char first[PATH_SIZE];
+        sub_index(first, at, k);
+        return key_fail(rd, ek, "organ '%s' is given twice (first as %s); each organ once", e->valuestring, first);
+      }
+    t->organ_count++;
+  }
+  return FASCIA_OK;
+}
+
 static fascia_status parse_reduced_tissue(const reader *rd, const fascia_prep_scene *scene, const cJSON *item,
                                           const char *path, const char *base_dir, fascia_prep_tissue_def *t) {
   static const char *const known_strand[] = {"name", "form", "from", "to", "radius", "area", "material",
@@ -889,24 +919,7 @@ static fascia_status parse_reduced_tissue(const reader *rd, const fascia_prep_sc
   PREP_TRY(parse_placement(rd, item, path, &t->mesh_scale, units, sizeof units, &units_given, t->mesh_transform));
   PREP_TRY(get_number(rd, item, path, "thickness", 1, 0, 0, 0, INFINITY, &t->thickness));
   t->area = t->thickness;
-  sub_key(at, path, "connects");
-  const cJSON *connects = cJSON_GetObjectItemCaseSensitive(item, "connects");
-  if (!cJSON_IsArray(connects) || cJSON_GetArraySize(connects) < 1)
-    return key_fail(rd, at, "expected an array of one or more organ names (those the sheet joins), found %s",
-                    type_name(connects));
-  t->organs = prep_calloc(cJSON_GetArraySize(connects), sizeof(int32_t));
-  PREP_CHECK(t->organs, rd->ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", rd->file);
-  const cJSON *e;
-  cJSON_ArrayForEach(e, connects) {
-    char ek[PATH_SIZE];
-    sub_index(ek, at, t->organ_count);
-    if (!cJSON_IsString(e)) return key_fail(rd, ek, "expected an organ name, found %s", type_name(e));
-    PREP_TRY(need_organ(rd, scene, ek, e->valuestring, &t->organs[t->organ_count]));
-    for (int32_t k = 0; k < t->organ_count; ++k)
-      if (t->organs[k] == t->organs[t->organ_count])
-        return key_fail(rd, ek, "organ '%s' is given twice; each organ once", e->valuestring);
-    t->organ_count++;
-  }
+  PREP_TRY(get_connects(rd, scene, item, path, 1, t));
   const cJSON *coupling = cJSON_GetObjectItemCaseSensitive(item, "coupling");
   if (coupling) {
     sub_key(at, path, "coupling");
@@ -939,28 +952,8 @@ static fascia_status parse_tissue(const reader *rd, const fascia_prep_scene *sce
   PREP_TRY(get_name(rd, item, path, "name", t->name));
   const char *description;
   PREP_TRY(get_string(rd, item, path, "description", 0, &description));
+  PREP_TRY(get_connects(rd, scene, item, path, 2, t));
   char at[PATH_SIZE];
-  sub_key(at, path, "connects");
-  const cJSON *connects = cJSON_GetObjectItemCaseSensitive(item, "connects");
-  if (!cJSON_IsArray(connects) || cJSON_GetArraySize(connects) < 2)
-    return key_fail(rd, at, "expected an array of two or more organ names, found %s%s", type_name(connects),
-                    cJSON_IsArray(connects) ? " with fewer" : "");
-  t->organs = prep_calloc(cJSON_GetArraySize(connects), sizeof(int32_t));
-  PREP_CHECK(t->organs, rd->ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", rd->file);
-  const cJSON *e;
-  cJSON_ArrayForEach(e, connects) {
-    char ek[PATH_SIZE];
-    sub_index(ek, at, t->organ_count);
-    if (!cJSON_IsString(e)) return key_fail(rd, ek, "expected an organ name, found %s", type_name(e));
-    PREP_TRY(need_organ(rd, scene, ek, e->valuestring, &t->organs[t->organ_count]));
-    for (int32_t k = 0; k < t->organ_count; ++k)
-      if (t->organs[k] == t->organs[t->organ_count]) {
-        char first[PATH_SIZE];
-        sub_index(first, at, k);
-        return key_fail(rd, ek, "organ '%s' is given twice (first as %s); each organ once", e->valuestring, first);
-      }
-    t->organ_count++;
-  }
   PREP_TRY(get_number(rd, item, path, "max_gap", 1, 0, 0, 0, INFINITY, &t->max_gap));
   t->region_organ = -1;
   const cJSON *region = cJSON_GetObjectItemCaseSensitive(item, "region");
