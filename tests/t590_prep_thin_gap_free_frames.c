@@ -8,7 +8,8 @@
 // frames between the faces, each on the gap's mid-layer (within a voxel of
 // the middle, at least a voxel from both faces), and a static solve
 // with box B pulled must iterate and move them. `fascia prep --json` reports the tissue's
-// form, its free frames and its shared frames per organ; a third box that
+// form, its free frames (and how many are mid-layer frames) and its shared
+// frames per organ; a third box that
 // the tissue touches but does not connect is reported, coupled by default
 // and left free under "coupling": {"others": false}.
 // Usage: t590_prep_thin_gap_free_frames PATH/TO/fascia
@@ -96,13 +97,16 @@ static void check_report(const char *cli, const char *dir, const char *others) {
   cJSON *root = cJSON_Parse(result.out);
   const cJSON *tissue = cJSON_GetArrayItem(cJSON_GetObjectItem(root, "tissues"), 0);
   const cJSON *form = cJSON_GetObjectItem(tissue, "form"), *free_frames = cJSON_GetObjectItem(tissue, "free_frames");
+  const cJSON *mid_layer = cJSON_GetObjectItem(tissue, "mid_layer_frames");
   const cJSON *shared = cJSON_GetObjectItem(tissue, "shared_frames");
   const cJSON *touched = cJSON_GetObjectItem(cJSON_GetObjectItem(tissue, "touches_unconnected"), "C");
   const int coupled = !others || !strcmp(others, "true");
   const double c_shared = cJSON_GetNumberValue(cJSON_GetObjectItem(touched, "shared_frames"));
   const double c_free = cJSON_GetNumberValue(cJSON_GetObjectItem(touched, "free_frames"));
   const int ok = cJSON_IsString(form) && !strcmp(form->valuestring, "volume") && cJSON_IsNumber(free_frames) &&
-                 free_frames->valueint > 0 && cJSON_GetNumberValue(cJSON_GetObjectItem(shared, "A")) > 0 &&
+                 free_frames->valueint > 0 && cJSON_IsNumber(mid_layer) && mid_layer->valueint > 0 &&
+                 mid_layer->valueint <= free_frames->valueint && strstr(result.err, "on the mid-layers") &&
+                 cJSON_GetNumberValue(cJSON_GetObjectItem(shared, "A")) > 0 &&
                  cJSON_GetNumberValue(cJSON_GetObjectItem(shared, "B")) > 0 && cJSON_IsObject(touched) &&
                  (coupled ? c_shared > 0 && c_free == 0 && cJSON_GetNumberValue(cJSON_GetObjectItem(shared, "C")) > 0
                           : c_shared == 0 && c_free > 0 && !cJSON_GetObjectItem(shared, "C")) &&

@@ -74,6 +74,7 @@ void fascia_prep_points_destroy(fascia_prep_points **points) {
   free(p->sample_voxel);
   free(p->sample_tet_frame);
   free(p->sample_cell_frame);
+  free(p->tissue_mid_layer_frames);
   free(p);
   *points = NULL;
 }
@@ -726,10 +727,11 @@ static void attach_shared(const fascia_prep_scene *scene, const fascia_prep_mesh
 // frames, already attached, then interior frames anywhere inside); then
 // samples and their volumes, the same for both: Poisson-disk samples with
 // Voronoi volumes (MLS), or the quadrature points of the kept tets (TET).
+// *mid_layer (may be NULL): how many of its frames are mid-layer frames.
 static fascia_status sample_region(fascia_ctx *ctx, const fascia_prep_scene *scene,
                                    const fascia_prep_meshes *meshes, const fascia_prep_volume *vol, uint8_t label,
                                    fascia_cgal_tree **trees, point_list *frames, point_list *samples,
-                                   sample_data *data) {
+                                   sample_data *data, int32_t *mid_layer) {
   const int32_t organ = prep_label_organ(vol, label);
   const fascia_prep_tissue_def *td = organ < 0 ? scene->tissues + (label - 1) : NULL;
   double frame_spacing, sample_spacing;
@@ -778,8 +780,10 @@ static fascia_status sample_region(fascia_ctx *ctx, const fascia_prep_scene *sce
     PREP_CHECK_GOTO(list_push(&cand, x, -1, -1, v), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
   }
   PREP_TRY_GOTO(throw_darts(ctx, &rng, &cand, &darts, frames));
+  const int64_t before_mid_layer = frames->count;
   if (td)
     PREP_TRY_GOTO(mid_layer_frames(ctx, vol, voxels, voxel_count, frame_spacing, &rng, first_interior, frames));
+  if (mid_layer) *mid_layer = (int32_t)(frames->count - before_mid_layer);
   PREP_TRY_GOTO(fill_thin_pieces(ctx, vol, label, frame_spacing, frames));
   dart_free(&darts);
   if (shape_kind == FASCIA_PREP_SHAPE_TET) {
@@ -825,8 +829,9 @@ fascia_status fascia_prep_sample(fascia_ctx *ctx, const fascia_prep_scene *scene
   int32_t *region_organ = prep_calloc(T + O, sizeof(int32_t)), *tissue_of = NULL;
   fascia_cgal_tree **trees = prep_calloc(meshes->count, sizeof *trees);
   fascia_prep_points *p = calloc(1, sizeof *p);
+  int32_t *mid_layer = p ? (p->tissue_mid_layer_frames = prep_calloc(T, sizeof(int32_t))) : NULL;
   int32_t regions = 0;
-  PREP_CHECK_GOTO(p && trees && frame_end && sample_end && region_organ, ctx, FASCIA_ERR_MEMORY,
+  PREP_CHECK_GOTO(p && mid_layer && trees && frame_end && sample_end && region_organ, ctx, FASCIA_ERR_MEMORY,
                   "sample: out of memory");
   for (int32_t t = 0; t < T; ++t) {
     fascia_ctx_progress(ctx, "sample", (double)t / (T + O), scene->tissues[t].name);
@@ -834,7 +839,7 @@ fascia_status fascia_prep_sample(fascia_ctx *ctx, const fascia_prep_scene *scene
       PREP_TRY_GOTO(sample_reduced(ctx, scene, meshes, volume, t, trees, &frames, &samples, &data));
     else
       PREP_TRY_GOTO(
-          sample_region(ctx, scene, meshes, volume, (uint8_t)(t + 1), trees, &frames, &samples, &data));
+          sample_region(ctx, scene, meshes, volume, (uint8_t)(t + 1), trees, &frames, &samples, &data, mid_layer + t));
     region_organ[regions] = -1;
     frame_end[regions] = (int32_t)frames.count;
     sample_end[regions++] = (int32_t)samples.count;
@@ -848,7 +853,7 @@ fascia_status fascia_prep_sample(fascia_ctx *ctx, const fascia_prep_scene *scene
     fascia_ctx_progress(ctx, "sample", (double)(T + o) / (T + O), scene->organs[o].name);
     attach_shared(scene, meshes, volume, o, tissue_of, &frames);
     PREP_TRY_GOTO(sample_region(ctx, scene, meshes, volume, (uint8_t)volume->organ_label[o], trees, &frames, &samples,
-                                &data));
+                                &data, NULL));
     region_organ[regions] = o;
     frame_end[regions] = (int32_t)frames.count;
     sample_end[regions++] = (int32_t)samples.count;

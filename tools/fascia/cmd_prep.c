@@ -280,7 +280,10 @@ static void print_summary(const prep_run *r, const step_clock *c, const char *ou
               (int)tr->dropped_components, 1e6 * tr->dropped_volume, (int)frames, (int)samples);
     tissue_hold hold;
     if (tissue_hold_count(r, t, &hold)) {
-      fprintf(stderr, "  form %s; %d free frames; shared with", fascia_prep_form_name(tdef->form), (int)hold.free);
+      const int32_t mid_layer = r->points->tissue_mid_layer_frames[t];
+      char layer[96] = "";
+      if (mid_layer > 0) snprintf(layer, sizeof layer, " (%d on the mid-layers of gaps thinner than its frame spacing)", (int)mid_layer);
+      fprintf(stderr, "  form %s; %d free frames%s; shared with", fascia_prep_form_name(tdef->form), (int)hold.free, layer);
       int printed = 0;
       for (int32_t o = 0; o < r->meshes->count; ++o)
         if (hold.shared[o] && fascia_prep_tissue_connects(sc->tissues + t, o))
@@ -458,6 +461,7 @@ static void print_json(const prep_run *r, const step_clock *c, const char *outpu
       cJSON_AddStringToObject(e, "form", fascia_prep_form_name(td->form));
       cJSON_AddNumberToObject(e, "frames", hold.frames);
       cJSON_AddNumberToObject(e, "free_frames", hold.free);
+      cJSON_AddNumberToObject(e, "mid_layer_frames", r->points->tissue_mid_layer_frames[t]);
       cJSON *shared = cJSON_AddObjectToObject(e, "shared_frames"); // organ name -> frames shared with it
       cJSON *others = cJSON_AddObjectToObject(e, "touches_unconnected"); // organ -> {shared, free}
       for (int32_t o = 0; o < r->meshes->count; ++o) {

@@ -427,6 +427,10 @@ typedef struct fascia_prep_points {
   /// volume samples. Such samples and frames have no voxel (sample_voxel,
   /// frame_voxel -1).
   int32_t *sample_cell_frame;
+  /// [tissue_count] of each tissue's frames, those on the mid-layers of its
+  /// gaps thinner than its frame spacing (free frames no interior frame
+  /// could give there; 0 for strands and sheets)
+  int32_t *tissue_mid_layer_frames;
 } fascia_prep_points;
 
 /// Poisson-disk sampling in each tissue region (fixed seed: same input, same
