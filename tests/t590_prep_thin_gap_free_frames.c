@@ -6,12 +6,12 @@
 // from an organ, so without its mid-layer every frame would lie on a box and
 // move with it, and nothing would be simulated. Each gap must have free
 // frames between the faces, each on the gap's mid-layer (within a voxel of
-// the middle, at least a voxel from both faces), and a static solve
-// with box B pulled must iterate and move them. `fascia prep --json` reports the tissue's
-// form, its free frames (and how many are mid-layer frames) and its shared
-// frames per organ; a third box that
-// the tissue touches but does not connect is reported, coupled by default
-// and left free under "coupling": {"others": false}.
+// the middle, at least a voxel from both faces), and a static solve with
+// box B pulled must iterate and move them. `fascia prep --json` reports the
+// tissue's form, its free frames (and how many are mid-layer frames) and
+// its shared frames per organ; a third box that the tissue touches but does
+// not connect is reported, coupled by default and left free under
+// "coupling": {"others": false}.
 // Usage: t590_prep_thin_gap_free_frames PATH/TO/fascia
 #define _POSIX_C_SOURCE 200809L // mkdtemp
 #include <cjson/cJSON.h>
