@@ -224,6 +224,73 @@ static void check_refusals(const char *dir) {
           "larger than the gap");
 }
 
+// One box of an OBJ file as part `name` (o name), its vertices numbered from first + 1.
+static void obj_box(char *text, size_t size, const char *name, const double *lo, const double *hi, int first) {
+  size_t n = strlen(text);
+  n += (size_t)snprintf(text + n, size - n, "o %s\n", name);
+  for (int k = 0; k < 8; ++k)
+    n += (size_t)snprintf(text + n, size - n, "v %g %g %g\n", (k & 1) ? hi[0] : lo[0], (k & 2) ? hi[1] : lo[1],
+                          (k & 4) ? hi[2] : lo[2]);
+  static const int faces[12][3] = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
+                                   {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
+  for (int f = 0; f < 12; ++f)
+    n += (size_t)snprintf(text + n, size - n, "f %d %d %d\n", first + faces[f][0] + 1, first + faces[f][1] + 1,
+                          first + faces[f][2] + 1);
+}
+
+// A strand attached to a named part ends at that part's point nearest its
+// other end: organ P is two boxes, parts "top" and "bottom", beside B.
+static void check_part_attachment(const char *dir) {
+  char text[4096] = "";
+  const double top_lo[3] = {0.01, -0.005, 0.015}, top_hi[3] = {0.02, 0.005, 0.025};
+  const double bottom_lo[3] = {0.01, -0.005, -0.025}, bottom_hi[3] = {0.02, 0.005, -0.015};
+  obj_box(text, sizeof text, "top", top_lo, top_hi, 0);
+  obj_box(text, sizeof text, "bottom", bottom_lo, bottom_hi, 8);
+  CHECK(fixture_write(dir, "p.obj", text));
+  static const char organ_p[] = ", {\"name\": \"P\", \"mesh\": \"p.obj\", \"model\": \"fixed\"}";
+  static const char *const parts[2] = {"top", "bottom"};
+  for (int k = 0; k < 2; ++k) {
+    char tissue[1024], path[512];
+    snprintf(tissue, sizeof tissue,
+             "{\"name\": \"lig\", \"form\": \"strand\", \"from\": {\"organ\": \"A\", \"point\": [-0.01, 0, 0]},\n"
+             " \"to\": {\"organ\": \"P\", \"part\": \"%s\"}, \"radius\": 0.001, \"material\": \"lig\",\n"
+             " \"frame_spacing\": 0.004}",
+             parts[k]);
+    CHECK(write_scene(dir, organ_p, tissue, path));
+    fascia_ctx *ctx = fixture_ctx();
+    fixture_run r;
+    const fascia_status st = fixture_prep(ctx, path, &r);
+    if (st != FASCIA_OK) fprintf(stderr, "part %s: %s\n", parts[k], fascia_ctx_message(ctx));
+    CHECK(st == FASCIA_OK);
+    if (st == FASCIA_OK) { // the end on P: the part's edge nearest (-10, 0, 0) mm, coupled to P
+      const double want[3] = {0.01, 0, k == 0 ? 0.015 : -0.015};
+      double off = INFINITY;
+      int on_p = 0;
+      for (int32_t c = 0; c < r.model->coupling_count; ++c) {
+        if (r.model->coupling_organ[c] != 2) continue;
+        const double *x = r.model->frame_position + 3 * r.model->coupling_frame[c];
+        off = fmin(off, sqrt((x[0] - want[0]) * (x[0] - want[0]) + (x[1] - want[1]) * (x[1] - want[1]) +
+                             (x[2] - want[2]) * (x[2] - want[2])));
+        ++on_p;
+      }
+      if (on_p != 1 || off > 1e-6) fprintf(stderr, "part %s: %d ends on P, %.3g mm off\n", parts[k], on_p, 1e3 * off);
+      CHECK(on_p == 1 && off <= 1e-6);
+    }
+    fixture_free(&r);
+    fascia_ctx_destroy(&ctx);
+  }
+  char text2[2048];
+  static const char by_part[] =
+      "{\"name\": \"lig\", \"form\": \"strand\", \"from\": {\"organ\": \"A\", \"point\": [-0.01, 0, 0]},\n"
+      " \"to\": {\"organ\": \"P\", \"part\": \"top\"}, \"radius\": 0.001, \"material\": \"lig\",\n"
+      " \"frame_spacing\": 0.004}";
+  refused(dir, organ_p, replaced(by_part, "\"top\"", "\"side\"", text2, sizeof text2), "tissues[0].to.part",
+          "no part named 'side'");
+  refused(dir, organ_p, replaced(by_part, "\"part\": \"top\"", "\"part\": \"top\", \"point\": [0, 0, 0]", text2,
+                                 sizeof text2),
+          "tissues[0].to", "not both");
+}
+
 static void check_shipped(const char *cli, const char *dir, const char *scene) {
   char args[2048], err[512];
   snprintf(args, sizeof args, "prep '%s' -o '%s/shipped.h5' --json", scene, dir);
@@ -270,8 +337,9 @@ int main(int argc, char **argv) {
   check_strand(dir);
   check_sheet(dir);
   check_refusals(dir);
+  check_part_attachment(dir);
   check_shipped(argv[1], dir, argv[2]);
-  static const char *const files[] = {"a.obj", "b.obj", "c.obj", "sheet.obj", "lines.obj", "inside.obj", "scene.json",
+  static const char *const files[] = {"a.obj", "b.obj", "c.obj", "p.obj", "sheet.obj", "lines.obj", "inside.obj", "scene.json",
                                       "shipped.h5", "stderr.txt", NULL};
   fixture_cleanup(dir, files);
   return CHECK_RESULT();

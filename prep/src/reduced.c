@@ -102,14 +102,90 @@ static fascia_status attach(fascia_ctx *ctx, const fascia_prep_scene *scene, con
   return FASCIA_OK;
 }
 
+// A part of an organ's mesh as a closest-point tree of its own; *first_of
+// maps the tree's triangle k back to the organ's: part_triangles[k].
+typedef struct part_tree {
+  fascia_cgal_tree *tree;
+  int32_t *triangles; ///< [count] the organ's triangle indices of the part
+  int32_t count;
+} part_tree;
+
+static fascia_status part_tree_create(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_meshes *meshes,
+                                      int32_t t, const char *key, const fascia_prep_attachment *a, part_tree *out) {
+  memset(out, 0, sizeof *out);
+  const fascia_prep_mesh *m = meshes->organs + a->organ;
+  const int32_t part = prep_mesh_part(m, a->part);
+  PREP_CHECK(part >= 0, ctx, FASCIA_ERR_ARGUMENT,
+             "scene '%s' tissues[%d].%s.part: organ '%s' uses no part named '%s' (fascia prep --preview lists what it "
+             "read; label organs have one part, named after the organ)",
+             scene->path, (int)t, key, m->name, a->part);
+  for (int32_t k = 0; k < m->triangle_count; ++k) out->count += m->triangle_part[k] == part;
+  PREP_CHECK(out->count > 0, ctx, FASCIA_ERR_ARGUMENT, "scene '%s' tissues[%d].%s.part: part '%s' of organ '%s' has no "
+             "triangle", scene->path, (int)t, key, a->part, m->name);
+  out->triangles = prep_calloc(out->count, sizeof(int32_t));
+  int32_t *corners = prep_calloc(3 * (int64_t)out->count, sizeof(int32_t));
+  fascia_status status = out->triangles && corners ? FASCIA_OK
+                                                   : PREP_FAIL(ctx, FASCIA_ERR_MEMORY, "strand: out of memory");
+  for (int32_t k = 0, n = 0; status == FASCIA_OK && k < m->triangle_count; ++k)
+    if (m->triangle_part[k] == part) {
+      memcpy(corners + 3 * (int64_t)n, m->triangles + 3 * (int64_t)k, 3 * sizeof(int32_t));
+      out->triangles[n++] = k;
+    }
+  if (status == FASCIA_OK)
+    status = fascia_cgal_tree_create(ctx, m->vertex_count, m->vertices, out->count, corners, &out->tree);
+  free(corners);
+  return status;
+}
+
+static void part_tree_free(part_tree *p) {
+  fascia_cgal_tree_destroy(&p->tree);
+  free(p->triangles);
+  p->triangles = NULL;
+}
+
+// The point of part p nearest to x, and the organ's triangle holding it.
+static void part_closest(const part_tree *p, const double *x, double *out, int32_t *triangle) {
+  int32_t k = 0;
+  fascia_cgal_tree_closest(p->tree, 1, x, out, &k);
+  *triangle = p->triangles[k];
+}
+
+// A strand's ends, one or both on parts of their organs: the nearest points
+// of the two (alternate projections from a point end, or from part A's
+// first vertex; a few rounds settle on the nearest pair of convex-ish parts).
+static fascia_status attach_ends(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_meshes *meshes,
+                                 fascia_cgal_tree **trees, int32_t t, double *a, int32_t *ta, double *b,
+                                 int32_t *tb) {
+  const fascia_prep_tissue_def *td = scene->tissues + t;
+  const int on_a = td->from.part[0] != '\0', on_b = td->to.part[0] != '\0';
+  if (!on_a) PREP_TRY(attach(ctx, scene, meshes, trees, t, "from", &td->from, a, ta));
+  if (!on_b) PREP_TRY(attach(ctx, scene, meshes, trees, t, "to", &td->to, b, tb));
+  if (!on_a && !on_b) return FASCIA_OK;
+  part_tree pa = {0}, pb = {0};
+  fascia_status status = FASCIA_OK;
+  if (on_a) PREP_TRY_GOTO(part_tree_create(ctx, scene, meshes, t, "from", &td->from, &pa));
+  if (on_b) PREP_TRY_GOTO(part_tree_create(ctx, scene, meshes, t, "to", &td->to, &pb));
+  if (on_a && on_b) {
+    const fascia_prep_mesh *m = meshes->organs + td->from.organ;
+    memcpy(a, m->vertices + 3 * (int64_t)m->triangles[3 * (int64_t)pa.triangles[0]], 3 * sizeof(double));
+  }
+  for (int round = 0; round < 8; ++round) {
+    if (on_b) part_closest(&pb, a, b, tb);
+    if (on_a) part_closest(&pa, b, a, ta);
+  }
+cleanup:
+  part_tree_free(&pa);
+  part_tree_free(&pb);
+  return status;
+}
+
 static fascia_status build_strand(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_meshes *meshes,
                                   const fascia_prep_volume *vol, int32_t t, fascia_cgal_tree **trees,
                                   prep_reduced *out) {
   const fascia_prep_tissue_def *td = scene->tissues + t;
   double a[3], b[3], axis[3];
   int32_t ta, tb;
-  PREP_TRY(attach(ctx, scene, meshes, trees, t, "from", &td->from, a, &ta));
-  PREP_TRY(attach(ctx, scene, meshes, trees, t, "to", &td->to, b, &tb));
+  PREP_TRY(attach_ends(ctx, scene, meshes, trees, t, a, &ta, b, &tb));
   sub3(b, a, axis);
   const double length = norm3(axis);
   PREP_CHECK(length > 2 * vol->voxel_size, ctx, FASCIA_ERR_ARGUMENT,

@@ -805,27 +805,40 @@ static fascia_status parse_coupling(const reader *rd, const fascia_prep_scene *s
 
 #define SCENE_PI 3.14159265358979323846
 
-// A strand's end: {"organ", "point", "radius"}.
+// A strand's end: {"organ", "point", "radius"} or {"organ", "part"}.
 static fascia_status parse_attachment(const reader *rd, const fascia_prep_scene *scene, const cJSON *item,
                                       const char *path, const char *key, fascia_prep_attachment *a) {
   char at[PATH_SIZE], ok[PATH_SIZE];
   sub_key(at, path, key);
   const cJSON *e = cJSON_GetObjectItemCaseSensitive(item, key);
   if (!cJSON_IsObject(e))
-    return key_fail(rd, at, "expected an attachment {\"organ\": name, \"point\": [x, y, z], \"radius\": r}, found %s",
+    return key_fail(rd, at,
+                    "expected an attachment {\"organ\": name, \"point\": [x, y, z], \"radius\": r} or {\"organ\": "
+                    "name, \"part\": part name}, found %s",
                     type_name(e));
-  static const char *const known[] = {"organ", "point", "radius", NULL};
+  static const char *const known[] = {"organ", "point", "radius", "part", NULL};
   PREP_TRY(check_keys(rd, e, at, known));
   const char *organ;
   PREP_TRY(get_string(rd, e, at, "organ", 1, &organ));
   sub_key(ok, at, "organ");
   PREP_TRY(need_organ(rd, scene, ok, organ, &a->organ));
+  const cJSON *part = cJSON_GetObjectItemCaseSensitive(e, "part");
+  if (part) {
+    char pk[PATH_SIZE];
+    sub_key(pk, at, "part");
+    if (cJSON_GetObjectItemCaseSensitive(e, "point") || cJSON_GetObjectItemCaseSensitive(e, "radius"))
+      return key_fail(rd, at, "give either \"point\" (with \"radius\") or \"part\", not both");
+    if (!cJSON_IsString(part) || !part->valuestring[0] || strlen(part->valuestring) >= sizeof a->part)
+      return key_fail(rd, pk, "expected the name of a part of organ '%s' (up to %d characters), found %s", organ,
+                      (int)sizeof a->part - 1, type_name(part));
+    snprintf(a->part, sizeof a->part, "%s", part->valuestring);
+    return FASCIA_OK;
+  }
   PREP_TRY(get_vector(rd, e, at, "point", 1, 3, a->point));
   PREP_TRY(get_number(rd, e, at, "radius", 0, 2 * scene->voxel_size, 0, 0, INFINITY, &a->radius));
   return FASCIA_OK;
 }
 
-// A strand or a sheet (the keys of parse_tissue that apply, and their own).
 // A tissue's "connects": at least `minimum` organ names, each once, into
 // t->organs (the sheet's organs, a volume tissue's two or more).
 static fascia_status get_connects(const reader *rd, const fascia_prep_scene *scene, const cJSON *item,
@@ -856,6 +869,7 @@ static fascia_status get_connects(const reader *rd, const fascia_prep_scene *sce
   return FASCIA_OK;
 }
 
+// A strand or a sheet (the keys of parse_tissue that apply, and their own).
 static fascia_status parse_reduced_tissue(const reader *rd, const fascia_prep_scene *scene, const cJSON *item,
                                           const char *path, const char *base_dir, fascia_prep_tissue_def *t) {
   static const char *const known_strand[] = {"name", "form", "from", "to", "radius", "area", "material",

@@ -122,11 +122,14 @@ typedef enum fascia_prep_tissue_form {
 /// "volume", "strand" or "sheet".
 FASCIA_API const char *fascia_prep_form_name(int32_t form);
 
-/// Where a strand ends: a point near an organ's surface (within radius).
+/// Where a strand ends: a point near an organ's surface (within radius), or
+/// a named part of the organ's mesh (the strand then ends at the point of
+/// that part nearest its other end: a ligament takes the shortest way).
 typedef struct fascia_prep_attachment {
   int32_t organ;        ///< organ index
-  fascia_real point[3]; ///< as given, m
+  fascia_real point[3]; ///< as given, m (unused with a part)
   fascia_real radius;   ///< the point lies within this of the organ's surface, m
+  char part[FASCIA_NAME_SIZE]; ///< "" : attached at point; else the part of the organ's mesh
 } fascia_prep_attachment;
 
 /// One tissue: the connective tissue between two or more organs.
