@@ -141,7 +141,54 @@ static fascia_status find_occupied(fascia_ctx *ctx, const fascia_prep_scene *sce
   return FASCIA_OK;
 }
 
-// The surface of organ o's labels, in the world, into mesh (one part, named after the organ).
+// The parts of organ o's surface (grid coordinates in grid[3 nv]): one
+// part named after the organ when it is one label; else one per label,
+// named by the label table (or "label N"), each triangle in the part of
+// the organ's voxel nearest its centroid (a strand can then attach to one
+// vertebra of "vertebrae_*").
+static fascia_status label_parts(fascia_ctx *ctx, const fascia_prep_scene *scene, const prep_labelmap *map,
+                                 const int32_t *organ_of, int32_t o, const double *grid, fascia_prep_mesh *mesh) {
+  const fascia_prep_organ_def *od = scene->organs + o;
+  const int32_t parts = od->label_count > 1 ? od->label_count : 1;
+  mesh->triangle_part = prep_calloc(mesh->triangle_count, sizeof(int32_t));
+  mesh->part_names = prep_calloc(parts, sizeof(char *));
+  PREP_CHECK(mesh->triangle_part && mesh->part_names, ctx, FASCIA_ERR_MEMORY, "organ '%s': out of memory", mesh->name);
+  mesh->part_count = parts;
+  for (int32_t p = 0; p < parts; ++p) {
+    char name[FASCIA_NAME_SIZE];
+    const char *label = fascia_prep_label_name(&scene->segmentation, od->labels[p]);
+    if (parts == 1) snprintf(name, sizeof name, "%s", mesh->name);
+    else if (label) snprintf(name, sizeof name, "%s", label);
+    else snprintf(name, sizeof name, "label %d", (int)od->labels[p]);
+    mesh->part_names[p] = prep_strdup(name);
+    PREP_CHECK(mesh->part_names[p], ctx, FASCIA_ERR_MEMORY, "organ '%s': out of memory", mesh->name);
+  }
+  if (parts == 1) return FASCIA_OK;
+  const int32_t *d = map->dims;
+  for (int32_t t = 0; t < mesh->triangle_count; ++t) {
+    double c[3] = {0, 0, 0};
+    for (int j = 0; j < 3; ++j)
+      for (int r = 0; r < 3; ++r) c[r] += grid[3 * (int64_t)mesh->triangles[3 * (int64_t)t + j] + r] / 3;
+    double best = INFINITY;
+    int32_t part = 0;
+    for (int dk = -2; dk <= 2; ++dk) // the organ's voxels within two of the centroid
+      for (int dj = -2; dj <= 2; ++dj)
+        for (int di = -2; di <= 2; ++di) {
+          const int32_t ijk[3] = {(int32_t)lround(c[0]) + di, (int32_t)lround(c[1]) + dj, (int32_t)lround(c[2]) + dk};
+          if (ijk[0] < 0 || ijk[1] < 0 || ijk[2] < 0 || ijk[0] >= d[0] || ijk[1] >= d[1] || ijk[2] >= d[2]) continue;
+          const int32_t label = map->labels[ijk[0] + (int64_t)d[0] * (ijk[1] + (int64_t)d[1] * ijk[2])];
+          if (organ_of[label] != o) continue;
+          const double e0 = ijk[0] - c[0], e1 = ijk[1] - c[1], e2 = ijk[2] - c[2], dist = e0 * e0 + e1 * e1 + e2 * e2;
+          if (dist >= best) continue;
+          for (int32_t p = 0; p < parts; ++p)
+            if (od->labels[p] == label) best = dist, part = p;
+        }
+    mesh->triangle_part[t] = part;
+  }
+  return FASCIA_OK;
+}
+
+// The surface of organ o's labels, in the world, into mesh, with its parts (label_parts).
 static fascia_status label_surface(fascia_ctx *ctx, const fascia_prep_scene *scene, const prep_labelmap *map,
                                    const int32_t *organ_of, int32_t o, fascia_prep_mesh *mesh) {
   const int32_t *d = map->dims;
@@ -173,8 +220,13 @@ static fascia_status label_surface(fascia_ctx *ctx, const fascia_prep_scene *sce
   free(inside);
   PREP_TRY(status);
   const double *A = map->to_world;
+  double *grid = prep_calloc(3 * (int64_t)nv + 3, sizeof(double)); // the vertices on the label map's grid
+  if (!grid) {
+    free(vertices), free(triangles);
+    return PREP_FAIL(ctx, FASCIA_ERR_MEMORY, "organ '%s': out of memory for its surface", mesh->name);
+  }
   for (int32_t v = 0; v < nv; ++v) {
-    double x[3];
+    double *x = grid + 3 * (int64_t)v;
     for (int r = 0; r < 3; ++r) x[r] = vertices[3 * v + r] + lo[r] - pad;
     for (int r = 0; r < 3; ++r) vertices[3 * v + r] = A[4 * r] * x[0] + A[4 * r + 1] * x[1] + A[4 * r + 2] * x[2] + A[4 * r + 3];
   }
@@ -188,13 +240,9 @@ static fascia_status label_surface(fascia_ctx *ctx, const fascia_prep_scene *sce
   mesh->vertex_count = nv;
   mesh->triangles = triangles;
   mesh->triangle_count = nt;
-  mesh->triangle_part = prep_calloc(nt, sizeof(int32_t));
-  mesh->part_names = prep_calloc(1, sizeof(char *));
-  PREP_CHECK(mesh->triangle_part && mesh->part_names, ctx, FASCIA_ERR_MEMORY, "organ '%s': out of memory", mesh->name);
-  mesh->part_names[0] = prep_strdup(mesh->name);
-  PREP_CHECK(mesh->part_names[0], ctx, FASCIA_ERR_MEMORY, "organ '%s': out of memory", mesh->name);
-  mesh->part_count = 1;
-  return FASCIA_OK;
+  const fascia_status parts = label_parts(ctx, scene, map, organ_of, o, grid, mesh);
+  free(grid);
+  return parts;
 }
 
 // Voxel faces where labels of two different organs meet, per pair.
@@ -332,7 +380,13 @@ fascia_status prep_label_organs(fascia_ctx *ctx, const fascia_prep_scene *scene,
     PREP_TRY_GOTO(label_surface(ctx, scene, map, organ_of, o, m));
     memcpy(m->sha256, sha256, sizeof sha256);
     prep_mesh_bounds(m);
-    m->report.parts_used = 1;
+    m->report.parts_used = 0; // the parts that got triangles: labels named by a pattern may be absent
+    for (int32_t p = 0; p < m->part_count; ++p)
+      for (int32_t t = 0; t < m->triangle_count; ++t)
+        if (m->triangle_part[t] == p) {
+          ++m->report.parts_used;
+          break;
+        }
   }
   PREP_TRY_GOTO(find_contacts(ctx, scene, map, organ_of, meshes));
   PREP_TRY_GOTO(find_occupied(ctx, scene, map, organ_of, meshes));

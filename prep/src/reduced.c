@@ -117,7 +117,7 @@ static fascia_status part_tree_create(fascia_ctx *ctx, const fascia_prep_scene *
   const int32_t part = prep_mesh_part(m, a->part);
   PREP_CHECK(part >= 0, ctx, FASCIA_ERR_ARGUMENT,
              "scene '%s' tissues[%d].%s.part: organ '%s' uses no part named '%s' (fascia prep --preview lists what it "
-             "read; label organs have one part, named after the organ)",
+             "read; an organ of one label has one part, named after the organ, an organ of several one per label)",
              scene->path, (int)t, key, m->name, a->part);
   for (int32_t k = 0; k < m->triangle_count; ++k) out->count += m->triangle_part[k] == part;
   PREP_CHECK(out->count > 0, ctx, FASCIA_ERR_ARGUMENT, "scene '%s' tissues[%d].%s.part: part '%s' of organ '%s' has no "
