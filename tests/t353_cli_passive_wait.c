@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
 // The fascia program runs OpenMP with the passive wait policy, so that its
-// threads do not spin for cores a busy machine does not give them (README.md,
+// threads do not spin for cores a busy machine does not give them (docs/measured.md,
 // "On a busy machine") after a short spin, and keeps a policy or a spin
 // count the user set; OpenBLAS starts no spinning workers
 // (OPENBLAS_NUM_THREADS=1, the direct solver's one BLAS thread) unless the

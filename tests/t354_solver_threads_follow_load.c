@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
 // The solver's thread count follows the free cores (fascia_threads_free,
-// README.md "On a busy machine"): never more than asked, at least one, and
+// docs/measured.md "On a busy machine"): never more than asked, at least one, and
 // one while other processes keep every core busy, unless its passes are long
 // (FASCIA_THREADS_LONG_PASS_PAIRS pairs or more: all it asked for, busy or
 // not); a run that changes its thread count on the way gives the same bits

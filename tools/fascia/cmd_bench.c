@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// `fascia bench`: the benchmarks (README.md, "What is measured").
+// `fascia bench`: the benchmarks (docs/measured.md).
 //   paper       the rows of Tables 2 and 3 of Bosman et al. 2013 (sec. 4.3),
 //               run in the paper's mode (implicit Euler, one Newton iteration,
 //               exactly 60 CG iterations per step): minimum ms per step over

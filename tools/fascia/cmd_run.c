@@ -4,7 +4,7 @@
 // implicit Euler steps (docs/mechanics.md), optionally writes the
 // results file (HDF5 + XDMF), and prints a summary: steps, ms per step,
 // Newton and CG iterations, each probe's displacement, the largest strain;
-// as text or as one JSON object on stdout (the CLI contract of README.md).
+// as text or as one JSON object on stdout (the CLI contract of docs/cli.md).
 // SIGINT/SIGTERM during a dynamic run stop it after the current step; the
 // results file is then closed cleanly with the steps done.
 #define _POSIX_C_SOURCE 200809L

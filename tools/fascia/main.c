@@ -69,7 +69,7 @@ fascia_ctx *cli_ctx(int threads, int progress) {
 }
 
 // OpenMP threads that spin while they wait for a core they do not get make
-// a run on a busy machine 10-30 times slower (README.md, "Speed"); with the
+// a run on a busy machine 10-30 times slower (docs/measured.md, "Speed"); with the
 // passive wait policy it degrades with the cores it gets. A short spin
 // (FASCIA_OMP_SPIN rounds of libgomp's pause loop, about 0.1 ms) before a
 // thread sleeps is kept: CG passes follow each other within microseconds,
