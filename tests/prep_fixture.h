@@ -95,15 +95,8 @@ static inline void fixture_weight_errors(const fascia_model *m, double worst[3])
 }
 
 /// Everything the pipeline builds.
-typedef struct fixture_run {
-  fascia_prep_scene *scene;
-  fascia_prep_meshes *meshes;
-  fascia_prep_volume *volume;
-  fascia_prep_points *points;
-  fascia_prep_weights *weights;
-  fascia_prep_coupling *coupling;
-  fascia_model *model;
-} fixture_run;
+/// Every stage's output (fascia_prep_stages).
+typedef fascia_prep_stages fixture_run;
 
 /// 1 when every 26-connected piece of the region with this label has voxels
 /// next to (26 neighbours) the insides of at least `need` different organs
@@ -150,29 +143,10 @@ static inline int fixture_pieces_touch(const fascia_prep_volume *v, int label, i
 
 /// Runs every stage on the scene file at path; stops at the first error.
 static inline fascia_status fixture_prep(fascia_ctx *ctx, const char *path, fixture_run *r) {
-  memset(r, 0, sizeof *r);
-  fascia_status st = fascia_prep_scene_load(ctx, path, &r->scene);
-  if (!st) st = fascia_prep_import(ctx, r->scene, &r->meshes);
-  if (!st) st = fascia_prep_repair(ctx, r->scene, r->meshes);
-  if (!st) st = fascia_prep_voxelize(ctx, r->scene, r->meshes, &r->volume);
-  if (!st) st = fascia_prep_sample(ctx, r->scene, r->meshes, r->volume, &r->points);
-  if (!st) st = fascia_prep_shape_functions(ctx, r->scene, r->volume, r->points, &r->weights);
-  if (!st) st = fascia_prep_couple(ctx, r->scene, r->meshes, r->points, &r->coupling);
-  if (!st)
-    st = fascia_prep_package(ctx, r->scene, r->meshes, r->volume, r->points, r->weights, r->coupling, NULL,
-                             &r->model);
-  return st;
+  return fascia_prep_stages_run(ctx, path, NULL, r);
 }
 
-static inline void fixture_free(fixture_run *r) {
-  fascia_model_destroy(&r->model);
-  fascia_prep_coupling_destroy(&r->coupling);
-  fascia_prep_weights_destroy(&r->weights);
-  fascia_prep_points_destroy(&r->points);
-  fascia_prep_volume_destroy(&r->volume);
-  fascia_prep_meshes_destroy(&r->meshes);
-  fascia_prep_scene_destroy(&r->scene);
-}
+static inline void fixture_free(fixture_run *r) { fascia_prep_stages_free(r); }
 
 static inline fascia_ctx *fixture_ctx(void) {
   fascia_ctx_def def = fascia_ctx_def_default();

@@ -72,25 +72,7 @@ static void step_end(step_clock *c, const char *name) {
   c->count++;
 }
 
-typedef struct prep_run {
-  fascia_prep_scene *scene;
-  fascia_prep_meshes *meshes;
-  fascia_prep_volume *volume;
-  fascia_prep_points *points;
-  fascia_prep_weights *weights;
-  fascia_prep_coupling *coupling;
-  fascia_model *model;
-} prep_run;
-
-static void run_free(prep_run *r) {
-  fascia_model_destroy(&r->model);
-  fascia_prep_coupling_destroy(&r->coupling);
-  fascia_prep_weights_destroy(&r->weights);
-  fascia_prep_points_destroy(&r->points);
-  fascia_prep_volume_destroy(&r->volume);
-  fascia_prep_meshes_destroy(&r->meshes);
-  fascia_prep_scene_destroy(&r->scene);
-}
+typedef fascia_prep_stages prep_run; // every stage's output
 
 enum { GAP_NONE, GAP_OVERLAP, GAP_CONTACT, GAP_THIN, GAP_OPEN };
 
@@ -717,7 +699,7 @@ fail:
   if (!strstr(fascia_ctx_message(ctx), "units look wrong")) print_warnings(r.meshes);
   rc = cli_fail("prep", ctx, st);
 done:
-  run_free(&r);
+  fascia_prep_stages_free(&r);
   fascia_ctx_destroy(&ctx);
   return rc;
 }

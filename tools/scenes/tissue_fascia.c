@@ -20,40 +20,6 @@
 #define DIR_SIZE 512
 #define PATH_SIZE (DIR_SIZE + 64)
 
-// Everything the pipeline builds, freed by stages_free.
-typedef struct stages {
-  fascia_prep_scene *scene;
-  fascia_prep_meshes *meshes;
-  fascia_prep_volume *volume;
-  fascia_prep_points *points;
-  fascia_prep_weights *weights;
-  fascia_prep_coupling *coupling;
-  fascia_model *model;
-} stages;
-
-static void stages_free(stages *s) {
-  fascia_model_destroy(&s->model);
-  fascia_prep_coupling_destroy(&s->coupling);
-  fascia_prep_weights_destroy(&s->weights);
-  fascia_prep_points_destroy(&s->points);
-  fascia_prep_volume_destroy(&s->volume);
-  fascia_prep_meshes_destroy(&s->meshes);
-  fascia_prep_scene_destroy(&s->scene);
-}
-
-static fascia_status run_stages(fascia_ctx *ctx, const char *path, stages *s) {
-  memset(s, 0, sizeof *s);
-  SCENE_TRY(fascia_prep_scene_load(ctx, path, &s->scene));
-  SCENE_TRY(fascia_prep_import(ctx, s->scene, &s->meshes));
-  SCENE_TRY(fascia_prep_repair(ctx, s->scene, s->meshes));
-  SCENE_TRY(fascia_prep_voxelize(ctx, s->scene, s->meshes, &s->volume));
-  SCENE_TRY(fascia_prep_sample(ctx, s->scene, s->meshes, s->volume, &s->points));
-  SCENE_TRY(fascia_prep_shape_functions(ctx, s->scene, s->volume, s->points, &s->weights));
-  SCENE_TRY(fascia_prep_couple(ctx, s->scene, s->meshes, s->points, &s->coupling));
-  return fascia_prep_package(ctx, s->scene, s->meshes, s->volume, s->points, s->weights, s->coupling, NULL,
-                             &s->model);
-}
-
 static void remove_scene(const char *dir) {
   static const char *const names[] = {FASCIA_TISSUE_BOX_A, FASCIA_TISSUE_BOX_B, FASCIA_TISSUE_SHEET,
                                       FASCIA_TISSUE_SCENE};
@@ -152,15 +118,15 @@ fascia_status fascia_tissue_hang_fascia(fascia_ctx *ctx, const fascia_tissue_han
   memset(out, 0, sizeof *out);
   char dir[DIR_SIZE], path[PATH_SIZE];
   SCENE_TRY(make_folder(ctx, dir));
-  stages s;
+  fascia_prep_stages s;
   memset(&s, 0, sizeof s);
   fascia_status status = FASCIA_OK;
   SCENE_TRY_GOTO(fascia_tissue_hang_write_scene(ctx, def, dir));
   snprintf(path, sizeof path, "%s/%s", dir, FASCIA_TISSUE_SCENE);
-  SCENE_TRY_GOTO(run_stages(ctx, path, &s));
+  SCENE_TRY_GOTO(fascia_prep_stages_run(ctx, path, NULL, &s));
   SCENE_TRY_GOTO(hang_from_model(ctx, s.model, out));
 cleanup:
-  stages_free(&s);
+  fascia_prep_stages_free(&s);
   remove_scene(dir);
   return status;
 }
@@ -204,15 +170,15 @@ fascia_status fascia_tissue_pull_fascia(fascia_ctx *ctx, const fascia_tissue_pul
   memset(out, 0, sizeof *out);
   char dir[DIR_SIZE], path[PATH_SIZE];
   SCENE_TRY(make_folder(ctx, dir));
-  stages s;
+  fascia_prep_stages s;
   memset(&s, 0, sizeof s);
   fascia_status status = FASCIA_OK;
   SCENE_TRY_GOTO(fascia_tissue_pull_write_scene(ctx, def, dir));
   snprintf(path, sizeof path, "%s/%s", dir, FASCIA_TISSUE_SCENE);
-  SCENE_TRY_GOTO(run_stages(ctx, path, &s));
+  SCENE_TRY_GOTO(fascia_prep_stages_run(ctx, path, NULL, &s));
   SCENE_TRY_GOTO(pull_from_model(ctx, def, s.model, out));
 cleanup:
-  stages_free(&s);
+  fascia_prep_stages_free(&s);
   remove_scene(dir);
   return status;
 }

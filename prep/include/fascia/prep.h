@@ -529,6 +529,26 @@ FASCIA_API fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_
                                              const fascia_prep_coupling *coupling, const fascia_prep_run_info *info,
                                              fascia_model **out);
 
+/// What every stage built for one scene, in the order they run; freed by
+/// fascia_prep_stages_free (NULL members are skipped).
+typedef struct fascia_prep_stages {
+  fascia_prep_scene *scene;
+  fascia_prep_meshes *meshes;
+  fascia_prep_volume *volume;
+  fascia_prep_points *points;
+  fascia_prep_weights *weights;
+  fascia_prep_coupling *coupling;
+  fascia_model *model;
+} fascia_prep_stages;
+
+/// Runs every stage on the scene file at path, as `fascia prep` does, and
+/// stops at the first error (its status; what was built stays in *out, to
+/// free). info goes to fascia_prep_package (NULL: none).
+FASCIA_API fascia_status fascia_prep_stages_run(fascia_ctx *ctx, const char *path, const fascia_prep_run_info *info,
+                                                fascia_prep_stages *out);
+/// Frees every member and zeroes them; accepts a zeroed struct.
+FASCIA_API void fascia_prep_stages_free(fascia_prep_stages *stages);
+
 /// Writes a ParaView preview into folder dir (created if absent), VTK XML:
 /// ORGAN.vtp per organ (its surface), region.vti (the voxel grid: region,
 /// distance to the nearest organ), frames.vtu (kind: 0 free, 1 on a fixed
