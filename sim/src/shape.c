@@ -155,72 +155,6 @@ static void cholesky4_solve(const fascia_real M[16], const fascia_real L[16], co
 //   d_k w_i   = phi_i b_i . g_k + d_k phi_i b_i . a,
 //   g_k       = M^-1 (e_{k+1} / r - (d_k M) a),  d_k M = sum_i d_k phi_i b_i b_i^T
 // and d phi_i / dp = phi'(q) (p - x_i) / (|p - x_i| r) = -20 (1 - q)^3 (p - x_i) / r^2.
-fascia_status fascia_shape_mls(fascia_ctx *ctx, int32_t n, const fascia_real *frame, const fascia_real p[3],
-                               fascia_real radius, fascia_real *w, fascia_real *grad) {
-  FASCIA_CHECK(frame && p && w && grad, ctx, FASCIA_ERR_ARGUMENT, "fascia_shape_mls: NULL argument");
-  FASCIA_CHECK(n >= 4, ctx, FASCIA_ERR_ARGUMENT,
-               "MLS at point (%g %g %g): %d frames, a linear basis needs at least 4", p[0], p[1], p[2], (int)n);
-  FASCIA_CHECK(isfinite(radius) && radius > 0, ctx, FASCIA_ERR_ARGUMENT,
-               "MLS at point (%g %g %g): kernel radius %g, expected > 0", p[0], p[1], p[2], radius);
-  fascia_real M[16] = {0}, dM[3][16], phi_sum = 0;
-  memset(dM, 0, sizeof dM);
-  int32_t inside = 0;
-  // first pass: kernel values (kept in w) and gradients (kept in grad)
-  for (int32_t i = 0; i < n; ++i) {
-    fascia_real b[4] = {1, 0, 0, 0}, dist2 = 0;
-    for (int r = 0; r < 3; ++r) {
-      b[r + 1] = (frame[3 * i + r] - p[r]) / radius;
-      dist2 += b[r + 1] * b[r + 1];
-    }
-    const fascia_real q = sqrt(dist2), phi = fascia_shape_kernel(q);
-    const fascia_real a = q < 1 ? 1 - q : 0, dphi_scale = 20 * a * a * a / radius; // d phi / dp = dphi_scale b
-    w[i] = phi;
-    for (int r = 0; r < 3; ++r) grad[3 * i + r] = dphi_scale * b[r + 1];
-    if (phi <= 0) continue;
-    ++inside;
-    phi_sum += phi;
-    for (int j = 0; j < 4; ++j)
-      for (int k = 0; k < 4; ++k) {
-        M[4 * j + k] += phi * b[j] * b[k];
-        for (int r = 0; r < 3; ++r) dM[r][4 * j + k] += grad[3 * i + r] * b[j] * b[k];
-      }
-  }
-  fascia_real L[16];
-  const fascia_real pivot = inside >= 4 ? cholesky4(M, L, phi_sum, 4) : -1;
-  FASCIA_CHECK(pivot > MLS_PIVOT_TOLERANCE, ctx, FASCIA_ERR_NUMERIC,
-               "MLS at point (%.9g %.9g %.9g): the moment matrix of the %d frames within radius %g m is singular "
-               "(relative pivot %.3g, %d frames in the support); the frames are coplanar, collinear or too few: use "
-               "more neighbours or a larger radius",
-               p[0], p[1], p[2], (int)n, radius, pivot, (int)inside);
-  const fascia_real e0[4] = {1, 0, 0, 0};
-  fascia_real a[4], g[3][4];
-  cholesky4_solve(M, L, e0, a, 4);
-  for (int r = 0; r < 3; ++r) {
-    fascia_real rhs[4];
-    for (int j = 0; j < 4; ++j) {
-      rhs[j] = (j == r + 1 ? 1 / radius : 0);
-      for (int k = 0; k < 4; ++k) rhs[j] -= dM[r][4 * j + k] * a[k];
-    }
-    cholesky4_solve(M, L, rhs, g[r], 4);
-  }
-  for (int32_t i = 0; i < n; ++i) {
-    const fascia_real phi = w[i];
-    if (phi <= 0) {
-      w[i] = 0;
-      grad[3 * i] = grad[3 * i + 1] = grad[3 * i + 2] = 0;
-      continue;
-    }
-    fascia_real b[4] = {1, 0, 0, 0};
-    for (int r = 0; r < 3; ++r) b[r + 1] = (frame[3 * i + r] - p[r]) / radius;
-    const fascia_real ba = b[0] * a[0] + b[1] * a[1] + b[2] * a[2] + b[3] * a[3];
-    w[i] = phi * ba;
-    for (int r = 0; r < 3; ++r) {
-      const fascia_real bg = b[0] * g[r][0] + b[1] * g[r][1] + b[2] * g[r][2] + b[3] * g[r][3];
-      grad[3 * i + r] = phi * bg + grad[3 * i + r] * ba;
-    }
-  }
-  return FASCIA_OK;
-}
 
 // Principal axes of n points: the eigenvectors of their covariance by
 // cyclic Jacobi rotations, ordered by decreasing variance. axis: [9], row k
@@ -274,11 +208,12 @@ static void principal_axes(int32_t n, const fascia_real *x, fascia_real axis[9],
   }
 }
 
-// MLS with a linear basis in the span of the frames: b(x) = (1, E (x - c) / r)
-// with the rows of E the dim principal axes of the frames, c = p held fixed,
-// and the kernel on the distance within that span. The formulas are those of
-// fascia_shape_mls with e_{k+1} / r replaced by E e_k / r on the right-hand
-// side of g_k and the kernel's gradient projected on the span.
+// MLS with a linear basis in a span of dim directions: b(x) = (1, E (x - c) / r)
+// with the rows of E the span's axes, c = p held fixed, and the kernel on the
+// distance within that span; with dim 3 and E the identity, the 3-D linear
+// MLS of fascia_shape_mls (the same arithmetic, the same bits). The weights'
+// gradients follow from the moment matrix's: g_k solves M g_k = E e_k / r -
+// dM_k a, and the kernel's gradient is projected on the span.
 static fascia_status mls_in_span(fascia_ctx *ctx, int32_t n, const fascia_real *frame, const fascia_real p[3],
                                  fascia_real radius, int dim, const fascia_real *E, fascia_real *w,
                                  fascia_real *grad) {
@@ -311,6 +246,12 @@ static fascia_status mls_in_span(fascia_ctx *ctx, int32_t n, const fascia_real *
   }
   fascia_real L[16];
   const fascia_real pivot = inside >= m ? cholesky4(M, L, phi_sum, m) : -1;
+  if (dim == 3)
+    FASCIA_CHECK(pivot > MLS_PIVOT_TOLERANCE, ctx, FASCIA_ERR_NUMERIC,
+                 "MLS at point (%.9g %.9g %.9g): the moment matrix of the %d frames within radius %g m is singular "
+                 "(relative pivot %.3g, %d frames in the support); the frames are coplanar, collinear or too few: use "
+                 "more neighbours or a larger radius",
+                 p[0], p[1], p[2], (int)n, radius, pivot, (int)inside);
   FASCIA_CHECK(pivot > MLS_PIVOT_TOLERANCE, ctx, FASCIA_ERR_NUMERIC,
                "MLS at point (%.9g %.9g %.9g): the moment matrix of the %d frames within radius %g m along their "
                "%s is singular (relative pivot %.3g, %d frames in the support, %d needed); use more neighbours or a "
@@ -349,6 +290,17 @@ static fascia_status mls_in_span(fascia_ctx *ctx, int32_t n, const fascia_real *
     }
   }
   return FASCIA_OK;
+}
+
+fascia_status fascia_shape_mls(fascia_ctx *ctx, int32_t n, const fascia_real *frame, const fascia_real p[3],
+                               fascia_real radius, fascia_real *w, fascia_real *grad) {
+  FASCIA_CHECK(frame && p && w && grad, ctx, FASCIA_ERR_ARGUMENT, "fascia_shape_mls: NULL argument");
+  FASCIA_CHECK(n >= 4, ctx, FASCIA_ERR_ARGUMENT,
+               "MLS at point (%g %g %g): %d frames, a linear basis needs at least 4", p[0], p[1], p[2], (int)n);
+  FASCIA_CHECK(isfinite(radius) && radius > 0, ctx, FASCIA_ERR_ARGUMENT,
+               "MLS at point (%g %g %g): kernel radius %g, expected > 0", p[0], p[1], p[2], radius);
+  static const fascia_real identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  return mls_in_span(ctx, n, frame, p, radius, 3, identity, w, grad);
 }
 
 fascia_status fascia_shape_mls_adaptive(fascia_ctx *ctx, int32_t n, const fascia_real *frame, const fascia_real p[3],
