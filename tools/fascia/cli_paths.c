@@ -39,8 +39,7 @@ const char *cli_folder_of(const char *path, char *out, size_t size) {
   return out;
 }
 
-static void folder_of(const char *path, char *out) { cli_folder_of(path, out, PATH_TEXT); }
-static const char *folder_of_input(const char *path, char *out) { return cli_folder_of(path, out, PATH_TEXT); }
+static const char *folder_of(const char *path, char *out) { return cli_folder_of(path, out, PATH_TEXT); }
 
 static int same_key(const file_key *a, const file_key *b) {
   if (a->exists != b->exists || a->dev != b->dev || a->ino != b->ino) return 0;
@@ -132,7 +131,7 @@ static int check_folder_patterns(const char *command, const cli_path *paths, int
     if (other == p || other->kind == CLI_OUTPUT_DIR || !other->path || !other->path[0]) continue;
     char folder[PATH_TEXT];
     struct stat st;
-    if (stat(folder_of_input(other->path, folder), &st) != 0 || st.st_dev != dir.st_dev || st.st_ino != dir.st_ino)
+    if (stat(folder_of(other->path, folder), &st) != 0 || st.st_dev != dir.st_dev || st.st_ino != dir.st_ino)
       continue;
     const char *slash = strrchr(other->path, '/');
     const char *name = slash ? slash + 1 : other->path;
