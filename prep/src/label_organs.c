@@ -60,14 +60,15 @@ static fascia_status check_present(fascia_ctx *ctx, const fascia_prep_scene *sce
       if (count[v] || !def->label_named[k]) continue; // a pattern takes the labels the image has
       labels_present(&scene->segmentation, count, list, sizeof list);
       status = PREP_FAIL(ctx, FASCIA_ERR_FORMAT,
-                         "organ '%s' (scene '%s'): label map '%s' has no voxel labelled %d; the labels it holds: %s",
+                         "organ '%s' (scene '%s'): label map '%s' has no voxel labelled %d; the labels it holds: %s "
+                         "(an organ a segmentation may lack: \"optional\": true)",
                          def->name, scene->path, scene->segmentation.file_path, (int)v, list);
     }
     if (status == FASCIA_OK && def->label_count && !voxels) {
       labels_present(&scene->segmentation, count, list, sizeof list);
       status = PREP_FAIL(ctx, FASCIA_ERR_FORMAT,
                          "organ '%s' (scene '%s'): label map '%s' has no voxel of the labels its pattern matches; "
-                         "the labels it holds: %s",
+                         "the labels it holds: %s (an organ a segmentation may lack: \"optional\": true)",
                          def->name, scene->path, scene->segmentation.file_path, list);
     }
   }

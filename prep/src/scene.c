@@ -14,6 +14,7 @@
 
 #include "labels.h"
 #include "prep_util.h"
+#include "scene_optional.h"
 
 typedef struct reader {
   fascia_ctx *ctx;
@@ -690,9 +691,18 @@ static fascia_status parse_organ(const reader *rd, fascia_prep_scene *scene, con
   static const char *const known[] = {"name",          "mesh",           "labels",          "parts",
                                       "units",         "transform",      "model",           "motion",
                                       "material",      "frame_spacing",  "sample_spacing",  "shape_functions",
-                                      "min_component", "patch_radius",   "description",    NULL};
+                                      "min_component", "patch_radius",   "description",    "optional", NULL};
   PREP_TRY(check_keys(rd, item, path, known));
   PREP_TRY(get_name(rd, item, path, "name", o->name));
+  int optional = 0;
+  PREP_TRY(get_bool(rd, item, path, "optional", 0, &optional));
+  o->optional = optional;
+  if (optional && !cJSON_GetObjectItemCaseSensitive(item, "labels")) {
+    char ok[PATH_SIZE];
+    sub_key(ok, path, "optional");
+    return key_fail(rd, ok, "applies to an organ made of labels (a segmentation may lack them); a mesh is given or "
+                    "not");
+  }
   const char *mesh, *model, *description;
   PREP_TRY(get_string(rd, item, path, "description", 0, &description));
   const cJSON *labels = cJSON_GetObjectItemCaseSensitive(item, "labels");
@@ -1300,6 +1310,19 @@ fascia_status fascia_prep_scene_parse(fascia_ctx *ctx, const char *text, const c
   if (!strncmp(cursor, "\xEF\xBB\xBF", 3)) cursor += 3; // a UTF-8 byte order mark, which cJSON skips
   PREP_TRY_GOTO(check_repeated_keys(&rd, text, root, "", &cursor));
   PREP_TRY_GOTO(parse_root(&rd, root, base_dir, s));
+  int edited = 0;
+  PREP_TRY_GOTO(prep_scene_leave_out_absent(ctx, s, root, &edited));
+  if (edited) { // read again without the absent optional organs
+    fascia_prep_scene *again = calloc(1, sizeof *again);
+    PREP_CHECK_GOTO(again, ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", origin);
+    again->path = s->path, again->text = s->text, s->path = s->text = NULL;
+    again->absent_organ_count = s->absent_organ_count, again->absent_organs = s->absent_organs;
+    again->dropped_tissue_count = s->dropped_tissue_count, again->dropped_tissues = s->dropped_tissues;
+    s->absent_organs = s->dropped_tissues = NULL;
+    fascia_prep_scene_destroy(&s);
+    s = again;
+    PREP_TRY_GOTO(parse_root(&rd, root, base_dir, s));
+  }
   *out = s;
   s = NULL;
 cleanup:
@@ -1382,6 +1405,8 @@ void fascia_prep_scene_destroy(fascia_prep_scene **scene) {
   free(s->path);
   free(s->text);
   free(s->output);
+  free(s->absent_organs);
+  free(s->dropped_tissues);
   free(s);
   *scene = NULL;
 }

@@ -180,6 +180,10 @@ static void print_summary(const prep_run *r, const step_clock *c, const char *ou
   const double h = v->voxel_size;
   fprintf(stderr, "\nfascia prep: %s -> %s\n", sc->path, output);
   print_warnings(r->meshes);
+  for (int32_t k = 0; k < sc->absent_organ_count; ++k) // "optional": true organs the segmentation lacks
+    fprintf(stderr, "optional organ '%s': not in the label map, left out\n", sc->absent_organs[k]);
+  for (int32_t k = 0; k < sc->dropped_tissue_count; ++k)
+    fprintf(stderr, "tissue '%s': left out with the optional organs the label map lacks\n", sc->dropped_tissues[k]);
   fprintf(stderr, "organs\n");
   for (int32_t o = 0; o < r->meshes->count; ++o) {
     const fascia_prep_mesh *m = r->meshes->organs + o;
@@ -410,6 +414,11 @@ static void print_json(const prep_run *r, const step_clock *c, const char *outpu
   for (int32_t o = 0; o < r->meshes->count; ++o)
     cJSON_AddNumberToObject(coupling, r->meshes->organs[o].name, r->coupling->per_organ[o]);
   cJSON_AddNumberToObject(root, "max_linear_reproduction_error", r->weights->max_linear_error);
+  cJSON *absent = cJSON_AddArrayToObject(root, "absent_organs"), *left_out = cJSON_AddArrayToObject(root, "dropped_tissues");
+  for (int32_t k = 0; k < r->scene->absent_organ_count; ++k)
+    cJSON_AddItemToArray(absent, cJSON_CreateString(r->scene->absent_organs[k]));
+  for (int32_t k = 0; k < r->scene->dropped_tissue_count; ++k)
+    cJSON_AddItemToArray(left_out, cJSON_CreateString(r->scene->dropped_tissues[k]));
   // pieces that nothing held, dropped by prep (its provenance lists them)
   cJSON *prov = r->model->provenance ? cJSON_Parse(r->model->provenance) : NULL;
   cJSON *dropped = cJSON_DetachItemFromObject(cJSON_GetObjectItem(prov, "reports"), "unheld_pieces_dropped");

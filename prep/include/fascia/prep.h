@@ -102,6 +102,9 @@ typedef struct fascia_prep_organ_def {
   /// Radius of the volumetric patches (mean dilatation, docs/mechanics.md), m;
   /// 0: none; FASCIA_PREP_PATCH_AUTO: by the rule of fascia_prep_patch_radius.
   fascia_real patch_radius;
+  /// 1: an organ of labels the segmentation may lack ("optional": true); when
+  /// it does, the scene is read without it (fascia_prep_scene.absent_organs).
+  int32_t optional;
 } fascia_prep_organ_def;
 
 /// Coupling rule of a tissue for one organ.
@@ -221,6 +224,12 @@ typedef struct fascia_prep_scene {
   int32_t tissue_count;
   fascia_prep_tissue_def *tissues; ///< [tissue_count]
   fascia_prep_segmentation segmentation; ///< file NULL when no organ comes from labels
+  /// Optional organs the segmentation lacks, left out of organs, and the
+  /// tissues left out with them (too few of their organs left).
+  int32_t absent_organ_count;
+  char (*absent_organs)[FASCIA_NAME_SIZE];   ///< [absent_organ_count]
+  int32_t dropped_tissue_count;
+  char (*dropped_tissues)[FASCIA_NAME_SIZE]; ///< [dropped_tissue_count]
 } fascia_prep_scene;
 
 /// Reads and checks a scene file. Unknown keys, wrong types, missing
