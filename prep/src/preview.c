@@ -37,8 +37,12 @@ static fascia_status open_part(preview *p, const char *name, fascia_file **file)
 // Commits a part's file and lists it in preview.pvd under its block name.
 static fascia_status close_part(preview *p, fascia_file **file, const char *file_name, const char *block) {
   PREP_TRY(fascia_file_commit(file));
-  fprintf(fascia_file_stream(p->pvd), "    <DataSet timestep=\"0\" group=\"\" part=\"%d\" name=\"%s\" file=\"%s\"/>\n",
-          p->parts++, block, file_name);
+  FILE *pvd = fascia_file_stream(p->pvd);
+  fprintf(pvd, "    <DataSet timestep=\"0\" group=\"\" part=\"%d\" name=\"", p->parts++);
+  fascia_xml_text(pvd, block); // names are data
+  fputs("\" file=\"", pvd);
+  fascia_xml_text(pvd, file_name);
+  fputs("\"/>\n", pvd);
   return FASCIA_OK;
 }
 

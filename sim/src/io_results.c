@@ -28,6 +28,7 @@
 #include "fascia/files.h"
 #include "fascia/results.h"
 #include "fascia/solver.h"
+#include "fascia/vtk_xml.h"
 #include "h5io.h"
 
 #define RESULTS_VERSION 2
@@ -42,6 +43,7 @@
 
 typedef struct field {
   char name[FASCIA_NAME_SIZE];
+  char unit[TEXT_SIZE]; ///< as described, for the XDMF sidecar
   hid_t dset;
 } field;
 
@@ -409,6 +411,7 @@ static field *find_field(fascia_results *r, const char *name, fascia_status *sta
   }
   field *f = r->fields + r->field_count++;
   snprintf(f->name, sizeof f->name, "%s", name);
+  snprintf(f->unit, sizeof f->unit, "unknown");
   f->dset = dset;
   return f;
 }
@@ -451,6 +454,7 @@ fascia_status fascia_results_describe_field(fascia_results *r, const char *name,
   fascia_status status = FASCIA_OK;
   field *f = find_field(r, name, &status);
   if (f && describe(f->dset, unit, meaning) < 0) status = h5_failed(r, "/samples/fields", "describe");
+  if (f) snprintf(f->unit, sizeof f->unit, "%s", unit);
   fascia_h5_quiet_end(&quiet);
   return status;
 }
@@ -570,32 +574,27 @@ void fascia_results_sidecar_path(const char *path, char *out, size_t size) {
   snprintf(out, size, "%.*s.xdmf", (int)length, path);
 }
 
-static void xml_escaped(FILE *out, const char *text) {
-  for (; *text; ++text) switch (*text) {
-    case '&': fputs("&amp;", out); break;
-    case '<': fputs("&lt;", out); break;
-    case '>': fputs("&gt;", out); break;
-    case '"': fputs("&quot;", out); break;
-    default: fputc(*text, out);
-    }
-}
-
 // An HDF DataItem of dataset h5:/path, `rows` by `cols` (0: a scalar per row).
 static void xdmf_item(FILE *out, const char *h5, const char *path, int64_t rows, int cols, bool integer) {
   fprintf(out, "            <DataItem Dimensions=\"%lld", (long long)rows);
   if (cols) fprintf(out, " %d", cols);
   fprintf(out, "\" NumberType=\"%s\" Precision=\"%d\" Format=\"HDF\">", integer ? "Int" : "Float", integer ? 4 : 8);
-  xml_escaped(out, h5);
+  fascia_xml_text(out, h5);
   fputc(':', out);
-  xml_escaped(out, path); // field names are free text
+  fascia_xml_text(out, path); // field names are free text
   fputs("</DataItem>\n", out);
 }
 
-static void xdmf_attribute(FILE *out, const char *name, const char *h5, const char *path, int64_t rows, int cols,
-                           bool integer) {
+// An attribute with its unit as an XDMF Information element (readers that
+// do not know it skip it).
+static void xdmf_attribute(FILE *out, const char *name, const char *unit, const char *h5, const char *path,
+                           int64_t rows, int cols, bool integer) {
   fputs("          <Attribute Name=\"", out);
-  xml_escaped(out, name);
+  fascia_xml_text(out, name);
   fprintf(out, "\" AttributeType=\"%s\" Center=\"Node\">\n", cols ? "Vector" : "Scalar");
+  fputs("            <Information Name=\"unit\" Value=\"", out);
+  fascia_xml_text(out, unit);
+  fputs("\"/>\n", out);
   xdmf_item(out, h5, path, rows, cols, integer);
   fputs("          </Attribute>\n", out);
 }
@@ -619,21 +618,21 @@ static void xdmf_grid(FILE *out, const fascia_results *r, const char *h5, int64_
     const series_info *info = series_table + k;
     if (info->samples != samples || k == SERIES_FRAME_POSITION || k == SERIES_SAMPLE_POSITION) continue;
     snprintf(path, sizeof path, "/xdmf/step_%lld/%s_%s", (long long)t, block, info->name);
-    xdmf_attribute(out, info->name, h5, path, rows, 3, false);
+    xdmf_attribute(out, info->name, info->unit, h5, path, rows, 3, false);
   }
   snprintf(path, sizeof path, "/%s/rest_position", block);
-  xdmf_attribute(out, "rest_position", h5, path, rows, 3, false);
+  xdmf_attribute(out, "rest_position", "m", h5, path, rows, 3, false);
   snprintf(path, sizeof path, "/%s/organ", block);
-  xdmf_attribute(out, "organ", h5, path, rows, 0, true);
+  xdmf_attribute(out, "organ", "1", h5, path, rows, 0, true);
   if (samples) {
-    xdmf_attribute(out, "material", h5, "/samples/material", rows, 0, true);
-    xdmf_attribute(out, "volume", h5, "/samples/volume", rows, 0, false);
+    xdmf_attribute(out, "material", "1", h5, "/samples/material", rows, 0, true);
+    xdmf_attribute(out, "volume", "m^3", h5, "/samples/volume", rows, 0, false);
   } else {
-    xdmf_attribute(out, "kind", h5, "/frames/kind", rows, 0, true);
+    xdmf_attribute(out, "kind", "1", h5, "/frames/kind", rows, 0, true);
   }
   for (int32_t k = 0; samples && k < r->field_count; ++k) {
     snprintf(path, sizeof path, "/xdmf/step_%lld/field_%s", (long long)t, r->fields[k].name);
-    xdmf_attribute(out, r->fields[k].name, h5, path, rows, 0, false);
+    xdmf_attribute(out, r->fields[k].name, r->fields[k].unit, h5, path, rows, 0, false);
   }
   fputs("        </Grid>\n", out);
 }
@@ -650,7 +649,8 @@ static fascia_status write_xdmf(fascia_results *r) {
   const char *slash = strrchr(r->path, '/');
   const char *h5 = slash ? slash + 1 : r->path;
   fprintf(out, "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n<Xdmf Version=\"3.0\">\n");
-  fprintf(out, "  <Domain>\n    <Grid Name=\"fascia\" GridType=\"Collection\" CollectionType=\"Spatial\">\n");
+  fprintf(out, "  <Domain>\n    <Information Name=\"units\" Value=\"%s; Time in s\"/>\n", RESULTS_UNITS);
+  fprintf(out, "    <Grid Name=\"fascia\" GridType=\"Collection\" CollectionType=\"Spatial\">\n");
   for (int b = 0; b < (r->write_samples ? 2 : 1); ++b) {
     fprintf(out, "      <Grid Name=\"%s\" GridType=\"Collection\" CollectionType=\"Temporal\">\n",
             b ? "samples" : "frames");

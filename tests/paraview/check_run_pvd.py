@@ -20,6 +20,7 @@ from paraview import servermanager as sm
 from paraview.vtk.util.numpy_support import vtk_to_numpy
 from vtkmodules.vtkCommonDataModel import vtkMultiBlockDataSet
 from vtkmodules.vtkFiltersCore import vtkImplicitPolyDataDistance
+from vtkmodules.vtkFiltersGeometry import vtkGeometryFilter
 
 from documented_arrays import documented
 
@@ -46,7 +47,7 @@ def main(folder, doc, steps, organs, tolerance=1e-6):
     times = list(reader.TimestepValues)
     if len(times) != steps:
         failures.append("%d times, %d saved steps" % (len(times), steps))
-    optional = [k for k, pattern in (("tissue", "tissue-*.vtp"), ("tetrahedra", "tetrahedra-*.vtu"))
+    optional = [k for k, pattern in (("tissue", "tissue-*.vtu"), ("tetrahedra", "tetrahedra-*.vtu"))
                 if glob.glob(folder + "/" + pattern)]
     names = optional + ["samples", "frames"] + organs
     for t in times:
@@ -77,8 +78,11 @@ def main(folder, doc, steps, organs, tolerance=1e-6):
         x = vtk_to_numpy(frames.GetPoints().GetData())
         coupled = vtk_to_numpy(frames.GetPointData().GetArray("coupled_organ"))
         for k, o in enumerate(organs):
+            polydata = vtkGeometryFilter()  # the organ's triangles as PolyData
+            polydata.SetInputData(blocks[o])
+            polydata.Update()
             surface = vtkImplicitPolyDataDistance()
-            surface.SetInput(blocks[o])
+            surface.SetInput(polydata.GetOutput())
             on = [abs(surface.EvaluateFunction(list(p))) for p in x[coupled == k]]
             if not on or max(on) > tolerance:
                 failures.append("t = %.17g organ %s: %d shared frames, up to %s m off its surface" %

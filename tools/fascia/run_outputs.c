@@ -3,11 +3,12 @@
 // Extra outputs of `fascia run`:
 //   --history FILE.csv  one row per step: time, energies, Newton and CG
 //                       iterations, ms, largest strain and stress;
-//   --paraview DIR      per saved step, the samples and the frames (VTK XML
-//                       UnstructuredGrid, which meshio reads too) and each
-//                       organ's surface where the simulation put it
-//                       (PolyData; deformable organs carried by their
-//                       frames, driven ones by their first coupling frame),
+//   --paraview DIR      per saved step, the tissue surface, the samples, the
+//                       frames and each organ's surface where the
+//                       simulation put it (deformable organs carried by
+//                       their frames, driven ones by their first coupling
+//                       frame), all VTK XML UnstructuredGrid so that meshio
+//                       reads every file as ParaView does,
 //                       with DIR/run.pvd that opens all of it, named, in one
 //                       go, and DIR/organs.pvd of the organs alone (to open
 //                       next to the results' XDMF); --organs is its older name;
@@ -29,8 +30,9 @@
 const char run_outputs_usage[] =
     "  --history FILE.csv     per-step history: time, energies, iterations, ms, largest strain\n"
     "  --paraview DIR         ParaView files per saved step: open DIR/run.pvd for the samples,\n"
-    "                         frames and organ surfaces, named (samples-<k>.vtu, frames-<k>.vtu,\n"
-    "                         <organ>-<k>.vtp; DIR/organs.pvd: the organs alone). --organs DIR:\n"
+    "                         frames and organ surfaces, named (tissue-<k>.vtu, samples-<k>.vtu,\n"
+    "                         frames-<k>.vtu, <organ>-<k>.vtu; DIR/organs.pvd: the organs alone).\n"
+    "                         Lengths in m, time in s. --organs DIR:\n"
     "                         the same (its older name)\n"
     "  --snapshots DIR        CSV of tissue samples and organ surface points at rest and at the end\n"
     "                         (DIR/tissue-rest.csv, tissue-final.csv, organs-rest.csv, organs-final.csv)\n";
@@ -87,15 +89,27 @@ static fascia_real *organ_now(const fascia_model *m, const fascia_solver *solver
 
 _Static_assert(sizeof(fascia_real) == 8, "the VTK files declare Float64");
 
-// One organ surface at its current pose as VTK XML PolyData.
-static fascia_status write_vtp(fascia_ctx *ctx, const char *dir, const char *name, const fascia_organ *o,
-                               const fascia_real *positions) {
+// What a piece at `time` shows when opened: `scalars` coloured, `vectors`
+// for Warp By Vector.
+static fascia_vtk_piece piece_at(fascia_real time, const char *scalars, const char *vectors) {
+  fascia_vtk_piece p = fascia_vtk_piece_default();
+  p.time = time;
+  p.scalars = scalars;
+  p.vectors = vectors;
+  return p;
+}
+
+// One organ surface at its current pose: triangles in an UnstructuredGrid.
+static fascia_status write_organ(fascia_ctx *ctx, const char *dir, const char *name, const fascia_organ *o,
+                                 const fascia_real *positions, fascia_real time) {
   fascia_status st = FASCIA_OK;
   fascia_file *file = open_file(ctx, "--paraview", dir, name, &st);
   if (!file) return st;
   FILE *f = fascia_file_stream(file);
-  fascia_vtk_begin(f, "PolyData", positions, o->vertex_count, 3, o->triangles, o->triangle_count);
-  fascia_vtk_end(f, "PolyData");
+  const fascia_vtk_piece piece = piece_at(time, NULL, NULL);
+  fascia_vtk_begin_piece(f, "UnstructuredGrid", &piece, positions, o->vertex_count, 3, o->triangles,
+                         o->triangle_count);
+  fascia_vtk_end(f, "UnstructuredGrid");
   return fascia_file_commit(&file);
 }
 
@@ -103,7 +117,7 @@ static fascia_status write_vtp(fascia_ctx *ctx, const char *dir, const char *nam
 // UnstructuredGrid of vertices: displacement, rest position, strain, stress,
 // volume, material and organ (-1 tissue), as in the results file.
 static fascia_status write_samples(run_outputs *out, fascia_ctx *ctx, const fascia_model *m,
-                                   const fascia_solver *solver, const char *name) {
+                                   const fascia_solver *solver, const char *name, fascia_real time) {
   const int64_t S = m->sample_count;
   fascia_solver_sample_positions(solver, out->positions);
   fascia_solver_sample_strain(solver, out->strain, out->stress);
@@ -112,7 +126,8 @@ static fascia_status write_samples(run_outputs *out, fascia_ctx *ctx, const fasc
   fascia_file *file = open_file(ctx, "--paraview", out->paraview_dir, name, &st);
   if (!file) return st;
   FILE *f = fascia_file_stream(file);
-  fascia_vtk_begin(f, "UnstructuredGrid", out->positions, S, 1, NULL, S);
+  const fascia_vtk_piece piece = piece_at(time, "strain", "displacement");
+  fascia_vtk_begin_piece(f, "UnstructuredGrid", &piece, out->positions, S, 1, NULL, S);
   fascia_vtk_array(f, "displacement", 3, out->scratch, NULL, S);
   fascia_vtk_array(f, "rest_position", 3, m->sample_position, NULL, S);
   fascia_vtk_array(f, "strain", 1, out->strain, NULL, S);
@@ -128,7 +143,7 @@ static fascia_status write_samples(run_outputs *out, fascia_ctx *ctx, const fasc
 // (three vectors, for Glyph), kind (0 free, 1 fixed, 2 prescribed), organ
 // and the organ it is shared with (its first coupling).
 static fascia_status write_frames(run_outputs *out, fascia_ctx *ctx, const fascia_model *m,
-                                  const fascia_solver *solver, const char *name) {
+                                  const fascia_solver *solver, const char *name, fascia_real time) {
   const int64_t N = m->frame_count;
   const fascia_real *x = fascia_solver_frame_positions(solver);
   fascia_frame_axes(fascia_solver_frame_rotations(solver), N, out->axes);
@@ -136,7 +151,8 @@ static fascia_status write_frames(run_outputs *out, fascia_ctx *ctx, const fasci
   fascia_file *file = open_file(ctx, "--paraview", out->paraview_dir, name, &st);
   if (!file) return st;
   FILE *f = fascia_file_stream(file);
-  fascia_vtk_begin(f, "UnstructuredGrid", x, N, 1, NULL, N);
+  const fascia_vtk_piece piece = piece_at(time, NULL, "displacement");
+  fascia_vtk_begin_piece(f, "UnstructuredGrid", &piece, x, N, 1, NULL, N);
   for (int64_t k = 0; k < 3 * N; ++k) out->scratch[k] = x[k] - m->frame_position[k];
   fascia_vtk_array(f, "displacement", 3, out->scratch, NULL, N);
   fascia_vtk_array(f, "rest_position", 3, m->frame_position, NULL, N);
@@ -153,9 +169,9 @@ static fascia_status write_frames(run_outputs *out, fascia_ctx *ctx, const fasci
 }
 
 // The tissue surface (model->tissue_surface) where the frames carry it, with
-// its displacement and the strain of the sample nearest each vertex.
+// its displacement and the strain of the sample nearest each vertex (shown).
 static fascia_status write_tissue(run_outputs *out, fascia_ctx *ctx, const fascia_model *m,
-                                  const fascia_solver *solver, const char *name) {
+                                  const fascia_solver *solver, const char *name, fascia_real time) {
   const fascia_surface *ts = &m->tissue_surface;
   const int64_t V = ts->vertex_count;
   fascia_real *x = malloc(3 * ((size_t)V + 1) * sizeof *x), *u = malloc(3 * ((size_t)V + 1) * sizeof *u);
@@ -167,11 +183,12 @@ static fascia_status write_tissue(run_outputs *out, fascia_ctx *ctx, const fasci
   if (file) {
     FILE *f = fascia_file_stream(file);
     for (int64_t k = 0; k < 3 * V; ++k) u[k] = x[k] - ts->vertices[k];
-    fascia_vtk_begin(f, "PolyData", x, V, 3, ts->triangles, ts->triangle_count);
+    const fascia_vtk_piece piece = piece_at(time, "strain", "displacement");
+    fascia_vtk_begin_piece(f, "UnstructuredGrid", &piece, x, V, 3, ts->triangles, ts->triangle_count);
     fascia_vtk_array(f, "displacement", 3, u, NULL, V);
     fascia_vtk_array(f, "rest_position", 3, ts->vertices, NULL, V);
     fascia_vtk_array(f, "strain", 1, strain, NULL, V);
-    fascia_vtk_end(f, "PolyData");
+    fascia_vtk_end(f, "UnstructuredGrid");
     st = fascia_file_commit(&file);
   }
   free(x), free(u), free(strain);
@@ -181,65 +198,69 @@ static fascia_status write_tissue(run_outputs *out, fascia_ctx *ctx, const fasci
 // The tetrahedra of tet tissues (model->tetrahedra) on the frames as they
 // are now, with the frames' displacement.
 static fascia_status write_tetrahedra(run_outputs *out, fascia_ctx *ctx, const fascia_model *m,
-                                      const fascia_solver *solver, const char *name) {
+                                      const fascia_solver *solver, const char *name, fascia_real time) {
   const int64_t N = m->frame_count;
   const fascia_real *x = fascia_solver_frame_positions(solver);
   fascia_status st = FASCIA_OK;
   fascia_file *file = open_file(ctx, "--paraview", out->paraview_dir, name, &st);
   if (!file) return st;
   FILE *f = fascia_file_stream(file);
-  fascia_vtk_begin(f, "UnstructuredGrid", x, N, 4, m->tetrahedra, m->tetrahedron_count);
+  const fascia_vtk_piece piece = piece_at(time, NULL, "displacement");
+  fascia_vtk_begin_piece(f, "UnstructuredGrid", &piece, x, N, 4, m->tetrahedra, m->tetrahedron_count);
   for (int64_t k = 0; k < 3 * N; ++k) out->scratch[k] = x[k] - m->frame_position[k];
   fascia_vtk_array(f, "displacement", 3, out->scratch, NULL, N);
   fascia_vtk_end(f, "UnstructuredGrid");
   return fascia_file_commit(&file);
 }
 
+// A collection entry: names and file names are data, escaped.
+static void pvd_entry(FILE *pvd, fascia_real time, int part, const char *name, const char *file) {
+  fprintf(pvd, "    <DataSet timestep=\"%.17g\" group=\"\" part=\"%d\" name=\"", time, part);
+  fascia_xml_text(pvd, name);
+  fputs("\" file=\"", pvd);
+  fascia_xml_text(pvd, file);
+  fputs("\"/>\n", pvd);
+}
+
 // One saved step: the tissue surface, the samples, the frames and every
 // organ at the solver's state, listed in run.pvd (all of them, named) and
-// organs.pvd (the organs).
+// organs.pvd (the organs); the time as the results' XDMF writes it: one
+// time per saved step in ParaView.
 static fascia_status write_step(run_outputs *out, fascia_ctx *ctx, const fascia_model *m,
                                 const fascia_solver *solver, fascia_real time) {
   FILE *run = fascia_file_stream(out->run_pvd), *organs = fascia_file_stream(out->pvd);
   char name[FASCIA_NAME_SIZE + 32];
   fascia_status st;
-  // the time as the results' XDMF writes it: one time per saved step in ParaView
   int part = 0;
   if (m->tissue_surface.triangle_count > 0) {
-    snprintf(name, sizeof name, "tissue-%04d.vtp", out->organ_steps);
-    if ((st = write_tissue(out, ctx, m, solver, name)) != FASCIA_OK) return st;
-    fprintf(run, "    <DataSet timestep=\"%.17g\" group=\"\" part=\"%d\" name=\"tissue\" file=\"%s\"/>\n", time,
-            part++, name);
+    snprintf(name, sizeof name, "tissue-%04d.vtu", out->organ_steps);
+    if ((st = write_tissue(out, ctx, m, solver, name, time)) != FASCIA_OK) return st;
+    pvd_entry(run, time, part++, "tissue", name);
   }
   if (m->tetrahedron_count > 0) {
     snprintf(name, sizeof name, "tetrahedra-%04d.vtu", out->organ_steps);
-    if ((st = write_tetrahedra(out, ctx, m, solver, name)) != FASCIA_OK) return st;
-    fprintf(run, "    <DataSet timestep=\"%.17g\" group=\"\" part=\"%d\" name=\"tetrahedra\" file=\"%s\"/>\n", time,
-            part++, name);
+    if ((st = write_tetrahedra(out, ctx, m, solver, name, time)) != FASCIA_OK) return st;
+    pvd_entry(run, time, part++, "tetrahedra", name);
   }
   snprintf(name, sizeof name, "samples-%04d.vtu", out->organ_steps);
-  if ((st = write_samples(out, ctx, m, solver, name)) != FASCIA_OK) return st;
-  fprintf(run, "    <DataSet timestep=\"%.17g\" group=\"\" part=\"%d\" name=\"samples\" file=\"%s\"/>\n", time,
-          part++, name);
+  if ((st = write_samples(out, ctx, m, solver, name, time)) != FASCIA_OK) return st;
+  pvd_entry(run, time, part++, "samples", name);
   snprintf(name, sizeof name, "frames-%04d.vtu", out->organ_steps);
-  if ((st = write_frames(out, ctx, m, solver, name)) != FASCIA_OK) return st;
-  fprintf(run, "    <DataSet timestep=\"%.17g\" group=\"\" part=\"%d\" name=\"frames\" file=\"%s\"/>\n", time,
-          part++, name);
+  if ((st = write_frames(out, ctx, m, solver, name, time)) != FASCIA_OK) return st;
+  pvd_entry(run, time, part++, "frames", name);
   for (int32_t k = 0; k < m->organ_count; ++k) {
     // a fixed organ never moves: its first file serves every step
     const int fixed = m->organs[k].kind == FASCIA_ORGAN_FIXED;
-    snprintf(name, sizeof name, "%s-%04d.vtp", m->organs[k].name, fixed ? 0 : out->organ_steps);
+    snprintf(name, sizeof name, "%s-%04d.vtu", m->organs[k].name, fixed ? 0 : out->organ_steps);
     if (!fixed || out->organ_steps == 0) {
       fascia_real *now = organ_now(m, solver, k);
       if (!now) continue;
-      st = write_vtp(ctx, out->paraview_dir, name, m->organs + k, now);
+      st = write_organ(ctx, out->paraview_dir, name, m->organs + k, now, fixed ? NAN : time); // for all steps: no time
       free(now);
       if (st != FASCIA_OK) return st;
     }
-    fprintf(organs, "    <DataSet timestep=\"%.17g\" group=\"\" part=\"%d\" name=\"%s\" file=\"%s\"/>\n", time,
-            (int)k, m->organs[k].name, name);
-    fprintf(run, "    <DataSet timestep=\"%.17g\" group=\"\" part=\"%d\" name=\"%s\" file=\"%s\"/>\n", time,
-            part++, m->organs[k].name, name);
+    pvd_entry(organs, time, (int)k, m->organs[k].name, name);
+    pvd_entry(run, time, part++, m->organs[k].name, name);
   }
   out->organ_steps++;
   return FASCIA_OK;
@@ -324,7 +345,7 @@ fascia_status run_outputs_begin(run_outputs *out, fascia_ctx *ctx, const fascia_
     if ((st = make_dir(ctx, out->paraview_dir)) != FASCIA_OK) return st;
     if (!(out->pvd = open_file(ctx, "--paraview", out->paraview_dir, "organs.pvd", &st))) return st;
     if (!(out->run_pvd = open_file(ctx, "--paraview", out->paraview_dir, "run.pvd", &st))) return st;
-    static const char head[] = "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n";
+    static const char head[] = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n";
     fputs(head, fascia_file_stream(out->pvd));
     fputs(head, fascia_file_stream(out->run_pvd));
     if ((st = write_step(out, ctx, m, solver, time)) != FASCIA_OK) return st;

@@ -14,7 +14,7 @@
 
 typedef struct run_outputs {
   const char *history_path;  ///< --history FILE.csv
-  const char *paraview_dir;  ///< --paraview DIR (--organs DIR): run.pvd, organs.pvd, samples/frames-<k>.vtu, <organ>-<k>.vtp
+  const char *paraview_dir;  ///< --paraview DIR (--organs DIR): run.pvd, organs.pvd, tissue/samples/frames-<k>.vtu, <organ>-<k>.vtu
   const char *snapshots_dir; ///< --snapshots DIR: tissue-{rest,final}.csv, organs-{rest,final}.csv
   // state
   fascia_ctx *ctx;
