@@ -64,6 +64,9 @@ struct fascia_organs {
   int32_t *frame_offsets;   ///< [O+1] CSR into frames: each organ's coupling frames, once each
   int32_t *frames;          ///< coupling-table order
   unsigned char *driven;    ///< [O] 1 while the caller drives the organ
+  unsigned char *posed;     ///< [O] 1 while it is driven by fascia_solver_organ_set_pose
+  fascia_real *pose;        ///< [7O] that pose: translation, rotation
+  fascia_real *reference;   ///< [3O] rest reference point of the wrench (fascia_solver_organ_wrench)
   int32_t *master;          ///< [O] master frame of a rigid organ, -1 without coupling frames or not rigid
   fascia_real *mass;        ///< [O] kg (rigid organs)
   fascia_real *centre;      ///< [3O] rest centre of mass, m
@@ -139,6 +142,16 @@ static int mass_properties(const fascia_organ *o, fascia_real rho, fascia_real *
   return 1;
 }
 
+// The rest point an organ's wrench is taken about: the centre of the volume
+// its surface encloses, else (an open or empty surface) its vertices' mean.
+static void reference_point(const fascia_organ *o, fascia_real *point) {
+  fascia_real mass, inertia[9];
+  if (mass_properties(o, 1, &mass, point, inertia)) return;
+  point[0] = point[1] = point[2] = 0;
+  for (int32_t v = 0; v < o->vertex_count; ++v)
+    for (int c = 0; c < 3; ++c) point[c] += o->vertices[3 * v + c] / o->vertex_count;
+}
+
 // ---------------------------------------------------------------- create
 
 void fascia_organs_destroy(fascia_organs **organs) {
@@ -147,7 +160,7 @@ void fascia_organs_destroy(fascia_organs **organs) {
   free(O->frame_offsets), free(O->frames), free(O->driven), free(O->master), free(O->mass), free(O->centre);
   free(O->inertia), free(O->velocity), free(O->free_pose), free(O->target), free(O->world_inertia);
   free(O->geometric), free(O->frame_body), free(O->target_x), free(O->target_q), free(O->full_mask);
-  free(O->active), free(O->reaction);
+  free(O->active), free(O->reaction), free(O->posed), free(O->pose), free(O->reference);
   free(O);
   *organs = NULL;
 }
@@ -235,10 +248,14 @@ fascia_status fascia_organs_create(fascia_ctx *ctx, const fascia_model *m, fasci
   O->full_mask = fascia_calloc(6 * N, 1);
   O->active = fascia_calloc(K, 1);
   O->reaction = fascia_calloc(6 * N, sizeof(fascia_real));
+  O->posed = fascia_calloc(K, 1);
+  O->pose = fascia_calloc(7 * K, sizeof(fascia_real));
+  O->reference = fascia_calloc(3 * K, sizeof(fascia_real));
   fascia_status status = FASCIA_OK;
   if (!O->frame_offsets || !O->frames || !O->driven || !O->master || !O->mass || !O->centre || !O->inertia ||
       !O->velocity || !O->free_pose || !O->target || !O->world_inertia || !O->geometric || !O->frame_body ||
-      !O->target_x || !O->target_q || !O->full_mask || !O->active || !O->reaction) {
+      !O->target_x || !O->target_q || !O->full_mask || !O->active || !O->reaction || !O->posed || !O->pose ||
+      !O->reference) {
     status = FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "organs: out of memory for %lld frames", (long long)N);
     goto cleanup;
   }
@@ -247,6 +264,7 @@ fascia_status fascia_organs_create(fascia_ctx *ctx, const fascia_model *m, fasci
     for (int c = 0; c < 3; ++c) O->world_inertia[9 * k + 4 * c] = 1;
   FASCIA_TRY_GOTO(list_frames(ctx, O));
   FASCIA_TRY_GOTO(setup_bodies(ctx, O));
+  for (int32_t k = 0; k < O->organ_count; ++k) reference_point(m->organs + k, O->reference + 3 * k);
   const fascia_pt_bodies table = {O->organ_count, O->frame_offsets, O->frames,  O->frame_body,
                                   O->master,      m->frame_position, m->frame_rotation, O->centre,
                                   O->mass,        O->active,       O->world_inertia, O->target,
@@ -582,8 +600,13 @@ fascia_status fascia_solver_organ_pose(const fascia_solver *S, int32_t organ, fa
   FASCIA_TRY(check_organ(S, organ, "organ pose"));
   const fascia_organs *O = S->organs;
   const fascia_organ *o = S->model->organs + organ;
+  if (O->driven[organ] && O->posed[organ]) {
+    memcpy(translation, O->pose + 7 * organ, 3 * sizeof(fascia_real));
+    memcpy(rotation, O->pose + 7 * organ + 3, 4 * sizeof(fascia_real));
+    return FASCIA_OK;
+  }
   FASCIA_CHECK(!O->driven[organ], S->ctx, FASCIA_ERR_UNSUPPORTED,
-               "organ '%s' is driven by the caller: its pose is the caller's", o->name);
+               "organ '%s' is driven frame by frame by the caller: it has no pose of its own", o->name);
   fascia_real R[9], p[3];
   if (o->kind == FASCIA_ORGAN_PRESCRIBED && o->motion >= 0) {
     // x = pivot + T + Q (x_rest - pivot)
@@ -659,6 +682,7 @@ fascia_status fascia_solver_organ_set_frames(fascia_solver *S, int32_t organ, co
     memcpy(O->target_x + 3 * i, positions + 3 * k, 3 * sizeof(fascia_real));
     for (int c = 0; c < 4; ++c) O->target_q[4 * i + c] = q[c] / norm;
   }
+  O->posed[organ] = 0;
   if (!O->driven[organ]) {
     O->driven[organ] = 1;
     fascia_organs_masks(O, S->mask);
@@ -671,6 +695,7 @@ fascia_status fascia_solver_organ_release(fascia_solver *S, int32_t organ) {
   fascia_organs *O = S->organs;
   if (!O->driven[organ]) return FASCIA_OK;
   O->driven[organ] = 0;
+  O->posed[organ] = 0;
   fascia_organs_masks(O, S->mask);
   if (active(O, organ)) place_slaves(O, S, organ);
   fascia_system_set_state(S->sys, S->x, S->q);
@@ -701,3 +726,101 @@ fascia_status fascia_solver_organ_reaction(fascia_solver *S, int32_t organ, fasc
   }
   return FASCIA_OK;
 }
+
+fascia_status fascia_solver_organ_set_pose(fascia_solver *S, int32_t organ, const fascia_real *translation,
+                                           const fascia_real *rotation) {
+  FASCIA_TRY(check_organ(S, organ, "set organ pose"));
+  const char *name = S->model->organs[organ].name;
+  FASCIA_CHECK(translation && rotation, S->ctx, FASCIA_ERR_ARGUMENT, "set organ '%s' pose: NULL array", name);
+  const fascia_real norm =
+      sqrt(rotation[0] * rotation[0] + rotation[1] * rotation[1] + rotation[2] * rotation[2] + rotation[3] * rotation[3]);
+  FASCIA_CHECK(isfinite(translation[0]) && isfinite(translation[1]) && isfinite(translation[2]) && isfinite(norm) &&
+                   norm > 1e-12,
+               S->ctx, FASCIA_ERR_ARGUMENT,
+               "set organ '%s' pose: translation (%g %g %g) m and rotation (%g %g %g %g) must be finite, the rotation "
+               "a nonzero quaternion w x y z; nothing changed",
+               name, translation[0], translation[1], translation[2], rotation[0], rotation[1], rotation[2], rotation[3]);
+  fascia_organs *O = S->organs;
+  const int32_t begin = O->frame_offsets[organ], count = O->frame_offsets[organ + 1] - begin;
+  fascia_real *x = malloc(7 * ((size_t)count + 1) * sizeof(fascia_real)), *q = x + 3 * ((size_t)count + 1);
+  FASCIA_CHECK(x, S->ctx, FASCIA_ERR_MEMORY, "set organ '%s' pose: out of memory", name);
+  fascia_real Q[4], R[9];
+  for (int c = 0; c < 4; ++c) Q[c] = rotation[c] / norm;
+  fascia_pt_quat_to_mat(Q, R);
+  const fascia_model *m = S->model;
+  for (int32_t k = 0; k < count; ++k) { // x = R x_rest + t, q = Q q_rest
+    const int32_t i = O->frames[begin + k];
+    fascia_pt_mat_vec(R, m->frame_position + 3 * (int64_t)i, x + 3 * k);
+    for (int c = 0; c < 3; ++c) x[3 * k + c] += translation[c];
+    fascia_pt_quat_mul(Q, m->frame_rotation + 4 * (int64_t)i, q + 4 * k);
+  }
+  const fascia_status st = fascia_solver_organ_set_frames(S, organ, x, q);
+  free(x);
+  FASCIA_TRY(st);
+  O->posed[organ] = 1;
+  memcpy(O->pose + 7 * organ, translation, 3 * sizeof(fascia_real));
+  memcpy(O->pose + 7 * organ + 3, Q, 4 * sizeof(fascia_real));
+  return FASCIA_OK;
+}
+
+// The pose that carries the organ's reference point: its own where it has
+// one, its first coupling frame's rigid motion where it is driven frame by
+// frame, the rest pose for a deformable organ.
+static void wrench_pose(const fascia_solver *S, int32_t organ, fascia_real *translation, fascia_real *rotation) {
+  const fascia_organs *O = S->organs;
+  const int32_t begin = O->frame_offsets[organ];
+  if (O->driven[organ] && !O->posed[organ] && begin < O->frame_offsets[organ + 1]) {
+    const int32_t f = O->frames[begin];
+    fascia_real qc[4], R[9], p[3];
+    quat_conj(S->model->frame_rotation + 4 * (int64_t)f, qc);
+    fascia_pt_quat_mul(S->q + 4 * (int64_t)f, qc, rotation);
+    fascia_pt_quat_normalize(rotation);
+    fascia_pt_quat_to_mat(rotation, R);
+    fascia_pt_mat_vec(R, S->model->frame_position + 3 * (int64_t)f, p);
+    for (int c = 0; c < 3; ++c) translation[c] = S->x[3 * (int64_t)f + c] - p[c];
+    return;
+  }
+  if (fascia_solver_organ_pose(S, organ, translation, rotation) == FASCIA_OK) return;
+  translation[0] = translation[1] = translation[2] = 0;
+  rotation[0] = 1, rotation[1] = rotation[2] = rotation[3] = 0;
+}
+
+fascia_status fascia_solver_organ_wrench(fascia_solver *S, int32_t organ, fascia_real *force, fascia_real *torque,
+                                         fascia_real *point) {
+  FASCIA_TRY(check_organ(S, organ, "organ wrench"));
+  FASCIA_CHECK(force, S->ctx, FASCIA_ERR_ARGUMENT, "organ wrench: NULL force");
+  const fascia_organs *O = S->organs;
+  const int32_t begin = O->frame_offsets[organ], count = O->frame_offsets[organ + 1] - begin;
+  fascia_real t[3], Q[4], R[9], p[3];
+  wrench_pose(S, organ, t, Q);
+  fascia_pt_quat_to_mat(Q, R);
+  fascia_pt_mat_vec(R, O->reference + 3 * organ, p);
+  for (int c = 0; c < 3; ++c) p[c] += t[c];
+  fascia_real F[3] = {0, 0, 0}, M[3] = {0, 0, 0};
+  if (count > 0) {
+    fascia_real *f = malloc(6 * (size_t)count * sizeof(fascia_real));
+    FASCIA_CHECK(f, S->ctx, FASCIA_ERR_MEMORY, "organ wrench: out of memory");
+    const fascia_status st = fascia_solver_organ_reaction(S, organ, f, f + 3 * count);
+    for (int32_t k = 0; st == FASCIA_OK && k < count; ++k) {
+      const fascia_real *x = S->x + 3 * (int64_t)O->frames[begin + k], *fk = f + 3 * k;
+      fascia_real arm[3], moment[3];
+      for (int c = 0; c < 3; ++c) arm[c] = x[c] - p[c];
+      fascia_pt_cross(arm, fk, moment);
+      for (int c = 0; c < 3; ++c) F[c] += fk[c], M[c] += f[3 * count + 3 * k + c] + moment[c];
+    }
+    free(f);
+    FASCIA_TRY(st);
+  }
+  memcpy(force, F, sizeof F);
+  if (torque) memcpy(torque, M, sizeof M);
+  if (point) memcpy(point, p, sizeof p);
+  return FASCIA_OK;
+}
+
+int32_t fascia_model_organ_count(const fascia_model *m) { return m ? m->organ_count : 0; }
+
+const char *fascia_model_organ_name(const fascia_model *m, int32_t organ) {
+  return m && organ >= 0 && organ < m->organ_count ? m->organs[organ].name : "";
+}
+
+const fascia_surface *fascia_model_tissue_surface(const fascia_model *m) { return &m->tissue_surface; }

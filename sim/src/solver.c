@@ -36,14 +36,19 @@ fascia_solver_def fascia_solver_def_default(void) {
   return d;
 }
 
+static fascia_status check_time_step(fascia_ctx *ctx, fascia_real time_step) {
+  FASCIA_CHECK(isfinite(time_step) && time_step > 0, ctx, FASCIA_ERR_ARGUMENT,
+               "solver: time step %g s is impossible; give a positive number of seconds", time_step);
+  FASCIA_CHECK(time_step >= FASCIA_MIN_TIME_STEP, ctx, FASCIA_ERR_ARGUMENT,
+               "solver: time step %g s is below the shortest one, %g s (the inertia term would swamp the tissue's "
+               "stiffness beyond double precision); give a longer time step", time_step, FASCIA_MIN_TIME_STEP);
+  return FASCIA_OK;
+}
+
 static fascia_status check_def(fascia_ctx *ctx, const fascia_solver_def *d) {
   FASCIA_CHECK(d->cookie_ == FASCIA_DEF_COOKIE, ctx, FASCIA_ERR_ARGUMENT,
                "solver: the settings were not made by fascia_solver_def_default()");
-  FASCIA_CHECK(isfinite(d->time_step) && d->time_step > 0, ctx, FASCIA_ERR_ARGUMENT,
-               "solver: time step %g s is impossible; give a positive number of seconds", d->time_step);
-  FASCIA_CHECK(d->time_step >= FASCIA_MIN_TIME_STEP, ctx, FASCIA_ERR_ARGUMENT,
-               "solver: time step %g s is below the shortest one, %g s (the inertia term would swamp the tissue's "
-               "stiffness beyond double precision); give a longer time step", d->time_step, FASCIA_MIN_TIME_STEP);
+  FASCIA_TRY(check_time_step(ctx, d->time_step));
   FASCIA_CHECK(isfinite(d->blow_up_strain) && d->blow_up_strain >= 0, ctx, FASCIA_ERR_ARGUMENT,
                "solver: blow-up strain %g must be >= 0 (0: off)", d->blow_up_strain);
   FASCIA_CHECK(d->newton_iterations >= 1 && d->newton_iterations <= 100000, ctx, FASCIA_ERR_ARGUMENT,
@@ -519,6 +524,10 @@ fascia_status fascia_solver_step(fascia_solver *S, fascia_solve_report *report) 
   fascia_status status = step_split(S, h, 0, report, &smallest);
   if (status == FASCIA_OK) {
     S->time = t0 + h; // the sum of the sub-steps, without their rounding
+    char detail[96];
+    snprintf(detail, sizeof detail, "t = %.6g s, %d Newton iterations%s", S->time, report->newton_iterations,
+             report->substeps > 1 ? " (split)" : "");
+    fascia_ctx_progress(S->ctx, "step", -1, detail);
   } else {
     char where[384] = "";
     if (status == FASCIA_ERR_NUMERIC) describe_failure(S, where, sizeof where);
@@ -548,6 +557,18 @@ fascia_status fascia_solver_set_time(fascia_solver *S, fascia_real time) {
   ++S->linear_epoch;
   return FASCIA_OK;
 }
+fascia_real fascia_solver_time_step(const fascia_solver *S) { return S->def.time_step; }
+
+fascia_status fascia_solver_set_time_step(fascia_solver *S, fascia_real time_step) {
+  FASCIA_CHECK(S, NULL, FASCIA_ERR_ARGUMENT, "NULL solver");
+  FASCIA_TRY(check_time_step(S->ctx, time_step));
+  S->def.time_step = time_step;
+  return FASCIA_OK;
+}
+
+int32_t fascia_solver_frame_count(const fascia_solver *S) { return S ? S->model->frame_count : 0; }
+int32_t fascia_solver_sample_count(const fascia_solver *S) { return S ? S->model->sample_count : 0; }
+
 const char *fascia_solver_backend(const fascia_solver *S) { return S->backend_name; }
 const char *fascia_solver_device(const fascia_solver *S) { return S->device_text; }
 const fascia_real *fascia_solver_frame_positions(const fascia_solver *S) { return S->x; }

@@ -45,6 +45,7 @@ int cli_fail(const char *command, fascia_ctx *ctx, fascia_status status) {
 
 static void print_progress(void *user, const char *stage, double fraction, const char *detail) {
   (void)user;
+  if (!strcmp(stage, "step")) return; // fascia run draws its own step line, with the time left
   if (fraction >= 0)
     fprintf(stderr, "\r%-24s %5.1f%%  %s\033[K", stage, 100 * fraction, detail ? detail : "");
   else

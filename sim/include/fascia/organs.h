@@ -48,11 +48,15 @@ FASCIA_API fascia_status fascia_solver_organ_surface(const fascia_solver *solver
 /// the model has no tissue surface.
 FASCIA_API fascia_status fascia_solver_tissue_surface(const fascia_solver *solver, fascia_real *positions,
                                                       fascia_real *strain);
+/// The model's tissue surface at rest (vertex and triangle counts, arrays
+/// owned by the model), never NULL: for bindings that keep the model opaque.
+FASCIA_API const fascia_surface *fascia_model_tissue_surface(const fascia_model *model);
 /// Current pose of an organ as the rigid map from its rest surface to the
 /// world: p_world = R p_rest + translation, R the rotation of `rotation`.
 /// Fixed organs: identity. Prescribed: their motion at the solver's time.
 /// Rigid: the body's pose (part of the solver state). An organ driven by
-/// the caller (fascia_solver_organ_set_frames) has no pose of its own:
+/// fascia_solver_organ_set_pose: the pose last given. An organ driven
+/// frame by frame (fascia_solver_organ_set_frames) has no pose of its own:
 /// FASCIA_ERR_UNSUPPORTED, outputs untouched.
 FASCIA_API fascia_status fascia_solver_organ_pose(const fascia_solver *solver, int32_t organ,
                                                   fascia_real *translation, fascia_real *rotation);
@@ -82,6 +86,19 @@ FASCIA_API fascia_status fascia_solver_organ_frames(const fascia_solver *solver,
 FASCIA_API fascia_status fascia_solver_organ_set_frames(fascia_solver *solver, int32_t organ,
                                                         const fascia_real *positions, const fascia_real *rotations);
 
+/// Outside simulator, the organ as one rigid body: moves the coupling frames
+/// of `organ` (fixed, prescribed, rigid or already driven) by the rigid map
+/// p_world = R p_rest + translation from their rest poses (R the rotation
+/// of the unit quaternion `rotation`, w x y z; normalized here), as
+/// fascia_solver_organ_set_frames with those frames: they reach the pose at
+/// the end of the next step (or in the next static solve) and stay there,
+/// and from this call on the organ is driven by the caller whatever its kind
+/// in the model. fascia_solver_organ_pose then returns this pose.
+/// Non-finite values or a zero quaternion: FASCIA_ERR_ARGUMENT, nothing
+/// changed.
+FASCIA_API fascia_status fascia_solver_organ_set_pose(fascia_solver *solver, int32_t organ,
+                                                      const fascia_real *translation, const fascia_real *rotation);
+
 /// Hands an organ driven by the caller back to its model kind from the
 /// current state (a rigid organ's body takes the pose and velocity of its
 /// coupling frames: fixed and prescribed organs jump back to their motion at
@@ -99,6 +116,26 @@ FASCIA_API fascia_status fascia_solver_organ_release(fascia_solver *solver, int3
 /// torques may be NULL. FASCIA_ERR_NUMERIC when the state is not finite.
 FASCIA_API fascia_status fascia_solver_organ_reaction(fascia_solver *solver, int32_t organ, fascia_real *forces,
                                                       fascia_real *torques);
+
+/// The resultant of fascia_solver_organ_reaction on an organ: force [3]
+/// (N), the sum over its coupling frames, and torque [3] (N m) about the
+/// organ's reference point, the sum of each frame's torque and the moment
+/// of its force about that point. The reference point is the centre of the
+/// volume the organ's rest surface encloses (fascia_solver_organ_mass's
+/// centre; the mean of its rest vertices where the surface encloses no
+/// volume) carried by the organ's current pose: fascia_solver_organ_pose,
+/// or for an organ driven through fascia_solver_organ_set_frames the rigid
+/// motion of its first coupling frame; a deformable organ's stays at rest.
+/// point [3] (m, world; may be NULL) gets that point. torque may be NULL.
+/// An organ with no coupling frame gets zeros. FASCIA_ERR_NUMERIC when the
+/// state is not finite.
+FASCIA_API fascia_status fascia_solver_organ_wrench(fascia_solver *solver, int32_t organ, fascia_real *force,
+                                                    fascia_real *torque, fascia_real *point);
+
+/// Number of organs of a model, and the name of organ k ("" for a bad
+/// index): for bindings that keep the model opaque.
+FASCIA_API int32_t fascia_model_organ_count(const fascia_model *model);
+FASCIA_API const char *fascia_model_organ_name(const fascia_model *model, int32_t organ);
 
 #ifdef __cplusplus
 }

@@ -5,6 +5,15 @@
 // Levenberg damping, each linear system by preconditioned conjugate
 // gradients. Every knob that trades time for accuracy is a field of
 // fascia_solver_def. See docs/mechanics.md.
+//
+// Threads: a solver is used by one thread at a time, and so is the context
+// it reports to (the context holds the last message). Solvers made on
+// contexts of their own run in threads of their own, each giving the same
+// bits as it would alone (each may start OpenMP threads of its own, up to
+// its def.threads); they may share one model, which no solver writes to.
+// Loading and saving files goes through HDF5, which Debian builds without
+// its thread-safe option: do that from one thread at a time. Register
+// backends (fascia_backend_register) before solvers are made in threads.
 #ifndef FASCIA_SOLVER_H
 #define FASCIA_SOLVER_H
 
@@ -143,12 +152,16 @@ FASCIA_API fascia_status fascia_solver_create(fascia_ctx *ctx, const fascia_mode
                                               const fascia_solver_def *def, fascia_solver **out);
 FASCIA_API void fascia_solver_destroy(fascia_solver **solver);
 
-/// One implicit Euler step of def.time_step, split into shorter steps where
+/// One implicit Euler step of the time step (def.time_step, or the last
+/// fascia_solver_set_time_step), split into shorter steps where
 /// a step fails (def.step_retries, def.require_convergence; the report sums
 /// the iterations of all of them and counts them in substeps). On
 /// FASCIA_ERR_NUMERIC, even at the shortest step, the state and the time are
 /// left as they were before the step and the message names the time, the
-/// shortest step tried and the cause.
+/// shortest step tried and the cause. After an accepted step the context's
+/// progress hook is called with stage "step", fraction -1 (a solver does not
+/// know how many steps its caller takes) and a detail line with the time
+/// reached and the Newton iterations.
 FASCIA_API fascia_status fascia_solver_step(fascia_solver *solver, fascia_solve_report *report);
 /// Static equilibrium under gravity and loads at the current time, starting
 /// from the current state; velocities are set to zero. Not converging within
@@ -164,6 +177,17 @@ FASCIA_API fascia_real fascia_solver_time(const fascia_solver *solver);
 /// (say, fascia_model_motion_end, for the equilibrium once the organs have
 /// moved), the next step starts there.
 FASCIA_API fascia_status fascia_solver_set_time(fascia_solver *solver, fascia_real time);
+/// The time step of the next fascia_solver_step, s.
+FASCIA_API fascia_real fascia_solver_time_step(const fascia_solver *solver);
+/// Sets the time step of the steps from now on (s, checked as
+/// def.time_step; a host simulator's frame time may vary). The state and
+/// velocities carry over. A checkpoint (fascia/checkpoint.h) records one
+/// time step per run. On error nothing changed.
+FASCIA_API fascia_status fascia_solver_set_time_step(fascia_solver *solver, fascia_real time_step);
+/// Number of frames and of samples of the solver's model: the sizes of the
+/// arrays below ([3N], [3S]).
+FASCIA_API int32_t fascia_solver_frame_count(const fascia_solver *solver);
+FASCIA_API int32_t fascia_solver_sample_count(const fascia_solver *solver);
 /// The backend the solver runs on: "cpu", "cuda" or "emulated".
 FASCIA_API const char *fascia_solver_backend(const fascia_solver *solver);
 /// What it runs on, in words: the GPU's name, or the CPU threads; for a
