@@ -11,6 +11,7 @@
 #include <nifti2_io.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <teem/nrrd.h>
 #include <zlib.h>
 #include <bzlib.h>
@@ -669,6 +670,92 @@ cleanup:
   for (int32_t k = 0; k < count; ++k) free(names[k]);
   free(names);
   free(raw);
+  return status;
+}
+
+// Value of header key "Segment<k>_<field>" (teem's copy, to free), NULL when absent.
+static char *segment_value(const Nrrd *nrrd, int k, const char *field) {
+  char key[64];
+  snprintf(key, sizeof key, "Segment%d_%s", k, field);
+  return nrrdKeyValueGet(nrrd, key);
+}
+
+// An integer header value: 1 when all of text is one, within lo .. hi.
+static int parse_int(const char *text, long lo, long hi, long *out) {
+  char *end;
+  if (!text || !*text) return 0;
+  const long v = strtol(text, &end, 10);
+  while (*end == ' ') ++end;
+  *out = v;
+  return *end == 0 && v >= lo && v <= hi;
+}
+
+// Checks segment k's layer and label value, then adds it to the table.
+static fascia_status add_segment(fascia_ctx *ctx, const char *path, const Nrrd *nrrd, int k, long *first_layer,
+                                 prep_label_table *table) {
+  char *name = segment_value(nrrd, k, "Name"), *value = segment_value(nrrd, k, "LabelValue");
+  char *layer = segment_value(nrrd, k, "Layer");
+  long label = 0, in_layer = 0;
+  fascia_status status = FASCIA_OK;
+  if (!value)
+    status = PREP_FAIL(ctx, FASCIA_ERR_FORMAT,
+                       "segmentation '%s' Segment%d_LabelValue: absent (segment '%s'; 3D Slicer 4.11 and later write "
+                       "it); save the segmentation again in a current Slicer, or export it as a labelmap volume",
+                       path, k, name);
+  else if (!parse_int(value, 1, PREP_MAX_LABEL, &label))
+    status = PREP_FAIL(ctx, FASCIA_ERR_FORMAT,
+                       "segmentation '%s' Segment%d_LabelValue: '%s' is not a label (expected an integer 1 .. %d)",
+                       path, k, value, PREP_MAX_LABEL);
+  else if (layer && !parse_int(layer, 0, INT32_MAX, &in_layer))
+    status = PREP_FAIL(ctx, FASCIA_ERR_FORMAT,
+                       "segmentation '%s' Segment%d_Layer: '%s' is not a layer index (expected an integer from 0)",
+                       path, k, layer);
+  else if (k > 0 && in_layer != *first_layer)
+    status = PREP_FAIL(ctx, FASCIA_ERR_UNSUPPORTED,
+                       "segmentation '%s' Segment%d_Layer: segment '%s' is in layer %ld, segment '%s' in layer %ld: "
+                       "its segments overlap, and fascia reads one layer; in 3D Slicer export it as a labelmap volume "
+                       "(overlaps resolved) or remove the overlaps",
+                       path, k, name, in_layer, table->name[0], *first_layer);
+  for (int32_t e = 0; status == FASCIA_OK && e < table->count; ++e)
+    if (table->label[e] == label)
+      status = PREP_FAIL(ctx, FASCIA_ERR_FORMAT,
+                         "segmentation '%s' Segment%d_LabelValue: %ld is also segment '%s''s; a label value names one "
+                         "segment",
+                         path, k, label, table->name[e]);
+  if (status == FASCIA_OK) {
+    *first_layer = in_layer;
+    status = prep_label_table_add(ctx, path, table, (int32_t)label, name);
+  }
+  free(name), free(value), free(layer);
+  return status;
+}
+
+fascia_status prep_segmentation_table(fascia_ctx *ctx, const char *path, prep_label_table *table) {
+  memset(table, 0, sizeof *table);
+  struct stat st; // a FIFO would block; what is wrong with the file the label map's read says
+  if ((!ends_with(path, ".nrrd") && !ends_with(path, ".nhdr")) || stat(path, &st) != 0 || !S_ISREG(st.st_mode))
+    return FASCIA_OK;
+  Nrrd *nrrd = nrrdNew();
+  NrrdIoState *nio = nrrdIoStateNew();
+  fascia_status status = FASCIA_OK;
+  PREP_CHECK_GOTO(nrrd && nio, ctx, FASCIA_ERR_MEMORY, "segmentation '%s': out of memory", path);
+  nio->skipData = AIR_TRUE; // the header alone: the voxels are read (and checked) with the label map
+  nrrdStateVerboseIO = 0;
+  if (nrrdLoad(nrrd, path, nio)) {
+    free(biffGetDone(NRRD)); // prep_labelmap_read says what is wrong with the file, in full
+    goto cleanup;
+  }
+  long first_layer = 0;
+  for (int k = 0;; ++k) {
+    char *name = segment_value(nrrd, k, "Name");
+    if (!name) break;
+    free(name);
+    PREP_TRY_GOTO(add_segment(ctx, path, nrrd, k, &first_layer, table));
+  }
+cleanup:
+  if (nrrd) nrrdNuke(nrrd);
+  if (nio) nrrdIoStateNix(nio);
+  if (status != FASCIA_OK) prep_label_table_free(table);
   return status;
 }
 

@@ -25,6 +25,17 @@ FASCIA_PREP_INTERN fascia_status prep_label_table_load(fascia_ctx *ctx, const ch
 /// A built-in table by name (PREP_TOTALSEGMENTATOR_TOTAL).
 FASCIA_PREP_INTERN fascia_status prep_label_table_builtin(fascia_ctx *ctx, const char *name, prep_label_table *table);
 FASCIA_PREP_INTERN void prep_label_table_free(prep_label_table *table);
+/// Appends label and a copy of name; messages name origin.
+FASCIA_PREP_INTERN fascia_status prep_label_table_add(fascia_ctx *ctx, const char *origin, prep_label_table *table,
+                                                      int32_t label, const char *name);
+/// The segments a 3D Slicer segmentation (.seg.nrrd) names in its header
+/// (Segment<k>_Name, _LabelValue, _Layer): their label values and names, so
+/// that a scene names organs as Slicer does. table->count is 0 when the file
+/// is no NRRD or names no segments. Refused, one line naming the file and
+/// key: a segment without a label value or with one outside 1 ..
+/// PREP_MAX_LABEL, two segments of one value, segments in several layers
+/// (overlapping segments, which one label map cannot hold).
+FASCIA_PREP_INTERN fascia_status prep_segmentation_table(fascia_ctx *ctx, const char *path, prep_label_table *table);
 /// Name of label in the table, NULL if absent.
 FASCIA_PREP_INTERN const char *prep_label_table_name(const prep_label_table *table, int32_t label);
 /// Labels whose name is spec (or matches it, when it holds * ? [): their

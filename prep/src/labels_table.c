@@ -47,8 +47,8 @@ void prep_label_table_free(prep_label_table *table) {
   table->count = 0;
 }
 
-static fascia_status add_entry(fascia_ctx *ctx, const char *origin, prep_label_table *table, int32_t label,
-                               const char *name) {
+fascia_status prep_label_table_add(fascia_ctx *ctx, const char *origin, prep_label_table *table, int32_t label,
+                                   const char *name) {
   int32_t *labels = realloc(table->label, (size_t)(table->count + 1) * sizeof *labels);
   if (labels) table->label = labels;
   char **names = realloc(table->name, (size_t)(table->count + 1) * sizeof *names);
@@ -71,7 +71,7 @@ fascia_status prep_label_table_builtin(fascia_ctx *ctx, const char *name, prep_l
                      PREP_TOTALSEGMENTATOR_TOTAL);
   const int32_t n = (int32_t)(sizeof totalsegmentator_total / sizeof *totalsegmentator_total);
   for (int32_t k = 0; k < n; ++k) {
-    const fascia_status status = add_entry(ctx, name, table, k + 1, totalsegmentator_total[k]);
+    const fascia_status status = prep_label_table_add(ctx, name, table, k + 1, totalsegmentator_total[k]);
     if (status != FASCIA_OK) {
       prep_label_table_free(table);
       return status;
@@ -120,7 +120,7 @@ fascia_status prep_label_table_load(fascia_ctx *ctx, const char *path, prep_labe
       PREP_CHECK_GOTO(strcmp(table->name[k], name), ctx, FASCIA_ERR_FORMAT,
                       "label table '%s' line %d: name '%s' is given twice", path, line, name);
     }
-    PREP_TRY_GOTO(add_entry(ctx, path, table, (int32_t)label, name));
+    PREP_TRY_GOTO(prep_label_table_add(ctx, path, table, (int32_t)label, name));
   }
   PREP_CHECK_GOTO(table->count > 0, ctx, FASCIA_ERR_FORMAT, "label table '%s': no labels in it", path);
 cleanup:

@@ -615,6 +615,16 @@ static fascia_status parse_segmentation(const reader *rd, fascia_prep_scene *sce
     seg->table_count = table.count;
     seg->table_label = table.label;
     seg->table_name = table.name;
+  } else { // a 3D Slicer .seg.nrrd names its segments in its header: that is its table
+    prep_label_table table;
+    PREP_TRY(prep_segmentation_table(rd->ctx, seg->file_path, &table));
+    if (table.count > 0) {
+      seg->table = prep_strdup(file);
+      seg->table_count = table.count;
+      seg->table_label = table.label;
+      seg->table_name = table.name;
+      PREP_CHECK(seg->table, rd->ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", rd->file);
+    }
   }
   PREP_TRY(get_string(rd, item, path, "frame", 0, &frame));
   seg->frame = FASCIA_PREP_FRAME_RAS;

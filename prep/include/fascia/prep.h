@@ -193,7 +193,8 @@ typedef enum fascia_prep_frame {
 typedef struct fascia_prep_segmentation {
   char *file;                 ///< as written in the scene (NULL: the scene has none)
   char *file_path;            ///< resolved against the scene's folder
-  char *table;                ///< the label table as written: a TSV path or "totalsegmentator:total" (NULL: none)
+  char *table;                ///< the label table as written: a TSV path or "totalsegmentator:total", or the
+                              ///< segmentation file itself when a .seg.nrrd names its segments (NULL: none)
   int32_t table_count;        ///< entries of the table
   int32_t *table_label;       ///< [table_count]
   char **table_name;          ///< [table_count]
