@@ -1,8 +1,8 @@
 # SPDX-License-Identifier: MIT
 # The installed package, so that other programs can link fascia: the CMake
 # package (find_package(fascia): fascia::sim, fascia::prep), its version file,
-# and fascia.pc for pkg-config. The libraries are static, so both carry what
-# the archives link: the config finds it again, the .pc file lists it.
+# and fascia.pc for pkg-config. fascia::sim is the static archive, whose
+# config finds what it links again; fascia::sim_shared the shared library.
 include(CMakePackageConfigHelpers)
 set(FASCIA_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/fascia)
 
@@ -22,25 +22,21 @@ write_basic_package_version_file(${PROJECT_BINARY_DIR}/fasciaConfigVersion.cmake
 install(FILES ${PROJECT_BINARY_DIR}/fasciaConfig.cmake ${PROJECT_BINARY_DIR}/fasciaConfigVersion.cmake
               ${PROJECT_SOURCE_DIR}/cmake/FindCHOLMOD.cmake DESTINATION ${FASCIA_CMAKE_DIR})
 
-# Link flags for pkg-config from a CMake library list: a file path becomes
-# -L<dir> -l<name> (no -L for the compiler's own folders), a name -l<name>,
-# a flag stays as it is.
-function(fascia_pc_flags out)
+# fascia.pc: Libs names the shared library alone (it carries what it
+# links); Libs.private what the static archive needs in a static link, as
+# library names and pkg-config modules, never a folder of this machine (a
+# library outside the linker's default folders comes through its own .pc,
+# Requires.private; the CUDA runtime's folder is the user's toolkit's).
+function(fascia_pc_names out)
   set(flags "")
   foreach(lib IN LISTS ARGN)
     if(lib MATCHES "^-")
       list(APPEND flags "${lib}")
-    elseif(IS_ABSOLUTE "${lib}")
-      get_filename_component(dir "${lib}" DIRECTORY)
+    else()
       get_filename_component(name "${lib}" NAME)
       string(REGEX REPLACE "^lib" "" name "${name}")
       string(REGEX REPLACE "\\.(so[.0-9]*|a)$" "" name "${name}")
-      if(NOT dir IN_LIST CMAKE_C_IMPLICIT_LINK_DIRECTORIES)
-        list(APPEND flags "-L${dir}")
-      endif()
       list(APPEND flags "-l${name}")
-    else()
-      list(APPEND flags "-l${lib}")
     endif()
   endforeach()
   list(REMOVE_DUPLICATES flags)
@@ -48,25 +44,36 @@ function(fascia_pc_flags out)
   set(${out} "${flags}" PARENT_SCOPE)
 endfunction()
 
-# what libfascia_sim.a calls directly: libhdf5, libcholmod and OpenBLAS, OpenMP's
-# runtime, the CUDA runtime (static, with what it needs) and the C++ runtime for
-# the launcher, libm
-set(hdf5_direct ${HDF5_C_LIBRARY_hdf5})
-if(NOT hdf5_direct)
-  list(GET HDF5_C_LIBRARIES 0 hdf5_direct)
-endif()
-set(hdf5_rest ${HDF5_C_LIBRARIES})
-list(REMOVE_ITEM hdf5_rest ${hdf5_direct})
-set(direct ${hdf5_direct} ${CHOLMOD_LIBRARY} ${CHOLMOD_OPENBLAS_LIBRARY})
+# what libfascia_sim.a calls directly: libhdf5 (its module hdf5, else the
+# name), libcholmod and OpenBLAS (module openblas, else the name), OpenMP's
+# runtime, the CUDA runtime (static, with what it needs) and the C++ runtime
+# for the launcher, libm; then what libcholmod needs
+find_package(PkgConfig QUIET)
+set(FASCIA_PC_REQUIRES_PRIVATE "")
+set(direct "")
+foreach(module hdf5 openblas)
+  set(found FALSE)
+  if(PKG_CONFIG_FOUND)
+    execute_process(COMMAND ${PKG_CONFIG_EXECUTABLE} --exists ${module} RESULT_VARIABLE missing)
+    if(missing EQUAL 0)
+      list(APPEND FASCIA_PC_REQUIRES_PRIVATE ${module})
+      set(found TRUE)
+    endif()
+  endif()
+  if(NOT found)
+    list(APPEND direct ${module})
+  endif()
+endforeach()
+list(JOIN FASCIA_PC_REQUIRES_PRIVATE " " FASCIA_PC_REQUIRES_PRIVATE)
+list(APPEND direct cholmod)
 if(OpenMP_C_FOUND)
   list(APPEND direct ${OpenMP_C_FLAGS})
 endif()
 if(FASCIA_HAVE_CUDA)
-  list(APPEND direct ${CUDA_cudart_static_LIBRARY} dl rt pthread stdc++)
+  list(APPEND direct cudart_static dl rt pthread stdc++)
 endif()
-list(APPEND direct m)
-fascia_pc_flags(FASCIA_PC_LIBS ${direct})
-fascia_pc_flags(FASCIA_PC_LIBS_PRIVATE ${hdf5_rest} ${CHOLMOD_LIBRARIES_PRIVATE})
+list(APPEND direct m ${CHOLMOD_LIBRARIES_PRIVATE})
+fascia_pc_names(FASCIA_PC_LIBS_PRIVATE ${direct})
 # relative to the .pc file, so that the file is right wherever the tree is
 # installed (cmake --install --prefix, DESTDIR)
 set(pc_dir ${CMAKE_INSTALL_LIBDIR}/pkgconfig)

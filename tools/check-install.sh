@@ -3,7 +3,9 @@
 # Checks that an installed fascia can be used by a program of your own: builds
 # (or reuses a build), installs into a temporary prefix, then builds examples/
 # against that prefix only, never the build tree, with find_package(fascia) and
-# with pkg-config, and runs them on a model the installed CLI prepares.
+# with pkg-config, on the static and the shared library, and runs them on a
+# model the installed CLI prepares; checks that the install names no folder
+# of the build machine and that the shared library is versioned.
 #
 #   tools/check-install.sh [BUILD_DIR]     (default: $FASCIA_BUILD_DIR, else build/)
 #
@@ -58,6 +60,34 @@ no_source_paths() {
   [ -z "$found" ] || { echo "these name the checkout or the build folder: $found"; return 1; }
 }
 check no-source-paths no_source_paths
+# nor a folder of the build machine: the .pc names only ${...} folders (its
+# dependencies come as modules), the CMake files only the install's own
+# prefix (dependencies come as imported targets, found again where used)
+no_machine_paths() {
+  local pc bad
+  pc="$(find "$prefix" -name fascia.pc | head -n 1)"
+  bad="$(grep -nE '(^|[[:space:]=,])(-[LI]|-Wl,-rpath,)?/' "$pc" | grep -v '^[0-9]*:#')" || true
+  [ -z "$bad" ] || { echo "$pc names folders of this machine: $bad"; return 1; }
+  bad="$(grep -nE '"/(usr|opt|home|root|tmp)/' "$(dirname "$(find "$prefix" -name fasciaConfig.cmake | head -n 1)")"/*.cmake)" || true
+  [ -z "$bad" ] || { echo "the CMake package names folders of this machine: $bad"; return 1; }
+}
+check no-machine-paths no_machine_paths
+# the shared library: versioned (soname libfascia_sim.so.MAJOR.MINOR, the
+# links beside it), exporting the public API (fascia_*) only
+version="$(sed -n 's/^Version: *//p' "$(find "$prefix" -name fascia.pc | head -n 1)")"
+soname="libfascia_sim.so.${version%.*}"
+shared_library() {
+  local lib
+  lib="$(find "$prefix" -name "libfascia_sim.so.$version" | head -n 1)"
+  [ -n "$lib" ] || { echo "no libfascia_sim.so.$version in the install"; return 1; }
+  readelf -d "$lib" | grep -F "[$soname]" | grep -q SONAME || { echo "$lib: soname is not $soname"; return 1; }
+  [ "$(readlink "$(dirname "$lib")/$soname")" = "libfascia_sim.so.$version" ] || { echo "no link $soname"; return 1; }
+  [ -L "$(dirname "$lib")/libfascia_sim.so" ] || { echo "no link libfascia_sim.so"; return 1; }
+  local other
+  other="$(nm -D --defined-only "$lib" | awk '{print $3}' | grep -v '^fascia_')" || true
+  [ -z "$other" ] || { echo "$lib exports more than fascia_*: $(echo "$other" | head -n 5)"; return 1; }
+}
+check shared-library shared_library
 # every public header compiles on its own against the installed include folder
 headers_alone() {
   local h
@@ -137,21 +167,39 @@ if [ $have_prep = 1 ]; then
   check cmake-prep-run scene_info_sane
 fi
 
-# --- pkg-config: the README's one-line build, shared-style and --static
+if [ $have_prep = 1 ]; then
+  check cmake-shared-run run_example "$work/examples/drive_organ_shared" "$model" uterus 2 3
+else
+  skipped="$skipped cmake-shared-run"
+fi
+# drive_organ_shared runs on the installed shared library (found by its rpath)
+links_shared() { ldd "$1" | grep -F "$soname => $prefix/"; }
+check cmake-shared-links links_shared "$work/examples/drive_organ_shared"
+
+# --- pkg-config: the README's one-line build (the shared library, found at
+# run time through the rpath the .pc gives), and a static one (the archive
+# and --static); the CUDA runtime's folder is the toolkit's, on LIBRARY_PATH
 pc_dir="$(dirname "$(find "$prefix" -name fascia.pc | head -n 1)")"
+cuda_lib="$(sed -n 's|^CUDA_cudart_static_LIBRARY:FILEPATH=\(.*\)/[^/]*$|\1|p' "$build/CMakeCache.txt")"
 pc_build() { # OUTPUT [--static]
-  local out="$1"
+  local out="$1" flags
   shift
-  # shellcheck disable=SC2046 # the flags are meant to split
-  cc -std=c11 -Wall -Wextra -Werror "$root/examples/drive_organ.c" -o "$out" \
-    $(PKG_CONFIG_PATH="$pc_dir" pkg-config --cflags --libs "$@" fascia)
+  flags="$(PKG_CONFIG_PATH="$pc_dir" pkg-config --cflags --libs "$@" fascia)" || return 1
+  if [ "${1:-}" = --static ]; then flags="${flags/-lfascia_sim/-l:libfascia_sim.a}"; fi
+  # shellcheck disable=SC2086 # the flags are meant to split
+  LIBRARY_PATH="${cuda_lib:+$cuda_lib:}${LIBRARY_PATH:-}" \
+    cc -std=c11 -Wall -Wextra -Werror "$root/examples/drive_organ.c" -o "$out" $flags -lm
 }
 check pkg-config-build pc_build "$work/drive_organ_pc"
+check pkg-config-links links_shared "$work/drive_organ_pc"
 check pkg-config-static-build pc_build "$work/drive_organ_pc_static" --static
+links_static() { ! ldd "$1" | grep -F libfascia_sim; }
+check pkg-config-static-links links_static "$work/drive_organ_pc_static"
 if [ $have_prep = 1 ]; then
   check pkg-config-run run_example "$work/drive_organ_pc" "$model" bladder 1 3
+  check pkg-config-static-run run_example "$work/drive_organ_pc_static" "$model" bladder 1 3
 else
-  skipped="$skipped pkg-config-run"
+  skipped="$skipped pkg-config-run pkg-config-static-run"
 fi
 
 if [ -n "$skipped" ]; then
