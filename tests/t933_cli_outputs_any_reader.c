@@ -6,9 +6,13 @@
 // XDMF sidecar are well-formed XML naming the organ as given, meshio reads
 // every file run.pvd lists with its units and time, h5py finds every dataset
 // the sidecar names, and ParaView opens the blocks by name and the tissue
-// coloured by strain (tests/paraview/check_outputs.py). Skipped without
-// Python 3 and its xml module.
+// coloured by strain (tests/paraview/check_outputs.py). The demo's pictures
+// are drawn from them (tools/plots/: gnuplot without a warning, ParaView
+// under xvfb-run) with the colour bar's top the run's largest strain, to
+// its printed digits. Skipped without Python 3 and its xml module; the
+// pictures without gnuplot, pvbatch or xvfb-run.
 // Usage: t933_cli_outputs_any_reader PATH/TO/fascia WORK_DIR TESTS/paraview data/scenes/pelvis-female-demo.json
+//        TOOLS/plots
 #define _POSIX_C_SOURCE 200809L
 #include "check.h"
 #include "cli_exec.h"
@@ -59,9 +63,35 @@ static int write_scene(const char *demo, const char *path) {
   return ok;
 }
 
+// The demo's pictures from the run's outputs: gnuplot's without a warning;
+// ParaView's with the colour bar's top the largest strain the run printed.
+static void check_pictures(const char *plots, const char *dir, int pvbatch) {
+  char command[8192], text[256] = "", *largest = strstr(result.out, "strain      largest ");
+  if (largest) sscanf(largest, "strain      largest %63s", text);
+  CHECK(text[0]);
+  if (system("command -v gnuplot >/dev/null 2>&1") == 0) {
+    snprintf(command, sizeof command,
+             "gnuplot -e \"dir='%s'; title='t933'; organs='a b'\" '%s/demo.gp' 2>&1 | tee /dev/stderr | grep -q .", dir,
+             plots);
+    CHECK(system(command) != 0); // nothing printed
+  } else {
+    printf("t933: gnuplot pictures skipped: gnuplot is not installed\n");
+  }
+  if (!pvbatch || system("command -v xvfb-run >/dev/null 2>&1") != 0) {
+    printf("t933: ParaView pictures skipped: pvbatch or xvfb-run is not installed\n");
+    return;
+  }
+  snprintf(command, sizeof command,
+           "xvfb-run -a -s '-screen 0 1280x1024x24' pvbatch '%s/demo_paraview.py' '%s/pv/run.pvd' '%s' t933 sagittal "
+           "2>/dev/null | grep -q '^strain colour bar: 0 to %s$'",
+           plots, dir, dir, text);
+  CHECK(system(command) == 0);
+}
+
 int main(int argc, char **argv) {
-  if (argc < 5) {
-    fprintf(stderr, "usage: t933_cli_outputs_any_reader PATH/TO/fascia WORK_DIR TESTS/paraview DEMO-SCENE.json\n");
+  if (argc < 6) {
+    fprintf(stderr, "usage: t933_cli_outputs_any_reader PATH/TO/fascia WORK_DIR TESTS/paraview DEMO-SCENE.json "
+                    "TOOLS/plots\n");
     return 1;
   }
   const int pvbatch = system("command -v pvbatch >/dev/null 2>&1") == 0;
@@ -88,8 +118,8 @@ int main(int argc, char **argv) {
   // 4 steps of the demo's traction, every other saved: rest and 2 more
   snprintf(args, sizeof args,
            "run '%s/model.h5' --steps 4 --dt 0.05 --save-every 2 --threads 1 --samples -o '%s/results.h5' "
-           "--paraview '%s/pv'",
-           dir, dir, dir);
+           "--paraview '%s/pv' --history '%s/history.csv' --snapshots '%s/data'",
+           dir, dir, dir, dir, dir);
   CHECK(cli_exec(argv[1], args, path, &result) && result.status == 0);
   snprintf(args, sizeof args,
            "%s '%s/check_outputs.py' '%s/pv' '%s/results.h5' '%s/name.txt' 2>&1 | grep -v -i openpmd"
@@ -97,5 +127,6 @@ int main(int argc, char **argv) {
            python, argv[3], dir, dir, dir);
   fflush(stdout);
   CHECK(system(args) == 0);
+  check_pictures(argv[5], dir, pvbatch);
   return CHECK_RESULT();
 }

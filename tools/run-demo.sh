@@ -91,12 +91,12 @@ cat <<EOF
 demo summary: $what
   model        $frames frames ($(sed -n 's/^frames *[0-9]* (\(.*\))/\1/p' "$out/model.txt")), $samples samples
   simulation   $steps steps of $dt s, $ms ms per step, backend $(field backend), linear solver $(field linear)
-  tissue       largest strain $strain (Green-Lagrange norm), largest stress $stress Pa
+  tissue       largest strain $strain (Green-Lagrange norm, over the samples at the end: the colour bars' top), largest stress $stress Pa
   wall time    ${seconds} s to prepare and simulate
   files        $out/
     results.h5 + results.xdmf   tissue frames and samples with displacement, strain and stress per saved step (ParaView)
     paraview/run.pvd            open in ParaView: tissue surface, samples, frames, organs per saved step
-    scene-rest.png, scene-deformed.png   tissue coloured by strain between the organs ($pictures)
+    scene-rest.png, scene-deformed.png   tissue coloured by strain between the named organs, the rest shape in grey ($pictures)
     energy.png, iterations.png, ms-per-step.png   the run over time
     history.csv, data/*.csv     the numbers behind the pictures
 EOF

@@ -2,10 +2,17 @@
 # Pictures of a `fascia run` without a display (gnuplot, pngcairo):
 #   gnuplot -e "dir='out/demo'" tools/plots/demo.gp
 #   (optional: title='...', organs='name ...' in the model's order, view='sagittal', 'coronal' or 'coronal-ras')
+# Strain is a magnitude (0 up): a sequential colour map (viridis) from 0 to
+# the largest sample strain at the end, the summary's "largest strain", its
+# value on the bar's top; the deformed picture draws the samples at rest in
+# grey behind the deformed ones. Keys sit below the plots (no data under
+# them); an axis whose data span more than a decade is logarithmic; a series
+# that is all zero (CG iterations with the direct solver) is left out and the
+# title says so.
 # reads   dir/data/{tissue,organs}-{rest,final}.csv  (fascia run --snapshots dir/data)
 #         dir/history.csv                            (fascia run --history dir/history.csv)
 # writes  dir/scene-rest.png, dir/scene-deformed.png  tissue samples coloured by strain, organ surface points
-#         dir/energy.png, dir/iterations.png, dir/ms-per-step.png
+#         dir/energy.png (potential linear, kinetic logarithmic), dir/iterations.png, dir/ms-per-step.png
 if (!exists("dir")) dir = "out/demo"
 if (!exists("title")) title = "fascia"
 set datafile separator ","
@@ -51,11 +58,14 @@ set zlabel (ras ? "z, superior (mm)" : "y, superior (mm)") rotate parallel offse
 unset ylabel
 set ytics format ""
 set grid
-set palette defined (0 "#2c7bb6", 0.25 "#abd9e9", 0.5 "#ffffbf", 0.75 "#fdae61", 1 "#d7191c")
+# viridis (sequential, readable in grey and by the colour-blind)
+set palette defined (0 "#440154", 0.125 "#482878", 0.25 "#3e4989", 0.375 "#31688e", 0.5 "#26828e", \
+                     0.625 "#1f9e89", 0.75 "#35b779", 0.875 "#6ece58", 1 "#fde725")
 set cbrange [0:strain_max]
-set cblabel "tissue strain: Green-Lagrange |E|"
+set cbtics add (sprintf("max %.3g", strain_max) strain_max)
+set cblabel "tissue strain: Green-Lagrange |E| (0 to the largest at the end)"
 if (coronal) { set key at screen 0.01, 0.92 left top Left reverse width -10 box opaque samplen 1 font ",11" } else { set key top left box opaque }
-set colorbox vertical user origin 0.86, 0.2 size 0.03, 0.6
+set colorbox vertical user origin 0.84, 0.2 size 0.03, 0.6
 mm = 1000
 array organ_colour[10] = ["#c97b9b", "#d9b13b", "#7fa36b", "#8a8ac9", "#b5835a", "#5fa8a8", "#9e9e9e", "#e07b39", \
                           "#6b8fd4", "#a3c94f"]
@@ -65,9 +75,13 @@ do for [stage in "rest final"] {
   set title sprintf("%s: %s, %s (%d tissue samples)", title, \
                     stage eq "rest" ? "at rest" : "deformed, end of the run", \
                     coronal ? "coronal view from the front" : "sagittal view from the left", samples)
+  at_rest = stage eq "rest" # the rest samples behind the deformed ones only
   splot for [k=0:organ_count-1] dir."/data/organs-".stage.".csv" every ::1 \
           using ($1 == k ? sign*column(across + 1)*mm : NaN):(column(depth + 1)*mm):(column(up + 1)*mm) \
           with points pt 7 ps 0.3 lc rgb organ_colour[k % 10 + 1] title word(organs, k+1)." surface" noenhanced, \
+        dir."/data/tissue-rest.csv" every ::1 \
+          using (at_rest ? NaN : sign*column(across)*mm):(column(depth)*mm):(column(up)*mm) \
+          with points pt 7 ps 0.8 lc rgb "#c8c8c8" title (at_rest ? "" : "tissue samples at rest (grey)"), \
         dir."/data/tissue-".stage.".csv" every ::1 using (sign*column(across)*mm):(column(depth)*mm):(column(up)*mm):4 \
           with points pt 7 ps 0.8 palette title "tissue samples (colour: strain)"
 }
@@ -75,35 +89,58 @@ reset
 
 # --- history: energy, iterations, ms per step ------------------------------
 set datafile separator ","
-set terminal pngcairo size 1200,700 enhanced font "DejaVu Sans,14"
+set terminal pngcairo size 1200,800 enhanced font "DejaVu Sans,14"
 set grid
-set key top right box opaque
+set key outside top center horizontal box opaque
 set xlabel "time (s)"
 
 set output dir."/energy.png"
+set multiplot layout 2,1
 set title title.": energy per step"
-set ylabel "energy (J)"
+set ylabel "potential energy (J)"
 set format y "%.3g"
-plot dir."/history.csv" every ::1 using 2:3 with linespoints lw 2 pt 7 ps 0.6 title "potential (elastic + gravity)", \
-     "" every ::1 using 2:4 with linespoints lw 2 pt 5 ps 0.6 title "kinetic"
+unset xlabel
+plot dir."/history.csv" every ::1 using 2:3 with linespoints lw 2 pt 7 ps 0.6 lc rgb "#31688e" \
+     title "potential (elastic + gravity)"
+set xlabel "time (s)"
+unset title
+set ylabel "kinetic energy (J)"
+stats dir."/history.csv" using ($4 > 0 ? $4 : NaN) every ::1 nooutput
+if (STATS_records > 0 && STATS_max > 10 * STATS_min) { set logscale y; set format y "10^{%L}" }
+plot dir."/history.csv" every ::1 using 2:($4 > 0 ? $4 : NaN) with linespoints lw 2 pt 5 ps 0.6 lc rgb "#35b779" \
+     title "kinetic (steps with 0 not drawn on the log axis)"
+unset logscale y
+set format y "%.3g"
+unset multiplot
 
+set terminal pngcairo size 1200,700 enhanced font "DejaVu Sans,14"
 set output dir."/iterations.png"
-set title title.": solver iterations per step"
-set ylabel "Newton iterations"
-set y2label "CG iterations"
-set ytics nomirror
-set y2tics
 stats dir."/history.csv" using 6 every ::1 nooutput
+cg_max = STATS_max
 set yrange [0:*]
-if (STATS_max > 0) { set y2range [0:*] } else { set y2range [0:1] } # direct solver: no CG
-plot dir."/history.csv" every ::1 using 2:5 with linespoints lw 2 pt 7 ps 0.6 axes x1y1 title "Newton", \
-     "" every ::1 using 2:6 with linespoints lw 2 pt 5 ps 0.6 axes x1y2 title "CG (0: direct solver)"
+if (cg_max > 0) {
+  set title title.": solver iterations per step"
+  set ylabel "Newton iterations"
+  set y2label "CG iterations"
+  set ytics nomirror
+  set y2tics
+  set y2range [0:*]
+  plot dir."/history.csv" every ::1 using 2:5 with linespoints lw 2 pt 7 ps 0.6 axes x1y1 title "Newton", \
+       "" every ::1 using 2:6 with linespoints lw 2 pt 5 ps 0.6 axes x1y2 title "CG"
+} else {
+  set title title.": Newton iterations per step (direct linear solver: no CG iterations)"
+  set ylabel "Newton iterations"
+  plot dir."/history.csv" every ::1 using 2:5 with linespoints lw 2 pt 7 ps 0.6 title "Newton"
+}
 unset y2label
 unset y2tics
 set ytics mirror
+set autoscale y
 
 set output dir."/ms-per-step.png"
 set title title.": wall time per step"
 set ylabel "ms per step"
+stats dir."/history.csv" using ($7 > 0 ? $7 : NaN) every ::1 nooutput
+if (STATS_records > 0 && STATS_max > 10 * STATS_min) { set logscale y }
 plot dir."/history.csv" every ::1 using 2:7 with linespoints lw 2 pt 7 ps 0.6 title "ms per step"
 set output
