@@ -15,6 +15,7 @@ packages=(
   paraview python3-paraview python3-h5py python3-meshio  # tests open the results with ParaView's readers (pvbatch), h5py and meshio
   xvfb xauth                           # the demo's pictures rendered by ParaView without a display (xvfb-run)
   calculix-ccx                         # the cantilever's FE reference and bench's peer (data/reference/)
+  python3-numpy python3-cffi python3-pytest  # the Python package (sim/python: cffi over libfascia_sim.so) and its tests
   snakemake                            # the cohort workflow (tools/cohort/Snakefile, docs/cohort.md)
 )
 
