@@ -56,7 +56,7 @@ check() {
 check install cmake --install "$build" --prefix "$prefix"
 no_source_paths() {
   local found
-  found="$(grep -rlF -e "$root" -e "$build" --include='*.h' --include='*.cmake' --include='*.pc' "$prefix")" || true
+  found="$(grep -rlF -e "$root" -e "$build" --include='*.h' --include='*.cmake' --include='*.pc' --include='*.py' "$prefix")" || true
   [ -z "$found" ] || { echo "these name the checkout or the build folder: $found"; return 1; }
 }
 check no-source-paths no_source_paths
@@ -200,6 +200,27 @@ if [ $have_prep = 1 ]; then
   check pkg-config-static-run run_example "$work/drive_organ_pc_static" "$model" bladder 1 3
 else
   skipped="$skipped pkg-config-run pkg-config-static-run"
+fi
+
+# --- the Python package, where it was built: imported from the prefix, on
+# the prefix's library, running the example on the model
+py_dir="$(find "$prefix" -type d -path '*/dist-packages/fascia' | head -n 1)"
+if [ -n "$py_dir" ]; then
+  python="$(sed -n 's|^FASCIA_PYTHON_EXECUTABLE:INTERNAL=||p' "$build/CMakeCache.txt")"
+  python_import() {
+    env -u FASCIA_LIBRARY -u FASCIA_CLI PYTHONPATH="$(dirname "$py_dir")" "${python:-python3}" -c \
+      "import fascia, sys; p = fascia.library_path(); print(fascia.version(), p); sys.exit(not p.startswith('$prefix/'))"
+  }
+  check python-import python_import
+  if [ $have_prep = 1 ]; then
+    python_example() {
+      env -u FASCIA_LIBRARY -u FASCIA_CLI PYTHONPATH="$(dirname "$py_dir")" "${python:-python3}" \
+        "$root/examples/retract.py" "$model" --steps 3 && return 0
+    }
+    check python-example python_example
+  fi
+else
+  skipped="$skipped python (not built)"
 fi
 
 if [ -n "$skipped" ]; then
