@@ -595,10 +595,34 @@ static int check_prep_paths(const fascia_prep_scene *scene, const char *output, 
   return rc;
 }
 
+// --estimate: what preparing will take, for a scheduler (docs/cohort.md); nothing written.
+static int print_estimate(fascia_ctx *ctx, const fascia_prep_scene *scene, int json) {
+  fascia_prep_estimate_report e;
+  const fascia_status st = fascia_prep_estimate(ctx, scene, &e);
+  if (st != FASCIA_OK) return cli_fail("prep", ctx, st);
+  const double mib = e.peak_bytes / 1048576;
+  fprintf(stderr, "fascia prep: %s: expected peak memory %.0f MiB (%.3g grid voxels of %g m, %.3g triangles)\n",
+          scene->path, mib, e.grid_voxels, scene->voxel_size, e.triangles);
+  if (!json) return 0;
+  cJSON *root = cJSON_CreateObject();
+  cJSON_AddStringToObject(root, "scene", scene->path);
+  cJSON_AddNumberToObject(root, "grid_voxels", e.grid_voxels);
+  cJSON_AddNumberToObject(root, "organ_voxels", e.organ_voxels);
+  cJSON_AddNumberToObject(root, "triangles", e.triangles);
+  cJSON_AddNumberToObject(root, "peak_bytes", e.peak_bytes);
+  cJSON_AddNumberToObject(root, "peak_mib", (double)(int64_t)(mib + 1));
+  cJSON *absent = cJSON_AddArrayToObject(root, "absent_organs");
+  for (int32_t k = 0; k < scene->absent_organ_count; ++k)
+    cJSON_AddItemToArray(absent, cJSON_CreateString(scene->absent_organs[k]));
+  const int rc = cli_json_emit(root, 0);
+  cJSON_Delete(root);
+  return rc;
+}
+
 int fascia_prep_command(int argc, char **argv) {
   const char *scene_path = NULL, *output = NULL, *preview = NULL, *labelmap = NULL;
   char label_table[4096] = "";
-  int json = 0, threads = 0;
+  int json = 0, threads = 0, estimate = 0;
   for (int k = 1; k < argc; ++k) {
     if (!strcmp(argv[k], "--help") || !strcmp(argv[k], "-h")) {
       printf("%s", cli_prep_usage);
@@ -606,6 +630,8 @@ int fascia_prep_command(int argc, char **argv) {
     } else if (!strcmp(argv[k], "--json")) {
       json = 1;
     } else if (!strcmp(argv[k], "--verbose")) {
+    } else if (!strcmp(argv[k], "--estimate")) {
+      estimate = 1;
     } else if ((!strcmp(argv[k], "-o") || !strcmp(argv[k], "--output")) && k + 1 < argc) {
       output = argv[++k];
     } else if (!strcmp(argv[k], "--preview") && k + 1 < argc) {
@@ -651,6 +677,10 @@ int fascia_prep_command(int argc, char **argv) {
     if (st != FASCIA_OK) goto fail;                                                                                   \
   } while (0)
   STEP("scene", fascia_prep_scene_load(ctx, scene_path, &r.scene));
+  if (estimate) {
+    rc = print_estimate(ctx, r.scene, json);
+    goto done;
+  }
   if (!output) output = r.scene->output;
   if (!output) {
     fprintf(stderr, "fascia prep: no output file: give -o MODEL.h5 or an \"output\" key in '%s'\n", scene_path);

@@ -28,6 +28,8 @@ const char cli_prep_usage[] =
     "                  scene can build the same organs from labels (docs/labelmaps.md)\n"
     "  --json          print one JSON summary object on stdout\n"
     "  --threads N     worker threads, 1 to 1024 (default: all)\n"
+    "  --estimate      print the expected peak memory of preparing (from the label map or the meshes'\n"
+    "                  bounds, docs/cohort.md) and stop; nothing is written\n"
     "  --verbose       on failure, also print where the error was found\n";
 
 static int asks_for_help(int argc, char **argv) {

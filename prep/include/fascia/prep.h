@@ -589,6 +589,26 @@ FASCIA_API int fascia_prep_labelmap_table_path(const char *path, char *out, size
 /// Hex SHA-256 of a file into hex[65].
 FASCIA_API fascia_status fascia_prep_file_sha256(fascia_ctx *ctx, const char *path, char hex[65]);
 
+// ---------------------------------------------------------------- estimate
+
+/// What preparing a scene will take, known before it runs (a scheduler sizes
+/// a job by it): the voxel grid over the organs, their surfaces' triangles,
+/// and the peak resident memory they imply (docs/cohort.md).
+typedef struct fascia_prep_estimate_report {
+  double grid_voxels;  ///< voxels of the tissues' grid: their organs' overlapping bounds grown by max_gap
+  double organ_voxels; ///< voxels of the largest organ's own grid (its bounds)
+  double triangles;    ///< the organs' surface triangles (label organs: two per boundary voxel face)
+  double input_bytes;  ///< bytes of the mesh files read (0 for a label map)
+  double input_voxels; ///< voxels of the label map (0 for meshes)
+  double peak_bytes;   ///< expected peak resident memory of `fascia prep`, bytes
+  double bounds[6];    ///< the organs' bounds, m, world: min xyz, max xyz
+} fascia_prep_estimate_report;
+
+/// Reads the scene's label map, or its meshes (assimp only), and fills out;
+/// nothing is meshed, voxelized or written. Errors as import's.
+FASCIA_API fascia_status fascia_prep_estimate(fascia_ctx *ctx, const fascia_prep_scene *scene,
+                                              fascia_prep_estimate_report *out);
+
 #ifdef __cplusplus
 }
 #endif
