@@ -45,13 +45,14 @@ function(fascia_pc_names out)
 endfunction()
 
 # what libfascia_sim.a calls directly: libhdf5 (its module hdf5, else the
-# name), libcholmod and OpenBLAS (module openblas, else the name), OpenMP's
+# name), zlib for compressed VTK files (module zlib, else z), libcholmod and
+# OpenBLAS (module openblas, else the name), OpenMP's
 # runtime, the CUDA runtime (static, with what it needs) and the C++ runtime
 # for the launcher, libm; then what libcholmod needs
 find_package(PkgConfig QUIET)
 set(FASCIA_PC_REQUIRES_PRIVATE "")
 set(direct "")
-foreach(module hdf5 openblas)
+foreach(module hdf5 openblas zlib)
   set(found FALSE)
   if(PKG_CONFIG_FOUND)
     execute_process(COMMAND ${PKG_CONFIG_EXECUTABLE} --exists ${module} RESULT_VARIABLE missing)
@@ -60,7 +61,9 @@ foreach(module hdf5 openblas)
       set(found TRUE)
     endif()
   endif()
-  if(NOT found)
+  if(NOT found AND module STREQUAL "zlib")
+    list(APPEND direct z)
+  elseif(NOT found)
     list(APPEND direct ${module})
   endif()
 endforeach()

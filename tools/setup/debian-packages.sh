@@ -6,7 +6,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake pkg-config     # compilers and build
-  libhdf5-dev                          # model and result files (simulator core)
+  libhdf5-dev zlib1g-dev               # model and result files, compressed VTK outputs (simulator core)
   libsuitesparse-dev libopenblas-dev   # the direct linear solver: CHOLMOD on an optimized BLAS (simulator core)
   libcjson-dev                         # JSON for scene files and --json output
   libassimp-dev libcgal-dev libopenvdb-dev libboost-iostreams-dev libtbb-dev libeigen3-dev nettle-dev  # prep stage
