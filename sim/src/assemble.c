@@ -147,8 +147,7 @@ static fascia_status plan(fascia_ctx *ctx, const fascia_model *m, fascia_bsr *B)
 // Appends frame to row i's list unless the row has it (row_of: the row
 // that last listed each frame), so that a row is sorted without its repeats:
 // a frame of the hex beam meets its 27 neighbours about 20 times each
-// through its samples and patches (the static 20x3x3 hex cantilever's set-up
-// 45 -> 35 million instructions).
+// through its samples and patches, and sorting the repeats dominated the set-up.
 static inline void list_once(int32_t *row_of, int32_t i, int32_t frame, int32_t *row, int32_t *len) {
   if (row_of[frame] != i) row_of[frame] = i, row[(*len)++] = frame;
 }
@@ -291,8 +290,7 @@ static void mass_rows(fascia_system *sys, const unsigned char *moves, fascia_bsr
 // sample in patch p >= 0 with enhanced strain modes also leaves its shares
 // of the modes' terms (sim/src/modes.h) from its D and B^T D.
 // dq, col: 6 max_neighbours reals; scratch: 66 max_neighbours. Its loops
-// over the sample's pairs are wide (AVX2: 26 against 32 ms of assembly in
-// the static 20x3x3 hex cantilever).
+// over the sample's pairs are compiled wide (wide.h), where AVX2 pays.
 WIDE_CLONES static void local_stiffness(const fascia_system *sys, const fascia_pt_state *st, const unsigned char *moves,
                             int32_t s, int32_t p, fascia_real *out, fascia_real *dq, fascia_real *col,
                             fascia_real *scratch) {
@@ -555,9 +553,8 @@ static int plan_adds(fascia_bsr *B, int T) {
 }
 
 // Adds to BSR block chunk_blocks[t] its entries, local blocks of the
-// chunk in B->chunk, in ascending order. Its sums are wide (AVX2: the
-// static 20x3x3 hex cantilever 464 -> 445 million instructions, its block
-// sums 29 -> 10), the same bits as the baseline build's.
+// chunk in B->chunk, in ascending order. Its sums are compiled wide
+// (wide.h) and give the same bits as the baseline build's.
 WIDE_CLONES static void add_contributions(fascia_bsr *B, int64_t t) {
   fascia_real *FASCIA_RESTRICT dst = B->values + 36 * (int64_t)B->chunk_blocks[t];
   for (int64_t c = B->chunk_entry_offsets[t]; c < B->chunk_entry_offsets[t + 1]; ++c) {

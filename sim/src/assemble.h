@@ -73,9 +73,8 @@ static inline int fascia_frame_moving(const unsigned char *moves, int32_t i) { r
 /// Local blocks computed per pass of the assembly (bounds its scratch to
 /// 0.6 MB, which a core's own cache keeps between the loop that writes the
 /// blocks and the one that adds them up). Each pass visits only the blocks
-/// its samples add to, so small passes cost little: the static 20x3x3 hex
-/// cantilever, one thread, 24 -> 20 ms of assembly against 16384 blocks;
-/// t3-s34610 the same within the machine's noise on one or two threads.
+/// its samples add to, so small passes cost little and a smaller bound
+/// is not slower than a larger one.
 #define FASCIA_ASSEMBLY_CHUNK 2048
 
 /// Pattern of frame pairs that share a sample (every frame has its diagonal).

@@ -67,11 +67,10 @@ typedef struct cpu_backend {
 /// the last step's, when it was made for the same mask and mass coefficient
 /// and the state was not set or restored since (a checkpoint carries it:
 /// linear_state_save), and a second iteration may follow to check it.
-/// Assembly and factorization are 80-90 % of a direct iteration, the solve
-/// with the factor about 3 %. Dynamic steps only: a static solve keeps
-/// exact Newton, whose iteration count the accuracy study reports (the
-/// 20x3x3 cantilever at nu = 0.49, hex: 13 iterations in 75 ms; with chord
-/// steps 15 in 72 ms).
+/// Assembly and factorization are most of a direct iteration, the solve
+/// with the factor a small part. Dynamic steps only: a static solve keeps
+/// exact Newton, whose iteration count the accuracy study reports (chord
+/// steps there saved little time for more iterations).
 #define REUSE_REDUCTION 10
 
 static int cpu_available(char *detail, size_t size) {
@@ -286,8 +285,8 @@ static fascia_status cpu_begin(fascia_backend *backend, const fascia_step_values
   op.bodies = fascia_organs_body_count(S->organs) > 0 ? B->bodies : NULL;
   op.full_mask = B->full_mask;
   op.prolonged = B->prolonged;
-  // float products: half the memory traffic of CG's products, which bound a paper-mode step (t3-s34610, 2
-  // threads: CG 172 -> 104 ms per step on a shared 2-core machine); the rounding stays far below the CG tolerance
+  // float products: half the memory traffic of CG's products, which bound a paper-mode step; the rounding
+  // stays far below the CG tolerance
   const int single = B->def->single_precision_matrix == FASCIA_SINGLE_AUTO
                          ? B->def->cg_fixed || B->def->cg_tolerance >= FASCIA_SINGLE_MIN_CG_TOLERANCE
                          : B->def->single_precision_matrix;

@@ -31,9 +31,9 @@ static inline void add_product(wide_real *acc, const double *p, const wide_real 
   *acc += w * *x;
 }
 
-// The four floats at p, widened element by element: gcc 12 compiles
-// __builtin_convertvector of four floats as two halves through the stack,
-// not one vcvtps2pd (t3-s34610's products: 29 -> 16 cycles a block in cache).
+// The four floats at p, widened element by element: gcc may compile
+// __builtin_convertvector of four floats as two halves through the stack
+// instead of one vcvtps2pd, in the innermost loop of CG's products.
 static inline void widen(const float *p, wide_real *out) {
   wide_float w;
   memcpy(&w, p, sizeof w);

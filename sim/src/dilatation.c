@@ -202,9 +202,7 @@ void fascia_dilatation_destroy(fascia_dilatation **dilatation) {
   *dilatation = NULL;
 }
 
-// One patch's mean dilatation and its gradient, compiled wide (wide.h): the
-// demo tissue's 30 steps 338 -> 333 million instructions (its patches'
-// dilatations 41 -> 37).
+// One patch's mean dilatation and its gradient, compiled wide (wide.h).
 WIDE_CLONES static void patch_evaluate(const fascia_system *sys, const fascia_pt_state *st, fascia_dilatation *d,
                                        int32_t p) {
   fascia_pt_patch_evaluate(&sys->pm, st, &d->view, p);

@@ -378,18 +378,13 @@ static int shift_diagonal(fascia_direct *d, const fascia_real *damping, fascia_r
 
 // Factors the values in d->matrix (finite): 1, or 0 when not positive definite.
 static int factor_values(fascia_direct *d) {
-  // Debian's CHOLMOD asks OpenMP for teams of a fixed 4 threads in its
-  // supernodal factorization, for loops that only copy (the BLAS runs on
-  // one thread). With no active level allowed, every one of its regions
-  // runs as a team of one. Teams of 4 had doubled the 950-frame abdomen's
-  // linear solves on 2 cores; teams fitted to the free cores (2) still cost
-  // the deformable pelvis 9.9 against 3.2 ms of linear solves per step, and
-  // waking their sleeping worker made a factorization after an idle second
-  // 3x slower (docs/mechanics.md, "CHOLMOD's threads"). One thread was as
-  // fast or faster on every scene measured; the bits are the same. (Dynamic
-  // adjustment with nthreads-var 1 did the same, but read the machine's
-  // load and affinity, two system calls, in each of its regions: about 44
-  // per factorization of the 20x3x3 cantilever.)
+  // CHOLMOD's supernodal factorization may ask OpenMP for teams of its own,
+  // for loops that only copy (the BLAS runs on one thread). With no active
+  // level allowed, every one of its regions runs as a team of one: its teams
+  // would compete with the solver's threads for the cores and sleep between
+  // factorizations, and one thread is not slower; the bits are the same.
+  // Dynamic adjustment would do the same but asks the kernel for the load in
+  // every region (docs/mechanics.md, "CHOLMOD's threads").
   int factored;
 #ifdef _OPENMP
   const int levels = omp_get_max_active_levels();

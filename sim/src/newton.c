@@ -225,10 +225,8 @@ fascia_status fascia_newton_minimize(fascia_solver *S, const fascia_step_values 
           ++relaxed;
           accepted = 1;
           // a full step starts the next tangent unshifted: the shift that made
-          // an overshot iterate's tangent factor (about 1 on the cantilever)
-          // slowed three more iterations as it decayed by tenths (static
-          // 20x3x3 hex 9 -> 7 iterations, tet 10 -> 7, meshless 9 -> 8, nu =
-          // 0.49 12/11/13 -> 10/10/11); a tangent that is still indefinite
+          // an overshot iterate's tangent factor would slow the next iterations
+          // while it decayed by tenths; a tangent that is still indefinite
           // fails its factorization once and the direct solver goes on from a
           // tenth of its last shift (backend_cpu.c)
           shift = 0;

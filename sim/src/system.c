@@ -248,8 +248,7 @@ fascia_real fascia_dot(const fascia_real *a, const fascia_real *b, int64_t n, in
 
 // Samples [begin, end): their energy, summed in order, and their pairs'
 // gradients into the pair buffer, with their caches and flags. Compiled
-// wide (wide.h): in the static 20x3x3 cantilever 30 -> 26 million
-// instructions (hex), 58 -> 51 (tet).
+// wide (wide.h).
 WIDE_CLONES static fascia_real samples_gradient(fascia_system *sys, const fascia_pt_state *st, int32_t begin,
                                                int32_t end) {
   const int32_t *offsets = sys->model->sample_offsets, *patch = sys->model->sample_patch;
