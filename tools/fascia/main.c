@@ -70,19 +70,17 @@ fascia_ctx *cli_ctx(int threads, int progress) {
 }
 
 // OpenMP threads that spin while they wait for a core they do not get make
-// a run on a busy machine 10-30 times slower (docs/measured.md, "Speed"); with the
-// passive wait policy it degrades with the cores it gets. A short spin
-// (FASCIA_OMP_SPIN rounds of libgomp's pause loop, about 0.1 ms) before a
-// thread sleeps is kept: CG passes follow each other within microseconds,
-// and waking a sleeping thread for each cost t3-s34610 a tenth of its step.
+// a run on a busy machine many times slower (docs/measured.md, "On a busy
+// machine"); with the passive wait policy it degrades with the cores it
+// gets. A short spin (FASCIA_OMP_SPIN rounds of libgomp's pause loop)
+// before a thread sleeps is kept: CG passes follow each other within
+// microseconds, and waking a sleeping thread for each would slow a step.
 // OpenBLAS, the direct solver's BLAS, starts a worker per core as it loads,
-// and each spins about 0.1 s before it sleeps although the solver runs BLAS
-// on one thread (sim/src/direct.c): OPENBLAS_NUM_THREADS=1 keeps them from
-// being started (a static cantilever's run: 1898 samples of a spinning
-// thread beside 5281 of the solver's, none with it).
-// Both libraries read these as they load, so the program sets them and
-// starts itself again, keeping each the user chose (a start is about 20 ms:
-// the prep stage's libraries are loaded by `fascia prep` only,
+// and each spins before it sleeps although the solver runs BLAS on one
+// thread (sim/src/direct.c): OPENBLAS_NUM_THREADS=1 keeps them from being
+// started. Both libraries read these as they load, so the program sets
+// them and starts itself again, keeping each the user chose (a start is
+// cheap: the prep stage's libraries are loaded by `fascia prep` only,
 // prep_module.c). A function in the program's preinit array runs before
 // the libraries' constructors, but glibc 2.36 sets up the environment after
 // it, and its setenv is lost. If the new start fails the run goes on as it is.
@@ -105,13 +103,12 @@ static void start_settings(char **argv) {
 // frees them with the solver. glibc maps a block above a threshold of its
 // own on fresh pages, moves that threshold with the sizes freed so far, and
 // hands the heap's free top back to the system: a program that makes one
-// solver after another (the bench's repeats, the trade study's sweeps) met
-// fresh pages, a page fault each, again and again, more or fewer with the
-// order its rows ran in. On a VM whose faults cost 8 us the cantilever bench
-// took 18,000-24,000 faults and a row moved by up to 40 % with the rows
-// before it; with both thresholds fixed, 4,500, and each row's time the same
-// in any order. Freed memory is then kept for the next allocation, not
-// given back (blocks over 32 MB still are).
+// solver after another (the bench's repeats, the trade study's sweeps)
+// would meet fresh pages, a page fault each, again and again, more or fewer
+// with the order its rows run in, so that a row's time would depend on the
+// rows before it. With both thresholds fixed, freed memory is kept for the next
+// allocation, not given back (blocks over 32 MB still are), and each row's
+// time is the same in any order.
 static void keep_freed_memory(void) {
 #ifdef __GLIBC__
   mallopt(M_MMAP_THRESHOLD, 32 << 20);

@@ -3,9 +3,8 @@
 // `fascia prep` runs from a module, fascia-prep.so (cmd_prep.c and the prep
 // stage), that the program loads only when the command is asked for. The
 // prep stage's libraries (OpenVDB, TBB, CGAL's GMP, assimp, teem, NIfTI)
-// took about 70 ms to load and bind at every start of the program, and it
-// starts twice (main.c): `fascia --version` 159 ms, of which 140 were the
-// loader; every other command now starts without them.
+// take most of a start to load and bind, and the program starts twice
+// (main.c): every other command starts without them.
 // The module is looked for next to the program (the build folder), then in
 // FASCIA_PREP_MODULE_DIR relative to it (the install: ../lib/fascia).
 #define _DEFAULT_SOURCE // readlink

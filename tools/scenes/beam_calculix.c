@@ -292,9 +292,8 @@ static char **ccx_environment(int threads, char settings[CCX_THREAD_NAMES][64]) 
 // the signal that ended it), or -1 with why in *why when it could not be
 // started; its processor time (user + system) in *cpu_ms. Spawned (glibc: a
 // vfork), not forked: a fork write-protects every page of this process, and
-// the bench's next fascia row paid a page fault for each page it wrote
-// again (the 20x3x3 hex row 25 -> 59 ms on a machine whose faults cost
-// about 8 us).
+// the bench's next fascia row would pay a page fault for each page it writes
+// again, timing the faults instead of the solver.
 static int run_ccx(const char *dir, const char *program, int threads, double *cpu_ms, const char **why) {
   char settings[CCX_THREAD_NAMES][64];
   char **env = ccx_environment(threads, settings);
