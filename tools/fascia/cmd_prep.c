@@ -609,6 +609,8 @@ static int print_estimate(fascia_ctx *ctx, const fascia_prep_scene *scene, int j
   cJSON_AddNumberToObject(root, "grid_voxels", e.grid_voxels);
   cJSON_AddNumberToObject(root, "organ_voxels", e.organ_voxels);
   cJSON_AddNumberToObject(root, "triangles", e.triangles);
+  cJSON_AddNumberToObject(root, "input_bytes", e.input_bytes);
+  cJSON_AddNumberToObject(root, "input_voxels", e.input_voxels);
   cJSON_AddNumberToObject(root, "peak_bytes", e.peak_bytes);
   cJSON_AddNumberToObject(root, "peak_mib", (double)(int64_t)(mib + 1));
   cJSON *absent = cJSON_AddArrayToObject(root, "absent_organs");
