@@ -2,8 +2,8 @@
 // SPDX-FileCopyrightText: fascia developers
 // Stable over Young's moduli from 1e2 to 1e8 Pa, both laws: a
 // clamped beam under its own weight takes every step, finite, without energy
-// growth, and its Newton solves converge (a stiff Neo-Hookean beam once
-// could not: its energy's rounding hid the decrease near the minimum). A
+// growth, and its Newton solves converge (on a stiff Neo-Hookean beam the
+// energy's rounding can hide the decrease near the minimum). A
 // heterogeneous beam, two materials with a 1e4 stiffness contrast alternating
 // cell by cell along it, is just as stable, and its static deflection lies
 // between those of the all-soft and all-stiff beams. The device backends

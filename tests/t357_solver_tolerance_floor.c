@@ -3,14 +3,12 @@
 // A Newton tolerance below the forces' round-off does not fail steps at
 // random. Nearly incompressible tissue (nu = 0.49) in volumetric patches
 // keeps most of its stiffness in the patches' lambda, not the samples':
-// the forces' round-off floor of the Newton solver must count it. When it
-// did not (the samples' lambda share only, 50 times less here), the 10 x 2
-// x 2 cantilever's second step at a tolerance of 1e-10 converged in 3
-// iterations to |gradient| ~1e-9, then bounced on round-off until the
-// iteration limit, and the step was rejected and split, or not, by
-// rounding luck: 57 Newton iterations and a split step with the direct
-// solver, 4 with CG, so that two codes agreeing on everything else ended
-// 15 % apart. Every linear solver must take each of the three steps whole,
+// the forces' round-off floor of the Newton solver must count it. A floor
+// from the samples' lambda share only is 50 times too low here: the 10 x 2
+// x 2 cantilever's steps at a tolerance of 1e-10 would reach round-off,
+// bounce on it until the iteration limit, and be rejected and split, or
+// not, by rounding luck, so that linear solvers agreeing on everything else
+// end far apart. Every linear solver must take each of the three steps whole,
 // in a few iterations, and all must end at the same state. And where the
 // estimate falls short, a |gradient| that stops falling near it is the
 // floor: a static solve to 1e-14 converges there.

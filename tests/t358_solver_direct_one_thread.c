@@ -2,11 +2,10 @@
 // SPDX-FileCopyrightText: fascia developers
 // The direct solver's factorizations start no threads of their own: a
 // one-thread static solve of the 20x3x3 cantilever (supernodal factors)
-// leaves the process with the threads it had. Debian's CHOLMOD asks OpenMP
-// for teams of 4 in its supernodal factorization; fitted to the free cores
-// they still started a worker beside the solver's thread, which cost the
-// deformable pelvis 9.9 against 3.2 ms of linear solves per step on 2
-// threads and made a factorization after an idle second 3x slower
+// leaves the process with the threads it had. CHOLMOD may ask OpenMP for
+// teams of its own in its supernodal factorization; even fitted to the free
+// cores such a team starts a worker beside the solver's thread that
+// competes for the cores and is slow to wake after an idle spell
 // (docs/mechanics.md, "CHOLMOD's threads"). The thread count is read from
 // /proc/self/task, so the test is skipped where there is none. The runtime
 // fits a team to the cores its load average leaves free, so on a machine

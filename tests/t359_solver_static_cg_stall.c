@@ -6,11 +6,10 @@
 // on the 60x8x8 cantilever (8.2e9 flops) the first CG solve of a static
 // solve stops at its 200-iteration cap, and the solve goes on with the
 // direct solver, whose analysis was kept for this: it converges, within
-// 0.5 % of the converged CalculiX tip (before: 100 Newton iterations of
-// capped CG, not converged). A later static solve of the same solver (from
+// 0.5 % of the converged CalculiX tip, where capped CG alone does not
+// converge. A later static solve of the same solver (from
 // rest again) starts with the direct solver. A dynamic step (0.01 s)
-// switches the same way (at 0.1 s CG had taken 54 Newton iterations and
-// 17 s a step, now 4-5 and 1.8 s), the next step direct at once, and a
+// switches the same way, the next step direct at once, and a
 // run resumed from a checkpoint after that first step takes the next two to
 // the same bits (its kept factorization says CG had stalled); with one
 // Newton iteration per step (the interactive preset, whose CG cap bounds a

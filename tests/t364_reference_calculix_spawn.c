@@ -1,10 +1,9 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
 // Running CalculiX leaves the caller's memory as it was: the program is
-// spawned, not forked. A fork write-protected every page of the bench's
-// process, and the fascia row timed after a CalculiX run paid a page fault
-// for each page it wrote again (the 20x3x3 hex row 25 -> 59 ms on a machine
-// whose faults cost about 8 us). Here the program run is `true`, which
+// spawned, not forked. A fork write-protects every page of the bench's
+// process, and the fascia row timed after a CalculiX run would pay a page
+// fault for each page it writes again. Here the program run is `true`, which
 // writes no results (so the solve reports its output unreadable), also by
 // a path relative to the caller's folder; a program that does not exist is
 // reported as not run, one killed by a signal as stopped. Needs neither ccx nor

@@ -2,8 +2,8 @@
 // SPDX-FileCopyrightText: fascia developers
 // A deformable organ inside a multi-organ tissue from real CT anatomy
 // converges: the shipped TotalSegmentator abdomen with its spleen made
-// deformable (frames 10 mm, samples 5 mm, E 10 kPa: the spleen that once
-// took 1,600 Newton iterations without converging) between three tissues.
+// deformable (frames 10 mm, samples 5 mm, E 10 kPa: a soft organ whose
+// Newton solves are hard to converge) between three tissues.
 // The static solve and five steps of 0.01 s must converge, in a bounded
 // number of Newton iterations and with a bounded strain.
 // Usage: t583_prep_deformable_ct PATH/TO/data/scenes/abdomen-totalsegmentator.json

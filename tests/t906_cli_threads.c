@@ -2,8 +2,8 @@
 // SPDX-FileCopyrightText: fascia developers
 // A thread count beyond fascia's bound (1024) is refused before any work
 // with exit status 2 and one line that states the bound, whether it comes
-// from --threads (run, bench, prep, tradeoff) or from OMP_NUM_THREADS; the
-// OpenMP runtime used to crash on such counts. Counts inside the bound run.
+// from --threads (run, bench, prep, tradeoff) or from OMP_NUM_THREADS, which
+// the OpenMP runtime may crash on. Counts inside the bound run.
 // Usage: t906_cli_threads PATH/TO/fascia WORK_DIR
 #define _POSIX_C_SOURCE 200809L
 

@@ -4,8 +4,8 @@
 // the way one does: exit status 1 with "interrupted after step N" on stderr,
 // the results file (with its XDMF sidecar), the checkpoint and the history
 // written under their names, and no temporary file left. SIGTERM twice the
-// same. (The handler used to be reset by its first delivery, so the second
-// signal killed the run with nothing saved.)
+// same. (A handler reset by its first delivery would let the second signal
+// kill the run with nothing saved.)
 // Usage: t908_cli_interrupt_twice PATH/TO/fascia WORK_DIR
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
@@ -29,8 +29,8 @@ static void sleep_ms(long ms) {
 // One interrupted run in folder dir, stopped by two `sig`; 0 when it ended
 // as documented.
 // late: the second comes once the stop message is on stderr, while the run
-// closes its outputs and exits (it used to restore the default action there,
-// so a late second signal killed it).
+// closes its outputs and exits (restoring the default action there would
+// let a late second signal kill it).
 static int interrupt_twice(const char *fascia, const char *model, const char *dir, int sig, int late) {
   char command[4096], results[1024], xdmf[1024], checkpoint[1024], history[1024], err[1024];
   snprintf(command, sizeof command, "rm -rf '%s' && mkdir -p '%s'", dir, dir);

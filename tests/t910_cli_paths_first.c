@@ -76,7 +76,7 @@ int main(int argc, char **argv) {
     ++failures;
   }
 #ifdef FASCIA_HAVE_PREP
-  // prep: the whole pipeline used to run before the missing folder showed
+  // prep: the folder is checked before the pipeline runs
   char scene[1024], mesh[1024];
   CHECK(cli_write_tiny_scene(dir, scene, mesh));
   snprintf(args, sizeof args, "prep '%s' -o '%s/m.h5'", scene, missing);
