@@ -74,6 +74,19 @@ FASCIA_PREP_INTERN void fascia_cgal_tree_destroy(fascia_cgal_tree **tree);
 FASCIA_PREP_INTERN fascia_status fascia_cgal_delaunay(fascia_ctx *ctx, int32_t n, const double *points,
                                                       int32_t **out_tets, int32_t *out_tet_count);
 
+/// Triangles over n points spread over a surface (a shell's frames): 3
+/// point indices each (malloc'ed), each point joined only to its neighbours
+/// on the surface (advancing-front reconstruction). what names the surface
+/// in messages.
+FASCIA_PREP_INTERN fascia_status fascia_cgal_surface_triangles(fascia_ctx *ctx, const char *what, int32_t n,
+                                                               const double *points, int32_t **out_triangles,
+                                                               int32_t *out_count);
+/// Pairs of triangles of a triangle soup over points that cross (sharing a
+/// corner or an edge is not crossing) into *out_pairs.
+FASCIA_PREP_INTERN fascia_status fascia_cgal_soup_self_intersections(fascia_ctx *ctx, const char *what, int32_t n,
+                                                                     const double *points, int32_t triangle_count,
+                                                                     const int32_t *triangles, int64_t *out_pairs);
+
 // ------------------------------------------------------------------ OpenVDB
 
 /// Unsigned distance (m) from a triangle soup, on the dense box of lattice

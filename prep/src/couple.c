@@ -63,8 +63,11 @@ fascia_status fascia_prep_couple(fascia_ctx *ctx, const fascia_prep_scene *scene
     const double *x = points->frame_position + 3 * (int64_t)i;
     if (points->frame_tissue[i] < 0) continue; // a deformable organ's own frame (never on a surface today)
     if (!prep_coupling_allowed(scene->tissues + points->frame_tissue[i], o, m, tri, x)) continue;
-    // a deformable organ shares exactly the frames its inside reaches
-    if (scene->organs[o].kind == FASCIA_ORGAN_DEFORMABLE && points->frame_organ_voxel[i] < 0) continue;
+    // a deformable organ shares exactly the frames its inside reaches (a
+    // shell every tissue frame on its surface: its wall's frames)
+    if (scene->organs[o].kind == FASCIA_ORGAN_DEFORMABLE && !scene->organs[o].shell &&
+        points->frame_organ_voxel[i] < 0)
+      continue;
     const int32_t *v = m->triangles + 3 * (int64_t)tri;
     double *b = c->barycentric + 3 * (int64_t)c->count;
     prep_triangle_barycentric(m->vertices + 3 * (int64_t)v[0], m->vertices + 3 * (int64_t)v[1],

@@ -644,6 +644,15 @@ fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_scene *scen
                              : scene->organs[points->sample_inside_organ[s]].enhanced_modes;
   }
   for (int32_t i = 0; i < points->frame_count; ++i) m->frame_organ[i] = points->frame_inside_organ[i];
+  // a shell organ's frames in its hold region, its own and those it shares, are fixed (docs/organs.md)
+  for (int32_t i = 0, c = 0; i < points->frame_count; ++i) {
+    int32_t o = points->frame_inside_organ[i];
+    for (; c < coupling->count && coupling->frame[c] < i; ++c) {}
+    if (c < coupling->count && coupling->frame[c] == i) o = coupling->organ[c];
+    if (o >= 0 && scene->organs[o].shell && scene->organs[o].hold.kind != FASCIA_PREP_REGION_NONE &&
+        prep_region_contains(&scene->organs[o].hold, points->frame_position + 3 * (int64_t)i))
+      m->frame_kind[i] = FASCIA_FRAME_FIXED, m->frame_motion[i] = -1;
+  }
   memcpy(m->sample_offsets, weights->sample_offsets, ((size_t)points->sample_count + 1) * sizeof(int32_t));
   memcpy(m->pair_frame, weights->pair_frame, (size_t)weights->pair_count * sizeof(int32_t));
   memcpy(m->pair_weight, weights->pair_weight, (size_t)weights->pair_count * sizeof(double));

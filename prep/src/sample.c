@@ -56,6 +56,7 @@
 #include "fascia/shape.h"
 #include "prep_util.h"
 #include "reduced.h"
+#include "shell.h"
 
 void fascia_prep_points_destroy(fascia_prep_points **points) {
   if (!points || !*points) return;
@@ -558,6 +559,36 @@ cleanup:
   return status;
 }
 
+// A shell organ's wall (shell.c): its own frames and samples appended; its
+// samples' triangles are frame indices of the whole scene already.
+static fascia_status sample_shell(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_meshes *meshes,
+                                  int32_t o, int64_t tissue_frames, const int32_t *tissue_of,
+                                  fascia_cgal_tree **trees, point_list *frames, point_list *samples,
+                                  sample_data *data) {
+  const prep_shell_frames seen = {frames->count, frames->position, frames->organ, frames->triangle, tissue_frames,
+                                  tissue_of};
+  prep_reduced r;
+  PREP_TRY(prep_shell_build(ctx, scene, meshes, o, &seen, trees, &r));
+  fascia_status status = FASCIA_OK;
+  const int64_t first_sample = samples->count;
+  for (int32_t i = 0; i < r.frame_count; ++i)
+    PREP_CHECK_GOTO(list_push(frames, r.frame_position + 3 * (int64_t)i, r.frame_organ[i], r.frame_triangle[i], -1),
+                    ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  for (int32_t s = 0; s < r.sample_count; ++s)
+    PREP_CHECK_GOTO(list_push(samples, r.sample_position + 3 * (int64_t)s, -1, -1, -1), ctx, FASCIA_ERR_MEMORY,
+                    "sample: out of memory");
+  PREP_CHECK_GOTO(data_reserve(data, samples->count), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  for (int32_t s = 0; s < r.sample_count; ++s) {
+    const int64_t k = first_sample + s;
+    data->volume[k] = r.sample_volume[s];
+    for (int j = 0; j < 4; ++j) data->tet_frame[4 * k + j] = -1;
+    memcpy(data->cell_frame + 3 * k, r.sample_cell + 3 * (int64_t)s, 3 * sizeof(int32_t));
+  }
+cleanup:
+  prep_reduced_free(&r);
+  return status;
+}
+
 // ------------------------------------------------------------ TET samples
 
 typedef struct tet {
@@ -851,9 +882,13 @@ fascia_status fascia_prep_sample(fascia_ctx *ctx, const fascia_prep_scene *scene
   for (int32_t o = 0; o < O; ++o) {
     if (scene->organs[o].kind != FASCIA_ORGAN_DEFORMABLE) continue;
     fascia_ctx_progress(ctx, "sample", (double)(T + o) / (T + O), scene->organs[o].name);
-    attach_shared(scene, meshes, volume, o, tissue_of, &frames);
-    PREP_TRY_GOTO(sample_region(ctx, scene, meshes, volume, (uint8_t)volume->organ_label[o], trees, &frames, &samples,
-                                &data, NULL));
+    if (scene->organs[o].shell) { // a hollow organ's wall (shell.c)
+      PREP_TRY_GOTO(sample_shell(ctx, scene, meshes, o, frame_end[T - 1], tissue_of, trees, &frames, &samples, &data));
+    } else {
+      attach_shared(scene, meshes, volume, o, tissue_of, &frames);
+      PREP_TRY_GOTO(sample_region(ctx, scene, meshes, volume, (uint8_t)volume->organ_label[o], trees, &frames,
+                                  &samples, &data, NULL));
+    }
     region_organ[regions] = o;
     frame_end[regions] = (int32_t)frames.count;
     sample_end[regions++] = (int32_t)samples.count;

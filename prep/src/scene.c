@@ -12,6 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "fascia/shape.h"
 #include "labels.h"
 #include "prep_util.h"
 #include "scene_optional.h"
@@ -696,12 +697,68 @@ static fascia_status parse_placement(const reader *rd, const cJSON *item, const 
   return FASCIA_OK;
 }
 
+// A shell organ (docs/organs.md, "Shell organs"): its wall's thickness,
+// material and frame spacing; the wall gets a material of its own with the
+// section's moduli (plane stress, as a sheet's: fascia_shape_section_moduli),
+// appended to the scene's materials as "MATERIAL/ORGAN".
+static fascia_status parse_shell(const reader *rd, fascia_prep_scene *scene, const cJSON *item, const char *path,
+                                 fascia_prep_organ_def *o) {
+  char at[PATH_SIZE];
+  const char *material;
+  PREP_TRY(get_string(rd, item, path, "material", 0, &material));
+  sub_key(at, path, "material");
+  if (!material) return key_fail(rd, at, "missing: a shell organ needs the material of its wall");
+  const int base = material_index(scene, material);
+  if (base < 0) return key_fail(rd, at, "no material is named '%s' in \"materials\"", material);
+  PREP_TRY(get_number(rd, item, path, "thickness", 1, 0, 0, 0, INFINITY, &o->thickness));
+  PREP_TRY(get_number(rd, item, path, "frame_spacing", 1, 0, 0, 0, INFINITY, &o->frame_spacing));
+  if (o->thickness >= o->frame_spacing) {
+    sub_key(at, path, "thickness");
+    return key_fail(rd, at, "%g m is not thinner than frame_spacing %g m: a wall that thick is a volume; make the "
+                    "organ \"deformable\", or space its frames wider", o->thickness, o->frame_spacing);
+  }
+  static const char *const volume_keys[] = {"sample_spacing", "shape_functions", "min_component", "patch_radius", NULL};
+  for (int k = 0; volume_keys[k]; ++k)
+    if (cJSON_GetObjectItemCaseSensitive(item, volume_keys[k])) {
+      sub_key(at, path, volume_keys[k]);
+      return key_fail(rd, at, "a shell takes one sample per triangle of its frames, at its centroid, times "
+                      "section_points through the wall (more points lock the wall in bending, docs/mechanics.md); "
+                      "leave %s out", volume_keys[k]);
+    }
+  int q;
+  PREP_TRY(get_int(rd, item, path, "section_points", 0, 2, 1, 4, &q));
+  o->section_points = q;
+  const cJSON *hold = cJSON_GetObjectItemCaseSensitive(item, "hold");
+  if (hold) {
+    sub_key(at, path, "hold");
+    static const char *const known_h[] = {"box", "sphere", NULL};
+    PREP_TRY(check_keys(rd, hold, at, known_h));
+    PREP_TRY(get_shape_region(rd, hold, at, &o->hold));
+    if (o->hold.kind == FASCIA_PREP_REGION_NONE) return key_fail(rd, at, "give a \"box\" or a \"sphere\"");
+  }
+  o->sample_spacing = o->frame_spacing;
+  o->shape_kind = FASCIA_PREP_SHAPE_MLS;
+  o->neighbours = 3;
+  o->patch_radius = 0; // the section is carried by the rotations: nothing locks volumetrically
+  fascia_material *wall = scene->materials + scene->material_count;
+  *wall = scene->materials[base];
+  fascia_shape_section_moduli(2, wall->youngs_modulus, wall->poisson_ratio, &wall->youngs_modulus,
+                              &wall->poisson_ratio);
+  wall->rotation_smoothing = 0;
+  char name[2 * FASCIA_NAME_SIZE + 8];
+  snprintf(name, sizeof name, "%s/%s", scene->materials[base].name, o->name);
+  snprintf(wall->name, sizeof wall->name, "%.*s", (int)sizeof wall->name - 1, name);
+  o->material = scene->material_count++;
+  return FASCIA_OK;
+}
+
 static fascia_status parse_organ(const reader *rd, fascia_prep_scene *scene, const cJSON *item, const char *path,
                                  const char *base_dir, fascia_prep_organ_def *o) {
   static const char *const known[] = {"name",          "mesh",           "labels",          "parts",
                                       "units",         "transform",      "model",           "motion",
                                       "material",      "frame_spacing",  "sample_spacing",  "shape_functions",
-                                      "min_component", "patch_radius",   "description",    "optional", NULL};
+                                      "min_component", "patch_radius",   "description",    "optional",
+                                      "thickness",     "section_points", "hold",           NULL};
   PREP_TRY(check_keys(rd, item, path, known));
   PREP_TRY(get_name(rd, item, path, "name", o->name));
   int optional = 0;
@@ -745,10 +802,18 @@ static fascia_status parse_organ(const reader *rd, fascia_prep_scene *scene, con
     o->kind = FASCIA_ORGAN_PRESCRIBED;
   else if (!strcmp(model, "rigid"))
     o->kind = FASCIA_ORGAN_RIGID;
-  else if (!strcmp(model, "deformable"))
-    o->kind = FASCIA_ORGAN_DEFORMABLE;
+  else if (!strcmp(model, "deformable") || !strcmp(model, "shell"))
+    o->kind = FASCIA_ORGAN_DEFORMABLE, o->shell = !strcmp(model, "shell");
   else
-    return key_fail(rd, at, "unknown model '%s' (known: fixed, prescribed, rigid, deformable)", model);
+    return key_fail(rd, at, "unknown model '%s' (known: fixed, prescribed, rigid, deformable, shell)", model);
+  if (o->shell) return parse_shell(rd, scene, item, path, o);
+  static const char *const shell_keys[] = {"thickness", "section_points", "hold", NULL};
+  for (int k = 0; shell_keys[k]; ++k)
+    if (cJSON_GetObjectItemCaseSensitive(item, shell_keys[k])) {
+      sub_key(at, path, shell_keys[k]);
+      return key_fail(rd, at, "only a \"shell\" organ (a hollow organ's wall) takes it (this organ's model is \"%s\")",
+                      model ? model : "fixed");
+    }
   if (o->kind == FASCIA_ORGAN_PRESCRIBED) {
     PREP_TRY(parse_motion(rd, item, path, &o->motion, o->name));
   } else if (cJSON_GetObjectItemCaseSensitive(item, "motion")) {
@@ -1068,7 +1133,10 @@ static fascia_status parse_root(const reader *rd, const cJSON *root, const char 
   if (!cJSON_IsObject(materials) || cJSON_GetArraySize(materials) < 1)
     return key_fail(rd, "materials", "expected an object {name: {\"youngs_modulus\", ...}}, found %s",
                     type_name(materials));
-  s->materials = prep_calloc(cJSON_GetArraySize(materials), sizeof *s->materials);
+  // room for the wall material each shell organ derives (parse_shell)
+  s->materials = prep_calloc(cJSON_GetArraySize(materials) +
+                                 cJSON_GetArraySize(cJSON_GetObjectItemCaseSensitive(root, "organs")),
+                             sizeof *s->materials);
   PREP_CHECK(s->materials, rd->ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", rd->file);
   const cJSON *e;
   cJSON_ArrayForEach(e, materials) {

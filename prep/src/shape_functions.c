@@ -526,9 +526,10 @@ static fascia_status cell_weights(fascia_ctx *ctx, const fascia_prep_scene *scen
   for (int32_t s = 0; s < pts->sample_count; ++s) {
     if (pts->sample_voxel[s] >= 0) continue;
     const int32_t *c = pts->sample_cell_frame + 3 * (int64_t)s;
-    const int32_t t = pts->sample_tissue[s];
-    PREP_CHECK(c[0] >= 0 && c[1] >= 0 && t >= 0, ctx, FASCIA_ERR_INTERNAL,
-               "sample %d: neither a voxel nor a strand's or sheet's cell recorded by the sampling stage", (int)s);
+    const int32_t t = pts->sample_tissue[s], o = pts->sample_inside_organ[s]; // a shell organ's wall: o >= 0
+    PREP_CHECK(c[0] >= 0 && c[1] >= 0 && (t >= 0 || o >= 0), ctx, FASCIA_ERR_INTERNAL,
+               "sample %d: neither a voxel nor a strand's, sheet's or shell's cell recorded by the sampling stage",
+               (int)s);
     int32_t frame[3];
     const int32_t k = c[2] >= 0 ? 3 : 2;
     memcpy(frame, c, (size_t)k * sizeof(int32_t));
@@ -551,9 +552,10 @@ static fascia_status cell_weights(fascia_ctx *ctx, const fascia_prep_scene *scen
     const fascia_status st =
         fascia_shape_mls_adaptive(ctx, k, x, p, CELL_SUPPORT_FACTOR * reach, 0, pair_w + base, pair_g + 3 * base, &dim);
     PREP_CHECK(st == FASCIA_OK && dim == k - 1, ctx, FASCIA_ERR_NUMERIC,
-               "tissue '%s' (%s) sample %d at (%.4g %.4g %.4g) m: the frames of its %s span %d dimension(s), expected "
+               "%s '%s' (%s) sample %d at (%.4g %.4g %.4g) m: the frames of its %s span %d dimension(s), expected "
                "%d (frames at one point or in a line); repair the geometry there",
-               scene->tissues[t].name, fascia_prep_form_name(scene->tissues[t].form), (int)s, p[0], p[1], p[2],
+               t >= 0 ? "tissue" : "organ", t >= 0 ? scene->tissues[t].name : scene->organs[o].name,
+               t >= 0 ? fascia_prep_form_name(scene->tissues[t].form) : "shell", (int)s, p[0], p[1], p[2],
                k == 2 ? "interval" : "triangle", (int)dim, (int)(k - 1));
     memcpy(pair_frame + base, frame, (size_t)k * sizeof(int32_t));
     pair_count[s] = k;

@@ -985,7 +985,7 @@ fascia_status fascia_prep_voxelize(fascia_ctx *ctx, const fascia_prep_scene *sce
   // deformable organs: the whole inside is a region
   int32_t deformable = 0;
   for (int32_t o = 0; o < scene->organ_count; ++o) {
-    if (scene->organs[o].kind != FASCIA_ORGAN_DEFORMABLE) continue;
+    if (scene->organs[o].kind != FASCIA_ORGAN_DEFORMABLE || scene->organs[o].shell) continue; // a shell: a wall
     ++deformable;
     const double *b = meshes->organs[o].bounds;
     for (int r = 0; r < 3; ++r) lo[r] = fmin(lo[r], b[r] - h), hi[r] = fmax(hi[r], b[3 + r] + h);
@@ -1078,7 +1078,7 @@ fascia_status fascia_prep_voxelize(fascia_ctx *ctx, const fascia_prep_scene *sce
     if (scene->tissues[t].form == FASCIA_PREP_FORM_VOLUME) PREP_TRY_GOTO(build_region(ctx, scene, meshes, vol, t));
   }
   for (int32_t o = 0, label = scene->tissue_count + 1; o < scene->organ_count; ++o)
-    if (scene->organs[o].kind == FASCIA_ORGAN_DEFORMABLE) {
+    if (scene->organs[o].kind == FASCIA_ORGAN_DEFORMABLE && !scene->organs[o].shell) {
       fascia_ctx_progress(ctx, "voxelize", 0.95, scene->organs[o].name);
       PREP_TRY_GOTO(build_organ_region(ctx, scene, vol, o, (uint8_t)label++));
     }

@@ -105,6 +105,13 @@ typedef struct fascia_prep_organ_def {
   /// 1: an organ of labels the segmentation may lack ("optional": true); when
   /// it does, the scene is read without it (fascia_prep_scene.absent_organs).
   int32_t optional;
+  /// 1: a hollow organ ("model": "shell", kind DEFORMABLE): frames on its
+  /// surface, its wall thickness wide about the surface (docs/organs.md,
+  /// "Shell organs"); material is then the wall's section material.
+  int32_t shell;
+  fascia_real thickness;     ///< SHELL: wall thickness, m
+  int32_t section_points;    ///< SHELL: Gauss points through the wall
+  fascia_prep_region hold;   ///< SHELL: its frames in this box or sphere are fixed (NONE: none)
 } fascia_prep_organ_def;
 
 /// Coupling rule of a tissue for one organ.

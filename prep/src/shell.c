@@ -1,0 +1,366 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// Shell organs (docs/organs.md, "Shell organs"): a hollow organ is its wall,
+// a sheet (docs/mechanics.md, "Strands and sheets") whose mid-surface is the
+// organ's surface. Its frames lie on the surface, its samples through the
+// wall, and the solver treats them as a deformable organ's (model kind
+// DEFORMABLE), so the wall and the tissues on it are one mechanical system.
+//
+//   frames   the tissue frames on the surface that their coupling rules
+//            allow (shared with the tissues), then darts thrown on the
+//            surface (random points of its triangles, area-weighted, in a
+//            seeded order), kept when no frame lies closer than
+//            frame_spacing;
+//   wall     the frames joined into triangles over the surface (CGAL's
+//            advancing-front reconstruction: each frame to its neighbours
+//            on the surface, never across the organ);
+//   samples  per triangle its centroid, section_points through the wall
+//            along its normal, volume triangle area x thickness x the Gauss
+//            weight, weights linear over its three frames: a sheet's.
+//
+// An open surface (a bladder cut at its neck) is a wall with a free edge.
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fascia/shape.h"
+#include "shell.h"
+
+// Darts per frame_spacing^2 of surface: enough that the kept frames fill it
+// (a maximal Poisson-disk set keeps about one per 1.1 spacing^2).
+#define DARTS_PER_SPACING2 12.0
+// The wall's faces must lie this fraction of half its thickness from the
+// rest of the surface (the tilt of the closest triangle's normal is allowed
+// for on a curved, faceted surface).
+#define FACE_CLEARANCE 0.7
+// The frames' triangles must cover the organ's surface to this fraction (a
+// faceted wall is smaller than a voxel-stepped or wrinkled surface).
+#define AREA_TOLERANCE 0.25
+
+static void sub3(const double *a, const double *b, double *out) {
+  for (int r = 0; r < 3; ++r) out[r] = a[r] - b[r];
+}
+static void cross3(const double *a, const double *b, double *out) {
+  out[0] = a[1] * b[2] - a[2] * b[1];
+  out[1] = a[2] * b[0] - a[0] * b[2];
+  out[2] = a[0] * b[1] - a[1] * b[0];
+}
+static double norm3(const double *a) { return sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]); }
+static double dist3(const double *a, const double *b) {
+  double d[3];
+  sub3(a, b, d);
+  return norm3(d);
+}
+
+static uint64_t splitmix(uint64_t *state) {
+  uint64_t z = (*state += 0x9e3779b97f4a7c15ull);
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+  return z ^ (z >> 31);
+}
+static double uniform(uint64_t *state) { return (double)(splitmix(state) >> 11) * 0x1.0p-53; }
+
+// Unit normal and area of triangle k of mesh m.
+static double triangle_normal(const fascia_prep_mesh *m, int32_t k, double *n) {
+  const int32_t *c = m->triangles + 3 * (int64_t)k;
+  double e1[3], e2[3];
+  sub3(m->vertices + 3 * (int64_t)c[1], m->vertices + 3 * (int64_t)c[0], e1);
+  sub3(m->vertices + 3 * (int64_t)c[2], m->vertices + 3 * (int64_t)c[0], e2);
+  cross3(e1, e2, n);
+  const double twice = norm3(n);
+  for (int r = 0; r < 3; ++r) n[r] = twice > 0 ? n[r] / twice : 0;
+  return 0.5 * twice;
+}
+
+// ------------------------------------------------------------ dart throwing
+
+// Kept points on a dense grid of cells frame_spacing wide over the organ's
+// bounds: a point conflicts with those in its 27 cells.
+typedef struct cell_grid {
+  double lo[3], size;
+  int32_t dims[3];
+  int32_t *head, *next; // [cells], [points]: lists of kept points per cell
+  const double *x;      // [3 points]
+} cell_grid;
+
+static int64_t cell_of(const cell_grid *g, const double *p, int32_t *ijk) {
+  for (int r = 0; r < 3; ++r) {
+    const double c = floor((p[r] - g->lo[r]) / g->size);
+    ijk[r] = (int32_t)fmin(fmax(c, 0), g->dims[r] - 1);
+  }
+  return ijk[0] + (int64_t)g->dims[0] * (ijk[1] + (int64_t)g->dims[1] * ijk[2]);
+}
+
+static int conflicts(const cell_grid *g, const double *p) {
+  int32_t c[3];
+  cell_of(g, p, c);
+  for (int dz = -1; dz <= 1; ++dz)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int32_t i = c[0] + dx, j = c[1] + dy, k = c[2] + dz;
+        if (i < 0 || j < 0 || k < 0 || i >= g->dims[0] || j >= g->dims[1] || k >= g->dims[2]) continue;
+        for (int32_t q = g->head[i + (int64_t)g->dims[0] * (j + (int64_t)g->dims[1] * k)]; q >= 0; q = g->next[q])
+          if (dist3(g->x + 3 * (int64_t)q, p) < g->size) return 1;
+      }
+  return 0;
+}
+
+static void keep(cell_grid *g, int32_t q) {
+  int32_t c[3];
+  const int64_t cell = cell_of(g, g->x + 3 * (int64_t)q, c);
+  g->next[q] = g->head[cell];
+  g->head[cell] = q;
+}
+
+typedef struct dart {
+  uint64_t key;
+  int32_t triangle;
+  double x[3];
+} dart;
+
+static int by_key(const void *a, const void *b) {
+  const uint64_t x = ((const dart *)a)->key, y = ((const dart *)b)->key;
+  return (x > y) - (x < y);
+}
+
+// The shell's frames: shared ones (given) first, then darts. x, triangle:
+// [capacity] filled from *count on; *count grows.
+static fascia_status throw_frames(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_mesh *m,
+                                  int32_t o, double spacing, int32_t capacity, double *x, int32_t *triangle,
+                                  int32_t *count) {
+  fascia_status status = FASCIA_OK;
+  uint64_t state = (uint64_t)scene->seed * 0x9e3779b97f4a7c15ull + 0x5e11ull + (uint64_t)o;
+  int64_t darts = 0;
+  for (int32_t k = 0; k < m->triangle_count; ++k) {
+    double n[3];
+    darts += (int64_t)floor(triangle_normal(m, k, n) / (spacing * spacing) * DARTS_PER_SPACING2 + uniform(&state));
+  }
+  cell_grid g = {{m->bounds[0], m->bounds[1], m->bounds[2]}, spacing, {1, 1, 1}, NULL, NULL, x};
+  int64_t cells = 1;
+  for (int r = 0; r < 3; ++r) {
+    g.dims[r] = (int32_t)fmin(ceil((m->bounds[3 + r] - m->bounds[r]) / spacing) + 1, 1 << 20);
+    cells *= g.dims[r];
+  }
+  PREP_CHECK(cells < ((int64_t)1 << 31) && darts < ((int64_t)1 << 31), ctx, FASCIA_ERR_ARGUMENT,
+             "scene '%s' shell organ '%s': frame_spacing %.3g mm is too fine for an organ this large; raise it",
+             scene->path, m->name, 1e3 * spacing);
+  dart *d = prep_calloc(darts, sizeof *d);
+  g.head = prep_calloc(cells, sizeof(int32_t));
+  g.next = prep_calloc(capacity, sizeof(int32_t));
+  PREP_CHECK_GOTO(d && g.head && g.next, ctx, FASCIA_ERR_MEMORY, "shell '%s': out of memory", m->name);
+  for (int64_t c = 0; c < cells; ++c) g.head[c] = -1;
+  for (int32_t q = 0; q < *count; ++q) keep(&g, q);
+  // the same draws again, now placing the darts
+  state = (uint64_t)scene->seed * 0x9e3779b97f4a7c15ull + 0x5e11ull + (uint64_t)o;
+  int64_t made = 0;
+  for (int32_t k = 0; k < m->triangle_count; ++k) {
+    double n[3];
+    const int64_t here =
+        (int64_t)floor(triangle_normal(m, k, n) / (spacing * spacing) * DARTS_PER_SPACING2 + uniform(&state));
+    const int32_t *c = m->triangles + 3 * (int64_t)k;
+    for (int64_t j = 0; j < here && made < darts; ++j, ++made) {
+      double a = uniform(&state), b = uniform(&state);
+      if (a + b > 1) a = 1 - a, b = 1 - b;
+      for (int r = 0; r < 3; ++r)
+        d[made].x[r] = m->vertices[3 * (int64_t)c[0] + r] +
+                       a * (m->vertices[3 * (int64_t)c[1] + r] - m->vertices[3 * (int64_t)c[0] + r]) +
+                       b * (m->vertices[3 * (int64_t)c[2] + r] - m->vertices[3 * (int64_t)c[0] + r]);
+      d[made].triangle = k;
+      d[made].key = splitmix(&state);
+    }
+  }
+  qsort(d, (size_t)made, sizeof *d, by_key);
+  for (int64_t j = 0; j < made && *count < capacity; ++j) {
+    if (conflicts(&g, d[j].x)) continue;
+    memcpy(x + 3 * (int64_t)*count, d[j].x, sizeof d[j].x);
+    triangle[*count] = d[j].triangle;
+    keep(&g, (*count)++);
+  }
+cleanup:
+  free(d);
+  free(g.head);
+  free(g.next);
+  return status;
+}
+
+// ------------------------------------------------------------ checks
+
+typedef struct edge {
+  int32_t a, b;
+} edge;
+static int by_edge(const void *pa, const void *pb) {
+  const edge *a = pa, *b = pb;
+  if (a->a != b->a) return a->a < b->a ? -1 : 1;
+  return (a->b > b->b) - (a->b < b->b);
+}
+
+// Edges of more than two of the wall's triangles (not a surface there).
+static fascia_status count_fins(fascia_ctx *ctx, const int32_t *tri, int32_t T, int64_t *fins) {
+  edge *e = prep_calloc(3 * (int64_t)T, sizeof *e);
+  PREP_CHECK(e, ctx, FASCIA_ERR_MEMORY, "shell: out of memory");
+  for (int32_t k = 0; k < T; ++k)
+    for (int j = 0; j < 3; ++j) {
+      const int32_t a = tri[3 * (int64_t)k + j], b = tri[3 * (int64_t)k + (j + 1) % 3];
+      e[3 * (int64_t)k + j] = (edge){a < b ? a : b, a < b ? b : a};
+    }
+  qsort(e, 3 * (size_t)T, sizeof *e, by_edge);
+  *fins = 0;
+  for (int64_t k = 0; k < 3 * (int64_t)T;) {
+    int64_t j = k;
+    while (j < 3 * (int64_t)T && !by_edge(e + j, e + k)) ++j;
+    *fins += j - k > 2;
+    k = j;
+  }
+  free(e);
+  return FASCIA_OK;
+}
+
+// The wall, thickness wide about the surface, must not reach another part
+// of the surface: at each frame both faces (half the thickness along the
+// surface's normal) stay clear of the rest of the surface.
+static fascia_status check_thickness(fascia_ctx *ctx, const fascia_prep_scene *scene, int32_t o,
+                                     const fascia_prep_mesh *m, fascia_cgal_tree *tree, const double *x,
+                                     const int32_t *triangle, int32_t n) {
+  const double t = scene->organs[o].thickness;
+  for (int32_t i = 0; i < n; ++i) {
+    double normal[3];
+    triangle_normal(m, triangle[i], normal);
+    for (int side = -1; side <= 1; side += 2) {
+      double y[3], c[3];
+      int32_t k;
+      for (int r = 0; r < 3; ++r) y[r] = x[3 * (int64_t)i + r] + side * 0.5 * t * normal[r];
+      fascia_cgal_tree_closest(tree, 1, y, c, &k);
+      const double clear = dist3(y, c);
+      PREP_CHECK(clear >= FACE_CLEARANCE * 0.5 * t, ctx, FASCIA_ERR_ARGUMENT,
+                 "scene '%s' organs[%d].thickness: the wall of '%s', %.3g mm thick, is thicker than the organ near "
+                 "(%.4g %.4g %.4g) m: its face there comes within %.3g mm of another part of the surface (expected "
+                 "about %.3g mm); give a thinner wall, or make the organ \"deformable\"",
+                 scene->path, (int)o, m->name, 1e3 * t, x[3 * (int64_t)i], x[3 * (int64_t)i + 1],
+                 x[3 * (int64_t)i + 2], 1e3 * clear, 0.5e3 * t);
+    }
+  }
+  return FASCIA_OK;
+}
+
+// ------------------------------------------------------------ the wall
+
+static fascia_status wall_samples(fascia_ctx *ctx, const fascia_prep_organ_def *od, const double *x,
+                                  const int64_t *global, const int32_t *tri, int32_t T, prep_reduced *out,
+                                  double *area_sum) {
+  const int q = od->section_points;
+  int32_t s = 0;
+  *area_sum = 0;
+  for (int32_t k = 0; k < T; ++k) {
+    const int32_t *c = tri + 3 * (int64_t)k;
+    const double *p0 = x + 3 * (int64_t)c[0], *p1 = x + 3 * (int64_t)c[1], *p2 = x + 3 * (int64_t)c[2];
+    double e1[3], e2[3], n[3];
+    sub3(p1, p0, e1);
+    sub3(p2, p0, e2);
+    cross3(e1, e2, n);
+    const double twice = norm3(n);
+    if (!(twice > 1e-12 * (e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2] + e2[0] * e2[0] + e2[1] * e2[1] +
+                           e2[2] * e2[2])))
+      continue; // no area to integrate
+    for (int r = 0; r < 3; ++r) n[r] /= twice;
+    double offset[3 * 4], fraction[4];
+    PREP_TRY(fascia_shape_section_points(ctx, 2, q, n, NULL, od->thickness, 0, offset, fraction));
+    *area_sum += 0.5 * twice;
+    for (int j = 0; j < q; ++j, ++s) {
+      for (int r = 0; r < 3; ++r)
+        out->sample_position[3 * (int64_t)s + r] = (p0[r] + p1[r] + p2[r]) / 3 + offset[3 * j + r];
+      out->sample_volume[s] = 0.5 * twice * fraction[j] * od->thickness;
+      for (int r = 0; r < 3; ++r) out->sample_cell[3 * (int64_t)s + r] = (int32_t)global[c[r]];
+    }
+  }
+  out->sample_count = s;
+  return FASCIA_OK;
+}
+
+static double mesh_area(const fascia_prep_mesh *m) {
+  double a = 0, n[3];
+  for (int32_t k = 0; k < m->triangle_count; ++k) a += triangle_normal(m, k, n);
+  return a;
+}
+
+fascia_status prep_shell_build(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_meshes *meshes,
+                               int32_t o, const prep_shell_frames *frames, fascia_cgal_tree **trees,
+                               prep_reduced *out) {
+  memset(out, 0, sizeof *out);
+  const fascia_prep_organ_def *od = scene->organs + o;
+  const fascia_prep_mesh *m = meshes->organs + o;
+  if (!trees[o])
+    PREP_TRY(fascia_cgal_tree_create(ctx, m->vertex_count, m->vertices, m->triangle_count, m->triangles, trees + o));
+  const double spacing = od->frame_spacing, area = mesh_area(m);
+  // at most one frame per (spacing / 2)^2 pi of surface, and the shared ones
+  int64_t shared = 0;
+  for (int64_t k = 0; k < frames->tissue_count; ++k) shared += frames->organ[k] == o;
+  const int64_t capacity = shared + (int64_t)(area / (0.78 * spacing * spacing / 4)) + 16;
+  PREP_CHECK(capacity < INT32_MAX / 4, ctx, FASCIA_ERR_ARGUMENT,
+             "scene '%s' organs[%d].frame_spacing: %.3g mm gives too many frames on '%s'; raise it", scene->path,
+             (int)o, 1e3 * spacing, od->name);
+  double *x = prep_calloc(3 * capacity, sizeof(double));
+  int32_t *triangle = prep_calloc(capacity, sizeof(int32_t)), *tri = NULL;
+  int64_t *global = prep_calloc(capacity, sizeof(int64_t));
+  fascia_status status = FASCIA_OK;
+  PREP_CHECK_GOTO(x && triangle && global, ctx, FASCIA_ERR_MEMORY, "shell '%s': out of memory", od->name);
+  int32_t n = 0;
+  for (int64_t k = 0; k < frames->tissue_count; ++k) {
+    if (frames->organ[k] != o) continue;
+    const double *p = frames->position + 3 * k;
+    if (!prep_coupling_allowed(scene->tissues + frames->tissue[k], o, m, frames->triangle[k], p)) continue;
+    memcpy(x + 3 * (int64_t)n, p, 3 * sizeof(double));
+    triangle[n] = frames->triangle[k];
+    global[n++] = k;
+  }
+  const int32_t first_own = n;
+  PREP_TRY_GOTO(throw_frames(ctx, scene, m, o, spacing, (int32_t)capacity, x, triangle, &n));
+  for (int32_t i = first_own; i < n; ++i) global[i] = frames->count + (i - first_own);
+  PREP_TRY_GOTO(check_thickness(ctx, scene, o, m, trees[o], x, triangle, n));
+  int32_t T = 0;
+  PREP_TRY_GOTO(fascia_cgal_surface_triangles(ctx, od->name, n, x, &tri, &T));
+  int64_t fins = 0;
+  PREP_TRY_GOTO(count_fins(ctx, tri, T, &fins));
+  PREP_CHECK_GOTO(fins == 0, ctx, FASCIA_ERR_ARGUMENT,
+                  "scene '%s' organs[%d].frame_spacing: the frames of shell '%s', %.3g mm apart, do not make one "
+                  "wall (%lld edges of more than two triangles): parts of the organ are thinner or closer together "
+                  "than the spacing; lower frame_spacing",
+                  scene->path, (int)o, od->name, 1e3 * spacing, (long long)fins);
+  int64_t crossing = 0;
+  PREP_TRY_GOTO(fascia_cgal_soup_self_intersections(ctx, od->name, n, x, T, tri, &crossing));
+  PREP_CHECK_GOTO(crossing == 0, ctx, FASCIA_ERR_ARGUMENT,
+                  "scene '%s' organs[%d] (shell '%s'): its wall intersects itself (%lld pairs of its triangles cross, "
+                  "frames %.3g mm apart; the mesh has %d crossing pairs of its own): a wall cannot pass through "
+                  "itself; repair the mesh where it folds, lower frame_spacing, or make the organ \"deformable\"",
+                  scene->path, (int)o, od->name, (long long)crossing, 1e3 * spacing,
+                  (int)m->report.self_intersections);
+  // its own frames and samples
+  out->frame_count = n - first_own;
+  out->frame_position = prep_calloc(3 * (int64_t)out->frame_count, sizeof(double));
+  out->frame_organ = prep_calloc(out->frame_count, sizeof(int32_t));
+  out->frame_triangle = prep_calloc(out->frame_count, sizeof(int32_t));
+  out->sample_position = prep_calloc(3 * (int64_t)T * od->section_points, sizeof(double));
+  out->sample_volume = prep_calloc((int64_t)T * od->section_points, sizeof(double));
+  out->sample_cell = prep_calloc(3 * (int64_t)T * od->section_points, sizeof(int32_t));
+  PREP_CHECK_GOTO(out->frame_position && out->frame_organ && out->frame_triangle && out->sample_position &&
+                      out->sample_volume && out->sample_cell,
+                  ctx, FASCIA_ERR_MEMORY, "shell '%s': out of memory", od->name);
+  memcpy(out->frame_position, x + 3 * (int64_t)first_own, 3 * (size_t)out->frame_count * sizeof(double));
+  for (int32_t i = 0; i < out->frame_count; ++i) out->frame_organ[i] = o, out->frame_triangle[i] = triangle[first_own + i];
+  double covered = 0;
+  PREP_TRY_GOTO(wall_samples(ctx, od, x, global, tri, T, out, &covered));
+  PREP_CHECK_GOTO(fabs(covered - area) <= AREA_TOLERANCE * area, ctx, FASCIA_ERR_ARGUMENT,
+                  "scene '%s' organs[%d].frame_spacing: the wall of shell '%s' made of its frames %.3g mm apart has "
+                  "%.4g cm^2, the organ's surface %.4g cm^2 (%+.1f %%, at most %.0f %% allowed): the spacing is too "
+                  "coarse for the organ's shape; lower frame_spacing",
+                  scene->path, (int)o, od->name, 1e3 * spacing, 1e4 * covered, 1e4 * area,
+                  100 * (covered - area) / area, 100 * AREA_TOLERANCE);
+  out->length = covered;
+cleanup:
+  free(x);
+  free(triangle);
+  free(global);
+  free(tri);
+  if (status != FASCIA_OK) prep_reduced_free(out);
+  return status;
+}

@@ -1,0 +1,211 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// A hollow organ as a shell (docs/organs.md, "Shell organs"): box A fixed,
+// a sphere B of radius 10 mm 5 mm from it, a "shell" with a 1 mm wall and
+// frames 4 mm apart, the tissue between them:
+//  - B's own frames lie on its surface, its wall's samples add up to about
+//    its area x thickness, and the tissue's frames on B are the wall's too
+//    (coupled to B, weighed on by B's samples);
+//  - the wall takes the section's plane-stress moduli (a material of its
+//    own), and its hold region fixes the frames in it;
+//  - hanging from A under gravity, the static solve converges and B sags;
+//  - every refusal is one line naming the key: a wall not thinner than its
+//    frame spacing, a wall thicker than the organ (a 2 mm slab), a sample
+//    spacing, shell keys on another model.
+#define _POSIX_C_SOURCE 200809L // mkdtemp
+#include <math.h>
+
+#include "check.h"
+#include "prep_fixture.h"
+
+#define PI 3.14159265358979323846
+#define RADIUS 0.01
+static const double centre[3] = {0.015, 0, 0};
+
+static const char scene_format[] =
+    "{\"fascia_scene\": 1, \"voxel_size\": 0.001, \"seed\": 5, \"gravity\": [0, 0, -9.81],\n"
+    " \"materials\": {\"soft\": {\"youngs_modulus\": 3000, \"poisson_ratio\": 0.3},\n"
+    "               \"wall\": {\"youngs_modulus\": 30000, \"poisson_ratio\": 0.45}},\n"
+    " \"organs\": [{\"name\": \"A\", \"mesh\": \"a.obj\", \"model\": \"fixed\"},\n"
+    "              {\"name\": \"B\", \"mesh\": \"%s\", %s}],\n"
+    " \"tissues\": [{\"name\": \"t\", \"connects\": [\"A\", \"B\"], \"max_gap\": 0.008, \"material\": \"soft\",\n"
+    "               \"frame_spacing\": 0.003, \"sample_spacing\": 0.0015}]}\n";
+
+static const char shell[] =
+    "\"model\": \"shell\", \"material\": \"wall\", \"thickness\": 0.001, \"frame_spacing\": 0.004";
+
+// An icosphere of RADIUS about centre, refined 3 times (1280 triangles).
+static int write_sphere(const char *dir, const char *name) {
+  enum { MAXV = 700, MAXT = 1280 };
+  static double v[3 * MAXV];
+  static int t[3 * MAXT], t2[3 * MAXT];
+  const double g = (1 + sqrt(5.0)) / 2;
+  const double v0[12][3] = {{-1, g, 0}, {1, g, 0}, {-1, -g, 0}, {1, -g, 0}, {0, -1, g}, {0, 1, g},
+                            {0, -1, -g}, {0, 1, -g}, {g, 0, -1}, {g, 0, 1}, {-g, 0, -1}, {-g, 0, 1}};
+  const int t0[20][3] = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                         {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8},
+                         {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
+  int nv = 12, nt = 20;
+  for (int i = 0; i < 12; ++i)
+    for (int r = 0; r < 3; ++r) v[3 * i + r] = v0[i][r];
+  for (int k = 0; k < 20; ++k)
+    for (int r = 0; r < 3; ++r) t[3 * k + r] = t0[k][r];
+  for (int level = 0; level < 3; ++level) {
+    int n2 = 0;
+    for (int k = 0; k < nt; ++k) {
+      int mid[3];
+      for (int e = 0; e < 3; ++e) {
+        const int a = t[3 * k + e], b = t[3 * k + (e + 1) % 3];
+        double p[3];
+        for (int r = 0; r < 3; ++r) p[r] = 0.5 * (v[3 * a + r] + v[3 * b + r]);
+        int found = -1; // midpoints are shared by two triangles: look them up
+        for (int i = 0; i < nv && found < 0; ++i)
+          if (fabs(v[3 * i] - p[0]) + fabs(v[3 * i + 1] - p[1]) + fabs(v[3 * i + 2] - p[2]) < 1e-12) found = i;
+        if (found < 0) {
+          memcpy(v + 3 * nv, p, sizeof p);
+          found = nv++;
+        }
+        mid[e] = found;
+      }
+      const int c[4][3] = {{t[3 * k], mid[0], mid[2]}, {mid[0], t[3 * k + 1], mid[1]},
+                           {mid[2], mid[1], t[3 * k + 2]}, {mid[0], mid[1], mid[2]}};
+      for (int j = 0; j < 4; ++j, ++n2)
+        for (int r = 0; r < 3; ++r) t2[3 * n2 + r] = c[j][r];
+    }
+    nt = n2;
+    memcpy(t, t2, 3 * sizeof(int) * (size_t)nt);
+  }
+  static char text[65536];
+  int n = 0;
+  for (int i = 0; i < nv; ++i) {
+    const double len = sqrt(v[3 * i] * v[3 * i] + v[3 * i + 1] * v[3 * i + 1] + v[3 * i + 2] * v[3 * i + 2]);
+    n += snprintf(text + n, sizeof text - (size_t)n, "v %.9f %.9f %.9f\n", centre[0] + RADIUS * v[3 * i] / len,
+                  centre[1] + RADIUS * v[3 * i + 1] / len, centre[2] + RADIUS * v[3 * i + 2] / len);
+  }
+  for (int k = 0; k < nt; ++k)
+    n += snprintf(text + n, sizeof text - (size_t)n, "f %d %d %d\n", t[3 * k] + 1, t[3 * k + 1] + 1, t[3 * k + 2] + 1);
+  return fixture_write(dir, name, text);
+}
+
+static int write_scene(const char *dir, const char *mesh, const char *organ, char *path) {
+  char text[4096];
+  snprintf(text, sizeof text, scene_format, mesh, organ);
+  snprintf(path, 512, "%s/scene.json", dir);
+  return fixture_write(dir, "scene.json", text);
+}
+
+static int check_shell(const char *dir) {
+  char path[512];
+  CHECK(write_scene(dir, "b.obj", shell, path));
+  fascia_ctx *ctx = fixture_ctx();
+  fixture_run r;
+  CHECK_OK(fixture_prep(ctx, path, &r), ctx);
+  const fascia_model *m = r.model;
+  if (!m) goto done;
+  // own frames on the sphere (the icosphere lies within 0.1 mm of it)
+  int own = 0;
+  for (int32_t i = 0; i < m->frame_count; ++i) {
+    if (m->frame_organ[i] != 1) continue;
+    ++own;
+    double d2 = 0;
+    for (int c = 0; c < 3; ++c) d2 += (m->frame_position[3 * i + c] - centre[c]) * (m->frame_position[3 * i + c] - centre[c]);
+    CHECK_NEAR(sqrt(d2), RADIUS, 0, 0.1e-3);
+  }
+  // about pi (2 r)^2 / (0.87 spacing^2) frames: a Poisson disk keeps one per ~0.87 spacing^2 to 1.3 spacing^2
+  CHECK(own > 40 && own < 120);
+  // the wall's volume: area x thickness, the area of its frames' triangles:
+  // chords of the sphere, 52 frames on it give about 7 % less
+  double wall = 0;
+  int tissue_frames_in_wall = 0;
+  for (int32_t s = 0; s < m->sample_count; ++s) {
+    if (m->sample_organ[s] != 1) continue;
+    wall += m->sample_volume[s];
+    CHECK(m->materials[m->sample_material[s]].poisson_ratio < 0.45); // the section's moduli, not the 3-D law's
+    for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k)
+      tissue_frames_in_wall += m->frame_organ[m->pair_frame[k]] < 0;
+  }
+  CHECK(wall > 0.9 * 4 * PI * RADIUS * RADIUS * 0.001 && wall < 4 * PI * RADIUS * RADIUS * 0.001);
+  int coupled = 0;
+  for (int32_t c = 0; c < m->coupling_count; ++c) coupled += m->coupling_organ[c] == 1;
+  CHECK(coupled > 5);
+  CHECK(tissue_frames_in_wall > 5); // the tissue's frames on B carry B's wall too
+  // hanging from A: the static solve converges and B sags
+  {
+    fascia_solver_def def = fascia_solver_def_default();
+    def.backend = "cpu";
+    def.threads = 1;
+    fascia_solver *solver = NULL;
+    fascia_solve_report report;
+    CHECK_OK(fascia_solver_create(ctx, m, &def, &solver), ctx);
+    CHECK_OK(solver ? fascia_solver_solve_static(solver, &report) : FASCIA_ERR_ARGUMENT, ctx);
+    const fascia_real *x = solver ? fascia_solver_frame_positions(solver) : NULL;
+    double sag = 0;
+    for (int32_t i = 0; x && i < m->frame_count; ++i)
+      if (m->frame_organ[i] == 1) sag = fmin(sag, x[3 * i + 2] - m->frame_position[3 * i + 2]);
+    CHECK(sag < -1e-5);
+    fascia_solver_destroy(&solver);
+  }
+done:
+  fixture_free(&r);
+  // a hold region fixes the wall's frames in it (the far half of the sphere)
+  char organ[512];
+  snprintf(organ, sizeof organ, "%s, \"hold\": {\"box\": {\"min\": [0.016, -0.02, -0.02], \"max\": [0.03, 0.02, 0.02]}}",
+           shell);
+  CHECK(write_scene(dir, "b.obj", organ, path));
+  CHECK_OK(fixture_prep(ctx, path, &r), ctx);
+  int fixed = 0, free_far = 0;
+  for (int32_t i = 0; r.model && i < r.model->frame_count; ++i)
+    if (r.model->frame_organ[i] == 1) {
+      const int far = r.model->frame_position[3 * i] > 0.016;
+      fixed += far && r.model->frame_kind[i] == FASCIA_FRAME_FIXED;
+      free_far += far && r.model->frame_kind[i] != FASCIA_FRAME_FIXED;
+    }
+  CHECK(fixed > 10 && free_far == 0);
+  fixture_free(&r);
+  fascia_ctx_destroy(&ctx);
+  return 0;
+}
+
+// The scene must be refused with one line holding key and what.
+static void refused(const char *dir, const char *mesh, const char *organ, const char *key, const char *what) {
+  char path[512];
+  CHECK(write_scene(dir, mesh, organ, path));
+  fascia_ctx *ctx = fixture_ctx();
+  fixture_run r;
+  const fascia_status st = fixture_prep(ctx, path, &r);
+  const char *message = fascia_ctx_message(ctx);
+  const int ok = st != FASCIA_OK && strstr(message, key) && strstr(message, what) && !strchr(message, '\n');
+  if (!ok) fprintf(stderr, "expected a refusal naming '%s' ('%s'), got %d: %s\n", key, what, (int)st, message);
+  CHECK(ok);
+  fixture_free(&r);
+  fascia_ctx_destroy(&ctx);
+}
+
+static void check_refusals(const char *dir) {
+  refused(dir, "b.obj",
+          "\"model\": \"shell\", \"material\": \"wall\", \"thickness\": 0.004, \"frame_spacing\": 0.004",
+          "organs[1].thickness", "not thinner than frame_spacing");
+  refused(dir, "slab.obj",
+          "\"model\": \"shell\", \"material\": \"wall\", \"thickness\": 0.003, \"frame_spacing\": 0.004",
+          "organs[1].thickness", "thicker than the organ");
+  char organ[512];
+  snprintf(organ, sizeof organ, "%s, \"sample_spacing\": 0.002", shell);
+  refused(dir, "b.obj", organ, "organs[1].sample_spacing", "one sample per triangle");
+  refused(dir, "b.obj", "\"model\": \"fixed\", \"thickness\": 0.001", "organs[1].thickness", "only a \"shell\"");
+  refused(dir, "b.obj", "\"model\": \"shell\", \"thickness\": 0.001, \"frame_spacing\": 0.004", "organs[1].material",
+          "missing");
+}
+
+int main(void) {
+  char dir[256];
+  if (!fixture_tmpdir(dir)) return 1;
+  const double a_lo[3] = {-0.03, -0.012, -0.012}, a_hi[3] = {-0.0005, 0.012, 0.012};
+  const double slab_lo[3] = {0.005, -0.012, -0.012}, slab_hi[3] = {0.007, 0.012, 0.012};
+  CHECK(fixture_box(dir, "a.obj", a_lo, a_hi) && write_sphere(dir, "b.obj") &&
+        fixture_box(dir, "slab.obj", slab_lo, slab_hi));
+  const int stopped = check_shell(dir); // 1: a stage failed (printed)
+  check_refusals(dir);
+  static const char *const files[] = {"a.obj", "b.obj", "slab.obj", "scene.json", NULL};
+  fixture_cleanup(dir, files);
+  return stopped || CHECK_RESULT();
+}
