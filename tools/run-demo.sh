@@ -12,12 +12,14 @@
 #                            segmentation label map, into out/abdomen-totalsegmentator/
 #   --scene abdomen-ligaments  a ligament (strand) and a membrane (sheet)
 #                            between HRA organs, into out/abdomen-ligaments/
+#   --scene pelvis-female-shells  the paper's Figure 7: uterus and bladder as
+#                            shells, the top of the uterus fixed, into out/pelvis-female-shells/
 # Other arguments go to cmake's configure step.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 name=pelvis-female-demo
 if [[ "${1:-}" == "--scene" ]]; then
-  name="${2:?--scene needs a name: pelvis-female-demo, abdomen-female, abdomen-totalsegmentator or abdomen-ligaments}"
+  name="${2:?--scene needs a name: pelvis-female-demo, abdomen-female, abdomen-totalsegmentator, abdomen-ligaments or pelvis-female-shells}"
   shift 2
 fi
 case "$name" in
@@ -37,8 +39,12 @@ abdomen-ligaments)
   out="$root/out/abdomen-ligaments" view=coronal
   what="splenorenal ligament (a strand) and hepatocolic membrane (a sheet) between HRA organs"
   motion="liver and kidney fixed, spleen drawn along its ligament, colon pulled 3 mm down and 2 mm forward" ;;
+pelvis-female-shells)
+  out="$root/out/pelvis-female-shells" view=sagittal
+  what="female pelvis (the paper's Figure 7), uterus and bladder as shells, the top of the uterus fixed"
+  motion="top of the uterus fixed, uterus, bladder and tissue hanging under gravity" ;;
 *)
-  echo "run-demo.sh: unknown scene '$name' (known: pelvis-female-demo, abdomen-female, abdomen-totalsegmentator, abdomen-ligaments)" >&2
+  echo "run-demo.sh: unknown scene '$name' (known: pelvis-female-demo, abdomen-female, abdomen-totalsegmentator, abdomen-ligaments, pelvis-female-shells)" >&2
   exit 2 ;;
 esac
 "$root/tools/setup/debian-packages.sh"
