@@ -198,7 +198,8 @@ fascia_status fascia_prep_repair(fascia_ctx *ctx, const fascia_prep_scene *scene
   for (int32_t k = 0; k < meshes->count; ++k) {
     fascia_ctx_progress(ctx, "check and repair", (double)k / meshes->count, meshes->organs[k].name);
     PREP_TRY(repair_organ(ctx, scene, meshes->organs + k));
-    PREP_TRY(check_encloses(ctx, scene, k, meshes->organs + k));
+    // a shell is its wall, the surface itself: an open or flat patch is one (docs/organs.md)
+    if (!scene->organs[k].shell) PREP_TRY(check_encloses(ctx, scene, k, meshes->organs + k));
   }
   fascia_ctx_progress(ctx, "check and repair", 1, "done");
   return FASCIA_OK;

@@ -563,6 +563,177 @@ static fascia_status cell_weights(fascia_ctx *ctx, const fascia_prep_scene *scen
   return FASCIA_OK;
 }
 
+// ------------------------------------------------------------ shell walls
+
+// A shell's wall (shell.c) is a sheet of triangles, one point each. With
+// the triangle's linear gradients, a bent wall shears: at the point the
+// gradient of the interpolated deflection and the interpolated rotation
+// differ by about the curvature times the triangle's size (the linear
+// triangle's shear locking; a strand's midpoint is free of it, a
+// triangle's centroid is not), and the wall is several times too stiff
+// where its frames are not much closer than its thickness. The cure: the
+// wall point's gradients are those of a quadratic fit (moving least
+// squares in the wall's plane over its nearest frames), which differentiate
+// every quadratic field exactly there; the shear of a uniformly bent wall
+// is then zero. The weights stay the triangle's (the stencil's other
+// frames weigh 0): positions and rotations are interpolated as before.
+#define SHELL_STENCIL 9
+#define SHELL_BASIS 6
+
+// Solves the SHELL_BASIS x SHELL_BASIS system a x = b (b: SHELL_BASIS x
+// columns, row-major, overwritten) by Gaussian elimination with partial
+// pivoting; 0 when a pivot falls under 1e-12 of the largest diagonal.
+static int solve_small(double *a, double *b, int columns) {
+  enum { n = SHELL_BASIS };
+  double scale = 0;
+  for (int i = 0; i < n; ++i) scale = fmax(scale, fabs(a[i * n + i]));
+  for (int c = 0; c < n; ++c) {
+    int piv = c;
+    for (int r = c + 1; r < n; ++r)
+      if (fabs(a[r * n + c]) > fabs(a[piv * n + c])) piv = r;
+    if (!(fabs(a[piv * n + c]) > 1e-12 * scale)) return 0;
+    for (int k = 0; k < n; ++k) {
+      const double t = a[c * n + k];
+      a[c * n + k] = a[piv * n + k], a[piv * n + k] = t;
+    }
+    for (int k = 0; k < columns; ++k) {
+      const double t = b[c * columns + k];
+      b[c * columns + k] = b[piv * columns + k], b[piv * columns + k] = t;
+    }
+    for (int r = c + 1; r < n; ++r) {
+      const double f = a[r * n + c] / a[c * n + c];
+      for (int k = c; k < n; ++k) a[r * n + k] -= f * a[c * n + k];
+      for (int k = 0; k < columns; ++k) b[r * columns + k] -= f * b[c * columns + k];
+    }
+  }
+  for (int c = n - 1; c >= 0; --c)
+    for (int k = 0; k < columns; ++k) {
+      double v = b[c * columns + k];
+      for (int j = c + 1; j < n; ++j) v -= a[c * n + j] * b[j * columns + k];
+      b[c * columns + k] = v / a[c * n + c];
+    }
+  return 1;
+}
+
+// One wall sample: its triangle's frames (pairs already there, linear
+// weights) and the wall's nearest frames; the gradients of the quadratic
+// fit at the triangle's centroid. Leaves the sample as it is (the linear
+// gradients) where the frames do not determine a quadratic.
+static void shell_sample(const fascia_prep_points *pts, const fascia_frame_grid *grid, const int32_t *wall_frame,
+                         int32_t s, int32_t *pair_frame, double *pair_w, double *pair_g, int32_t *pair_count) {
+  const int64_t base = (int64_t)MAX_PAIRS * s;
+  const int32_t *c = pts->sample_cell_frame + 3 * (int64_t)s;
+  const double *x0 = pts->frame_position + 3 * (int64_t)c[0], *x1 = pts->frame_position + 3 * (int64_t)c[1],
+               *x2 = pts->frame_position + 3 * (int64_t)c[2];
+  double centre[3], e1[3], e2[3], n[3];
+  for (int r = 0; r < 3; ++r) centre[r] = (x0[r] + x1[r] + x2[r]) / 3, e1[r] = x1[r] - x0[r], e2[r] = x2[r] - x0[r];
+  n[0] = e1[1] * e2[2] - e1[2] * e2[1], n[1] = e1[2] * e2[0] - e1[0] * e2[2], n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+  const double nn = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  const double l1 = sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]);
+  if (!(nn > 0) || !(l1 > 0)) return;
+  double u[3], v[3]; // the wall's plane
+  for (int r = 0; r < 3; ++r) n[r] /= nn, u[r] = e1[r] / l1;
+  v[0] = n[1] * u[2] - n[2] * u[1], v[1] = n[2] * u[0] - n[0] * u[2], v[2] = n[0] * u[1] - n[1] * u[0];
+  // the stencil: the triangle's frames, then the wall's nearest others
+  int32_t near[SHELL_STENCIL], frame[SHELL_STENCIL + 3];
+  fascia_real radius = 0, at[3] = {centre[0], centre[1], centre[2]};
+  fascia_ctx_def cd = fascia_ctx_def_default();
+  fascia_ctx *quiet = NULL;
+  if (fascia_ctx_create(&cd, &quiet) != FASCIA_OK) return;
+  const int32_t want = fascia_frame_grid_count(grid) < SHELL_STENCIL ? fascia_frame_grid_count(grid) : SHELL_STENCIL;
+  const fascia_status st = fascia_frame_grid_nearest(quiet, grid, at, want, near, &radius);
+  fascia_ctx_destroy(&quiet);
+  if (st != FASCIA_OK) return;
+  int32_t m = 0;
+  for (int j = 0; j < 3; ++j) frame[m++] = c[j];
+  for (int32_t j = 0; j < want; ++j) {
+    const int32_t f = wall_frame[near[j]];
+    if (f != c[0] && f != c[1] && f != c[2]) frame[m++] = f;
+  }
+  double reach = radius;
+  for (int j = 0; j < 3; ++j) {
+    double d2 = 0;
+    for (int r = 0; r < 3; ++r) d2 += (pts->frame_position[3 * (int64_t)c[j] + r] - centre[r]) *
+                                      (pts->frame_position[3 * (int64_t)c[j] + r] - centre[r]);
+    reach = fmax(reach, FASCIA_SHAPE_SUPPORT_MARGIN * sqrt(d2));
+  }
+  // weighted least squares of the basis (1, a, b, a^2, ab, b^2) in units of reach
+  double A[SHELL_BASIS * SHELL_BASIS] = {0}, B[SHELL_BASIS * (SHELL_STENCIL + 3)] = {0};
+  for (int32_t j = 0; j < m; ++j) {
+    const double *x = pts->frame_position + 3 * (int64_t)frame[j];
+    double d[3];
+    for (int r = 0; r < 3; ++r) d[r] = x[r] - centre[r];
+    const double a = (d[0] * u[0] + d[1] * u[1] + d[2] * u[2]) / reach;
+    const double b = (d[0] * v[0] + d[1] * v[1] + d[2] * v[2]) / reach;
+    const double w = fascia_shape_kernel(sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) / reach);
+    const double basis[SHELL_BASIS] = {1, a, b, a * a, a * b, b * b};
+    for (int r = 0; r < SHELL_BASIS; ++r) {
+      for (int k = 0; k < SHELL_BASIS; ++k) A[r * SHELL_BASIS + k] += w * basis[r] * basis[k];
+      B[r * m + j] = w * basis[r];
+    }
+  }
+  if (m < SHELL_BASIS || !solve_small(A, B, m)) return;
+  // the fit's slopes at the centre: rows 1 and 2 of A^-1 B; weights as the triangle's
+  double weight[SHELL_STENCIL + 3] = {0};
+  for (int32_t j = 0; j < pair_count[s]; ++j)
+    for (int k = 0; k < 3; ++k)
+      if (pair_frame[base + j] == c[k]) weight[k] = pair_w[base + j];
+  int32_t order[SHELL_STENCIL + 3];
+  for (int32_t j = 0; j < m; ++j) order[j] = j;
+  for (int32_t i = 1; i < m; ++i) // frames ascending, as the model's pairs
+    for (int32_t j = i; j > 0 && frame[order[j - 1]] > frame[order[j]]; --j) {
+      const int32_t t = order[j];
+      order[j] = order[j - 1], order[j - 1] = t;
+    }
+  for (int32_t j = 0; j < m; ++j) {
+    const int32_t q = order[j];
+    pair_frame[base + j] = frame[q];
+    pair_w[base + j] = weight[q];
+    const double ga = B[1 * m + q] / reach, gb = B[2 * m + q] / reach;
+    for (int r = 0; r < 3; ++r) pair_g[3 * (base + j) + r] = ga * u[r] + gb * v[r];
+  }
+  pair_count[s] = m;
+}
+
+// The wall samples of every shell organ (shell_sample); after cell_weights.
+static fascia_status shell_weights(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_points *pts,
+                                   int32_t *pair_frame, double *pair_w, double *pair_g, int32_t *pair_count) {
+  const int32_t S = pts->sample_count, N = pts->frame_count;
+  int32_t *wall_frame = prep_calloc(N > 0 ? N : 1, sizeof(int32_t));
+  uint8_t *on = prep_calloc(N > 0 ? N : 1, 1);
+  double *x = prep_calloc(3 * (int64_t)(N > 0 ? N : 1), sizeof(double));
+  fascia_status status = FASCIA_OK;
+  fascia_frame_grid *grid = NULL;
+  PREP_CHECK_GOTO(wall_frame && on && x, ctx, FASCIA_ERR_MEMORY, "shape functions: out of memory");
+  for (int32_t o = 0; o < scene->organ_count; ++o) {
+    if (!scene->organs[o].shell) continue;
+    memset(on, 0, (size_t)N);
+    for (int32_t s = 0; s < S; ++s)
+      if (pts->sample_voxel[s] < 0 && pts->sample_tissue[s] < 0 && pts->sample_inside_organ[s] == o)
+        for (int j = 0; j < 3; ++j)
+          if (pts->sample_cell_frame[3 * (int64_t)s + j] >= 0) on[pts->sample_cell_frame[3 * (int64_t)s + j]] = 1;
+    int32_t n = 0;
+    for (int32_t i = 0; i < N; ++i)
+      if (on[i]) {
+        memcpy(x + 3 * (int64_t)n, pts->frame_position + 3 * (int64_t)i, 3 * sizeof(double));
+        wall_frame[n++] = i;
+      }
+    if (n < SHELL_BASIS) continue;
+    PREP_TRY_GOTO(fascia_frame_grid_create(ctx, n, x, &grid));
+    for (int32_t s = 0; s < S; ++s)
+      if (pts->sample_voxel[s] < 0 && pts->sample_tissue[s] < 0 && pts->sample_inside_organ[s] == o &&
+          pts->sample_cell_frame[3 * (int64_t)s + 2] >= 0)
+        shell_sample(pts, grid, wall_frame, s, pair_frame, pair_w, pair_g, pair_count);
+    fascia_frame_grid_destroy(&grid);
+  }
+cleanup:
+  fascia_frame_grid_destroy(&grid);
+  free(wall_frame);
+  free(on);
+  free(x);
+  return status;
+}
+
 // e without its part across the span of sample s's interval or triangle.
 static void in_span(const fascia_prep_points *pts, int32_t s, double *e) {
   const int32_t *c = pts->sample_cell_frame + 3 * (int64_t)s;
@@ -627,6 +798,7 @@ fascia_status fascia_prep_shape_functions(fascia_ctx *ctx, const fascia_prep_sce
   fascia_ctx_progress(ctx, "shape functions", 0, "tet");
   PREP_TRY_GOTO(tet_weights(ctx, scene, volume, points, pair_frame, pair_w, pair_g, pair_count));
   PREP_TRY_GOTO(cell_weights(ctx, scene, points, pair_frame, pair_w, pair_g, pair_count));
+  PREP_TRY_GOTO(shell_weights(ctx, scene, points, pair_frame, pair_w, pair_g, pair_count));
   {
     int64_t mls_count = 0, done = 0, next_report = 1;
     for (int32_t s = 0; s < S; ++s) {

@@ -10,7 +10,8 @@
 //            allow (shared with the tissues), then darts thrown on the
 //            surface (random points of its triangles, area-weighted, in a
 //            seeded order), kept when no frame lies closer than
-//            frame_spacing;
+//            frame_spacing; an open surface's free edges get theirs
+//            before the darts (border_frames);
 //   wall     the frames joined into triangles over the surface (CGAL's
 //            advancing-front reconstruction: each frame to its neighbours
 //            on the surface, never across the organ);
@@ -18,7 +19,9 @@
 //            along its normal, volume triangle area x thickness x the Gauss
 //            weight, weights linear over its three frames: a sheet's.
 //
-// An open surface (a bladder cut at its neck) is a wall with a free edge.
+// An open surface (a bladder cut at its neck) is a wall with a free edge:
+// frames lie along that edge, so the wall reaches it and a hold there
+// clamps the wall along it.
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -37,6 +40,16 @@
 // The frames' triangles must cover the organ's surface to this fraction (a
 // faceted wall is smaller than a voxel-stepped or wrinkled surface).
 #define AREA_TOLERANCE 0.25
+// A wall triangle whose centre lies farther than this fraction of
+// frame_spacing from the organ's surface spans a hole, not the surface (a
+// chord's sag on a surface curved at the spacing's radius is 0.08 of it).
+#define OFF_SURFACE 0.2
+// A free edge's vertex where it turns by more than this (cosine of the
+// turn below) is a corner of the wall: it gets a frame.
+#define CORNER_COS 0.7071
+// Frames on a free edge keep this fraction of frame_spacing from the
+// frames already there (its corners, shared frames).
+#define BORDER_CLEARANCE 0.5
 
 static void sub3(const double *a, const double *b, double *out) {
   for (int r = 0; r < 3; ++r) out[r] = a[r] - b[r];
@@ -92,7 +105,8 @@ static int64_t cell_of(const cell_grid *g, const double *p, int32_t *ijk) {
   return ijk[0] + (int64_t)g->dims[0] * (ijk[1] + (int64_t)g->dims[1] * ijk[2]);
 }
 
-static int conflicts(const cell_grid *g, const double *p) {
+// Whether a kept point lies closer than r (at most the cell size) to p.
+static int conflicts_within(const cell_grid *g, const double *p, double r) {
   int32_t c[3];
   cell_of(g, p, c);
   for (int dz = -1; dz <= 1; ++dz)
@@ -101,16 +115,139 @@ static int conflicts(const cell_grid *g, const double *p) {
         const int32_t i = c[0] + dx, j = c[1] + dy, k = c[2] + dz;
         if (i < 0 || j < 0 || k < 0 || i >= g->dims[0] || j >= g->dims[1] || k >= g->dims[2]) continue;
         for (int32_t q = g->head[i + (int64_t)g->dims[0] * (j + (int64_t)g->dims[1] * k)]; q >= 0; q = g->next[q])
-          if (dist3(g->x + 3 * (int64_t)q, p) < g->size) return 1;
+          if (dist3(g->x + 3 * (int64_t)q, p) < r) return 1;
       }
   return 0;
 }
+static int conflicts(const cell_grid *g, const double *p) { return conflicts_within(g, p, g->size); }
 
 static void keep(cell_grid *g, int32_t q) {
   int32_t c[3];
   const int64_t cell = cell_of(g, g->x + 3 * (int64_t)q, c);
   g->next[q] = g->head[cell];
   g->head[cell] = q;
+}
+
+// ------------------------------------------------------------ free edges
+
+typedef struct half_edge {
+  int32_t lo, hi;        // vertices, lo < hi: the undirected edge
+  int32_t from, to, tri; // as its triangle runs it
+} half_edge;
+static int by_undirected(const void *pa, const void *pb) {
+  const half_edge *a = pa, *b = pb;
+  if (a->lo != b->lo) return a->lo < b->lo ? -1 : 1;
+  return (a->hi > b->hi) - (a->hi < b->hi);
+}
+
+// Keeps the point at arc length t along the chain of border edges e[0..n)
+// (e[k] ends where e[k + 1] starts), if no frame lies within r of it.
+static void border_point(cell_grid *g, const fascia_prep_mesh *m, const half_edge *e, int32_t n, double t, double r,
+                         int32_t capacity, double *x, int32_t *triangle, int32_t *count) {
+  int32_t k = 0;
+  double len = 0;
+  for (; k < n; ++k) {
+    len = dist3(m->vertices + 3 * (int64_t)e[k].from, m->vertices + 3 * (int64_t)e[k].to);
+    if (t <= len || k == n - 1) break;
+    t -= len;
+  }
+  const double *a = m->vertices + 3 * (int64_t)e[k].from, *b = m->vertices + 3 * (int64_t)e[k].to;
+  const double u = len > 0 ? fmin(fmax(t / len, 0), 1) : 0;
+  double p[3];
+  for (int c = 0; c < 3; ++c) p[c] = a[c] + u * (b[c] - a[c]);
+  if (*count >= capacity || conflicts_within(g, p, r)) return;
+  memcpy(x + 3 * (int64_t)*count, p, sizeof p);
+  triangle[*count] = e[k].tri;
+  keep(g, (*count)++);
+}
+
+// Frames along an open surface's free edges (edges of one triangle): at its
+// corners, then evenly between corners, about frame_spacing apart (a loop
+// without corners evenly from its first vertex). Without them the darts
+// leave a ragged margin up to a spacing wide, and a hold along the edge
+// clamps a few scattered frames.
+static fascia_status border_frames(fascia_ctx *ctx, const fascia_prep_mesh *m, double spacing, cell_grid *g,
+                                   int32_t capacity, double *x, int32_t *triangle, int32_t *count) {
+  const int64_t H = 3 * (int64_t)m->triangle_count;
+  half_edge *h = prep_calloc(H > 0 ? H : 1, sizeof *h);
+  int32_t *first = prep_calloc(m->vertex_count > 0 ? m->vertex_count : 1, sizeof(int32_t)); // border edge from v
+  int32_t *next = prep_calloc(H > 0 ? H : 1, sizeof(int32_t)); // another border edge from the same vertex
+  half_edge *chain = prep_calloc(H > 0 ? H : 1, sizeof *chain);
+  uint8_t *used = prep_calloc(H > 0 ? H : 1, 1);
+  int32_t *corner = prep_calloc(H + 1, sizeof(int32_t));
+  double *arc = prep_calloc(H + 2, sizeof(double)); // arc length at each corner, then the chain's end
+  fascia_status status = FASCIA_OK;
+  PREP_CHECK_GOTO(h && first && next && chain && used && corner && arc, ctx, FASCIA_ERR_MEMORY,
+                  "shell '%s': out of memory", m->name);
+  for (int32_t t = 0; t < m->triangle_count; ++t)
+    for (int j = 0; j < 3; ++j) {
+      const int32_t a = m->triangles[3 * (int64_t)t + j], b = m->triangles[3 * (int64_t)t + (j + 1) % 3];
+      h[3 * (int64_t)t + j] = (half_edge){a < b ? a : b, a < b ? b : a, a, b, t};
+    }
+  qsort(h, (size_t)H, sizeof *h, by_undirected);
+  int64_t B = 0; // border edges, compacted to the front of h
+  for (int64_t k = 0; k < H;) {
+    int64_t j = k;
+    while (j < H && !by_undirected(h + j, h + k)) ++j;
+    if (j - k == 1) h[B++] = h[k];
+    k = j;
+  }
+  for (int32_t v = 0; v < m->vertex_count; ++v) first[v] = -1;
+  for (int64_t k = B - 1; k >= 0; --k) next[k] = first[h[k].from], first[h[k].from] = (int32_t)k;
+  for (int64_t start = 0; start < B; ++start) {
+    if (used[start]) continue;
+    int32_t n = 0; // the loop through start, edge after edge
+    for (int64_t k = start; k >= 0 && !used[k];) {
+      used[k] = 1;
+      chain[n++] = h[k];
+      int64_t after = -1;
+      for (int32_t q = first[h[k].to]; q >= 0; q = next[q])
+        if (!used[q]) after = q;
+      k = after;
+    }
+    double t_at = 0;
+    int32_t corners = 0;
+    for (int32_t k = 0; k < n; ++k) {
+      const double *a = m->vertices + 3 * (int64_t)chain[k].from, *b = m->vertices + 3 * (int64_t)chain[k].to;
+      if (chain[(k + n - 1) % n].to != chain[k].from) continue; // an open chain's ends are not turns
+      double din[3], dout[3];
+      sub3(a, m->vertices + 3 * (int64_t)chain[(k + n - 1) % n].from, din);
+      sub3(b, a, dout);
+      const double ni = norm3(din), no = norm3(dout);
+      if (ni > 0 && no > 0 && (din[0] * dout[0] + din[1] * dout[1] + din[2] * dout[2]) < CORNER_COS * ni * no)
+        corner[corners++] = k;
+    }
+    const int closed = chain[n - 1].to == chain[0].from;
+    if (corners == 0 || !closed) { // a smooth loop from its first vertex; an open chain from its start
+      if (corners == 0 || corner[0] != 0) memmove(corner + 1, corner, (size_t)corners++ * sizeof *corner);
+      corner[0] = 0;
+    }
+    for (int32_t k = 0, c = 0; k < n; ++k) { // each corner's arc length from the chain's start
+      if (c < corners && corner[c] == k) arc[c++] = t_at;
+      t_at += dist3(m->vertices + 3 * (int64_t)chain[k].from, m->vertices + 3 * (int64_t)chain[k].to);
+    }
+    if (!(t_at > 0)) continue;
+    arc[corners] = closed ? t_at + arc[0] : t_at; // back to the first corner, or the chain's end
+    const double r = BORDER_CLEARANCE * spacing;
+    for (int32_t c = 0; c < corners; ++c) border_point(g, m, chain, n, arc[c], r, capacity, x, triangle, count);
+    if (!closed) border_point(g, m, chain, n, t_at, r, capacity, x, triangle, count);
+    for (int32_t c = 0; c < corners; ++c) {
+      const double len = arc[c + 1] - arc[c];
+      const long pieces = fmax(1, lround(len / spacing));
+      for (long j = 1; j < pieces; ++j)
+        border_point(g, m, chain, n, fmod(arc[c] + len * (double)j / (double)pieces, t_at), r, capacity, x, triangle,
+                     count);
+    }
+  }
+cleanup:
+  free(h);
+  free(first);
+  free(next);
+  free(chain);
+  free(used);
+  free(corner);
+  free(arc);
+  return status;
 }
 
 typedef struct dart {
@@ -151,6 +288,7 @@ static fascia_status throw_frames(fascia_ctx *ctx, const fascia_prep_scene *scen
   PREP_CHECK_GOTO(d && g.head && g.next, ctx, FASCIA_ERR_MEMORY, "shell '%s': out of memory", m->name);
   for (int64_t c = 0; c < cells; ++c) g.head[c] = -1;
   for (int32_t q = 0; q < *count; ++q) keep(&g, q);
+  PREP_TRY_GOTO(border_frames(ctx, m, spacing, &g, capacity, x, triangle, count));
   // the same draws again, now placing the darts
   state = (uint64_t)scene->seed * 0x9e3779b97f4a7c15ull + 0x5e11ull + (uint64_t)o;
   int64_t made = 0;
@@ -319,6 +457,21 @@ fascia_status prep_shell_build(fascia_ctx *ctx, const fascia_prep_scene *scene, 
   PREP_TRY_GOTO(check_thickness(ctx, scene, o, m, trees[o], x, triangle, n));
   int32_t T = 0;
   PREP_TRY_GOTO(fascia_cgal_surface_triangles(ctx, od->name, n, x, &tri, &T));
+  // the reconstruction may bridge an open surface's hole (a lid over a
+  // bowl's rim): a triangle whose centre lies off the organ's surface is
+  // not the wall's
+  int32_t kept = 0;
+  for (int32_t k = 0; k < T; ++k) {
+    double centre[3], closest[3];
+    int32_t on;
+    for (int r = 0; r < 3; ++r)
+      centre[r] = (x[3 * (int64_t)tri[3 * k] + r] + x[3 * (int64_t)tri[3 * k + 1] + r] +
+                   x[3 * (int64_t)tri[3 * k + 2] + r]) / 3;
+    fascia_cgal_tree_closest(trees[o], 1, centre, closest, &on);
+    if (dist3(centre, closest) > OFF_SURFACE * spacing) continue;
+    memmove(tri + 3 * (int64_t)kept++, tri + 3 * (int64_t)k, 3 * sizeof(int32_t));
+  }
+  T = kept;
   int64_t fins = 0;
   PREP_TRY_GOTO(count_fins(ctx, tri, T, &fins));
   PREP_CHECK_GOTO(fins == 0, ctx, FASCIA_ERR_ARGUMENT,
