@@ -381,3 +381,22 @@ double fascia_tissue_error3(const double a[3], const double b[3]) {
   for (int k = 0; k < 3; ++k) d += (a[k] - b[k]) * (a[k] - b[k]), n += b[k] * b[k];
   return n > 0 ? sqrt(d / n) : d > 0 ? INFINITY : 0;
 }
+
+// ------------------------------------------------------------ shared with other cases
+
+fascia_status fascia_tissue_write_box(fascia_ctx *ctx, const char *dir, const char *name, double x0, double edge) {
+  return write_box(ctx, dir, name, x0, edge);
+}
+
+void fascia_tissue_deck_step(FILE *out) { write_step_start(out); }
+
+int fascia_tissue_dat_node(const char *dat, const char *header, long long node, double v[3]) {
+  const char *block = last_block(dat, header);
+  return block && block_node(block, node, v);
+}
+
+FILE *fascia_tissue_open(fascia_ctx *ctx, const char *dir, const char *name, char *path) {
+  return open_in(ctx, dir, name, path);
+}
+
+fascia_status fascia_tissue_close(fascia_ctx *ctx, FILE *f, const char *path) { return close_file(ctx, f, path); }

@@ -116,6 +116,27 @@ fascia_status fascia_tissue_hang_fascia(fascia_ctx *ctx, const fascia_tissue_han
 fascia_status fascia_tissue_pull_fascia(fascia_ctx *ctx, const fascia_tissue_pull_def *def,
                                         fascia_tissue_pull_result *out);
 
+/// Pieces of the cases above for other cases (shell_calculix.c): the box
+/// [x0, x0 + edge] x [-edge/2, edge/2]^2 as dir/name (a closed OBJ); the
+/// start of the deck's NLGEOM step with its controls; the values of `node`
+/// in the last block of a .dat text headed `header` (0 if none).
+fascia_status fascia_tissue_write_box(fascia_ctx *ctx, const char *dir, const char *name, double x0, double edge);
+void fascia_tissue_deck_step(FILE *out);
+int fascia_tissue_dat_node(const char *dat, const char *header, long long node, double v[3]);
+/// dir/name opened for writing, its path in `path` (1024 chars); NULL (the
+/// context says why) when it cannot be; closed, FASCIA_ERR_IO if writing failed.
+FILE *fascia_tissue_open(fascia_ctx *ctx, const char *dir, const char *name, char *path);
+fascia_status fascia_tissue_close(fascia_ctx *ctx, FILE *f, const char *path);
+
+/// The scene folder of fascia_tissue_*_fascia (fresh, under $TMPDIR or
+/// /tmp; dir of at least 512 chars), its removal (the file names above),
+/// and their static solve at time 1 (CPU, one thread, Newton tolerance
+/// 1e-10; FASCIA_ERR_NUMERIC when not converged; *solver to destroy).
+fascia_status fascia_tissue_scene_folder(fascia_ctx *ctx, char *dir);
+void fascia_tissue_scene_remove(const char *dir);
+fascia_status fascia_tissue_solve_static(fascia_ctx *ctx, const fascia_model *model, fascia_solver **solver,
+                                         fascia_solve_report *report, double *ms);
+
 /// |a - b| / |b| of two 3-vectors (the relative error of a against b); 0 when both are 0.
 double fascia_tissue_error3(const double a[3], const double b[3]);
 

@@ -45,7 +45,8 @@ static double now_ms(void) {
 }
 
 // The static equilibrium at time 1 (the end of B's motion, if any).
-static fascia_status solve(fascia_ctx *ctx, const fascia_model *m, fascia_solver **solver, double *ms) {
+fascia_status fascia_tissue_solve_static(fascia_ctx *ctx, const fascia_model *m, fascia_solver **solver,
+                                         fascia_solve_report *report, double *ms) {
   fascia_solver_def def = fascia_solver_def_default();
   def.backend = "cpu";
   def.threads = 1;
@@ -53,13 +54,17 @@ static fascia_status solve(fascia_ctx *ctx, const fascia_model *m, fascia_solver
   def.newton_tolerance = 1e-10;
   SCENE_TRY(fascia_solver_create(ctx, m, &def, solver));
   SCENE_TRY(fascia_solver_set_time(*solver, 1));
-  fascia_solve_report report;
   const double t0 = now_ms();
-  SCENE_TRY(fascia_solver_solve_static(*solver, &report));
+  SCENE_TRY(fascia_solver_solve_static(*solver, report));
   *ms = now_ms() - t0;
-  SCENE_CHECK(report.converged, ctx, FASCIA_ERR_NUMERIC, "static solve: not converged in %d Newton iterations",
-              report.newton_iterations);
+  SCENE_CHECK(report->converged, ctx, FASCIA_ERR_NUMERIC, "static solve: not converged in %d Newton iterations",
+              report->newton_iterations);
   return FASCIA_OK;
+}
+
+static fascia_status solve(fascia_ctx *ctx, const fascia_model *m, fascia_solver **solver, double *ms) {
+  fascia_solve_report report;
+  return fascia_tissue_solve_static(ctx, m, solver, &report, ms);
 }
 
 // Sum of the tissue's forces on an organ's coupling frames (N).
@@ -182,3 +187,7 @@ cleanup:
   remove_scene(dir);
   return status;
 }
+
+fascia_status fascia_tissue_scene_folder(fascia_ctx *ctx, char *dir) { return make_folder(ctx, dir); }
+
+void fascia_tissue_scene_remove(const char *dir) { remove_scene(dir); }
