@@ -371,7 +371,16 @@ static cJSON *provenance(const fascia_prep_scene *scene, const fascia_prep_meshe
   return root;
 }
 
-// The model without the frames of unheld pieces (frame_piece >= 0), their
+// Whether sample s weighs on a frame that goes (frame_piece >= 0): an
+// unheld piece's samples weigh on its frames only, a hinged piece's also on
+// the frames that held it, which stay.
+static int sample_dropped(const fascia_model *m, const int32_t *frame_piece, int32_t s) {
+  for (int32_t p = m->sample_offsets[s]; p < m->sample_offsets[s + 1]; ++p)
+    if (frame_piece[m->pair_frame[p]] >= 0) return 1;
+  return 0;
+}
+
+// The model without the frames of dropped pieces (frame_piece >= 0), their
 // samples and pairs and their coupling entries; organs, motions and materials
 // move over from *mp, which is replaced.
 static fascia_status compact(fascia_ctx *ctx, fascia_model **mp, const int32_t *frame_piece) {
@@ -383,8 +392,7 @@ static fascia_status compact(fascia_ctx *ctx, fascia_model **mp, const int32_t *
   memset(&z, 0, sizeof z);
   for (int32_t i = 0; i < N; ++i) map[i] = frame_piece[i] < 0 ? z.frames++ : -1;
   for (int32_t s = 0; s < S; ++s)
-    if (map[m->pair_frame[m->sample_offsets[s]]] >= 0)
-      ++z.samples, z.pairs += m->sample_offsets[s + 1] - m->sample_offsets[s];
+    if (!sample_dropped(m, frame_piece, s)) ++z.samples, z.pairs += m->sample_offsets[s + 1] - m->sample_offsets[s];
   for (int32_t c = 0; c < m->coupling_count; ++c) z.couplings += map[m->coupling_frame[c]] >= 0;
   z.materials = m->material_count;
   z.motions = m->motion_count;
@@ -405,7 +413,7 @@ static fascia_status compact(fascia_ctx *ctx, fascia_model **mp, const int32_t *
     n->frame_organ[j] = m->frame_organ[i];
   }
   for (int32_t s = 0, t = 0, q = 0; s < S; ++s) {
-    if (map[m->pair_frame[m->sample_offsets[s]]] < 0) continue;
+    if (sample_dropped(m, frame_piece, s)) continue;
     memcpy(n->sample_position + 3 * t, m->sample_position + 3 * s, 3 * sizeof(double));
     n->sample_volume[t] = m->sample_volume[s];
     n->sample_material[t] = m->sample_material[s];
@@ -478,10 +486,150 @@ static fascia_status collect_tetrahedra(fascia_ctx *ctx, const fascia_prep_point
   return status;
 }
 
+// A piece of volume tissue held at fewer than three points off one line
+// turns about them for free. Its weights reproduce linear fields, so free
+// frames moved by d_i = w x (X_i - c), for an axis w through the points that
+// hold it (c on it), move every sample by w x (p - c) and give it
+// F = I + [w]x, a rotation to first order: no strain, and the energy rises
+// only as the fourth power of the angle (a hinge; held at one point, a ball
+// joint). Gravity swings such a piece far beyond the tissue's strain and its
+// Newton iterations converge slowly, setting the cost of every step of the
+// whole model. A piece here: free frames joined through volume samples;
+// what holds it: the fixed and prescribed frames and the frames coupled to a
+// rigid organ that its samples weigh on. Strand, sheet and shell samples
+// carry their section by the frames' rotations, which the held frames lock:
+// their pieces are left alone.
+#define HINGE_TOLERANCE 1e-2 // held points within this fraction of their span from one line
+
+static double dist3(const double *a, const double *b) {
+  return sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+}
+
+static int32_t hinge_root(int32_t *parent, int32_t i) {
+  while (parent[i] != i) i = parent[i] = parent[parent[i]];
+  return i;
+}
+
+// The largest distance of the points x[3 list[k]] from the line through the
+// two farthest apart (the farthest from the first, then the farthest from
+// that one), relative to their distance; 0 for fewer than three.
+static double off_line(const double *x, const int32_t *list, int32_t count) {
+  if (count < 3) return 0;
+  int32_t a = list[0], b = list[0];
+  double far = 0, worst = 0, e[3];
+  for (int32_t k = 0; k < count; ++k)
+    if (dist3(x + 3 * (int64_t)list[k], x + 3 * (int64_t)list[0]) > far)
+      far = dist3(x + 3 * (int64_t)list[k], x + 3 * (int64_t)list[0]), a = list[k];
+  far = 0;
+  for (int32_t k = 0; k < count; ++k)
+    if (dist3(x + 3 * (int64_t)list[k], x + 3 * (int64_t)a) > far)
+      far = dist3(x + 3 * (int64_t)list[k], x + 3 * (int64_t)a), b = list[k];
+  if (!(far > 0)) return 0;
+  for (int c = 0; c < 3; ++c) e[c] = (x[3 * (int64_t)b + c] - x[3 * (int64_t)a + c]) / far;
+  for (int32_t k = 0; k < count; ++k) {
+    double v[3], t = 0, o = 0;
+    for (int c = 0; c < 3; ++c) v[c] = x[3 * (int64_t)list[k] + c] - x[3 * (int64_t)a + c], t += v[c] * e[c];
+    for (int c = 0; c < 3; ++c) o += (v[c] - t * e[c]) * (v[c] - t * e[c]);
+    worst = fmax(worst, sqrt(o) / far);
+  }
+  return worst;
+}
+
+// Marks the frames of every hinged piece (above) in frame_piece, numbered
+// from *count on, and lists each in `dropped` with the number of frames that
+// held it. frame_piece: -1 for a frame kept so far. A hinged piece that
+// holds a deformable organ's frames is refused: dropping it would drop the
+// organ.
+static fascia_status mark_hinged(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_points *pts,
+                                 const fascia_model *m, int32_t *frame_piece, int32_t *count, cJSON *dropped) {
+  const int32_t N = m->frame_count, S = m->sample_count;
+  int32_t *parent = prep_calloc((int64_t)N + 1, sizeof(int32_t)), *stamp = prep_calloc((int64_t)N + 1, sizeof(int32_t));
+  int32_t *list = prep_calloc((int64_t)N + 1, sizeof(int32_t)), *root = prep_calloc((int64_t)S + 1, sizeof(int32_t));
+  int32_t *start = prep_calloc((int64_t)N + 2, sizeof(int32_t)), *order = prep_calloc((int64_t)S + 1, sizeof(int32_t));
+  unsigned char *held = prep_calloc((int64_t)N + 1, 1), *section = prep_calloc((int64_t)N + 1, 1);
+  fascia_status status = FASCIA_OK;
+  PREP_CHECK_GOTO(parent && stamp && list && root && start && order && held && section, ctx, FASCIA_ERR_MEMORY,
+                  "package: out of memory");
+  for (int32_t i = 0; i < N; ++i) parent[i] = i, stamp[i] = -1, held[i] = m->frame_kind[i] != FASCIA_FRAME_FREE;
+  for (int32_t c = 0; c < m->coupling_count; ++c)
+    if (m->organs[m->coupling_organ[c]].kind == FASCIA_ORGAN_RIGID) held[m->coupling_frame[c]] = 1;
+  // pieces: the free frames joined through the samples
+  for (int32_t s = 0; s < S; ++s) {
+    int32_t first = -1;
+    for (int32_t p = m->sample_offsets[s]; p < m->sample_offsets[s + 1]; ++p) {
+      const int32_t f = m->pair_frame[p];
+      if (held[f]) continue;
+      section[f] |= pts->sample_voxel[s] < 0;
+      if (first < 0) first = f;
+      const int32_t a = hinge_root(parent, first), b = hinge_root(parent, f);
+      if (a < b) parent[b] = a;
+      else if (b < a) parent[a] = b;
+    }
+  }
+  for (int32_t i = 0; i < N; ++i) section[hinge_root(parent, i)] |= section[i];
+  // each piece's samples, in one pass (a sample weighing on held frames only has none)
+  for (int32_t s = 0; s < S; ++s) {
+    root[s] = -1;
+    for (int32_t p = m->sample_offsets[s]; p < m->sample_offsets[s + 1] && root[s] < 0; ++p)
+      if (!held[m->pair_frame[p]]) root[s] = hinge_root(parent, m->pair_frame[p]);
+    if (root[s] >= 0) ++start[root[s] + 1];
+  }
+  for (int32_t i = 0; i < N; ++i) start[i + 1] += start[i];
+  for (int32_t s = 0; s < S; ++s) // stamp counts the samples placed so far per piece
+    if (root[s] >= 0) order[start[root[s]] + ++stamp[root[s]]] = s;
+  for (int32_t i = 0; i < N; ++i) stamp[i] = -1;
+  for (int32_t r = 0; r < N; ++r) {
+    if (held[r] || frame_piece[r] >= 0 || section[r] || hinge_root(parent, r) != r || start[r] == start[r + 1])
+      continue; // not a piece's first frame, already dropped, a section's, or no sample weighs on it
+    int32_t points = 0;
+    fascia_model_piece q = {0, 0, 0, r, {m->frame_position[3 * (int64_t)r], m->frame_position[3 * (int64_t)r + 1],
+                                         m->frame_position[3 * (int64_t)r + 2]}};
+    for (int32_t k = start[r]; k < start[r + 1]; ++k) {
+      const int32_t s = order[k];
+      ++q.samples;
+      q.volume += m->sample_volume[s];
+      for (int32_t p = m->sample_offsets[s]; p < m->sample_offsets[s + 1]; ++p) {
+        const int32_t f = m->pair_frame[p];
+        if (held[f] && stamp[f] != r) stamp[f] = r, list[points++] = f;
+      }
+    }
+    if (points == 0 || off_line(m->frame_position, list, points) > HINGE_TOLERANCE) continue; // unheld: drop_unheld's
+    for (int32_t i = r; i < N; ++i) {
+      if (held[i] || hinge_root(parent, i) != r) continue;
+      const int32_t o = m->frame_organ[i];
+      PREP_CHECK_GOTO(o < 0, ctx, FASCIA_ERR_ARGUMENT,
+                      "scene '%s': deformable organ '%s' and the tissue on it are held at only %d point(s)%s near "
+                      "(%.4g, %.4g, %.4g) m: they would turn about %s at no cost; fix or prescribe another organ the "
+                      "tissue connects, or lower the tissue's frame_spacing so that more of its frames lie on the "
+                      "organs that hold it",
+                      scene->path, scene->organs[o].name, (int)points, points > 1 ? " on a line" : "", q.position[0],
+                      q.position[1], q.position[2], points > 1 ? "that line" : "it");
+      frame_piece[i] = *count;
+      ++q.frames;
+    }
+    const int32_t t = pts->frame_tissue[r];
+    cJSON *e = cJSON_CreateObject();
+    PREP_CHECK_GOTO(e, ctx, FASCIA_ERR_MEMORY, "package: out of memory");
+    cJSON_AddItemToArray(dropped, e);
+    if (t >= 0) cJSON_AddStringToObject(e, "tissue", scene->tissues[t].name);
+    cJSON_AddNumberToObject(e, "volume_m3", q.volume);
+    cJSON_AddNumberToObject(e, "frames", q.frames);
+    cJSON_AddNumberToObject(e, "samples", q.samples);
+    cJSON_AddItemToObject(e, "position_m", vector(q.position, 3));
+    cJSON_AddNumberToObject(e, "held_at", points);
+    ++*count;
+  }
+cleanup:
+  free(parent), free(stamp), free(list), free(root), free(start), free(order), free(held), free(section);
+  return status;
+}
+
 // Tissue that no fixed or prescribed organ holds, directly or through other
 // tissue, a deformable or a rigid organ, would fall for ever in the simulation
-// (the model loader refuses it). Such pieces are dropped and listed in
-// `dropped` (one object each); a tissue left with nothing is refused. A free
+// (the model loader refuses it). Such pieces, and the hinged ones
+// (mark_hinged), are dropped and listed in `dropped` (one object each, with
+// held_at the number of frames that held it); a tissue left with nothing is
+// refused. A free
 // frame that no sample weighs on (a tetrahedral region's frame whose
 // tetrahedra all lie outside the region) and that couples to no organ carries
 // nothing, and the solver refuses a free frame without mass: those go too,
@@ -511,17 +659,20 @@ static fascia_status drop_unheld(fascia_ctx *ctx, const fascia_prep_scene *scene
       }
     free(used);
   }
-  if (count == 0 && *empty == 0) goto cleanup;
+  int32_t numbered = count + 1; // after the unheld pieces and the frames without samples
+  PREP_TRY_GOTO(mark_hinged(ctx, scene, pts, m, frame_piece, &numbered, dropped));
+  if (count == 0 && *empty == 0 && numbered == count + 1) goto cleanup;
   for (int32_t s = 0; s < m->sample_count; ++s) {
     const int32_t t = pts->sample_tissue[s];
     if (t < 0) continue;
-    if (frame_piece[m->pair_frame[m->sample_offsets[s]]] < 0) kept[t] += m->sample_volume[s];
+    if (!sample_dropped(m, frame_piece, s)) kept[t] += m->sample_volume[s];
     else lost[t] += m->sample_volume[s];
   }
   for (int32_t t = 0; t < scene->tissue_count; ++t)
     PREP_CHECK_GOTO(kept[t] > 0 || lost[t] == 0, ctx, FASCIA_ERR_ARGUMENT, // the scene's problem, as voxelize's
                     "scene '%s': no part of tissue '%s' (%.3g cm^3) touches a fixed or prescribed organ, directly or "
-                    "through other tissue or organs: nothing holds it and it would fall for ever; make one of the "
+                    "through other tissue or organs (at three frames or more off one line): nothing holds it and it "
+                    "would fall or turn for ever; make one of the "
                     "organs it touches fixed or prescribed, or widen its region (max_gap) to reach one",
                     scene->path, scene->tissues[t].name, 1e6 * lost[t]);
   for (int32_t k = 0; k < count; ++k) {
@@ -536,6 +687,7 @@ static fascia_status drop_unheld(fascia_ctx *ctx, const fascia_prep_scene *scene
     cJSON_AddNumberToObject(e, "frames", q->frames);
     cJSON_AddNumberToObject(e, "samples", q->samples);
     cJSON_AddItemToObject(e, "position_m", vector(q->position, 3));
+    cJSON_AddNumberToObject(e, "held_at", 0);
   }
   PREP_TRY_GOTO(compact(ctx, mp, frame_piece));
 cleanup:

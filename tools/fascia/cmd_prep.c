@@ -336,10 +336,14 @@ static void print_summary(const prep_run *r, const step_clock *c, const char *ou
   cJSON_ArrayForEach(e, dropped) {
     const cJSON *t = cJSON_GetObjectItem(e, "tissue"), *o = cJSON_GetObjectItem(e, "organ");
     const cJSON *x = cJSON_GetObjectItem(e, "position_m");
-    fprintf(stderr,
-            "dropped: a piece of %s '%s' that nothing holds (no fixed or prescribed organ, directly or through "
-            "other tissue or organs): %.3g cm^3, %d frames, %d samples, near (%.4g, %.4g, %.4g) m\n",
-            cJSON_IsString(t) ? "tissue" : "organ", cJSON_IsString(t) ? t->valuestring : cJSON_IsString(o) ? o->valuestring : "?",
+    const int held_at = (int)cJSON_GetNumberValue(cJSON_GetObjectItem(e, "held_at"));
+    char why[160] = "that nothing holds (no fixed or prescribed organ, directly or through other tissue or organs)";
+    if (held_at > 0) // a hinge: docs/organs.md
+      snprintf(why, sizeof why, "held at only %d frame%s, about which it would turn at no cost (lower frame_spacing "
+               "to keep it)", held_at, held_at > 1 ? "s, on a line" : "");
+    fprintf(stderr, "dropped: a piece of %s '%s' %s: %.3g cm^3, %d frames, %d samples, near (%.4g, %.4g, %.4g) m\n",
+            cJSON_IsString(t) ? "tissue" : "organ",
+            cJSON_IsString(t) ? t->valuestring : cJSON_IsString(o) ? o->valuestring : "?", why,
             1e6 * cJSON_GetNumberValue(cJSON_GetObjectItem(e, "volume_m3")),
             (int)cJSON_GetNumberValue(cJSON_GetObjectItem(e, "frames")),
             (int)cJSON_GetNumberValue(cJSON_GetObjectItem(e, "samples")), cJSON_GetNumberValue(cJSON_GetArrayItem(x, 0)),
