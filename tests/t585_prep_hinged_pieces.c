@@ -3,11 +3,15 @@
 // No piece of volume tissue that prep keeps is held at fewer than three
 // points off one line: such a piece turns about them at no cost to first
 // order, swings under gravity and sets the Newton iterations of every step
-// of the whole model. The shipped CT abdomen with a deformable spleen
-// (data/scenes/abdomen-totalsegmentator-deformable.json), whose
-// retroperitoneal tissue holds such a piece between the spine and the right
-// kidney (two free frames, one held frame on each organ), then solves
-// static, at dt 0.01 s and at dt 0.05 s within bounded Newton iterations.
+// of the whole model. Boxes A and B (fixed) with tissue between them, and C
+// and D (fixed) far from them, with the same tissue 'web' connecting all
+// four: when coupling rules leave its C-D piece held at one frame on C and
+// one on D, that piece is dropped and listed (held at 2) and the A-B piece
+// kept; held at two frames on C and one on D, it is kept. Then the shipped
+// CT abdomen with a deformable spleen
+// (data/scenes/abdomen-totalsegmentator-deformable.json) keeps no such
+// piece and solves static, at dt 0.01 s and at dt 0.05 s within bounded
+// Newton iterations.
 // Usage: t585_prep_hinged_pieces PATH/TO/abdomen-totalsegmentator-deformable.json
 #define _POSIX_C_SOURCE 200809L // mkdtemp in prep_fixture.h
 #include "check.h"
@@ -85,6 +89,92 @@ static int hinged_pieces(const fascia_model *m) {
   return hinged;
 }
 
+static const char boxes_scene[] =
+    "{\"fascia_scene\": 1, \"voxel_size\": 0.001, \"seed\": 3,\n"
+    " \"materials\": {\"soft\": {\"youngs_modulus\": 3000, \"poisson_ratio\": 0.3}},\n"
+    " \"organs\": [{\"name\": \"A\", \"mesh\": \"a.obj\"}, {\"name\": \"B\", \"mesh\": \"b.obj\"},\n"
+    "   {\"name\": \"C\", \"mesh\": \"c.obj\"}, {\"name\": \"D\", \"mesh\": \"d.obj\"}],\n"
+    " \"tissues\": [{\"name\": \"web\", \"connects\": [\"A\", \"B\", \"C\", \"D\"], \"max_gap\": 0.005, "
+    "\"material\": \"soft\", \"frame_spacing\": 0.002, \"sample_spacing\": 0.0015%s}]}\n";
+
+// The coupling rule that holds organ `name` only inside a sphere of radius
+// `radius` around p (m), into out.
+static void sphere_rule(char *out, size_t size, const char *name, const double *p, double radius) {
+  snprintf(out, size, "\"%s\": {\"region\": {\"sphere\": {\"center\": [%.9g, %.9g, %.9g], \"radius\": %.9g}}}", name,
+           p[0], p[1], p[2], radius);
+}
+
+// The four boxes, the C-D piece of 'web' held at one frame on D and at
+// `on_c` frames on C (1 or 2); 0 when every check passed, 1 otherwise
+// (CHECK_OK's convention).
+static int synthetic(fascia_ctx *ctx, int on_c) {
+  char dir[256], path[512], text[4096], rule_c[256], rule_d[256], rules[800];
+  if (!fixture_tmpdir(dir)) return 1;
+  const double lo[4][3] = {{-0.03, -0.01, -0.01}, {0.002, -0.01, -0.01}, {-0.03, -0.01, 0.06}, {0.002, -0.01, 0.06}};
+  const double hi[4][3] = {{-0.002, 0.01, 0.01}, {0.03, 0.01, 0.01}, {-0.002, 0.01, 0.08}, {0.03, 0.01, 0.08}};
+  const char *names[] = {"a.obj", "b.obj", "c.obj", "d.obj", "scene.json", NULL};
+  for (int k = 0; k < 4; ++k) CHECK(fixture_box(dir, names[k], lo[k], hi[k]));
+  snprintf(path, sizeof path, "%s/scene.json", dir);
+  // first every frame on the organs held: where the frames on C and D are
+  snprintf(text, sizeof text, boxes_scene, "");
+  CHECK(fixture_write(dir, "scene.json", text));
+  fixture_run r;
+  CHECK_OK(fixture_prep(ctx, path, &r), ctx);
+  const fascia_model *m = r.model;
+  int32_t c0 = -1, c1 = -1, d0 = -1; // the C frame nearest D's centre, the C frame nearest it, a D frame nearest c0
+  const double d_centre[3] = {0.016, 0, 0.07};
+  for (int32_t k = 0; k < m->coupling_count; ++k)
+    if (!strcmp(m->organs[m->coupling_organ[k]].name, "C") &&
+        (c0 < 0 || distance(m->frame_position + 3 * m->coupling_frame[k], d_centre) <
+                       distance(m->frame_position + 3 * c0, d_centre)))
+      c0 = m->coupling_frame[k];
+  if (c0 < 0) return 1;
+  for (int32_t k = 0; k < m->coupling_count; ++k) {
+    const int32_t f = m->coupling_frame[k];
+    const char *organ = m->organs[m->coupling_organ[k]].name;
+    const double here = distance(m->frame_position + 3 * f, m->frame_position + 3 * c0);
+    if (!strcmp(organ, "C") && f != c0 && (c1 < 0 || here < distance(m->frame_position + 3 * c1, m->frame_position + 3 * c0)))
+      c1 = f;
+    if (!strcmp(organ, "D") && (d0 < 0 || here < distance(m->frame_position + 3 * d0, m->frame_position + 3 * c0)))
+      d0 = f;
+  }
+  if (c1 < 0 || d0 < 0) return 1;
+  double p0[3], p1[3], mid[3], pd[3];
+  for (int k = 0; k < 3; ++k)
+    p0[k] = m->frame_position[3 * c0 + k], p1[k] = m->frame_position[3 * c1 + k], mid[k] = 0.5 * (p0[k] + p1[k]),
+    pd[k] = m->frame_position[3 * d0 + k];
+  const double spread = distance(p0, p1);
+  fixture_free(&r);
+  // a sphere under half the frame spacing holds one frame (the frames are a
+  // Poisson-disk set at that spacing); one just over half their distance, both
+  if (on_c == 1) sphere_rule(rule_c, sizeof rule_c, "C", p0, 0.0009);
+  else sphere_rule(rule_c, sizeof rule_c, "C", mid, 0.5 * spread + 0.0001);
+  sphere_rule(rule_d, sizeof rule_d, "D", pd, 0.0009);
+  snprintf(rules, sizeof rules, ", \"coupling\": {\"organs\": {%s, %s}}", rule_c, rule_d);
+  snprintf(text, sizeof text, boxes_scene, rules);
+  CHECK(fixture_write(dir, "scene.json", text));
+  CHECK_OK(fixture_prep(ctx, path, &r), ctx);
+  m = r.model;
+  CHECK(hinged_pieces(m) == 0);
+  const char *list = m->provenance ? strstr(m->provenance, "\"unheld_pieces_dropped\":[") : NULL;
+  CHECK(list);
+  if (on_c == 1) {
+    // the C-D piece dropped, listed with the two frames that held it; A-B kept
+    CHECK(list && strstr(list, "\"tissue\":\"web\"") && strstr(list, "\"held_at\":2"));
+    int32_t on[4] = {0, 0, 0, 0};
+    for (int32_t k = 0; k < m->coupling_count; ++k) ++on[m->coupling_organ[k]];
+    CHECK(on[0] > 3 && on[1] > 3 && on[2] + on[3] <= 2);
+    double kept = 0;
+    for (int32_t s = 0; s < m->sample_count; ++s) kept += m->sample_volume[s];
+    CHECK(kept > 0 && kept < 0.75 * r.volume->tissues[0].volume); // half the region bridges A-B
+  } else {
+    CHECK(list && !strncmp(list, "\"unheld_pieces_dropped\":[]", 26));
+  }
+  fixture_free(&r);
+  fixture_cleanup(dir, names);
+  return 0;
+}
+
 // Newton iterations of `steps` steps of dt; -1 when one did not converge.
 static int run_steps(fascia_ctx *ctx, const fascia_model *m, double dt, int steps) {
   fascia_solver_def sd = fascia_solver_def_default();
@@ -105,6 +195,8 @@ static int run_steps(fascia_ctx *ctx, const fascia_model *m, double dt, int step
 int main(int argc, char **argv) {
   CHECK(argc > 1);
   fascia_ctx *ctx = fixture_ctx();
+  CHECK(synthetic(ctx, 1) == 0);
+  CHECK(synthetic(ctx, 2) == 0);
   fixture_run r;
   CHECK_OK(fixture_prep(ctx, argv[1], &r), ctx);
   const fascia_model *m = r.model;
