@@ -124,6 +124,7 @@ static int check_shell(const char *dir) {
     for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k)
       tissue_frames_in_wall += m->frame_organ[m->pair_frame[k]] < 0;
   }
+  printf("t595: %d own frames, wall %.4g of area x thickness\n", own, wall / (4 * PI * RADIUS * RADIUS * 0.001));
   CHECK(wall > 0.9 * 4 * PI * RADIUS * RADIUS * 0.001 && wall < 4 * PI * RADIUS * RADIUS * 0.001);
   int coupled = 0;
   for (int32_t c = 0; c < m->coupling_count; ++c) coupled += m->coupling_organ[c] == 1;

@@ -508,6 +508,11 @@ fascia_status prep_shell_build(fascia_ctx *ctx, const fascia_prep_scene *scene, 
                   "coarse for the organ's shape; lower frame_spacing",
                   scene->path, (int)o, od->name, 1e3 * spacing, 1e4 * covered, 1e4 * area,
                   100 * (covered - area) / area, 100 * AREA_TOLERANCE);
+  // the wall's triangles are chords of the organ's surface and miss some of
+  // its area, more where the draw left frames sparse: the samples carry the
+  // organ's whole area, so that the wall's mass and stiffness do not depend
+  // on the draw
+  for (int32_t s = 0; s < out->sample_count; ++s) out->sample_volume[s] *= area / covered;
   out->length = covered;
 cleanup:
   free(x);
