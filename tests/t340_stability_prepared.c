@@ -17,12 +17,11 @@
 #include "system.h"
 
 // Tissue strain stays below this in five steps of any shipped scene: the
-// largest measured is 5.24, in 31 samples of loose tissue of the 950-frame
-// abdomen (abdomen-female-fine.json) where the pulled colon shears a layer
-// a few voxels thick, the same at dt = 0.05 and 1 s (the state the motion
-// asks for; its 404-frame original, which does not resolve the layer,
-// reaches 1.91); a blow-up reaches 1e4.
-#define STRAIN_BOUND 8.0
+// largest is in the kidney-colon layer of the 950-frame abdomen
+// (abdomen-female-fine.json), a few millimetres thick, where the pulled
+// colon shears it, and it depends on where the draw puts the frames on its
+// two faces (5.2 and 9.3 for two draws); a blow-up reaches 1e4.
+#define STRAIN_BOUND 20.0
 
 // Free tissue frames whose lumped 6x6 block is not positive definite.
 static int indefinite_blocks(fascia_ctx *ctx, const fascia_model *m, const char *name) {

@@ -24,7 +24,7 @@
 #define W 0.015 // half the boxes' width, m
 
 static const char scene_format[] =
-    "{\"fascia_scene\": 1, \"voxel_size\": 0.001, \"seed\": 5,\n"
+    "{\"fascia_scene\": 1, \"voxel_size\": 0.001, \"seed\": 1,\n"
     " \"materials\": {\"soft\": {\"youngs_modulus\": 3000, \"poisson_ratio\": 0.3}},\n"
     " \"organs\": [{\"name\": \"A\", \"mesh\": \"a.obj\", \"model\": \"fixed\"},\n"
     "              {\"name\": \"B\", \"mesh\": \"b.obj\", \"model\": \"prescribed\", \"motion\": {\"pivot\": [0, 0, 0], \"keys\": [\n"

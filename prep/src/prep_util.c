@@ -96,24 +96,6 @@ fascia_status prep_read_file(fascia_ctx *ctx, const char *path, const char *what
   return FASCIA_OK;
 }
 
-uint64_t prep_rng_next(prep_rng *rng) {
-  uint64_t z = (rng->state += 0x9e3779b97f4a7c15ull);
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-  return z ^ (z >> 31);
-}
-
-double prep_rng_uniform(prep_rng *rng) { return (double)(prep_rng_next(rng) >> 11) * (1.0 / 9007199254740992.0); }
-
-void prep_shuffle(prep_rng *rng, int64_t *values, int64_t n) {
-  for (int64_t k = n - 1; k > 0; --k) {
-    const int64_t j = (int64_t)(prep_rng_next(rng) % (uint64_t)(k + 1));
-    const int64_t t = values[k];
-    values[k] = values[j];
-    values[j] = t;
-  }
-}
-
 void prep_grid_cover(prep_grid *g, double h, const double *min, const double *max, int32_t pad) {
   g->h = h;
   for (int r = 0; r < 3; ++r) {

@@ -62,16 +62,6 @@ FASCIA_PREP_INTERN fascia_status prep_mesh_precheck(fascia_ctx *ctx, const char 
 /// Hex SHA-256 of a buffer into hex[65].
 FASCIA_PREP_INTERN void prep_sha256_buffer(const void *data, size_t size, char hex[65]);
 
-/// Deterministic random numbers (splitmix64).
-typedef struct prep_rng {
-  uint64_t state;
-} prep_rng;
-FASCIA_PREP_INTERN uint64_t prep_rng_next(prep_rng *rng);
-/// Uniform in [0, 1).
-FASCIA_PREP_INTERN double prep_rng_uniform(prep_rng *rng);
-/// Fisher-Yates shuffle of n int64 values.
-FASCIA_PREP_INTERN void prep_shuffle(prep_rng *rng, int64_t *values, int64_t n);
-
 /// A box of the global voxel lattice: voxel (i,j,k) of the box is lattice
 /// voxel lo + (i,j,k), centred at h (lo + (i,j,k)); index i + nx (j + ny k).
 typedef struct prep_grid {

@@ -5,8 +5,8 @@
 //   surface frames  candidates are the closest organ-surface points of the
 //                   region voxels that touch an organ (CGAL AABB tree), so
 //                   that frames shared with an organ lie exactly on it;
-//   interior frames candidates are jittered centres of region voxels farther
-//                   than the coupling tolerance from every organ;
+//   interior frames candidates are cell targets (below) in the region
+//                   farther than the coupling tolerance from every organ;
 //   mid-layer frames where a gap is thinner than the frame spacing (the
 //                   surface frames on both sides refuse every interior
 //                   candidate), centres of its medial voxels (about as far
@@ -14,12 +14,15 @@
 //                   interior frames only: a thin tissue keeps a layer of
 //                   free frames instead of being all surface frames that
 //                   move with the organs;
-//   samples         candidates are region voxel centres (meshless regions;
-//                   mesh-based ones: see below).
+//   samples         candidates are cell targets in the region (meshless
+//                   regions; mesh-based ones: see below).
 //
 // Candidates are visited in a seeded random order and kept when no kept
 // point of the same kind lies closer than the spacing (dart throwing on a
-// hash grid): the same scene gives the same points. Each region voxel then
+// hash grid): the same scene gives the same points. The order, and the cell
+// targets (random points, one per cell of a quarter of the spacing), come
+// from the seed and the position in space, not from the voxel grid, so a
+// finer voxel size refines the geometry without drawing new points. Each region voxel then
 // goes to the nearest sample through the region (multi-source Dijkstra over
 // the 26-neighbourhood), so sample volumes add up to the region volume
 // exactly, and a sample moves to the centroid of its cell when that stays in
@@ -243,17 +246,73 @@ static fascia_status surface_candidates(fascia_ctx *ctx, const fascia_prep_meshe
   return FASCIA_OK;
 }
 
-// Keeps candidates in a random order when they do not conflict with kept points.
-static fascia_status throw_darts(fascia_ctx *ctx, prep_rng *rng, const point_list *cand, dart_grid *darts,
-                                 point_list *kept) {
-  int64_t *order = prep_calloc(cand->count, sizeof(int64_t));
+// The order darts are thrown in, drawn from the seed but not from the voxel
+// grid: space is cut into cells of a quarter of the spacing, each cell gets
+// a random rank and a random target point, and candidates are visited in the
+// order of their cell's rank, within a cell the nearest to its target first.
+// Refining the voxels then moves each kept point by less than a voxel
+// instead of drawing the frames and samples anew, so a model converges as
+// its voxels are refined.
+static uint64_t mix64(uint64_t z) {
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+  return z ^ (z >> 31);
+}
+
+static uint64_t dart_cell_rank(uint64_t seed, const int64_t *cell) {
+  uint64_t h = mix64(seed + 0x9e3779b97f4a7c15ull);
+  for (int r = 0; r < 3; ++r) h = mix64(h ^ ((uint64_t)cell[r] + 0x9e3779b97f4a7c15ull * (uint64_t)(r + 1)));
+  return h;
+}
+
+// The target point of a cell (edge `size`), uniform in it.
+static void dart_cell_target(uint64_t rank, const int64_t *cell, double size, double *x) {
+  for (int r = 0; r < 3; ++r) {
+    const double u = (double)(mix64(rank + (uint64_t)(r + 1)) >> 11) * (1.0 / 9007199254740992.0);
+    x[r] = size * ((double)cell[r] + u);
+  }
+}
+
+static double dart_cell_size(double spacing) { return spacing / 4; }
+
+typedef struct dart_key {
+  uint64_t rank;
+  double distance2; // to the cell's target
+  int64_t index;
+} dart_key;
+
+static int by_dart_key(const void *a, const void *b) {
+  const dart_key *x = a, *y = b;
+  if (x->rank != y->rank) return x->rank < y->rank ? -1 : 1;
+  if (x->distance2 != y->distance2) return x->distance2 < y->distance2 ? -1 : 1;
+  return (x->index > y->index) - (x->index < y->index);
+}
+
+// Keeps candidates, in the seed's order above, when they do not conflict
+// with kept points. taken (NULL: no such rule): one kept point per voxel,
+// taken[v] set for each voxel v that has one (samples: a voxel goes to one
+// sample's cell, and a voxel larger than the spacing could hold two).
+static fascia_status throw_darts(fascia_ctx *ctx, uint64_t seed, const point_list *cand, dart_grid *darts,
+                                 uint8_t *taken, point_list *kept) {
+  dart_key *order = prep_calloc(cand->count, sizeof(dart_key));
   PREP_CHECK(order, ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
-  for (int64_t k = 0; k < cand->count; ++k) order[k] = k;
-  prep_shuffle(rng, order, cand->count);
-  for (int64_t r = 0; r < cand->count; ++r) {
-    const int64_t k = order[r];
+  const double size = dart_cell_size(darts->radius);
+  for (int64_t k = 0; k < cand->count; ++k) {
     const double *x = cand->position + 3 * k;
-    if (dart_conflicts(darts, x)) continue;
+    int64_t cell[3];
+    double t[3];
+    for (int r = 0; r < 3; ++r) cell[r] = (int64_t)floor(x[r] / size);
+    order[k].rank = dart_cell_rank(seed, cell);
+    dart_cell_target(order[k].rank, cell, size, t);
+    order[k].distance2 = (x[0] - t[0]) * (x[0] - t[0]) + (x[1] - t[1]) * (x[1] - t[1]) + (x[2] - t[2]) * (x[2] - t[2]);
+    order[k].index = k;
+  }
+  qsort(order, (size_t)cand->count, sizeof(dart_key), by_dart_key);
+  for (int64_t r = 0; r < cand->count; ++r) {
+    const int64_t k = order[r].index;
+    const double *x = cand->position + 3 * k;
+    if ((taken && taken[cand->voxel[k]]) || dart_conflicts(darts, x)) continue;
+    if (taken) taken[cand->voxel[k]] = 1;
     if (!list_push(kept, x, cand->organ[k], cand->triangle[k], cand->voxel[k]) || !dart_add(darts, kept->count - 1)) {
       free(order);
       return PREP_FAIL(ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
@@ -261,6 +320,29 @@ static fascia_status throw_darts(fascia_ctx *ctx, prep_rng *rng, const point_lis
   }
   free(order);
   return FASCIA_OK;
+}
+
+// Candidates inside the given voxels that do not depend on the voxel grid:
+// the cell targets (above, for darts of this spacing) that fall in them.
+// Each target lies in one voxel, so none is listed twice.
+static int region_targets(const prep_grid *g, const int64_t *voxels, int64_t voxel_count, uint64_t seed,
+                          double spacing, point_list *out) {
+  const double size = dart_cell_size(spacing), h = g->h;
+  for (int64_t k = 0; k < voxel_count; ++k) {
+    double c[3];
+    prep_grid_center(g, voxels[k], c);
+    int64_t lo[3], hi[3], cell[3];
+    for (int r = 0; r < 3; ++r) lo[r] = (int64_t)floor((c[r] - h / 2) / size), hi[r] = (int64_t)floor((c[r] + h / 2) / size);
+    for (cell[2] = lo[2]; cell[2] <= hi[2]; ++cell[2])
+      for (cell[1] = lo[1]; cell[1] <= hi[1]; ++cell[1])
+        for (cell[0] = lo[0]; cell[0] <= hi[0]; ++cell[0]) {
+          double x[3];
+          dart_cell_target(dart_cell_rank(seed, cell), cell, size, x);
+          if (prep_grid_locate(g, x) != voxels[k]) continue;
+          if (!list_push(out, x, -1, -1, voxels[k])) return 0;
+        }
+  }
+  return 1;
 }
 
 // Mid-layer frames of a tissue (the header): candidates are the region
@@ -273,7 +355,7 @@ static fascia_status throw_darts(fascia_ctx *ctx, prep_rng *rng, const point_lis
 // interior ones) only.
 static fascia_status mid_layer_frames(fascia_ctx *ctx, const fascia_prep_volume *vol, const int64_t *voxels,
                                       int64_t voxel_count,
-                                      double spacing, prep_rng *rng, int64_t first, point_list *frames) {
+                                      double spacing, uint64_t seed, int64_t first, point_list *frames) {
   const prep_grid g = prep_volume_grid(vol);
   const double h = g.h;
   point_list cand = {0};
@@ -302,7 +384,7 @@ static fascia_status mid_layer_frames(fascia_ctx *ctx, const fascia_prep_volume 
   darts.points = frames;
   for (int64_t k = first; k < frames->count; ++k)
     PREP_CHECK_GOTO(dart_add(&darts, k), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
-  PREP_TRY_GOTO(throw_darts(ctx, rng, &cand, &darts, frames));
+  PREP_TRY_GOTO(throw_darts(ctx, seed, &cand, &darts, NULL, frames));
 cleanup:
   list_free(&cand);
   dart_free(&darts);
@@ -775,11 +857,13 @@ static fascia_status sample_region(fascia_ctx *ctx, const fascia_prep_scene *sce
   point_list cand = {0};
   dart_grid darts = {0};
   double *cell_volume = NULL;
-  prep_rng rng = {scene->seed * 0x9e3779b97f4a7c15ull + (uint64_t)(label - 1)};
-  int64_t voxel_count = 0;
+  uint8_t *taken = NULL;
+  // one seed per region and kind of point, so each kind is drawn apart
+  const uint64_t seed = (uint64_t)scene->seed * 0x9e3779b97f4a7c15ull + (uint64_t)label * 4;
+  int64_t voxel_count = 0, far_count = 0;
   for (int64_t v = 0; v < n; ++v) voxel_count += vol->region[v] == label;
-  int64_t *voxels = prep_calloc(voxel_count, sizeof(int64_t));
-  PREP_CHECK_GOTO(voxels, ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  int64_t *voxels = prep_calloc(voxel_count, sizeof(int64_t)), *far = prep_calloc(voxel_count, sizeof(int64_t));
+  PREP_CHECK_GOTO(voxels && far, ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
   voxel_count = 0;
   for (int64_t v = 0; v < n; ++v)
     if (vol->region[v] == label) voxels[voxel_count++] = v;
@@ -789,31 +873,28 @@ static fascia_status sample_region(fascia_ctx *ctx, const fascia_prep_scene *sce
   darts.points = frames;
   if (td) {
     PREP_TRY_GOTO(surface_candidates(ctx, meshes, vol, voxels, voxel_count, trees, &cand));
-    PREP_TRY_GOTO(throw_darts(ctx, &rng, &cand, &darts, frames));
+    PREP_TRY_GOTO(throw_darts(ctx, seed, &cand, &darts, NULL, frames));
   } else {
     for (int64_t k = 0; k < frames->count; ++k)
       if (frames->attach[k] >= 0 && vol->region[frames->attach[k]] == label)
         PREP_CHECK_GOTO(dart_add(&darts, k), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
   }
+  // interior frames in the voxels farther than the coupling tolerance (plus
+  // a voxel, for a target off its voxel's centre) from every organ
+  for (int64_t k = 0; k < voxel_count; ++k) {
+    double nearest = INFINITY;
+    for (int32_t o = 0; td && o < vol->organ_count; ++o)
+      if (vol->distance[o]) nearest = fmin(nearest, vol->distance[o][voxels[k]]);
+    if (!td || nearest > td->coupling_tolerance + h) far[far_count++] = voxels[k];
+  }
   cand.count = 0;
   const int64_t first_interior = frames->count;
-  for (int64_t k = 0; k < voxel_count; ++k) {
-    const int64_t v = voxels[k];
-    if (td) {
-      double nearest = INFINITY;
-      for (int32_t o = 0; o < vol->organ_count; ++o)
-        if (vol->distance[o]) nearest = fmin(nearest, vol->distance[o][v]);
-      if (nearest <= td->coupling_tolerance + h) continue; // jitter stays within h: never within tolerance
-    }
-    double x[3];
-    prep_grid_center(&g, v, x);
-    for (int r = 0; r < 3; ++r) x[r] += (prep_rng_uniform(&rng) - 0.5) * 0.9 * h; // stays in its voxel
-    PREP_CHECK_GOTO(list_push(&cand, x, -1, -1, v), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
-  }
-  PREP_TRY_GOTO(throw_darts(ctx, &rng, &cand, &darts, frames));
+  PREP_CHECK_GOTO(region_targets(&g, far, far_count, seed + 1, frame_spacing, &cand), ctx, FASCIA_ERR_MEMORY,
+                  "sample: out of memory");
+  PREP_TRY_GOTO(throw_darts(ctx, seed + 1, &cand, &darts, NULL, frames));
   const int64_t before_mid_layer = frames->count;
   if (td)
-    PREP_TRY_GOTO(mid_layer_frames(ctx, vol, voxels, voxel_count, frame_spacing, &rng, first_interior, frames));
+    PREP_TRY_GOTO(mid_layer_frames(ctx, vol, voxels, voxel_count, frame_spacing, seed + 2, first_interior, frames));
   if (mid_layer) *mid_layer = (int32_t)(frames->count - before_mid_layer);
   PREP_TRY_GOTO(fill_thin_pieces(ctx, vol, label, frame_spacing, frames));
   dart_free(&darts);
@@ -823,23 +904,24 @@ static fascia_status sample_region(fascia_ctx *ctx, const fascia_prep_scene *sce
     goto cleanup;
   }
 
-  // samples at voxel centres, then Voronoi volumes
+  // samples at the cell targets in the region, then Voronoi volumes
   const int64_t first_sample = samples->count;
   cand.count = 0;
-  for (int64_t k = 0; k < voxel_count; ++k) {
-    double x[3];
-    prep_grid_center(&g, voxels[k], x);
-    PREP_CHECK_GOTO(list_push(&cand, x, -1, -1, voxels[k]), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
-  }
-  PREP_CHECK_GOTO(dart_init(&darts, sample_spacing, voxel_count), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  PREP_CHECK_GOTO(region_targets(&g, voxels, voxel_count, seed + 3, sample_spacing, &cand), ctx, FASCIA_ERR_MEMORY,
+                  "sample: out of memory");
+  PREP_CHECK_GOTO(dart_init(&darts, sample_spacing, cand.count), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
   darts.points = samples;
-  PREP_TRY_GOTO(throw_darts(ctx, &rng, &cand, &darts, samples));
+  taken = prep_calloc(n, 1);
+  PREP_CHECK_GOTO(taken, ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  PREP_TRY_GOTO(throw_darts(ctx, seed + 3, &cand, &darts, taken, samples));
   PREP_TRY_GOTO(voronoi_volumes(ctx, vol, label, samples, first_sample, &cell_volume));
   PREP_CHECK_GOTO(data_reserve(data, samples->count), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
   memcpy(data->volume + first_sample, cell_volume, (size_t)(samples->count - first_sample) * sizeof(double));
   for (int64_t s = 4 * first_sample; s < 4 * samples->count; ++s) data->tet_frame[s] = -1;
 cleanup:
   free(voxels);
+  free(far);
+  free(taken);
   free(cell_volume);
   list_free(&cand);
   dart_free(&darts);
