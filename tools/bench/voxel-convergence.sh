@@ -1,15 +1,20 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: MIT
 # Does a scene's answer converge as its voxels are refined? Prepares SCENE at
-# each voxel size (a copy of the scene with only voxel_size changed, its file
-# paths made absolute), runs the demo's 30 steps of 0.05 s on one thread, and
-# prints the frames, the largest strain and the change of the tissue's force
-# on each organ over the run, beside the prep's time and peak memory.
+# each voxel size under each seed (a copy of the scene with only voxel_size
+# and seed changed, its file paths made absolute), solves the static
+# equilibrium at the end of the scene's motions on one thread, and prints
+# the frames, the largest strain and the tissue's force on each organ, beside
+# the prep's time and peak memory; then, per voxel size, the mean over the
+# seeds with their spread, and the change of each mean from the previous
+# voxel size. The spread over seeds is the discretization's own noise at a
+# given frame spacing: a change smaller than it says nothing either way.
 #
 #   tools/bench/voxel-convergence.sh SCENE.json VOXEL_M [VOXEL_M ...]
-#   e.g. tools/bench/voxel-convergence.sh data/scenes/abdomen-totalsegmentator.json 0.003 0.0015 0.001 0.0005
+#   e.g. SEEDS="1 2 3" tools/bench/voxel-convergence.sh data/scenes/abdomen-totalsegmentator.json 0.001 0.0005
 #
-# Environment: FASCIA (default build/tools/fascia), STEPS (30), DT (0.05).
+# Environment: FASCIA (default build/tools/fascia), SEEDS (default "1 2 3"),
+# SPACING (a factor on every frame_spacing and sample_spacing, default 1).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/../.." && pwd)"
 fascia="${FASCIA:-$root/build/tools/fascia}"
@@ -17,15 +22,18 @@ scene="$(cd "$(dirname "$1")" && pwd)/$(basename "$1")"
 shift
 work="$(mktemp -d "${TMPDIR:-/tmp}/fascia-voxels.XXXXXX")"
 trap 'rm -rf "$work"' EXIT
-echo "# tools/bench/voxel-convergence.sh $(basename "$scene"), $(date +%F), $(nproc) cores, load $(cut -d' ' -f1-3 /proc/loadavg), commit $(git -C "$root" rev-parse --short HEAD)"
+echo "# tools/bench/voxel-convergence.sh $(basename "$scene"), seeds ${SEEDS:-1 2 3}, spacing x${SPACING:-1}," \
+  "$(date +%F), $(nproc) cores, load $(cut -d' ' -f1-3 /proc/loadavg), commit $(git -C "$root" rev-parse --short HEAD)"
 for voxel in "$@"; do
-  copy="$work/scene-$voxel.json"
-  python3 - "$scene" "$voxel" "$copy" <<'EOF'
+  for seed in ${SEEDS:-1 2 3}; do
+    copy="$work/scene-$voxel-$seed.json"
+    python3 - "$scene" "$voxel" "$seed" "${SPACING:-1}" "$copy" <<'EOF'
 import json, os, sys
-scene, voxel, out = sys.argv[1], float(sys.argv[2]), sys.argv[3]
+scene, voxel, seed, factor, out = sys.argv[1], float(sys.argv[2]), int(sys.argv[3]), float(sys.argv[4]), sys.argv[5]
 base = os.path.dirname(scene)
 s = json.load(open(scene))
 s["voxel_size"] = voxel
+s["seed"] = seed
 s.pop("output", None)
 absolute = lambda p: p if os.path.isabs(p) else os.path.normpath(os.path.join(base, p))
 if "segmentation" in s:
@@ -33,28 +41,60 @@ if "segmentation" in s:
     labels = s["segmentation"].get("labels", "")
     if isinstance(labels, str) and not labels.startswith("totalsegmentator:"):
         s["segmentation"]["labels"] = absolute(labels)
-for organ in s.get("organs", []):
-    if "mesh" in organ:
-        organ["mesh"] = absolute(organ["mesh"])
-for tissue in s.get("tissues", []):
-    if "mesh" in tissue:
-        tissue["mesh"] = absolute(tissue["mesh"])
+for part in s.get("organs", []) + s.get("tissues", []):
+    if "mesh" in part:
+        part["mesh"] = absolute(part["mesh"])
+    for key in ("frame_spacing", "sample_spacing"):
+        if key in part:
+            part[key] *= factor
 json.dump(s, open(out, "w"), indent=1)
 EOF
-  model="$work/model-$voxel.h5"
-  /usr/bin/time -f "%e %M" -o "$work/time" "$fascia" prep "$copy" -o "$model" --json >"$work/prep.json" 2>/dev/null
-  read -r seconds peak_kb <"$work/time"
-  "$fascia" run "$model" --steps "${STEPS:-30}" --dt "${DT:-0.05}" --threads 1 --json >"$work/run.json" 2>/dev/null || true
-  python3 - "$voxel" "$seconds" "$peak_kb" "$work/prep.json" "$work/run.json" <<'EOF'
+    model="$work/model-$voxel-$seed.h5"
+    /usr/bin/time -f "%e %M" -o "$work/time" "$fascia" prep "$copy" -o "$model" --json >"$work/prep.json" 2>/dev/null
+    read -r seconds peak_kb <"$work/time"
+    "$fascia" run "$model" --static --threads 1 --json >"$work/run.json" 2>/dev/null || true
+    python3 - "$voxel" "$seed" "$seconds" "$peak_kb" "$work/prep.json" "$work/run.json" "$work/rows.json" <<'EOF'
 import json, math, sys
-voxel, seconds, peak_kb, prep, run = sys.argv[1:6]
+voxel, seed, seconds, peak_kb, prep, run, rows = sys.argv[1:8]
 p, r = json.load(open(prep)), json.load(open(run))
 free = sum(t.get("free_frames", 0) for t in p["tissues"])
-forces = " ".join("%s %.3g" % (k, math.dist(v["end"], v["start"])) for k, v in r.get("organ_force", {}).items())
-print("voxel %.4g mm: %d frames (%d free), %d samples; prep %.1f s, %.0f MB; run %s, %d/%d steps converged, "
-      "%.2f ms/step; largest strain %.3g; force change (N): %s"
-      % (1e3 * float(voxel), p["frames"], free, p["samples"], float(seconds), float(peak_kb) / 1024, r.get("ended"),
-         r.get("converged_steps", 0), r.get("steps", 0), r.get("ms_per_step", 0), r.get("max_strain", float("nan")),
-         forces))
+force = {k: math.dist(v["end"], v["start"]) for k, v in r.get("organ_force", {}).items()}
+row = {"voxel": float(voxel), "seed": int(seed), "strain": r.get("max_strain", float("nan")), "force": force,
+       "ended": r.get("ended")}
+with open(rows, "a") as f:
+    f.write(json.dumps(row) + "\n")
+print("voxel %.4g mm seed %s: %d frames (%d free), %d samples; prep %.1f s, %.0f MB; static %s; largest strain %.3g; "
+      "force (N): %s" % (1e3 * float(voxel), seed, p["frames"], free, p["samples"], float(seconds),
+                         float(peak_kb) / 1024, r.get("ended"), row["strain"],
+                         " ".join("%s %.3g" % kv for kv in force.items())))
 EOF
+  done
 done
+python3 - "$work/rows.json" <<'EOF'
+import json, sys
+rows = [json.loads(line) for line in open(sys.argv[1])]
+voxels = sorted({r["voxel"] for r in rows}, reverse=True)
+def stats(values):
+    mean = sum(values) / len(values)
+    return mean, min(values), max(values)
+previous = None
+for v in voxels:
+    at = [r for r in rows if r["voxel"] == v and r["ended"] == "completed"]
+    if not at:
+        print("# voxel %.4g mm: no completed solve" % (1e3 * v))
+        continue
+    quantities = {"largest strain": [r["strain"] for r in at]}
+    for organ in at[0]["force"]:
+        quantities[organ] = [r["force"][organ] for r in at]
+    means = {}
+    line = []
+    for name, values in quantities.items():
+        mean, lo, hi = stats(values)
+        means[name] = mean
+        change = ""
+        if previous and previous.get(name):
+            change = " (%+.1f %%)" % (100 * (mean / previous[name] - 1))
+        line.append("%s %.3g [%.3g-%.3g]%s" % (name, mean, lo, hi, change))
+    print("# voxel %.4g mm, mean of %d seeds [range], change from the coarser voxel: %s" % (1e3 * v, len(at), "; ".join(line)))
+    previous = means
+EOF
