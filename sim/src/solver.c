@@ -498,9 +498,18 @@ static void describe_failure(const fascia_solver *S, char *text, size_t size) {
     n = snprintf(text, size, "; largest residual force %.3g N at frame %d (rest position %.4g %.4g %.4g m)",
                  worst_norm, (int)worst, S->model->frame_position[3 * worst], S->model->frame_position[3 * worst + 1],
                  S->model->frame_position[3 * worst + 2]);
-  if (n >= 0 && (size_t)n < size && S->sys->inverted_count > 0)
-    snprintf(text + n, size - (size_t)n, "; %d inverted samples, the first sample %d (likely cause: the material is "
-             "crushed; StVK loses stiffness in compression, the stable Neo-Hookean does not)",
+  if (n < 0 || (size_t)n >= size || S->sys->inverted_count <= 0) return;
+  // the cause named is one the inverted samples' own law has
+  int32_t stvk = 0;
+  for (int32_t s = 0; s < S->sys->sample_count; ++s)
+    stvk += (S->sys->sample_flags[s] & FASCIA_PT_FLAG_INVERTED) && S->sys->sample_law[s] == FASCIA_LAW_STVK;
+  if (stvk > 0)
+    snprintf(text + n, size - (size_t)n, "; %d inverted samples (%d StVK), the first sample %d (likely cause: the "
+             "material is crushed; StVK loses stiffness in compression, the stable Neo-Hookean does not)",
+             (int)S->sys->inverted_count, (int)stvk, (int)S->sys->first_inverted);
+  else
+    snprintf(text + n, size - (size_t)n, "; %d inverted samples (all Neo-Hookean), the first sample %d (likely cause: "
+             "the step moves the tissue farther than its Newton iterations follow, so the last iterate crushes it)",
              (int)S->sys->inverted_count, (int)S->sys->first_inverted);
 }
 
