@@ -459,7 +459,10 @@ fascia_status prep_shell_build(fascia_ctx *ctx, const fascia_prep_scene *scene, 
   PREP_TRY_GOTO(fascia_cgal_surface_triangles(ctx, od->name, n, x, &tri, &T));
   // the reconstruction may bridge an open surface's hole (a lid over a
   // bowl's rim): a triangle whose centre lies off the organ's surface is
-  // not the wall's
+  // not the wall's. A closed surface has no hole to bridge, and there a
+  // triangle's centre lies off a surface curved tighter than the spacing:
+  // dropping it would open the wall.
+  const int open = m->report.border_edges > 0;
   int32_t kept = 0;
   for (int32_t k = 0; k < T; ++k) {
     double centre[3], closest[3];
@@ -468,7 +471,7 @@ fascia_status prep_shell_build(fascia_ctx *ctx, const fascia_prep_scene *scene, 
       centre[r] = (x[3 * (int64_t)tri[3 * k] + r] + x[3 * (int64_t)tri[3 * k + 1] + r] +
                    x[3 * (int64_t)tri[3 * k + 2] + r]) / 3;
     fascia_cgal_tree_closest(trees[o], 1, centre, closest, &on);
-    if (dist3(centre, closest) > OFF_SURFACE * spacing) continue;
+    if (open && dist3(centre, closest) > OFF_SURFACE * spacing) continue;
     memmove(tri + 3 * (int64_t)kept++, tri + 3 * (int64_t)k, 3 * sizeof(int32_t));
   }
   T = kept;
