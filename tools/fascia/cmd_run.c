@@ -61,7 +61,7 @@ static const char run_usage[] =
     "  --step-retries N       a failed step is redone as halved steps, N halvings at most (default 4);\n"
     "                         0 stops at the first failure, the last good state saved\n"
     "  --require-convergence  a step whose Newton iterations do not converge counts as failed and\n"
-    "                         is split (the default; the interactive and balanced presets accept it)\n"
+    "                         is split (the default, and every preset's)\n"
     "  --accept-unconverged   keep a step whose Newton iterations did not converge\n"
     "  --blow-up-strain E     a step after which a sample's strain passes E has blown up and fails\n"
     "                         (default 10; 0: off). Blown-up steps, overflow and diverging Newton\n"
@@ -74,12 +74,14 @@ static const char run_usage[] =
     "  --matrix-free          CG multiplies without a matrix (the default beyond that and on a GPU)\n"
     "  --single               ... stored in float for the products (half their memory traffic; the\n"
     "                         default where the CG tolerance is 1e-6 or looser, or --cg-fixed)\n"
-    "  --double               ... stored in double for the products\n"
-    "  --preset NAME          interactive, balanced or accurate: solver settings measured by\n"
-    "                         'fascia tradeoff' (tools/bench/README.md) for dynamic runs; options\n"
-    "                         after it override it; a static solve keeps its Newton limit of 100\n";
+    "  --double               ... stored in double for the products\n";
 // the rest of the help, split off: C99 guarantees string literals of 4095 bytes only
 static const char run_usage_notes[] =
+    "  --preset NAME          interactive, balanced or accurate: every step converged (else split,\n"
+    "                         then refused) to a Newton tolerance of 1e-2, 1e-4 or 1e-8 (and CG\n"
+    "                         1e-6); looser is fewer iterations, interactive at most the default's\n"
+    "                         (docs/cli.md, measured on every shipped scene); options after it\n"
+    "                         override it; a static solve keeps its Newton limit of 100\n"
     "  --verbose              on failure, also print where the error was found\n"
     "Progress with the time left goes to stderr when it is a terminal (or FASCIA_PROGRESS=1).\n"
     "Every output is written as NAME.tmp-PID-K and renamed when complete; the next run writing\n"
