@@ -7,7 +7,9 @@
 // and D (fixed) far from them, with the same tissue 'web' connecting all
 // four: when coupling rules leave its C-D piece held at one frame on C and
 // one on D, that piece is dropped and listed (held at 2) and the A-B piece
-// kept; held at two frames on C and one on D, it is kept. Then the shipped
+// kept; held at two frames on C and one on D, it is kept. A deformable box
+// held so (its tissue coupled to the fixed box at one frame) is refused,
+// naming it. Then the shipped
 // CT abdomen with a deformable spleen
 // (data/scenes/abdomen-totalsegmentator-deformable.json) keeps no such
 // piece and solves static, at dt 0.01 s and at dt 0.05 s within bounded
@@ -175,6 +177,49 @@ static int synthetic(fascia_ctx *ctx, int on_c) {
   return 0;
 }
 
+// Box B deformable beside the fixed box A, the tissue between them held on
+// A at one frame only: the organ and the tissue would turn about it, and
+// prep refuses the scene naming the organ. 0 when every check passed.
+static int deformable_on_a_point(fascia_ctx *ctx) {
+  char dir[256], path[512], text[4096], rule[256];
+  if (!fixture_tmpdir(dir)) return 1;
+  const char *names[] = {"a.obj", "b.obj", "scene.json", NULL};
+  static const char scene[] =
+      "{\"fascia_scene\": 1, \"voxel_size\": 0.001, \"seed\": 3,\n"
+      " \"materials\": {\"soft\": {\"youngs_modulus\": 3000, \"poisson_ratio\": 0.3}},\n"
+      " \"organs\": [{\"name\": \"A\", \"mesh\": \"a.obj\"},\n"
+      "   {\"name\": \"B\", \"mesh\": \"b.obj\", \"model\": \"deformable\", \"material\": \"soft\", "
+      "\"frame_spacing\": 0.005, \"sample_spacing\": 0.0025}],\n"
+      " \"tissues\": [{\"name\": \"web\", \"connects\": [\"A\", \"B\"], \"max_gap\": 0.005, "
+      "\"material\": \"soft\", \"frame_spacing\": 0.002, \"sample_spacing\": 0.0015%s}]}\n";
+  CHECK(fixture_two_boxes(dir, 0.002, NULL, NULL));
+  snprintf(path, sizeof path, "%s/scene.json", dir);
+  snprintf(text, sizeof text, scene, "");
+  CHECK(fixture_write(dir, "scene.json", text));
+  fixture_run r;
+  CHECK_OK(fixture_prep(ctx, path, &r), ctx);
+  int32_t on_a = -1;
+  for (int32_t k = 0; k < r.model->coupling_count && on_a < 0; ++k)
+    if (!strcmp(r.model->organs[r.model->coupling_organ[k]].name, "A")) on_a = r.model->coupling_frame[k];
+  if (on_a < 0) return 1;
+  double p[3];
+  memcpy(p, r.model->frame_position + 3 * on_a, sizeof p);
+  fixture_free(&r);
+  char rules[400];
+  sphere_rule(rule, sizeof rule, "A", p, 0.0009);
+  snprintf(rules, sizeof rules, ", \"coupling\": {\"organs\": {%s}}", rule);
+  snprintf(text, sizeof text, scene, rules);
+  CHECK(fixture_write(dir, "scene.json", text));
+  const fascia_status st = fixture_prep(ctx, path, &r);
+  const char *msg = fascia_ctx_message(ctx);
+  CHECK(st == FASCIA_ERR_ARGUMENT && r.model == NULL);
+  CHECK(strstr(msg, "organ 'B'") && strstr(msg, "held at only 1 point") && strstr(msg, "scene.json"));
+  if (st != FASCIA_ERR_ARGUMENT) fprintf(stderr, "one point on A: %s: %s\n", fascia_status_name(st), msg);
+  fixture_free(&r);
+  fixture_cleanup(dir, names);
+  return 0;
+}
+
 // Newton iterations of `steps` steps of dt; -1 when one did not converge.
 static int run_steps(fascia_ctx *ctx, const fascia_model *m, double dt, int steps) {
   fascia_solver_def sd = fascia_solver_def_default();
@@ -197,6 +242,7 @@ int main(int argc, char **argv) {
   fascia_ctx *ctx = fixture_ctx();
   CHECK(synthetic(ctx, 1) == 0);
   CHECK(synthetic(ctx, 2) == 0);
+  CHECK(deformable_on_a_point(ctx) == 0);
   fixture_run r;
   CHECK_OK(fixture_prep(ctx, argv[1], &r), ctx);
   const fascia_model *m = r.model;
