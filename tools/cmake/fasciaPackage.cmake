@@ -9,18 +9,18 @@ set(FASCIA_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/fascia)
 install(EXPORT fasciaTargets NAMESPACE fascia:: DESTINATION ${FASCIA_CMAKE_DIR})
 if(FASCIA_HAVE_PREP)
   install(EXPORT fasciaPrepTargets NAMESPACE fascia:: DESTINATION ${FASCIA_CMAKE_DIR})
-  install(FILES ${PROJECT_SOURCE_DIR}/cmake/fasciaPrepDependencies.cmake DESTINATION ${FASCIA_CMAKE_DIR})
+  install(FILES ${PROJECT_SOURCE_DIR}/tools/cmake/fasciaPrepDependencies.cmake DESTINATION ${FASCIA_CMAKE_DIR})
 endif()
 set(FASCIA_CONFIG_OPENMP OFF)
 if(OpenMP_C_FOUND)
   set(FASCIA_CONFIG_OPENMP ON)
 endif()
-configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/fasciaConfig.cmake.in
+configure_package_config_file(${PROJECT_SOURCE_DIR}/tools/cmake/fasciaConfig.cmake.in
                               ${PROJECT_BINARY_DIR}/fasciaConfig.cmake INSTALL_DESTINATION ${FASCIA_CMAKE_DIR})
 # 0.x: a minor version may change the API
 write_basic_package_version_file(${PROJECT_BINARY_DIR}/fasciaConfigVersion.cmake COMPATIBILITY SameMinorVersion)
 install(FILES ${PROJECT_BINARY_DIR}/fasciaConfig.cmake ${PROJECT_BINARY_DIR}/fasciaConfigVersion.cmake
-              ${PROJECT_SOURCE_DIR}/cmake/FindCHOLMOD.cmake DESTINATION ${FASCIA_CMAKE_DIR})
+              ${PROJECT_SOURCE_DIR}/tools/cmake/FindCHOLMOD.cmake DESTINATION ${FASCIA_CMAKE_DIR})
 
 # fascia.pc: Libs names the shared library alone (it carries what it
 # links); Libs.private what the static archive needs in a static link, as
@@ -82,5 +82,5 @@ fascia_pc_names(FASCIA_PC_LIBS_PRIVATE ${direct})
 set(pc_dir ${CMAKE_INSTALL_LIBDIR}/pkgconfig)
 file(RELATIVE_PATH FASCIA_PC_UP /root/${pc_dir} /root)
 string(REGEX REPLACE "/$" "" FASCIA_PC_UP "${FASCIA_PC_UP}")
-configure_file(${PROJECT_SOURCE_DIR}/cmake/fascia.pc.in ${PROJECT_BINARY_DIR}/fascia.pc @ONLY)
+configure_file(${PROJECT_SOURCE_DIR}/tools/cmake/fascia.pc.in ${PROJECT_BINARY_DIR}/fascia.pc @ONLY)
 install(FILES ${PROJECT_BINARY_DIR}/fascia.pc DESTINATION ${pc_dir})
