@@ -610,33 +610,40 @@ static int data_reserve(sample_data *d, int64_t count) {
   return 1;
 }
 
-// A strand or a sheet (reduced.c): its frames and samples appended, with
-// no voxel; each sample keeps its interval's or triangle's frames.
+// Appends a strand's, a sheet's or a shell's frames and samples (no voxel).
+// A sample's interval or triangle is given in r's own frames (cell_offset:
+// the index its first frame gets here) or in the scene's (cell_offset -1).
+static fascia_status append_reduced(fascia_ctx *ctx, const prep_reduced *r, int64_t cell_offset, point_list *frames,
+                                    point_list *samples, sample_data *data) {
+  const int64_t first_sample = samples->count;
+  for (int32_t i = 0; i < r->frame_count; ++i)
+    PREP_CHECK(list_push(frames, r->frame_position + 3 * (int64_t)i, r->frame_organ[i], r->frame_triangle[i], -1),
+               ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  for (int32_t s = 0; s < r->sample_count; ++s)
+    PREP_CHECK(list_push(samples, r->sample_position + 3 * (int64_t)s, -1, -1, -1), ctx, FASCIA_ERR_MEMORY,
+               "sample: out of memory");
+  PREP_CHECK(data_reserve(data, samples->count), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  for (int32_t s = 0; s < r->sample_count; ++s) {
+    const int64_t k = first_sample + s;
+    data->volume[k] = r->sample_volume[s];
+    for (int j = 0; j < 4; ++j) data->tet_frame[4 * k + j] = -1;
+    for (int j = 0; j < 3; ++j) {
+      const int32_t c = r->sample_cell[3 * (int64_t)s + j];
+      data->cell_frame[3 * k + j] = cell_offset < 0 ? c : c < 0 ? -1 : (int32_t)(cell_offset + c);
+    }
+  }
+  return FASCIA_OK;
+}
+
+// A strand or a sheet (reduced.c): its frames and samples appended; each
+// sample keeps its interval's or triangle's frames.
 static fascia_status sample_reduced(fascia_ctx *ctx, const fascia_prep_scene *scene,
                                     const fascia_prep_meshes *meshes, const fascia_prep_volume *vol, int32_t t,
                                     fascia_cgal_tree **trees, point_list *frames, point_list *samples,
                                     sample_data *data) {
   prep_reduced r;
   PREP_TRY(prep_reduced_build(ctx, scene, meshes, vol, t, trees, &r));
-  fascia_status status = FASCIA_OK;
-  const int64_t first_frame = frames->count, first_sample = samples->count;
-  for (int32_t i = 0; i < r.frame_count; ++i)
-    PREP_CHECK_GOTO(list_push(frames, r.frame_position + 3 * (int64_t)i, r.frame_organ[i], r.frame_triangle[i], -1),
-                    ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
-  for (int32_t s = 0; s < r.sample_count; ++s)
-    PREP_CHECK_GOTO(list_push(samples, r.sample_position + 3 * (int64_t)s, -1, -1, -1), ctx, FASCIA_ERR_MEMORY,
-                    "sample: out of memory");
-  PREP_CHECK_GOTO(data_reserve(data, samples->count), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
-  for (int32_t s = 0; s < r.sample_count; ++s) {
-    const int64_t k = first_sample + s;
-    data->volume[k] = r.sample_volume[s];
-    for (int j = 0; j < 4; ++j) data->tet_frame[4 * k + j] = -1;
-    for (int j = 0; j < 3; ++j) {
-      const int32_t c = r.sample_cell[3 * (int64_t)s + j];
-      data->cell_frame[3 * k + j] = c < 0 ? -1 : (int32_t)(first_frame + c);
-    }
-  }
-cleanup:
+  const fascia_status status = append_reduced(ctx, &r, frames->count, frames, samples, data);
   prep_reduced_free(&r);
   return status;
 }
@@ -651,22 +658,7 @@ static fascia_status sample_shell(fascia_ctx *ctx, const fascia_prep_scene *scen
                                   tissue_of};
   prep_reduced r;
   PREP_TRY(prep_shell_build(ctx, scene, meshes, o, &seen, trees, &r));
-  fascia_status status = FASCIA_OK;
-  const int64_t first_sample = samples->count;
-  for (int32_t i = 0; i < r.frame_count; ++i)
-    PREP_CHECK_GOTO(list_push(frames, r.frame_position + 3 * (int64_t)i, r.frame_organ[i], r.frame_triangle[i], -1),
-                    ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
-  for (int32_t s = 0; s < r.sample_count; ++s)
-    PREP_CHECK_GOTO(list_push(samples, r.sample_position + 3 * (int64_t)s, -1, -1, -1), ctx, FASCIA_ERR_MEMORY,
-                    "sample: out of memory");
-  PREP_CHECK_GOTO(data_reserve(data, samples->count), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
-  for (int32_t s = 0; s < r.sample_count; ++s) {
-    const int64_t k = first_sample + s;
-    data->volume[k] = r.sample_volume[s];
-    for (int j = 0; j < 4; ++j) data->tet_frame[4 * k + j] = -1;
-    memcpy(data->cell_frame + 3 * k, r.sample_cell + 3 * (int64_t)s, 3 * sizeof(int32_t));
-  }
-cleanup:
+  const fascia_status status = append_reduced(ctx, &r, -1, frames, samples, data);
   prep_reduced_free(&r);
   return status;
 }
