@@ -236,12 +236,6 @@ const char *fascia_ccx_program(void) {
   return NULL;
 }
 
-static double now_ms(void) {
-  struct timespec t;
-  clock_gettime(CLOCK_MONOTONIC, &t);
-  return 1e3 * (double)t.tv_sec + 1e-6 * (double)t.tv_nsec;
-}
-
 // Removes the run folder and everything ccx left in it.
 static void remove_folder(const char *dir) {
   DIR *d = opendir(dir);
@@ -415,7 +409,7 @@ fascia_status fascia_ccx_beam_solve(fascia_ctx *ctx, const fascia_ccx_beam_def *
   if (n < 0 || n >= (int)sizeof dir || !mkdtemp(dir)) return SCENE_FAIL(ctx, FASCIA_ERR_IO, WHO ": cannot make a folder %s (%s)", dir, strerror(errno));
   snprintf(deck, sizeof deck, "%s/" JOB ".inp", dir);
   fascia_status status = FASCIA_OK;
-  const double t0 = now_ms();
+  const double t0 = scene_now_ms();
   FILE *f = fopen(deck, "w");
   if (!f) {
     status = SCENE_FAIL(ctx, FASCIA_ERR_IO, WHO ": cannot write %s (%s)", deck, strerror(errno));
@@ -429,7 +423,7 @@ fascia_status fascia_ccx_beam_solve(fascia_ctx *ctx, const fascia_ccx_beam_def *
   const int rc = run_ccx(dir, program, threads, &out->cpu_ms, &why);
   double time = 0;
   const int found = read_dat(dir, out->tip, &time);
-  out->ms = now_ms() - t0;
+  out->ms = scene_now_ms() - t0;
   read_sta(dir, &out->increments, &out->iterations);
   char last[256];
   last_log_line(dir, last, sizeof last);

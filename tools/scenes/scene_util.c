@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "scene_util.h"
 
@@ -277,4 +278,10 @@ void scene_append_body_json(char *buf, size_t size, const fascia_scene_beam_def 
   if (def->enhanced_modes > 0) scene_append(buf, size, "\"enhanced_modes\": %d, ", (int)def->enhanced_modes);
   scene_append(buf, size, "\"gravity\": [%.15g, %.15g, %.15g], ", def->gravity[0], def->gravity[1], def->gravity[2]);
   scene_append(buf, size, "\"fixed\": \"frames at x = 0\", \"probe\": \"tip at (%.15g, 0, 0)\"", def->length);
+}
+
+double scene_now_ms(void) {
+  struct timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return 1e3 * (double)t.tv_sec + 1e-6 * (double)t.tv_nsec;
 }

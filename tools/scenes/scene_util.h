@@ -41,6 +41,9 @@ typedef struct scene_grid {
 /// Private cookie of fascia_scene_beam_def.
 #define FASCIA_SCENE_BEAM_COOKIE_ 0x5cee4b
 
+/// Monotonic wall-clock time in milliseconds, for the peers' timings.
+double scene_now_ms(void);
+
 /// Coordinate along axis d of grid index idx (the last one is exactly hi).
 fascia_real scene_grid_coord(const scene_grid *g, int d, int32_t idx);
 

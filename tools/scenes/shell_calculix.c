@@ -383,22 +383,16 @@ fascia_status fascia_shell_write_deck(fascia_ctx *ctx, const void *shell_def, FI
   return FASCIA_OK;
 }
 
-static double now_ms(void) {
-  struct timespec t;
-  clock_gettime(CLOCK_MONOTONIC, &t);
-  return 1e3 * (double)t.tv_sec + 1e-6 * (double)t.tv_nsec;
-}
-
 fascia_status fascia_shell_calculix(fascia_ctx *ctx, const fascia_shell_def *def, const char *program,
                                     fascia_shell_result *out) {
   SCENE_CHECK(out, ctx, FASCIA_ERR_ARGUMENT, "shell case: NULL result");
   memset(out, 0, sizeof *out);
-  const double t0 = now_ms();
+  const double t0 = scene_now_ms();
   char *dat = NULL;
   double cpu_ms = 0;
   SCENE_TRY(fascia_ccx_run_deck(ctx, def->kind == FASCIA_SHELL_PLATE ? "shell plate" : "shell bowl",
                                 fascia_shell_write_deck, def, program, 1, &dat, &cpu_ms));
-  out->ms = now_ms() - t0;
+  out->ms = scene_now_ms() - t0;
   int64_t probe = -1;
   fascia_status status = probe_node(ctx, def, &probe, &out->nodes);
   const int ok = status == FASCIA_OK &&

@@ -317,21 +317,15 @@ static int block_total(const char *block, double v[3]) {
   return 0;
 }
 
-static double now_ms(void) {
-  struct timespec t;
-  clock_gettime(CLOCK_MONOTONIC, &t);
-  return 1e3 * (double)t.tv_sec + 1e-6 * (double)t.tv_nsec;
-}
-
 fascia_status fascia_tissue_hang_calculix(fascia_ctx *ctx, const fascia_tissue_hang_def *def, const char *program,
                                           fascia_tissue_hang_result *out) {
   SCENE_CHECK(out, ctx, FASCIA_ERR_ARGUMENT, "hanging organ: NULL result");
   memset(out, 0, sizeof *out);
-  const double t0 = now_ms();
+  const double t0 = scene_now_ms();
   char *dat = NULL;
   double cpu_ms = 0;
   SCENE_TRY(fascia_ccx_run_deck(ctx, "hanging organ", fascia_tissue_hang_write_deck, def, program, 1, &dat, &cpu_ms));
-  out->ms = now_ms() - t0;
+  out->ms = scene_now_ms() - t0;
   const int32_t last = 2 * def->elements + 1, centre = last + 2;
   const char *u = last_block(dat, "displacements (vx,vy,vz) for set NORGAN");
   const char *rf = last_block(dat, "total force (fx,fy,fz) for set NFIX");
@@ -354,11 +348,11 @@ fascia_status fascia_tissue_pull_calculix(fascia_ctx *ctx, const fascia_tissue_p
                                           fascia_tissue_pull_result *out) {
   SCENE_CHECK(out, ctx, FASCIA_ERR_ARGUMENT, "pulled sheet: NULL result");
   memset(out, 0, sizeof *out);
-  const double t0 = now_ms();
+  const double t0 = scene_now_ms();
   char *dat = NULL;
   double cpu_ms = 0;
   SCENE_TRY(fascia_ccx_run_deck(ctx, "pulled sheet", fascia_tissue_pull_write_deck, def, program, 1, &dat, &cpu_ms));
-  out->ms = now_ms() - t0;
+  out->ms = scene_now_ms() - t0;
   const int32_t ex = def->elements[0], ey = def->elements[1];
   const int32_t edge = shell_node(def, ex, 2 * ey), centre = shell_node(def, ex, ey);
   const char *u = last_block(dat, "displacements (vx,vy,vz) for set NPROBE");

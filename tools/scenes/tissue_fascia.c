@@ -38,12 +38,6 @@ static fascia_status make_folder(fascia_ctx *ctx, char *dir) {
   return FASCIA_OK;
 }
 
-static double now_ms(void) {
-  struct timespec t;
-  clock_gettime(CLOCK_MONOTONIC, &t);
-  return 1e3 * (double)t.tv_sec + 1e-6 * (double)t.tv_nsec;
-}
-
 // The static equilibrium at time 1 (the end of B's motion, if any).
 fascia_status fascia_tissue_solve_static(fascia_ctx *ctx, const fascia_model *m, fascia_solver **solver,
                                          fascia_solve_report *report, double *ms) {
@@ -54,9 +48,9 @@ fascia_status fascia_tissue_solve_static(fascia_ctx *ctx, const fascia_model *m,
   def.newton_tolerance = 1e-10;
   SCENE_TRY(fascia_solver_create(ctx, m, &def, solver));
   SCENE_TRY(fascia_solver_set_time(*solver, 1));
-  const double t0 = now_ms();
+  const double t0 = scene_now_ms();
   SCENE_TRY(fascia_solver_solve_static(*solver, report));
-  *ms = now_ms() - t0;
+  *ms = scene_now_ms() - t0;
   SCENE_CHECK(report->converged, ctx, FASCIA_ERR_NUMERIC, "static solve: not converged in %d Newton iterations",
               report->newton_iterations);
   return FASCIA_OK;
