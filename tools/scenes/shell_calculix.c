@@ -275,26 +275,12 @@ fascia_status fascia_shell_write_scene(fascia_ctx *ctx, const fascia_shell_def *
 
 // Node id of point (i, j) of the plate's (2 ex + 1) x (2 ey + 1) grid.
 static int32_t plate_node(const fascia_shell_def *d, int32_t i, int32_t j) {
-  return 1 + i + (2 * d->elements[0] + 1) * j;
+  return fascia_ccx_s8r_node(d->elements[0], i, j);
 }
 
 static void write_plate_mesh(const fascia_shell_def *d, FILE *out) {
   const int32_t ex = d->elements[0], ey = d->elements[1], nx = 2 * ex + 1, ny = 2 * ey + 1;
-  fprintf(out, "*NODE, NSET=NALL\n");
-  for (int32_t j = 0; j < ny; ++j)
-    for (int32_t i = 0; i < nx; ++i)
-      if (!(i % 2 && j % 2))
-        fprintf(out, "%d, %.13g, %.13g, 0\n", (int)plate_node(d, i, j), d->length * i / (nx - 1),
-                d->width * (-0.5 + (double)j / (ny - 1)));
-  fprintf(out, "*ELEMENT, TYPE=S8R, ELSET=EALL\n");
-  for (int32_t b = 0; b < ey; ++b)
-    for (int32_t a = 0; a < ex; ++a) {
-      const int32_t i = 2 * a, j = 2 * b;
-      fprintf(out, "%d, %d, %d, %d, %d, %d, %d, %d, %d\n", (int)(1 + a + ex * b), (int)plate_node(d, i, j),
-              (int)plate_node(d, i + 2, j), (int)plate_node(d, i + 2, j + 2), (int)plate_node(d, i, j + 2),
-              (int)plate_node(d, i + 1, j), (int)plate_node(d, i + 2, j + 1), (int)plate_node(d, i + 1, j + 2),
-              (int)plate_node(d, i, j + 1));
-    }
+  fascia_ccx_s8r_rectangle(out, ex, ey, 0, d->length, -d->width / 2, d->width);
   fprintf(out, "*NSET, NSET=NFIX\n");
   for (int32_t j = 0; j < ny; ++j) fprintf(out, "%d,\n", (int)plate_node(d, 0, j));
   fprintf(out, "*NSET, NSET=NPROBE\n%d\n", (int)plate_node(d, nx - 1, ey));

@@ -230,8 +230,32 @@ fascia_status fascia_tissue_hang_write_deck(fascia_ctx *ctx, const void *hang_de
 }
 
 // Node id of point (i, j) of the (2 ex + 1) x (2 ey + 1) grid of an S8R mesh.
+int32_t fascia_ccx_s8r_node(int32_t ex, int32_t i, int32_t j) { return 1 + i + (2 * ex + 1) * j; }
+
+void fascia_ccx_s8r_rectangle(FILE *out, int32_t ex, int32_t ey, double x0, double lx, double y0, double ly) {
+  const int32_t nx = 2 * ex + 1, ny = 2 * ey + 1;
+  fprintf(out, "*NODE, NSET=NALL\n");
+  for (int32_t j = 0; j < ny; ++j)
+    for (int32_t i = 0; i < nx; ++i)
+      if (!(i % 2 && j % 2)) // the serendipity element has no centre node
+        fprintf(out, "%d, %.13g, %.13g, 0\n", (int)fascia_ccx_s8r_node(ex, i, j), x0 + lx * i / (nx - 1),
+                y0 + ly * j / (ny - 1));
+  fprintf(out, "*ELEMENT, TYPE=S8R, ELSET=EALL\n");
+  for (int32_t b = 0; b < ey; ++b)
+    for (int32_t a = 0; a < ex; ++a) {
+      const int32_t i = 2 * a, j = 2 * b;
+      const int32_t node[8] = {fascia_ccx_s8r_node(ex, i, j),         fascia_ccx_s8r_node(ex, i + 2, j),
+                               fascia_ccx_s8r_node(ex, i + 2, j + 2), fascia_ccx_s8r_node(ex, i, j + 2),
+                               fascia_ccx_s8r_node(ex, i + 1, j),     fascia_ccx_s8r_node(ex, i + 2, j + 1),
+                               fascia_ccx_s8r_node(ex, i + 1, j + 2), fascia_ccx_s8r_node(ex, i, j + 1)};
+      fprintf(out, "%d", (int)(1 + a + ex * b));
+      for (int k = 0; k < 8; ++k) fprintf(out, ", %d", (int)node[k]);
+      fprintf(out, "\n");
+    }
+}
+
 static int32_t shell_node(const fascia_tissue_pull_def *d, int32_t i, int32_t j) {
-  return 1 + i + (2 * d->elements[0] + 1) * j;
+  return fascia_ccx_s8r_node(d->elements[0], i, j);
 }
 
 fascia_status fascia_tissue_pull_write_deck(fascia_ctx *ctx, const void *pull_def, FILE *out) {
@@ -244,22 +268,7 @@ fascia_status fascia_tissue_pull_write_deck(fascia_ctx *ctx, const void *pull_de
           "** %d x %d S8R elements, NLGEOM\n*HEADING\nfascia sheet under a pull\n",
           d->gap, d->width, d->thickness, -d->gap / 2, d->gap / 2, d->pull[0], d->pull[1], d->pull[2], (int)ex,
           (int)ey);
-  fprintf(out, "*NODE, NSET=NALL\n");
-  for (int32_t j = 0; j < ny; ++j)
-    for (int32_t i = 0; i < nx; ++i)
-      if (!(i % 2 && j % 2)) // the serendipity element has no centre node
-        fprintf(out, "%d, %.13g, %.13g, 0\n", (int)shell_node(d, i, j), -d->gap / 2 + d->gap * i / (nx - 1),
-                -d->width / 2 + d->width * j / (ny - 1));
-  // corners counter-clockwise seen from +z, then the mid-side nodes from the first edge on
-  fprintf(out, "*ELEMENT, TYPE=S8R, ELSET=EALL\n");
-  for (int32_t b = 0; b < ey; ++b)
-    for (int32_t a = 0; a < ex; ++a) {
-      const int32_t i = 2 * a, j = 2 * b;
-      fprintf(out, "%d, %d, %d, %d, %d, %d, %d, %d, %d\n", (int)(1 + a + ex * b), (int)shell_node(d, i, j),
-              (int)shell_node(d, i + 2, j), (int)shell_node(d, i + 2, j + 2), (int)shell_node(d, i, j + 2),
-              (int)shell_node(d, i + 1, j), (int)shell_node(d, i + 2, j + 1), (int)shell_node(d, i + 1, j + 2),
-              (int)shell_node(d, i, j + 1));
-    }
+  fascia_ccx_s8r_rectangle(out, ex, ey, -d->gap / 2, d->gap, -d->width / 2, d->width);
   fprintf(out, "*NSET, NSET=NFIX\n");
   for (int32_t j = 0; j < ny; ++j) fprintf(out, "%d,\n", (int)shell_node(d, 0, j));
   fprintf(out, "*NSET, NSET=NPULL\n");

@@ -94,6 +94,14 @@ typedef struct fascia_tissue_pull_result {
 fascia_status fascia_tissue_hang_write_scene(fascia_ctx *ctx, const fascia_tissue_hang_def *def, const char *dir);
 fascia_status fascia_tissue_pull_write_scene(fascia_ctx *ctx, const fascia_tissue_pull_def *def, const char *dir);
 
+/// Node number (from 1) of point (i, j) of a rectangle of ex x ey S8R
+/// elements: a (2 ex + 1) x (2 ey + 1) grid of corners and mid-sides, i fastest.
+int32_t fascia_ccx_s8r_node(int32_t ex, int32_t i, int32_t j);
+/// Writes the *NODE (NSET=NALL) and *ELEMENT (S8R, ELSET=EALL) cards of that
+/// rectangle over [x0, x0 + lx] x [y0, y0 + ly] in the plane z = 0, its
+/// corners counter-clockwise seen from +z, then its mid-sides.
+void fascia_ccx_s8r_rectangle(FILE *out, int32_t ex, int32_t ey, double x0, double lx, double y0, double ly);
+
 /// The CalculiX decks of the cases (def passed as void * for fascia_ccx_run_deck).
 fascia_status fascia_tissue_hang_write_deck(fascia_ctx *ctx, const void *hang_def, FILE *out);
 fascia_status fascia_tissue_pull_write_deck(fascia_ctx *ctx, const void *pull_def, FILE *out);
