@@ -234,7 +234,8 @@ static fascia_status write_surface(fascia_ctx *ctx, const fascia_shell_def *d, c
   return fascia_tissue_close(ctx, f, path);
 }
 
-fascia_status fascia_shell_write_scene(fascia_ctx *ctx, const fascia_shell_def *def, const char *dir) {
+fascia_status fascia_shell_write_scene(fascia_ctx *ctx, const void *shell_def, const char *dir) {
+  const fascia_shell_def *def = shell_def;
   SCENE_TRY(check_def(ctx, def));
   SCENE_TRY(write_surface(ctx, def, dir));
   const double s = def->scale, R = s * def->length, sp = s * def->frame_spacing;

@@ -61,7 +61,7 @@ typedef struct fascia_shell_result {
 /// The organ's surface mesh, the boxes and scene.json (the "stvk" law) into
 /// the existing folder `dir` (the names of tissue_calculix.h). Errors:
 /// FASCIA_ERR_ARGUMENT (a bad def, naming the field), FASCIA_ERR_IO.
-fascia_status fascia_shell_write_scene(fascia_ctx *ctx, const fascia_shell_def *def, const char *dir);
+fascia_status fascia_shell_write_scene(fascia_ctx *ctx, const void *shell_def, const char *dir);
 /// The CalculiX deck (def passed as void * for fascia_ccx_run_deck).
 fascia_status fascia_shell_write_deck(fascia_ctx *ctx, const void *def, FILE *out);
 /// Solves the case with CalculiX (`program`: fascia_ccx_program; one thread).

@@ -16,8 +16,6 @@
 #include "shell_calculix.h"
 #include "tissue_calculix.h"
 
-#define DIR_SIZE 512
-#define PATH_SIZE (DIR_SIZE + 64)
 
 // Barycentric coordinates of p's projection on triangle (a, b, c) and its
 // distance from the triangle's plane; 0 if the triangle has no area.
@@ -85,15 +83,10 @@ static fascia_status probe_displacement(fascia_ctx *ctx, const fascia_model *m, 
 fascia_status fascia_shell_fascia(fascia_ctx *ctx, const fascia_shell_def *def, fascia_shell_result *out) {
   SCENE_CHECK(out && def, ctx, FASCIA_ERR_ARGUMENT, "shell case: NULL argument");
   memset(out, 0, sizeof *out);
-  char dir[DIR_SIZE], path[PATH_SIZE];
-  SCENE_TRY(fascia_tissue_scene_folder(ctx, dir));
   fascia_prep_stages st;
-  memset(&st, 0, sizeof st);
   fascia_solver *solver = NULL;
   fascia_status status = FASCIA_OK;
-  SCENE_TRY_GOTO(fascia_shell_write_scene(ctx, def, dir));
-  snprintf(path, sizeof path, "%s/%s", dir, FASCIA_TISSUE_SCENE);
-  SCENE_TRY_GOTO(fascia_prep_stages_run(ctx, path, NULL, &st));
+  SCENE_TRY_GOTO(fascia_tissue_prepare(ctx, fascia_shell_write_scene, def, &st));
   const fascia_model *m = st.model;
   const int32_t organ = fascia_model_find_organ(m, "shell");
   if (organ < 0) {
@@ -112,6 +105,5 @@ fascia_status fascia_shell_fascia(fascia_ctx *ctx, const fascia_shell_def *def, 
 cleanup:
   fascia_solver_destroy(&solver);
   fascia_prep_stages_free(&st);
-  fascia_tissue_scene_remove(dir);
   return status;
 }

@@ -121,7 +121,8 @@ static fascia_status write_boxes(fascia_ctx *ctx, const char *dir, double gap, d
   return write_box(ctx, dir, FASCIA_TISSUE_BOX_B, gap / 2, box);
 }
 
-fascia_status fascia_tissue_hang_write_scene(fascia_ctx *ctx, const fascia_tissue_hang_def *def, const char *dir) {
+fascia_status fascia_tissue_hang_write_scene(fascia_ctx *ctx, const void *hang_def, const char *dir) {
+  const fascia_tissue_hang_def *def = hang_def;
   SCENE_TRY(check_hang(ctx, def));
   SCENE_TRY(write_boxes(ctx, dir, def->gap, def->box));
   char path[PATH_SIZE];
@@ -144,7 +145,8 @@ fascia_status fascia_tissue_hang_write_scene(fascia_ctx *ctx, const fascia_tissu
   return close_file(ctx, f, path);
 }
 
-fascia_status fascia_tissue_pull_write_scene(fascia_ctx *ctx, const fascia_tissue_pull_def *def, const char *dir) {
+fascia_status fascia_tissue_pull_write_scene(fascia_ctx *ctx, const void *pull_def, const char *dir) {
+  const fascia_tissue_pull_def *def = pull_def;
   SCENE_TRY(check_pull(ctx, def));
   SCENE_TRY(write_boxes(ctx, dir, def->gap, def->box));
   char path[PATH_SIZE];

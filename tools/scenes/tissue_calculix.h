@@ -89,10 +89,12 @@ typedef struct fascia_tissue_pull_result {
 #define FASCIA_TISSUE_SCENE "scene.json"
 
 /// Writes the fascia scene of a case (the boxes, the sheet's mesh, scene.json
-/// with the "stvk" law) into the existing folder `dir`. Errors:
-/// FASCIA_ERR_ARGUMENT (a bad def, naming the field), FASCIA_ERR_IO.
-fascia_status fascia_tissue_hang_write_scene(fascia_ctx *ctx, const fascia_tissue_hang_def *def, const char *dir);
-fascia_status fascia_tissue_pull_write_scene(fascia_ctx *ctx, const fascia_tissue_pull_def *def, const char *dir);
+/// with the "stvk" law) into the existing folder `dir` (def passed as void *
+/// for fascia_tissue_prepare). Errors: FASCIA_ERR_ARGUMENT (a bad def, naming
+/// the field), FASCIA_ERR_IO.
+typedef fascia_status (*fascia_tissue_scene_writer)(fascia_ctx *ctx, const void *def, const char *dir);
+fascia_status fascia_tissue_hang_write_scene(fascia_ctx *ctx, const void *hang_def, const char *dir);
+fascia_status fascia_tissue_pull_write_scene(fascia_ctx *ctx, const void *pull_def, const char *dir);
 
 /// Node number (from 1) of point (i, j) of a rectangle of ex x ey S8R
 /// elements: a (2 ex + 1) x (2 ey + 1) grid of corners and mid-sides, i fastest.
@@ -136,12 +138,14 @@ int fascia_tissue_dat_node(const char *dat, const char *header, long long node, 
 FILE *fascia_tissue_open(fascia_ctx *ctx, const char *dir, const char *name, char *path);
 fascia_status fascia_tissue_close(fascia_ctx *ctx, FILE *f, const char *path);
 
-/// The scene folder of fascia_tissue_*_fascia (fresh, under $TMPDIR or
-/// /tmp; dir of at least 512 chars), its removal (the file names above),
-/// and their static solve at time 1 (CPU, one thread, Newton tolerance
-/// 1e-10; FASCIA_ERR_NUMERIC when not converged; *solver to destroy).
-fascia_status fascia_tissue_scene_folder(fascia_ctx *ctx, char *dir);
-void fascia_tissue_scene_remove(const char *dir);
+/// A case prepared as `fascia prep` does: its scene written by `write` into
+/// a fresh folder under $TMPDIR or /tmp, prep's stages run into *stages (to
+/// free with fascia_prep_stages_free), the folder removed again. And the
+/// cases' static solve at time 1 (CPU, one thread, Newton tolerance 1e-10;
+/// FASCIA_ERR_NUMERIC when not converged; *solver to destroy).
+struct fascia_prep_stages; // fascia/prep.h: the solved cases need prep
+fascia_status fascia_tissue_prepare(fascia_ctx *ctx, fascia_tissue_scene_writer write, const void *def,
+                                    struct fascia_prep_stages *stages);
 fascia_status fascia_tissue_solve_static(fascia_ctx *ctx, const fascia_model *model, fascia_solver **solver,
                                          fascia_solve_report *report, double *ms);
 

@@ -38,6 +38,18 @@ static fascia_status make_folder(fascia_ctx *ctx, char *dir) {
   return FASCIA_OK;
 }
 
+fascia_status fascia_tissue_prepare(fascia_ctx *ctx, fascia_tissue_scene_writer write, const void *def,
+                                    fascia_prep_stages *stages) {
+  memset(stages, 0, sizeof *stages);
+  char dir[DIR_SIZE], path[PATH_SIZE];
+  SCENE_TRY(make_folder(ctx, dir));
+  fascia_status status = write(ctx, def, dir);
+  snprintf(path, sizeof path, "%s/%s", dir, FASCIA_TISSUE_SCENE);
+  if (status == FASCIA_OK) status = fascia_prep_stages_run(ctx, path, NULL, stages);
+  remove_scene(dir);
+  return status;
+}
+
 // The static equilibrium at time 1 (the end of B's motion, if any).
 fascia_status fascia_tissue_solve_static(fascia_ctx *ctx, const fascia_model *m, fascia_solver **solver,
                                          fascia_solve_report *report, double *ms) {
@@ -115,18 +127,10 @@ fascia_status fascia_tissue_hang_fascia(fascia_ctx *ctx, const fascia_tissue_han
                                         fascia_tissue_hang_result *out) {
   SCENE_CHECK(out, ctx, FASCIA_ERR_ARGUMENT, "hanging organ: NULL result");
   memset(out, 0, sizeof *out);
-  char dir[DIR_SIZE], path[PATH_SIZE];
-  SCENE_TRY(make_folder(ctx, dir));
   fascia_prep_stages s;
-  memset(&s, 0, sizeof s);
-  fascia_status status = FASCIA_OK;
-  SCENE_TRY_GOTO(fascia_tissue_hang_write_scene(ctx, def, dir));
-  snprintf(path, sizeof path, "%s/%s", dir, FASCIA_TISSUE_SCENE);
-  SCENE_TRY_GOTO(fascia_prep_stages_run(ctx, path, NULL, &s));
-  SCENE_TRY_GOTO(hang_from_model(ctx, s.model, out));
-cleanup:
+  fascia_status status = fascia_tissue_prepare(ctx, fascia_tissue_hang_write_scene, def, &s);
+  if (status == FASCIA_OK) status = hang_from_model(ctx, s.model, out);
   fascia_prep_stages_free(&s);
-  remove_scene(dir);
   return status;
 }
 
@@ -167,21 +171,9 @@ fascia_status fascia_tissue_pull_fascia(fascia_ctx *ctx, const fascia_tissue_pul
                                         fascia_tissue_pull_result *out) {
   SCENE_CHECK(out, ctx, FASCIA_ERR_ARGUMENT, "pulled sheet: NULL result");
   memset(out, 0, sizeof *out);
-  char dir[DIR_SIZE], path[PATH_SIZE];
-  SCENE_TRY(make_folder(ctx, dir));
   fascia_prep_stages s;
-  memset(&s, 0, sizeof s);
-  fascia_status status = FASCIA_OK;
-  SCENE_TRY_GOTO(fascia_tissue_pull_write_scene(ctx, def, dir));
-  snprintf(path, sizeof path, "%s/%s", dir, FASCIA_TISSUE_SCENE);
-  SCENE_TRY_GOTO(fascia_prep_stages_run(ctx, path, NULL, &s));
-  SCENE_TRY_GOTO(pull_from_model(ctx, def, s.model, out));
-cleanup:
+  fascia_status status = fascia_tissue_prepare(ctx, fascia_tissue_pull_write_scene, def, &s);
+  if (status == FASCIA_OK) status = pull_from_model(ctx, def, s.model, out);
   fascia_prep_stages_free(&s);
-  remove_scene(dir);
   return status;
 }
-
-fascia_status fascia_tissue_scene_folder(fascia_ctx *ctx, char *dir) { return make_folder(ctx, dir); }
-
-void fascia_tissue_scene_remove(const char *dir) { remove_scene(dir); }
