@@ -83,6 +83,11 @@ static double distance_at(const fascia_prep_volume *vol, const prep_grid *g, int
 
 // ------------------------------------------------------------ strands
 
+// A spread end's fibres: enough frames to spread its load over the area,
+// few enough to keep the strand cheap.
+#define FAN_FRAMES_MAX 32
+#define FAN_FRAMES_MIN 3
+
 // The attachment's point moved onto its organ: the closest surface point,
 // refused when farther than its radius.
 static fascia_status attach(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_meshes *meshes,
@@ -102,32 +107,66 @@ static fascia_status attach(fascia_ctx *ctx, const fascia_prep_scene *scene, con
   return FASCIA_OK;
 }
 
-// A part of an organ's mesh as a closest-point tree of its own; *first_of
-// maps the tree's triangle k back to the organ's: part_triangles[k].
+// A part of an organ's mesh as a closest-point tree of its own; triangles
+// maps the tree's triangle k back to the organ's: triangles[k].
 typedef struct part_tree {
   fascia_cgal_tree *tree;
   int32_t *triangles; ///< [count] the organ's triangle indices of the part
   int32_t count;
+  int32_t part;       ///< its index among the organ's parts
 } part_tree;
+
+// The part a label of a label organ is: the organ's only part, or the part
+// of that label (label_organs.c names them by the label table).
+static fascia_status label_part(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_mesh *m, int32_t t,
+                                const char *key, const fascia_prep_attachment *a, const char **name) {
+  const fascia_prep_organ_def *od = scene->organs + a->organ;
+  const fascia_prep_segmentation *seg = &scene->segmentation;
+  int32_t value = -1;
+  if (strspn(a->label, "0123456789") == strlen(a->label)) value = (int32_t)atoi(a->label);
+  for (int32_t k = 0; value < 0 && k < seg->table_count; ++k)
+    if (!strcmp(seg->table_name[k], a->label)) value = seg->table_label[k];
+  int32_t p = -1;
+  for (int32_t k = 0; k < od->label_count; ++k)
+    if (od->labels[k] == value) p = k;
+  char list[256] = "";
+  for (int32_t k = 0; k < od->label_count && strlen(list) < sizeof list - 40; ++k) {
+    const char *n = fascia_prep_label_name(seg, od->labels[k]);
+    snprintf(list + strlen(list), sizeof list - strlen(list), "%s%d%s%s%s", k ? ", " : "", (int)od->labels[k],
+             n ? " (" : "", n ? n : "", n ? ")" : "");
+  }
+  PREP_CHECK(p >= 0, ctx, FASCIA_ERR_ARGUMENT,
+             "scene '%s' tissues[%d].%s.label: organ '%s' has no label '%s' (its labels: %s); name one of them",
+             scene->path, (int)t, key, od->name, a->label, list);
+  *name = m->part_count == 1 ? m->part_names[0] : p < m->part_count ? m->part_names[p] : "";
+  return FASCIA_OK;
+}
 
 static fascia_status part_tree_create(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_meshes *meshes,
                                       int32_t t, const char *key, const fascia_prep_attachment *a, part_tree *out) {
   memset(out, 0, sizeof *out);
   const fascia_prep_mesh *m = meshes->organs + a->organ;
-  const int32_t part = prep_mesh_part(m, a->part);
-  PREP_CHECK(part >= 0, ctx, FASCIA_ERR_ARGUMENT,
+  const int by_label = a->label[0] != '\0';
+  const char *name = a->part;
+  if (by_label) PREP_TRY(label_part(ctx, scene, m, t, key, a, &name));
+  out->part = prep_mesh_part(m, name);
+  PREP_CHECK(by_label || out->part >= 0, ctx, FASCIA_ERR_ARGUMENT,
              "scene '%s' tissues[%d].%s.part: organ '%s' uses no part named '%s' (fascia prep --preview lists what it "
              "read; an organ of one label has one part, named after the organ, an organ of several one per label)",
              scene->path, (int)t, key, m->name, a->part);
-  for (int32_t k = 0; k < m->triangle_count; ++k) out->count += m->triangle_part[k] == part;
-  PREP_CHECK(out->count > 0, ctx, FASCIA_ERR_ARGUMENT, "scene '%s' tissues[%d].%s.part: part '%s' of organ '%s' has no "
-             "triangle", scene->path, (int)t, key, a->part, m->name);
+  for (int32_t k = 0; out->part >= 0 && k < m->triangle_count; ++k) out->count += m->triangle_part[k] == out->part;
+  PREP_CHECK(out->count > 0, ctx, FASCIA_ERR_ARGUMENT,
+             "scene '%s' tissues[%d].%s.%s: %s '%s' of organ '%s' has no surface (no triangle%s); attach the strand "
+             "to a %s that has one",
+             scene->path, (int)t, key, by_label ? "label" : "part", by_label ? "label" : "part",
+             by_label ? a->label : a->part, m->name, by_label ? ": no voxel of it left in the segmentation" : "",
+             by_label ? "label" : "part");
   out->triangles = prep_calloc(out->count, sizeof(int32_t));
   int32_t *corners = prep_calloc(3 * (int64_t)out->count, sizeof(int32_t));
   fascia_status status = out->triangles && corners ? FASCIA_OK
                                                    : PREP_FAIL(ctx, FASCIA_ERR_MEMORY, "strand: out of memory");
   for (int32_t k = 0, n = 0; status == FASCIA_OK && k < m->triangle_count; ++k)
-    if (m->triangle_part[k] == part) {
+    if (m->triangle_part[k] == out->part) {
       memcpy(corners + 3 * (int64_t)n, m->triangles + 3 * (int64_t)k, 3 * sizeof(int32_t));
       out->triangles[n++] = k;
     }
@@ -150,105 +189,454 @@ static void part_closest(const part_tree *p, const double *x, double *out, int32
   *triangle = p->triangles[k];
 }
 
-// A strand's ends, one or both on parts of their organs: the nearest points
-// of the two (alternate projections from a point end, or from part A's
-// first vertex; a few rounds settle on the nearest pair of convex-ish parts).
-static fascia_status attach_ends(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_meshes *meshes,
-                                 fascia_cgal_tree **trees, int32_t t, double *a, int32_t *ta, double *b,
-                                 int32_t *tb) {
-  const fascia_prep_tissue_def *td = scene->tissues + t;
-  const int on_a = td->from.part[0] != '\0', on_b = td->to.part[0] != '\0';
-  if (!on_a) PREP_TRY(attach(ctx, scene, meshes, trees, t, "from", &td->from, a, ta));
-  if (!on_b) PREP_TRY(attach(ctx, scene, meshes, trees, t, "to", &td->to, b, tb));
-  if (!on_a && !on_b) return FASCIA_OK;
-  part_tree pa = {0}, pb = {0};
-  fascia_status status = FASCIA_OK;
-  if (on_a) PREP_TRY_GOTO(part_tree_create(ctx, scene, meshes, t, "from", &td->from, &pa));
-  if (on_b) PREP_TRY_GOTO(part_tree_create(ctx, scene, meshes, t, "to", &td->to, &pb));
-  if (on_a && on_b) {
-    const fascia_prep_mesh *m = meshes->organs + td->from.organ;
-    memcpy(a, m->vertices + 3 * (int64_t)m->triangles[3 * (int64_t)pa.triangles[0]], 3 * sizeof(double));
+// Points on an organ's surface (an attachment's area), with their triangles.
+typedef struct surface_points {
+  double *x;
+  int32_t *triangle;
+  int64_t count, capacity;
+} surface_points;
+
+static int points_push(surface_points *p, const double *x, int32_t triangle) {
+  if (p->count == p->capacity) {
+    const int64_t cap = p->capacity ? 2 * p->capacity : 256;
+    double *nx = realloc(p->x, 3 * (size_t)cap * sizeof(double));
+    if (!nx) return 0;
+    p->x = nx;
+    int32_t *nt = realloc(p->triangle, (size_t)cap * sizeof(int32_t));
+    if (!nt) return 0;
+    p->triangle = nt;
+    p->capacity = cap;
   }
-  for (int round = 0; round < 8; ++round) {
-    if (on_b) part_closest(&pb, a, b, tb);
-    if (on_a) part_closest(&pa, b, a, ta);
+  memcpy(p->x + 3 * p->count, x, 3 * sizeof(double));
+  p->triangle[p->count++] = triangle;
+  return 1;
+}
+
+static void points_free(surface_points *p) {
+  free(p->x);
+  free(p->triangle);
+  memset(p, 0, sizeof *p);
+}
+
+// One end of a strand as it is built.
+typedef struct strand_end {
+  const fascia_prep_attachment *a;
+  const char *key;         ///< "from" or "to"
+  double x[3];             ///< the curve's end: on the organ, or (spread) the apex of its fan
+  int32_t triangle;        ///< not spread: the organ's triangle at x
+  int fixed;               ///< x does not depend on the strand's other points (a point end, not spread)
+  part_tree part;          ///< part or label: its triangles
+  surface_points area;     ///< region or spread: points of the area; spread: then its fan's frames
+  double centre[3];        ///< spread: the mean of its fan's frames
+  double reach;            ///< spread: the farthest fan frame from centre, m
+} strand_end;
+
+static void end_free(strand_end *e) {
+  part_tree_free(&e->part);
+  points_free(&e->area);
+}
+
+// Is x in the end's area: its region, its part's triangle, within its radius of its point.
+static int in_area(const strand_end *e, const fascia_prep_mesh *m, const double *point, int32_t tri, const double *x) {
+  const fascia_prep_attachment *a = e->a;
+  if (a->region.kind != FASCIA_PREP_REGION_NONE) return prep_region_contains(&a->region, x);
+  if (a->part[0] || a->label[0]) return m->triangle_part[tri] == e->part.part;
+  double d[3];
+  sub3(x, point, d);
+  return norm3(d) <= a->radius;
+}
+
+// The end's area sampled on its organ's triangles at about `step`: a
+// lattice on each triangle that may reach it, the points in it kept.
+static fascia_status area_points(fascia_ctx *ctx, const fascia_prep_meshes *meshes, strand_end *e, const double *point,
+                                 double step) {
+  const fascia_prep_mesh *m = meshes->organs + e->a->organ;
+  const fascia_prep_attachment *a = e->a;
+  double lo[3], hi[3];
+  for (int r = 0; r < 3; ++r) {
+    lo[r] = a->region.kind == FASCIA_PREP_REGION_BOX      ? a->region.min[r]
+            : a->region.kind == FASCIA_PREP_REGION_SPHERE ? a->region.center[r] - a->region.radius
+            : a->part[0] || a->label[0]                    ? -INFINITY
+                                                           : point[r] - a->radius;
+    hi[r] = a->region.kind == FASCIA_PREP_REGION_BOX      ? a->region.max[r]
+            : a->region.kind == FASCIA_PREP_REGION_SPHERE ? a->region.center[r] + a->region.radius
+            : a->part[0] || a->label[0]                    ? INFINITY
+                                                           : point[r] + a->radius;
+  }
+  for (int32_t k = 0; k < m->triangle_count; ++k) {
+    const int32_t *c = m->triangles + 3 * (int64_t)k;
+    const double *p[3] = {m->vertices + 3 * (int64_t)c[0], m->vertices + 3 * (int64_t)c[1],
+                          m->vertices + 3 * (int64_t)c[2]};
+    int near = 1;
+    for (int r = 0; r < 3; ++r)
+      near &= fmax(fmax(p[0][r], p[1][r]), p[2][r]) >= lo[r] && fmin(fmin(p[0][r], p[1][r]), p[2][r]) <= hi[r];
+    if (!near || ((a->part[0] || a->label[0]) && m->triangle_part[k] != e->part.part)) continue;
+    double e1[3], e2[3], e3[3];
+    sub3(p[1], p[0], e1);
+    sub3(p[2], p[0], e2);
+    sub3(p[2], p[1], e3);
+    const double longest = fmax(fmax(norm3(e1), norm3(e2)), norm3(e3));
+    const int n = (int)fmin(64, fmax(1, ceil(longest / step)));
+    for (int i = 0; i <= n; ++i)
+      for (int j = 0; i + j <= n; ++j) {
+        double x[3];
+        for (int r = 0; r < 3; ++r) x[r] = p[0][r] + e1[r] * i / n + e2[r] * j / n;
+        if (in_area(e, m, point, k, x))
+          PREP_CHECK(points_push(&e->area, x, k), ctx, FASCIA_ERR_MEMORY, "strand: out of memory");
+      }
+  }
+  return FASCIA_OK;
+}
+
+typedef struct by_distance_item {
+  double d;
+  int64_t k;
+} by_distance_item;
+static int by_distance(const void *pa, const void *pb) {
+  const by_distance_item *a = pa, *b = pb;
+  if (a->d != b->d) return a->d < b->d ? -1 : 1;
+  return (a->k > b->k) - (a->k < b->k);
+}
+
+// A spread end's fan: points of its area at least `spacing` apart, taken
+// from the area's middle outwards (FAN_FRAMES_MIN to FAN_FRAMES_MAX where
+// the area allows: the spacing halved or widened), replacing the area's
+// points; their centre and reach.
+static fascia_status pick_fan(fascia_ctx *ctx, strand_end *e, double spacing, double floor_spacing) {
+  surface_points *all = &e->area;
+  double mid[3] = {0, 0, 0};
+  for (int64_t k = 0; k < all->count; ++k)
+    for (int r = 0; r < 3; ++r) mid[r] += all->x[3 * k + r] / (double)all->count;
+  by_distance_item *order = prep_calloc(all->count, sizeof *order);
+  int64_t *kept = prep_calloc(FAN_FRAMES_MAX + 1, sizeof(int64_t));
+  fascia_status status = FASCIA_OK;
+  PREP_CHECK_GOTO(order && kept, ctx, FASCIA_ERR_MEMORY, "strand: out of memory");
+  for (int64_t k = 0; k < all->count; ++k) {
+    double d[3];
+    sub3(all->x + 3 * k, mid, d);
+    order[k].d = norm3(d), order[k].k = k;
+  }
+  qsort(order, (size_t)all->count, sizeof *order, by_distance);
+  int count = 0;
+  for (int attempt = 0; attempt < 12; ++attempt) {
+    count = 0;
+    int over = 0;
+    for (int64_t o = 0; o < all->count && !over; ++o) {
+      const double *x = all->x + 3 * order[o].k;
+      int free_place = 1;
+      for (int j = 0; j < count && free_place; ++j) {
+        double d[3];
+        sub3(x, all->x + 3 * kept[j], d);
+        free_place = norm3(d) >= spacing;
+      }
+      if (!free_place) continue;
+      if (count == FAN_FRAMES_MAX) over = 1;
+      else kept[count++] = order[o].k;
+    }
+    if (over) spacing *= 1.25;
+    else if (count < FAN_FRAMES_MIN && spacing / 2 >= floor_spacing) spacing /= 2;
+    else break;
+  }
+  surface_points fan = {0};
+  for (int j = 0; j < count; ++j)
+    PREP_CHECK_GOTO(points_push(&fan, all->x + 3 * kept[j], all->triangle[kept[j]]), ctx, FASCIA_ERR_MEMORY,
+                    "strand: out of memory");
+  points_free(all);
+  *all = fan;
+  memset(e->centre, 0, sizeof e->centre);
+  for (int j = 0; j < count; ++j)
+    for (int r = 0; r < 3; ++r) e->centre[r] += fan.x[3 * j + r] / count;
+  e->reach = 0;
+  for (int j = 0; j < count; ++j) {
+    double d[3];
+    sub3(fan.x + 3 * j, e->centre, d);
+    e->reach = fmax(e->reach, norm3(d));
   }
 cleanup:
-  part_tree_free(&pa);
-  part_tree_free(&pb);
+  free(order);
+  free(kept);
   return status;
+}
+
+// What an end's area is made of, named for messages: "to.region" etc.
+static const char *area_key(const strand_end *e, char *out, size_t size) {
+  const fascia_prep_attachment *a = e->a;
+  snprintf(out, size, "%s.%s", e->key,
+           a->region.kind != FASCIA_PREP_REGION_NONE ? "region" : a->part[0] ? "part" : a->label[0] ? "label" : "point");
+  return out;
+}
+
+// Sets an end up: a point end moved onto its organ, a part's or a label's
+// tree, a region's or a spread end's area (spread: its fan's frames).
+static fascia_status end_setup(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_meshes *meshes,
+                               const fascia_prep_volume *vol, fascia_cgal_tree **trees, int32_t t, strand_end *e) {
+  const fascia_prep_tissue_def *td = scene->tissues + t;
+  const fascia_prep_attachment *a = e->a;
+  const fascia_prep_organ_def *od = scene->organs + a->organ;
+  const int by_part = a->part[0] || a->label[0], by_region = a->region.kind != FASCIA_PREP_REGION_NONE;
+  char key[64];
+  area_key(e, key, sizeof key);
+  e->triangle = -1;
+  if (!by_part && !by_region) PREP_TRY(attach(ctx, scene, meshes, trees, t, e->key, a, e->x, &e->triangle));
+  e->fixed = !by_part && !by_region && !a->spread;
+  if (by_part) {
+    PREP_TRY(part_tree_create(ctx, scene, meshes, t, e->key, a, &e->part));
+    const fascia_prep_mesh *m = meshes->organs + a->organ; // a first guess: the part's first corner
+    memcpy(e->x, m->vertices + 3 * (int64_t)m->triangles[3 * (int64_t)e->part.triangles[0]], 3 * sizeof(double));
+  }
+  if (!by_region && !a->spread) return FASCIA_OK;
+  // a deformable organ's frames keep its own spacing (the fan's frames join them)
+  const double spacing = od->kind == FASCIA_ORGAN_DEFORMABLE && !od->shell ? fmax(od->frame_spacing, td->frame_spacing)
+                                                                           : td->frame_spacing;
+  const double step = a->spread ? fmin(spacing / 3, vol->voxel_size) : vol->voxel_size / 2;
+  const double point[3] = {e->x[0], e->x[1], e->x[2]};
+  PREP_TRY(area_points(ctx, meshes, e, point, step));
+  if (!by_part && !by_region) PREP_CHECK(points_push(&e->area, point, e->triangle), ctx, FASCIA_ERR_MEMORY,
+                                         "strand: out of memory");
+  if (e->area.count == 0) {
+    double c[3], d[3];
+    int32_t tri;
+    PREP_TRY(tree_of(ctx, meshes, trees, a->organ));
+    const double *centre = a->region.kind == FASCIA_PREP_REGION_BOX ? NULL : a->region.center;
+    double box_centre[3];
+    for (int r = 0; r < 3; ++r) box_centre[r] = 0.5 * (a->region.min[r] + a->region.max[r]);
+    fascia_cgal_tree_closest(trees[a->organ], 1, centre ? centre : box_centre, c, &tri);
+    sub3(c, centre ? centre : box_centre, d);
+    return PREP_FAIL(ctx, FASCIA_ERR_ARGUMENT,
+                     "scene '%s' tissues[%d].%s: the %s lies on no organ: it holds no surface of '%s', whose nearest "
+                     "surface point (%g %g %g) is %.3g mm from its centre; move the region onto the organ or widen it",
+                     scene->path, (int)t, key, a->region.kind == FASCIA_PREP_REGION_BOX ? "box" : "sphere", od->name,
+                     c[0], c[1], c[2], 1e3 * norm3(d));
+  }
+  if (a->spread) {
+    PREP_TRY(pick_fan(ctx, e, spacing, 2 * vol->voxel_size));
+    memcpy(e->x, e->centre, sizeof e->x);
+  } else { // a region's point nearest to its centre, a first guess
+    memcpy(e->x, e->area.x, sizeof e->x);
+    e->triangle = e->area.triangle[0];
+  }
+  return FASCIA_OK;
+}
+
+// Moves an end that depends on where the strand goes toward `target` (its
+// next point): a part's or a region's point nearest it, or a spread end's
+// apex, off its area's centre toward it by the area's reach (its fibres
+// then meet the surface at 45 degrees or steeper), at least a frame
+// spacing, at most a third of the way.
+static void end_toward(const fascia_prep_tissue_def *td, strand_end *e, const double *target) {
+  const fascia_prep_attachment *a = e->a;
+  if (e->fixed) return;
+  if (a->spread) {
+    double d[3];
+    sub3(target, e->centre, d);
+    const double far = norm3(d);
+    const double h = fmin(fmax(e->reach, td->frame_spacing), far / 3);
+    for (int r = 0; r < 3; ++r) e->x[r] = e->centre[r] + (far > 0 ? h * d[r] / far : 0);
+    return;
+  }
+  if (a->part[0] || a->label[0]) {
+    part_closest(&e->part, target, e->x, &e->triangle);
+    return;
+  }
+  double best = INFINITY;
+  for (int64_t k = 0; k < e->area.count; ++k) {
+    double d[3];
+    sub3(e->area.x + 3 * k, target, d);
+    const double dist = norm3(d);
+    if (dist < best) best = dist, memcpy(e->x, e->area.x + 3 * k, sizeof e->x), e->triangle = e->area.triangle[k];
+  }
+}
+
+// Refuses a piece of the strand, from p to q, that passes through an organ
+// (more than a voxel inside; `skip_p`, `skip_q`: lengths at its ends left
+// unchecked, where it leaves an organ's surface). 1: clear; else *organ,
+// *at, *depth, *s say where.
+static int path_clear(const fascia_prep_scene *scene, const fascia_prep_volume *vol, const prep_grid *g,
+                      const double *p, const double *q, double skip_p, double skip_q, int32_t *organ, double *at,
+                      double *depth, double *s_at) {
+  double axis[3];
+  sub3(q, p, axis);
+  const double length = norm3(axis), h = vol->voxel_size;
+  if (!(length > 0)) return 1;
+  for (double s = skip_p; s <= length - skip_q; s += h / 2) {
+    double x[3];
+    for (int r = 0; r < 3; ++r) x[r] = p[r] + s * axis[r] / length;
+    for (int32_t o = 0; o < scene->organ_count; ++o) {
+      const double d = distance_at(vol, g, o, x);
+      if (d < -h) {
+        *organ = o, *depth = -d, *s_at = s;
+        memcpy(at, x, 3 * sizeof(double));
+        return 0;
+      }
+    }
+  }
+  return 1;
+}
+
+// Appends one station of a strand's interval or fibre from p to q: q x q
+// section points over a square of `area` across it, weighted by frames i, j.
+static fascia_status add_station(fascia_ctx *ctx, const fascia_prep_tissue_def *td, const double *p, const double *q,
+                                 double area, int32_t i, int32_t j, prep_reduced *out, int32_t *s) {
+  double axis[3], u[3], v[3], other[3] = {1, 0, 0};
+  sub3(q, p, axis);
+  const double length = norm3(axis);
+  for (int r = 0; r < 3; ++r) axis[r] /= length;
+  if (fabs(axis[0]) > 0.9) other[0] = 0, other[1] = 1;
+  cross3(axis, other, u);
+  const double nu = norm3(u);
+  for (int r = 0; r < 3; ++r) u[r] /= nu;
+  cross3(axis, u, v);
+  const int q_points = td->section_points;
+  const double side = sqrt(area);
+  double offset[3 * 16], fraction[16];
+  PREP_TRY(fascia_shape_section_points(ctx, 1, q_points, u, v, side, side, offset, fraction));
+  for (int k = 0; k < q_points * q_points; ++k, ++*s) {
+    for (int r = 0; r < 3; ++r) out->sample_position[3 * (int64_t)*s + r] = 0.5 * (p[r] + q[r]) + offset[3 * k + r];
+    out->sample_volume[*s] = fraction[k] * length * area;
+    out->sample_cell[3 * (int64_t)*s] = i;
+    out->sample_cell[3 * (int64_t)*s + 1] = j;
+    out->sample_cell[3 * (int64_t)*s + 2] = -1;
+  }
+  return FASCIA_OK;
+}
+
+// The name of the curve's point k of n (0: its start, n - 1: its end) in the scene.
+static const char *curve_point_name(int32_t k, int32_t n, char *out, size_t size) {
+  if (k == 0) snprintf(out, size, "its start (from)");
+  else if (k == n - 1) snprintf(out, size, "its end (to)");
+  else snprintf(out, size, "through[%d]", (int)(k - 1));
+  return out;
 }
 
 static fascia_status build_strand(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_meshes *meshes,
                                   const fascia_prep_volume *vol, int32_t t, fascia_cgal_tree **trees,
                                   prep_reduced *out) {
   const fascia_prep_tissue_def *td = scene->tissues + t;
-  double a[3], b[3], axis[3];
-  int32_t ta, tb;
-  PREP_TRY(attach_ends(ctx, scene, meshes, trees, t, a, &ta, b, &tb));
-  sub3(b, a, axis);
-  const double length = norm3(axis);
-  PREP_CHECK(length > 2 * vol->voxel_size, ctx, FASCIA_ERR_ARGUMENT,
-             "scene '%s' tissues[%d]: the strand's ends on '%s' and '%s' are %.3g mm apart, less than two voxels "
-             "(%.3g mm); give attachment points farther apart",
-             scene->path, (int)t, scene->organs[td->from.organ].name, scene->organs[td->to.organ].name, 1e3 * length,
-             2e3 * vol->voxel_size);
-  for (int r = 0; r < 3; ++r) axis[r] /= length;
-  // the straight segment must stay outside every organ (its ends excepted:
-  // two voxels at each end, where it leaves its organs' surfaces)
+  strand_end ends[2];
+  memset(ends, 0, sizeof ends);
+  ends[0].a = &td->from, ends[0].key = "from";
+  ends[1].a = &td->to, ends[1].key = "to";
+  const int32_t n_through = td->through_count, n_points = n_through + 2;
+  double *curve = prep_calloc(3 * (int64_t)n_points, sizeof(double));
+  fascia_status status = FASCIA_OK;
+  PREP_CHECK_GOTO(curve, ctx, FASCIA_ERR_MEMORY, "strand: out of memory");
+  for (int k = 0; k < 2; ++k) PREP_TRY_GOTO(end_setup(ctx, scene, meshes, vol, trees, t, ends + k));
+  // the ends that depend on the strand's path: toward the through points,
+  // or toward each other (alternate projections: a few rounds settle on
+  // the nearest points of convex-ish areas)
+  for (int round = 0; round < (n_through ? 1 : 8); ++round)
+    for (int k = 0; k < 2; ++k) {
+      const double *target = n_through ? td->through + (k == 0 ? 0 : 3 * (int64_t)(n_through - 1))
+                             : ends[1 - k].a->spread ? ends[1 - k].centre
+                                                     : ends[1 - k].x;
+      end_toward(td, ends + k, target);
+    }
+  memcpy(curve, ends[0].x, 3 * sizeof(double));
+  for (int32_t k = 0; k < n_through; ++k)
+    for (int r = 0; r < 3; ++r) curve[3 * (k + 1) + r] = td->through[3 * k + r];
+  memcpy(curve + 3 * (int64_t)(n_points - 1), ends[1].x, 3 * sizeof(double));
+  double length = 0;
+  int32_t intervals = 0;
+  for (int32_t k = 0; k + 1 < n_points; ++k) {
+    double d[3];
+    sub3(curve + 3 * (k + 1), curve + 3 * k, d);
+    length += norm3(d);
+    intervals += (int32_t)fmax(1, ceil(norm3(d) / td->frame_spacing - 1e-9));
+  }
   const prep_grid g = prep_volume_grid(vol);
-  const double h = vol->voxel_size, step = h / 2, skip = 2 * h;
-  for (double s = skip; s <= length - skip; s += step) {
-    double x[3];
-    for (int r = 0; r < 3; ++r) x[r] = a[r] + s * axis[r];
-    for (int32_t o = 0; o < scene->organ_count; ++o) {
-      const double d = distance_at(vol, &g, o, x);
-      PREP_CHECK(!(d < -h), ctx, FASCIA_ERR_ARGUMENT,
-                 "scene '%s' tissues[%d]: the strand from '%s' to '%s' is straight and would pass through organ '%s' "
-                 "(at (%g %g %g), %.3g mm from its end on '%s', %.3g mm inside); move from.point or to.point so the "
-                 "line between them stays outside the organs",
-                 scene->path, (int)t, scene->organs[td->from.organ].name, scene->organs[td->to.organ].name,
-                 scene->organs[o].name, x[0], x[1], x[2], 1e3 * s, scene->organs[td->from.organ].name, -1e3 * d);
+  const double h = vol->voxel_size, skip = 2 * h;
+  PREP_CHECK_GOTO(length > 2 * h, ctx, FASCIA_ERR_ARGUMENT,
+                  "scene '%s' tissues[%d]: the strand's ends on '%s' and '%s' are %.3g mm apart, less than two voxels "
+                  "(%.3g mm); give attachment points farther apart%s",
+                  scene->path, (int)t, scene->organs[td->from.organ].name, scene->organs[td->to.organ].name,
+                  1e3 * length, 2e3 * h, td->from.spread || td->to.spread ? " or smaller spread areas" : "");
+  // the curve must stay outside every organ (two voxels at each end excepted,
+  // where it leaves its organs' surfaces)
+  for (int32_t k = 0; k + 1 < n_points; ++k) {
+    int32_t o;
+    double x[3], depth, s;
+    if (path_clear(scene, vol, &g, curve + 3 * k, curve + 3 * (k + 1), k == 0 ? skip : 0,
+                   k + 2 == n_points ? skip : 0, &o, x, &depth, &s))
+      continue;
+    char a_name[40], b_name[40];
+    if (n_through == 0)
+      PREP_CHECK_GOTO(0, ctx, FASCIA_ERR_ARGUMENT,
+                      "scene '%s' tissues[%d]: the strand from '%s' to '%s' is straight and would pass through organ "
+                      "'%s' (at (%g %g %g), %.3g mm from its end on '%s', %.3g mm inside); move from.point or "
+                      "to.point so the line between them stays outside the organs, or route it with \"through\"",
+                      scene->path, (int)t, scene->organs[td->from.organ].name, scene->organs[td->to.organ].name,
+                      scene->organs[o].name, x[0], x[1], x[2], 1e3 * s, scene->organs[td->from.organ].name,
+                      1e3 * depth);
+    PREP_CHECK_GOTO(0, ctx, FASCIA_ERR_ARGUMENT,
+                    "scene '%s' tissues[%d].through: the strand's curve between %s and %s would pass through organ '%s' "
+                    "(at (%g %g %g), %.3g mm inside); move the through points so the curve stays outside the organs",
+                    scene->path, (int)t, curve_point_name(k, n_points, a_name, sizeof a_name),
+                    curve_point_name(k + 1, n_points, b_name, sizeof b_name), scene->organs[o].name, x[0], x[1], x[2],
+                    1e3 * depth);
+  }
+  // a spread end's fibres, from its apex to its area, must stay outside the organs too
+  for (int k = 0; k < 2; ++k) {
+    if (!ends[k].a->spread) continue;
+    for (int64_t j = 0; j < ends[k].area.count; ++j) {
+      int32_t o;
+      double x[3], depth, s;
+      if (path_clear(scene, vol, &g, ends[k].x, ends[k].area.x + 3 * j, 0, skip, &o, x, &depth, &s)) continue;
+      char key[64];
+      PREP_CHECK_GOTO(0, ctx, FASCIA_ERR_ARGUMENT,
+                      "scene '%s' tissues[%d].%s: the fibres spreading the strand's end over its area on '%s' would "
+                      "pass through organ '%s' (at (%g %g %g), %.3g mm inside): the area is too wide or too curved; "
+                      "make it smaller, or set %s.spread false",
+                      scene->path, (int)t, area_key(ends + k, key, sizeof key), scene->organs[ends[k].a->organ].name,
+                      scene->organs[o].name, x[0], x[1], x[2], 1e3 * depth, ends[k].key);
     }
   }
-  const int32_t intervals = (int32_t)fmax(1, ceil(length / td->frame_spacing - 1e-9));
-  const int q = td->section_points;
-  const int per_station = q * q;
-  PREP_TRY(reserve(ctx, out, intervals + 1, (int64_t)intervals * per_station));
-  out->frame_count = intervals + 1;
-  for (int32_t i = 0; i <= intervals; ++i) {
-    double *x = out->frame_position + 3 * (int64_t)i;
-    for (int r = 0; r < 3; ++r) x[r] = i == intervals ? b[r] : a[r] + length * axis[r] * ((double)i / intervals);
-    out->frame_organ[i] = i == 0 ? td->from.organ : i == intervals ? td->to.organ : -1;
-    out->frame_triangle[i] = i == 0 ? ta : i == intervals ? tb : -1;
+  // frames: the curve's (its points and equal intervals between them), then the fans'
+  const int32_t curve_frames = intervals + 1, fan_frames = (int32_t)(ends[0].area.count * !!td->from.spread +
+                                                                     ends[1].area.count * !!td->to.spread);
+  const int per_station = td->section_points * td->section_points;
+  PREP_TRY_GOTO(reserve(ctx, out, curve_frames + fan_frames, (int64_t)(intervals + fan_frames) * per_station));
+  out->frame_count = curve_frames + fan_frames;
+  int32_t i = 0;
+  for (int32_t k = 0; k + 1 < n_points; ++k) {
+    double d[3];
+    sub3(curve + 3 * (k + 1), curve + 3 * k, d);
+    const int32_t n = (int32_t)fmax(1, ceil(norm3(d) / td->frame_spacing - 1e-9));
+    for (int32_t j = 0; j < n; ++j, ++i)
+      for (int r = 0; r < 3; ++r) out->frame_position[3 * (int64_t)i + r] = curve[3 * k + r] + d[r] * j / n;
   }
-  // the section: a square of the strand's area, across the axis
-  double u[3], v[3], other[3] = {1, 0, 0};
-  if (fabs(axis[0]) > 0.9) other[0] = 0, other[1] = 1;
-  cross3(axis, other, u);
-  const double nu = norm3(u);
-  for (int r = 0; r < 3; ++r) u[r] /= nu;
-  cross3(axis, u, v);
-  const double side = sqrt(td->area);
-  double offset[3 * 16], fraction[16];
-  PREP_TRY(fascia_shape_section_points(ctx, 1, q, u, v, side, side, offset, fraction));
-  const double interval = length / intervals;
+  memcpy(out->frame_position + 3 * (int64_t)i, ends[1].x, 3 * sizeof(double));
+  for (int32_t j = 0; j < out->frame_count; ++j) out->frame_organ[j] = -1, out->frame_triangle[j] = -1;
+  for (int k = 0; k < 2; ++k)
+    if (!ends[k].a->spread) {
+      const int32_t at = k == 0 ? 0 : curve_frames - 1;
+      out->frame_organ[at] = ends[k].a->organ;
+      out->frame_triangle[at] = ends[k].triangle;
+    }
   int32_t s = 0;
-  for (int32_t i = 0; i < intervals; ++i) {
-    double station[3];
-    for (int r = 0; r < 3; ++r)
-      station[r] = 0.5 * (out->frame_position[3 * (int64_t)i + r] + out->frame_position[3 * (int64_t)(i + 1) + r]);
-    for (int k = 0; k < per_station; ++k, ++s) {
-      for (int r = 0; r < 3; ++r) out->sample_position[3 * (int64_t)s + r] = station[r] + offset[3 * k + r];
-      out->sample_volume[s] = fraction[k] * interval * td->area;
-      out->sample_cell[3 * (int64_t)s] = i;
-      out->sample_cell[3 * (int64_t)s + 1] = i + 1;
-      out->sample_cell[3 * (int64_t)s + 2] = -1;
+  for (int32_t j = 0; j < intervals; ++j)
+    PREP_TRY_GOTO(add_station(ctx, td, out->frame_position + 3 * (int64_t)j, out->frame_position + 3 * (int64_t)(j + 1),
+                              td->area, j, j + 1, out, &s));
+  // each fan frame: on the organ (shared), one fibre to its apex carrying its share of the section
+  int32_t f = curve_frames;
+  for (int k = 0; k < 2; ++k) {
+    if (!ends[k].a->spread) continue;
+    const int32_t apex = k == 0 ? 0 : curve_frames - 1;
+    const surface_points *fan = &ends[k].area;
+    for (int64_t j = 0; j < fan->count; ++j, ++f) {
+      memcpy(out->frame_position + 3 * (int64_t)f, fan->x + 3 * j, 3 * sizeof(double));
+      out->frame_organ[f] = ends[k].a->organ;
+      out->frame_triangle[f] = fan->triangle[j];
+      PREP_TRY_GOTO(add_station(ctx, td, out->frame_position + 3 * (int64_t)apex, fan->x + 3 * j,
+                                td->area / (double)fan->count, apex, f, out, &s));
     }
   }
   out->sample_count = s;
   out->length = length;
-  return FASCIA_OK;
+cleanup:
+  free(curve);
+  end_free(ends);
+  end_free(ends + 1);
+  return status;
 }
 
 // ------------------------------------------------------------ sheets

@@ -890,7 +890,8 @@ static fascia_status parse_coupling(const reader *rd, const fascia_prep_scene *s
 
 #define SCENE_PI 3.14159265358979323846
 
-// A strand's end: {"organ", "point", "radius"} or {"organ", "part"}.
+// A strand's end: {"organ"} and one of "point" (with "radius"), "part",
+// "label" (a label organ's) or "region" (a box or a sphere); "spread".
 static fascia_status parse_attachment(const reader *rd, const fascia_prep_scene *scene, const cJSON *item,
                                       const char *path, const char *key, fascia_prep_attachment *a) {
   char at[PATH_SIZE], ok[PATH_SIZE];
@@ -899,28 +900,103 @@ static fascia_status parse_attachment(const reader *rd, const fascia_prep_scene 
   if (!cJSON_IsObject(e))
     return key_fail(rd, at,
                     "expected an attachment {\"organ\": name, \"point\": [x, y, z], \"radius\": r} or {\"organ\": "
-                    "name, \"part\": part name}, found %s",
+                    "name, \"part\" | \"label\" | \"region\": ...}, found %s",
                     type_name(e));
-  static const char *const known[] = {"organ", "point", "radius", "part", NULL};
+  static const char *const known[] = {"organ", "point", "radius", "part", "label", "region", "spread", NULL};
   PREP_TRY(check_keys(rd, e, at, known));
   const char *organ;
   PREP_TRY(get_string(rd, e, at, "organ", 1, &organ));
   sub_key(ok, at, "organ");
   PREP_TRY(need_organ(rd, scene, ok, organ, &a->organ));
-  const cJSON *part = cJSON_GetObjectItemCaseSensitive(e, "part");
-  if (part) {
-    char pk[PATH_SIZE];
-    sub_key(pk, at, "part");
-    if (cJSON_GetObjectItemCaseSensitive(e, "point") || cJSON_GetObjectItemCaseSensitive(e, "radius"))
-      return key_fail(rd, at, "give either \"point\" (with \"radius\") or \"part\", not both");
-    if (!cJSON_IsString(part) || !part->valuestring[0] || strlen(part->valuestring) >= sizeof a->part)
-      return key_fail(rd, pk, "expected the name of a part of organ '%s' (up to %d characters), found %s", organ,
-                      (int)sizeof a->part - 1, type_name(part));
-    snprintf(a->part, sizeof a->part, "%s", part->valuestring);
+  static const char *const kinds[] = {"point", "part", "label", "region"};
+  int given = 0;
+  for (int k = 0; k < 4; ++k) given += cJSON_GetObjectItemCaseSensitive(e, kinds[k]) != NULL;
+  if (given != 1)
+    return key_fail(rd, at, "give one of \"point\" (with \"radius\"), \"part\", \"label\" or \"region\"%s",
+                    given ? ", not both" : "");
+  if (cJSON_GetObjectItemCaseSensitive(e, "radius") && !cJSON_GetObjectItemCaseSensitive(e, "point"))
+    return key_fail(rd, at, "\"radius\" goes with \"point\"; give either \"point\" (with \"radius\") or a part, "
+                    "label or region, not both");
+  const cJSON *region = cJSON_GetObjectItemCaseSensitive(e, "region");
+  PREP_TRY(get_bool(rd, e, at, "spread", region != NULL, &a->spread));
+  static const char *const names[2] = {"part", "label"};
+  for (int k = 0; k < 2; ++k) {
+    const cJSON *name = cJSON_GetObjectItemCaseSensitive(e, names[k]);
+    if (!name) continue;
+    char nk[PATH_SIZE], value[FASCIA_NAME_SIZE];
+    sub_key(nk, at, names[k]);
+    if (k == 1 && cJSON_IsNumber(name) && name->valuedouble == floor(name->valuedouble) && name->valuedouble >= 0 &&
+        name->valuedouble < 1e9)
+      snprintf(value, sizeof value, "%d", (int)name->valuedouble);
+    else if (cJSON_IsString(name) && name->valuestring[0] && strlen(name->valuestring) < sizeof value)
+      snprintf(value, sizeof value, "%s", name->valuestring);
+    else
+      return key_fail(rd, nk, "expected the name of a %s of organ '%s' (up to %d characters)%s, found %s", names[k],
+                      organ, (int)sizeof value - 1, k ? " or its value" : "", type_name(name));
+    if (k == 1 && scene->organs[a->organ].label_count == 0)
+      return key_fail(rd, nk, "organ '%s' is a mesh, not labels of the segmentation; name a \"part\" of its mesh "
+                      "or give a \"region\"", organ);
+    snprintf(k ? a->label : a->part, sizeof a->part, "%s", value);
+    return FASCIA_OK;
+  }
+  if (region) {
+    char rk[PATH_SIZE];
+    sub_key(rk, at, "region");
+    static const char *const known_r[] = {"box", "sphere", NULL};
+    PREP_TRY(check_keys(rd, region, rk, known_r));
+    PREP_TRY(get_shape_region(rd, region, rk, &a->region));
+    if (a->region.kind == FASCIA_PREP_REGION_NONE) return key_fail(rd, rk, "give a \"box\" or a \"sphere\"");
     return FASCIA_OK;
   }
   PREP_TRY(get_vector(rd, e, at, "point", 1, 3, a->point));
   PREP_TRY(get_number(rd, e, at, "radius", 0, 2 * scene->voxel_size, 0, 0, INFINITY, &a->radius));
+  return FASCIA_OK;
+}
+
+// Where an attachment is known before the meshes are read: its point or
+// its region's centre; 0 for a part or a label.
+static int attachment_centre(const fascia_prep_attachment *a, double *x) {
+  if (a->part[0] || a->label[0]) return 0;
+  for (int r = 0; r < 3; ++r)
+    x[r] = a->region.kind == FASCIA_PREP_REGION_BOX      ? 0.5 * (a->region.min[r] + a->region.max[r])
+           : a->region.kind == FASCIA_PREP_REGION_SPHERE ? a->region.center[r]
+                                                          : a->point[r];
+  return 1;
+}
+
+// A strand's "through": the points its curve passes through, in order.
+static fascia_status parse_through(const reader *rd, const cJSON *item, const char *path,
+                                   fascia_prep_tissue_def *t) {
+  const cJSON *through = cJSON_GetObjectItemCaseSensitive(item, "through");
+  if (!through) return FASCIA_OK;
+  char at[PATH_SIZE];
+  sub_key(at, path, "through");
+  if (!cJSON_IsArray(through) || cJSON_GetArraySize(through) < 1 || cJSON_GetArraySize(through) > 10000)
+    return key_fail(rd, at, "expected an array of 1 to 10000 points [x, y, z] (m) the strand passes through, found %s",
+                    type_name(through));
+  const int n = cJSON_GetArraySize(through);
+  t->through = prep_calloc(3 * (int64_t)n, sizeof(fascia_real));
+  PREP_CHECK(t->through, rd->ctx, FASCIA_ERR_MEMORY, "scene '%s': out of memory", rd->file);
+  const cJSON *e;
+  cJSON_ArrayForEach(e, through) {
+    char ek[PATH_SIZE];
+    sub_index(ek, at, t->through_count);
+    int k = 0;
+    const cJSON *c;
+    if (cJSON_IsArray(e) && cJSON_GetArraySize(e) == 3) {
+      cJSON_ArrayForEach(c, e) {
+        if (cJSON_IsNumber(c) && isfinite(c->valuedouble)) t->through[3 * t->through_count + k++] = c->valuedouble;
+      }
+    }
+    if (k != 3) return key_fail(rd, ek, "expected a point [x, y, z] of three finite numbers (m), found %s", type_name(e));
+    if (t->through_count > 0) {
+      const fascia_real *p = t->through + 3 * t->through_count;
+      double d2 = 0;
+      for (int r = 0; r < 3; ++r) d2 += (p[r] - p[r - 3]) * (p[r] - p[r - 3]);
+      if (!(d2 > 0)) return key_fail(rd, ek, "the same point as the one before; give each point once");
+    }
+    t->through_count++;
+  }
   return FASCIA_OK;
 }
 
@@ -957,7 +1033,7 @@ static fascia_status get_connects(const reader *rd, const fascia_prep_scene *sce
 // A strand or a sheet (the keys of parse_tissue that apply, and their own).
 static fascia_status parse_reduced_tissue(const reader *rd, const fascia_prep_scene *scene, const cJSON *item,
                                           const char *path, const char *base_dir, fascia_prep_tissue_def *t) {
-  static const char *const known_strand[] = {"name", "form", "from", "to", "radius", "area", "material",
+  static const char *const known_strand[] = {"name", "form", "from", "to", "through", "radius", "area", "material",
                                              "frame_spacing", "section_points", "description", NULL};
   static const char *const known_sheet[] = {"name", "form", "mesh", "units", "transform", "thickness", "connects",
                                             "material", "section_points", "coupling", "description", NULL};
@@ -998,10 +1074,24 @@ static fascia_status parse_reduced_tissue(const reader *rd, const fascia_prep_sc
     }
     PREP_TRY(get_number(rd, item, path, "frame_spacing", 1, 0, 0, 0, INFINITY, &t->frame_spacing));
     t->sample_spacing = t->frame_spacing;
+    PREP_TRY(parse_through(rd, item, path, t));
+    // the gap it bridges (what a motion's stretch is judged by): along the
+    // points known now, its ends' points or regions' centres and "through"
+    double prev[3], x[3], span = 0;
+    int have = attachment_centre(&t->from, prev);
+    for (int32_t k = 0; k <= t->through_count; ++k) {
+      const int known = k < t->through_count ? (memcpy(x, t->through + 3 * k, sizeof x), 1)
+                                             : attachment_centre(&t->to, x);
+      if (known && have) span += sqrt((x[0] - prev[0]) * (x[0] - prev[0]) + (x[1] - prev[1]) * (x[1] - prev[1]) +
+                                      (x[2] - prev[2]) * (x[2] - prev[2]));
+      if (known) memcpy(prev, x, sizeof x), have = 1;
+    }
+    t->max_gap = span;
+    const int points = !t->from.part[0] && !t->from.label[0] && t->from.region.kind == FASCIA_PREP_REGION_NONE &&
+                       !t->to.part[0] && !t->to.label[0] && t->to.region.kind == FASCIA_PREP_REGION_NONE;
     double d2 = 0;
     for (int r = 0; r < 3; ++r) d2 += (t->to.point[r] - t->from.point[r]) * (t->to.point[r] - t->from.point[r]);
-    t->max_gap = sqrt(d2); // the gap it bridges: what a motion's stretch is judged by
-    if (!(sqrt(d2) > t->from.radius + t->to.radius)) {
+    if (points && t->through_count == 0 && !(sqrt(d2) > t->from.radius + t->to.radius)) {
       sub_key(at, path, "to");
       return key_fail(rd, at, "the strand's ends are %g m apart, within their attachment radii (%g + %g m); give "
                       "points farther apart or smaller radii", sqrt(d2), t->from.radius, t->to.radius);
@@ -1468,6 +1558,7 @@ void fascia_prep_scene_destroy(fascia_prep_scene **scene) {
     free(t->coupling);
     free(t->mesh);
     free(t->mesh_path);
+    free(t->through);
   }
   fascia_prep_segmentation *seg = &s->segmentation;
   prep_label_table table;

@@ -125,21 +125,28 @@ typedef struct fascia_prep_coupling_def {
 /// Forms of a tissue (data/scenes/README.md, "Strands and sheets").
 typedef enum fascia_prep_tissue_form {
   FASCIA_PREP_FORM_VOLUME = 0, ///< the space between its organs, voxelized
-  FASCIA_PREP_FORM_STRAND = 1, ///< a ligament: a straight curve between two attachments, a cross-section
+  FASCIA_PREP_FORM_STRAND = 1, ///< a ligament: a curve between two attachments, a cross-section
   FASCIA_PREP_FORM_SHEET = 2   ///< a membrane: a surface mesh given in the scene, a thickness
 } fascia_prep_tissue_form;
 
 /// "volume", "strand" or "sheet".
 FASCIA_API const char *fascia_prep_form_name(int32_t form);
 
-/// Where a strand ends: a point near an organ's surface (within radius), or
-/// a named part of the organ's mesh (the strand then ends at the point of
-/// that part nearest its other end: a ligament takes the shortest way).
+/// Where a strand ends: a point near an organ's surface (within radius), a
+/// named part of the organ's mesh, a label of a label organ or a region of
+/// its surface (the strand then ends at the point of that area nearest its
+/// next point: a ligament takes the shortest way; or, spread, over all of it).
 typedef struct fascia_prep_attachment {
   int32_t organ;        ///< organ index
   fascia_real point[3]; ///< as given, m (unused with a part)
   fascia_real radius;   ///< the point lies within this of the organ's surface, m
   char part[FASCIA_NAME_SIZE]; ///< "" : attached at point; else the part of the organ's mesh
+  char label[FASCIA_NAME_SIZE]; ///< "": none; else a label (name or value) of a label organ: its surface
+  fascia_prep_region region;    ///< kind NONE: none; else the organ's surface in this box or sphere
+  /// 1: the end is coupled over its whole area (point: the surface within
+  /// radius; part, label, region: all of it) by a fan of fibres; 0: at the
+  /// area's point nearest the strand's next point
+  int32_t spread;
 } fascia_prep_attachment;
 
 /// One tissue: the connective tissue between two or more organs.
@@ -147,6 +154,8 @@ typedef struct fascia_prep_tissue_def {
   int32_t form;              ///< fascia_prep_tissue_form
   /// STRAND: its two ends (organs[0] = from.organ, organs[1] = to.organ).
   fascia_prep_attachment from, to;
+  int32_t through_count;     ///< STRAND: points its curve passes through between its ends (0: straight)
+  fascia_real *through;      ///< STRAND: [3 through_count] m, in order from `from` to `to`
   /// STRAND: cross-section area, m^2 (a disc of "radius", or "area");
   /// SHEET: thickness, m. Its section is carried by the frames' rotations.
   fascia_real area, thickness;
@@ -451,6 +460,10 @@ typedef struct fascia_prep_points {
   /// gaps thinner than its frame spacing (free frames no interior frame
   /// could give there; 0 for strands and sheets)
   int32_t *tissue_mid_layer_frames;
+  /// [tissue_count] m^3 of each tissue in gaps thinner than its sample
+  /// spacing: layers held by the frames on both their faces, with no free
+  /// frame of their own (0 for strands and sheets)
+  double *tissue_held_layer_volume;
 } fascia_prep_points;
 
 /// Poisson-disk sampling in each tissue region (fixed seed: same input, same
