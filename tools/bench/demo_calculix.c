@@ -1,0 +1,273 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// demo-calculix: the demo's tissue against CalculiX, statically
+// (tools/scenes/demo_calculix.h). Prints, side by side: CalculiX's force on
+// each organ for each mesh asked for, fascia's at the default and at finer
+// rungs of frame and sample spacing, the error of each against the
+// reference mesh, fascia's displacement error at the reference's nodes
+// (50th, 95th percentile and largest, in % of CalculiX's largest
+// displacement), the slip of fascia's tissue on the organs (its displacement
+// against the organ's at the organ-facing nodes, mm), and each solve's time.
+//
+//   demo-calculix [SCENE.json] [--ccx LIST] [--fascia LIST] [--reference K]
+//                 [--neighbours N] [--threads N] [--csv FILE]
+//   --ccx     meshes, comma-separated TYPE:VOXEL_MM:SPLIT (TYPE 8i = C3D8I,
+//             20r = C3D20R; SPLIT elements along a voxel's edge); default
+//             8i:1:1,8i:1:2,20r:1:1
+//   --fascia  rungs, comma-separated VOXEL_MM:SCALE[:SAMPLE_SCALE] (the
+//             tissue's frame and sample spacings times SCALE, the sample
+//             spacing times SAMPLE_SCALE on top); default 1:1,1:0.7,1:0.5
+//   --reference  the CalculiX mesh (from 1) the errors are taken against;
+//             default the last; displacements are compared at the nodes of
+//             the last mesh of each rung's voxel size
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "beam_calculix.h"
+#include "demo_calculix.h"
+#include "point/material.h"
+#include "scene_util.h"
+#include "tissue_calculix.h"
+
+#define ROWS_MAX 16
+
+typedef struct ccx_row {
+  int quadratic;
+  double voxel_mm;
+  int32_t split;
+  fascia_demo_mesh mesh;
+  fascia_demo_result result;
+} ccx_row;
+
+typedef struct fascia_row {
+  double voxel_mm, scale, sample_scale;
+} fascia_row;
+
+static int usage(const char *why) {
+  fprintf(stderr,
+          "demo-calculix: %s\nusage: demo-calculix [SCENE.json] [--ccx TYPE:VOXEL_MM:SPLIT,...] "
+          "[--fascia VOXEL_MM:SCALE[:SAMPLE_SCALE],...] [--reference K] [--neighbours N] [--threads N] [--csv FILE]\n",
+          why);
+  return 2;
+}
+
+static double norm3(const double v[3]) { return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
+
+// The stable Neo-Hookean's P from fascia's own law against CalculiX's one element.
+static int check_one_element(fascia_ctx *ctx, const char *ccx, double E, double nu) {
+  const double F[9] = {1.1, 0.05, 0.02, -0.03, 0.95, 0.04, 0.01, 0.06, 1.08};
+  double P[9];
+  if (fascia_demo_one_element(ctx, ccx, E, nu, F, P) != FASCIA_OK) {
+    fprintf(stderr, "demo-calculix: %s\n", fascia_ctx_message(ctx));
+    return 0;
+  }
+  const double mu = E / (2 * (1 + nu)), lambda = E * nu / ((1 + nu) * (1 - 2 * nu));
+  fascia_real Fr[9], Pr[9], aux[FASCIA_PT_AUX_SIZE];
+  for (int k = 0; k < 9; ++k) Fr[k] = F[k];
+  fascia_pt_stress(FASCIA_PT_LAW_NEOHOOKEAN, lambda, mu, Fr, Pr, aux);
+  double d = 0, n = 0;
+  for (int k = 0; k < 9; ++k) d = fmax(d, fabs(P[k] - Pr[k])), n = fmax(n, fabs(Pr[k]));
+  printf("one element: CalculiX's *HYPERFOAM against fascia's stable Neo-Hookean under a general F: "
+         "largest |P - P_fascia| %.2e of |P|max (ccx prints 7 digits)\n",
+         d / n);
+  return d / n < 1e-5;
+}
+
+int main(int argc, char **argv) {
+  const char *scene = "data/scenes/pelvis-female-demo.json", *ccx_list = "8i:1:1,8i:1:2,20r:1:1",
+             *fascia_list = "1:1,1:0.7,1:0.5", *csv_path = NULL;
+  int reference = 0, threads = 1, neighbours = 0;
+  for (int i = 1; i < argc; ++i) {
+    const char *a = argv[i];
+    if (!strcmp(a, "--ccx") && i + 1 < argc) ccx_list = argv[++i];
+    else if (!strcmp(a, "--fascia") && i + 1 < argc) fascia_list = argv[++i];
+    else if (!strcmp(a, "--reference") && i + 1 < argc) reference = atoi(argv[++i]);
+    else if (!strcmp(a, "--threads") && i + 1 < argc) threads = atoi(argv[++i]);
+    else if (!strcmp(a, "--neighbours") && i + 1 < argc) neighbours = atoi(argv[++i]);
+    else if (!strcmp(a, "--csv") && i + 1 < argc) csv_path = argv[++i];
+    else if (a[0] != '-') scene = a;
+    else return usage("unknown argument");
+  }
+  ccx_row cr[ROWS_MAX];
+  fascia_row fr[ROWS_MAX];
+  int nc = 0, nf = 0;
+  memset(cr, 0, sizeof cr);
+  for (const char *p = ccx_list; p && *p && nc < ROWS_MAX;) {
+    char type[8];
+    double vox;
+    int split;
+    if (sscanf(p, "%7[^:]:%lf:%d", type, &vox, &split) != 3 || (strcmp(type, "8i") && strcmp(type, "20r")))
+      return usage("--ccx: expected TYPE:VOXEL_MM:SPLIT with TYPE 8i or 20r");
+    cr[nc].quadratic = !strcmp(type, "20r"), cr[nc].voxel_mm = vox, cr[nc].split = split, ++nc;
+    p = strchr(p, ',');
+    if (p) ++p;
+  }
+  for (const char *p = fascia_list; p && *p && nf < ROWS_MAX;) {
+    fr[nf].sample_scale = 1;
+    if (sscanf(p, "%lf:%lf:%lf", &fr[nf].voxel_mm, &fr[nf].scale, &fr[nf].sample_scale) < 2)
+      return usage("--fascia: expected VOXEL_MM:SCALE[:SAMPLE_SCALE]");
+    ++nf;
+    p = strchr(p, ',');
+    if (p) ++p;
+  }
+  if (nc == 0) return usage("--ccx: no mesh");
+  if (reference == 0) reference = nc;
+  if (reference < 1 || reference > nc) return usage("--reference: expected 1 .. the number of meshes");
+  const char *ccx = fascia_ccx_program();
+  if (!ccx) {
+    fprintf(stderr, "demo-calculix: CalculiX (ccx) not found; install calculix-ccx\n");
+    return 1;
+  }
+  fascia_ctx *ctx = NULL;
+  const fascia_ctx_def cd = fascia_ctx_def_default();
+  if (fascia_ctx_create(&cd, &ctx) != FASCIA_OK) return 1;
+  int rc = 0;
+  FILE *csv = NULL;
+  char csv_tmp[1100] = "";
+  if (csv_path) {
+    snprintf(csv_tmp, sizeof csv_tmp, "%s.tmp", csv_path);
+    csv = fopen(csv_tmp, "w");
+    if (!csv) {
+      fprintf(stderr, "demo-calculix: cannot write %s\n", csv_tmp);
+      return 1;
+    }
+    fprintf(csv, "code,mesh,voxel_mm,frame_spacing_mm,sample_spacing_mm,nodes,elements,organ,fx,fy,fz,"
+                 "force_error_percent,magnitude_error_percent,u_p50_percent,u_p95_percent,u_max_percent,"
+                 "slip_p50_mm,slip_p95_mm,solve_ms\n");
+  }
+  printf("demo-calculix: %s, its first tissue against CalculiX, gravity off, static at time 1 (ccx on %d thread%s, "
+         "fascia on 1)\n",
+         scene, threads, threads == 1 ? "" : "s");
+  char organs[FASCIA_DEMO_ORGANS_MAX][FASCIA_NAME_SIZE];
+  int32_t organ_count = 0;
+  double base_frame = 0, base_sample = 0;
+  // CalculiX's meshes
+  printf("\nCalculiX                        nodes  elements");
+  for (int k = 0; k < nc; ++k) {
+    fascia_prep_stages s;
+    fascia_demo_def d = {scene, cr[k].voxel_mm * 1e-3, 1, 1, neighbours};
+    fascia_status st = fascia_demo_prepare(ctx, &d, &s);
+    if (st == FASCIA_OK) st = fascia_demo_mesh_build(ctx, &s, cr[k].quadratic, cr[k].split, &cr[k].mesh);
+    if (st == FASCIA_OK && k == 0) {
+      base_frame = s.scene->tissues[0].frame_spacing, base_sample = s.scene->tissues[0].sample_spacing;
+      organ_count = cr[k].mesh.organ_count;
+      for (int32_t o = 0; o < organ_count; ++o) {
+        snprintf(organs[o], FASCIA_NAME_SIZE, "%s", cr[k].mesh.organ_name[o]);
+        printf("  %9.9s N (|F|)", organs[o]);
+      }
+      printf("  time s\n");
+      fflush(stdout);
+      if (!check_one_element(ctx, ccx, cr[k].mesh.youngs_modulus, cr[k].mesh.poisson_ratio)) rc = 1;
+    }
+    fascia_prep_stages_free(&s);
+    if (st == FASCIA_OK) st = fascia_demo_calculix(ctx, &cr[k].mesh, ccx, threads, &cr[k].result);
+    if (st != FASCIA_OK) {
+      fprintf(stderr, "demo-calculix: CalculiX mesh %d: %s\n", k + 1, fascia_ctx_message(ctx));
+      rc = 1;
+      goto done;
+    }
+    char name[64];
+    snprintf(name, sizeof name, "%d %s %g mm%s", k + 1, cr[k].quadratic ? "C3D20R" : "C3D8I", cr[k].voxel_mm,
+             cr[k].split > 1 ? " split" : "");
+    if (cr[k].split > 1) snprintf(name + strlen(name), sizeof name - strlen(name), " %d", (int)cr[k].split);
+    printf("  %-26s %8lld %9lld", name, (long long)cr[k].result.nodes, (long long)cr[k].result.elements);
+    for (int32_t o = 0; o < organ_count; ++o) printf("  %16.5f", norm3(cr[k].result.force[o]));
+    printf("  %6.1f\n", 1e-3 * cr[k].result.ms);
+    fflush(stdout);
+  }
+  const fascia_demo_result *ref = &cr[reference - 1].result;
+  printf("reference: mesh %d; the errors below are against it (vector error |F - F_ref| / |F_ref|, then the\n"
+         "signed error of |F|), CalculiX's own first\n",
+         reference);
+  for (int k = 0; k < nc; ++k) {
+    printf("  mesh %d:", k + 1);
+    for (int32_t o = 0; o < organ_count; ++o)
+      printf("  %s %+.2f %% (|F| %+.2f %%)", organs[o], 100 * fascia_tissue_error3(cr[k].result.force[o], ref->force[o]),
+             100 * (norm3(cr[k].result.force[o]) - norm3(ref->force[o])) / norm3(ref->force[o]));
+    printf("\n");
+    if (csv)
+      for (int32_t o = 0; o < organ_count; ++o)
+        fprintf(csv, "calculix,%s%s%d,%g,,,%lld,%lld,%s,%.6g,%.6g,%.6g,%.4f,%.4f,,,,,,%.0f\n",
+                cr[k].quadratic ? "C3D20R" : "C3D8I", "-split", (int)cr[k].split, cr[k].voxel_mm,
+                (long long)cr[k].result.nodes, (long long)cr[k].result.elements, organs[o], cr[k].result.force[o][0],
+                cr[k].result.force[o][1], cr[k].result.force[o][2],
+                100 * fascia_tissue_error3(cr[k].result.force[o], ref->force[o]),
+                100 * (norm3(cr[k].result.force[o]) - norm3(ref->force[o])) / norm3(ref->force[o]), cr[k].result.ms);
+  }
+  // fascia's rungs
+  printf("\nfascia  voxel frame  sample  frames samples");
+  for (int32_t o = 0; o < organ_count; ++o) printf("  %9.9s N  err %%  |F| %%", organs[o]);
+  printf("  u err %% of max: p50   p95   max  slip mm: p50  p95  solve ms\n");
+  for (int k = 0; k < nf; ++k) {
+    // displacements at the nodes of the last CalculiX mesh of this voxel size
+    const ccx_row *at = NULL;
+    for (int c = 0; c < nc; ++c)
+      if (fabs(cr[c].voxel_mm - fr[k].voxel_mm) < 1e-9) at = cr + c;
+    fascia_prep_stages s;
+    fascia_demo_def d = {scene, fr[k].voxel_mm * 1e-3, fr[k].scale, fr[k].sample_scale, neighbours};
+    fascia_demo_result r;
+    memset(&r, 0, sizeof r);
+    fascia_status st = fascia_demo_prepare(ctx, &d, &s);
+    if (st == FASCIA_OK) st = fascia_demo_fascia(ctx, &s, at ? &at->mesh : NULL, &r);
+    fascia_prep_stages_free(&s);
+    if (st != FASCIA_OK) {
+      fprintf(stderr, "demo-calculix: fascia rung %d: %s\n", k + 1, fascia_ctx_message(ctx));
+      rc = 1;
+      continue;
+    }
+    const double frame = base_frame * fr[k].scale, sample = base_sample * fr[k].scale * fr[k].sample_scale;
+    printf("  %5.2f %5.2f  %5.3f  %6lld %7lld", fr[k].voxel_mm, 1e3 * frame, 1e3 * sample, (long long)r.nodes,
+           (long long)r.elements);
+    for (int32_t o = 0; o < organ_count; ++o)
+      printf("  %11.5f %+6.2f %+6.2f", norm3(r.force[o]), 100 * fascia_tissue_error3(r.force[o], ref->force[o]),
+             100 * (norm3(r.force[o]) - norm3(ref->force[o])) / norm3(ref->force[o]));
+    double pct[3] = {NAN, NAN, NAN}, slip[2] = {NAN, NAN};
+    if (at) {
+      const fascia_demo_mesh *m = &at->mesh;
+      double *err = malloc((size_t)m->node_count * sizeof *err), *sl = malloc((size_t)m->node_count * sizeof *sl);
+      double largest = 0;
+      int64_t ns = 0;
+      for (int64_t q = 0; q < m->node_count && err && sl; ++q) {
+        const double *uc = at->result.u + 3 * q, *uf = r.u + 3 * q;
+        largest = fmax(largest, norm3(uc));
+        const double e[3] = {uf[0] - uc[0], uf[1] - uc[1], uf[2] - uc[2]};
+        err[q] = norm3(e);
+        if (m->node_organ[q] >= 0) {
+          const double *up = m->node_u + 3 * q;
+          const double de[3] = {uf[0] - up[0], uf[1] - up[1], uf[2] - up[2]};
+          sl[ns++] = norm3(de);
+        }
+      }
+      if (err && sl && largest > 0) {
+        pct[0] = 100 * fascia_demo_percentile(err, m->node_count, 0.5) / largest;
+        pct[1] = 100 * fascia_demo_percentile(err, m->node_count, 0.95) / largest;
+        pct[2] = 100 * fascia_demo_percentile(err, m->node_count, 1.0) / largest;
+        slip[0] = 1e3 * fascia_demo_percentile(sl, ns, 0.5), slip[1] = 1e3 * fascia_demo_percentile(sl, ns, 0.95);
+      }
+      free(err), free(sl);
+    }
+    printf("  %20.1f %5.1f %5.1f  %11.3f %4.3f  %8.0f\n", pct[0], pct[1], pct[2], slip[0], slip[1], r.ms);
+    fflush(stdout);
+    if (csv)
+      for (int32_t o = 0; o < organ_count; ++o)
+        fprintf(csv, "fascia,x%g,%g,%.4g,%.4g,%lld,%lld,%s,%.6g,%.6g,%.6g,%.4f,%.4f,%.3f,%.3f,%.3f,%.4f,%.4f,%.1f\n",
+                fr[k].scale, fr[k].voxel_mm, 1e3 * frame, 1e3 * sample, (long long)r.nodes, (long long)r.elements,
+                organs[o], r.force[o][0], r.force[o][1], r.force[o][2],
+                100 * fascia_tissue_error3(r.force[o], ref->force[o]),
+                100 * (norm3(r.force[o]) - norm3(ref->force[o])) / norm3(ref->force[o]), pct[0], pct[1], pct[2],
+                slip[0], slip[1], r.ms);
+    fascia_demo_result_free(&r);
+  }
+done:
+  for (int k = 0; k < nc; ++k) fascia_demo_mesh_free(&cr[k].mesh), fascia_demo_result_free(&cr[k].result);
+  if (csv && (fclose(csv) != 0 || rc != 0 || rename(csv_tmp, csv_path) != 0)) {
+    if (rc == 0) fprintf(stderr, "demo-calculix: cannot write %s\n", csv_path);
+    remove(csv_tmp);
+    rc = 1;
+  }
+  fascia_ctx_destroy(&ctx);
+  return rc;
+}
