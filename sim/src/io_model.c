@@ -82,6 +82,7 @@
 #include "fascia/model.h"
 #include "fnv.h"
 #include "h5io.h"
+#include "model_arrays.h"
 
 // A model with volumetric patches is version 2: a version 1 reader would
 // drop the patches and compute a locking answer without a word.
@@ -104,17 +105,8 @@
 
 _Static_assert(sizeof(fascia_real) == sizeof(double), "model files store fascia_real as f64");
 
-/// Element type of a dataset.
-typedef enum elem { ELEM_REAL, ELEM_INT, ELEM_NAME } elem;
-
 // ---------------------------------------------------------------------------
 // The checksum of what a file holds
-
-static uint64_t hash_name(uint64_t h, const char *name) {
-  const size_t n = strnlen(name, FASCIA_NAME_SIZE);
-  h = fascia_fnv(h, name, n);
-  return fascia_fnv(h, "", 1); // the end of the name: "ab"+"c" differs from "a"+"bc"
-}
 
 static uint64_t hash_count(uint64_t h, int64_t n) { return fascia_fnv(h, &n, sizeof n); }
 
@@ -122,66 +114,11 @@ static uint64_t hash_count(uint64_t h, int64_t n) { return fascia_fnv(h, &n, siz
 // what the writer stores, as the reader reads it back.
 static uint64_t model_checksum(const fascia_model *m, int32_t version) {
   const size_t R = sizeof(fascia_real), I = sizeof(int32_t);
-  const size_t N = (size_t)m->frame_count, S = (size_t)m->sample_count, P = (size_t)m->pair_count;
-  const size_t Q = (size_t)m->probe_count, PR = (size_t)m->probe_pair_count, C = (size_t)m->coupling_count;
   uint64_t h = fascia_fnv(FASCIA_FNV_START, &version, sizeof version);
-  const int32_t counts[9] = {m->frame_count, m->sample_count, m->pair_count, m->material_count, m->motion_count,
-                             m->probe_count, m->probe_pair_count, m->organ_count, m->coupling_count};
-  h = fascia_fnv(h, counts, sizeof counts);
-  h = fascia_fnv(h, m->frame_position, 3 * N * R);
-  h = fascia_fnv(h, m->frame_rotation, 4 * N * R);
-  h = fascia_fnv(h, m->frame_kind, N * I);
-  h = fascia_fnv(h, m->frame_motion, N * I);
-  h = fascia_fnv(h, m->frame_load, 6 * N * R);
-  h = fascia_fnv(h, m->frame_organ, N * I);
-  h = fascia_fnv(h, m->frame_offsets, (N + 1) * I);
-  h = fascia_fnv(h, m->frame_pairs, P * I);
-  h = fascia_fnv(h, m->sample_position, 3 * S * R);
-  h = fascia_fnv(h, m->sample_volume, S * R);
-  h = fascia_fnv(h, m->sample_material, S * I);
-  h = fascia_fnv(h, m->sample_organ, S * I);
-  h = fascia_fnv(h, m->sample_patch, S * I);
-  h = fascia_fnv(h, m->sample_modes, S * I);
-  h = fascia_fnv(h, m->sample_offsets, (S + 1) * I);
-  h = fascia_fnv(h, m->pair_frame, P * I);
-  h = fascia_fnv(h, m->pair_weight, P * R);
-  h = fascia_fnv(h, m->pair_gradient, 3 * P * R);
-  for (int32_t k = 0; k < m->material_count; ++k) {
-    const fascia_material *mat = m->materials + k;
-    const fascia_real values[5] = {mat->youngs_modulus, mat->poisson_ratio, mat->density, mat->rotation_coupling,
-                                   mat->rotation_smoothing};
-    const int32_t kinds[2] = {mat->law, mat->part};
-    h = hash_name(h, mat->name);
-    h = fascia_fnv(h, kinds, sizeof kinds);
-    h = fascia_fnv(h, values, sizeof values);
-  }
-  for (int32_t k = 0; k < m->motion_count; ++k) {
-    const fascia_motion *mo = m->motions + k;
-    const size_t K = (size_t)mo->key_count;
-    h = hash_name(h, mo->name);
-    h = hash_count(h, mo->key_count);
-    h = fascia_fnv(h, mo->pivot, 3 * R);
-    h = fascia_fnv(h, mo->key_time, K * R);
-    h = fascia_fnv(h, mo->key_translation, 3 * K * R);
-    h = fascia_fnv(h, mo->key_rotation, 4 * K * R);
-  }
-  for (size_t k = 0; k < Q; ++k) h = hash_name(h, m->probe_name[k]);
-  h = fascia_fnv(h, m->probe_position, 3 * Q * R);
-  h = fascia_fnv(h, m->probe_offsets, (Q + 1) * I);
-  h = fascia_fnv(h, m->probe_frame, PR * I);
-  h = fascia_fnv(h, m->probe_weight, PR * R);
-  for (int32_t k = 0; k < m->organ_count; ++k) {
-    const fascia_organ *o = m->organs + k;
-    const int32_t head[4] = {o->kind, o->motion, o->vertex_count, o->triangle_count};
-    h = hash_name(h, o->name);
-    h = fascia_fnv(h, head, sizeof head);
-    h = fascia_fnv(h, o->vertices, 3 * (size_t)o->vertex_count * R);
-    h = fascia_fnv(h, o->triangles, 3 * (size_t)o->triangle_count * I);
-  }
-  h = fascia_fnv(h, m->coupling_organ, C * I);
-  h = fascia_fnv(h, m->coupling_frame, C * I);
-  h = fascia_fnv(h, m->coupling_triangle, C * I);
-  h = fascia_fnv(h, m->coupling_barycentric, 3 * C * R);
+  const fascia_model_sizes counts = fascia_model_shape(m);
+  _Static_assert(sizeof counts == 9 * sizeof(int32_t), "the checksum hashes the nine counts in their order");
+  h = fascia_fnv(h, &counts, sizeof counts);
+  h = fascia_model_hash_rows(h, m, 1);
   h = fascia_fnv(h, m->gravity, 3 * R);
   const int32_t floating = m->allow_floating != 0; // stored as 1 or not at all
   h = fascia_fnv(h, &floating, sizeof floating);
@@ -228,13 +165,13 @@ static hid_t name_type(void) {
 
 // Writes dataset `name` (absolute) of rank 1 [d0] or 2 [d0,d1] from data,
 // with an optional `unit` attribute.
-static fascia_status write_dataset(writer *w, const char *name, elem kind, int rank, int64_t d0, int64_t d1,
+static fascia_status write_dataset(writer *w, const char *name, fascia_ma_kind kind, int rank, int64_t d0, int64_t d1,
                                    const void *data, const char *unit) {
   const hsize_t dims[2] = {(hsize_t)d0, (hsize_t)d1};
   hid_t space = H5Screate_simple(rank, dims, NULL), dset = H5I_INVALID_HID, type = H5I_INVALID_HID;
-  hid_t file_type = kind == ELEM_REAL ? H5T_IEEE_F64LE : H5T_STD_I32LE;
-  hid_t mem_type = kind == ELEM_REAL ? H5T_NATIVE_DOUBLE : H5T_NATIVE_INT32;
-  if (kind == ELEM_NAME) file_type = mem_type = type = name_type();
+  hid_t file_type = kind == FASCIA_MA_REAL ? H5T_IEEE_F64LE : H5T_STD_I32LE;
+  hid_t mem_type = kind == FASCIA_MA_REAL ? H5T_NATIVE_DOUBLE : H5T_NATIVE_INT32;
+  if (kind == FASCIA_MA_NAME) file_type = mem_type = type = name_type();
   int ok = space >= 0 && file_type >= 0;
   if (ok) dset = H5Dcreate2(w->file, name, file_type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
   ok = ok && dset >= 0;
@@ -276,26 +213,6 @@ static fascia_status write_group(writer *w, const char *name, int32_t index, int
   return status;
 }
 
-static fascia_status write_frames(writer *w, const fascia_model *m) {
-  const int64_t N = m->frame_count;
-  FASCIA_TRY(write_group(w, "/frames", -1, -1, -1));
-  WRITE2(w, "/frames/position", ELEM_REAL, N, 3, m->frame_position, "m");
-  WRITE2(w, "/frames/rotation", ELEM_REAL, N, 4, m->frame_rotation, "1");
-  WRITE1(w, "/frames/kind", ELEM_INT, N, m->frame_kind, NULL);
-  WRITE1(w, "/frames/motion", ELEM_INT, N, m->frame_motion, NULL);
-  WRITE1(w, "/frames/organ", ELEM_INT, N, m->frame_organ, NULL);
-  WRITE2(w, "/frames/load", ELEM_REAL, N, 6, m->frame_load, "N, N m");
-  WRITE1(w, "/frames/offsets", ELEM_INT, N + 1, m->frame_offsets, NULL);
-  WRITE1(w, "/frames/pairs", ELEM_INT, m->pair_count, m->frame_pairs, NULL);
-  return FASCIA_OK;
-}
-
-static int model_has_patches(const fascia_model *m) {
-  for (int32_t s = 0; s < m->sample_count; ++s)
-    if (m->sample_patch[s] >= 0) return 1;
-  return 0;
-}
-
 // The version the modes need: 0 without modes.
 static int model_modes_version(const fascia_model *m) {
   int version = 0;
@@ -303,23 +220,6 @@ static int model_modes_version(const fascia_model *m) {
     if (m->sample_modes[s] > FASCIA_MODES_NINE) return MODEL_VERSION_MODE_SETS;
     else if (m->sample_modes[s]) version = MODEL_VERSION_MODES;
   return version;
-}
-
-static fascia_status write_samples_pairs(writer *w, const fascia_model *m) {
-  const int64_t S = m->sample_count, P = m->pair_count;
-  FASCIA_TRY(write_group(w, "/samples", -1, -1, -1));
-  WRITE2(w, "/samples/position", ELEM_REAL, S, 3, m->sample_position, "m");
-  WRITE1(w, "/samples/volume", ELEM_REAL, S, m->sample_volume, "m^3");
-  WRITE1(w, "/samples/material", ELEM_INT, S, m->sample_material, NULL);
-  WRITE1(w, "/samples/organ", ELEM_INT, S, m->sample_organ, NULL);
-  if (model_has_patches(m)) WRITE1(w, "/samples/patch", ELEM_INT, S, m->sample_patch, NULL);
-  if (model_modes_version(m)) WRITE1(w, "/samples/modes", ELEM_INT, S, m->sample_modes, NULL);
-  WRITE1(w, "/samples/offsets", ELEM_INT, S + 1, m->sample_offsets, NULL);
-  FASCIA_TRY(write_group(w, "/pairs", -1, -1, -1));
-  WRITE1(w, "/pairs/frame", ELEM_INT, P, m->pair_frame, NULL);
-  WRITE1(w, "/pairs/weight", ELEM_REAL, P, m->pair_weight, "1");
-  WRITE2(w, "/pairs/gradient", ELEM_REAL, P, 3, m->pair_gradient, "1/m");
-  return FASCIA_OK;
 }
 
 // Materials as parallel datasets (one per field): simpler to check on
@@ -345,15 +245,15 @@ static fascia_status write_materials(writer *w, const fascia_model *m) {
     values[4 * M + k] = mat->rotation_smoothing;
   }
   FASCIA_TRY_GOTO(write_group(w, "/materials", -1, -1, -1));
-  FASCIA_TRY_GOTO(write_dataset(w, "/materials/name", ELEM_NAME, 1, M, 0, names, NULL));
-  FASCIA_TRY_GOTO(write_dataset(w, "/materials/law", ELEM_INT, 1, M, 0, law, NULL));
-  FASCIA_TRY_GOTO(write_dataset(w, "/materials/youngs_modulus", ELEM_REAL, 1, M, 0, values, "Pa"));
-  FASCIA_TRY_GOTO(write_dataset(w, "/materials/poisson_ratio", ELEM_REAL, 1, M, 0, values + M, "1"));
-  FASCIA_TRY_GOTO(write_dataset(w, "/materials/density", ELEM_REAL, 1, M, 0, values + 2 * M, "kg/m^3"));
-  FASCIA_TRY_GOTO(write_dataset(w, "/materials/rotation_coupling", ELEM_REAL, 1, M, 0, values + 3 * M, "1"));
-  FASCIA_TRY_GOTO(write_dataset(w, "/materials/rotation_smoothing", ELEM_REAL, 1, M, 0, values + 4 * M, "1"));
+  FASCIA_TRY_GOTO(write_dataset(w, "/materials/name", FASCIA_MA_NAME, 1, M, 0, names, NULL));
+  FASCIA_TRY_GOTO(write_dataset(w, "/materials/law", FASCIA_MA_INT, 1, M, 0, law, NULL));
+  FASCIA_TRY_GOTO(write_dataset(w, "/materials/youngs_modulus", FASCIA_MA_REAL, 1, M, 0, values, "Pa"));
+  FASCIA_TRY_GOTO(write_dataset(w, "/materials/poisson_ratio", FASCIA_MA_REAL, 1, M, 0, values + M, "1"));
+  FASCIA_TRY_GOTO(write_dataset(w, "/materials/density", FASCIA_MA_REAL, 1, M, 0, values + 2 * M, "kg/m^3"));
+  FASCIA_TRY_GOTO(write_dataset(w, "/materials/rotation_coupling", FASCIA_MA_REAL, 1, M, 0, values + 3 * M, "1"));
+  FASCIA_TRY_GOTO(write_dataset(w, "/materials/rotation_smoothing", FASCIA_MA_REAL, 1, M, 0, values + 4 * M, "1"));
   for (int64_t k = 0; k < M; ++k) law[k] = m->materials[k].part;
-  FASCIA_TRY_GOTO(write_dataset(w, "/materials/part", ELEM_INT, 1, M, 0, law, NULL));
+  FASCIA_TRY_GOTO(write_dataset(w, "/materials/part", FASCIA_MA_INT, 1, M, 0, law, NULL));
 cleanup:
   free(names);
   free(law);
@@ -370,29 +270,18 @@ static fascia_status write_motions(writer *w, const fascia_model *m) {
     snprintf(name, sizeof name, "/motions/%s", mo->name);
     FASCIA_TRY(write_group(w, name, k, -1, -1));
     snprintf(name, sizeof name, "/motions/%s/pivot", mo->name);
-    WRITE1(w, name, ELEM_REAL, 3, mo->pivot, "m");
+    WRITE1(w, name, FASCIA_MA_REAL, 3, mo->pivot, "m");
     snprintf(name, sizeof name, "/motions/%s/time", mo->name);
-    WRITE1(w, name, ELEM_REAL, K, mo->key_time, "s");
+    WRITE1(w, name, FASCIA_MA_REAL, K, mo->key_time, "s");
     snprintf(name, sizeof name, "/motions/%s/translation", mo->name);
-    WRITE2(w, name, ELEM_REAL, K, 3, mo->key_translation, "m");
+    WRITE2(w, name, FASCIA_MA_REAL, K, 3, mo->key_translation, "m");
     snprintf(name, sizeof name, "/motions/%s/rotation", mo->name);
-    WRITE2(w, name, ELEM_REAL, K, 4, mo->key_rotation, "1");
+    WRITE2(w, name, FASCIA_MA_REAL, K, 4, mo->key_rotation, "1");
   }
   return FASCIA_OK;
 }
 
-static fascia_status write_probes(writer *w, const fascia_model *m) {
-  const int64_t Q = m->probe_count, R = m->probe_pair_count;
-  FASCIA_TRY(write_group(w, "/probes", -1, -1, -1));
-  WRITE1(w, "/probes/name", ELEM_NAME, Q, m->probe_name, NULL);
-  WRITE2(w, "/probes/position", ELEM_REAL, Q, 3, m->probe_position, "m");
-  WRITE1(w, "/probes/offsets", ELEM_INT, Q + 1, m->probe_offsets, NULL);
-  WRITE1(w, "/probes/frame", ELEM_INT, R, m->probe_frame, NULL);
-  WRITE1(w, "/probes/weight", ELEM_REAL, R, m->probe_weight, "1");
-  return FASCIA_OK;
-}
-
-static fascia_status write_organs_coupling(writer *w, const fascia_model *m) {
+static fascia_status write_organs(writer *w, const fascia_model *m) {
   char name[PATH_SIZE];
   FASCIA_TRY(write_group(w, "/organs", -1, -1, -1));
   for (int32_t k = 0; k < m->organ_count; ++k) {
@@ -400,16 +289,33 @@ static fascia_status write_organs_coupling(writer *w, const fascia_model *m) {
     snprintf(name, sizeof name, "/organs/%s", o->name);
     FASCIA_TRY(write_group(w, name, k, o->kind, o->motion));
     snprintf(name, sizeof name, "/organs/%s/vertices", o->name);
-    WRITE2(w, name, ELEM_REAL, o->vertex_count, 3, o->vertices, "m");
+    WRITE2(w, name, FASCIA_MA_REAL, o->vertex_count, 3, o->vertices, "m");
     snprintf(name, sizeof name, "/organs/%s/triangles", o->name);
-    WRITE2(w, name, ELEM_INT, o->triangle_count, 3, o->triangles, NULL);
+    WRITE2(w, name, FASCIA_MA_INT, o->triangle_count, 3, o->triangles, NULL);
   }
-  const int64_t C = m->coupling_count;
-  FASCIA_TRY(write_group(w, "/coupling", -1, -1, -1));
-  WRITE1(w, "/coupling/organ", ELEM_INT, C, m->coupling_organ, NULL);
-  WRITE1(w, "/coupling/frame", ELEM_INT, C, m->coupling_frame, NULL);
-  WRITE1(w, "/coupling/triangle", ELEM_INT, C, m->coupling_triangle, NULL);
-  WRITE2(w, "/coupling/barycentric", ELEM_REAL, C, 3, m->coupling_barycentric, "1");
+  return FASCIA_OK;
+}
+
+// The table's arrays (model_arrays.h) in its order, but for an EARLY row
+// written before the row above; each group before its first dataset.
+static fascia_status write_arrays(writer *w, const fascia_model *m, const fascia_model_view *views) {
+  char group[PATH_SIZE] = "";
+  for (int k = 0; k < FASCIA_MA_COUNT; ++k) {
+    const int early = k + 1 < FASCIA_MA_COUNT && (views[k + 1].array->flags & FASCIA_MA_EARLY);
+    const fascia_model_view *v = views + (early ? k + 1 : views[k].array->flags & FASCIA_MA_EARLY ? k - 1 : k);
+    const fascia_model_array *a = v->array;
+    if (a->kind == FASCIA_MA_MATERIAL) FASCIA_TRY(write_materials(w, m));
+    else if (a->kind == FASCIA_MA_MOTION) FASCIA_TRY(write_motions(w, m));
+    else if (a->kind == FASCIA_MA_ORGAN) FASCIA_TRY(write_organs(w, m));
+    else if (fascia_model_view_set(v)) {
+      const size_t parent = (size_t)(strrchr(a->path, '/') - a->path);
+      if (strlen(group) != parent || strncmp(group, a->path, parent)) {
+        snprintf(group, sizeof group, "%.*s", (int)parent, a->path);
+        FASCIA_TRY(write_group(w, group, -1, -1, -1));
+      }
+      FASCIA_TRY(write_dataset(w, a->path, a->kind, a->width > 1 ? 2 : 1, v->rows, a->width, v->data, a->unit));
+    }
+  }
   return FASCIA_OK;
 }
 
@@ -426,8 +332,12 @@ static fascia_status write_model(writer *w, const fascia_model *m) {
   char creator[64];
   snprintf(creator, sizeof creator, "fascia %s", fascia_version());
   hid_t root = H5Gopen2(w->file, "/", H5P_DEFAULT);
+  fascia_model_view views[FASCIA_MA_COUNT];
+  fascia_model_views(m, views);
   const int modes = model_modes_version(m);
-  const int version = modes ? modes : model_has_patches(m) ? MODEL_VERSION_PATCHES : 1;
+  const int version = modes                                                      ? modes
+                      : fascia_model_view_set(views + FASCIA_MA_ID_sample_patch) ? MODEL_VERSION_PATCHES
+                                                                                 : 1;
   const uint64_t checksum = model_checksum(m, version);
   const int ok = root >= 0 && fascia_h5_attr_int(root, "fascia_model_version", version) >= 0 &&
                  attr_u64(root, CHECKSUM_ATTR, checksum) >= 0 &&
@@ -436,20 +346,15 @@ static fascia_status write_model(writer *w, const fascia_model *m) {
                  (!m->allow_floating || fascia_h5_attr_int(root, "allow_floating", 1) >= 0);
   if (root >= 0) H5Gclose(root);
   if (!ok) return write_failed(w, "/");
-  FASCIA_TRY(write_frames(w, m));
-  FASCIA_TRY(write_samples_pairs(w, m));
-  FASCIA_TRY(write_materials(w, m));
-  FASCIA_TRY(write_motions(w, m));
-  FASCIA_TRY(write_probes(w, m));
-  FASCIA_TRY(write_organs_coupling(w, m));
-  WRITE1(w, "/gravity", ELEM_REAL, 3, m->gravity, "m/s^2");
+  FASCIA_TRY(write_arrays(w, m, views));
+  WRITE1(w, "/gravity", FASCIA_MA_REAL, 3, m->gravity, "m/s^2");
   const fascia_surface *ts = &m->tissue_surface;
   if (ts->triangle_count > 0) { // optional, for drawing: older readers ignore it and simulate the same
     FASCIA_TRY(write_group(w, "/tissue_surface", -1, -1, -1));
-    WRITE2(w, "/tissue_surface/vertices", ELEM_REAL, ts->vertex_count, 3, ts->vertices, "m");
-    WRITE2(w, "/tissue_surface/triangles", ELEM_INT, ts->triangle_count, 3, ts->triangles, NULL);
+    WRITE2(w, "/tissue_surface/vertices", FASCIA_MA_REAL, ts->vertex_count, 3, ts->vertices, "m");
+    WRITE2(w, "/tissue_surface/triangles", FASCIA_MA_INT, ts->triangle_count, 3, ts->triangles, NULL);
   }
-  if (m->tetrahedron_count > 0) WRITE2(w, "/tetrahedra", ELEM_INT, m->tetrahedron_count, 4, m->tetrahedra, NULL);
+  if (m->tetrahedron_count > 0) WRITE2(w, "/tetrahedra", FASCIA_MA_INT, m->tetrahedron_count, 4, m->tetrahedra, NULL);
   if (m->provenance) FASCIA_TRY(write_text(w, "/provenance", m->provenance));
   return FASCIA_OK;
 }
@@ -548,7 +453,7 @@ static fascia_status read_failed(reader *r, const char *name, const char *action
 // (0..2) with dims[k] rows in axis k, where dims[k] < 0 accepts any count
 // and is filled in. Counts over FASCIA_MAX_COUNT are refused before anyone
 // allocates for them. On success *out is an open dataset.
-static fascia_status open_checked(reader *r, const char *name, elem kind, int rank, int64_t *dims, hid_t *out) {
+static fascia_status open_checked(reader *r, const char *name, fascia_ma_kind kind, int rank, int64_t *dims, hid_t *out) {
   *out = H5I_INVALID_HID;
   FASCIA_CHECK(fascia_h5_link_exists(r->file, name), r->ctx, FASCIA_ERR_FORMAT, "model '%s' %s: dataset missing; %s", r->path,
                name, REMEDY);
@@ -562,13 +467,13 @@ static fascia_status open_checked(reader *r, const char *name, elem kind, int ra
     goto cleanup;
   }
   const H5T_class_t cls = H5Tget_class(type);
-  const H5T_class_t want = kind == ELEM_REAL ? H5T_FLOAT : kind == ELEM_INT ? H5T_INTEGER : H5T_STRING;
+  const H5T_class_t want = kind == FASCIA_MA_REAL ? H5T_FLOAT : kind == FASCIA_MA_INT ? H5T_INTEGER : H5T_STRING;
   if (cls != want) {
     status = FASCIA_FAIL(r->ctx, FASCIA_ERR_FORMAT, "model '%s' %s: expected %s, found %s; %s", r->path, name,
                          class_phrase(want), class_phrase(cls), REMEDY);
     goto cleanup;
   }
-  if (kind != ELEM_NAME && !fascia_h5_number_type_ok(type)) {
+  if (kind != FASCIA_MA_NAME && !fascia_h5_number_type_ok(type)) {
     status = FASCIA_FAIL(r->ctx, FASCIA_ERR_FORMAT, "model '%s' %s: %s of a damaged or unsupported layout; %s",
                          r->path, name, class_phrase(cls), REMEDY);
     goto cleanup;
@@ -621,7 +526,7 @@ cleanup:
 
 // Row count (axis 0) of dataset `name`, checked as open_checked does, with
 // `cols` columns (0 for a 1-D dataset).
-static fascia_status count_rows(reader *r, const char *name, elem kind, int64_t cols, int64_t *rows) {
+static fascia_status count_rows(reader *r, const char *name, fascia_ma_kind kind, int64_t cols, int64_t *rows) {
   int64_t dims[2] = {-1, cols};
   hid_t dset;
   FASCIA_TRY(open_checked(r, name, kind, cols ? 2 : 1, dims, &dset));
@@ -632,13 +537,13 @@ static fascia_status count_rows(reader *r, const char *name, elem kind, int64_t 
 
 // Reads numeric dataset `name` of exactly [rows] (cols == 0) or [rows,cols]
 // into buf, converting to double or int32.
-static fascia_status read_numbers(reader *r, const char *name, elem kind, int64_t rows, int64_t cols, void *buf) {
+static fascia_status read_numbers(reader *r, const char *name, fascia_ma_kind kind, int64_t rows, int64_t cols, void *buf) {
   int64_t dims[2] = {rows, cols};
   hid_t dset;
   FASCIA_TRY(open_checked(r, name, kind, cols ? 2 : 1, dims, &dset));
   fascia_status status = FASCIA_OK;
   if (rows * (cols ? cols : 1) > 0 &&
-      H5Dread(dset, kind == ELEM_REAL ? H5T_NATIVE_DOUBLE : H5T_NATIVE_INT32, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) < 0)
+      H5Dread(dset, kind == FASCIA_MA_REAL ? H5T_NATIVE_DOUBLE : H5T_NATIVE_INT32, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) < 0)
     status = read_failed(r, name, "read it");
   H5Dclose(dset);
   return status;
@@ -708,7 +613,7 @@ cleanup:
 static fascia_status read_names(reader *r, const char *name, int64_t count, char (*out)[FASCIA_NAME_SIZE]) {
   int64_t dims[1] = {count};
   hid_t dset;
-  FASCIA_TRY(open_checked(r, name, ELEM_NAME, 1, dims, &dset));
+  FASCIA_TRY(open_checked(r, name, FASCIA_MA_NAME, 1, dims, &dset));
   fascia_status status = FASCIA_OK;
   if (count > 0) status = read_strings(r, name, dset, count, out[0], FASCIA_NAME_SIZE, FASCIA_NAME_SIZE - 1);
   H5Dclose(dset);
@@ -721,7 +626,7 @@ static fascia_status read_provenance(reader *r, char **out) {
   if (!fascia_h5_link_exists(r->file, "/provenance")) return FASCIA_OK;
   int64_t dims[1];
   hid_t dset;
-  FASCIA_TRY(open_checked(r, "/provenance", ELEM_NAME, 0, dims, &dset));
+  FASCIA_TRY(open_checked(r, "/provenance", FASCIA_MA_NAME, 0, dims, &dset));
   fascia_status status = FASCIA_OK;
   fascia_h5_scope scope = FASCIA_H5_SCOPE_INIT;
   fascia_h5_keep(&scope, dset);
@@ -926,15 +831,15 @@ static fascia_status check_memory(reader *r, const fascia_model_sizes *z) {
 
 static fascia_status read_sizes(reader *r, fascia_model_sizes *z) {
   int64_t n[9];
-  FASCIA_TRY(count_rows(r, "/frames/position", ELEM_REAL, 3, &n[0]));
-  FASCIA_TRY(count_rows(r, "/samples/position", ELEM_REAL, 3, &n[1]));
-  FASCIA_TRY(count_rows(r, "/pairs/frame", ELEM_INT, 0, &n[2]));
-  FASCIA_TRY(count_rows(r, "/materials/name", ELEM_NAME, 0, &n[3]));
+  FASCIA_TRY(count_rows(r, "/frames/position", FASCIA_MA_REAL, 3, &n[0]));
+  FASCIA_TRY(count_rows(r, "/samples/position", FASCIA_MA_REAL, 3, &n[1]));
+  FASCIA_TRY(count_rows(r, "/pairs/frame", FASCIA_MA_INT, 0, &n[2]));
+  FASCIA_TRY(count_rows(r, "/materials/name", FASCIA_MA_NAME, 0, &n[3]));
   FASCIA_TRY(count_members(r, "/motions", &n[4]));
-  FASCIA_TRY(count_rows(r, "/probes/name", ELEM_NAME, 0, &n[5]));
-  FASCIA_TRY(count_rows(r, "/probes/frame", ELEM_INT, 0, &n[6]));
+  FASCIA_TRY(count_rows(r, "/probes/name", FASCIA_MA_NAME, 0, &n[5]));
+  FASCIA_TRY(count_rows(r, "/probes/frame", FASCIA_MA_INT, 0, &n[6]));
   FASCIA_TRY(count_members(r, "/organs", &n[7]));
-  FASCIA_TRY(count_rows(r, "/coupling/organ", ELEM_INT, 0, &n[8]));
+  FASCIA_TRY(count_rows(r, "/coupling/organ", FASCIA_MA_INT, 0, &n[8]));
   FASCIA_CHECK(n[2] <= n[1] * 1024, r->ctx, FASCIA_ERR_FORMAT,
                "model '%s' /pairs/frame: %lld pairs for %lld samples is more than 1024 neighbours per sample; %s",
                r->path, (long long)n[2], (long long)n[1], REMEDY);
@@ -955,29 +860,29 @@ static fascia_status read_sizes(reader *r, fascia_model_sizes *z) {
 
 static fascia_status read_frames_samples(reader *r, fascia_model *m) {
   const int64_t N = m->frame_count, S = m->sample_count, P = m->pair_count;
-  READ(r, "/frames/position", ELEM_REAL, N, 3, m->frame_position);
-  READ(r, "/frames/rotation", ELEM_REAL, N, 4, m->frame_rotation);
-  READ(r, "/frames/kind", ELEM_INT, N, 0, m->frame_kind);
-  READ(r, "/frames/motion", ELEM_INT, N, 0, m->frame_motion);
-  READ(r, "/frames/load", ELEM_REAL, N, 6, m->frame_load);
-  READ(r, "/frames/offsets", ELEM_INT, N + 1, 0, m->frame_offsets);
-  READ(r, "/frames/pairs", ELEM_INT, P, 0, m->frame_pairs);
-  READ(r, "/samples/position", ELEM_REAL, S, 3, m->sample_position);
-  READ(r, "/samples/volume", ELEM_REAL, S, 0, m->sample_volume);
-  READ(r, "/samples/material", ELEM_INT, S, 0, m->sample_material);
+  READ(r, "/frames/position", FASCIA_MA_REAL, N, 3, m->frame_position);
+  READ(r, "/frames/rotation", FASCIA_MA_REAL, N, 4, m->frame_rotation);
+  READ(r, "/frames/kind", FASCIA_MA_INT, N, 0, m->frame_kind);
+  READ(r, "/frames/motion", FASCIA_MA_INT, N, 0, m->frame_motion);
+  READ(r, "/frames/load", FASCIA_MA_REAL, N, 6, m->frame_load);
+  READ(r, "/frames/offsets", FASCIA_MA_INT, N + 1, 0, m->frame_offsets);
+  READ(r, "/frames/pairs", FASCIA_MA_INT, P, 0, m->frame_pairs);
+  READ(r, "/samples/position", FASCIA_MA_REAL, S, 3, m->sample_position);
+  READ(r, "/samples/volume", FASCIA_MA_REAL, S, 0, m->sample_volume);
+  READ(r, "/samples/material", FASCIA_MA_INT, S, 0, m->sample_material);
   // organ owners came with deformable organs: files without them are all tissue
-  if (fascia_h5_link_exists(r->file, "/frames/organ")) READ(r, "/frames/organ", ELEM_INT, N, 0, m->frame_organ);
-  if (fascia_h5_link_exists(r->file, "/samples/organ")) READ(r, "/samples/organ", ELEM_INT, S, 0, m->sample_organ);
-  if (r->version >= MODEL_VERSION_PATCHES) READ(r, "/samples/patch", ELEM_INT, S, 0, m->sample_patch);
-  if (r->version >= MODEL_VERSION_MODES) READ(r, "/samples/modes", ELEM_INT, S, 0, m->sample_modes);
+  if (fascia_h5_link_exists(r->file, "/frames/organ")) READ(r, "/frames/organ", FASCIA_MA_INT, N, 0, m->frame_organ);
+  if (fascia_h5_link_exists(r->file, "/samples/organ")) READ(r, "/samples/organ", FASCIA_MA_INT, S, 0, m->sample_organ);
+  if (r->version >= MODEL_VERSION_PATCHES) READ(r, "/samples/patch", FASCIA_MA_INT, S, 0, m->sample_patch);
+  if (r->version >= MODEL_VERSION_MODES) READ(r, "/samples/modes", FASCIA_MA_INT, S, 0, m->sample_modes);
   for (int64_t s = 0; s < S && r->version < MODEL_VERSION_MODE_SETS; ++s)
     FASCIA_CHECK(m->sample_modes[s] <= FASCIA_MODES_NINE, r->ctx, FASCIA_ERR_FORMAT,
                  "model '%s' /samples/modes: sample %d has %d, which needs format version %d (the file says %d)",
                  r->path, (int)s, (int)m->sample_modes[s], MODEL_VERSION_MODE_SETS, (int)r->version);
-  READ(r, "/samples/offsets", ELEM_INT, S + 1, 0, m->sample_offsets);
-  READ(r, "/pairs/frame", ELEM_INT, P, 0, m->pair_frame);
-  READ(r, "/pairs/weight", ELEM_REAL, P, 0, m->pair_weight);
-  READ(r, "/pairs/gradient", ELEM_REAL, P, 3, m->pair_gradient);
+  READ(r, "/samples/offsets", FASCIA_MA_INT, S + 1, 0, m->sample_offsets);
+  READ(r, "/pairs/frame", FASCIA_MA_INT, P, 0, m->pair_frame);
+  READ(r, "/pairs/weight", FASCIA_MA_REAL, P, 0, m->pair_weight);
+  READ(r, "/pairs/gradient", FASCIA_MA_REAL, P, 3, m->pair_gradient);
   return FASCIA_OK;
 }
 
@@ -992,19 +897,19 @@ static fascia_status read_materials(reader *r, fascia_model *m) {
     goto cleanup;
   }
   FASCIA_TRY_GOTO(read_names(r, "/materials/name", M, names));
-  FASCIA_TRY_GOTO(read_numbers(r, "/materials/law", ELEM_INT, M, 0, law));
-  FASCIA_TRY_GOTO(read_numbers(r, "/materials/youngs_modulus", ELEM_REAL, M, 0, values));
-  FASCIA_TRY_GOTO(read_numbers(r, "/materials/poisson_ratio", ELEM_REAL, M, 0, values + M));
-  FASCIA_TRY_GOTO(read_numbers(r, "/materials/density", ELEM_REAL, M, 0, values + 2 * M));
-  FASCIA_TRY_GOTO(read_numbers(r, "/materials/rotation_coupling", ELEM_REAL, M, 0, values + 3 * M));
-  FASCIA_TRY_GOTO(read_numbers(r, "/materials/rotation_smoothing", ELEM_REAL, M, 0, values + 4 * M));
+  FASCIA_TRY_GOTO(read_numbers(r, "/materials/law", FASCIA_MA_INT, M, 0, law));
+  FASCIA_TRY_GOTO(read_numbers(r, "/materials/youngs_modulus", FASCIA_MA_REAL, M, 0, values));
+  FASCIA_TRY_GOTO(read_numbers(r, "/materials/poisson_ratio", FASCIA_MA_REAL, M, 0, values + M));
+  FASCIA_TRY_GOTO(read_numbers(r, "/materials/density", FASCIA_MA_REAL, M, 0, values + 2 * M));
+  FASCIA_TRY_GOTO(read_numbers(r, "/materials/rotation_coupling", FASCIA_MA_REAL, M, 0, values + 3 * M));
+  FASCIA_TRY_GOTO(read_numbers(r, "/materials/rotation_smoothing", FASCIA_MA_REAL, M, 0, values + 4 * M));
   int32_t *part = fascia_calloc(M, sizeof *part); // optional: files before reduced integration are all FULL
   if (!part) {
     status = FASCIA_FAIL(r->ctx, FASCIA_ERR_MEMORY, "model '%s' /materials: out of memory", r->path);
     goto cleanup;
   }
   if (fascia_h5_link_exists(r->file, "/materials/part")) {
-    status = read_numbers(r, "/materials/part", ELEM_INT, M, 0, part);
+    status = read_numbers(r, "/materials/part", FASCIA_MA_INT, M, 0, part);
     if (status != FASCIA_OK) {
       free(part);
       goto cleanup;
@@ -1041,18 +946,18 @@ static fascia_status read_motions(reader *r, fascia_model *m) {
     memcpy(mo->name, scratch, FASCIA_NAME_SIZE);
     int64_t K;
     snprintf(name, sizeof name, "%s/time", group);
-    FASCIA_TRY(count_rows(r, name, ELEM_REAL, 0, &K));
+    FASCIA_TRY(count_rows(r, name, FASCIA_MA_REAL, 0, &K));
     FASCIA_TRY(check_stored(r, name));
     FASCIA_CHECK(K >= 1, r->ctx, FASCIA_ERR_FORMAT, "model '%s' %s: no keyframe, expected at least one; %s", r->path,
                  name, REMEDY);
     FASCIA_TRY(fascia_motion_alloc(r->ctx, mo, (int32_t)K));
-    READ(r, name, ELEM_REAL, K, 0, mo->key_time);
+    READ(r, name, FASCIA_MA_REAL, K, 0, mo->key_time);
     snprintf(name, sizeof name, "%s/pivot", group);
-    READ(r, name, ELEM_REAL, 3, 0, mo->pivot);
+    READ(r, name, FASCIA_MA_REAL, 3, 0, mo->pivot);
     snprintf(name, sizeof name, "%s/translation", group);
-    READ(r, name, ELEM_REAL, K, 3, mo->key_translation);
+    READ(r, name, FASCIA_MA_REAL, K, 3, mo->key_translation);
     snprintf(name, sizeof name, "%s/rotation", group);
-    READ(r, name, ELEM_REAL, K, 4, mo->key_rotation);
+    READ(r, name, FASCIA_MA_REAL, K, 4, mo->key_rotation);
   }
   return FASCIA_OK;
 }
@@ -1073,13 +978,13 @@ static fascia_status read_organs(reader *r, fascia_model *m) {
     char triangles[PATH_SIZE + 16];
     snprintf(name, sizeof name, "%s/vertices", group);
     snprintf(triangles, sizeof triangles, "%s/triangles", group);
-    FASCIA_TRY(count_rows(r, name, ELEM_REAL, 3, &V));
-    FASCIA_TRY(count_rows(r, triangles, ELEM_INT, 3, &T));
+    FASCIA_TRY(count_rows(r, name, FASCIA_MA_REAL, 3, &V));
+    FASCIA_TRY(count_rows(r, triangles, FASCIA_MA_INT, 3, &T));
     FASCIA_TRY(check_stored(r, name));
     FASCIA_TRY(check_stored(r, triangles));
     FASCIA_TRY(fascia_organ_alloc(r->ctx, o, (int32_t)V, (int32_t)T));
-    READ(r, name, ELEM_REAL, V, 3, o->vertices);
-    READ(r, triangles, ELEM_INT, T, 3, o->triangles);
+    READ(r, name, FASCIA_MA_REAL, V, 3, o->vertices);
+    READ(r, triangles, FASCIA_MA_INT, T, 3, o->triangles);
   }
   return FASCIA_OK;
 }
@@ -1087,15 +992,15 @@ static fascia_status read_organs(reader *r, fascia_model *m) {
 static fascia_status read_rest(reader *r, fascia_model *m) {
   const int64_t Q = m->probe_count, R = m->probe_pair_count, C = m->coupling_count;
   FASCIA_TRY(read_names(r, "/probes/name", Q, m->probe_name));
-  READ(r, "/probes/position", ELEM_REAL, Q, 3, m->probe_position);
-  READ(r, "/probes/offsets", ELEM_INT, Q + 1, 0, m->probe_offsets);
-  READ(r, "/probes/frame", ELEM_INT, R, 0, m->probe_frame);
-  READ(r, "/probes/weight", ELEM_REAL, R, 0, m->probe_weight);
-  READ(r, "/coupling/organ", ELEM_INT, C, 0, m->coupling_organ);
-  READ(r, "/coupling/frame", ELEM_INT, C, 0, m->coupling_frame);
-  READ(r, "/coupling/triangle", ELEM_INT, C, 0, m->coupling_triangle);
-  READ(r, "/coupling/barycentric", ELEM_REAL, C, 3, m->coupling_barycentric);
-  READ(r, "/gravity", ELEM_REAL, 3, 0, m->gravity);
+  READ(r, "/probes/position", FASCIA_MA_REAL, Q, 3, m->probe_position);
+  READ(r, "/probes/offsets", FASCIA_MA_INT, Q + 1, 0, m->probe_offsets);
+  READ(r, "/probes/frame", FASCIA_MA_INT, R, 0, m->probe_frame);
+  READ(r, "/probes/weight", FASCIA_MA_REAL, R, 0, m->probe_weight);
+  READ(r, "/coupling/organ", FASCIA_MA_INT, C, 0, m->coupling_organ);
+  READ(r, "/coupling/frame", FASCIA_MA_INT, C, 0, m->coupling_frame);
+  READ(r, "/coupling/triangle", FASCIA_MA_INT, C, 0, m->coupling_triangle);
+  READ(r, "/coupling/barycentric", FASCIA_MA_REAL, C, 3, m->coupling_barycentric);
+  READ(r, "/gravity", FASCIA_MA_REAL, 3, 0, m->gravity);
   // optional: absent in files of models that must be held everywhere
   const htri_t floating = H5Aexists_by_name(r->file, "/", "allow_floating", H5P_DEFAULT);
   if (floating > 0) {
@@ -1106,20 +1011,20 @@ static fascia_status read_rest(reader *r, fascia_model *m) {
   }
   if (fascia_h5_link_exists(r->file, "/tissue_surface/triangles")) {
     int64_t V, T;
-    FASCIA_TRY(count_rows(r, "/tissue_surface/vertices", ELEM_REAL, 3, &V));
-    FASCIA_TRY(count_rows(r, "/tissue_surface/triangles", ELEM_INT, 3, &T));
+    FASCIA_TRY(count_rows(r, "/tissue_surface/vertices", FASCIA_MA_REAL, 3, &V));
+    FASCIA_TRY(count_rows(r, "/tissue_surface/triangles", FASCIA_MA_INT, 3, &T));
     FASCIA_TRY(check_stored(r, "/tissue_surface/vertices"));
     FASCIA_TRY(check_stored(r, "/tissue_surface/triangles"));
     FASCIA_TRY(fascia_surface_alloc(r->ctx, &m->tissue_surface, (int32_t)V, (int32_t)T));
-    READ(r, "/tissue_surface/vertices", ELEM_REAL, V, 3, m->tissue_surface.vertices);
-    READ(r, "/tissue_surface/triangles", ELEM_INT, T, 3, m->tissue_surface.triangles);
+    READ(r, "/tissue_surface/vertices", FASCIA_MA_REAL, V, 3, m->tissue_surface.vertices);
+    READ(r, "/tissue_surface/triangles", FASCIA_MA_INT, T, 3, m->tissue_surface.triangles);
   }
   if (fascia_h5_link_exists(r->file, "/tetrahedra")) {
     int64_t M;
-    FASCIA_TRY(count_rows(r, "/tetrahedra", ELEM_INT, 4, &M));
+    FASCIA_TRY(count_rows(r, "/tetrahedra", FASCIA_MA_INT, 4, &M));
     FASCIA_TRY(check_stored(r, "/tetrahedra"));
     FASCIA_TRY(fascia_model_tetrahedra_alloc(r->ctx, m, (int32_t)M));
-    READ(r, "/tetrahedra", ELEM_INT, M, 4, m->tetrahedra);
+    READ(r, "/tetrahedra", FASCIA_MA_INT, M, 4, m->tetrahedra);
   }
   return read_provenance(r, &m->provenance);
 }

@@ -2,12 +2,14 @@
 // SPDX-FileCopyrightText: fascia developers
 // The model structure: allocation, the reverse (frame -> samples) table, and
 // validation, the one gate every model passes before a solver sees it.
+#define _POSIX_C_SOURCE 200809L // strnlen (strict C11 hides it)
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "fascia/model.h"
 #include "fnv.h"
+#include "model_arrays.h"
 #include "status.h"
 
 // Tolerances of the validation: weights are computed in double from rest
@@ -15,6 +17,77 @@
 // files written by other tools in double.
 #define WEIGHT_SUM_TOLERANCE 1e-9
 #define QUAT_NORM_TOLERANCE 1e-9
+
+// What a row of each count is, in messages.
+#define ROW_frames "frame"
+#define ROW_samples "sample"
+#define ROW_pairs "pair"
+#define ROW_materials "material"
+#define ROW_motions "motion"
+#define ROW_probes "probe"
+#define ROW_probe_pairs "probe-frame pair"
+#define ROW_organs "organ"
+#define ROW_couplings "coupling entry"
+
+const fascia_model_array fascia_model_arrays[FASCIA_MA_COUNT] = {
+#define ROW(field, kind, count, plus, width, path, unit, fill, flags, since, device)                                  \
+  {#field, FASCIA_MA_##kind, ROW_##count, plus, width, path, unit, fill, flags, since},
+    FASCIA_MODEL_ARRAYS(ROW)
+#undef ROW
+};
+
+fascia_model_sizes fascia_model_shape(const fascia_model *m) {
+  return (fascia_model_sizes){m->frame_count,      m->sample_count,     m->pair_count,
+                              m->material_count,   m->motion_count,     m->probe_count,
+                              m->probe_pair_count, m->organ_count,      m->coupling_count};
+}
+
+void fascia_model_views(const fascia_model *m, fascia_model_view views[FASCIA_MA_COUNT]) {
+  const fascia_model_sizes z = fascia_model_shape(m);
+#define VIEW(field, kind, count, plus, ...)                                                                           \
+  views[FASCIA_MA_ID_##field] =                                                                                      \
+      (fascia_model_view){fascia_model_arrays + FASCIA_MA_ID_##field, (void *)m->field, (int64_t)z.count + (plus)};
+  FASCIA_MODEL_ARRAYS(VIEW)
+#undef VIEW
+}
+
+size_t fascia_model_array_size(fascia_ma_kind kind) {
+  switch (kind) {
+  case FASCIA_MA_REAL: return sizeof(fascia_real);
+  case FASCIA_MA_INT: return sizeof(int32_t);
+  case FASCIA_MA_NAME: return FASCIA_NAME_SIZE;
+  case FASCIA_MA_MATERIAL: return sizeof(fascia_material);
+  case FASCIA_MA_MOTION: return sizeof(fascia_motion);
+  case FASCIA_MA_ORGAN: return sizeof(fascia_organ);
+  }
+  return 0;
+}
+
+size_t fascia_model_view_bytes(const fascia_model_view *v) {
+  return (size_t)v->rows * (size_t)v->array->width * fascia_model_array_size(v->array->kind);
+}
+
+// The fill of value e of a row's array: `fill` first in each row, 0 after.
+static int32_t fill_value(const fascia_model_array *a, int64_t e) { return e % a->width ? 0 : a->fill; }
+
+static void fill(const fascia_model_view *v) {
+  const fascia_model_array *a = v->array;
+  const int64_t n = v->rows * a->width;
+  for (int64_t e = 0; a->fill && e < n; ++e)
+    if (a->kind == FASCIA_MA_INT) ((int32_t *)v->data)[e] = fill_value(a, e);
+    else if (a->kind == FASCIA_MA_REAL) ((fascia_real *)v->data)[e] = fill_value(a, e);
+}
+
+int fascia_model_view_set(const fascia_model_view *v) {
+  const fascia_model_array *a = v->array;
+  if (!(a->flags & FASCIA_MA_SPARSE)) return 1;
+  const int64_t n = v->rows * a->width;
+  for (int64_t e = 0; e < n; ++e)
+    if (a->kind == FASCIA_MA_INT ? ((const int32_t *)v->data)[e] != fill_value(a, e)
+                                 : ((const fascia_real *)v->data)[e] != fill_value(a, e))
+      return 1;
+  return 0;
+}
 
 fascia_status fascia_model_alloc(fascia_ctx *ctx, const fascia_model_sizes *z, fascia_model **out) {
   FASCIA_CHECK(out && z, ctx, FASCIA_ERR_ARGUMENT, "fascia_model_alloc: NULL argument");
@@ -38,52 +111,19 @@ fascia_status fascia_model_alloc(fascia_ctx *ctx, const fascia_model_sizes *z, f
   m->probe_pair_count = z->probe_pairs;
   m->organ_count = z->organs;
   m->coupling_count = z->couplings;
-  const int64_t N = z->frames, S = z->samples, P = z->pairs, Q = z->probes, C = z->couplings;
-  m->frame_position = fascia_calloc(3 * N, sizeof(fascia_real));
-  m->frame_rotation = fascia_calloc(4 * N, sizeof(fascia_real));
-  m->frame_kind = fascia_calloc(N, sizeof(int32_t));
-  m->frame_motion = fascia_calloc(N, sizeof(int32_t));
-  m->frame_load = fascia_calloc(6 * N, sizeof(fascia_real));
-  m->frame_organ = fascia_calloc(N, sizeof(int32_t));
-  m->sample_organ = fascia_calloc(S, sizeof(int32_t));
-  m->sample_patch = fascia_calloc(S, sizeof(int32_t));
-  m->sample_modes = fascia_calloc(S, sizeof(int32_t));
-  m->sample_position = fascia_calloc(3 * S, sizeof(fascia_real));
-  m->sample_volume = fascia_calloc(S, sizeof(fascia_real));
-  m->sample_material = fascia_calloc(S, sizeof(int32_t));
-  m->sample_offsets = fascia_calloc(S + 1, sizeof(int32_t));
-  m->pair_frame = fascia_calloc(P, sizeof(int32_t));
-  m->pair_weight = fascia_calloc(P, sizeof(fascia_real));
-  m->pair_gradient = fascia_calloc(3 * P, sizeof(fascia_real));
-  m->frame_offsets = fascia_calloc(N + 1, sizeof(int32_t));
-  m->frame_pairs = fascia_calloc(P, sizeof(int32_t));
-  m->materials = fascia_calloc(z->materials, sizeof(fascia_material));
-  m->motions = fascia_calloc(z->motions, sizeof(fascia_motion));
-  m->probe_name = fascia_calloc(Q, FASCIA_NAME_SIZE);
-  m->probe_position = fascia_calloc(3 * Q, sizeof(fascia_real));
-  m->probe_offsets = fascia_calloc(Q + 1, sizeof(int32_t));
-  m->probe_frame = fascia_calloc(z->probe_pairs, sizeof(int32_t));
-  m->probe_weight = fascia_calloc(z->probe_pairs, sizeof(fascia_real));
-  m->organs = fascia_calloc(z->organs, sizeof(fascia_organ));
-  m->coupling_organ = fascia_calloc(C, sizeof(int32_t));
-  m->coupling_frame = fascia_calloc(C, sizeof(int32_t));
-  m->coupling_triangle = fascia_calloc(C, sizeof(int32_t));
-  m->coupling_barycentric = fascia_calloc(3 * C, sizeof(fascia_real));
-  if (!m->frame_organ || !m->sample_organ || !m->sample_patch || !m->sample_modes || !m->frame_position || !m->frame_rotation || !m->frame_kind || !m->frame_motion || !m->frame_load ||
-      !m->sample_position || !m->sample_volume || !m->sample_material || !m->sample_offsets || !m->pair_frame ||
-      !m->pair_weight || !m->pair_gradient || !m->frame_offsets || !m->frame_pairs || !m->materials || !m->motions ||
-      !m->probe_name || !m->probe_position || !m->probe_offsets || !m->probe_frame || !m->probe_weight ||
-      !m->organs || !m->coupling_organ || !m->coupling_frame || !m->coupling_triangle || !m->coupling_barycentric) {
-    fascia_model_destroy(&m);
-    return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "model: out of memory for %lld frames, %lld samples, %lld pairs",
-                       (long long)N, (long long)S, (long long)P);
-  }
-  for (int64_t i = 0; i < N; ++i) {
-    m->frame_rotation[4 * i] = 1;
-    m->frame_motion[i] = -1;
-    m->frame_organ[i] = -1;
-  }
-  for (int64_t s = 0; s < S; ++s) m->sample_organ[s] = m->sample_patch[s] = -1;
+  fascia_model_view views[FASCIA_MA_COUNT];
+#define ALLOC(field, kind, count, plus, width, ...)                                                                  \
+  m->field = fascia_calloc(((int64_t)z->count + (plus)) * (width), fascia_model_array_size(FASCIA_MA_##kind));
+  FASCIA_MODEL_ARRAYS(ALLOC)
+#undef ALLOC
+  fascia_model_views(m, views);
+  for (int k = 0; k < FASCIA_MA_COUNT; ++k)
+    if (!views[k].data) {
+      fascia_model_destroy(&m);
+      return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "model: out of memory for %lld frames, %lld samples, %lld pairs",
+                         (long long)z->frames, (long long)z->samples, (long long)z->pairs);
+    }
+  for (int k = 0; k < FASCIA_MA_COUNT; ++k) fill(views + k);
   for (int32_t k = 0; k < z->organs; ++k) m->organs[k].motion = -1;
   *out = m;
   return FASCIA_OK;
@@ -92,48 +132,21 @@ fascia_status fascia_model_alloc(fascia_ctx *ctx, const fascia_model_sizes *z, f
 void fascia_model_destroy(fascia_model **model) {
   if (!model || !*model) return;
   fascia_model *m = *model;
-  free(m->tissue_surface.vertices);
-  free(m->tissue_surface.triangles);
-  free(m->tetrahedra);
-  free(m->frame_position);
-  free(m->frame_rotation);
-  free(m->frame_kind);
-  free(m->frame_motion);
-  free(m->frame_load);
-  free(m->frame_organ);
-  free(m->sample_organ);
-  free(m->sample_patch);
-  free(m->sample_modes);
-  free(m->sample_position);
-  free(m->sample_volume);
-  free(m->sample_material);
-  free(m->sample_offsets);
-  free(m->pair_frame);
-  free(m->pair_weight);
-  free(m->pair_gradient);
-  free(m->frame_offsets);
-  free(m->frame_pairs);
-  free(m->materials);
   for (int32_t k = 0; m->motions && k < m->motion_count; ++k) {
     free(m->motions[k].key_time);
     free(m->motions[k].key_translation);
     free(m->motions[k].key_rotation);
   }
-  free(m->motions);
-  free(m->probe_name);
-  free(m->probe_position);
-  free(m->probe_offsets);
-  free(m->probe_frame);
-  free(m->probe_weight);
   for (int32_t k = 0; m->organs && k < m->organ_count; ++k) {
     free(m->organs[k].vertices);
     free(m->organs[k].triangles);
   }
-  free(m->organs);
-  free(m->coupling_organ);
-  free(m->coupling_frame);
-  free(m->coupling_triangle);
-  free(m->coupling_barycentric);
+#define FREE(field, ...) free(m->field);
+  FASCIA_MODEL_ARRAYS(FREE)
+#undef FREE
+  free(m->tissue_surface.vertices);
+  free(m->tissue_surface.triangles);
+  free(m->tetrahedra);
   free(m->provenance);
   free(m);
   *model = NULL;
@@ -258,15 +271,23 @@ static fascia_status check_csr(fascia_ctx *ctx, const char *origin, const char *
   return FASCIA_OK;
 }
 
+// Every real array of the table: finite numbers only.
+static fascia_status validate_finite(fascia_ctx *ctx, const fascia_model *m, const char *origin) {
+  fascia_model_view views[FASCIA_MA_COUNT];
+  fascia_model_views(m, views);
+  for (int k = 0; k < FASCIA_MA_COUNT; ++k) {
+    const fascia_model_array *a = views[k].array;
+    const fascia_real *x = views[k].data;
+    int64_t bad;
+    if (a->kind == FASCIA_MA_REAL && !finite_all(x, views[k].rows * a->width, &bad))
+      return FASCIA_FAIL(ctx, FASCIA_ERR_FORMAT, "model '%s' %s: %s %lld has a value that is not finite (%g)", origin,
+                         a->path, a->row, (long long)(bad / a->width), x[bad]);
+  }
+  return FASCIA_OK;
+}
+
 static fascia_status validate_frames(fascia_ctx *ctx, const fascia_model *m, const char *origin) {
-  int64_t bad;
   const int32_t N = m->frame_count;
-  FASCIA_CHECK(finite_all(m->frame_position, 3 * (int64_t)N, &bad), ctx, FASCIA_ERR_FORMAT,
-               "model '%s' /frames/position: frame %lld has a non-finite coordinate", origin, (long long)(bad / 3));
-  FASCIA_CHECK(finite_all(m->frame_rotation, 4 * (int64_t)N, &bad), ctx, FASCIA_ERR_FORMAT,
-               "model '%s' /frames/rotation: frame %lld has a non-finite quaternion", origin, (long long)(bad / 4));
-  FASCIA_CHECK(finite_all(m->frame_load, 6 * (int64_t)N, &bad), ctx, FASCIA_ERR_FORMAT,
-               "model '%s' /frames/load: frame %lld has a non-finite load", origin, (long long)(bad / 6));
   for (int32_t i = 0; i < N; ++i) {
     const fascia_real *q = m->frame_rotation + 4 * i;
     const double norm = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
@@ -293,10 +314,7 @@ static fascia_status validate_frames(fascia_ctx *ctx, const fascia_model *m, con
 }
 
 static fascia_status validate_samples(fascia_ctx *ctx, const fascia_model *m, const char *origin) {
-  int64_t bad;
   const int32_t S = m->sample_count, N = m->frame_count;
-  FASCIA_CHECK(finite_all(m->sample_position, 3 * (int64_t)S, &bad), ctx, FASCIA_ERR_FORMAT,
-               "model '%s' /samples/position: sample %lld has a non-finite coordinate", origin, (long long)(bad / 3));
   for (int32_t s = 0; s < S; ++s) {
     FASCIA_CHECK(isfinite(m->sample_volume[s]) && m->sample_volume[s] > 0, ctx, FASCIA_ERR_FORMAT,
                  "model '%s' /samples/volume: sample %d has volume %g, expected a positive number", origin, (int)s,
@@ -309,10 +327,6 @@ static fascia_status validate_samples(fascia_ctx *ctx, const fascia_model *m, co
                  (int)m->sample_material[s], (int)m->material_count);
   }
   FASCIA_TRY(check_csr(ctx, origin, "/samples/offsets", m->sample_offsets, S, m->pair_count));
-  FASCIA_CHECK(finite_all(m->pair_weight, m->pair_count, &bad), ctx, FASCIA_ERR_FORMAT,
-               "model '%s' /pairs/weight: pair %lld is not finite", origin, (long long)bad);
-  FASCIA_CHECK(finite_all(m->pair_gradient, 3 * (int64_t)m->pair_count, &bad), ctx, FASCIA_ERR_FORMAT,
-               "model '%s' /pairs/gradient: pair %lld is not finite", origin, (long long)(bad / 3));
   for (int32_t s = 0; s < S; ++s) {
     const int32_t begin = m->sample_offsets[s], end = m->sample_offsets[s + 1];
     FASCIA_CHECK(end > begin, ctx, FASCIA_ERR_FORMAT, "model '%s' /samples/offsets: sample %d has no neighbour frame",
@@ -415,10 +429,7 @@ static fascia_status validate_motions(fascia_ctx *ctx, const fascia_model *m, co
 }
 
 static fascia_status validate_probes(fascia_ctx *ctx, const fascia_model *m, const char *origin) {
-  int64_t bad;
   FASCIA_TRY(check_csr(ctx, origin, "/probes/offsets", m->probe_offsets, m->probe_count, m->probe_pair_count));
-  FASCIA_CHECK(finite_all(m->probe_position, 3 * (int64_t)m->probe_count, &bad), ctx, FASCIA_ERR_FORMAT,
-               "model '%s' /probes/position: probe %lld is not finite", origin, (long long)(bad / 3));
   for (int32_t p = 0; p < m->probe_count; ++p) {
     FASCIA_CHECK(memchr(m->probe_name[p], 0, FASCIA_NAME_SIZE) && m->probe_name[p][0], ctx, FASCIA_ERR_FORMAT,
                  "model '%s' /probes/name: probe %d has an empty or unterminated name", origin, (int)p);
@@ -427,8 +438,6 @@ static fascia_status validate_probes(fascia_ctx *ctx, const fascia_model *m, con
       FASCIA_CHECK(m->probe_frame[k] >= 0 && m->probe_frame[k] < m->frame_count, ctx, FASCIA_ERR_FORMAT,
                    "model '%s' /probes/frame: probe '%s' names frame %d of %d", origin, m->probe_name[p],
                    (int)m->probe_frame[k], (int)m->frame_count);
-      FASCIA_CHECK(isfinite(m->probe_weight[k]), ctx, FASCIA_ERR_FORMAT,
-                   "model '%s' /probes/weight: probe '%s' has a non-finite weight", origin, m->probe_name[p]);
       sum += m->probe_weight[k];
     }
     FASCIA_CHECK(fabs(sum - 1) < WEIGHT_SUM_TOLERANCE, ctx, FASCIA_ERR_FORMAT,
@@ -586,6 +595,7 @@ fascia_status fascia_model_validate(fascia_ctx *ctx, const fascia_model *m, cons
   FASCIA_CHECK(m->sample_count >= 1, ctx, FASCIA_ERR_FORMAT, "model '%s' /samples: no sample", origin);
   int64_t bad;
   FASCIA_CHECK(finite_all(m->gravity, 3, &bad), ctx, FASCIA_ERR_FORMAT, "model '%s' /gravity: not finite", origin);
+  FASCIA_TRY(validate_finite(ctx, m, origin));
   FASCIA_TRY(validate_materials(ctx, m, origin));
   FASCIA_TRY(validate_motions(ctx, m, origin));
   FASCIA_TRY(validate_frames(ctx, m, origin));
@@ -653,62 +663,73 @@ int32_t fascia_model_find_probe(const fascia_model *m, const char *name) {
   return -1;
 }
 
-// FNV-1a over every array the solver reads (model.h says what counts).
-uint64_t fascia_model_fingerprint(const fascia_model *m) {
-  const size_t R = sizeof(fascia_real), I = sizeof(int32_t);
-  const size_t N = (size_t)m->frame_count, S = (size_t)m->sample_count, P = (size_t)m->pair_count;
-  const size_t C = (size_t)m->coupling_count;
-  uint64_t h = FASCIA_FNV_START;
-  h = fascia_fnv(h, m->frame_position, 3 * N * R);
-  h = fascia_fnv(h, m->frame_rotation, 4 * N * R);
-  h = fascia_fnv(h, m->frame_kind, N * I);
-  h = fascia_fnv(h, m->frame_motion, N * I);
-  h = fascia_fnv(h, m->frame_load, 6 * N * R);
-  h = fascia_fnv(h, m->frame_organ, N * I);
-  h = fascia_fnv(h, m->sample_position, 3 * S * R);
-  h = fascia_fnv(h, m->sample_volume, S * R);
-  h = fascia_fnv(h, m->sample_material, S * I);
-  h = fascia_fnv(h, m->sample_organ, S * I);
-  for (size_t s = 0; s < S; ++s) // models without patches keep the hash they had before patches existed
-    if (m->sample_patch[s] >= 0) {
-      h = fascia_fnv(h, m->sample_patch, S * I);
-      break;
-    }
-  for (size_t s = 0; s < S; ++s) // likewise for models without modes
-    if (m->sample_modes[s]) {
-      h = fascia_fnv(h, m->sample_modes, S * I);
-      break;
-    }
-  h = fascia_fnv(h, m->sample_offsets, (S + 1) * I);
-  h = fascia_fnv(h, m->pair_frame, P * I);
-  h = fascia_fnv(h, m->pair_weight, P * R);
-  h = fascia_fnv(h, m->pair_gradient, 3 * P * R);
+static uint64_t hash_name(uint64_t h, const char *name) {
+  const size_t n = strnlen(name, FASCIA_NAME_SIZE);
+  h = fascia_fnv(h, name, n);
+  return fascia_fnv(h, "", 1); // the end of the name: "ab"+"c" differs from "a"+"bc"
+}
+
+static uint64_t hash_materials(uint64_t h, const fascia_model *m, int file) {
   for (int32_t k = 0; k < m->material_count; ++k) {
     const fascia_material *mat = m->materials + k;
     const fascia_real values[5] = {mat->youngs_modulus, mat->poisson_ratio, mat->density, mat->rotation_coupling,
                                    mat->rotation_smoothing};
     const int32_t kinds[2] = {mat->law, mat->part};
+    if (file) h = hash_name(h, mat->name);
     h = fascia_fnv(h, kinds, sizeof kinds);
     h = fascia_fnv(h, values, sizeof values);
   }
+  return h;
+}
+
+static uint64_t hash_motions(uint64_t h, const fascia_model *m, int file) {
+  const size_t R = sizeof(fascia_real);
   for (int32_t k = 0; k < m->motion_count; ++k) {
     const fascia_motion *mo = m->motions + k;
     const size_t K = (size_t)mo->key_count;
+    const int64_t keys = mo->key_count;
+    if (file) h = fascia_fnv(hash_name(h, mo->name), &keys, sizeof keys);
     h = fascia_fnv(h, mo->pivot, 3 * R);
     h = fascia_fnv(h, mo->key_time, K * R);
     h = fascia_fnv(h, mo->key_translation, 3 * K * R);
     h = fascia_fnv(h, mo->key_rotation, 4 * K * R);
   }
+  return h;
+}
+
+static uint64_t hash_organs(uint64_t h, const fascia_model *m, int file) {
   for (int32_t k = 0; k < m->organ_count; ++k) {
     const fascia_organ *o = m->organs + k;
-    const int32_t kinds[4] = {o->kind, o->motion, o->vertex_count, o->triangle_count};
-    h = fascia_fnv(h, kinds, sizeof kinds);
-    h = fascia_fnv(h, o->vertices, 3 * (size_t)o->vertex_count * R);
-    h = fascia_fnv(h, o->triangles, 3 * (size_t)o->triangle_count * I);
+    const int32_t head[4] = {o->kind, o->motion, o->vertex_count, o->triangle_count};
+    if (file) h = hash_name(h, o->name);
+    h = fascia_fnv(h, head, sizeof head);
+    h = fascia_fnv(h, o->vertices, 3 * (size_t)o->vertex_count * sizeof(fascia_real));
+    h = fascia_fnv(h, o->triangles, 3 * (size_t)o->triangle_count * sizeof(int32_t));
   }
-  h = fascia_fnv(h, m->coupling_organ, C * I);
-  h = fascia_fnv(h, m->coupling_frame, C * I);
-  h = fascia_fnv(h, m->coupling_triangle, C * I);
-  h = fascia_fnv(h, m->coupling_barycentric, 3 * C * R);
-  return fascia_fnv(h, m->gravity, 3 * R);
+  return h;
+}
+
+uint64_t fascia_model_hash_rows(uint64_t h, const fascia_model *m, int file) {
+  fascia_model_view views[FASCIA_MA_COUNT];
+  fascia_model_views(m, views);
+  for (int k = 0; k < FASCIA_MA_COUNT; ++k) {
+    const fascia_model_view *v = views + k;
+    if (!file && (!(v->array->flags & FASCIA_MA_FP) || !fascia_model_view_set(v))) continue;
+    switch (v->array->kind) {
+    case FASCIA_MA_NAME:
+      for (int64_t r = 0; r < v->rows; ++r) h = hash_name(h, (const char *)v->data + r * FASCIA_NAME_SIZE);
+      break;
+    case FASCIA_MA_MATERIAL: h = hash_materials(h, m, file); break;
+    case FASCIA_MA_MOTION: h = hash_motions(h, m, file); break;
+    case FASCIA_MA_ORGAN: h = hash_organs(h, m, file); break;
+    default: h = fascia_fnv(h, v->data, fascia_model_view_bytes(v));
+    }
+  }
+  return h;
+}
+
+// FNV-1a over every array the solver reads (model.h says what counts).
+uint64_t fascia_model_fingerprint(const fascia_model *m) {
+  const uint64_t h = fascia_model_hash_rows(FASCIA_FNV_START, m, 0);
+  return fascia_fnv(h, m->gravity, 3 * sizeof(fascia_real));
 }
