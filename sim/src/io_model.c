@@ -768,14 +768,6 @@ static fascia_status member(reader *r, const char *group, int64_t k, int32_t cou
   return FASCIA_OK;
 }
 
-// Datasets whose shapes give the model's sizes, and the others of fixed names.
-static const char *const sized_datasets[] = {
-    "/frames/position", "/frames/rotation", "/frames/kind",     "/frames/motion",   "/frames/load",
-    "/frames/offsets",  "/frames/pairs",    "/samples/position", "/samples/volume", "/samples/material",
-    "/samples/offsets", "/pairs/frame",     "/pairs/weight",     "/pairs/gradient", "/probes/position",
-    "/probes/offsets",  "/probes/frame",    "/probes/weight",    "/coupling/organ", "/coupling/frame",
-    "/coupling/triangle", "/coupling/barycentric", "/materials/name", "/probes/name"};
-
 // A dataset that declares many values must store them: HDF5 reads the fill
 // value (zeros) for storage never written, so a file of a few kilobytes can
 // declare arrays of gigabytes. Every dataset fascia writes is stored whole.
@@ -803,12 +795,12 @@ static fascia_status check_stored(reader *r, const char *name) {
 // Bytes the model's arrays take for these sizes (fascia_model_alloc), and the
 // machine's physical memory (0 when unknown).
 static double model_bytes(const fascia_model_sizes *z) {
-  const double R = sizeof(fascia_real), I = sizeof(int32_t);
-  return (double)z->frames * (13 * R + 3 * I) + (double)z->samples * (4 * R + 2 * I) +
-         (double)z->pairs * (4 * R + 2 * I) + (double)z->probes * (3 * R + I + FASCIA_NAME_SIZE) +
-         (double)z->probe_pairs * (R + I) + (double)z->couplings * (3 * R + 3 * I) +
-         (double)z->materials * sizeof(fascia_material) + (double)z->motions * sizeof(fascia_motion) +
-         (double)z->organs * sizeof(fascia_organ);
+  double bytes = 0;
+#define BYTES(field, kind, count, plus, width, ...)                                                                  \
+  bytes += ((double)z->count + (plus)) * (width) * (double)fascia_model_array_size(FASCIA_MA_##kind);
+  FASCIA_MODEL_ARRAYS(BYTES)
+#undef BYTES
+  return bytes;
 }
 
 static double physical_memory(void) {
@@ -829,61 +821,36 @@ static fascia_status check_memory(reader *r, const fascia_model_sizes *z) {
   return FASCIA_OK;
 }
 
-static fascia_status read_sizes(reader *r, fascia_model_sizes *z) {
-  int64_t n[9];
-  FASCIA_TRY(count_rows(r, "/frames/position", FASCIA_MA_REAL, 3, &n[0]));
-  FASCIA_TRY(count_rows(r, "/samples/position", FASCIA_MA_REAL, 3, &n[1]));
-  FASCIA_TRY(count_rows(r, "/pairs/frame", FASCIA_MA_INT, 0, &n[2]));
-  FASCIA_TRY(count_rows(r, "/materials/name", FASCIA_MA_NAME, 0, &n[3]));
-  FASCIA_TRY(count_members(r, "/motions", &n[4]));
-  FASCIA_TRY(count_rows(r, "/probes/name", FASCIA_MA_NAME, 0, &n[5]));
-  FASCIA_TRY(count_rows(r, "/probes/frame", FASCIA_MA_INT, 0, &n[6]));
-  FASCIA_TRY(count_members(r, "/organs", &n[7]));
-  FASCIA_TRY(count_rows(r, "/coupling/organ", FASCIA_MA_INT, 0, &n[8]));
-  FASCIA_CHECK(n[2] <= n[1] * 1024, r->ctx, FASCIA_ERR_FORMAT,
-               "model '%s' /pairs/frame: %lld pairs for %lld samples is more than 1024 neighbours per sample; %s",
-               r->path, (long long)n[2], (long long)n[1], REMEDY);
-  // open_checked bounded every count by FASCIA_MAX_COUNT (< INT32_MAX)
-  z->frames = (int32_t)n[0];
-  z->samples = (int32_t)n[1];
-  z->pairs = (int32_t)n[2];
-  z->materials = (int32_t)n[3];
-  z->motions = (int32_t)n[4];
-  z->probes = (int32_t)n[5];
-  z->probe_pairs = (int32_t)n[6];
-  z->organs = (int32_t)n[7];
-  z->couplings = (int32_t)n[8];
-  for (size_t k = 0; k < sizeof sized_datasets / sizeof sized_datasets[0]; ++k)
-    FASCIA_TRY(check_stored(r, sized_datasets[k]));
-  return check_memory(r, z);
+// The dataset whose rows count a row's entries: a material's name.
+static const char *counted_dataset(const fascia_model_array *a) {
+  return a->kind == FASCIA_MA_MATERIAL ? "/materials/name" : a->path;
 }
 
-static fascia_status read_frames_samples(reader *r, fascia_model *m) {
-  const int64_t N = m->frame_count, S = m->sample_count, P = m->pair_count;
-  READ(r, "/frames/position", FASCIA_MA_REAL, N, 3, m->frame_position);
-  READ(r, "/frames/rotation", FASCIA_MA_REAL, N, 4, m->frame_rotation);
-  READ(r, "/frames/kind", FASCIA_MA_INT, N, 0, m->frame_kind);
-  READ(r, "/frames/motion", FASCIA_MA_INT, N, 0, m->frame_motion);
-  READ(r, "/frames/load", FASCIA_MA_REAL, N, 6, m->frame_load);
-  READ(r, "/frames/offsets", FASCIA_MA_INT, N + 1, 0, m->frame_offsets);
-  READ(r, "/frames/pairs", FASCIA_MA_INT, P, 0, m->frame_pairs);
-  READ(r, "/samples/position", FASCIA_MA_REAL, S, 3, m->sample_position);
-  READ(r, "/samples/volume", FASCIA_MA_REAL, S, 0, m->sample_volume);
-  READ(r, "/samples/material", FASCIA_MA_INT, S, 0, m->sample_material);
-  // organ owners came with deformable organs: files without them are all tissue
-  if (fascia_h5_link_exists(r->file, "/frames/organ")) READ(r, "/frames/organ", FASCIA_MA_INT, N, 0, m->frame_organ);
-  if (fascia_h5_link_exists(r->file, "/samples/organ")) READ(r, "/samples/organ", FASCIA_MA_INT, S, 0, m->sample_organ);
-  if (r->version >= MODEL_VERSION_PATCHES) READ(r, "/samples/patch", FASCIA_MA_INT, S, 0, m->sample_patch);
-  if (r->version >= MODEL_VERSION_MODES) READ(r, "/samples/modes", FASCIA_MA_INT, S, 0, m->sample_modes);
-  for (int64_t s = 0; s < S && r->version < MODEL_VERSION_MODE_SETS; ++s)
-    FASCIA_CHECK(m->sample_modes[s] <= FASCIA_MODES_NINE, r->ctx, FASCIA_ERR_FORMAT,
-                 "model '%s' /samples/modes: sample %d has %d, which needs format version %d (the file says %d)",
-                 r->path, (int)s, (int)m->sample_modes[s], MODEL_VERSION_MODE_SETS, (int)r->version);
-  READ(r, "/samples/offsets", FASCIA_MA_INT, S + 1, 0, m->sample_offsets);
-  READ(r, "/pairs/frame", FASCIA_MA_INT, P, 0, m->pair_frame);
-  READ(r, "/pairs/weight", FASCIA_MA_REAL, P, 0, m->pair_weight);
-  READ(r, "/pairs/gradient", FASCIA_MA_REAL, P, 3, m->pair_gradient);
-  return FASCIA_OK;
+// The number of entries the file holds for a row: its dataset's rows, or the
+// members of its group (motions, organs).
+static fascia_status count_entries(reader *r, const fascia_model_array *a, int64_t *n) {
+  if (a->kind == FASCIA_MA_MOTION || a->kind == FASCIA_MA_ORGAN) return count_members(r, a->path, n);
+  if (a->kind == FASCIA_MA_MATERIAL) return count_rows(r, counted_dataset(a), FASCIA_MA_NAME, 0, n);
+  return count_rows(r, a->path, a->kind, a->width > 1 ? a->width : 0, n);
+}
+
+static fascia_status read_sizes(reader *r, fascia_model_sizes *z) {
+  int64_t n;
+  // open_checked bounded every count by FASCIA_MAX_COUNT (< INT32_MAX)
+#define SIZE(field, kind, count, plus, width, path, unit, fill, flags, ...)                                          \
+  if ((flags) & FASCIA_MA_SIZES) {                                                                                   \
+    FASCIA_TRY(count_entries(r, fascia_model_arrays + FASCIA_MA_ID_##field, &n));                                   \
+    z->count = (int32_t)n;                                                                                           \
+  }
+  FASCIA_MODEL_ARRAYS(SIZE)
+#undef SIZE
+  FASCIA_CHECK(z->pairs <= (int64_t)z->samples * 1024, r->ctx, FASCIA_ERR_FORMAT,
+               "model '%s' /pairs/frame: %lld pairs for %lld samples is more than 1024 neighbours per sample; %s",
+               r->path, (long long)z->pairs, (long long)z->samples, REMEDY);
+  for (int k = 0; k < FASCIA_MA_COUNT; ++k)
+    if (fascia_model_arrays[k].kind != FASCIA_MA_MOTION && fascia_model_arrays[k].kind != FASCIA_MA_ORGAN)
+      FASCIA_TRY(check_stored(r, counted_dataset(fascia_model_arrays + k)));
+  return check_memory(r, z);
 }
 
 static fascia_status read_materials(reader *r, fascia_model *m) {
@@ -989,17 +956,31 @@ static fascia_status read_organs(reader *r, fascia_model *m) {
   return FASCIA_OK;
 }
 
+// The table's arrays (model_arrays.h) in its order. A dataset of a later
+// version than the file's keeps its fill, as does an optional one the file
+// lacks (organ owners came with deformable organs: files without them are
+// all tissue).
+static fascia_status read_arrays(reader *r, fascia_model *m) {
+  fascia_model_view views[FASCIA_MA_COUNT];
+  fascia_model_views(m, views);
+  for (int k = 0; k < FASCIA_MA_COUNT; ++k) {
+    const fascia_model_array *a = views[k].array;
+    if (a->since ? r->version < a->since : !fascia_h5_link_exists(r->file, a->path)) continue;
+    if (a->kind == FASCIA_MA_MATERIAL) FASCIA_TRY(read_materials(r, m));
+    else if (a->kind == FASCIA_MA_MOTION) FASCIA_TRY(read_motions(r, m));
+    else if (a->kind == FASCIA_MA_ORGAN) FASCIA_TRY(read_organs(r, m));
+    else if (a->kind == FASCIA_MA_NAME) FASCIA_TRY(read_names(r, a->path, views[k].rows, views[k].data));
+    else READ(r, a->path, a->kind, views[k].rows, a->width > 1 ? a->width : 0, views[k].data);
+  }
+  for (int64_t s = 0; s < m->sample_count && r->version < MODEL_VERSION_MODE_SETS; ++s)
+    FASCIA_CHECK(m->sample_modes[s] <= FASCIA_MODES_NINE, r->ctx, FASCIA_ERR_FORMAT,
+                 "model '%s' /samples/modes: sample %d has %d, which needs format version %d (the file says %d)",
+                 r->path, (int)s, (int)m->sample_modes[s], MODEL_VERSION_MODE_SETS, (int)r->version);
+  return FASCIA_OK;
+}
+
+// What follows the table's arrays: gravity, the optional parts, provenance.
 static fascia_status read_rest(reader *r, fascia_model *m) {
-  const int64_t Q = m->probe_count, R = m->probe_pair_count, C = m->coupling_count;
-  FASCIA_TRY(read_names(r, "/probes/name", Q, m->probe_name));
-  READ(r, "/probes/position", FASCIA_MA_REAL, Q, 3, m->probe_position);
-  READ(r, "/probes/offsets", FASCIA_MA_INT, Q + 1, 0, m->probe_offsets);
-  READ(r, "/probes/frame", FASCIA_MA_INT, R, 0, m->probe_frame);
-  READ(r, "/probes/weight", FASCIA_MA_REAL, R, 0, m->probe_weight);
-  READ(r, "/coupling/organ", FASCIA_MA_INT, C, 0, m->coupling_organ);
-  READ(r, "/coupling/frame", FASCIA_MA_INT, C, 0, m->coupling_frame);
-  READ(r, "/coupling/triangle", FASCIA_MA_INT, C, 0, m->coupling_triangle);
-  READ(r, "/coupling/barycentric", FASCIA_MA_REAL, C, 3, m->coupling_barycentric);
   READ(r, "/gravity", FASCIA_MA_REAL, 3, 0, m->gravity);
   // optional: absent in files of models that must be held everywhere
   const htri_t floating = H5Aexists_by_name(r->file, "/", "allow_floating", H5P_DEFAULT);
@@ -1049,10 +1030,7 @@ fascia_status fascia_model_load(fascia_ctx *ctx, const char *path, fascia_model 
   FASCIA_TRY_GOTO(read_checksum(&r));
   FASCIA_TRY_GOTO(read_sizes(&r, &sizes));
   FASCIA_TRY_GOTO(fascia_model_alloc(ctx, &sizes, &m));
-  FASCIA_TRY_GOTO(read_frames_samples(&r, m));
-  FASCIA_TRY_GOTO(read_materials(&r, m));
-  FASCIA_TRY_GOTO(read_motions(&r, m));
-  FASCIA_TRY_GOTO(read_organs(&r, m));
+  FASCIA_TRY_GOTO(read_arrays(&r, m));
   FASCIA_TRY_GOTO(read_rest(&r, m));
 cleanup:
   if (r.file >= 0) H5Fclose(r.file);
