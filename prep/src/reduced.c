@@ -159,7 +159,7 @@ static fascia_status part_tree_create(fascia_ctx *ctx, const fascia_prep_scene *
              "scene '%s' tissues[%d].%s.%s: %s '%s' of organ '%s' has no surface (no triangle%s); attach the strand "
              "to a %s that has one",
              scene->path, (int)t, key, by_label ? "label" : "part", by_label ? "label" : "part",
-             by_label ? a->label : a->part, m->name, by_label ? ": no voxel of it left in the segmentation" : "",
+             by_label ? a->label : a->part, m->name, by_label ? " of the organ's surface: its voxels lie inside the organ" : "",
              by_label ? "label" : "part");
   out->triangles = prep_calloc(out->count, sizeof(int32_t));
   int32_t *corners = prep_calloc(3 * (int64_t)out->count, sizeof(int32_t));
@@ -229,6 +229,7 @@ typedef struct strand_end {
   surface_points area;     ///< region or spread: points of the area; spread: then its fan's frames
   double centre[3];        ///< spread: the mean of its fan's frames
   double reach;            ///< spread: the farthest fan frame from centre, m
+  double spacing;          ///< spread: between its fan's frames, m
 } strand_end;
 
 static void end_free(strand_end *e) {
@@ -408,32 +409,69 @@ static fascia_status end_setup(fascia_ctx *ctx, const fascia_prep_scene *scene, 
                      scene->path, (int)t, key, a->region.kind == FASCIA_PREP_REGION_BOX ? "box" : "sphere", od->name,
                      c[0], c[1], c[2], 1e3 * norm3(d));
   }
-  if (a->spread) {
-    PREP_TRY(pick_fan(ctx, e, spacing, 2 * vol->voxel_size));
-    memcpy(e->x, e->centre, sizeof e->x);
-  } else { // a region's point nearest to its centre, a first guess
+  e->spacing = spacing;
+  if (!by_part) { // a first guess: the area's first point
     memcpy(e->x, e->area.x, sizeof e->x);
     e->triangle = e->area.triangle[0];
   }
   return FASCIA_OK;
 }
 
-// Moves an end that depends on where the strand goes toward `target` (its
-// next point): a part's or a region's point nearest it, or a spread end's
-// apex, off its area's centre toward it by the area's reach (its fibres
-// then meet the surface at 45 degrees or steeper), at least a frame
-// spacing, at most a third of the way.
-static void end_toward(const fascia_prep_tissue_def *td, strand_end *e, const double *target) {
+// A spread end's fan, once the strand's next point `target` is known: the
+// area's points that face it (their triangle's outward normal toward it:
+// the strand's fibres insert on the side it comes from), thinned to the
+// fan's frames; its apex off their centre toward the target by the area's
+// reach (its fibres then meet the surface at 45 degrees or steeper), at
+// least a frame spacing, at most a third of the way.
+static fascia_status end_fan(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_meshes *meshes,
+                             const fascia_prep_volume *vol, int32_t t, strand_end *e, const double *target) {
+  const fascia_prep_tissue_def *td = scene->tissues + t;
+  const fascia_prep_mesh *m = meshes->organs + e->a->organ;
+  const double h = vol->voxel_size;
+  // the mesh's winding: outward where it encloses a positive volume
+  double volume = 0;
+  for (int32_t k = 0; k < m->triangle_count; ++k) {
+    const int32_t *c = m->triangles + 3 * (int64_t)k;
+    double n[3];
+    cross3(m->vertices + 3 * (int64_t)c[1], m->vertices + 3 * (int64_t)c[2], n);
+    volume += dot3(m->vertices + 3 * (int64_t)c[0], n);
+  }
+  const double outward = volume < 0 ? -1 : 1;
+  surface_points *all = &e->area;
+  int64_t kept = 0;
+  for (int64_t k = 0; k < all->count; ++k) {
+    const int32_t *c = m->triangles + 3 * (int64_t)all->triangle[k];
+    double e1[3], e2[3], n[3], d[3];
+    sub3(m->vertices + 3 * (int64_t)c[1], m->vertices + 3 * (int64_t)c[0], e1);
+    sub3(m->vertices + 3 * (int64_t)c[2], m->vertices + 3 * (int64_t)c[0], e2);
+    cross3(e1, e2, n);
+    sub3(target, all->x + 3 * k, d);
+    if (!(outward * dot3(n, d) > 0)) continue;
+    memmove(all->x + 3 * kept, all->x + 3 * k, 3 * sizeof(double));
+    all->triangle[kept++] = all->triangle[k];
+  }
+  char key[64];
+  PREP_CHECK(kept > 0, ctx, FASCIA_ERR_ARGUMENT,
+             "scene '%s' tissues[%d].%s: no point of the area faces the strand, which comes from (%g %g %g): the "
+             "area lies on the far side of organ '%s'; move it to the side the strand comes from",
+             scene->path, (int)t, area_key(e, key, sizeof key), target[0], target[1], target[2],
+             scene->organs[e->a->organ].name);
+  all->count = kept;
+  PREP_TRY(pick_fan(ctx, e, e->spacing, 2 * h));
+  double d[3];
+  sub3(target, e->centre, d);
+  const double far = norm3(d);
+  const double lift = fmin(fmax(e->reach, td->frame_spacing), far / 3);
+  for (int r = 0; r < 3; ++r) e->x[r] = e->centre[r] + (far > 0 ? lift * d[r] / far : 0);
+  return FASCIA_OK;
+}
+
+// Moves an end that depends on where the strand goes to the point of its
+// area (part, label, region; spread: its area before the fan is made)
+// nearest `target`.
+static void end_toward(strand_end *e, const double *target) {
   const fascia_prep_attachment *a = e->a;
   if (e->fixed) return;
-  if (a->spread) {
-    double d[3];
-    sub3(target, e->centre, d);
-    const double far = norm3(d);
-    const double h = fmin(fmax(e->reach, td->frame_spacing), far / 3);
-    for (int r = 0; r < 3; ++r) e->x[r] = e->centre[r] + (far > 0 ? h * d[r] / far : 0);
-    return;
-  }
   if (a->part[0] || a->label[0]) {
     part_closest(&e->part, target, e->x, &e->triangle);
     return;
@@ -524,13 +562,15 @@ static fascia_status build_strand(fascia_ctx *ctx, const fascia_prep_scene *scen
   // the ends that depend on the strand's path: toward the through points,
   // or toward each other (alternate projections: a few rounds settle on
   // the nearest points of convex-ish areas)
+  double target[2][3];
   for (int round = 0; round < (n_through ? 1 : 8); ++round)
     for (int k = 0; k < 2; ++k) {
-      const double *target = n_through ? td->through + (k == 0 ? 0 : 3 * (int64_t)(n_through - 1))
-                             : ends[1 - k].a->spread ? ends[1 - k].centre
-                                                     : ends[1 - k].x;
-      end_toward(td, ends + k, target);
+      memcpy(target[k], n_through ? td->through + (k == 0 ? 0 : 3 * (int64_t)(n_through - 1)) : ends[1 - k].x,
+             sizeof target[k]);
+      end_toward(ends + k, target[k]);
     }
+  for (int k = 0; k < 2; ++k)
+    if (ends[k].a->spread) PREP_TRY_GOTO(end_fan(ctx, scene, meshes, vol, t, ends + k, target[k]));
   memcpy(curve, ends[0].x, 3 * sizeof(double));
   for (int32_t k = 0; k < n_through; ++k)
     for (int r = 0; r < 3; ++r) curve[3 * (k + 1) + r] = td->through[3 * k + r];
