@@ -41,10 +41,12 @@
 #include "fascia/files.h"
 #include "presets.h"
 #include "scenes.h"
+#include "tradeoff_scene.h"
 
 static const char tradeoff_usage[] =
     "usage: fascia tradeoff [--out DIR] [--quick] [--repeats R] [--threads T] [--time T] [--json] [--no-plot]\n"
     "                       [--backend cpu|cuda|auto|emulated]\n"
+    "       fascia tradeoff SCENE.json [...]   the trade on your own scene (fascia tradeoff SCENE.json --help)\n"
     "\n"
     "Sweeps the knobs that trade time for accuracy on the paper's cantilever and writes\n"
     "DIR/tradeoff.csv, tradeoff.json, convergence.csv, pareto.gp, convergence.gp and, with\n"
@@ -443,20 +445,26 @@ static const char *const out_names[] = {"tradeoff.csv", "tradeoff.json", "conver
                                         "points_static_incompressible.dat", "front_static_incompressible.dat",
                                         "points_dynamic_cantilever.dat", "front_dynamic_cantilever.dat", NULL};
 
-static fascia_file *open_out(const tradeoff_options *opt, const char *name) {
+fascia_file *cli_tradeoff_open(fascia_ctx *ctx, const char *dir, const char *name) {
   char path[4096];
-  snprintf(path, sizeof path, "%s/%s", opt->out, name);
+  snprintf(path, sizeof path, "%s/%s", dir, name);
   fascia_file *f = NULL;
-  const fascia_status st = fascia_file_open(opt->ctx, "--out", path, &f);
-  if (st != FASCIA_OK) cli_fail("tradeoff", opt->ctx, st);
+  const fascia_status st = fascia_file_open(ctx, "--out", path, &f);
+  if (st != FASCIA_OK) cli_fail("tradeoff", ctx, st);
   return f;
 }
 
-// Finishes f: 0, else 1 after the message (nothing left under its name).
-static int close_out(const tradeoff_options *opt, fascia_file *f) {
+int cli_tradeoff_commit(fascia_ctx *ctx, fascia_file *f) {
   const fascia_status st = fascia_file_commit(&f);
-  return st == FASCIA_OK ? 0 : cli_fail("tradeoff", opt->ctx, st);
+  return st == FASCIA_OK ? 0 : cli_fail("tradeoff", ctx, st);
 }
+
+static fascia_file *open_out(const tradeoff_options *opt, const char *name) {
+  return cli_tradeoff_open(opt->ctx, opt->out, name);
+}
+
+// Finishes f: 0, else 1 after the message (nothing left under its name).
+static int close_out(const tradeoff_options *opt, fascia_file *f) { return cli_tradeoff_commit(opt->ctx, f); }
 
 // Point files for gnuplot: all rows of a set, and its front sorted by time.
 static int write_points(const tradeoff_options *opt, const row *rows, int count, int dynamic, int problem) {
@@ -564,18 +572,25 @@ static int write_plot_scripts(const tradeoff_options *opt) {
   return close_out(opt, file);
 }
 
-static int run_gnuplot(const tradeoff_options *opt) {
+int cli_tradeoff_gnuplot(const char *dir, const char *const *scripts) {
   if (system("command -v gnuplot > /dev/null 2>&1") != 0) {
-    fprintf(stderr, "fascia tradeoff: gnuplot not found; the scripts are in %s (gnuplot pareto.gp)\n", opt->out);
+    fprintf(stderr, "fascia tradeoff: gnuplot not found; the scripts are in %s (gnuplot %s)\n", dir, scripts[0]);
     return 0;
   }
-  char command[4600];
-  snprintf(command, sizeof command, "cd '%s' && gnuplot pareto.gp && gnuplot convergence.gp", opt->out);
+  char command[8192];
+  int n = snprintf(command, sizeof command, "cd '%s'", dir);
+  for (int k = 0; scripts[k] && n > 0 && n < (int)sizeof command; ++k)
+    n += snprintf(command + n, sizeof command - (size_t)n, " && gnuplot %s", scripts[k]);
   if (system(command) != 0) {
-    fprintf(stderr, "fascia tradeoff: gnuplot failed in %s\n", opt->out);
+    fprintf(stderr, "fascia tradeoff: gnuplot failed in %s\n", dir);
     return 1;
   }
   return 0;
+}
+
+static int run_gnuplot(const tradeoff_options *opt) {
+  static const char *const scripts[] = {"pareto.gp", "convergence.gp", NULL};
+  return cli_tradeoff_gnuplot(opt->out, scripts);
 }
 
 // ------------------------------------------------------------------ main --
@@ -643,6 +658,7 @@ static void print_backends(const row *rows, int count) {
 }
 
 int cmd_tradeoff(int argc, char **argv) {
+  if (cli_tradeoff_scene_wanted(argc, argv)) return cmd_tradeoff_scene(argc, argv); // fascia tradeoff SCENE.json
   tradeoff_options opt;
   int rc = parse_options(argc, argv, &opt);
   if (rc >= 0) return rc;

@@ -35,6 +35,9 @@ extern const char cli_prep_usage[];
 /// One line on fascia prep for `fascia info`: "module PATH", "module ... missing: ..." or
 /// "not built (why)"; the module is looked for, not loaded.
 void cli_prep_status(char *out, size_t size);
+/// The prep stage's module, loaded (dlopen) for a command other than prep
+/// that calls the prep API through dlsym; NULL after one line on stderr.
+void *cli_prep_module_open(const char *command);
 
 /// Prints "fascia NAME: <ctx message>" on stderr (and where, with --verbose)
 /// and returns 1.

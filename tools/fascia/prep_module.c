@@ -45,6 +45,12 @@ static int asks_for_help(int argc, char **argv) {
 
 void cli_prep_status(char *out, size_t size) { snprintf(out, size, "not built (%s)", FASCIA_PREP_WHY); }
 
+void *cli_prep_module_open(const char *command) {
+  fprintf(stderr, "fascia %s: the preprocessing stage was not built (%s); reconfigure with -DFASCIA_PREP=ON\n", command,
+          FASCIA_PREP_WHY);
+  return NULL;
+}
+
 int cmd_prep(int argc, char **argv) {
   if (asks_for_help(argc, argv)) printf("%s", cli_prep_usage);
   fprintf(stderr,
@@ -117,6 +123,21 @@ int cmd_prep(int argc, char **argv) {
           ": install fascia again\n",
           folder, folder);
   return 1;
+}
+
+
+void *cli_prep_module_open(const char *command) {
+  char folder[PATH_MAX], path[PATH_MAX + 64];
+  if (!program_folder(folder) || !find_module(folder, path)) {
+    fprintf(stderr, "fascia %s: the prep stage's module " MODULE_NAME " is missing: install fascia again\n", command);
+    return NULL;
+  }
+  void *module = dlopen(path, RTLD_NOW | RTLD_LOCAL);
+  if (!module) {
+    const char *why = dlerror();
+    fprintf(stderr, "fascia %s: cannot load the prep stage: %s\n", command, why ? why : path);
+  }
+  return module;
 }
 
 #endif

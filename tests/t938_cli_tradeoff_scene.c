@@ -1,0 +1,158 @@
+// SPDX-License-Identifier: MIT
+// SPDX-FileCopyrightText: fascia developers
+// `fascia tradeoff SCENE.json` on tiny ladders of two shipped scenes:
+// every planned row is there, the finest row's error is 0, each row's
+// largest organ-force error is what its own forces and the reference's give,
+// a rung that cannot be prepared is reported in its rows while the others
+// run, the recommendation respects --budget (none fits: exit 1, no model
+// written), -o writes a model `fascia inspect` reads, bad arguments are
+// refused with one line and exit 2.
+// Usage: t938_cli_tradeoff_scene PATH/TO/fascia WORK_DIR SCENE.json SHELL-SCENE.json
+#define _POSIX_C_SOURCE 200809L
+#include <cjson/cJSON.h>
+#include <math.h>
+
+#include "check.h"
+#include "cli_exec.h"
+
+static cli_result result;
+
+static double number(const cJSON *o, const char *key) {
+  const cJSON *v = cJSON_GetObjectItemCaseSensitive(o, key);
+  return cJSON_IsNumber(v) ? v->valuedouble : NAN;
+}
+
+static int flag(const cJSON *o, const char *key) { return cJSON_IsTrue(cJSON_GetObjectItemCaseSensitive(o, key)); }
+
+static double norm3(const double *v) { return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
+
+// Organ g's force of a row into f; 0 when absent.
+static int organ_force(const cJSON *row, int g, double f[3]) {
+  const cJSON *organ = cJSON_GetArrayItem(cJSON_GetObjectItemCaseSensitive(row, "organs"), g);
+  const cJSON *a = cJSON_GetObjectItemCaseSensitive(organ, "force");
+  if (cJSON_GetArraySize(a) != 3) return 0;
+  for (int c = 0; c < 3; ++c) f[c] = cJSON_GetArrayItem(a, c)->valuedouble;
+  return 1;
+}
+
+// The row's largest organ-force error recomputed from the forces: each
+// organ's difference in % of the reference's force, or of 1 % of the
+// largest reference force where an organ's is smaller (docs/cli.md).
+static double recomputed_error(const cJSON *row, const cJSON *ref) {
+  const int organs = cJSON_GetArraySize(cJSON_GetObjectItemCaseSensitive(ref, "organs"));
+  double largest = 0, top = 0, f[3], r[3];
+  for (int g = 0; g < organs; ++g)
+    if (organ_force(ref, g, r)) largest = fmax(largest, norm3(r));
+  for (int g = 0; g < organs; ++g) {
+    if (!organ_force(row, g, f) || !organ_force(ref, g, r)) return NAN;
+    const double d[3] = {f[0] - r[0], f[1] - r[1], f[2] - r[2]};
+    top = fmax(top, 100 * norm3(d) / fmax(norm3(r), 0.01 * largest));
+  }
+  return top;
+}
+
+int main(int argc, char **argv) {
+  if (argc < 5) {
+    fprintf(stderr, "usage: t938_cli_tradeoff_scene PATH/TO/fascia WORK_DIR SCENE.json SHELL-SCENE.json\n");
+    return 1;
+  }
+#ifndef FASCIA_HAVE_PREP
+  printf("skipped: the prep stage was not built\n");
+  return 77;
+#endif
+  const char *fascia = argv[1], *scene = argv[3], *shells = argv[4];
+  char dir[1024], err[1200], model[1200], args[4096];
+  snprintf(dir, sizeof dir, "%s/t938", argv[2]);
+  snprintf(err, sizeof err, "%s/stderr.txt", dir);
+  snprintf(model, sizeof model, "%s/recommended.h5", dir);
+  snprintf(args, sizeof args, "rm -rf '%s' && mkdir -p '%s'", dir, dir);
+  CHECK(system(args) == 0);
+
+  snprintf(args, sizeof args,
+           "tradeoff '%s' --ladder 1.4,1 --kinds scene --presets default,interactive --steps 10 --repeats 1 "
+           "--threads 1 --budget 1000 --out '%s' -o '%s' --json --no-plot",
+           scene, dir, model);
+  CHECK(cli_exec(fascia, args, err, &result) && result.status == 0);
+  if (result.status != 0) fprintf(stderr, "%s\n", result.err);
+  cJSON *rows = cJSON_Parse(result.out);
+  CHECK(cJSON_IsArray(rows));
+  // 2 rungs x 2 presets, and the one tissue one rung coarser
+  CHECK(cJSON_GetArraySize(rows) == 5);
+  const cJSON *ref = NULL, *best = NULL, *row;
+  int failed = 0, ladder = 0, tissue = 0;
+  cJSON_ArrayForEach(row, rows) {
+    const cJSON *error = cJSON_GetObjectItemCaseSensitive(row, "error");
+    const char *group = cJSON_GetStringValue(cJSON_GetObjectItemCaseSensitive(row, "group"));
+    ladder += group && !strcmp(group, "ladder"), tissue += group && !strcmp(group, "tissue");
+    if (cJSON_IsString(error)) {
+      ++failed;
+      continue;
+    }
+    if (flag(row, "reference")) ref = row;
+    if (flag(row, "recommended")) best = row;
+  }
+  CHECK(failed == 0 && ladder == 4 && tissue == 1);
+  CHECK(ref != NULL && best != NULL);
+  if (ref && best) {
+    CHECK(number(ref, "factor") == 1 && number(ref, "force_error_percent") == 0);
+    const double budget_ms = 1000;
+    CHECK(number(best, "ms_per_step") <= budget_ms);
+    // the recommendation: no row within the budget is more accurate
+    cJSON_ArrayForEach(row, rows) {
+      if (cJSON_IsString(cJSON_GetObjectItemCaseSensitive(row, "error"))) continue;
+      if (number(row, "ms_per_step") <= budget_ms)
+        CHECK(number(row, "force_error_percent") >= number(best, "force_error_percent"));
+    }
+    // every error is computed against the reference's forces
+    cJSON_ArrayForEach(row, rows) {
+      if (cJSON_IsString(cJSON_GetObjectItemCaseSensitive(row, "error"))) continue;
+      const double e = number(row, "force_error_percent");
+      CHECK_NEAR(recomputed_error(row, ref), e, 1e-6, 1e-9);
+    }
+  }
+  cJSON_Delete(rows);
+  CHECK(cli_file_exists(model));
+  snprintf(args, sizeof args, "%s/tradeoff-scene.csv", dir);
+  CHECK(cli_file_exists(args));
+  snprintf(args, sizeof args, "inspect '%s' --json", model);
+  CHECK(cli_exec(fascia, args, err, &result) && result.status == 0);
+
+  // a rung that cannot be prepared (the shell's wall as thick as its frames are
+  // apart at x0.5) is reported in its row, and the other rung still runs
+  snprintf(args, sizeof args,
+           "tradeoff '%s' --ladder 1,0.5 --kinds scene --presets interactive --no-tissues --steps 5 --repeats 1 "
+           "--threads 1 --out '%s' --json --no-plot",
+           shells, dir);
+  CHECK(cli_exec(fascia, args, err, &result) && result.status == 0);
+  rows = cJSON_Parse(result.out);
+  CHECK(cJSON_GetArraySize(rows) == 2);
+  const cJSON *coarse = cJSON_GetArrayItem(rows, 0), *fine = cJSON_GetArrayItem(rows, 1);
+  CHECK(number(coarse, "factor") == 1 && cJSON_IsNull(cJSON_GetObjectItemCaseSensitive(coarse, "error")));
+  const char *why = cJSON_GetStringValue(cJSON_GetObjectItemCaseSensitive(fine, "error"));
+  CHECK(number(fine, "factor") == 0.5 && why && strstr(why, "prep: ") && strstr(why, "thickness"));
+  cJSON_Delete(rows);
+
+  // a budget no row meets: exit 1 saying so, no model written
+  char none[1200];
+  snprintf(none, sizeof none, "%s/none.h5", dir);
+  snprintf(args, sizeof args,
+           "tradeoff '%s' --ladder 1 --kinds scene --presets interactive --no-tissues --steps 5 --repeats 1 "
+           "--threads 1 --budget 0.000001 --out '%s' -o '%s' --no-plot",
+           scene, dir, none);
+  CHECK(cli_exec(fascia, args, err, &result) && result.status == 1);
+  CHECK(strstr(result.err, "no row") && strstr(result.err, "--budget"));
+  CHECK(!cli_file_exists(none));
+
+  // bad arguments: one line, exit 2, nothing prepared
+  static const char *const bad[] = {"--budget -1", "--budget 5 --error 5", "--ladder 1,1.4", "--presets fast",
+                                    "--kinds hex", "--steps 0", "extra.json", "--frobnicate"};
+  for (size_t k = 0; k < sizeof bad / sizeof bad[0]; ++k) {
+    snprintf(args, sizeof args, "tradeoff '%s' %s --out '%s'", scene, bad[k], dir);
+    CHECK(cli_exec(fascia, args, err, &result) && result.status == 2);
+    CHECK(cli_lines(result.err) == 1 && strstr(result.err, "fascia tradeoff: "));
+    if (result.status != 2 || cli_lines(result.err) != 1) fprintf(stderr, "'%s': %s\n", bad[k], result.err);
+  }
+  snprintf(args, sizeof args, "tradeoff '%s/missing.json' --out '%s'", dir, dir);
+  CHECK(cli_exec(fascia, args, err, &result) && result.status == 1 && cli_lines(result.err) == 1);
+  return CHECK_RESULT();
+}
