@@ -13,6 +13,7 @@
 
 #include "backend.h"
 #include "launch.h"
+#include "model_arrays.h"
 #include "modes.h"
 
 #define CG_CHUNK 8 // CG iterations per recorded chunk in tolerance mode
@@ -159,6 +160,26 @@ static fascia_status upload_bodies(fascia_device *dev, const fascia_backend_setu
   return FASCIA_OK;
 }
 
+// The model's arrays whose device column (model_arrays.h) names a member of
+// fascia_dev: DEVICE(member) gives the slot &D->member, HOST none.
+static fascia_status upload_model_arrays(fascia_device *dev, const fascia_model *m) {
+  fascia_dev *D = &dev->D;
+  fascia_model_view views[FASCIA_MA_COUNT];
+  fascia_model_views(m, views);
+  void **slots[FASCIA_MA_COUNT] = {0};
+#define HOST NULL
+#define DEVICE(member) (void **)&D->member
+#define SLOT(field, kind, count, plus, width, path, unit, fill, flags, since, device)                                 \
+  slots[FASCIA_MA_ID_##field] = device;
+  FASCIA_MODEL_ARRAYS(SLOT)
+#undef SLOT
+#undef DEVICE
+#undef HOST
+  for (int k = 0; k < FASCIA_MA_COUNT; ++k)
+    if (slots[k]) FASCIA_TRY(put(dev, views[k].data, fascia_model_view_bytes(views + k), slots[k]));
+  return FASCIA_OK;
+}
+
 static fascia_status upload_model(fascia_device *dev, const fascia_backend_setup *setup) {
   const fascia_system *sys = setup->sys;
   const fascia_model *m = setup->model;
@@ -178,28 +199,20 @@ static fascia_status upload_model(fascia_device *dev, const fascia_backend_setup
                    : smoothing ? FASCIA_K_SAMPLE_STIFFNESS_SMOOTHING
                                : FASCIA_K_SAMPLE_STIFFNESS_PAPER;
   for (int c = 0; c < 3; ++c) D->gravity[c] = sys->gravity[c];
-  // the per-sample math's arrays (fascia_pt_model), then the reverse table
-  PUT(pm.sample_offsets, m->sample_offsets, Sn + 1, int32_t);
-  PUT(pm.pair_frame, m->pair_frame, P, int32_t);
-  PUT(pm.pair_weight, m->pair_weight, P, fascia_real);
-  PUT(pm.pair_gradient, m->pair_gradient, 3 * P, fascia_real);
+  // the model's arrays, then the system's: the per-sample math's (fascia_pt_model) and the rest
+  FASCIA_TRY(upload_model_arrays(dev, m));
+  dev->frame_load = (fascia_real *)D->frame_load; // sent again at every step's begin
   PUT(pm.pair_offset, sys->pair_offset, 3 * P, fascia_real);
-  PUT(pm.sample_volume, m->sample_volume, Sn, fascia_real);
   PUT(pm.sample_lambda, sys->sample_lambda, Sn, fascia_real);
   PUT(pm.sample_mu, sys->sample_mu, Sn, fascia_real);
   PUT(pm.sample_coupling, sys->sample_coupling, Sn, fascia_real);
   PUT(pm.sample_curvature, sys->sample_curvature, Sn, fascia_real);
   PUT(pm.sample_law, sys->sample_law, Sn, int32_t);
-  PUT(frame_offsets, m->frame_offsets, N + 1, int32_t);
-  PUT(frame_pairs, m->frame_pairs, P, int32_t);
   PUT(pair_sample, sys->pair_sample, P, int32_t);
   PUT(sample_mass, sys->sample_mass, Sn, fascia_real);
   PUT(frame_lumped_moments, sys->frame_lumped_moments, 13 * (int64_t)N, fascia_real);
   PUT(frame_mass, sys->frame_mass, N, fascia_real);
   PUT(frame_moment, sys->frame_moment, 3 * N, fascia_real);
-  FASCIA_TRY(put(dev, m->frame_load, 6 * (size_t)N * sizeof(fascia_real), (void **)&dev->frame_load));
-  D->frame_load = dev->frame_load;
-  PUT(rest_rotation, m->frame_rotation, 4 * N, fascia_real);
   FASCIA_TRY(put(dev, setup->mask, 6 * (size_t)N, (void **)&dev->mask));
   D->mask = D->full_mask = dev->mask;
   if (setup->bodies) FASCIA_TRY(upload_bodies(dev, setup));
