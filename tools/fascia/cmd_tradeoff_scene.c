@@ -127,6 +127,7 @@ typedef struct scene_options {
   int preset_count;
   double budget, error, dt;
   int steps, threads, repeats, tissues, json, plot, quick;
+  int other_kind; ///< kinds left to the default: the second is the kind the scene does not use
 } scene_options;
 
 // The positional argument, skipping the values of options that take one.
@@ -281,7 +282,7 @@ static int parse_scene_options(int argc, char **argv, scene_options *o) {
     o->ladder_count = o->quick ? 2 : 3;
     memcpy(o->ladder, o->quick ? quick : full, (size_t)o->ladder_count * sizeof(double));
   }
-  if (!kinds_given) o->kinds[0] = KIND_SCENE, o->kind_count = o->quick ? 1 : 2; // the other kind: set with the scene
+  if (!kinds_given) o->kinds[0] = KIND_SCENE, o->kind_count = o->quick ? 1 : 2, o->other_kind = !o->quick;
   if (!presets_given) {
     static const char *const full[] = {"default", "interactive", "balanced", "accurate"};
     o->preset_count = o->quick ? 2 : 4;
@@ -1098,7 +1099,7 @@ static int learn_scene(study *s, const fascia_prep_scene *sc) {
   if (!s->organ_names || !s->tissue_names) return 0;
   for (int k = 0; k < sc->organ_count; ++k) memcpy(s->organ_names[k], sc->organs[k].name, FASCIA_NAME_SIZE);
   for (int k = 0; k < sc->tissue_count; ++k) memcpy(s->tissue_names[k], sc->tissues[k].name, FASCIA_NAME_SIZE);
-  if (o->kind_count == 2 && o->kinds[1] == 0 && o->kinds[0] == KIND_SCENE) { // the default: the other kind
+  if (o->other_kind) {
     int kind = FASCIA_PREP_SHAPE_MLS;
     for (int t = sc->tissue_count - 1; t >= 0; --t)
       if (sc->tissues[t].form == FASCIA_PREP_FORM_VOLUME) kind = sc->tissues[t].shape_kind;
