@@ -748,11 +748,11 @@ static fascia_status count_members(reader *r, const char *name, int64_t *count) 
   return FASCIA_OK;
 }
 
-// Name of member k of group `group` (in name order) and, from its attribute
-// `index`, its place in the model (checked to be in range; the caller checks
-// that no two members share a place).
-static fascia_status member(reader *r, const char *group, int64_t k, int32_t count, char *name, char *member_path,
-                            int32_t *index) {
+// Member k of group `group` (in name order): from its attribute `index`, its
+// place in the model, checked to be in range and not taken (the name there,
+// at names + index * stride, still empty), which then gets its name.
+static fascia_status member(reader *r, const char *group, int64_t k, int32_t count, char *names, size_t stride,
+                            char *member_path, int32_t *index) {
   char link[FASCIA_NAME_SIZE + 1];
   const ssize_t length =
       H5Lget_name_by_idx(r->file, group, H5_INDEX_NAME, H5_ITER_INC, (hsize_t)k, link, sizeof link, H5P_DEFAULT);
@@ -764,6 +764,9 @@ static fascia_status member(reader *r, const char *group, int64_t k, int32_t cou
   FASCIA_TRY(read_int_attr(r, member_path, "index", index));
   FASCIA_CHECK(*index >= 0 && *index < count, r->ctx, FASCIA_ERR_FORMAT,
                "model '%s' %s: index %d is out of range 0..%d", r->path, member_path, (int)*index, (int)count - 1);
+  char *name = names + (size_t)*index * stride;
+  FASCIA_CHECK(!name[0], r->ctx, FASCIA_ERR_FORMAT, "model '%s' %s: index %d is also used by '%s'", r->path,
+               member_path, (int)*index, name);
   memcpy(name, link, (size_t)length + 1);
   return FASCIA_OK;
 }
@@ -905,12 +908,8 @@ static fascia_status read_motions(reader *r, fascia_model *m) {
   char group[PATH_SIZE], name[PATH_SIZE + 16];
   for (int64_t k = 0; k < m->motion_count; ++k) {
     int32_t index;
-    char scratch[FASCIA_NAME_SIZE] = {0};
-    FASCIA_TRY(member(r, "/motions", k, m->motion_count, scratch, group, &index));
+    FASCIA_TRY(member(r, "/motions", k, m->motion_count, m->motions->name, sizeof *m->motions, group, &index));
     fascia_motion *mo = m->motions + index;
-    FASCIA_CHECK(!mo->name[0], r->ctx, FASCIA_ERR_FORMAT, "model '%s' %s: index %d is also used by '%s'", r->path,
-                 group, (int)index, mo->name);
-    memcpy(mo->name, scratch, FASCIA_NAME_SIZE);
     int64_t K;
     snprintf(name, sizeof name, "%s/time", group);
     FASCIA_TRY(count_rows(r, name, FASCIA_MA_REAL, 0, &K));
@@ -933,12 +932,8 @@ static fascia_status read_organs(reader *r, fascia_model *m) {
   char group[PATH_SIZE], name[PATH_SIZE + 16];
   for (int64_t k = 0; k < m->organ_count; ++k) {
     int32_t index;
-    char scratch[FASCIA_NAME_SIZE] = {0};
-    FASCIA_TRY(member(r, "/organs", k, m->organ_count, scratch, group, &index));
+    FASCIA_TRY(member(r, "/organs", k, m->organ_count, m->organs->name, sizeof *m->organs, group, &index));
     fascia_organ *o = m->organs + index;
-    FASCIA_CHECK(!o->name[0], r->ctx, FASCIA_ERR_FORMAT, "model '%s' %s: index %d is also used by '%s'", r->path,
-                 group, (int)index, o->name);
-    memcpy(o->name, scratch, FASCIA_NAME_SIZE);
     FASCIA_TRY(read_int_attr(r, group, "kind", &o->kind));
     FASCIA_TRY(read_int_attr(r, group, "motion", &o->motion));
     int64_t V, T;

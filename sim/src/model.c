@@ -4,6 +4,7 @@
 // validation, the one gate every model passes before a solver sees it.
 #define _POSIX_C_SOURCE 200809L // strnlen (strict C11 hides it)
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -168,20 +169,25 @@ fascia_status fascia_motion_alloc(fascia_ctx *ctx, fascia_motion *motion, int32_
   return FASCIA_OK;
 }
 
+// (Re)allocates a triangle mesh of V vertices and T triangles, zeroed; `what`
+// names it in messages.
+static fascia_status alloc_mesh(fascia_ctx *ctx, const char *what, fascia_surface *mesh, int32_t V, int32_t T) {
+  FASCIA_CHECK(V >= 0 && T >= 0 && V <= FASCIA_MAX_COUNT && T <= FASCIA_MAX_COUNT, ctx, FASCIA_ERR_ARGUMENT,
+               "%s: bad size (%d vertices, %d triangles)", what, (int)V, (int)T);
+  free(mesh->vertices);
+  free(mesh->triangles);
+  mesh->vertex_count = V;
+  mesh->triangle_count = T;
+  mesh->vertices = fascia_calloc(3 * (int64_t)V, sizeof(fascia_real));
+  mesh->triangles = fascia_calloc(3 * (int64_t)T, sizeof(int32_t));
+  FASCIA_CHECK(mesh->vertices && mesh->triangles, ctx, FASCIA_ERR_MEMORY, "%s: out of memory", what);
+  return FASCIA_OK;
+}
+
 fascia_status fascia_surface_alloc(fascia_ctx *ctx, fascia_surface *surface, int32_t vertex_count,
                                    int32_t triangle_count) {
-  FASCIA_CHECK(surface && vertex_count >= 0 && triangle_count >= 0 && vertex_count <= FASCIA_MAX_COUNT &&
-                   triangle_count <= FASCIA_MAX_COUNT,
-               ctx, FASCIA_ERR_ARGUMENT, "surface: bad size (%d vertices, %d triangles)", (int)vertex_count,
-               (int)triangle_count);
-  free(surface->vertices);
-  free(surface->triangles);
-  surface->vertex_count = vertex_count;
-  surface->triangle_count = triangle_count;
-  surface->vertices = fascia_calloc(3 * (int64_t)vertex_count, sizeof(fascia_real));
-  surface->triangles = fascia_calloc(3 * (int64_t)triangle_count, sizeof(int32_t));
-  FASCIA_CHECK(surface->vertices && surface->triangles, ctx, FASCIA_ERR_MEMORY, "surface: out of memory");
-  return FASCIA_OK;
+  FASCIA_CHECK(surface, ctx, FASCIA_ERR_ARGUMENT, "fascia_surface_alloc: NULL surface");
+  return alloc_mesh(ctx, "tissue surface", surface, vertex_count, triangle_count);
 }
 
 fascia_status fascia_model_tetrahedra_alloc(fascia_ctx *ctx, fascia_model *m, int32_t count) {
@@ -195,19 +201,16 @@ fascia_status fascia_model_tetrahedra_alloc(fascia_ctx *ctx, fascia_model *m, in
 }
 
 fascia_status fascia_organ_alloc(fascia_ctx *ctx, fascia_organ *organ, int32_t vertex_count, int32_t triangle_count) {
-  FASCIA_CHECK(organ && vertex_count >= 0 && triangle_count >= 0 && vertex_count <= FASCIA_MAX_COUNT &&
-                   triangle_count <= FASCIA_MAX_COUNT,
-               ctx, FASCIA_ERR_ARGUMENT, "organ: bad surface size (%d vertices, %d triangles)", (int)vertex_count,
-               (int)triangle_count);
-  free(organ->vertices);
-  free(organ->triangles);
-  organ->vertex_count = vertex_count;
-  organ->triangle_count = triangle_count;
-  organ->vertices = fascia_calloc(3 * (int64_t)vertex_count, sizeof(fascia_real));
-  organ->triangles = fascia_calloc(3 * (int64_t)triangle_count, sizeof(int32_t));
-  FASCIA_CHECK(organ->vertices && organ->triangles, ctx, FASCIA_ERR_MEMORY, "organ '%s': out of memory",
-               organ->name);
-  return FASCIA_OK;
+  FASCIA_CHECK(organ, ctx, FASCIA_ERR_ARGUMENT, "fascia_organ_alloc: NULL organ");
+  char what[FASCIA_NAME_SIZE + 32];
+  snprintf(what, sizeof what, "organ '%.*s' surface", FASCIA_NAME_SIZE - 1, organ->name);
+  fascia_surface mesh = {organ->vertex_count, organ->triangle_count, organ->vertices, organ->triangles};
+  const fascia_status status = alloc_mesh(ctx, what, &mesh, vertex_count, triangle_count);
+  organ->vertex_count = mesh.vertex_count;
+  organ->triangle_count = mesh.triangle_count;
+  organ->vertices = mesh.vertices;
+  organ->triangles = mesh.triangles;
+  return status;
 }
 
 fascia_status fascia_model_set_provenance(fascia_ctx *ctx, fascia_model *model, const char *text) {
