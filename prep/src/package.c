@@ -215,10 +215,18 @@ static cJSON *provenance(const fascia_prep_scene *scene, const fascia_prep_meshe
         cJSON_AddStringToObject(a, "organ", scene->organs[ends[k]->organ].name);
         cJSON_AddItemToObject(a, "point", vector(ends[k]->point, 3));
         cJSON_AddNumberToObject(a, "radius", ends[k]->radius);
+        if (ends[k]->part[0]) cJSON_AddStringToObject(a, "part", ends[k]->part);
+        if (ends[k]->label[0]) cJSON_AddStringToObject(a, "label", ends[k]->label);
+        if (ends[k]->region.kind != FASCIA_PREP_REGION_NONE) cJSON_AddItemToObject(a, "region", region_json(&ends[k]->region));
+        cJSON_AddBoolToObject(a, "spread", ends[k]->spread);
       }
       cJSON_AddNumberToObject(e, "area", td->area);
       cJSON_AddNumberToObject(e, "radius", td->radius);
-      cJSON_AddStringToObject(e, "curve", "straight between the attachments' closest surface points");
+      cJSON *through = cJSON_AddArrayToObject(e, "through");
+      for (int32_t k = 0; k < td->through_count; ++k) cJSON_AddItemToArray(through, vector(td->through + 3 * k, 3));
+      cJSON_AddStringToObject(e, "curve", td->through_count ? "a polyline from its start through the through points "
+                                                              "to its end (reduced.c)"
+                                                            : "straight between its ends (reduced.c)");
     } else if (td->form == FASCIA_PREP_FORM_SHEET) {
       cJSON_AddStringToObject(e, "mesh", td->mesh_path);
       cJSON_AddStringToObject(e, "mesh_sha256", meshes->sheets[t].sha256);

@@ -17,6 +17,7 @@
 #include "fascia/files.h"
 #include "fascia/vtk_xml.h"
 #include "prep_util.h"
+#include "reduced.h"
 
 /// What holds a frame, in the preview's `kind` array.
 enum { KIND_FREE = 0, KIND_FIXED = 1, KIND_PRESCRIBED = 2, KIND_RIGID = 3, KIND_DEFORMABLE = 4 };
@@ -175,7 +176,7 @@ static fascia_status write_reduced(preview *p, const fascia_prep_scene *scene, c
     int64_t n = 0;
     for (int32_t i = 0; i < pts->frame_count; ++i) n += pts->frame_tissue[i] == t;
     points += n;
-    cells += strand ? (n > 0 ? n - 1 : 0) : meshes->sheets[t].triangle_count;
+    cells += strand ? prep_strand_intervals(pts, t, NULL) : meshes->sheets[t].triangle_count;
   }
   if (points == 0) return FASCIA_OK;
   uint8_t *coupled = prep_calloc(pts->frame_count, 1);
@@ -206,9 +207,16 @@ static fascia_status write_reduced(preview *p, const fascia_prep_scene *scene, c
     if (scene->tissues[t].form != form) continue;
     int64_t n = 0;
     for (int32_t i = 0; i < pts->frame_count; ++i) n += pts->frame_tissue[i] == t;
-    if (strand)
-      for (int64_t k = 0; k + 1 < n; ++k) fprintf(f, "%lld %lld\n", (long long)(base + k), (long long)(base + k + 1));
-    else
+    if (strand) { // its intervals (curve and fibres): frame indices made local to its run
+      const int64_t count = prep_strand_intervals(pts, t, NULL);
+      int32_t *pairs = prep_calloc(2 * count + 2, sizeof(int32_t));
+      int32_t first = 0;
+      while (first < pts->frame_count && pts->frame_tissue[first] != t) ++first;
+      if (pairs) prep_strand_intervals(pts, t, pairs);
+      for (int64_t k = 0; pairs && k < count; ++k)
+        fprintf(f, "%lld %lld\n", (long long)(base + pairs[2 * k] - first), (long long)(base + pairs[2 * k + 1] - first));
+      free(pairs);
+    } else
       for (int32_t k = 0; k < meshes->sheets[t].triangle_count; ++k) {
         const int32_t *c = meshes->sheets[t].triangles + 3 * (int64_t)k;
         fprintf(f, "%lld %lld %lld\n", (long long)(base + c[0]), (long long)(base + c[1]), (long long)(base + c[2]));

@@ -679,6 +679,20 @@ cleanup:
   return status;
 }
 
+int64_t prep_strand_intervals(const fascia_prep_points *points, int32_t t, int32_t *pairs) {
+  int64_t n = 0;
+  int32_t last_a = -1, last_b = -1;
+  for (int32_t s = 0; s < points->sample_count; ++s) {
+    const int32_t *c = points->sample_cell_frame + 3 * (int64_t)s;
+    if (points->sample_tissue[s] != t || c[0] < 0 || c[1] < 0 || c[2] >= 0) continue;
+    if (c[0] == last_a && c[1] == last_b) continue; // the other section points of the same station
+    last_a = c[0], last_b = c[1];
+    if (pairs) pairs[2 * n] = c[0], pairs[2 * n + 1] = c[1];
+    ++n;
+  }
+  return n;
+}
+
 // ------------------------------------------------------------ sheets
 
 // One point per triangle, its centroid (times the points through the

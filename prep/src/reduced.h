@@ -28,6 +28,11 @@ FASCIA_PREP_INTERN fascia_status prep_reduced_build(fascia_ctx *ctx, const fasci
                                                     int32_t t, fascia_cgal_tree **trees, prep_reduced *out);
 FASCIA_PREP_INTERN void prep_reduced_free(prep_reduced *r);
 
+/// The intervals of strand tissue t in prepared points: the distinct frame
+/// pairs of its samples' cells (its curve's intervals, then its fans'
+/// fibres), into pairs [2 count] when not NULL; their count. For drawing.
+FASCIA_PREP_INTERN int64_t prep_strand_intervals(const fascia_prep_points *points, int32_t t, int32_t *pairs);
+
 /// A sheet's mesh as read: merges vertices at the same position, drops
 /// triangles with a repeated corner, refuses a mesh with no triangle left, a
 /// closed surface and edges of more than two triangles (naming

@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "prep_util.h"
+#include "reduced.h"
 
 #define SURFACE_SMOOTHING 1 // mean-filter passes: voxel steps rounded, thin layers kept
 
@@ -34,7 +35,7 @@ static fascia_status add_reduced(fascia_ctx *ctx, const fascia_prep_scene *scene
     int32_t n = 0;
     for (int32_t i = 0; i < points->frame_count; ++i) n += points->frame_tissue[i] == t;
     if (scene->tissues[t].form == FASCIA_PREP_FORM_STRAND && n >= 2)
-      nv += (int64_t)TUBE_SIDES * n, nt += 2 * (int64_t)TUBE_SIDES * (n - 1);
+      nv += (int64_t)TUBE_SIDES * n, nt += 2 * (int64_t)TUBE_SIDES * prep_strand_intervals(points, t, NULL);
     if (scene->tissues[t].form == FASCIA_PREP_FORM_SHEET) nv += n, nt += meshes->sheets[t].triangle_count;
   }
   if (nv == out->vertex_count) return FASCIA_OK;
@@ -53,33 +54,72 @@ static fascia_status add_reduced(fascia_ctx *ctx, const fascia_prep_scene *scene
   for (int32_t t = 0; t < scene->tissue_count; ++t) {
     const fascia_prep_tissue_def *td = scene->tissues + t;
     const int32_t n = tissue_frames(points, t, list);
-    const double *x0 = points->frame_position + 3 * (int64_t)list[0];
     if (td->form == FASCIA_PREP_FORM_STRAND && n >= 2) {
-      // a ring of TUBE_SIDES vertices around each frame, in the plane normal to the (straight) axis
-      const double *x1 = points->frame_position + 3 * (int64_t)list[n - 1];
-      double a[3] = {x1[0] - x0[0], x1[1] - x0[1], x1[2] - x0[2]}, u[3], w[3];
-      const double length = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
-      for (int c = 0; c < 3; ++c) a[c] /= length;
-      const double e[3] = {fabs(a[0]) < 0.9 ? 1 : 0, fabs(a[0]) < 0.9 ? 0 : 1, 0};
-      u[0] = a[1] * e[2] - a[2] * e[1], u[1] = a[2] * e[0] - a[0] * e[2], u[2] = a[0] * e[1] - a[1] * e[0];
-      const double un = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
-      for (int c = 0; c < 3; ++c) u[c] /= un;
-      w[0] = a[1] * u[2] - a[2] * u[1], w[1] = a[2] * u[0] - a[0] * u[2], w[2] = a[0] * u[1] - a[1] * u[0];
+      // a ring of TUBE_SIDES vertices around each frame, normal to the strand
+      // there, and a tube along each interval (reduced.c: curve and fibres)
+      const int64_t intervals = prep_strand_intervals(points, t, NULL);
+      int32_t *pairs = prep_calloc(2 * intervals + 2, sizeof(int32_t));
+      double *tangent = prep_calloc(3 * (int64_t)points->frame_count, sizeof(double));
+      if (!pairs || !tangent) {
+        free(pairs), free(tangent), free(list), free(all.vertices), free(all.triangles);
+        return PREP_FAIL(ctx, FASCIA_ERR_MEMORY, "tissue surface: out of memory");
+      }
+      prep_strand_intervals(points, t, pairs);
+      for (int64_t k = 0; k < intervals; ++k) { // each frame's tangent: its intervals' directions, signs aligned
+        const double *xa = points->frame_position + 3 * (int64_t)pairs[2 * k];
+        const double *xb = points->frame_position + 3 * (int64_t)pairs[2 * k + 1];
+        double d[3] = {xb[0] - xa[0], xb[1] - xa[1], xb[2] - xa[2]};
+        const double len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        for (int e = 0; e < 2; ++e) {
+          double *tg = tangent + 3 * (int64_t)pairs[2 * k + e];
+          const double sign = tg[0] * d[0] + tg[1] * d[1] + tg[2] * d[2] < 0 ? -1 : 1;
+          for (int c = 0; c < 3; ++c) tg[c] += sign * d[c] / len;
+        }
+      }
+      // one reference axis for the whole strand, the one farthest from its tangents: untwisted rings
+      int axis = 0;
+      double least = INFINITY;
+      for (int e = 0; e < 3; ++e) {
+        double most = 0;
+        for (int32_t k = 0; k < n; ++k) {
+          const double *tg = tangent + 3 * (int64_t)list[k];
+          const double len = sqrt(tg[0] * tg[0] + tg[1] * tg[1] + tg[2] * tg[2]);
+          if (len > 0) most = fmax(most, fabs(tg[e]) / len);
+        }
+        if (most < least) least = most, axis = e;
+      }
       const int32_t first = v;
-      for (int32_t k = 0; k < n; ++k)
+      for (int32_t k = 0; k < n; ++k) {
+        double a[3], u[3], w[3];
+        memcpy(a, tangent + 3 * (int64_t)list[k], sizeof a);
+        double len = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+        if (!(len > 0)) a[0] = 1, a[1] = a[2] = 0, len = 1;
+        for (int c = 0; c < 3; ++c) a[c] /= len;
+        const double e[3] = {axis == 0, axis == 1, axis == 2};
+        u[0] = a[1] * e[2] - a[2] * e[1], u[1] = a[2] * e[0] - a[0] * e[2], u[2] = a[0] * e[1] - a[1] * e[0];
+        const double un = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+        for (int c = 0; c < 3; ++c) u[c] /= un;
+        w[0] = a[1] * u[2] - a[2] * u[1], w[1] = a[2] * u[0] - a[0] * u[2], w[2] = a[0] * u[1] - a[1] * u[0];
         for (int s = 0; s < TUBE_SIDES; ++s, ++v) {
           const double angle = 2 * acos(-1.0) * s / TUBE_SIDES;
           const double *x = points->frame_position + 3 * (int64_t)list[k];
           for (int c = 0; c < 3; ++c)
             all.vertices[3 * (int64_t)v + c] = x[c] + td->radius * (cos(angle) * u[c] + sin(angle) * w[c]);
         }
-      for (int32_t k = 0; k + 1 < n; ++k)
+      }
+      for (int64_t k = 0; k < intervals; ++k) {
+        int32_t ring[2] = {-1, -1}; // the rings of the interval's frames: their places in list
+        for (int32_t j = 0; j < n; ++j)
+          for (int e = 0; e < 2; ++e)
+            if (list[j] == pairs[2 * k + e]) ring[e] = j;
         for (int s = 0; s < TUBE_SIDES; ++s) { // two triangles per side, wound outward
-          const int32_t p = first + k * TUBE_SIDES, q = p + TUBE_SIDES, s1 = (s + 1) % TUBE_SIDES;
+          const int32_t p = first + ring[0] * TUBE_SIDES, q = first + ring[1] * TUBE_SIDES, s1 = (s + 1) % TUBE_SIDES;
           const int32_t quad[6] = {p + s, p + s1, q + s1, p + s, q + s1, q + s};
           memcpy(all.triangles + 3 * (int64_t)f, quad, sizeof quad);
           f += 2;
         }
+      }
+      free(pairs), free(tangent);
     } else if (td->form == FASCIA_PREP_FORM_SHEET) {
       // its frames are its merged vertices, in order: the mesh over them
       for (int32_t k = 0; k < n; ++k, ++v)

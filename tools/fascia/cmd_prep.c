@@ -247,11 +247,12 @@ static void print_summary(const prep_run *r, const step_clock *c, const char *ou
     const fascia_prep_tissue_def *tdef = sc->tissues + t;
     if (tdef->form == FASCIA_PREP_FORM_STRAND)
       fprintf(stderr,
-              "tissue '%s': strand from '%s' to '%s', straight, %.4g mm long, section %.4g mm^2 (radius %.3g mm), "
-              "%.4g cm^3 (samples: length x area); %d frames, %d samples\n",
+              "tissue '%s': strand from '%s' to '%s', %s, %.4g mm long, section %.4g mm^2 (radius %.3g mm), "
+              "%.4g cm^3 (samples: length x area%s); %d frames, %d samples\n",
               tdef->name, sc->organs[tdef->from.organ].name, sc->organs[tdef->to.organ].name,
-              1e3 * sample_volume / tdef->area, 1e6 * tdef->area, 1e3 * tdef->radius, 1e6 * sample_volume, (int)frames,
-              (int)samples);
+              tdef->through_count ? "curved" : "straight",
+              1e3 * sample_volume / tdef->area, 1e6 * tdef->area, 1e3 * tdef->radius, 1e6 * sample_volume,
+              tdef->from.spread || tdef->to.spread ? ", its ends' fibres included" : "", (int)frames, (int)samples);
     else if (tdef->form == FASCIA_PREP_FORM_SHEET)
       fprintf(stderr,
               "tissue '%s': sheet '%s', %.4g cm^2 x thickness %.3g mm, %.4g cm^3 (samples: area x thickness); %d "
