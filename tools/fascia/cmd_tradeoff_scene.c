@@ -343,6 +343,13 @@ typedef struct study {
   int row_count;
   double *probe;   ///< [3 probes] rest points, m
   int probe_count;
+  /// Imported and repaired organs per voxel size: the only stages a rung's
+  /// spacings and kind leave unchanged (voxelize writes their reports only).
+  struct {
+    double voxel;
+    fascia_prep_stages stages; ///< scene and meshes
+  } meshes[MAX_LADDER + 1];
+  int mesh_count;
   double started_ms, prep_ms_sum, row_ms_sum;
   int preps_done, rows_done;
 } study;
@@ -446,8 +453,21 @@ static void prepare_rung(study *s, rung *r) {
   const fascia_prep_run_info info = {tool, command, 0, NULL, NULL, NULL};
   const prep_api *p = &s->prep;
   if (status == FASCIA_OK) status = p->scene_parse(s->ctx, text, s->opt->scene, s->folder, &st.scene);
-  if (status == FASCIA_OK) status = p->import(s->ctx, st.scene, &st.meshes);
-  if (status == FASCIA_OK) status = p->repair(s->ctx, st.scene, st.meshes);
+  int cached = -1;
+  for (int k = 0; status == FASCIA_OK && k < s->mesh_count; ++k)
+    if (s->meshes[k].voxel == r->voxel) cached = k;
+  if (cached >= 0) {
+    st.meshes = s->meshes[cached].stages.meshes;
+  } else {
+    if (status == FASCIA_OK) status = p->import(s->ctx, st.scene, &st.meshes);
+    if (status == FASCIA_OK) status = p->repair(s->ctx, st.scene, st.meshes);
+    if (status == FASCIA_OK && s->mesh_count <= MAX_LADDER) { // kept with the scene that made them
+      cached = s->mesh_count++;
+      s->meshes[cached].voxel = r->voxel;
+      s->meshes[cached].stages.meshes = st.meshes;
+      status = p->scene_parse(s->ctx, text, s->opt->scene, s->folder, &s->meshes[cached].stages.scene);
+    }
+  }
   if (status == FASCIA_OK) status = p->voxelize(s->ctx, st.scene, st.meshes, &st.volume);
   if (status == FASCIA_OK) status = p->sample(s->ctx, st.scene, st.meshes, st.volume, &st.points);
   if (status == FASCIA_OK) status = p->shape_functions(s->ctx, st.scene, st.volume, st.points, &st.weights);
@@ -471,6 +491,7 @@ static void prepare_rung(study *s, rung *r) {
   for (char *c = r->error; *c; ++c)
     if (*c == '\n' || *c == '\r') *c = ' ';
   fascia_ctx_clear(s->ctx);
+  if (cached >= 0) st.meshes = NULL; // the cache's
   p->stages_free(&st);
   free(text);
   r->prep_s = (cli_now_ms() - t0) / 1e3;
@@ -1219,6 +1240,7 @@ static void study_free(study *s) {
   for (int k = 0; s->rows && k < s->row_count; ++k) free(s->rows[k].force);
   free(s->rungs), free(s->rows), free(s->probe), free(s->organ_names), free(s->tissue_names);
   cJSON_Delete(s->scene_json);
+  for (int k = 0; k < s->mesh_count; ++k) s->prep.stages_free(&s->meshes[k].stages);
 }
 
 // The report after the rows: reference, extrapolation, rows, tissues, target.
