@@ -15,6 +15,7 @@
 #include "launch.h"
 #include "model_arrays.h"
 #include "modes.h"
+#include "system_arrays.h"
 
 #define CG_CHUNK 8 // CG iterations per recorded chunk in tolerance mode
 #define MAX_BUFFERS 96 // the model, the state and work (about 50), the patches (16)
@@ -160,23 +161,27 @@ static fascia_status upload_bodies(fascia_device *dev, const fascia_backend_setu
   return FASCIA_OK;
 }
 
-// The model's arrays whose device column (model_arrays.h) names a member of
-// fascia_dev: DEVICE(member) gives the slot &D->member, HOST none.
-static fascia_status upload_model_arrays(fascia_device *dev, const fascia_model *m) {
+// The model's and the system's arrays whose device column (model_arrays.h,
+// system_arrays.h) names a member of fascia_dev: DEVICE(member) uploads the
+// array into D->member, HOST leaves it on the host.
+static fascia_status upload_arrays(fascia_device *dev, const fascia_model *m, const fascia_system *sys) {
   fascia_dev *D = &dev->D;
   fascia_model_view views[FASCIA_MA_COUNT];
   fascia_model_views(m, views);
-  void **slots[FASCIA_MA_COUNT] = {0};
+  void **slot;
 #define HOST NULL
 #define DEVICE(member) (void **)&D->member
-#define SLOT(field, kind, count, plus, width, path, unit, fill, flags, since, device)                                 \
-  slots[FASCIA_MA_ID_##field] = device;
-  FASCIA_MODEL_ARRAYS(SLOT)
-#undef SLOT
+#define MODEL(field, kind, count, plus, width, path, unit, fill, flags, since, device)                                \
+  if ((slot = device))                                                                                                \
+    FASCIA_TRY(put(dev, views[FASCIA_MA_ID_##field].data, fascia_model_view_bytes(views + FASCIA_MA_ID_##field), slot));
+#define SYSTEM(field, type, count, width, device)                                                                     \
+  if ((slot = device)) FASCIA_TRY(put(dev, sys->field, (size_t)sys->count * (width) * sizeof(type), slot));
+  FASCIA_MODEL_ARRAYS(MODEL)
+  FASCIA_SYSTEM_ARRAYS(SYSTEM)
+#undef SYSTEM
+#undef MODEL
 #undef DEVICE
 #undef HOST
-  for (int k = 0; k < FASCIA_MA_COUNT; ++k)
-    if (slots[k]) FASCIA_TRY(put(dev, views[k].data, fascia_model_view_bytes(views + k), slots[k]));
   return FASCIA_OK;
 }
 
@@ -199,20 +204,8 @@ static fascia_status upload_model(fascia_device *dev, const fascia_backend_setup
                    : smoothing ? FASCIA_K_SAMPLE_STIFFNESS_SMOOTHING
                                : FASCIA_K_SAMPLE_STIFFNESS_PAPER;
   for (int c = 0; c < 3; ++c) D->gravity[c] = sys->gravity[c];
-  // the model's arrays, then the system's: the per-sample math's (fascia_pt_model) and the rest
-  FASCIA_TRY(upload_model_arrays(dev, m));
+  FASCIA_TRY(upload_arrays(dev, m, sys));
   dev->frame_load = (fascia_real *)D->frame_load; // sent again at every step's begin
-  PUT(pm.pair_offset, sys->pair_offset, 3 * P, fascia_real);
-  PUT(pm.sample_lambda, sys->sample_lambda, Sn, fascia_real);
-  PUT(pm.sample_mu, sys->sample_mu, Sn, fascia_real);
-  PUT(pm.sample_coupling, sys->sample_coupling, Sn, fascia_real);
-  PUT(pm.sample_curvature, sys->sample_curvature, Sn, fascia_real);
-  PUT(pm.sample_law, sys->sample_law, Sn, int32_t);
-  PUT(pair_sample, sys->pair_sample, P, int32_t);
-  PUT(sample_mass, sys->sample_mass, Sn, fascia_real);
-  PUT(frame_lumped_moments, sys->frame_lumped_moments, 13 * (int64_t)N, fascia_real);
-  PUT(frame_mass, sys->frame_mass, N, fascia_real);
-  PUT(frame_moment, sys->frame_moment, 3 * N, fascia_real);
   FASCIA_TRY(put(dev, setup->mask, 6 * (size_t)N, (void **)&dev->mask));
   D->mask = D->full_mask = dev->mask;
   if (setup->bodies) FASCIA_TRY(upload_bodies(dev, setup));

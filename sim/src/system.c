@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "system.h"
+#include "system_arrays.h"
 #include "wide.h"
 #include "dilatation.h"
 #include "modes.h"
@@ -59,7 +60,7 @@ fascia_status fascia_system_create(fascia_ctx *ctx, const fascia_model *m, int t
   *out = NULL;
   fascia_system *sys = calloc(1, sizeof *sys);
   FASCIA_CHECK(sys, ctx, FASCIA_ERR_MEMORY, "system: out of memory");
-  const int64_t N = m->frame_count, S = m->sample_count, P = m->pair_count;
+  const int64_t S = m->sample_count, P = m->pair_count;
   sys->ctx = ctx;
   sys->model = m;
   sys->frame_count = m->frame_count;
@@ -71,32 +72,13 @@ fascia_status fascia_system_create(fascia_ctx *ctx, const fascia_model *m, int t
     const int32_t n = m->sample_offsets[s + 1] - m->sample_offsets[s];
     if (n > sys->max_neighbours) sys->max_neighbours = n;
   }
-  sys->pair_offset = fascia_calloc(3 * P, sizeof(fascia_real));
-  sys->sample_lambda = fascia_calloc(S, sizeof(fascia_real));
-  sys->sample_mu = fascia_calloc(S, sizeof(fascia_real));
-  sys->sample_coupling = fascia_calloc(S, sizeof(fascia_real));
-  sys->sample_curvature = fascia_calloc(S, sizeof(fascia_real));
-  sys->sample_mass = fascia_calloc(S, sizeof(fascia_real));
-  sys->sample_law = fascia_calloc(S, sizeof(int32_t));
-  sys->local_slot = fascia_calloc(sys->max_neighbours, sizeof(int32_t));
-  sys->pair_sample = fascia_calloc(P, sizeof(int32_t));
-  sys->pair_lumped_mass = fascia_calloc(P, sizeof(fascia_real));
-  sys->frame_lumped_moments = fascia_calloc(13 * (int64_t)N, sizeof(fascia_real));
-  sys->frame_mass = fascia_calloc(N, sizeof(fascia_real));
-  sys->frame_moment = fascia_calloc(3 * N, sizeof(fascia_real));
-  sys->x = fascia_calloc(3 * N, sizeof(fascia_real));
-  sys->q = fascia_calloc(4 * N, sizeof(fascia_real));
-  sys->A = fascia_calloc(9 * N, sizeof(fascia_real));
-  sys->A_mass = fascia_calloc(9 * N, sizeof(fascia_real));
-  sys->pair_buffer = fascia_calloc(6 * P, sizeof(fascia_real));
-  sys->cache = fascia_calloc(S * FASCIA_PT_CACHE_SIZE, sizeof(fascia_real));
-  sys->sample_flags = fascia_calloc(S, sizeof(int));
-  sys->conservative_torque = fascia_calloc(3 * N, sizeof(fascia_real));
-  sys->gradient_scratch = fascia_calloc(6 * N, sizeof(fascia_real));
-  if (!sys->pair_offset || !sys->sample_lambda || !sys->sample_mu || !sys->sample_coupling || !sys->sample_curvature || !sys->sample_mass ||
-      !sys->sample_law || !sys->local_slot || !sys->pair_sample || !sys->pair_lumped_mass || !sys->frame_lumped_moments || !sys->frame_mass || !sys->frame_moment || !sys->x || !sys->q ||
-      !sys->A || !sys->A_mass || !sys->pair_buffer || !sys->cache || !sys->sample_flags ||
-      !sys->conservative_torque || !sys->gradient_scratch) {
+  int missing = 0;
+#define ALLOC(field, type, count, width, device)                                                                     \
+  sys->field = fascia_calloc((int64_t)sys->count * (width), sizeof(type));                                           \
+  missing |= !sys->field;
+  FASCIA_SYSTEM_ARRAYS(ALLOC)
+#undef ALLOC
+  if (missing) {
     fascia_system_destroy(&sys);
     return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "system: out of memory for %lld samples, %lld pairs", (long long)S,
                        (long long)P);
@@ -174,31 +156,12 @@ void fascia_system_destroy(fascia_system **sys) {
   fascia_system *s = *sys;
   fascia_modes_destroy(&s->modes);
   fascia_dilatation_destroy(&s->dilatation);
-  free(s->pair_offset);
-  free(s->sample_lambda);
-  free(s->sample_mu);
-  free(s->sample_coupling);
-  free(s->sample_curvature);
+#define FREE(field, ...) free(s->field);
+  FASCIA_SYSTEM_ARRAYS(FREE)
+#undef FREE
   free(s->smoothing_offsets);
   free(s->smoothing_frames);
   free(s->smoothing_weight);
-  free(s->sample_mass);
-  free(s->sample_law);
-  free(s->local_slot);
-  free(s->pair_sample);
-  free(s->pair_lumped_mass);
-  free(s->frame_lumped_moments);
-  free(s->frame_mass);
-  free(s->frame_moment);
-  free(s->x);
-  free(s->q);
-  free(s->A);
-  free(s->A_mass);
-  free(s->pair_buffer);
-  free(s->cache);
-  free(s->sample_flags);
-  free(s->conservative_torque);
-  free(s->gradient_scratch);
   free(s);
   *sys = NULL;
 }
