@@ -20,6 +20,10 @@
 //   --reference  the CalculiX mesh (from 1) the errors are taken against;
 //             default the last; displacements are compared at the nodes of
 //             the last mesh of each rung's voxel size
+//   TAG       nK: K MLS neighbours; flat: no volumetric patches
+//   --cache DIR  CalculiX's answers read from DIR when there, else solved and kept there
+//   --slip    per rung, the tissue's slip on each organ by distance to the
+//             organ's nearest shared frame, and where the largest error lies
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdio.h>
@@ -44,12 +48,68 @@ typedef struct ccx_row {
 
 typedef struct fascia_row {
   double voxel_mm, scale, sample_scale;
+  int32_t neighbours, no_patches;
 } fascia_row;
+
+// A rung's tag: nK (K MLS neighbours) or flat (no volumetric patches).
+static int rung_tag(const char *tag, fascia_row *row) {
+  if (!strcmp(tag, "flat")) return row->no_patches = 1;
+  int k;
+  if (sscanf(tag, "n%d", &k) == 1 && k >= 4) return row->neighbours = k, 1;
+  return 0;
+}
+
+// CalculiX's answers kept between runs (--cache DIR): forces and node
+// displacements of a mesh, keyed by its kind, voxel and split.
+static void cache_path(const char *dir, const ccx_row *c, char *path, size_t size) {
+  snprintf(path, size, "%s/ccx-%s-%gmm-split%d.txt", dir, c->quadratic ? "c3d20r" : "c3d8i", c->voxel_mm,
+           (int)c->split);
+}
+
+static int cache_load(const char *dir, ccx_row *c) {
+  char path[1200];
+  cache_path(dir, c, path, sizeof path);
+  FILE *f = fopen(path, "r");
+  if (!f) return 0;
+  fascia_demo_result *r = &c->result;
+  memset(r, 0, sizeof *r);
+  long long nodes = 0, elements = 0;
+  int organs = 0, ok = fscanf(f, "%lld %lld %d %lf", &nodes, &elements, &organs, &r->ms) == 4 &&
+                       nodes == c->mesh.node_count && elements == c->mesh.element_count &&
+                       organs == c->mesh.organ_count;
+  for (int o = 0; ok && o < organs; ++o)
+    ok = fscanf(f, "%lf %lf %lf", r->force[o], r->force[o] + 1, r->force[o] + 2) == 3;
+  r->u = ok ? malloc((size_t)(3 * nodes) * sizeof *r->u) : NULL;
+  for (long long k = 0; r->u && k < 3 * nodes && ok; ++k) ok = fscanf(f, "%lf", r->u + k) == 1;
+  fclose(f);
+  if (!ok || !r->u) {
+    fascia_demo_result_free(r);
+    return 0;
+  }
+  r->nodes = nodes, r->elements = elements, r->organ_count = organs;
+  return 1;
+}
+
+static void cache_save(const char *dir, const ccx_row *c) {
+  char path[1200], tmp[1300];
+  cache_path(dir, c, path, sizeof path);
+  snprintf(tmp, sizeof tmp, "%s.tmp", path);
+  FILE *f = fopen(tmp, "w");
+  if (!f) return;
+  const fascia_demo_result *r = &c->result;
+  fprintf(f, "%lld %lld %d %.1f\n", (long long)r->nodes, (long long)r->elements, (int)r->organ_count, r->ms);
+  for (int o = 0; o < r->organ_count; ++o) fprintf(f, "%.9g %.9g %.9g\n", r->force[o][0], r->force[o][1], r->force[o][2]);
+  for (int64_t k = 0; k < r->nodes; ++k)
+    fprintf(f, "%.9g %.9g %.9g\n", r->u[3 * k], r->u[3 * k + 1], r->u[3 * k + 2]);
+  if (fclose(f) == 0) rename(tmp, path);
+  else remove(tmp);
+}
 
 static int usage(const char *why) {
   fprintf(stderr,
           "demo-calculix: %s\nusage: demo-calculix [SCENE.json] [--ccx TYPE:VOXEL_MM:SPLIT,...] "
-          "[--fascia VOXEL_MM:SCALE[:SAMPLE_SCALE],...] [--reference K] [--neighbours N] [--threads N] [--csv FILE]\n",
+          "[--fascia VOXEL_MM:SCALE[:SAMPLE_SCALE[:TAG]],...] [--reference K] [--neighbours N] [--threads N] "
+          "[--csv FILE] [--cache DIR] [--slip]\n",
           why);
   return 2;
 }
@@ -76,10 +136,97 @@ static int check_one_element(fascia_ctx *ctx, const char *ccx, double E, double 
   return d / n < 1e-5;
 }
 
+// The slip of fascia's tissue on each organ: at the organ-facing nodes of
+// CalculiX's mesh (where CalculiX's tissue moves with the organ exactly),
+// fascia's displacement less the organ's, by the node's distance to the
+// nearest frame the organ shares with the tissue; and where the largest
+// displacement error lies.
+static void print_slip(const fascia_prep_stages *s, const ccx_row *at, const fascia_demo_result *r) {
+  const fascia_demo_mesh *m = &at->mesh;
+  const fascia_model *model = s->model;
+  enum { BINS = 6 };
+  const double bin_mm = 1;
+  for (int32_t o = 0; o < m->organ_count; ++o) {
+    const int32_t k = fascia_model_find_organ(model, m->organ_name[o]);
+    double sum[BINS] = {0}, motion = 0;
+    int64_t count[BINS] = {0}, n = 0;
+    double *sl = malloc((size_t)m->node_count * sizeof *sl);
+    for (int64_t q = 0; sl && q < m->node_count; ++q) {
+      if (m->node_organ[q] != o) continue;
+      const double *x = m->node + 3 * q, *uf = r->u + 3 * q, *up = m->node_u + 3 * q;
+      double nearest = INFINITY;
+      for (int32_t c = 0; c < model->coupling_count; ++c) {
+        if (model->coupling_organ[c] != k) continue;
+        const fascia_real *y = model->frame_position + 3 * model->coupling_frame[c];
+        const double d[3] = {x[0] - y[0], x[1] - y[1], x[2] - y[2]};
+        nearest = fmin(nearest, norm3(d));
+      }
+      const double de[3] = {uf[0] - up[0], uf[1] - up[1], uf[2] - up[2]};
+      const double slip = norm3(de);
+      int b = (int)(1e3 * nearest / bin_mm);
+      if (b >= BINS) b = BINS - 1;
+      sum[b] += slip, ++count[b], sl[n++] = slip, motion += norm3(up);
+    }
+    if (sl && n > 0) {
+      const double p50 = fascia_demo_percentile(sl, n, 0.5), p95 = fascia_demo_percentile(sl, n, 0.95);
+      printf("      slip on %-8s %5lld nodes, organ's motion there %.3f mm on average: p50 %.3f p95 %.3f mm; "
+             "mean by distance to its nearest shared frame:",
+             m->organ_name[o], (long long)n, 1e3 * motion / (double)n, 1e3 * p50, 1e3 * p95);
+      for (int b = 0; b < BINS; ++b)
+        if (count[b])
+          printf(" %s%g mm %.3f (%lld)", b == BINS - 1 ? ">" : "<", b == BINS - 1 ? bin_mm * b : bin_mm * (b + 1),
+                 1e3 * sum[b] / (double)count[b], (long long)count[b]);
+      printf("\n");
+    }
+    free(sl);
+    // at the organ's own surface
+    const int64_t ns = r->surface_count[o];
+    double ssum[BINS] = {0};
+    int64_t scount[BINS] = {0};
+    for (int64_t j = 0; j < ns; ++j) {
+      int b = (int)(1e3 * r->surface_distance[o][j] / bin_mm);
+      if (b >= BINS) b = BINS - 1;
+      ssum[b] += r->surface_slip[o][j], ++scount[b];
+    }
+    double *copy = malloc((size_t)(ns + 1) * sizeof *copy);
+    if (copy && ns > 0) {
+      memcpy(copy, r->surface_slip[o], (size_t)ns * sizeof *copy);
+      const double p50 = fascia_demo_percentile(copy, ns, 0.5), p95 = fascia_demo_percentile(copy, ns, 0.95);
+      printf("      on %-8s own surface %5lld vertices: p50 %.3f p95 %.3f mm; by distance:", m->organ_name[o],
+             (long long)ns, 1e3 * p50, 1e3 * p95);
+      for (int b = 0; b < BINS; ++b)
+        if (scount[b])
+          printf(" %s%g mm %.3f (%lld)", b == BINS - 1 ? ">" : "<", b == BINS - 1 ? bin_mm * b : bin_mm * (b + 1),
+                 1e3 * ssum[b] / (double)scount[b], (long long)scount[b]);
+      printf("\n");
+    }
+    free(copy);
+  }
+  // the node of the largest error
+  int64_t worst = 0;
+  double worst_e = -1;
+  for (int64_t q = 0; q < m->node_count; ++q) {
+    const double *uc = at->result.u + 3 * q, *uf = r->u + 3 * q;
+    const double e[3] = {uf[0] - uc[0], uf[1] - uc[1], uf[2] - uc[2]};
+    if (norm3(e) > worst_e) worst_e = norm3(e), worst = q;
+  }
+  double nearest = INFINITY;
+  for (int32_t i = 0; i < model->sample_count; ++i) {
+    const double d[3] = {m->node[3 * worst] - model->sample_position[3 * i],
+                         m->node[3 * worst + 1] - model->sample_position[3 * i + 1],
+                         m->node[3 * worst + 2] - model->sample_position[3 * i + 2]};
+    nearest = fmin(nearest, norm3(d));
+  }
+  printf("      largest error %.3f mm at a %s node (%.4f %.4f %.4f m), %.2f mm from the nearest sample\n", 1e3 * worst_e,
+         m->node_organ[worst] >= 0 ? m->organ_name[m->node_organ[worst]] : "free", m->node[3 * worst],
+         m->node[3 * worst + 1], m->node[3 * worst + 2], 1e3 * nearest);
+}
+
 int main(int argc, char **argv) {
   const char *scene = "data/scenes/pelvis-female-demo.json", *ccx_list = "8i:1:1,8i:1:2,20r:1:1",
-             *fascia_list = "1:1,1:0.7,1:0.5", *csv_path = NULL;
-  int reference = 0, threads = 1, neighbours = 0;
+             *fascia_list = "1:1,1:0.7,1:0.5", *csv_path = NULL,
+             *cache = NULL;
+  int reference = 0, threads = 1, neighbours = 0, slips = 0;
   for (int i = 1; i < argc; ++i) {
     const char *a = argv[i];
     if (!strcmp(a, "--ccx") && i + 1 < argc) ccx_list = argv[++i];
@@ -88,6 +235,8 @@ int main(int argc, char **argv) {
     else if (!strcmp(a, "--threads") && i + 1 < argc) threads = atoi(argv[++i]);
     else if (!strcmp(a, "--neighbours") && i + 1 < argc) neighbours = atoi(argv[++i]);
     else if (!strcmp(a, "--csv") && i + 1 < argc) csv_path = argv[++i];
+    else if (!strcmp(a, "--cache") && i + 1 < argc) cache = argv[++i];
+    else if (!strcmp(a, "--slip")) slips = 1;
     else if (a[0] != '-') scene = a;
     else return usage("unknown argument");
   }
@@ -106,9 +255,12 @@ int main(int argc, char **argv) {
     if (p) ++p;
   }
   for (const char *p = fascia_list; p && *p && nf < ROWS_MAX;) {
+    memset(fr + nf, 0, sizeof fr[nf]);
     fr[nf].sample_scale = 1;
-    if (sscanf(p, "%lf:%lf:%lf", &fr[nf].voxel_mm, &fr[nf].scale, &fr[nf].sample_scale) < 2)
-      return usage("--fascia: expected VOXEL_MM:SCALE[:SAMPLE_SCALE]");
+    char tag[16] = "";
+    if (sscanf(p, "%lf:%lf:%lf:%15[^,]", &fr[nf].voxel_mm, &fr[nf].scale, &fr[nf].sample_scale, tag) < 2 ||
+        (tag[0] && !rung_tag(tag, fr + nf)))
+      return usage("--fascia: expected VOXEL_MM:SCALE[:SAMPLE_SCALE[:TAG]], TAG nK or flat");
     ++nf;
     p = strchr(p, ',');
     if (p) ++p;
@@ -136,7 +288,7 @@ int main(int argc, char **argv) {
     }
     fprintf(csv, "code,mesh,voxel_mm,frame_spacing_mm,sample_spacing_mm,nodes,elements,organ,fx,fy,fz,"
                  "force_error_percent,magnitude_error_percent,u_p50_percent,u_p95_percent,u_max_percent,"
-                 "slip_p50_mm,slip_p95_mm,solve_ms\n");
+                 "u_free_p95_percent,slip_p50_mm,slip_p95_mm,solve_ms\n");
   }
   printf("demo-calculix: %s, its first tissue against CalculiX, gravity off, static at time 1 (ccx on %d thread%s, "
          "fascia on 1)\n",
@@ -148,7 +300,7 @@ int main(int argc, char **argv) {
   printf("\nCalculiX                        nodes  elements");
   for (int k = 0; k < nc; ++k) {
     fascia_prep_stages s;
-    fascia_demo_def d = {scene, cr[k].voxel_mm * 1e-3, 1, 1, neighbours};
+    fascia_demo_def d = {scene, cr[k].voxel_mm * 1e-3, 1, 1, neighbours, 0};
     fascia_status st = fascia_demo_prepare(ctx, &d, &s);
     if (st == FASCIA_OK) st = fascia_demo_mesh_build(ctx, &s, cr[k].quadratic, cr[k].split, &cr[k].mesh);
     if (st == FASCIA_OK && k == 0) {
@@ -163,7 +315,9 @@ int main(int argc, char **argv) {
       if (!check_one_element(ctx, ccx, cr[k].mesh.youngs_modulus, cr[k].mesh.poisson_ratio)) rc = 1;
     }
     fascia_prep_stages_free(&s);
-    if (st == FASCIA_OK) st = fascia_demo_calculix(ctx, &cr[k].mesh, ccx, threads, &cr[k].result);
+    const int cached = st == FASCIA_OK && cache && cache_load(cache, cr + k);
+    if (st == FASCIA_OK && !cached) st = fascia_demo_calculix(ctx, &cr[k].mesh, ccx, threads, &cr[k].result);
+    if (st == FASCIA_OK && cache && !cached) cache_save(cache, cr + k);
     if (st != FASCIA_OK) {
       fprintf(stderr, "demo-calculix: CalculiX mesh %d: %s\n", k + 1, fascia_ctx_message(ctx));
       rc = 1;
@@ -175,7 +329,7 @@ int main(int argc, char **argv) {
     if (cr[k].split > 1) snprintf(name + strlen(name), sizeof name - strlen(name), " %d", (int)cr[k].split);
     printf("  %-26s %8lld %9lld", name, (long long)cr[k].result.nodes, (long long)cr[k].result.elements);
     for (int32_t o = 0; o < organ_count; ++o) printf("  %16.5f", norm3(cr[k].result.force[o]));
-    printf("  %6.1f\n", 1e-3 * cr[k].result.ms);
+    printf("  %6.1f%s\n", 1e-3 * cr[k].result.ms, cached ? " (cached)" : "");
     fflush(stdout);
   }
   const fascia_demo_result *ref = &cr[reference - 1].result;
@@ -190,7 +344,7 @@ int main(int argc, char **argv) {
     printf("\n");
     if (csv)
       for (int32_t o = 0; o < organ_count; ++o)
-        fprintf(csv, "calculix,%s%s%d,%g,,,%lld,%lld,%s,%.6g,%.6g,%.6g,%.4f,%.4f,,,,,,%.0f\n",
+        fprintf(csv, "calculix,%s%s%d,%g,,,%lld,%lld,%s,%.6g,%.6g,%.6g,%.4f,%.4f,,,,,,,%.0f\n",
                 cr[k].quadratic ? "C3D20R" : "C3D8I", "-split", (int)cr[k].split, cr[k].voxel_mm,
                 (long long)cr[k].result.nodes, (long long)cr[k].result.elements, organs[o], cr[k].result.force[o][0],
                 cr[k].result.force[o][1], cr[k].result.force[o][2],
@@ -198,43 +352,48 @@ int main(int argc, char **argv) {
                 100 * (norm3(cr[k].result.force[o]) - norm3(ref->force[o])) / norm3(ref->force[o]), cr[k].result.ms);
   }
   // fascia's rungs
-  printf("\nfascia  voxel frame  sample  frames samples");
+  printf("\nfascia (tag: nK neighbours, flat: no patches; voxel, frame and sample spacing in mm)\ntag   voxel frame  sample  frames samples");
   for (int32_t o = 0; o < organ_count; ++o) printf("  %9.9s N  err %%  |F| %%", organs[o]);
-  printf("  u err %% of max: p50   p95   max  slip mm: p50  p95  solve ms\n");
+  printf("  u err %% of max: p50   p95   max  free p95  slip mm: p50  p95  solve ms\n");
   for (int k = 0; k < nf; ++k) {
     // displacements at the nodes of the last CalculiX mesh of this voxel size
     const ccx_row *at = NULL;
     for (int c = 0; c < nc; ++c)
       if (fabs(cr[c].voxel_mm - fr[k].voxel_mm) < 1e-9) at = cr + c;
     fascia_prep_stages s;
-    fascia_demo_def d = {scene, fr[k].voxel_mm * 1e-3, fr[k].scale, fr[k].sample_scale, neighbours};
+    fascia_demo_def d = {scene, fr[k].voxel_mm * 1e-3, fr[k].scale, fr[k].sample_scale,
+                         fr[k].neighbours ? fr[k].neighbours : neighbours, fr[k].no_patches};
     fascia_demo_result r;
     memset(&r, 0, sizeof r);
     fascia_status st = fascia_demo_prepare(ctx, &d, &s);
     if (st == FASCIA_OK) st = fascia_demo_fascia(ctx, &s, at ? &at->mesh : NULL, &r);
-    fascia_prep_stages_free(&s);
     if (st != FASCIA_OK) {
       fprintf(stderr, "demo-calculix: fascia rung %d: %s\n", k + 1, fascia_ctx_message(ctx));
+      fascia_prep_stages_free(&s);
       rc = 1;
       continue;
     }
     const double frame = base_frame * fr[k].scale, sample = base_sample * fr[k].scale * fr[k].sample_scale;
-    printf("  %5.2f %5.2f  %5.3f  %6lld %7lld", fr[k].voxel_mm, 1e3 * frame, 1e3 * sample, (long long)r.nodes,
+    char tag[16] = "";
+    if (fr[k].no_patches) snprintf(tag, sizeof tag, "flat");
+    else if (fr[k].neighbours) snprintf(tag, sizeof tag, "n%d", (int)fr[k].neighbours);
+    printf("%-5s %5.2f %5.2f  %5.3f  %6lld %7lld", tag, fr[k].voxel_mm, 1e3 * frame, 1e3 * sample, (long long)r.nodes,
            (long long)r.elements);
     for (int32_t o = 0; o < organ_count; ++o)
       printf("  %11.5f %+6.2f %+6.2f", norm3(r.force[o]), 100 * fascia_tissue_error3(r.force[o], ref->force[o]),
              100 * (norm3(r.force[o]) - norm3(ref->force[o])) / norm3(ref->force[o]));
-    double pct[3] = {NAN, NAN, NAN}, slip[2] = {NAN, NAN};
+    double pct[3] = {NAN, NAN, NAN}, slip[2] = {NAN, NAN}, free95 = NAN, largest = 0;
     if (at) {
       const fascia_demo_mesh *m = &at->mesh;
       double *err = malloc((size_t)m->node_count * sizeof *err), *sl = malloc((size_t)m->node_count * sizeof *sl);
-      double largest = 0;
-      int64_t ns = 0;
+      double *fe = malloc((size_t)m->node_count * sizeof *fe);
+      int64_t ns = 0, nfree = 0;
       for (int64_t q = 0; q < m->node_count && err && sl; ++q) {
         const double *uc = at->result.u + 3 * q, *uf = r.u + 3 * q;
         largest = fmax(largest, norm3(uc));
         const double e[3] = {uf[0] - uc[0], uf[1] - uc[1], uf[2] - uc[2]};
         err[q] = norm3(e);
+        if (m->node_organ[q] < 0 && fe) fe[nfree++] = err[q];
         if (m->node_organ[q] >= 0) {
           const double *up = m->node_u + 3 * q;
           const double de[3] = {uf[0] - up[0], uf[1] - up[1], uf[2] - up[2]};
@@ -246,19 +405,24 @@ int main(int argc, char **argv) {
         pct[1] = 100 * fascia_demo_percentile(err, m->node_count, 0.95) / largest;
         pct[2] = 100 * fascia_demo_percentile(err, m->node_count, 1.0) / largest;
         slip[0] = 1e3 * fascia_demo_percentile(sl, ns, 0.5), slip[1] = 1e3 * fascia_demo_percentile(sl, ns, 0.95);
+        if (fe) free95 = 100 * fascia_demo_percentile(fe, nfree, 0.95) / largest;
       }
-      free(err), free(sl);
+      free(err), free(sl), free(fe);
     }
-    printf("  %20.1f %5.1f %5.1f  %11.3f %4.3f  %8.0f\n", pct[0], pct[1], pct[2], slip[0], slip[1], r.ms);
+    printf("  %20.1f %5.1f %5.1f %9.1f  %11.3f %4.3f  %8.0f\n", pct[0], pct[1], pct[2], free95, slip[0], slip[1],
+           r.ms);
+    if (at && slips) print_slip(&s, at, &r);
+    fascia_prep_stages_free(&s);
+    if (at && k == 0) printf("  (displacements at the nodes of CalculiX's last %g mm mesh, its largest %.4f mm)\n", fr[k].voxel_mm, 1e3 * largest);
     fflush(stdout);
     if (csv)
       for (int32_t o = 0; o < organ_count; ++o)
-        fprintf(csv, "fascia,x%g,%g,%.4g,%.4g,%lld,%lld,%s,%.6g,%.6g,%.6g,%.4f,%.4f,%.3f,%.3f,%.3f,%.4f,%.4f,%.1f\n",
-                fr[k].scale, fr[k].voxel_mm, 1e3 * frame, 1e3 * sample, (long long)r.nodes, (long long)r.elements,
+        fprintf(csv, "fascia%s%s,x%g,%g,%.4g,%.4g,%lld,%lld,%s,%.6g,%.6g,%.6g,%.4f,%.4f,%.3f,%.3f,%.3f,%.3f,%.4f,%.4f,%.1f\n",
+                tag[0] ? "-" : "", tag, fr[k].scale, fr[k].voxel_mm, 1e3 * frame, 1e3 * sample, (long long)r.nodes, (long long)r.elements,
                 organs[o], r.force[o][0], r.force[o][1], r.force[o][2],
                 100 * fascia_tissue_error3(r.force[o], ref->force[o]),
                 100 * (norm3(r.force[o]) - norm3(ref->force[o])) / norm3(ref->force[o]), pct[0], pct[1], pct[2],
-                slip[0], slip[1], r.ms);
+                free95, slip[0], slip[1], r.ms);
     fascia_demo_result_free(&r);
   }
 done:

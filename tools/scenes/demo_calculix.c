@@ -45,6 +45,7 @@ fascia_status fascia_demo_prepare(fascia_ctx *ctx, const fascia_demo_def *def, f
   td->frame_spacing *= scale;
   td->sample_spacing *= scale * (def->sample_scale > 0 ? def->sample_scale : 1);
   if (def->neighbours > 0) td->neighbours = def->neighbours;
+  if (def->no_patches) td->patch_radius = 0;
   SCENE_TRY(fascia_prep_import(ctx, sc, &s->meshes));
   SCENE_TRY(fascia_prep_repair(ctx, sc, s->meshes));
   SCENE_TRY(fascia_prep_voxelize(ctx, sc, s->meshes, &s->volume));
@@ -312,6 +313,10 @@ void fascia_demo_result_free(fascia_demo_result *r) {
   if (!r) return;
   free(r->u);
   r->u = NULL;
+  for (int o = 0; o < FASCIA_DEMO_ORGANS_MAX; ++o) {
+    free(r->surface_slip[o]), free(r->surface_distance[o]);
+    r->surface_slip[o] = r->surface_distance[o] = NULL, r->surface_count[o] = 0;
+  }
 }
 
 fascia_status fascia_demo_calculix(fascia_ctx *ctx, const fascia_demo_mesh *m, const char *program, int threads,
@@ -459,6 +464,62 @@ cleanup:
   return status;
 }
 
+// 1 when p's voxel or one of its face neighbours is the first tissue's.
+static int beside_region(const fascia_prep_volume *v, const fascia_real p[3]) {
+  if (fascia_prep_volume_region_at(v, p) == 1) return 1;
+  for (int a = 0; a < 3; ++a)
+    for (int side = -1; side <= 1; side += 2) {
+      fascia_real q[3] = {p[0], p[1], p[2]};
+      q[a] += side * v->voxel_size;
+      if (fascia_prep_volume_region_at(v, q) == 1) return 1;
+    }
+  return 0;
+}
+
+// The tissue's slip on organ o (scene order, model organ k) at its surface vertices beside the region.
+static fascia_status surface_slip(fascia_ctx *ctx, const fascia_prep_stages *s, const fascia_solver *solver,
+                                  int32_t o, int32_t k, fascia_demo_result *out) {
+  const fascia_model *m = s->model;
+  const fascia_organ *organ = m->organs + k;
+  double *points = malloc((size_t)(3 * (int64_t)organ->vertex_count + 3) * sizeof *points);
+  double *u = malloc((size_t)(3 * (int64_t)organ->vertex_count + 3) * sizeof *u);
+  out->surface_slip[o] = malloc((size_t)(organ->vertex_count + 1) * sizeof(double));
+  out->surface_distance[o] = malloc((size_t)(organ->vertex_count + 1) * sizeof(double));
+  fascia_status status = FASCIA_OK;
+  DEMO_CHECK_GOTO(points && u && out->surface_slip[o] && out->surface_distance[o], FASCIA_ERR_MEMORY,
+                  "demo: out of memory");
+  int64_t n = 0;
+  for (int32_t i = 0; i < organ->vertex_count; ++i)
+    if (beside_region(s->volume, organ->vertices + 3 * i))
+      for (int a = 0; a < 3; ++a) points[3 * n + a] = organ->vertices[3 * i + a], n += a == 2;
+  SCENE_TRY_GOTO(fascia_demo_displacement_at(ctx, m, solver, n, points, u));
+  fascia_real tr[3], q[4];
+  SCENE_TRY_GOTO(fascia_solver_organ_pose(solver, k, tr, q));
+  const double qd[4] = {q[0], q[1], q[2], q[3]};
+  double R[9];
+  quat_matrix(qd, R);
+  for (int64_t j = 0; j < n; ++j) {
+    const double *x = points + 3 * j;
+    double d2 = 0, nearest = INFINITY;
+    for (int a = 0; a < 3; ++a) {
+      const double moved = R[3 * a] * x[0] + R[3 * a + 1] * x[1] + R[3 * a + 2] * x[2] + tr[a] - x[a];
+      d2 += (u[3 * j + a] - moved) * (u[3 * j + a] - moved);
+    }
+    for (int32_t c = 0; c < m->coupling_count; ++c) {
+      if (m->coupling_organ[c] != k) continue;
+      const fascia_real *y = m->frame_position + 3 * m->coupling_frame[c];
+      nearest = fmin(nearest, sqrt((x[0] - y[0]) * (x[0] - y[0]) + (x[1] - y[1]) * (x[1] - y[1]) +
+                                   (x[2] - y[2]) * (x[2] - y[2])));
+    }
+    out->surface_slip[o][j] = sqrt(d2), out->surface_distance[o][j] = nearest;
+  }
+  out->surface_count[o] = n;
+cleanup:
+  free(points);
+  free(u);
+  return status;
+}
+
 fascia_status fascia_demo_fascia(fascia_ctx *ctx, const fascia_prep_stages *s, const fascia_demo_mesh *at,
                                  fascia_demo_result *out) {
   memset(out, 0, sizeof *out);
@@ -479,6 +540,8 @@ fascia_status fascia_demo_fascia(fascia_ctx *ctx, const fascia_prep_stages *s, c
     out->u = malloc((size_t)(3 * at->node_count) * sizeof *out->u);
     DEMO_CHECK_GOTO(out->u, FASCIA_ERR_MEMORY, "demo: out of memory");
     SCENE_TRY_GOTO(fascia_demo_displacement_at(ctx, s->model, solver, at->node_count, at->node, out->u));
+    for (int32_t o = 0; o < s->scene->organ_count; ++o)
+      SCENE_TRY_GOTO(surface_slip(ctx, s, solver, o, fascia_model_find_organ(s->model, s->scene->organs[o].name), out));
   }
 cleanup:
   fascia_solver_destroy(&solver);

@@ -30,6 +30,7 @@ typedef struct fascia_demo_def {
   double spacing_scale; ///< the first tissue's frame and sample spacings times this; 0: 1
   double sample_scale;  ///< its sample spacing times this on top; 0: 1
   int32_t neighbours;   ///< MLS neighbours; 0: the scene's
+  int32_t no_patches;   ///< 1: the tissue without volumetric patches (its whole energy per sample)
 } fascia_demo_def;
 
 /// The scene prepared as `fascia prep` does, gravity set to zero and the
@@ -66,6 +67,12 @@ typedef struct fascia_demo_result {
   int64_t nodes;                           ///< CalculiX: nodes; fascia: frames
   int64_t elements;                        ///< CalculiX: elements; fascia: samples
   double *u;                               ///< [3 mesh nodes] displacement at the mesh's nodes, m (malloc'd)
+  /// fascia: its slip on each organ where the tissue lies on it: at the
+  /// organ's rest surface vertices in or beside a voxel of the region,
+  /// |u_tissue - u_organ| (m) and the vertex's distance to the organ's
+  /// nearest shared frame (m); malloc'd [surface_count[o]]
+  int64_t surface_count[FASCIA_DEMO_ORGANS_MAX];
+  double *surface_slip[FASCIA_DEMO_ORGANS_MAX], *surface_distance[FASCIA_DEMO_ORGANS_MAX];
 } fascia_demo_result;
 void fascia_demo_result_free(fascia_demo_result *result);
 
@@ -78,7 +85,8 @@ fascia_status fascia_demo_calculix(fascia_ctx *ctx, const fascia_demo_mesh *mesh
                                    fascia_demo_result *out);
 /// Solves the prepared model with fascia, statically at time 1 (CPU, one
 /// thread, Newton tolerance 1e-10), and, when `at` is not NULL, evaluates
-/// its displacement at the mesh's nodes (fascia_demo_displacement_at).
+/// its displacement at the mesh's nodes (fascia_demo_displacement_at) and
+/// its slip on the organs' surfaces.
 fascia_status fascia_demo_fascia(fascia_ctx *ctx, const fascia_prep_stages *stages, const fascia_demo_mesh *at,
                                  fascia_demo_result *out);
 
