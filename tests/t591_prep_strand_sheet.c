@@ -311,8 +311,9 @@ static void check_shipped(const char *cli, const char *dir, const char *scene) {
     CHECK(form && free_frames > 0);
     if (form && !strcmp(form, "strand")) {
       ++strands;
-      CHECK(cJSON_GetNumberValue(cJSON_GetObjectItem(shared, "spleen")) == 1 &&
-            cJSON_GetNumberValue(cJSON_GetObjectItem(shared, "kidney")) == 1);
+      // its ends spread over their areas (a fan of frames on each organ)
+      CHECK(cJSON_GetNumberValue(cJSON_GetObjectItem(shared, "spleen")) >= 3 &&
+            cJSON_GetNumberValue(cJSON_GetObjectItem(shared, "kidney")) >= 3);
     }
     if (form && !strcmp(form, "sheet")) {
       ++sheets;

@@ -656,18 +656,31 @@ static fascia_status build_strand(fascia_ctx *ctx, const fascia_prep_scene *scen
   for (int32_t j = 0; j < intervals; ++j)
     PREP_TRY_GOTO(add_station(ctx, td, out->frame_position + 3 * (int64_t)j, out->frame_position + 3 * (int64_t)(j + 1),
                               td->area, j, j + 1, out, &s));
-  // each fan frame: on the organ (shared), one fibre to its apex carrying its share of the section
+  // each fan frame: on the organ (shared), one fibre to its apex. The
+  // fibres share a section a = A / sum cos^2 (their angles off the fan's
+  // axis, apex to centre): pulled along that axis the fan is as stiff per
+  // length of lift as the strand, so spreading the end does not soften it
   int32_t f = curve_frames;
   for (int k = 0; k < 2; ++k) {
     if (!ends[k].a->spread) continue;
     const int32_t apex = k == 0 ? 0 : curve_frames - 1;
     const surface_points *fan = &ends[k].area;
+    const double *x_apex = out->frame_position + 3 * (int64_t)apex;
+    double axis[3], cos2 = 0;
+    sub3(ends[k].centre, x_apex, axis);
+    const double lift = norm3(axis);
+    for (int64_t j = 0; j < fan->count; ++j) {
+      double d[3];
+      sub3(fan->x + 3 * j, x_apex, d);
+      const double c = dot3(d, axis) / (norm3(d) * lift);
+      cos2 += c * c;
+    }
+    const double fibre_area = td->area / fmax(cos2, 1e-3);
     for (int64_t j = 0; j < fan->count; ++j, ++f) {
       memcpy(out->frame_position + 3 * (int64_t)f, fan->x + 3 * j, 3 * sizeof(double));
       out->frame_organ[f] = ends[k].a->organ;
       out->frame_triangle[f] = fan->triangle[j];
-      PREP_TRY_GOTO(add_station(ctx, td, out->frame_position + 3 * (int64_t)apex, fan->x + 3 * j,
-                                td->area / (double)fan->count, apex, f, out, &s));
+      PREP_TRY_GOTO(add_station(ctx, td, x_apex, fan->x + 3 * j, fibre_area, apex, f, out, &s));
     }
   }
   out->sample_count = s;
