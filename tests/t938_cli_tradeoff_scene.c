@@ -76,14 +76,15 @@ int main(int argc, char **argv) {
   if (result.status != 0) fprintf(stderr, "%s\n", result.err);
   cJSON *rows = cJSON_Parse(result.out);
   CHECK(cJSON_IsArray(rows));
-  // 2 rungs x 2 presets, and the one tissue one rung coarser
-  CHECK(cJSON_GetArraySize(rows) == 5);
+  // 2 rungs x 2 presets, the one tissue one rung coarser, the base drawn with another seed
+  CHECK(cJSON_GetArraySize(rows) == 6);
   const cJSON *ref = NULL, *best = NULL, *row;
-  int failed = 0, ladder = 0, tissue = 0;
+  int failed = 0, ladder = 0, tissue = 0, seed = 0;
   cJSON_ArrayForEach(row, rows) {
     const cJSON *error = cJSON_GetObjectItemCaseSensitive(row, "error");
     const char *group = cJSON_GetStringValue(cJSON_GetObjectItemCaseSensitive(row, "group"));
     ladder += group && !strcmp(group, "ladder"), tissue += group && !strcmp(group, "tissue");
+    seed += group && !strcmp(group, "seed");
     if (cJSON_IsString(error)) {
       ++failed;
       continue;
@@ -91,7 +92,7 @@ int main(int argc, char **argv) {
     if (flag(row, "reference")) ref = row;
     if (flag(row, "recommended")) best = row;
   }
-  CHECK(failed == 0 && ladder == 4 && tissue == 1);
+  CHECK(failed == 0 && ladder == 4 && tissue == 1 && seed == 1);
   CHECK(ref != NULL && best != NULL);
   if (ref && best) {
     CHECK(number(ref, "factor") == 1 && number(ref, "force_error_percent") == 0);

@@ -299,6 +299,7 @@ typedef struct rung {
   double factor;
   int kind;            ///< KIND_SCENE or FASCIA_PREP_SHAPE_*
   int coarse_tissue;   ///< -1, else the tissue one rung coarser than factor
+  int seed_offset;     ///< 1: the base with the scene's seed + 1, the draw's noise
   double voxel;        ///< m
   fascia_model *model; ///< NULL when it failed
   int32_t *frame_tissue; ///< [frames] the tissue each frame lies in (-1 none)
@@ -372,7 +373,8 @@ static const char *kind_name(int kind) {
 }
 
 static void rung_label(const study *s, const rung *r, char *out, size_t size) {
-  if (r->coarse_tissue >= 0)
+  if (r->seed_offset) snprintf(out, size, "x%g %s, seed+%d", r->factor, kind_name(r->kind), r->seed_offset);
+  else if (r->coarse_tissue >= 0)
     snprintf(out, size, "x%g %s, %s x%g", r->factor, kind_name(r->kind), s->tissue_names[r->coarse_tissue],
              r->factor * COARSEN);
   else snprintf(out, size, "x%g %s", r->factor, kind_name(r->kind));
@@ -431,6 +433,10 @@ static char *rung_text(study *s, rung *r) {
     ++index;
   }
   r->voxel = fmin(s->base->voxel_size, finest);
+  if (r->seed_offset) {
+    cJSON_DeleteItemFromObjectCaseSensitive(root, "seed");
+    cJSON_AddNumberToObject(root, "seed", (double)(s->base->seed + (uint64_t)r->seed_offset));
+  }
   cJSON *voxel = cJSON_GetObjectItemCaseSensitive(root, "voxel_size");
   if (cJSON_IsNumber(voxel)) cJSON_SetNumberValue(voxel, r->voxel);
   char *text = cJSON_PrintUnformatted(root);
@@ -745,7 +751,8 @@ void cli_pareto_mark(int count, const double *ms, const double *error, const int
 static int find_row(const study *s, double factor, int kind, int coarse, const char *preset) {
   for (int k = 0; k < s->row_count; ++k) {
     const rung *r = s->rungs + s->rows[k].rung;
-    if (r->factor == factor && r->kind == kind && r->coarse_tissue == coarse && !strcmp(s->rows[k].preset, preset))
+    if (r->factor == factor && r->kind == kind && r->coarse_tissue == coarse && !r->seed_offset &&
+        !strcmp(s->rows[k].preset, preset))
       return k;
   }
   return -1;
@@ -764,7 +771,8 @@ static int reference_row(const study *s) {
     if (k >= 0 && !s->rows[k].failed) return k;
   }
   for (int k = 0; k < s->row_count; ++k)
-    if (!s->rows[k].failed && s->rungs[s->rows[k].rung].coarse_tissue < 0) return k;
+    if (!s->rows[k].failed && s->rungs[s->rows[k].rung].coarse_tissue < 0 && !s->rungs[s->rows[k].rung].seed_offset)
+      return k;
   return -1;
 }
 
@@ -844,7 +852,7 @@ static int recommend(const study *s) {
   int best = -1;
   for (int k = 0; k < s->row_count; ++k) {
     const scene_row *r = s->rows + k;
-    if (r->failed) continue;
+    if (r->failed || s->rungs[r->rung].seed_offset) continue; // the noise row is the base's model drawn again
     if (s->opt->budget > 0) {
       if (r->ms <= s->opt->budget &&
           (best < 0 || r->force_error_max < s->rows[best].force_error_max ||
@@ -876,7 +884,7 @@ static cJSON *json_row(const study *s, const scene_row *row) {
   cJSON *o = cJSON_CreateObject();
   cJSON_AddStringToObject(o, "scene", s->opt->scene);
   cJSON_AddStringToObject(o, "label", row->label);
-  cJSON_AddStringToObject(o, "group", r->coarse_tissue >= 0 ? "tissue" : "ladder");
+  cJSON_AddStringToObject(o, "group", r->seed_offset ? "seed" : r->coarse_tissue >= 0 ? "tissue" : "ladder");
   cJSON_AddNumberToObject(o, "factor", r->factor);
   cJSON_AddStringToObject(o, "shape_functions", kind_name(r->kind));
   if (r->coarse_tissue >= 0) cJSON_AddStringToObject(o, "coarsened_tissue", s->tissue_names[r->coarse_tissue]);
@@ -950,7 +958,7 @@ static int write_csv(const study *s) {
     const rung *r = s->rungs + row->rung;
     cli_csv_text(f, row->label);
     fprintf(f, ",%s,%g,%s,%s,%s,%g,%d,%d,%.2f,%d,%d,%.4f,%.1f,%.1f,%.4f,%s,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.5g,%.5g,%.5g,%d,%d,%d",
-            r->coarse_tissue >= 0 ? "tissue" : "ladder", r->factor, kind_name(r->kind),
+            r->seed_offset ? "seed" : r->coarse_tissue >= 0 ? "tissue" : "ladder", r->factor, kind_name(r->kind),
             r->coarse_tissue >= 0 ? s->tissue_names[r->coarse_tissue] : "", row->preset, r->voxel,
             r->model ? (int)r->model->frame_count : 0, r->model ? (int)r->model->sample_count : 0, r->prep_s,
             s->opt->steps, row->converged_steps, row->failed ? NAN : row->ms, row->memory_mb, row->peak_mb,
@@ -1053,6 +1061,15 @@ static void print_tissues(const study *s, int base, FILE *out) {
       fputc('\n', out);
     }
   }
+  double noise = NAN;
+  for (int k = 0; k < s->row_count; ++k)
+    if (s->rungs[s->rows[k].rung].seed_offset && !s->rows[k].failed) {
+      noise = s->rows[k].change_max;
+      fprintf(out, "the base drawn again (seed + 1): organ forces change by up to %.2f %% (", noise);
+      for (int o = 0; o < s->organ_count; ++o)
+        fprintf(out, "%s%s %.2f", o ? ", " : "", s->organ_names[o], s->rows[k].change[o]);
+      fprintf(out, "): the discretization's noise at this resolution\n");
+    }
   for (int k = 0; k < s->row_count; ++k) {
     const scene_row *r = s->rows + k;
     const rung *g = s->rungs + r->rung;
@@ -1065,8 +1082,10 @@ static void print_tissues(const study *s, int base, FILE *out) {
     fprintf(out, "tissue %s one rung coarser (x%g): organ forces change by at most %.2f %% (", s->tissue_names[g->coarse_tissue],
             g->factor * COARSEN, r->change_max);
     for (int o = 0; o < s->organ_count; ++o) fprintf(out, "%s%s %.2f", o ? ", " : "", s->organ_names[o], r->change[o]);
-    fprintf(out, "): %s\n",
-            r->change_max <= target ? "it could be coarser (within the error target)" : "it needs its resolution");
+    fprintf(out, "): %s\n", r->change_max <= target ? "it could be coarser (within the error target)"
+                            : r->change_max <= noise
+                                ? "beyond the error target but within the draw's noise: this ladder cannot tell"
+                                : "it needs its resolution");
   }
 }
 
@@ -1140,7 +1159,7 @@ static int learn_scene(study *s, const fascia_prep_scene *sc) {
 // the probes) and their rows.
 static int plan(study *s) {
   const scene_options *o = s->opt;
-  const int most = o->ladder_count * o->kind_count + s->tissue_count + 1;
+  const int most = o->ladder_count * o->kind_count + s->tissue_count + 2;
   s->rungs = calloc((size_t)most, sizeof *s->rungs);
   s->rows = calloc((size_t)most * o->preset_count, sizeof *s->rows);
   if (!s->rungs || !s->rows) return 0;
@@ -1153,10 +1172,11 @@ static int plan(study *s) {
   for (int t = 0; o->tissues && t < s->tissue_count; ++t)
     if (s->base->tissues[t].form != FASCIA_PREP_FORM_SHEET)
       s->rungs[s->rung_count++] = (rung){.factor = base, .kind = o->kinds[0], .coarse_tissue = t};
+  if (o->tissues) s->rungs[s->rung_count++] = (rung){.factor = base, .kind = o->kinds[0], .coarse_tissue = -1, .seed_offset = 1};
   const size_t per_row = 3 * (size_t)s->organ_count * 2 + 3 * (size_t)s->organ_count +
                          (size_t)s->organ_count * s->tissue_count + 3 * MAX_PROBES + 1;
   for (int r = 0; r < s->rung_count; ++r)
-    for (int p = 0; p < (s->rungs[r].coarse_tissue >= 0 ? 1 : o->preset_count); ++p) {
+    for (int p = 0; p < (s->rungs[r].coarse_tissue >= 0 || s->rungs[r].seed_offset ? 1 : o->preset_count); ++p) {
       scene_row *row = s->rows + s->row_count++;
       row->rung = r, row->preset = o->presets[p];
       double *block = calloc(per_row, sizeof *block);
@@ -1220,7 +1240,9 @@ static void sort_rows(study *s) {
     while (f < o->ladder_count - 1 && o->ladder[f] != r->factor) ++f;
     while (kind < o->kind_count - 1 && o->kinds[kind] != r->kind) ++kind;
     while (preset < o->preset_count - 1 && strcmp(o->presets[preset], s->rows[k].preset)) ++preset;
-    key[k] = r->coarse_tissue >= 0 ? 1000000 + r->coarse_tissue : (f * MAX_KINDS + kind) * MAX_PRESETS + preset;
+    key[k] = r->seed_offset      ? 2000000
+             : r->coarse_tissue >= 0 ? 1000000 + r->coarse_tissue
+                                     : (f * MAX_KINDS + kind) * MAX_PRESETS + preset;
   }
   for (int a = 1; a < s->row_count; ++a)
     for (int b = a; b > 0 && key[b] < key[b - 1]; --b) {
@@ -1364,7 +1386,8 @@ int cmd_tradeoff_scene(int argc, char **argv) {
     double *ms = calloc((size_t)s.row_count, sizeof *ms), *err = calloc((size_t)s.row_count, sizeof *err);
     int *skip = calloc((size_t)s.row_count, sizeof *skip), *front = calloc((size_t)s.row_count, sizeof *front);
     for (int k = 0; ms && err && skip && front && k < s.row_count; ++k)
-      ms[k] = s.rows[k].ms, err[k] = s.rows[k].force_error_max, skip[k] = s.rows[k].failed || ref < 0;
+      ms[k] = s.rows[k].ms, err[k] = s.rows[k].force_error_max,
+      skip[k] = s.rows[k].failed || ref < 0 || s.rungs[s.rows[k].rung].seed_offset;
     if (ms && err && skip && front) cli_pareto_mark(s.row_count, ms, err, skip, front);
     for (int k = 0; front && k < s.row_count; ++k) s.rows[k].pareto = front[k];
     free(ms), free(err), free(skip), free(front);
