@@ -4,14 +4,19 @@
 // frames and samples of a tissue whose form is a curve or a surface, built
 // from the scene's geometry instead of a voxel region.
 //
-//   strand  the straight segment between its two attachments, each the
-//           closest point of its organ's surface to the point given (within
-//           the attachment's radius); frames at equal intervals no longer
-//           than frame_spacing, the two end frames on the organs (shared:
-//           the coupling stage couples them); per interval one station at
-//           its middle with q x q section points over a square of the
-//           strand's area (fascia_shape_section_points, as the beam's
-//           strand), each of volume interval x area x its fraction;
+//   strand  the polyline from its start through its "through" points to
+//           its end (straight without them); an end at the point of its
+//           attachment's area (a point moved onto the organ's surface, a
+//           part, a label, a region) nearest the strand's next point,
+//           shared with the organ, or spread: a free apex and a fan of
+//           fibres from it to frames over the area's side that faces the
+//           strand, those shared (the coupling stage couples them). Frames
+//           at equal intervals no longer than frame_spacing along each
+//           segment; per interval (and fibre) one station at its middle
+//           with q x q section points over a square of the strand's area
+//           (a fibre's share of it) across it (fascia_shape_section_points,
+//           as the beam's strand), each of volume interval x area x its
+//           fraction;
 //   sheet   the mesh's (merged) vertices are its frames, a vertex within the
 //           coupling tolerance of an organ moved onto it (shared); per
 //           triangle its centroid, with q points through the thickness
@@ -21,7 +26,8 @@
 // Each sample records the frames of its interval or triangle; the shape
 // functions stage gives it fascia_shape_mls_adaptive's weights over them
 // (linear along the interval or over the triangle). So the samples of a
-// strand add up to length x area, of a sheet to area x thickness.
+// strand's curve add up to length x area (its fans' fibres besides), of a
+// sheet to area x thickness.
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>

@@ -20,8 +20,10 @@ typedef struct prep_reduced {
 
 /// Builds tissue t (a strand or a sheet; its sheet mesh in meshes->sheets)
 /// and refuses what cannot be one with a line naming the scene key: an
-/// attachment farther than its radius from its organ, a straight strand
-/// through an organ, a sheet thicker than the gap it fills. trees: one per
+/// attachment farther than its radius from its organ, a region on no organ,
+/// a part or label the organ lacks or with no surface, a strand's curve or
+/// a spread end's fibres through an organ, a sheet thicker than the gap it
+/// fills. A strand's frames: its curve's in order, then its fans'. trees: one per
 /// organ, created here when NULL (the caller destroys them).
 FASCIA_PREP_INTERN fascia_status prep_reduced_build(fascia_ctx *ctx, const fascia_prep_scene *scene,
                                                     const fascia_prep_meshes *meshes, const fascia_prep_volume *vol,
