@@ -222,6 +222,26 @@ static void print_slip(const fascia_prep_stages *s, const ccx_row *at, const fas
          m->node[3 * worst + 1], m->node[3 * worst + 2], 1e3 * nearest);
 }
 
+// Where CalculiX holds the tissue against the organs' surfaces, where
+// fascia's shared frames hold it: the held nodes' signed distance to their
+// organ (positive into the tissue).
+static void print_offsets(const fascia_demo_mesh *m) {
+  double *d = malloc((size_t)m->node_count * sizeof *d);
+  if (!d) return;
+  printf("    held nodes' distance to their organ's surface (mm, + into the tissue):");
+  for (int32_t o = 0; o < m->organ_count; ++o) {
+    int64_t n = 0;
+    double sum = 0;
+    for (int64_t k = 0; k < m->node_count; ++k)
+      if (m->node_organ[k] == o && isfinite(m->node_distance[k])) d[n++] = m->node_distance[k], sum += m->node_distance[k];
+    if (n == 0) continue;
+    printf(" %s mean %+.3f, p5 %+.3f, p95 %+.3f;", m->organ_name[o], 1e3 * sum / (double)n,
+           1e3 * fascia_demo_percentile(d, n, 0.05), 1e3 * fascia_demo_percentile(d, n, 0.95));
+  }
+  printf("\n");
+  free(d);
+}
+
 int main(int argc, char **argv) {
   const char *scene = "data/scenes/pelvis-female-demo.json", *ccx_list = "8i:1:1,8i:1:2,20r:1:1",
              *fascia_list = "1:1,1:0.7,1:0.5", *csv_path = NULL,
@@ -330,6 +350,7 @@ int main(int argc, char **argv) {
     printf("  %-26s %8lld %9lld", name, (long long)cr[k].result.nodes, (long long)cr[k].result.elements);
     for (int32_t o = 0; o < organ_count; ++o) printf("  %16.5f", norm3(cr[k].result.force[o]));
     printf("  %6.1f%s\n", 1e-3 * cr[k].result.ms, cached ? " (cached)" : "");
+    print_offsets(&cr[k].mesh);
     fflush(stdout);
   }
   const fascia_demo_result *ref = &cr[reference - 1].result;

@@ -98,13 +98,32 @@ static const double node_offset[20][3] = {
 
 void fascia_demo_mesh_free(fascia_demo_mesh *m) {
   if (!m) return;
-  free(m->node), free(m->node_organ), free(m->node_u), free(m->element);
+  free(m->node), free(m->node_organ), free(m->node_u), free(m->node_distance), free(m->element);
   memset(m, 0, sizeof *m);
 }
 
 // 1 when voxel w (a grid index, or -1 off the grid) lies inside organ o.
 static int inside(const fascia_prep_volume *v, int32_t o, int64_t w) {
   return w >= 0 && v->distance[o] && v->distance[o][w] <= 0;
+}
+
+// Organ o's signed distance at x, trilinear between the voxel centres.
+static double organ_distance(const fascia_prep_volume *v, int32_t o, const double x[3]) {
+  if (!v->distance[o]) return NAN;
+  double f[3];
+  int32_t c[3];
+  for (int a = 0; a < 3; ++a) {
+    const double t = (x[a] - v->origin[a]) / v->voxel_size;
+    c[a] = (int32_t)floor(t), f[a] = t - c[a];
+    if (c[a] < 0 || c[a] + 1 >= v->dims[a]) return NAN;
+  }
+  double d = 0;
+  for (int q = 0; q < 8; ++q) {
+    const int32_t i = c[0] + (q & 1), j = c[1] + ((q >> 1) & 1), k = c[2] + ((q >> 2) & 1);
+    const double w = ((q & 1) ? f[0] : 1 - f[0]) * (((q >> 1) & 1) ? f[1] : 1 - f[1]) * (((q >> 2) & 1) ? f[2] : 1 - f[2]);
+    d += w * v->distance[o][i + (int64_t)v->dims[0] * (j + (int64_t)v->dims[1] * k)];
+  }
+  return d;
 }
 
 fascia_status fascia_demo_mesh_build(fascia_ctx *ctx, const fascia_prep_stages *s, int quadratic,
@@ -199,7 +218,8 @@ fascia_status fascia_demo_mesh_build(fascia_ctx *ctx, const fascia_prep_stages *
   out->node = malloc((size_t)(3 * count) * sizeof *out->node);
   out->node_u = calloc((size_t)(3 * count), sizeof *out->node_u);
   out->node_organ = malloc((size_t)count * sizeof *out->node_organ);
-  if (!out->node || !out->node_u || !out->node_organ) {
+  out->node_distance = malloc((size_t)count * sizeof *out->node_distance);
+  if (!out->node || !out->node_u || !out->node_organ || !out->node_distance) {
     status = SCENE_FAIL(ctx, FASCIA_ERR_MEMORY, "demo mesh: out of memory (%lld nodes)", (long long)count);
     goto cleanup;
   }
@@ -211,6 +231,7 @@ fascia_status fascia_demo_mesh_build(fascia_ctx *ctx, const fascia_prep_stages *
     for (int a = 0; a < 3; ++a) x[a] = v->origin[a] + v->voxel_size * (lo[a] - 0.5) + h * (double)ijk[a];
     const int32_t o = organ[p];
     out->node_organ[k] = o;
+    out->node_distance[k] = o >= 0 ? organ_distance(v, o, x) : NAN;
     if (o < 0) continue;
     for (int a = 0; a < 3; ++a)
       out->node_u[3 * k + a] = R[o][3 * a] * x[0] + R[o][3 * a + 1] * x[1] + R[o][3 * a + 2] * x[2] + T[o][a] - x[a];

@@ -45,6 +45,10 @@ typedef struct fascia_demo_mesh {
   double *node;                  ///< [3 nodes] rest, m
   int32_t *node_organ;           ///< [nodes] organ (scene order) whose inside the node's face borders; -1: free
   double *node_u;                ///< [3 nodes] the organ's displacement there at time 1 (0 for free nodes), m
+  /// [nodes] a held node's signed distance to its organ's surface (m,
+  /// positive off the organ, into the tissue: where CalculiX holds the
+  /// tissue, against fascia's shared frames on the surface); NAN when free
+  double *node_distance;
   int32_t *element;              ///< [8 or 20 per element] node indices from 0, ccx's order
   int32_t organ_count;           ///< the scene's organs
   char organ_name[FASCIA_DEMO_ORGANS_MAX][FASCIA_NAME_SIZE];
