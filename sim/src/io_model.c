@@ -74,6 +74,7 @@
 // the arrays of the model would fit in this machine's memory.
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -222,76 +223,76 @@ static int model_modes_version(const fascia_model *m) {
   return version;
 }
 
-// Materials as parallel datasets (one per field): simpler to check on
-// reading than a compound, and each carries its own unit.
+// Materials as parallel datasets, one per field (simpler to check on reading
+// than a compound, and each carries its own unit), in file order.
+typedef struct material_field {
+  const char *path, *unit;
+  fascia_ma_kind kind;
+  size_t offset; ///< in fascia_material
+} material_field;
+
+static const material_field material_fields[] = {
+    {"/materials/name", NULL, FASCIA_MA_NAME, offsetof(fascia_material, name)},
+    {"/materials/law", NULL, FASCIA_MA_INT, offsetof(fascia_material, law)},
+    {"/materials/youngs_modulus", "Pa", FASCIA_MA_REAL, offsetof(fascia_material, youngs_modulus)},
+    {"/materials/poisson_ratio", "1", FASCIA_MA_REAL, offsetof(fascia_material, poisson_ratio)},
+    {"/materials/density", "kg/m^3", FASCIA_MA_REAL, offsetof(fascia_material, density)},
+    {"/materials/rotation_coupling", "1", FASCIA_MA_REAL, offsetof(fascia_material, rotation_coupling)},
+    {"/materials/rotation_smoothing", "1", FASCIA_MA_REAL, offsetof(fascia_material, rotation_smoothing)},
+    // the last, optional on reading: files before reduced integration are all FASCIA_PART_FULL (0)
+    {"/materials/part", NULL, FASCIA_MA_INT, offsetof(fascia_material, part)},
+};
+#define MATERIAL_FIELD_COUNT (sizeof material_fields / sizeof material_fields[0])
+
 static fascia_status write_materials(writer *w, const fascia_model *m) {
   const int64_t M = m->material_count;
-  fascia_status status = FASCIA_ERR_MEMORY;
-  char(*names)[FASCIA_NAME_SIZE] = fascia_calloc(M, FASCIA_NAME_SIZE);
-  int32_t *law = fascia_calloc(M, sizeof *law);
-  fascia_real *values = fascia_calloc(5 * M, sizeof *values);
-  if (!names || !law || !values) {
-    status = FASCIA_FAIL(w->ctx, FASCIA_ERR_MEMORY, "model '%s' /materials: out of memory", w->path);
-    goto cleanup;
+  char *column = fascia_calloc(M, FASCIA_NAME_SIZE); // the largest field
+  FASCIA_CHECK(column, w->ctx, FASCIA_ERR_MEMORY, "model '%s' /materials: out of memory", w->path);
+  fascia_status status = write_group(w, "/materials", -1, -1, -1);
+  for (size_t f = 0; f < MATERIAL_FIELD_COUNT && status == FASCIA_OK; ++f) {
+    const material_field *field = material_fields + f;
+    const size_t size = fascia_model_array_size(field->kind);
+    for (int64_t k = 0; k < M; ++k) memcpy(column + k * size, (const char *)(m->materials + k) + field->offset, size);
+    status = write_dataset(w, field->path, field->kind, 1, M, 0, column, field->unit);
   }
-  for (int64_t k = 0; k < M; ++k) {
-    const fascia_material *mat = m->materials + k;
-    memcpy(names[k], mat->name, FASCIA_NAME_SIZE);
-    law[k] = mat->law;
-    values[k] = mat->youngs_modulus;
-    values[M + k] = mat->poisson_ratio;
-    values[2 * M + k] = mat->density;
-    values[3 * M + k] = mat->rotation_coupling;
-    values[4 * M + k] = mat->rotation_smoothing;
-  }
-  FASCIA_TRY_GOTO(write_group(w, "/materials", -1, -1, -1));
-  FASCIA_TRY_GOTO(write_dataset(w, "/materials/name", FASCIA_MA_NAME, 1, M, 0, names, NULL));
-  FASCIA_TRY_GOTO(write_dataset(w, "/materials/law", FASCIA_MA_INT, 1, M, 0, law, NULL));
-  FASCIA_TRY_GOTO(write_dataset(w, "/materials/youngs_modulus", FASCIA_MA_REAL, 1, M, 0, values, "Pa"));
-  FASCIA_TRY_GOTO(write_dataset(w, "/materials/poisson_ratio", FASCIA_MA_REAL, 1, M, 0, values + M, "1"));
-  FASCIA_TRY_GOTO(write_dataset(w, "/materials/density", FASCIA_MA_REAL, 1, M, 0, values + 2 * M, "kg/m^3"));
-  FASCIA_TRY_GOTO(write_dataset(w, "/materials/rotation_coupling", FASCIA_MA_REAL, 1, M, 0, values + 3 * M, "1"));
-  FASCIA_TRY_GOTO(write_dataset(w, "/materials/rotation_smoothing", FASCIA_MA_REAL, 1, M, 0, values + 4 * M, "1"));
-  for (int64_t k = 0; k < M; ++k) law[k] = m->materials[k].part;
-  FASCIA_TRY_GOTO(write_dataset(w, "/materials/part", FASCIA_MA_INT, 1, M, 0, law, NULL));
-cleanup:
-  free(names);
-  free(law);
-  free(values);
+  free(column);
   return status;
 }
 
+// Writes dataset `leaf` of a motion's or organ's group (as write_dataset;
+// cols 0: a 1-D dataset).
+static fascia_status write_member(writer *w, const char *group, const char *leaf, fascia_ma_kind kind, int64_t rows,
+                                  int64_t cols, const void *data, const char *unit) {
+  char name[PATH_SIZE + 16];
+  snprintf(name, sizeof name, "%s/%s", group, leaf);
+  return write_dataset(w, name, kind, cols ? 2 : 1, rows, cols, data, unit);
+}
+
 static fascia_status write_motions(writer *w, const fascia_model *m) {
-  char name[PATH_SIZE];
+  char group[PATH_SIZE];
   FASCIA_TRY(write_group(w, "/motions", -1, -1, -1));
   for (int32_t k = 0; k < m->motion_count; ++k) {
     const fascia_motion *mo = m->motions + k;
     const int64_t K = mo->key_count;
-    snprintf(name, sizeof name, "/motions/%s", mo->name);
-    FASCIA_TRY(write_group(w, name, k, -1, -1));
-    snprintf(name, sizeof name, "/motions/%s/pivot", mo->name);
-    WRITE1(w, name, FASCIA_MA_REAL, 3, mo->pivot, "m");
-    snprintf(name, sizeof name, "/motions/%s/time", mo->name);
-    WRITE1(w, name, FASCIA_MA_REAL, K, mo->key_time, "s");
-    snprintf(name, sizeof name, "/motions/%s/translation", mo->name);
-    WRITE2(w, name, FASCIA_MA_REAL, K, 3, mo->key_translation, "m");
-    snprintf(name, sizeof name, "/motions/%s/rotation", mo->name);
-    WRITE2(w, name, FASCIA_MA_REAL, K, 4, mo->key_rotation, "1");
+    snprintf(group, sizeof group, "/motions/%s", mo->name);
+    FASCIA_TRY(write_group(w, group, k, -1, -1));
+    FASCIA_TRY(write_member(w, group, "pivot", FASCIA_MA_REAL, 3, 0, mo->pivot, "m"));
+    FASCIA_TRY(write_member(w, group, "time", FASCIA_MA_REAL, K, 0, mo->key_time, "s"));
+    FASCIA_TRY(write_member(w, group, "translation", FASCIA_MA_REAL, K, 3, mo->key_translation, "m"));
+    FASCIA_TRY(write_member(w, group, "rotation", FASCIA_MA_REAL, K, 4, mo->key_rotation, "1"));
   }
   return FASCIA_OK;
 }
 
 static fascia_status write_organs(writer *w, const fascia_model *m) {
-  char name[PATH_SIZE];
+  char group[PATH_SIZE];
   FASCIA_TRY(write_group(w, "/organs", -1, -1, -1));
   for (int32_t k = 0; k < m->organ_count; ++k) {
     const fascia_organ *o = m->organs + k;
-    snprintf(name, sizeof name, "/organs/%s", o->name);
-    FASCIA_TRY(write_group(w, name, k, o->kind, o->motion));
-    snprintf(name, sizeof name, "/organs/%s/vertices", o->name);
-    WRITE2(w, name, FASCIA_MA_REAL, o->vertex_count, 3, o->vertices, "m");
-    snprintf(name, sizeof name, "/organs/%s/triangles", o->name);
-    WRITE2(w, name, FASCIA_MA_INT, o->triangle_count, 3, o->triangles, NULL);
+    snprintf(group, sizeof group, "/organs/%s", o->name);
+    FASCIA_TRY(write_group(w, group, k, o->kind, o->motion));
+    FASCIA_TRY(write_member(w, group, "vertices", FASCIA_MA_REAL, o->vertex_count, 3, o->vertices, "m"));
+    FASCIA_TRY(write_member(w, group, "triangles", FASCIA_MA_INT, o->triangle_count, 3, o->triangles, NULL));
   }
   return FASCIA_OK;
 }
@@ -858,72 +859,54 @@ static fascia_status read_sizes(reader *r, fascia_model_sizes *z) {
 
 static fascia_status read_materials(reader *r, fascia_model *m) {
   const int64_t M = m->material_count;
+  char *column = fascia_calloc(M, FASCIA_NAME_SIZE); // the largest field
+  FASCIA_CHECK(column, r->ctx, FASCIA_ERR_MEMORY, "model '%s' /materials: out of memory", r->path);
   fascia_status status = FASCIA_OK;
-  char(*names)[FASCIA_NAME_SIZE] = fascia_calloc(M, FASCIA_NAME_SIZE);
-  int32_t *law = fascia_calloc(M, sizeof *law);
-  fascia_real *values = fascia_calloc(5 * M, sizeof *values);
-  if (!names || !law || !values) {
-    status = FASCIA_FAIL(r->ctx, FASCIA_ERR_MEMORY, "model '%s' /materials: out of memory", r->path);
-    goto cleanup;
+  for (size_t f = 0; f < MATERIAL_FIELD_COUNT && status == FASCIA_OK; ++f) {
+    const material_field *field = material_fields + f;
+    const size_t size = fascia_model_array_size(field->kind);
+    if (f == MATERIAL_FIELD_COUNT - 1 && !fascia_h5_link_exists(r->file, field->path)) break; // part
+    status = field->kind == FASCIA_MA_NAME ? read_names(r, field->path, M, (char(*)[FASCIA_NAME_SIZE])column)
+                                           : read_numbers(r, field->path, field->kind, M, 0, column);
+    for (int64_t k = 0; k < M && status == FASCIA_OK; ++k)
+      memcpy((char *)(m->materials + k) + field->offset, column + k * size, size);
   }
-  FASCIA_TRY_GOTO(read_names(r, "/materials/name", M, names));
-  FASCIA_TRY_GOTO(read_numbers(r, "/materials/law", FASCIA_MA_INT, M, 0, law));
-  FASCIA_TRY_GOTO(read_numbers(r, "/materials/youngs_modulus", FASCIA_MA_REAL, M, 0, values));
-  FASCIA_TRY_GOTO(read_numbers(r, "/materials/poisson_ratio", FASCIA_MA_REAL, M, 0, values + M));
-  FASCIA_TRY_GOTO(read_numbers(r, "/materials/density", FASCIA_MA_REAL, M, 0, values + 2 * M));
-  FASCIA_TRY_GOTO(read_numbers(r, "/materials/rotation_coupling", FASCIA_MA_REAL, M, 0, values + 3 * M));
-  FASCIA_TRY_GOTO(read_numbers(r, "/materials/rotation_smoothing", FASCIA_MA_REAL, M, 0, values + 4 * M));
-  int32_t *part = fascia_calloc(M, sizeof *part); // optional: files before reduced integration are all FULL
-  if (!part) {
-    status = FASCIA_FAIL(r->ctx, FASCIA_ERR_MEMORY, "model '%s' /materials: out of memory", r->path);
-    goto cleanup;
-  }
-  if (fascia_h5_link_exists(r->file, "/materials/part")) {
-    status = read_numbers(r, "/materials/part", FASCIA_MA_INT, M, 0, part);
-    if (status != FASCIA_OK) {
-      free(part);
-      goto cleanup;
-    }
-  }
-  for (int64_t k = 0; k < M; ++k) {
-    fascia_material *mat = m->materials + k;
-    memcpy(mat->name, names[k], FASCIA_NAME_SIZE);
-    mat->law = law[k];
-    mat->youngs_modulus = values[k];
-    mat->poisson_ratio = values[M + k];
-    mat->density = values[2 * M + k];
-    mat->rotation_coupling = values[3 * M + k];
-    mat->rotation_smoothing = values[4 * M + k];
-    mat->part = part[k];
-  }
-  free(part);
-cleanup:
-  free(names);
-  free(law);
-  free(values);
+  free(column);
   return status;
+}
+
+// Dataset `leaf` of a motion's or organ's group: its rows (as count_rows),
+// checked to be stored, and its path in `name`.
+static fascia_status count_member_rows(reader *r, const char *group, const char *leaf, fascia_ma_kind kind,
+                                       int64_t cols, char *name, size_t size, int64_t *rows) {
+  snprintf(name, size, "%s/%s", group, leaf);
+  FASCIA_TRY(count_rows(r, name, kind, cols, rows));
+  return check_stored(r, name);
+}
+
+// Reads dataset `leaf` of a motion's or organ's group (as read_numbers).
+static fascia_status read_member(reader *r, const char *group, const char *leaf, fascia_ma_kind kind, int64_t rows,
+                                 int64_t cols, void *buf) {
+  char name[PATH_SIZE + 16];
+  snprintf(name, sizeof name, "%s/%s", group, leaf);
+  return read_numbers(r, name, kind, rows, cols, buf);
 }
 
 static fascia_status read_motions(reader *r, fascia_model *m) {
   char group[PATH_SIZE], name[PATH_SIZE + 16];
   for (int64_t k = 0; k < m->motion_count; ++k) {
     int32_t index;
+    int64_t K;
     FASCIA_TRY(member(r, "/motions", k, m->motion_count, m->motions->name, sizeof *m->motions, group, &index));
     fascia_motion *mo = m->motions + index;
-    int64_t K;
-    snprintf(name, sizeof name, "%s/time", group);
-    FASCIA_TRY(count_rows(r, name, FASCIA_MA_REAL, 0, &K));
-    FASCIA_TRY(check_stored(r, name));
+    FASCIA_TRY(count_member_rows(r, group, "time", FASCIA_MA_REAL, 0, name, sizeof name, &K));
     FASCIA_CHECK(K >= 1, r->ctx, FASCIA_ERR_FORMAT, "model '%s' %s: no keyframe, expected at least one; %s", r->path,
                  name, REMEDY);
     FASCIA_TRY(fascia_motion_alloc(r->ctx, mo, (int32_t)K));
-    READ(r, name, FASCIA_MA_REAL, K, 0, mo->key_time);
-    snprintf(name, sizeof name, "%s/pivot", group);
-    READ(r, name, FASCIA_MA_REAL, 3, 0, mo->pivot);
-    snprintf(name, sizeof name, "%s/translation", group);
-    READ(r, name, FASCIA_MA_REAL, K, 3, mo->key_translation);
-    snprintf(name, sizeof name, "%s/rotation", group);
-    READ(r, name, FASCIA_MA_REAL, K, 4, mo->key_rotation);
+    FASCIA_TRY(read_member(r, group, "time", FASCIA_MA_REAL, K, 0, mo->key_time));
+    FASCIA_TRY(read_member(r, group, "pivot", FASCIA_MA_REAL, 3, 0, mo->pivot));
+    FASCIA_TRY(read_member(r, group, "translation", FASCIA_MA_REAL, K, 3, mo->key_translation));
+    FASCIA_TRY(read_member(r, group, "rotation", FASCIA_MA_REAL, K, 4, mo->key_rotation));
   }
   return FASCIA_OK;
 }
@@ -932,21 +915,16 @@ static fascia_status read_organs(reader *r, fascia_model *m) {
   char group[PATH_SIZE], name[PATH_SIZE + 16];
   for (int64_t k = 0; k < m->organ_count; ++k) {
     int32_t index;
+    int64_t V, T;
     FASCIA_TRY(member(r, "/organs", k, m->organ_count, m->organs->name, sizeof *m->organs, group, &index));
     fascia_organ *o = m->organs + index;
     FASCIA_TRY(read_int_attr(r, group, "kind", &o->kind));
     FASCIA_TRY(read_int_attr(r, group, "motion", &o->motion));
-    int64_t V, T;
-    char triangles[PATH_SIZE + 16];
-    snprintf(name, sizeof name, "%s/vertices", group);
-    snprintf(triangles, sizeof triangles, "%s/triangles", group);
-    FASCIA_TRY(count_rows(r, name, FASCIA_MA_REAL, 3, &V));
-    FASCIA_TRY(count_rows(r, triangles, FASCIA_MA_INT, 3, &T));
-    FASCIA_TRY(check_stored(r, name));
-    FASCIA_TRY(check_stored(r, triangles));
+    FASCIA_TRY(count_member_rows(r, group, "vertices", FASCIA_MA_REAL, 3, name, sizeof name, &V));
+    FASCIA_TRY(count_member_rows(r, group, "triangles", FASCIA_MA_INT, 3, name, sizeof name, &T));
     FASCIA_TRY(fascia_organ_alloc(r->ctx, o, (int32_t)V, (int32_t)T));
-    READ(r, name, FASCIA_MA_REAL, V, 3, o->vertices);
-    READ(r, triangles, FASCIA_MA_INT, T, 3, o->triangles);
+    FASCIA_TRY(read_member(r, group, "vertices", FASCIA_MA_REAL, V, 3, o->vertices));
+    FASCIA_TRY(read_member(r, group, "triangles", FASCIA_MA_INT, T, 3, o->triangles));
   }
   return FASCIA_OK;
 }
