@@ -12,9 +12,9 @@
 //    frames on the polyline, its volume exactly length x area, its weights
 //    well posed (each sample's weights sum to one, their gradients span its
 //    interval's axis alone), and it holds B when pulled;
-//  - refusals, one line naming the key: a region on no organ, a curve
-//    through an organ, a through point repeated, a label on a mesh organ,
-//    point and region both.
+//  - refusals, one line naming the key: a region on no organ, a region
+//    with nothing facing the strand, a curve through an organ, a through
+//    point repeated, a label on a mesh organ, point and region both.
 #define _POSIX_C_SOURCE 200809L // mkdtemp
 #include <math.h>
 
@@ -251,6 +251,10 @@ static void check_refusals(const char *dir) {
   refused(dir, to_point, ", \"through\": [[0, 0, 0.015], [0.02, 0, 0.015], [0.02, 0, 0.005]]", "tissues[0].through",
           "pass through organ 'B'");
   refused(dir, to_point, ", \"through\": [[0, 0, 0.015], [0, 0, 0.015]]", "tissues[0].through[1]", "same point");
+  // spread over B's far face only: nothing of it faces the strand
+  refused(dir, "{\"organ\": \"B\", \"region\": {\"box\": {\"min\": [0.029, -0.005, -0.005], \"max\": [0.031, 0.005, "
+               "0.005]}}}",
+          "", "tissues[0].to.region", "faces the strand");
   refused(dir, "{\"organ\": \"B\", \"label\": \"liver\"}", "", "tissues[0].to.label", "is a mesh");
   refused(dir, "{\"organ\": \"B\", \"point\": [0.01, 0, 0], \"region\": {\"sphere\": {\"center\": [0.01, 0, 0], "
                "\"radius\": 0.006}}}",
