@@ -22,6 +22,8 @@
 //             the last mesh of each rung's voxel size
 //   TAG       nK: K MLS neighbours; flat: no volumetric patches
 //   --cache DIR  CalculiX's answers read from DIR when there, else solved and kept there
+//   --write-reference FILE  CalculiX's forces per mesh, the reference last
+//             (data/reference/demo-calculix.csv, read by tests/t598)
 //   --slip    per rung, the tissue's slip on each organ by distance to the
 //             organ's nearest shared frame, and where the largest error lies
 #define _POSIX_C_SOURCE 200809L
@@ -105,12 +107,17 @@ static void cache_save(const char *dir, const ccx_row *c) {
   else remove(tmp);
 }
 
+static const char usage_text[] =
+    "usage: demo-calculix [SCENE.json] [--ccx TYPE:VOXEL_MM:SPLIT,...] "
+    "[--fascia VOXEL_MM:SCALE[:SAMPLE_SCALE[:TAG]],...]\n"
+    "                     [--reference K] [--neighbours N] [--threads N] [--csv FILE] [--cache DIR] [--slip]\n"
+    "                     [--write-reference FILE]\n"
+    "  TYPE 8i (C3D8I) or 20r (C3D20R); SPLIT elements along a voxel's edge; SCALE times the tissue's frame and\n"
+    "  sample spacings, SAMPLE_SCALE times the sample spacing on top; TAG nK (K MLS neighbours) or flat (no\n"
+    "  volumetric patches); --reference K: the CalculiX mesh (from 1) errors are taken against, default the last\n";
+
 static int usage(const char *why) {
-  fprintf(stderr,
-          "demo-calculix: %s\nusage: demo-calculix [SCENE.json] [--ccx TYPE:VOXEL_MM:SPLIT,...] "
-          "[--fascia VOXEL_MM:SCALE[:SAMPLE_SCALE[:TAG]],...] [--reference K] [--neighbours N] [--threads N] "
-          "[--csv FILE] [--cache DIR] [--slip]\n",
-          why);
+  fprintf(stderr, "demo-calculix: %s\n%s", why, usage_text);
   return 2;
 }
 
@@ -242,13 +249,47 @@ static void print_offsets(const fascia_demo_mesh *m) {
   free(d);
 }
 
+// CalculiX's forces as the stored reference (data/reference/demo-calculix.csv):
+// one row per mesh and organ, the reference mesh last.
+static int write_reference(const char *path, const char *scene, const ccx_row *cr, int nc, int reference) {
+  char tmp[1100];
+  snprintf(tmp, sizeof tmp, "%s.tmp", path);
+  FILE *f = fopen(tmp, "w");
+  if (!f) {
+    fprintf(stderr, "demo-calculix: cannot write %s\n", tmp);
+    return 0;
+  }
+  fprintf(f, "# CalculiX on the first tissue of %s (tools/scenes/demo_calculix.h): its voxels as hexahedra, the\n"
+             "# organ-facing nodes moved with the organs at time 1, gravity off, static; the tissue's force on each\n"
+             "# organ (N), the reference mesh last (demo-calculix --write-reference)\n"
+             "mesh,voxel_mm,nodes,elements,organ,fx,fy,fz\n",
+          scene);
+  for (int j = 0; j < nc; ++j) {
+    const int k = j < reference - 1 ? j : j == nc - 1 ? reference - 1 : j + 1;
+    for (int32_t o = 0; o < cr[k].mesh.organ_count; ++o)
+      fprintf(f, "%s-split%d,%g,%lld,%lld,%s,%.7g,%.7g,%.7g\n", cr[k].quadratic ? "C3D20R" : "C3D8I", (int)cr[k].split,
+              cr[k].voxel_mm, (long long)cr[k].result.nodes, (long long)cr[k].result.elements, cr[k].mesh.organ_name[o],
+              cr[k].result.force[o][0], cr[k].result.force[o][1], cr[k].result.force[o][2]);
+  }
+  if (fclose(f) != 0 || rename(tmp, path) != 0) {
+    fprintf(stderr, "demo-calculix: cannot write %s\n", path);
+    remove(tmp);
+    return 0;
+  }
+  return 1;
+}
+
 int main(int argc, char **argv) {
   const char *scene = "data/scenes/pelvis-female-demo.json", *ccx_list = "8i:1:1,8i:1:2,20r:1:1",
              *fascia_list = "1:1,1:0.7,1:0.5", *csv_path = NULL,
-             *cache = NULL;
+             *cache = NULL, *reference_path = NULL;
   int reference = 0, threads = 1, neighbours = 0, slips = 0;
   for (int i = 1; i < argc; ++i) {
     const char *a = argv[i];
+    if (!strcmp(a, "--help")) {
+      printf("demo-calculix: the demo's tissue against CalculiX, statically\n%s", usage_text);
+      return 0;
+    }
     if (!strcmp(a, "--ccx") && i + 1 < argc) ccx_list = argv[++i];
     else if (!strcmp(a, "--fascia") && i + 1 < argc) fascia_list = argv[++i];
     else if (!strcmp(a, "--reference") && i + 1 < argc) reference = atoi(argv[++i]);
@@ -257,6 +298,7 @@ int main(int argc, char **argv) {
     else if (!strcmp(a, "--csv") && i + 1 < argc) csv_path = argv[++i];
     else if (!strcmp(a, "--cache") && i + 1 < argc) cache = argv[++i];
     else if (!strcmp(a, "--slip")) slips = 1;
+    else if (!strcmp(a, "--write-reference") && i + 1 < argc) reference_path = argv[++i];
     else if (a[0] != '-') scene = a;
     else return usage("unknown argument");
   }
@@ -354,6 +396,7 @@ int main(int argc, char **argv) {
     fflush(stdout);
   }
   const fascia_demo_result *ref = &cr[reference - 1].result;
+  if (reference_path && !write_reference(reference_path, scene, cr, nc, reference)) rc = 1;
   printf("reference: mesh %d; the errors below are against it (vector error |F - F_ref| / |F_ref|, then the\n"
          "signed error of |F|), CalculiX's own first\n",
          reference);
