@@ -178,6 +178,20 @@ fascia_status prep_check_magnitudes(fascia_ctx *ctx, const fascia_prep_scene *sc
                     1e3 * (b[5] - b[2]), 1e3 * ORGAN_SMALLEST, hint));
     }
   }
+  // a strand's unspread end on a deformable organ loads one of its frames (reduced.c)
+  for (int32_t t = 0; t < scene->tissue_count; ++t) {
+    const fascia_prep_tissue_def *td = scene->tissues + t;
+    for (int e = 0; td->form == FASCIA_PREP_FORM_STRAND && e < 2; ++e) {
+      const fascia_prep_attachment *a = e ? &td->to : &td->from;
+      const fascia_prep_organ_def *od = scene->organs + a->organ;
+      if (a->spread || od->kind != FASCIA_ORGAN_DEFORMABLE || od->shell) continue;
+      PREP_TRY(warn(ctx, meshes,
+                    "tissue '%s' (scene '%s' tissues[%d].%s): its end on deformable organ '%s' loads one frame of "
+                    "the organ, where the organ's strain peaks and which it nearly turns about; spread the end over "
+                    "its insertion (\"spread\": true, or a \"region\")",
+                    td->name, scene->path, (int)t, e ? "to" : "from", od->name));
+    }
+  }
   if (scene->voxel_size >= VOXEL_COARSEST) {
     prep_units_hint_voxel(scene, hint, sizeof hint);
     PREP_TRY(warn(ctx, meshes, "scene '%s' voxel_size:%s", scene->path, hint + 1));
