@@ -6,7 +6,8 @@
 // voxel deep inside, so with no surface). A strand from A's face at
 // (-3, -4, 0) mm to B's label b_lower, spread: a fan of frames on the part
 // of b_lower's surface that faces the strand (B's face x = 3 mm, y < 0),
-// all coupled to B; by the label's value the same. Refused naming the key:
+// all coupled to B; by the label's value the same; unspread, the strand
+// ends at the label's one point nearest its start. Refused naming the key:
 // a label of another organ, a label with no surface (b_core).
 #define _POSIX_C_SOURCE 200809L // mkdtemp
 #include <math.h>
@@ -37,8 +38,7 @@ static const char scene_format[] =
     " \"organs\": [{\"name\": \"A\", \"labels\": \"box_a\", \"model\": \"fixed\"},\n"
     "  {\"name\": \"B\", \"labels\": [\"b_upper\", \"b_lower\", \"b_core\"], \"model\": \"fixed\"}],\n"
     " \"tissues\": [{\"name\": \"lig\", \"form\": \"strand\",\n"
-    "  \"from\": {\"organ\": \"A\", \"point\": [-0.003, -0.004, 0]}, \"to\": {\"organ\": \"B\", \"label\": %s, "
-    "\"spread\": true},\n"
+    "  \"from\": {\"organ\": \"A\", \"point\": [-0.003, -0.004, 0]}, \"to\": {\"organ\": \"B\", \"label\": %s},\n"
     "  \"radius\": 0.0005, \"material\": \"lig\", \"frame_spacing\": 0.002}]}\n";
 
 // The frames coupled to B after prep: their count, and how many lie on B's
@@ -71,7 +71,15 @@ int main(void) {
   CHECK(fixture_write(dir, "labels.tsv", table));
   snprintf(path, sizeof path, "%s/map.nii", dir);
   CHECK(labelmap_write_nifti(path, &grid, label_of, NULL, 1, 0, 0, 1));
-  static const char *const labels[2] = {"\"b_lower\"", "3"};
+  // unspread: one frame, the label's point nearest the strand's start
+  {
+    int on_b = 0, on_face = 0;
+    const fascia_status st = fan_on_b(dir, "\"b_lower\", \"spread\": false", &on_b, &on_face, message, sizeof message);
+    if (st != FASCIA_OK) fprintf(stderr, "label b_lower: %s\n", message);
+    fprintf(stderr, "label \"b_lower\", unspread: %d frame on B, %d on its face toward A at y < 0\n", on_b, on_face);
+    CHECK(st == FASCIA_OK && on_b == 1 && on_face == 1);
+  }
+  static const char *const labels[2] = {"\"b_lower\", \"spread\": true", "3, \"spread\": true"};
   for (int k = 0; k < 2; ++k) {
     int on_b = 0, on_face = 0;
     const fascia_status st = fan_on_b(dir, labels[k], &on_b, &on_face, message, sizeof message);
