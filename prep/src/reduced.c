@@ -93,6 +93,7 @@ static double distance_at(const fascia_prep_volume *vol, const prep_grid *g, int
 // few enough to keep the strand cheap.
 #define FAN_FRAMES_MAX 32
 #define FAN_FRAMES_MIN 3
+#define PI_ 3.14159265358979323846
 
 // The attachment's point moved onto its organ: the closest surface point,
 // refused when farther than its radius.
@@ -340,7 +341,8 @@ static fascia_status pick_fan(fascia_ctx *ctx, strand_end *e, double spacing, do
       if (count == FAN_FRAMES_MAX) over = 1;
       else kept[count++] = order[o].k;
     }
-    if (over) spacing *= 1.25;
+    // too many: widen, at once to about what FAN_FRAMES_MAX discs cover of the area's reach
+    if (over) spacing = fmax(1.25 * spacing, order[all->count - 1].d * sqrt(PI_ / FAN_FRAMES_MAX));
     else if (count < FAN_FRAMES_MIN && spacing / 2 >= floor_spacing) spacing /= 2;
     else break;
   }
@@ -374,7 +376,8 @@ static const char *area_key(const strand_end *e, char *out, size_t size) {
 }
 
 // Sets an end up: a point end moved onto its organ, a part's or a label's
-// tree, a region's or a spread end's area (spread: its fan's frames).
+// tree, a region's or a spread end's area (its points, from which end_fan
+// makes a spread end's fan).
 static fascia_status end_setup(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_meshes *meshes,
                                const fascia_prep_volume *vol, fascia_cgal_tree **trees, int32_t t, strand_end *e) {
   const fascia_prep_tissue_def *td = scene->tissues + t;
