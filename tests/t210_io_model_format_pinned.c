@@ -20,132 +20,38 @@ typedef struct pinned {
   const char *datasets; ///< every dataset, in file order (list_join): "path rank dims class size;"
 } pinned;
 
+// The datasets the three variants share: frames, samples, pairs, materials.
+#define FRAMES                                                                                                     \
+  "/frames/position 2 5 3 f8;/frames/rotation 2 5 4 f8;/frames/kind 1 5 0 i4;/frames/motion 1 5 0 i4;"           \
+  "/frames/organ 1 5 0 i4;/frames/load 2 5 6 f8;/frames/offsets 1 6 0 i4;/frames/pairs 1 9 0 i4;"
+#define SAMPLES                                                                                                    \
+  "/samples/position 2 3 3 f8;/samples/volume 1 3 0 f8;/samples/material 1 3 0 i4;/samples/organ 1 3 0 i4;"
+#define PAIRS_MATERIALS                                                                                            \
+  "/pairs/frame 1 9 0 i4;/pairs/weight 1 9 0 f8;/pairs/gradient 2 9 3 f8;"                                        \
+  "/materials/name 1 2 0 s64;/materials/law 1 2 0 i4;/materials/youngs_modulus 1 2 0 f8;"                          \
+  "/materials/poisson_ratio 1 2 0 f8;/materials/density 1 2 0 f8;/materials/rotation_coupling 1 2 0 f8;"          \
+  "/materials/rotation_smoothing 1 2 0 f8;/materials/part 1 2 0 i4;"
+// The full fixture's motion, probe, organ, coupling, gravity and provenance.
+#define FULL_REST                                                                                                  \
+  "/motions/breathing/pivot 1 3 0 f8;/motions/breathing/time 1 2 0 f8;/motions/breathing/translation 2 2 3 f8;"   \
+  "/motions/breathing/rotation 2 2 4 f8;"                                                                         \
+  "/probes/name 1 1 0 s64;/probes/position 2 1 3 f8;/probes/offsets 1 2 0 i4;/probes/frame 1 2 0 i4;"             \
+  "/probes/weight 1 2 0 f8;/organs/liver/vertices 2 4 3 f8;/organs/liver/triangles 2 2 3 i4;"                    \
+  "/coupling/organ 1 2 0 i4;/coupling/frame 1 2 0 i4;/coupling/triangle 1 2 0 i4;/coupling/barycentric 2 2 3 f8;" \
+  "/gravity 1 3 0 f8;/provenance 0 0 0 s48;"
+
 static const pinned expected[3] = {
     {UINT64_C(0xb283c35f47093cab), UINT64_C(0x3b37bf686e3c937b), 2,
-     "/frames/position 2 5 3 f8;"
-     "/frames/rotation 2 5 4 f8;"
-     "/frames/kind 1 5 0 i4;"
-     "/frames/motion 1 5 0 i4;"
-     "/frames/organ 1 5 0 i4;"
-     "/frames/load 2 5 6 f8;"
-     "/frames/offsets 1 6 0 i4;"
-     "/frames/pairs 1 9 0 i4;"
-     "/samples/position 2 3 3 f8;"
-     "/samples/volume 1 3 0 f8;"
-     "/samples/material 1 3 0 i4;"
-     "/samples/organ 1 3 0 i4;"
-     "/samples/patch 1 3 0 i4;"
-     "/samples/offsets 1 4 0 i4;"
-     "/pairs/frame 1 9 0 i4;"
-     "/pairs/weight 1 9 0 f8;"
-     "/pairs/gradient 2 9 3 f8;"
-     "/materials/name 1 2 0 s64;"
-     "/materials/law 1 2 0 i4;"
-     "/materials/youngs_modulus 1 2 0 f8;"
-     "/materials/poisson_ratio 1 2 0 f8;"
-     "/materials/density 1 2 0 f8;"
-     "/materials/rotation_coupling 1 2 0 f8;"
-     "/materials/rotation_smoothing 1 2 0 f8;"
-     "/materials/part 1 2 0 i4;"
-     "/motions/breathing/pivot 1 3 0 f8;"
-     "/motions/breathing/time 1 2 0 f8;"
-     "/motions/breathing/translation 2 2 3 f8;"
-     "/motions/breathing/rotation 2 2 4 f8;"
-     "/probes/name 1 1 0 s64;"
-     "/probes/position 2 1 3 f8;"
-     "/probes/offsets 1 2 0 i4;"
-     "/probes/frame 1 2 0 i4;"
-     "/probes/weight 1 2 0 f8;"
-     "/organs/liver/vertices 2 4 3 f8;"
-     "/organs/liver/triangles 2 2 3 i4;"
-     "/coupling/organ 1 2 0 i4;"
-     "/coupling/frame 1 2 0 i4;"
-     "/coupling/triangle 1 2 0 i4;"
-     "/coupling/barycentric 2 2 3 f8;"
-     "/gravity 1 3 0 f8;"
-     "/provenance 0 0 0 s48;"
-    },
+     FRAMES SAMPLES "/samples/patch 1 3 0 i4;/samples/offsets 1 4 0 i4;" PAIRS_MATERIALS FULL_REST},
+    // empty datasets (no data written) last, in name order
     {UINT64_C(0xabafeb21f575a715), UINT64_C(0x0090b8e158285ce0), 1,
-     "/frames/position 2 5 3 f8;"
-     "/frames/rotation 2 5 4 f8;"
-     "/frames/kind 1 5 0 i4;"
-     "/frames/motion 1 5 0 i4;"
-     "/frames/organ 1 5 0 i4;"
-     "/frames/load 2 5 6 f8;"
-     "/frames/offsets 1 6 0 i4;"
-     "/frames/pairs 1 9 0 i4;"
-     "/samples/position 2 3 3 f8;"
-     "/samples/volume 1 3 0 f8;"
-     "/samples/material 1 3 0 i4;"
-     "/samples/organ 1 3 0 i4;"
-     "/samples/offsets 1 4 0 i4;"
-     "/pairs/frame 1 9 0 i4;"
-     "/pairs/weight 1 9 0 f8;"
-     "/pairs/gradient 2 9 3 f8;"
-     "/materials/name 1 2 0 s64;"
-     "/materials/law 1 2 0 i4;"
-     "/materials/youngs_modulus 1 2 0 f8;"
-     "/materials/poisson_ratio 1 2 0 f8;"
-     "/materials/density 1 2 0 f8;"
-     "/materials/rotation_coupling 1 2 0 f8;"
-     "/materials/rotation_smoothing 1 2 0 f8;"
-     "/materials/part 1 2 0 i4;"
-     "/probes/offsets 1 1 0 i4;"
-     "/gravity 1 3 0 f8;"
-     "/coupling/barycentric 2 0 3 f8;"
-     "/coupling/frame 1 0 0 i4;"
-     "/coupling/organ 1 0 0 i4;"
-     "/coupling/triangle 1 0 0 i4;"
-     "/probes/frame 1 0 0 i4;"
-     "/probes/name 1 0 0 s64;"
-     "/probes/position 2 0 3 f8;"
-     "/probes/weight 1 0 0 f8;"
-    },
+     FRAMES SAMPLES "/samples/offsets 1 4 0 i4;" PAIRS_MATERIALS
+     "/probes/offsets 1 1 0 i4;/gravity 1 3 0 f8;/coupling/barycentric 2 0 3 f8;/coupling/frame 1 0 0 i4;"
+     "/coupling/organ 1 0 0 i4;/coupling/triangle 1 0 0 i4;/probes/frame 1 0 0 i4;/probes/name 1 0 0 s64;"
+     "/probes/position 2 0 3 f8;/probes/weight 1 0 0 f8;"},
     {UINT64_C(0x0abe800e665d684b), UINT64_C(0x162149bc3133c1f1), 4,
-     "/frames/position 2 5 3 f8;"
-     "/frames/rotation 2 5 4 f8;"
-     "/frames/kind 1 5 0 i4;"
-     "/frames/motion 1 5 0 i4;"
-     "/frames/organ 1 5 0 i4;"
-     "/frames/load 2 5 6 f8;"
-     "/frames/offsets 1 6 0 i4;"
-     "/frames/pairs 1 9 0 i4;"
-     "/samples/position 2 3 3 f8;"
-     "/samples/volume 1 3 0 f8;"
-     "/samples/material 1 3 0 i4;"
-     "/samples/organ 1 3 0 i4;"
-     "/samples/patch 1 3 0 i4;"
-     "/samples/modes 1 3 0 i4;"
-     "/samples/offsets 1 4 0 i4;"
-     "/pairs/frame 1 9 0 i4;"
-     "/pairs/weight 1 9 0 f8;"
-     "/pairs/gradient 2 9 3 f8;"
-     "/materials/name 1 2 0 s64;"
-     "/materials/law 1 2 0 i4;"
-     "/materials/youngs_modulus 1 2 0 f8;"
-     "/materials/poisson_ratio 1 2 0 f8;"
-     "/materials/density 1 2 0 f8;"
-     "/materials/rotation_coupling 1 2 0 f8;"
-     "/materials/rotation_smoothing 1 2 0 f8;"
-     "/materials/part 1 2 0 i4;"
-     "/motions/breathing/pivot 1 3 0 f8;"
-     "/motions/breathing/time 1 2 0 f8;"
-     "/motions/breathing/translation 2 2 3 f8;"
-     "/motions/breathing/rotation 2 2 4 f8;"
-     "/probes/name 1 1 0 s64;"
-     "/probes/position 2 1 3 f8;"
-     "/probes/offsets 1 2 0 i4;"
-     "/probes/frame 1 2 0 i4;"
-     "/probes/weight 1 2 0 f8;"
-     "/organs/liver/vertices 2 4 3 f8;"
-     "/organs/liver/triangles 2 2 3 i4;"
-     "/coupling/organ 1 2 0 i4;"
-     "/coupling/frame 1 2 0 i4;"
-     "/coupling/triangle 1 2 0 i4;"
-     "/coupling/barycentric 2 2 3 f8;"
-     "/gravity 1 3 0 f8;"
-     "/provenance 0 0 0 s48;"
-    },
+     FRAMES SAMPLES "/samples/patch 1 3 0 i4;/samples/modes 1 3 0 i4;/samples/offsets 1 4 0 i4;" PAIRS_MATERIALS
+         FULL_REST},
 };
 
 // A file's datasets in the order their data was written (their offsets in
