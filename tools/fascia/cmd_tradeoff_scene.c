@@ -301,6 +301,7 @@ typedef struct rung {
   int coarse_tissue;   ///< -1, else the tissue one rung coarser than factor
   int seed_offset;     ///< 1: the base with the scene's seed + 1, the draw's noise
   double voxel;        ///< m
+  double tissue_volume; ///< m^3, the tissue samples' (a kind that loses tissue shows here)
   fascia_model *model; ///< NULL when it failed
   int32_t *frame_tissue; ///< [frames] the tissue each frame lies in (-1 none)
   int32_t *probe_sample; ///< [probes] the tissue sample nearest each probe, -1 when none is near
@@ -490,7 +491,11 @@ static void prepare_rung(study *s, rung *r) {
     for (int32_t i = 0; r->frame_tissue && i < n; ++i)
       r->frame_tissue[i] = i < st.points->frame_count ? st.points->frame_tissue[i] : -1;
   }
-  if (status == FASCIA_OK) r->model = st.model, st.model = NULL;
+  if (status == FASCIA_OK) {
+    r->model = st.model, st.model = NULL;
+    for (int32_t k = 0; k < r->model->sample_count; ++k)
+      if (r->model->sample_organ[k] < 0) r->tissue_volume += r->model->sample_volume[k];
+  }
   else
     snprintf(r->error, sizeof r->error, "%s",
              status == FASCIA_ERR_MEMORY ? "out of memory" : fascia_ctx_message(s->ctx));
@@ -893,6 +898,7 @@ static cJSON *json_row(const study *s, const scene_row *row) {
   cJSON_AddNumberToObject(o, "voxel_size", r->voxel);
   cJSON_AddNumberToObject(o, "frames", r->model ? r->model->frame_count : 0);
   cJSON_AddNumberToObject(o, "samples", r->model ? r->model->sample_count : 0);
+  cJSON_AddNumberToObject(o, "tissue_volume", r->tissue_volume);
   cJSON_AddNumberToObject(o, "prep_seconds", r->prep_s);
   cJSON_AddNumberToObject(o, "steps", s->opt->steps);
   cJSON_AddNumberToObject(o, "dt", s->opt->dt);
@@ -946,7 +952,7 @@ static int write_csv(const study *s) {
   fascia_file *file = open_out(s, "tradeoff-scene.csv");
   if (!file) return 1;
   FILE *f = fascia_file_stream(file);
-  fprintf(f, "label,group,factor,shape_functions,coarsened_tissue,preset,voxel_size,frames,samples,prep_seconds,steps,"
+  fprintf(f, "label,group,factor,shape_functions,coarsened_tissue,preset,voxel_size,frames,samples,tissue_volume,prep_seconds,steps,"
              "converged_steps,ms_per_step,memory_mb,peak_memory_mb,force_error_percent,force_error_organ,"
              "torque_error_percent,force_error_vs_extrapolated_percent,force_change_vs_base_percent,"
              "displacement_median_percent,displacement_p95_percent,displacement_max_percent,strain_p50,strain_p95,"
@@ -957,10 +963,11 @@ static int write_csv(const study *s) {
     const scene_row *row = s->rows + k;
     const rung *r = s->rungs + row->rung;
     cli_csv_text(f, row->label);
-    fprintf(f, ",%s,%g,%s,%s,%s,%g,%d,%d,%.2f,%d,%d,%.4f,%.1f,%.1f,%.4f,%s,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.5g,%.5g,%.5g,%d,%d,%d",
+    fprintf(f, ",%s,%g,%s,%s,%s,%g,%d,%d,%.6g,%.2f,%d,%d,%.4f,%.1f,%.1f,%.4f,%s,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.5g,%.5g,%.5g,%d,%d,%d",
             r->seed_offset ? "seed" : r->coarse_tissue >= 0 ? "tissue" : "ladder", r->factor, kind_name(r->kind),
             r->coarse_tissue >= 0 ? s->tissue_names[r->coarse_tissue] : "", row->preset, r->voxel,
-            r->model ? (int)r->model->frame_count : 0, r->model ? (int)r->model->sample_count : 0, r->prep_s,
+            r->model ? (int)r->model->frame_count : 0, r->model ? (int)r->model->sample_count : 0, r->tissue_volume,
+            r->prep_s,
             s->opt->steps, row->converged_steps, row->failed ? NAN : row->ms, row->memory_mb, row->peak_mb,
             row->failed ? NAN : row->force_error_max,
             !row->failed && row->force_error_organ >= 0 ? s->organ_names[row->force_error_organ] : "",
@@ -1029,8 +1036,8 @@ static int write_plot(const study *s) {
 }
 
 static void print_rows(const study *s, FILE *out) {
-  fprintf(out, "%-44s %6s %6s %8s %7s %8s %-14s %8s %17s %6s %s\n", "row", "frames", "samp", "ms/step", "mem MB",
-          "F err%", "(organ)", "T err%", "disp med/p95/max%", "strain", "");
+  fprintf(out, "%-44s %6s %6s %8s %8s %7s %8s %-14s %8s %17s %8s %s\n", "row", "frames", "samp", "cm3", "ms/step",
+          "mem MB", "F err%", "(organ)", "T err%", "disp med/p95/max%", "strain95", "");
   for (int k = 0; k < s->row_count; ++k) {
     const scene_row *r = s->rows + k;
     const rung *g = s->rungs + r->rung;
@@ -1040,8 +1047,9 @@ static void print_rows(const study *s, FILE *out) {
     }
     char disp[48];
     snprintf(disp, sizeof disp, "%.1f/%.1f/%.1f", r->disp[0], r->disp[1], r->disp[2]);
-    fprintf(out, "%-44s %6d %6d %8.2f %7.1f %8.2f %-14s %8.2f %17s %6.3f %s%s%s\n", r->label,
-            (int)g->model->frame_count, (int)g->model->sample_count, r->ms, r->memory_mb, r->force_error_max,
+    fprintf(out, "%-44s %6d %6d %8.4g %8.2f %7.1f %8.2f %-14s %8.2f %17s %8.3f %s%s%s\n", r->label,
+            (int)g->model->frame_count, (int)g->model->sample_count, 1e6 * g->tissue_volume, r->ms, r->memory_mb,
+            r->force_error_max,
             r->force_error_organ >= 0 ? s->organ_names[r->force_error_organ] : "", r->torque_error_max, disp,
             r->strain[1], r->reference ? "reference " : "", r->pareto ? "pareto " : "",
             r->recommended ? "RECOMMENDED" : "");
