@@ -717,7 +717,9 @@ uint64_t fascia_model_hash_rows(uint64_t h, const fascia_model *m, int file) {
   fascia_model_views(m, views);
   for (int k = 0; k < FASCIA_MA_COUNT; ++k) {
     const fascia_model_view *v = views + k;
-    if (!file && (!(v->array->flags & FASCIA_MA_FP) || !fascia_model_view_set(v))) continue;
+    const int unset = !fascia_model_view_set(v);
+    if (file ? unset && v->array->since > FASCIA_MA_CHECKSUM_VERSION : unset || !(v->array->flags & FASCIA_MA_FP))
+      continue;
     switch (v->array->kind) {
     case FASCIA_MA_NAME:
       for (int64_t r = 0; r < v->rows; ++r) h = hash_name(h, (const char *)v->data + r * FASCIA_NAME_SIZE);

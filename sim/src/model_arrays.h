@@ -94,6 +94,11 @@ enum {
   FASCIA_MA_EARLY = 8,
 };
 
+/// The model file version that brought the checksum: it hashes every row of
+/// this version or before, and a later SPARSE row only where it is set (where
+/// files hold it), so that adding one leaves the checksums of older files.
+#define FASCIA_MA_CHECKSUM_VERSION 4
+
 /// Row numbers: FASCIA_MA_ID_frame_position, ...
 enum {
 #define FASCIA_MA_ID_(field, ...) FASCIA_MA_ID_##field,
@@ -138,7 +143,8 @@ FASCIA_INTERN fascia_model_sizes fascia_model_shape(const fascia_model *model);
 
 /// FNV-1a over the rows from h: with `file` 0 the fingerprint's (FP rows,
 /// SPARSE ones where set, no names), with 1 the model file checksum's (every
-/// row, names and key counts included).
+/// row but those FASCIA_MA_CHECKSUM_VERSION leaves out, names and key counts
+/// included).
 FASCIA_INTERN uint64_t fascia_model_hash_rows(uint64_t h, const fascia_model *model, int file);
 
 #endif
