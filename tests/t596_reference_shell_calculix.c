@@ -7,9 +7,12 @@
 //    E 4 MPa, its edge clamped by the shell's hold) at fascia's default
 //    frame spacing, the free end's displacement within 2 %; a wall whose
 //    triangles shear when bent (linear gradients) is 40 % too stiff here;
-//  - bowl: a hemisphere hanging from its clamped rim: solved and printed
-//    beside its reference, not yet bounded (7 % soft at the default
-//    spacing: docs/measured.md, "Shell organs against CalculiX");
+//  - bowl: a hemisphere hanging from its clamped rim (a curved wall that
+//    carries its weight by stretching), the bottom's sag within 2 % at the
+//    default spacing, and its sideways drift (the random frames are not
+//    symmetric; CalculiX's mesh is) within 3 % of the sag; a least-squares
+//    fit's gradients alone leave the wall's hourglass and drilling modes
+//    nearly free: 7 % too soft here;
 //  - the decks: S8R, the clamp, gravity; bad definitions refused by name.
 // argv[1]: the reference CSV.
 #define _POSIX_C_SOURCE 200809L // open_memstream
@@ -20,6 +23,7 @@
 #include "shell_calculix.h"
 
 #define TOLERANCE 0.02
+#define SIDEWAYS 0.03
 
 // The last row of the case in the CSV: its probe displacement.
 static int reference(const char *path, const char *name, double u[3]) {
@@ -65,7 +69,10 @@ static void check_decks(fascia_ctx *ctx) {
   if (f) fclose(f);
 }
 
-static void check_case(fascia_ctx *ctx, const char *csv, int kind, const char *name, double tolerance) {
+// tolerance bounds the error of the displacement; with sideways > 0 it
+// bounds the error of its z component, and sideways its x and y.
+static void check_case(fascia_ctx *ctx, const char *csv, int kind, const char *name, double tolerance,
+                       double sideways) {
   double ref[3];
   CHECK(reference(csv, name, ref));
   const fascia_shell_def def = fascia_shell_def_default(kind);
@@ -76,12 +83,19 @@ static void check_case(fascia_ctx *ctx, const char *csv, int kind, const char *n
   if (st != FASCIA_OK) return;
   double d = 0, n = 0;
   for (int a = 0; a < 3; ++a) d += (r.probe[a] - ref[a]) * (r.probe[a] - ref[a]), n += ref[a] * ref[a];
-  const double error = sqrt(d / n);
-  printf("%s (%d frames, spacing %g m): probe u (%.6f %.6f %.6f) m, CalculiX (%.6f %.6f %.6f) m: %.2f %%; "
-         "static solve %.1f ms, %d Newton iterations\n",
+  const double error = sqrt(d / n), sag = fabs(r.probe[2] - ref[2]) / sqrt(n),
+               drift = sqrt((r.probe[0] - ref[0]) * (r.probe[0] - ref[0]) + (r.probe[1] - ref[1]) * (r.probe[1] - ref[1])) /
+                       sqrt(n);
+  printf("%s (%d frames, spacing %g m): probe u (%.6f %.6f %.6f) m, CalculiX (%.6f %.6f %.6f) m: %.2f %% (z %.2f %%, "
+         "x and y %.2f %%); static solve %.1f ms, %d Newton iterations\n",
          name, (int)r.nodes, def.frame_spacing, r.probe[0], r.probe[1], r.probe[2], ref[0], ref[1], ref[2],
-         100 * error, r.ms, (int)r.newton);
-  if (tolerance > 0) CHECK(error < tolerance);
+         100 * error, 100 * sag, 100 * drift, r.ms, (int)r.newton);
+  if (sideways > 0) {
+    CHECK(sag < tolerance);
+    CHECK(drift < sideways);
+  } else {
+    CHECK(error < tolerance);
+  }
 }
 
 int main(int argc, char **argv) {
@@ -93,8 +107,8 @@ int main(int argc, char **argv) {
   fascia_ctx *ctx = NULL;
   if (fascia_ctx_create(&cd, &ctx) != FASCIA_OK) return 1;
   check_decks(ctx);
-  check_case(ctx, argv[1], FASCIA_SHELL_PLATE, "plate", TOLERANCE);
-  check_case(ctx, argv[1], FASCIA_SHELL_BOWL, "bowl", 0);
+  check_case(ctx, argv[1], FASCIA_SHELL_PLATE, "plate", TOLERANCE, 0);
+  check_case(ctx, argv[1], FASCIA_SHELL_BOWL, "bowl", TOLERANCE, SIDEWAYS);
   fascia_ctx_destroy(&ctx);
   return check_failures_ != 0;
 }

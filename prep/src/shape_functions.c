@@ -577,7 +577,21 @@ static fascia_status cell_weights(fascia_ctx *ctx, const fascia_prep_scene *scen
 // every quadratic field exactly there; the shear of a uniformly bent wall
 // is then zero. The weights stay the triangle's (the stencil's other
 // frames weigh 0): positions and rotations are interpolated as before.
+//
+// A least-squares fit alone is blind to what no quadratic explains: frame
+// patterns that alternate from one frame to the next fit to a flat
+// quadratic, so they cost almost nothing (hourglass modes of the deflection
+// and the rotations), and frame rotations about the wall's normal (drilling)
+// that vary smoothly strain no point at all. The wall then sags too far,
+// and farther under refinement (docs/measured.md, "Shell organs against
+// CalculiX"). So the fit is made to pass through the triangle's own
+// corners: what it leaves there is interpolated linearly and added (exact
+// quadratics unchanged, an alternating pattern answered as the linear
+// triangle answers it), and SHELL_LINEAR_SHARE of the linear triangle's own
+// gradients is mixed in, which gives drilling a stiffness (and a Newton
+// solve a tangent without a mechanism) at a small cost in bending.
 #define SHELL_STENCIL 9
+#define SHELL_LINEAR_SHARE 0.1
 #define SHELL_BASIS 6
 
 // Solves the SHELL_BASIS x SHELL_BASIS system a x = b (b: SHELL_BASIS x
@@ -685,12 +699,35 @@ static void shell_sample(const fascia_prep_points *pts, const fascia_frame_grid 
       const int32_t t = order[j];
       order[j] = order[j - 1], order[j - 1] = t;
     }
+  // the triangle's own linear gradients in (a, b), 1/m
+  double pa[3], pb[3], lin_a[3], lin_b[3];
+  for (int k = 0; k < 3; ++k) {
+    const double *x = pts->frame_position + 3 * (int64_t)c[k];
+    pa[k] = pb[k] = 0;
+    for (int r = 0; r < 3; ++r) pa[k] += (x[r] - centre[r]) * u[r], pb[k] += (x[r] - centre[r]) * v[r];
+  }
+  const double det = (pa[1] - pa[0]) * (pb[2] - pb[0]) - (pa[2] - pa[0]) * (pb[1] - pb[0]);
+  if (!(fabs(det) > 0)) return;
+  for (int k = 0; k < 3; ++k)
+    lin_a[k] = (pb[(k + 1) % 3] - pb[(k + 2) % 3]) / det, lin_b[k] = (pa[(k + 2) % 3] - pa[(k + 1) % 3]) / det;
+  // the fit's slopes, plus the linear slopes of what it leaves at the corners
+  double slope_a[SHELL_STENCIL + 3], slope_b[SHELL_STENCIL + 3];
+  for (int32_t j = 0; j < m; ++j) slope_a[j] = B[1 * m + j] / reach, slope_b[j] = B[2 * m + j] / reach;
+  for (int k = 0; k < 3; ++k) {
+    const double a = pa[k] / reach, b = pb[k] / reach, basis[SHELL_BASIS] = {1, a, b, a * a, a * b, b * b};
+    for (int32_t j = 0; j < m; ++j) {
+      double fitted = 0; // at corner k, for unit data at frame j
+      for (int r = 0; r < SHELL_BASIS; ++r) fitted += basis[r] * B[r * m + j];
+      slope_a[j] += lin_a[k] * ((j == k) - fitted), slope_b[j] += lin_b[k] * ((j == k) - fitted);
+    }
+  }
+  for (int32_t j = 0; j < m; ++j) slope_a[j] *= 1 - SHELL_LINEAR_SHARE, slope_b[j] *= 1 - SHELL_LINEAR_SHARE;
+  for (int k = 0; k < 3; ++k) slope_a[k] += SHELL_LINEAR_SHARE * lin_a[k], slope_b[k] += SHELL_LINEAR_SHARE * lin_b[k];
   for (int32_t j = 0; j < m; ++j) {
     const int32_t q = order[j];
     pair_frame[base + j] = frame[q];
     pair_w[base + j] = weight[q];
-    const double ga = B[1 * m + q] / reach, gb = B[2 * m + q] / reach;
-    for (int r = 0; r < 3; ++r) pair_g[3 * (base + j) + r] = ga * u[r] + gb * v[r];
+    for (int r = 0; r < 3; ++r) pair_g[3 * (base + j) + r] = slope_a[q] * u[r] + slope_b[q] * v[r];
   }
   pair_count[s] = m;
 }

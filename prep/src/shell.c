@@ -44,6 +44,9 @@
 // frame_spacing from the organ's surface spans a hole, not the surface (a
 // chord's sag on a surface curved at the spacing's radius is 0.08 of it).
 #define OFF_SURFACE 0.2
+// A wall triangle of an open surface whose normal turns from the surface's
+// by more than 60 degrees (cosine below) stands across it.
+#define ACROSS_COS 0.5
 // A free edge's vertex where it turns by more than this (cosine of the
 // turn below) is a corner of the wall: it gets a frame.
 #define CORNER_COS 0.7071
@@ -415,6 +418,21 @@ static fascia_status wall_samples(fascia_ctx *ctx, const fascia_prep_organ_def *
   return FASCIA_OK;
 }
 
+// Whether a wall triangle stands across the organ's surface rather than
+// along it: three frames of an open surface's free edge, where it curves,
+// join into a sliver in the edge's plane (a lip of the lid the
+// reconstruction would put over the opening), its normal in the surface.
+static int across_surface(const fascia_prep_mesh *m, int32_t on, const double *x, const int32_t *c) {
+  double e1[3], e2[3], n[3], surface[3];
+  sub3(x + 3 * (int64_t)c[1], x + 3 * (int64_t)c[0], e1);
+  sub3(x + 3 * (int64_t)c[2], x + 3 * (int64_t)c[0], e2);
+  cross3(e1, e2, n);
+  const double nn = norm3(n);
+  if (!(nn > 0)) return 1;
+  triangle_normal(m, on, surface);
+  return fabs(n[0] * surface[0] + n[1] * surface[1] + n[2] * surface[2]) < ACROSS_COS * nn;
+}
+
 static double mesh_area(const fascia_prep_mesh *m) {
   double a = 0, n[3];
   for (int32_t k = 0; k < m->triangle_count; ++k) a += triangle_normal(m, k, n);
@@ -472,6 +490,7 @@ fascia_status prep_shell_build(fascia_ctx *ctx, const fascia_prep_scene *scene, 
                    x[3 * (int64_t)tri[3 * k + 2] + r]) / 3;
     fascia_cgal_tree_closest(trees[o], 1, centre, closest, &on);
     if (open && dist3(centre, closest) > OFF_SURFACE * spacing) continue;
+    if (open && across_surface(m, on, x, tri + 3 * (int64_t)k)) continue;
     memmove(tri + 3 * (int64_t)kept++, tri + 3 * (int64_t)k, 3 * sizeof(int32_t));
   }
   T = kept;
