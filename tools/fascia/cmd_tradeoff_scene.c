@@ -1339,6 +1339,37 @@ static int write_outputs(study *s) {
   return s->opt->plot ? cli_tradeoff_gnuplot(s->opt->out, scripts) : 0;
 }
 
+// The model -o writes must not replace one of the scene's inputs (its
+// meshes, its label map). Returns -1 to go on, else the exit status.
+static int check_scene_inputs(const scene_options *opt, const fascia_prep_scene *scene) {
+  const fascia_prep_segmentation *seg = &scene->segmentation;
+  const cli_path paths[3] = {{"segmentation.file", seg->file ? seg->file_path : NULL, CLI_INPUT, NULL, NULL},
+                             {"-o", opt->model_out, CLI_OUTPUT_FILE, NULL, NULL},
+                             {"scene", opt->scene, CLI_INPUT, NULL, NULL}};
+  int rc = cli_check_paths("tradeoff", paths, 3);
+  for (int32_t k = 0; rc < 0 && opt->model_out && k < scene->organ_count; ++k) {
+    const cli_path mesh[2] = {{"organs[].mesh", scene->organs[k].label_count ? NULL : scene->organs[k].mesh_path,
+                               CLI_INPUT, NULL, NULL},
+                              {"-o", opt->model_out, CLI_OUTPUT_FILE, NULL, NULL}};
+    rc = cli_check_paths("tradeoff", mesh, 2);
+  }
+  return rc;
+}
+
+// The Pareto front over the rows that ran (the seed row left out: it is the
+// base's model drawn again).
+static void mark_front(study *s) {
+  const size_t n = (size_t)s->row_count + 1;
+  double *ms = calloc(n, sizeof *ms), *err = calloc(n, sizeof *err);
+  int *skip = calloc(n, sizeof *skip), *front = calloc(n, sizeof *front);
+  for (int k = 0; ms && err && skip && front && k < s->row_count; ++k)
+    ms[k] = s->rows[k].ms, err[k] = s->rows[k].force_error_max,
+    skip[k] = s->rows[k].failed || s->rungs[s->rows[k].rung].seed_offset;
+  if (ms && err && skip && front) cli_pareto_mark(s->row_count, ms, err, skip, front);
+  for (int k = 0; front && k < s->row_count; ++k) s->rows[k].pareto = front[k];
+  free(ms), free(err), free(skip), free(front);
+}
+
 int cmd_tradeoff_scene(int argc, char **argv) {
   scene_options opt;
   int rc = parse_scene_options(argc, argv, &opt);
@@ -1355,19 +1386,7 @@ int cmd_tradeoff_scene(int argc, char **argv) {
   s.ctx = cli_ctx(opt.threads, 0);
   fascia_prep_scene *scene = NULL;
   if ((rc = load_scene(&s, &scene)) >= 0) goto done;
-  { // the model must not replace one of the scene's inputs
-    const fascia_prep_segmentation *seg = &scene->segmentation;
-    cli_path paths[3] = {{"segmentation.file", seg->file ? seg->file_path : NULL, CLI_INPUT, NULL, NULL},
-                         {"-o", opt.model_out, CLI_OUTPUT_FILE, NULL, NULL},
-                         {"scene", opt.scene, CLI_INPUT, NULL, NULL}};
-    if ((rc = cli_check_paths("tradeoff", paths, 3)) >= 0) goto done;
-    for (int32_t k = 0; opt.model_out && k < scene->organ_count; ++k) {
-      const cli_path mesh[2] = {{"organs[].mesh", scene->organs[k].label_count ? NULL : scene->organs[k].mesh_path,
-                                 CLI_INPUT, NULL, NULL},
-                                {"-o", opt.model_out, CLI_OUTPUT_FILE, NULL, NULL}};
-      if ((rc = cli_check_paths("tradeoff", mesh, 2)) >= 0) goto done;
-    }
-  }
+  if ((rc = check_scene_inputs(&opt, scene)) >= 0) goto done;
   rc = 1;
   if (mkdir(opt.out, 0777) != 0 && errno != EEXIST) {
     fprintf(stderr, "fascia tradeoff: cannot create folder '%s': %s\n", opt.out, strerror(errno));
@@ -1390,16 +1409,7 @@ int cmd_tradeoff_scene(int argc, char **argv) {
   }
   extrapolate(&s, ref, &x);
   compute_errors(&s, ref, base, &x);
-  { // the front over every row that ran
-    double *ms = calloc((size_t)s.row_count, sizeof *ms), *err = calloc((size_t)s.row_count, sizeof *err);
-    int *skip = calloc((size_t)s.row_count, sizeof *skip), *front = calloc((size_t)s.row_count, sizeof *front);
-    for (int k = 0; ms && err && skip && front && k < s.row_count; ++k)
-      ms[k] = s.rows[k].ms, err[k] = s.rows[k].force_error_max,
-      skip[k] = s.rows[k].failed || ref < 0 || s.rungs[s.rows[k].rung].seed_offset;
-    if (ms && err && skip && front) cli_pareto_mark(s.row_count, ms, err, skip, front);
-    for (int k = 0; front && k < s.row_count; ++k) s.rows[k].pareto = front[k];
-    free(ms), free(err), free(skip), free(front);
-  }
+  if (ref >= 0) mark_front(&s);
   const int best = ref >= 0 ? recommend(&s) : -1;
   if (best >= 0) s.rows[best].recommended = 1;
   rc = report(&s, ref, base, &x, best, opt.json ? stderr : stdout);
