@@ -163,7 +163,8 @@ static fascia_status upload_bodies(fascia_device *dev, const fascia_backend_setu
 
 // The model's and the system's arrays whose device column (model_arrays.h,
 // system_arrays.h) names a member of fascia_dev: DEVICE(member) uploads the
-// array into D->member, HOST leaves it on the host.
+// array into D->member, POINT(member) into D->pm.member, HOST leaves it on
+// the host.
 static fascia_status upload_arrays(fascia_device *dev, const fascia_model *m, const fascia_system *sys) {
   fascia_dev *D = &dev->D;
   fascia_model_view views[FASCIA_MA_COUNT];
@@ -171,6 +172,7 @@ static fascia_status upload_arrays(fascia_device *dev, const fascia_model *m, co
   void **slot;
 #define HOST NULL
 #define DEVICE(member) (void **)&D->member
+#define POINT(member) DEVICE(pm.member)
 #define MODEL(field, kind, count, plus, width, path, unit, fill, flags, since, device)                                \
   if ((slot = device))                                                                                                \
     FASCIA_TRY(put(dev, views[FASCIA_MA_ID_##field].data, fascia_model_view_bytes(views + FASCIA_MA_ID_##field), slot));
@@ -180,6 +182,7 @@ static fascia_status upload_arrays(fascia_device *dev, const fascia_model *m, co
   FASCIA_SYSTEM_ARRAYS(SYSTEM)
 #undef SYSTEM
 #undef MODEL
+#undef POINT
 #undef DEVICE
 #undef HOST
   return FASCIA_OK;

@@ -36,38 +36,39 @@
 //   flags    FASCIA_MA_* below
 //   since    the file version from which the dataset is present (a file of an older version
 //            leaves the fill); 0: optional in any version
-//   device   DEVICE(member): uploaded into that member of the device's arrays (cuda/items.h,
-//            fascia_dev); HOST: not uploaded
-#define FASCIA_MODEL_ARRAYS(X)                                                                                     \
-  X(frame_position, REAL, frames, 0, 3, "/frames/position", "m", 0, FASCIA_MA_FP | FASCIA_MA_SIZES, 1, HOST)      \
-  X(frame_rotation, REAL, frames, 0, 4, "/frames/rotation", "1", 1, FASCIA_MA_FP, 1, DEVICE(rest_rotation))       \
-  X(frame_kind, INT, frames, 0, 1, "/frames/kind", NULL, 0, FASCIA_MA_FP, 1, HOST)                                 \
-  X(frame_motion, INT, frames, 0, 1, "/frames/motion", NULL, -1, FASCIA_MA_FP, 1, HOST)                            \
-  X(frame_load, REAL, frames, 0, 6, "/frames/load", "N, N m", 0, FASCIA_MA_FP, 1, DEVICE(frame_load))              \
-  X(frame_organ, INT, frames, 0, 1, "/frames/organ", NULL, -1, FASCIA_MA_FP | FASCIA_MA_EARLY, 0, HOST)            \
-  X(frame_offsets, INT, frames, 1, 1, "/frames/offsets", NULL, 0, 0, 1, DEVICE(frame_offsets))                     \
-  X(frame_pairs, INT, pairs, 0, 1, "/frames/pairs", NULL, 0, 0, 1, DEVICE(frame_pairs))                            \
-  X(sample_position, REAL, samples, 0, 3, "/samples/position", "m", 0, FASCIA_MA_FP | FASCIA_MA_SIZES, 1, HOST)   \
-  X(sample_volume, REAL, samples, 0, 1, "/samples/volume", "m^3", 0, FASCIA_MA_FP, 1, DEVICE(pm.sample_volume))   \
-  X(sample_material, INT, samples, 0, 1, "/samples/material", NULL, 0, FASCIA_MA_FP, 1, HOST)                      \
-  X(sample_organ, INT, samples, 0, 1, "/samples/organ", NULL, -1, FASCIA_MA_FP, 0, HOST)                           \
-  X(sample_patch, INT, samples, 0, 1, "/samples/patch", NULL, -1, FASCIA_MA_FP | FASCIA_MA_SPARSE, 2, HOST)        \
-  X(sample_modes, INT, samples, 0, 1, "/samples/modes", NULL, 0, FASCIA_MA_FP | FASCIA_MA_SPARSE, 3, HOST)         \
-  X(sample_offsets, INT, samples, 1, 1, "/samples/offsets", NULL, 0, FASCIA_MA_FP, 1, DEVICE(pm.sample_offsets))   \
-  X(pair_frame, INT, pairs, 0, 1, "/pairs/frame", NULL, 0, FASCIA_MA_FP | FASCIA_MA_SIZES, 1, DEVICE(pm.pair_frame)) \
-  X(pair_weight, REAL, pairs, 0, 1, "/pairs/weight", "1", 0, FASCIA_MA_FP, 1, DEVICE(pm.pair_weight))              \
-  X(pair_gradient, REAL, pairs, 0, 3, "/pairs/gradient", "1/m", 0, FASCIA_MA_FP, 1, DEVICE(pm.pair_gradient))      \
-  X(materials, MATERIAL, materials, 0, 1, "/materials", NULL, 0, FASCIA_MA_FP | FASCIA_MA_SIZES, 1, HOST)          \
-  X(motions, MOTION, motions, 0, 1, "/motions", NULL, 0, FASCIA_MA_FP | FASCIA_MA_SIZES, 1, HOST)                  \
-  X(probe_name, NAME, probes, 0, 1, "/probes/name", NULL, 0, FASCIA_MA_SIZES, 1, HOST)                             \
-  X(probe_position, REAL, probes, 0, 3, "/probes/position", "m", 0, 0, 1, HOST)                                    \
-  X(probe_offsets, INT, probes, 1, 1, "/probes/offsets", NULL, 0, 0, 1, HOST)                                      \
-  X(probe_frame, INT, probe_pairs, 0, 1, "/probes/frame", NULL, 0, FASCIA_MA_SIZES, 1, HOST)                       \
-  X(probe_weight, REAL, probe_pairs, 0, 1, "/probes/weight", "1", 0, 0, 1, HOST)                                   \
-  X(organs, ORGAN, organs, 0, 1, "/organs", NULL, 0, FASCIA_MA_FP | FASCIA_MA_SIZES, 1, HOST)                      \
-  X(coupling_organ, INT, couplings, 0, 1, "/coupling/organ", NULL, 0, FASCIA_MA_FP | FASCIA_MA_SIZES, 1, HOST)     \
-  X(coupling_frame, INT, couplings, 0, 1, "/coupling/frame", NULL, 0, FASCIA_MA_FP, 1, HOST)                       \
-  X(coupling_triangle, INT, couplings, 0, 1, "/coupling/triangle", NULL, 0, FASCIA_MA_FP, 1, HOST)                 \
+//   device   POINT(member): a member of the per-sample math's view (fascia_pt_model, point/sample.h),
+//            on the host (fascia_system's pm) and on the device; DEVICE(member): uploaded into that
+//            member of the device's arrays (fascia_dev, cuda/items.h); HOST: neither
+#define FASCIA_MODEL_ARRAYS(X)                                                                                         \
+  X(frame_position, REAL, frames, 0, 3, "/frames/position", "m", 0, FASCIA_MA_FP | FASCIA_MA_SIZES, 1, HOST)           \
+  X(frame_rotation, REAL, frames, 0, 4, "/frames/rotation", "1", 1, FASCIA_MA_FP, 1, DEVICE(rest_rotation))            \
+  X(frame_kind, INT, frames, 0, 1, "/frames/kind", NULL, 0, FASCIA_MA_FP, 1, HOST)                                     \
+  X(frame_motion, INT, frames, 0, 1, "/frames/motion", NULL, -1, FASCIA_MA_FP, 1, HOST)                                \
+  X(frame_load, REAL, frames, 0, 6, "/frames/load", "N, N m", 0, FASCIA_MA_FP, 1, DEVICE(frame_load))                  \
+  X(frame_organ, INT, frames, 0, 1, "/frames/organ", NULL, -1, FASCIA_MA_FP | FASCIA_MA_EARLY, 0, HOST)                \
+  X(frame_offsets, INT, frames, 1, 1, "/frames/offsets", NULL, 0, 0, 1, DEVICE(frame_offsets))                         \
+  X(frame_pairs, INT, pairs, 0, 1, "/frames/pairs", NULL, 0, 0, 1, DEVICE(frame_pairs))                                \
+  X(sample_position, REAL, samples, 0, 3, "/samples/position", "m", 0, FASCIA_MA_FP | FASCIA_MA_SIZES, 1, HOST)        \
+  X(sample_volume, REAL, samples, 0, 1, "/samples/volume", "m^3", 0, FASCIA_MA_FP, 1, POINT(sample_volume))            \
+  X(sample_material, INT, samples, 0, 1, "/samples/material", NULL, 0, FASCIA_MA_FP, 1, HOST)                          \
+  X(sample_organ, INT, samples, 0, 1, "/samples/organ", NULL, -1, FASCIA_MA_FP, 0, HOST)                               \
+  X(sample_patch, INT, samples, 0, 1, "/samples/patch", NULL, -1, FASCIA_MA_FP | FASCIA_MA_SPARSE, 2, HOST)            \
+  X(sample_modes, INT, samples, 0, 1, "/samples/modes", NULL, 0, FASCIA_MA_FP | FASCIA_MA_SPARSE, 3, HOST)             \
+  X(sample_offsets, INT, samples, 1, 1, "/samples/offsets", NULL, 0, FASCIA_MA_FP, 1, POINT(sample_offsets))           \
+  X(pair_frame, INT, pairs, 0, 1, "/pairs/frame", NULL, 0, FASCIA_MA_FP | FASCIA_MA_SIZES, 1, POINT(pair_frame))       \
+  X(pair_weight, REAL, pairs, 0, 1, "/pairs/weight", "1", 0, FASCIA_MA_FP, 1, POINT(pair_weight))                      \
+  X(pair_gradient, REAL, pairs, 0, 3, "/pairs/gradient", "1/m", 0, FASCIA_MA_FP, 1, POINT(pair_gradient))              \
+  X(materials, MATERIAL, materials, 0, 1, "/materials", NULL, 0, FASCIA_MA_FP | FASCIA_MA_SIZES, 1, HOST)              \
+  X(motions, MOTION, motions, 0, 1, "/motions", NULL, 0, FASCIA_MA_FP | FASCIA_MA_SIZES, 1, HOST)                      \
+  X(probe_name, NAME, probes, 0, 1, "/probes/name", NULL, 0, FASCIA_MA_SIZES, 1, HOST)                                 \
+  X(probe_position, REAL, probes, 0, 3, "/probes/position", "m", 0, 0, 1, HOST)                                        \
+  X(probe_offsets, INT, probes, 1, 1, "/probes/offsets", NULL, 0, 0, 1, HOST)                                          \
+  X(probe_frame, INT, probe_pairs, 0, 1, "/probes/frame", NULL, 0, FASCIA_MA_SIZES, 1, HOST)                           \
+  X(probe_weight, REAL, probe_pairs, 0, 1, "/probes/weight", "1", 0, 0, 1, HOST)                                       \
+  X(organs, ORGAN, organs, 0, 1, "/organs", NULL, 0, FASCIA_MA_FP | FASCIA_MA_SIZES, 1, HOST)                          \
+  X(coupling_organ, INT, couplings, 0, 1, "/coupling/organ", NULL, 0, FASCIA_MA_FP | FASCIA_MA_SIZES, 1, HOST)         \
+  X(coupling_frame, INT, couplings, 0, 1, "/coupling/frame", NULL, 0, FASCIA_MA_FP, 1, HOST)                           \
+  X(coupling_triangle, INT, couplings, 0, 1, "/coupling/triangle", NULL, 0, FASCIA_MA_FP, 1, HOST)                     \
   X(coupling_barycentric, REAL, couplings, 0, 3, "/coupling/barycentric", "1", 0, FASCIA_MA_FP, 1, HOST)
 
 /// What a row holds.

@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "system.h"
+#include "model_arrays.h"
 #include "system_arrays.h"
 #include "wide.h"
 #include "dilatation.h"
@@ -117,18 +118,20 @@ fascia_status fascia_system_create(fascia_ctx *ctx, const fascia_model *m, int t
       for (int c = 0; c < 3; ++c) sys->frame_moment[3 * i + c] += mw * sys->pair_offset[3 * k + c];
     }
   for (int c = 0; c < 3; ++c) sys->gravity[c] = m->gravity[c];
-  fascia_pt_model *pm = &sys->pm;
-  pm->sample_offsets = m->sample_offsets;
-  pm->pair_frame = m->pair_frame;
-  pm->pair_weight = m->pair_weight;
-  pm->pair_gradient = m->pair_gradient;
-  pm->pair_offset = sys->pair_offset;
-  pm->sample_volume = m->sample_volume;
-  pm->sample_lambda = sys->sample_lambda;
-  pm->sample_mu = sys->sample_mu;
-  pm->sample_coupling = sys->sample_coupling;
-  pm->sample_curvature = sys->sample_curvature;
-  pm->sample_law = sys->sample_law;
+  // the per-sample math's view: the rows of the two tables marked POINT(member)
+  // set sys->pm.member, the others are passed over
+#define POINT(member) sys->pm.member =
+#define DEVICE(member) (void)
+#define HOST (void)
+#define MODEL_VIEW(field, kind, count, plus, width, path, unit, fill, flags, since, device) device m->field;
+#define SYSTEM_VIEW(field, type, count, width, device) device sys->field;
+  FASCIA_MODEL_ARRAYS(MODEL_VIEW)
+  FASCIA_SYSTEM_ARRAYS(SYSTEM_VIEW)
+#undef SYSTEM_VIEW
+#undef MODEL_VIEW
+#undef HOST
+#undef DEVICE
+#undef POINT
   fascia_status status = fascia_dilatation_create(sys, &sys->dilatation);
   if (status == FASCIA_OK) status = fascia_modes_create(sys, &sys->modes);
   if (status != FASCIA_OK) {
