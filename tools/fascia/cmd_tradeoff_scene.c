@@ -365,8 +365,8 @@ static void progress(const study *s, const char *what) {
   const double prep_mean = s->preps_done ? s->prep_ms_sum / s->preps_done : 0;
   const double row_mean = s->rows_done ? s->row_ms_sum / s->rows_done : 0;
   const long left = lround((preps_left * prep_mean + rows_left * row_mean) / 1e3);
-  fprintf(stderr, "tradeoff %5.1f s: %s; time left ~%ld:%02ld%s\n", now_s(s), what, left / 60, left % 60,
-          s->preps_done ? "" : " (after the first prep)");
+  if (!s->preps_done) fprintf(stderr, "tradeoff %5.1f s: %s; time left: known after the first prep\n", now_s(s), what);
+  else fprintf(stderr, "tradeoff %5.1f s: %s; time left ~%ld:%02ld\n", now_s(s), what, left / 60, left % 60);
 }
 
 static const char *kind_name(int kind) {
