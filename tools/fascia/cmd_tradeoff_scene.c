@@ -1056,6 +1056,20 @@ static void print_rows(const study *s, FILE *out) {
   }
 }
 
+// The Pareto front, fastest first.
+static void print_front(const study *s, FILE *out) {
+  fprintf(out, "\nPareto front (no other row both faster and closer to the finest), fastest first:\n");
+  double last = -1;
+  for (;;) { // the next fastest front row after `last` ms
+    int next = -1;
+    for (int k = 0; k < s->row_count; ++k)
+      if (s->rows[k].pareto && s->rows[k].ms > last && (next < 0 || s->rows[k].ms < s->rows[next].ms)) next = k;
+    if (next < 0) break;
+    fprintf(out, "  %8.2f ms/step  %8.2f %%  %s\n", s->rows[next].ms, s->rows[next].force_error_max, s->rows[next].label);
+    last = s->rows[next].ms;
+  }
+}
+
 // What each tissue carries: each organ's force split by tissue (base row),
 // and the change of every organ force with that tissue one rung coarser.
 static void print_tissues(const study *s, int base, FILE *out) {
@@ -1302,6 +1316,7 @@ static int report(study *s, int ref, int base, const extrapolation *x, int best,
     fprintf(out, "no Richardson extrapolation: it needs three rungs of the reference's kind and preset\n");
   }
   print_rows(s, out);
+  print_front(s, out);
   print_tissues(s, base, out);
   const double target = o->error > 0 ? o->error : DEFAULT_ERROR;
   if (best < 0) {
