@@ -9,6 +9,10 @@
 //  - the wall takes the section's plane-stress moduli (a material of its
 //    own), and its hold region fixes the frames in it;
 //  - hanging from A under gravity, the static solve converges and B sags;
+//  - an open bowl (B's lower half, frames 2.5 mm apart) held along its rim:
+//    no wall triangle stands across the surface at the rim (8 did before
+//    prep dropped them, 6 with gradients over 5 / spacing), and each wall
+//    sample's gradients give a linear field along its plane its slope;
 //  - every refusal is one line naming the key: a wall not thinner than its
 //    frame spacing, a wall thicker than the organ (a 2 mm slab), a sample
 //    spacing, shell keys on another model.
@@ -84,6 +88,34 @@ static int write_sphere(const char *dir, const char *name) {
   }
   for (int k = 0; k < nt; ++k)
     n += snprintf(text + n, sizeof text - (size_t)n, "f %d %d %d\n", t[3 * k] + 1, t[3 * k + 1] + 1, t[3 * k + 2] + 1);
+  return fixture_write(dir, name, text);
+}
+
+// The lower half of a sphere of RADIUS about centre, open along its rim
+// (the circle z = centre z): RINGS rings of SEGMENTS vertices from the rim
+// down, then the bottom.
+static int write_bowl(const char *dir, const char *name) {
+  enum { RINGS = 12, SEGMENTS = 48 };
+  static char text[65536];
+  int n = 0;
+  for (int i = 0; i < RINGS; ++i)
+    for (int j = 0; j < SEGMENTS; ++j) {
+      const double polar = 0.5 * PI * (1 + (double)i / RINGS), azimuth = 2 * PI * j / SEGMENTS;
+      n += snprintf(text + n, sizeof text - (size_t)n, "v %.9f %.9f %.9f\n",
+                    centre[0] + RADIUS * sin(polar) * cos(azimuth), centre[1] + RADIUS * sin(polar) * sin(azimuth),
+                    centre[2] + RADIUS * cos(polar));
+    }
+  n += snprintf(text + n, sizeof text - (size_t)n, "v %.9f %.9f %.9f\n", centre[0], centre[1], centre[2] - RADIUS);
+  for (int i = 0; i < RINGS; ++i)
+    for (int j = 0; j < SEGMENTS; ++j) { // outward: seen from below the bowl, counter-clockwise
+      const int a = 1 + i * SEGMENTS + j, b = 1 + i * SEGMENTS + (j + 1) % SEGMENTS;
+      if (i == RINGS - 1) {
+        n += snprintf(text + n, sizeof text - (size_t)n, "f %d %d %d\n", a, 1 + RINGS * SEGMENTS, b);
+        continue;
+      }
+      const int c = a + SEGMENTS, d = b + SEGMENTS;
+      n += snprintf(text + n, sizeof text - (size_t)n, "f %d %d %d\nf %d %d %d\n", a, c, d, a, d, b);
+    }
   return fixture_write(dir, name, text);
 }
 
@@ -167,6 +199,72 @@ done:
   return 0;
 }
 
+// An open bowl (the sphere's lower half) held along its rim: every wall
+// triangle lies along the surface (the rim's frames make no sliver standing
+// across it, whose gradients would be many times 1 / spacing), and every
+// wall sample's gradients reproduce linear fields in its triangle's plane.
+#define BOWL_SPACING 0.0025
+static int check_open_wall(const char *dir) {
+  char path[512], organ[512];
+  snprintf(organ, sizeof organ,
+           "\"model\": \"shell\", \"material\": \"wall\", \"thickness\": 0.0005, \"frame_spacing\": %g, "
+           "\"hold\": {\"box\": {\"min\": [0, -0.02, -0.0005], \"max\": [0.03, 0.02, 0.0005]}}",
+           BOWL_SPACING);
+  CHECK(write_scene(dir, "bowl.obj", organ, path));
+  fascia_ctx *ctx = fixture_ctx();
+  fixture_run r;
+  CHECK_OK(fixture_prep(ctx, path, &r), ctx);
+  const fascia_model *m = r.model;
+  int wall = 0, across = 0, steep = 0, unreproduced = 0;
+  for (int32_t s = 0; m && s < m->sample_count; ++s) {
+    if (m->sample_organ[s] != 1) continue;
+    ++wall;
+    int32_t corner[3], k = 0;
+    double gx[9] = {0}, largest = 0;
+    for (int32_t j = m->sample_offsets[s]; j < m->sample_offsets[s + 1]; ++j) {
+      if (m->pair_weight[j] != 0 && k < 3) corner[k++] = m->pair_frame[j];
+      const fascia_real *g = m->pair_gradient + 3 * j, *x = m->frame_position + 3 * m->pair_frame[j];
+      largest = fmax(largest, sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]));
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) gx[3 * a + b] += x[a] * g[b];
+    }
+    if (k != 3) continue;
+    const fascia_real *p0 = m->frame_position + 3 * corner[0], *p1 = m->frame_position + 3 * corner[1],
+                      *p2 = m->frame_position + 3 * corner[2];
+    double e1[3], e2[3], n[3], radial[3];
+    for (int a = 0; a < 3; ++a)
+      e1[a] = p1[a] - p0[a], e2[a] = p2[a] - p0[a], radial[a] = (p0[a] + p1[a] + p2[a]) / 3 - centre[a];
+    n[0] = e1[1] * e2[2] - e1[2] * e2[1], n[1] = e1[2] * e2[0] - e1[0] * e2[2], n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    const double nn = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]),
+                 rr = sqrt(radial[0] * radial[0] + radial[1] * radial[1] + radial[2] * radial[2]);
+    across += fabs(n[0] * radial[0] + n[1] * radial[1] + n[2] * radial[2]) < 0.5 * nn * rr;
+    steep += largest * BOWL_SPACING > 5;
+    // P (sum_i x_i g_i^T) P = P, P the projector on the triangle's plane:
+    // a linear field along the plane has its slope (the frames off the
+    // plane, on the curved wall, add a part along n)
+    double P[9], pg[9] = {0}, pgp[9] = {0};
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) P[3 * a + b] = (a == b) - n[a] * n[b] / (nn * nn);
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b)
+        for (int q = 0; q < 3; ++q) pg[3 * a + b] += P[3 * a + q] * gx[3 * q + b];
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b)
+        for (int q = 0; q < 3; ++q) pgp[3 * a + b] += pg[3 * a + q] * P[3 * q + b];
+    for (int a = 0; a < 9; ++a) unreproduced += fabs(pgp[a] - P[a]) > 1e-9;
+  }
+  printf("t595: open bowl: %d wall samples, %d across its surface, %d with gradients over 5 / spacing, %d not "
+         "reproducing linear fields\n",
+         wall, across, steep, unreproduced);
+  CHECK(wall > 50);
+  CHECK(across == 0);
+  CHECK(steep == 0);
+  CHECK(unreproduced == 0);
+  fixture_free(&r);
+  fascia_ctx_destroy(&ctx);
+  return 0;
+}
+
 // The scene must be refused with one line holding key and what.
 static void refused(const char *dir, const char *mesh, const char *organ, const char *key, const char *what) {
   char path[512];
@@ -203,10 +301,11 @@ int main(void) {
   const double a_lo[3] = {-0.03, -0.012, -0.012}, a_hi[3] = {-0.0005, 0.012, 0.012};
   const double slab_lo[3] = {0.005, -0.012, -0.012}, slab_hi[3] = {0.007, 0.012, 0.012};
   CHECK(fixture_box(dir, "a.obj", a_lo, a_hi) && write_sphere(dir, "b.obj") &&
-        fixture_box(dir, "slab.obj", slab_lo, slab_hi));
+        write_bowl(dir, "bowl.obj") && fixture_box(dir, "slab.obj", slab_lo, slab_hi));
   const int stopped = check_shell(dir); // 1: a stage failed (printed)
+  const int open_stopped = check_open_wall(dir);
   check_refusals(dir);
-  static const char *const files[] = {"a.obj", "b.obj", "slab.obj", "scene.json", NULL};
+  static const char *const files[] = {"a.obj", "b.obj", "bowl.obj", "slab.obj", "scene.json", NULL};
   fixture_cleanup(dir, files);
-  return stopped || CHECK_RESULT();
+  return stopped || open_stopped || CHECK_RESULT();
 }
