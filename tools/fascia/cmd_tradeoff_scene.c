@@ -59,7 +59,9 @@ static const char scene_usage[] =
     "                   at least 10)\n"
     "  --threads T      worker threads, 1 to 1024 (default: OpenMP's)\n"
     "  --repeats R      runs per row for its time, the least is kept (default 2)\n"
-    "  --no-tissues     leave out the rows that coarsen one tissue at a time\n"
+    "  --no-tissues     leave out the rows that coarsen one tissue at a time, and the row that draws\n"
+    "                   the base again with seed + 1 (the discretization's noise)\n"
+    "  --backend NAME   cpu (default), cuda, auto or emulated\n"
     "  --json           print the rows as one JSON array on stdout\n"
     "  --no-plot        write the gnuplot script but do not run gnuplot\n";
 
