@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// The device backend of the core's Newton loop (sim/src/backend.h): the
+// The device backend of the core's Newton loop (sim/src/solve/backend.h): the
 // model's arrays uploaded once, and every operation of the loop run on the
 // device through a launcher (launch.h), on a GPU or in the host emulation.
 // The loop reads a few scalars per operation (energy, slope, gradient norm);
@@ -11,11 +11,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "backend.h"
+#include "solve/backend.h"
 #include "launch.h"
-#include "model_arrays.h"
-#include "modes.h"
-#include "system_arrays.h"
+#include "model/model_arrays.h"
+#include "cpu/modes.h"
+#include "cpu/system_arrays.h"
 
 #define CG_CHUNK 8 // CG iterations per recorded chunk in tolerance mode
 #define MAX_BUFFERS 96 // the model, the state and work (about 50), the patches (16)

@@ -20,7 +20,7 @@
 
 #include "launch.h"
 extern "C" {
-#include "status.h"
+#include "util/status.h"
 }
 
 /// Threads of a reduction block: a power of two for the tree sum.

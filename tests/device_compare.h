@@ -11,9 +11,9 @@
 #include <string.h>
 
 #include "check.h"
-#include "backend.h"
+#include "solve/backend.h"
 #include "backend_arg.h"
-#include "solver_internal.h"
+#include "solve/solver_internal.h"
 #include "random_model.h"
 
 static const char *backend = "emulated"; // --backend

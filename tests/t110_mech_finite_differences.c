@@ -16,7 +16,7 @@
 
 #include "check.h"
 #include "random_model.h"
-#include "system.h"
+#include "cpu/system.h"
 
 // Step of the differences: with energies of order 1, h = 1e-5 leaves a
 // truncation error ~h^2 = 1e-10 and a rounding error ~1e-16/h = 1e-11,

@@ -9,7 +9,7 @@
 
 #include "check.h"
 #include "random_model.h"
-#include "system.h"
+#include "cpu/system.h"
 
 // Forces are sums of stresses times volumes of order 1e3 Pa * 1e-2 m^3: a
 // rounding-level residual is ~1e-12; 1e-9 leaves room and still catches any

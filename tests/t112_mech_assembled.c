@@ -18,10 +18,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "assemble.h"
+#include "cpu/assemble.h"
 #include "check.h"
-#include "dilatation.h"
-#include "modes.h"
+#include "cpu/dilatation.h"
+#include "cpu/modes.h"
 #include "random_model.h"
 
 // Every block of K_part between two frames that move equals K's, the others are zero.

@@ -17,9 +17,9 @@
 #include "check.h"
 #include "random_model.h"
 #include "scenes.h"
-#include "modes.h"
-#include "system.h"
-#include "dilatation.h"
+#include "cpu/modes.h"
+#include "cpu/system.h"
+#include "cpu/dilatation.h"
 
 static unsigned long long rng_state = 4242;
 

@@ -2,7 +2,7 @@
 // SPDX-FileCopyrightText: fascia developers
 // The float copy keeps the upper blocks of a symmetric block matrix and
 // applies each one as itself and transposed, in tasks of rows whose terms
-// for later rows wait in slots (sim/src/bsr_product.c). On random symmetric
+// for later rows wait in slots (sim/src/cpu/bsr_product.c). On random symmetric
 // patterns of several tasks, banded and scattered (slots far from their
 // task), rows of only a diagonal, and row counts that are and are not a
 // multiple of a task: its product is the double product of the same float
@@ -13,7 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "assemble.h"
+#include "cpu/assemble.h"
 #include "check.h"
 #include "random_model.h"
 

@@ -16,7 +16,7 @@
 #include "beam_calculix.h"
 #include "check.h"
 #include "scenes.h"
-#include "solver_internal.h"
+#include "solve/solver_internal.h"
 
 static const char *backend = "cpu";
 

@@ -10,7 +10,7 @@
 #include "backend_arg.h"
 #include "check.h"
 #include "scenes.h"
-#include "solver_internal.h"
+#include "solve/solver_internal.h"
 
 int main(int argc, char **argv) {
   const char *backend = backend_arg(argc, argv, "cpu");

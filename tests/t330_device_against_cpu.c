@@ -15,7 +15,7 @@
 //     no fixed frame at all (free fall);
 //   - volumetric patches (mean dilatation): random models, and the cantilever
 //     at nu = 0.49 in cell patches, in steps and static;
-//   - their enhanced strain modes (sim/src/modes.h), the nine and the three
+//   - their enhanced strain modes (sim/src/cpu/modes.h), the nine and the three
 //     normal ones: random models with coupling and smoothing, both laws, the
 //     tetrahedral cantilever with its nine (fascia beam's default) in steps
 //     and static, the hexahedral one with its three normal ones static;

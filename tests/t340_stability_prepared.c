@@ -14,7 +14,7 @@
 #include "point/block6.h"
 #include "prep_fixture.h"
 #include "stability.h"
-#include "system.h"
+#include "cpu/system.h"
 
 // Tissue strain stays below this in five steps of any shipped scene: the
 // largest is in the kidney-colon layer of the 950-frame abdomen

@@ -10,7 +10,7 @@
 #include <string.h>
 
 #include "check.h"
-#include "direct.h"
+#include "cpu/direct.h"
 #include "random_model.h"
 #include "scenes.h"
 

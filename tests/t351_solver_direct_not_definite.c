@@ -13,7 +13,7 @@
 #include <string.h>
 
 #include "check.h"
-#include "direct.h"
+#include "cpu/direct.h"
 #include "random_model.h"
 
 // A diagonal matrix with `diagonal` on every unknown and weak symmetric

@@ -15,7 +15,7 @@
 
 #include "check.h"
 #include "scenes.h"
-#include "solver_internal.h"
+#include "solve/solver_internal.h"
 
 #define MAX_BUSY 64
 

@@ -9,7 +9,7 @@
 // two codes alike. With --enhanced-modes the script's tetrahedral beam is
 // within 2 % of the converged CalculiX reference where the scheme without
 // them is 11 % stiff, and fascia's tetrahedral beam with its enhanced strain
-// modes (fascia beam's default for tet, sim/src/modes.h, written apart from
+// modes (fascia beam's default for tet, sim/src/cpu/modes.h, written apart from
 // the script) gives the script's tip with them to 1e-3, at nu = 0.3 and
 // 0.49 (docs/mechanics.md); so does the hexahedral beam with its three
 // normal modes against the script's --normal-modes.

@@ -18,10 +18,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "backend.h"
+#include "solve/backend.h"
 #include "check.h"
 #include "scenes.h"
-#include "solver_internal.h"
+#include "solve/solver_internal.h"
 
 typedef struct toy {
   fascia_backend base;

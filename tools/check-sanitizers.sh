@@ -20,7 +20,7 @@ jobs="${JOBS:-$(nproc 2>/dev/null || echo 2)}"
 mode="${1:-asan}"
 shift || true
 
-# sim/src/newton.c calls clock_gettime without asking for POSIX; gcc's omp.h
+# sim/src/solve/newton.c calls clock_gettime without asking for POSIX; gcc's omp.h
 # happens to define _POSIX_C_SOURCE, clang's does not: say it here.
 posix="-D_POSIX_C_SOURCE=200809L"
 

@@ -27,7 +27,7 @@ if ! "$CC" --version 2>/dev/null | grep -q clang; then
   echo "fuzz: needs clang with libFuzzer (Debian: clang libclang-rt-dev); CC=$CC is not clang" >&2
   exit 2
 fi
-# -D_POSIX_C_SOURCE: sim/src/newton.c uses clock_gettime without asking for
+# -D_POSIX_C_SOURCE: sim/src/solve/newton.c uses clock_gettime without asking for
 # POSIX (gcc's omp.h happens to define it, clang's libomp omp.h does not).
 cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER="$CC" -DCMAKE_CXX_COMPILER="$CXX" \
   -DCMAKE_C_FLAGS="-D_POSIX_C_SOURCE=200809L" -DFASCIA_PREP="${FASCIA_FUZZ_PREP:-ON}" -DFASCIA_CUDA=OFF -DFASCIA_SANITIZE=ON -DFASCIA_FUZZ=ON -DFASCIA_TESTS=ON >"$build.configure.log" 2>&1 ||

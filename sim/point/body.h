@@ -2,7 +2,7 @@
 // SPDX-FileCopyrightText: fascia developers
 // Rigid organs as a reduction of the Newton operator, written once for every
 // backend (the CPU's loops in sim/src/, the device's kernels): the math of
-// one frame or one body. The design (sim/src/organs.c, docs/organs.md): a
+// one frame or one body. The design (sim/src/organs/organs.c, docs/organs.md): a
 // rigid organ's coupling frames follow its master frame m, whose state is
 // the body's pose; a slave i at rest offset r_i from the master sits at
 //

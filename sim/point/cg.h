@@ -2,7 +2,7 @@
 // SPDX-FileCopyrightText: fascia developers
 // Conjugate gradients' scalar logic, written once: when to stop, and the
 // step lengths alpha and beta, from the dot products of an iteration. The
-// CPU (sim/src/cg.c) calls it between its vector loops; the device runs
+// CPU (sim/src/cpu/cg.c) calls it between its vector loops; the device runs
 // it on one thread after each reduction, so that CG never waits for the
 // host. What stays per backend is only where the vectors live.
 //

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// The per-frame math, shared by the CPU (sim/src/system.c) and the device
+// The per-frame math, shared by the CPU (sim/src/cpu/system.c) and the device
 // kernels (the device backend): a frame's sum over its pairs, its orientation
 // relative to rest, the gravity and load terms of its gradient and tangent,
 // the symmetrizing term of the rotation update, its lumped mass block and

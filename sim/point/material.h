@@ -29,7 +29,7 @@ enum { FASCIA_PT_LAW_STVK = 0, FASCIA_PT_LAW_NEOHOOKEAN = 1 };
 /// on: psi_lambda = lambda/2 theta^2 with theta = tr E (StVK) or J - 1 (the
 /// stable Neo-Hookean; its mu part keeps the rest, docs/mechanics.md). Mean
 /// dilatation replaces theta per sample by its average over a patch of
-/// samples (sim/src/dilatation.c). Writes dtheta/dF into dtheta[9].
+/// samples (sim/src/cpu/dilatation.c). Writes dtheta/dF into dtheta[9].
 static inline FASCIA_HD fascia_real fascia_pt_dilatation(int law, const fascia_real *F, fascia_real *dtheta) {
   if (law == FASCIA_PT_LAW_NEOHOOKEAN) {
     fascia_pt_cofactor(F, dtheta);

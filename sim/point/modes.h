@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// Per-patch work of the enhanced strain modes (sim/src/modes.h has the
+// Per-patch work of the enhanced strain modes (sim/src/cpu/modes.h has the
 // method and its derivatives), written once for every backend that runs
 // them. A patch p holds samples (sim/point/patch.h); mode j = 3 r + c adds
 // a_j xi_c to entry (r, c) of each sample's deformation gradient, xi = X_s -
@@ -56,7 +56,7 @@ static inline FASCIA_HD fascia_real fascia_pt_modes_dot(const fascia_real *x, co
   return sum;
 }
 
-/// The sets of modes (fascia_modes_set's values: sim/src/modes.c checks).
+/// The sets of modes (fascia_modes_set's values: sim/src/cpu/modes.c checks).
 enum { FASCIA_PT_MODES_NINE = 1, FASCIA_PT_MODES_NORMAL = 2 };
 
 /// 1: mode j is in the set: all nine, or the normal ones j = 0, 4, 8.

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
 // Per-patch and per-frame work of mean dilatation over volumetric patches
-// (sim/src/dilatation.h has the energy and its derivatives), written once
+// (sim/src/cpu/dilatation.h has the energy and its derivatives), written once
 // for the CPU (dilatation.c) and the device backend. A patch p holds
 // samples; its support entries e are the distinct frames its samples hang
 // on. G_e is the gradient of sum_{s in p} v_s theta_s on entry e's frame.

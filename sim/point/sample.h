@@ -53,12 +53,12 @@ typedef struct fascia_pt_model {
   const fascia_real *sample_curvature; ///< [S] k_c = mu l^2, Pa m^2 (rotation smoothness)
   const int32_t *sample_law;        ///< [S] FASCIA_PT_LAW_*
   /// [S] the pressure a sample's volumetric patch puts on it (Pa: lambda
-  /// times the patch's mean dilatation, sim/src/dilatation.h), or NULL
+  /// times the patch's mean dilatation, sim/src/cpu/dilatation.h), or NULL
   /// without patches: the stress gains pressure * dtheta/dF, the energy
   /// nothing (the patch holds it).
   const fascia_real *sample_pressure;
   /// [9S] the enhanced part of a sample's deformation gradient, from its
-  /// patch's strain modes (sim/src/modes.h, row-major), or NULL without
+  /// patch's strain modes (sim/src/cpu/modes.h, row-major), or NULL without
   /// modes: F = the frames' F + this. The frames do not move it.
   const fascia_real *sample_enhanced;
 } fascia_pt_model;
@@ -416,7 +416,7 @@ static inline FASCIA_HD void fascia_pt_sample_stiffness_parts(const fascia_pt_mo
 }
 
 /// Sample s's response to a change dF of its deformation gradient with the
-/// frames held (an enhanced strain mode, sim/src/modes.h): dP_out[9] gets
+/// frames held (an enhanced strain mode, sim/src/cpu/modes.h): dP_out[9] gets
 /// the stress change (law, patch pressure and rotation coupling), and, if
 /// out6 is not NULL, out6 + 6 j the change of the gradient on its j-th
 /// pair's frame. cache: the sample's, at the state.
@@ -535,7 +535,7 @@ static inline FASCIA_HD int32_t fascia_pt_upper_block(int32_t n, int32_t a, int3
 /// M = C Pt^T. Equals fascia_pt_sample_stiffness_parts(.., BASE) applied to
 /// unit vectors; it is how the assembled matrix is built without 6n products
 /// per sample (the rotation coupling, when on, is added by such products,
-/// the rotation smoothing per frame pair: smoothing_rows in sim/src/assemble.c).
+/// the rotation smoothing per frame pair: smoothing_rows in sim/src/cpu/assemble.c).
 /// frame_moves ([frames], NULL: all): the rows of a frame not in it are not
 /// computed, and a block with such a frame is to be left unread (the
 /// assembly leaves the blocks of frames a step holds). scratch: 12 n reals

@@ -14,7 +14,7 @@
 
 #include "fuzz_common.h"
 #include "io_fixture.h"
-#include "solver_internal.h"
+#include "solve/solver_internal.h"
 
 static uint8_t *template_bytes;
 static size_t template_size;

@@ -3,7 +3,7 @@
 # which ships no CMake package of its own) on OpenBLAS (libopenblas-dev), as the
 # imported target CHOLMOD::CHOLMOD. OpenBLAS is linked by name, not only through
 # CHOLMOD's generic libblas, because the direct solver sets its thread count
-# (sim/src/direct.c). CHOLMOD_LIBRARIES_PRIVATE lists what libcholmod itself
+# (sim/src/cpu/direct.c). CHOLMOD_LIBRARIES_PRIVATE lists what libcholmod itself
 # links, for a fully static link (pkg-config --static).
 find_path(CHOLMOD_INCLUDE_DIR cholmod.h PATH_SUFFIXES suitesparse)
 find_library(CHOLMOD_LIBRARY cholmod)

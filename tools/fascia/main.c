@@ -77,7 +77,7 @@ fascia_ctx *cli_ctx(int threads, int progress) {
 // microseconds, and waking a sleeping thread for each would slow a step.
 // OpenBLAS, the direct solver's BLAS, starts a worker per core as it loads,
 // and each spins before it sleeps although the solver runs BLAS on one
-// thread (sim/src/direct.c): OPENBLAS_NUM_THREADS=1 keeps them from being
+// thread (sim/src/cpu/direct.c): OPENBLAS_NUM_THREADS=1 keeps them from being
 // started. Both libraries read these as they load, so the program sets
 // them and starts itself again, keeping each the user chose (a start is
 // cheap: the prep stage's libraries are loaded by `fascia prep` only,

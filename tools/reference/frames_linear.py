@@ -12,7 +12,7 @@ its gravity: per frame a translation du and a rotation dtheta, per sample
 the volumetric patches' (lambda - lambda_s)/2 V_p mean(tr e)^2 with
 lambda_s = lambda mu / (lambda + mu) on a patched sample (lambda elsewhere),
 the rotation smoothing's v k_c sum_c |sum_i g_ic dtheta_i|^2 (k_c as
-sim/src/system.c), gravity on each sample's mass at its blended position,
+sim/src/cpu/system.c), gravity on each sample's mass at its blended position,
 fixed frames held. Prints the probes' displacements, one line each:
 "probe NAME ux uy uz". For the stiff cantilever (E = 4 MPa) this is
 fascia's static answer to within its geometric nonlinearity (tests/t363).

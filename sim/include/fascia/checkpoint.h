@@ -5,7 +5,7 @@
 // depends on) in one small HDF5 file, so that a run killed at any moment
 // continues from its last checkpoint and reaches the same state, bit for bit
 // on the CPU (same model, time step and thread count), as a run that was
-// never interrupted. Format: the schema at the top of sim/src/io_checkpoint.c.
+// never interrupted. Format: the schema at the top of sim/src/io/io_checkpoint.c.
 #ifndef FASCIA_CHECKPOINT_H
 #define FASCIA_CHECKPOINT_H
 

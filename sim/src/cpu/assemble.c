@@ -10,10 +10,10 @@
 #include <omp.h>
 #endif
 
-#include "assemble.h"
-#include "dilatation.h"
-#include "modes.h"
-#include "index_set.h"
+#include "cpu/assemble.h"
+#include "cpu/dilatation.h"
+#include "cpu/modes.h"
+#include "util/index_set.h"
 
 static int32_t find_block(const fascia_bsr *B, int32_t i, int32_t j);
 
@@ -288,7 +288,7 @@ static void mass_rows(fascia_system *sys, const unsigned char *moves, fascia_bsr
 // vectors of the sample (its upper blocks: the assembled matrix is
 // symmetric). Blocks with a frame not in moves are left unwritten. A
 // sample in patch p >= 0 with enhanced strain modes also leaves its shares
-// of the modes' terms (sim/src/modes.h) from its D and B^T D.
+// of the modes' terms (sim/src/cpu/modes.h) from its D and B^T D.
 // dq, col: 6 max_neighbours reals; scratch: 66 max_neighbours. Its loops
 // over the sample's pairs are compiled wide (wide.h), where AVX2 pays.
 WIDE_CLONES static void local_stiffness(const fascia_system *sys, const fascia_pt_state *st, const unsigned char *moves,

@@ -9,8 +9,8 @@
 #ifndef FASCIA_SRC_ASSEMBLE_H
 #define FASCIA_SRC_ASSEMBLE_H
 
-#include "system.h"
-#include "wide.h"
+#include "cpu/system.h"
+#include "cpu/wide.h"
 
 /// Block CSR: row i has blocks cols[row_offsets[i] .. row_offsets[i+1]-1]
 /// (ascending frame indices), values 36 per block, row-major.

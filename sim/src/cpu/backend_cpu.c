@@ -9,10 +9,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "backend.h"
-#include "organs.h"
+#include "solve/backend.h"
+#include "organs/organs.h"
 #include "point/frame.h"
-#include "solver_internal.h"
+#include "solve/solver_internal.h"
 
 typedef struct cpu_backend {
   fascia_backend base;

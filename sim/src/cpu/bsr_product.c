@@ -18,7 +18,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "assemble.h"
+#include "cpu/assemble.h"
 
 typedef double wide_real __attribute__((vector_size(32), aligned(8)));
 typedef float wide_float __attribute__((vector_size(16), aligned(4)));

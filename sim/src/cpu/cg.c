@@ -13,7 +13,7 @@
 
 #include "point/body.h"
 #include "point/cg.h"
-#include "solver_internal.h"
+#include "solve/solver_internal.h"
 
 // Rigid organs: P^T A P v, A on every frame the tissue moves, plus the
 // bodies' own terms (point/body.h).

@@ -6,9 +6,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "dilatation.h"
-#include "wide.h"
-#include "index_set.h"
+#include "cpu/dilatation.h"
+#include "cpu/wide.h"
+#include "util/index_set.h"
 
 void fascia_patch_table_free(fascia_patch_table *t) {
   free(t->patch_offsets);

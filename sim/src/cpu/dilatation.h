@@ -27,7 +27,7 @@
 #define FASCIA_SRC_DILATATION_H
 
 #include "point/patch.h"
-#include "system.h"
+#include "cpu/system.h"
 
 /// The patches of a model as tables: which samples each holds, and the
 /// distinct frames its samples hang on (its support); a support entry is one

@@ -23,7 +23,7 @@
 
 #include <cholmod.h>
 
-#include "direct.h"
+#include "cpu/direct.h"
 
 // OpenBLAS's thread count (CMake links it by name, cmake/FindCHOLMOD.cmake).
 void openblas_set_num_threads(int threads);

@@ -10,7 +10,7 @@
 #ifndef FASCIA_SRC_DIRECT_H
 #define FASCIA_SRC_DIRECT_H
 
-#include "assemble.h"
+#include "cpu/assemble.h"
 
 typedef struct fascia_direct fascia_direct;
 

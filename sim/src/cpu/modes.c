@@ -6,9 +6,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "modes.h"
-#include "wide.h"
-#include "dilatation.h"
+#include "cpu/modes.h"
+#include "cpu/wide.h"
+#include "cpu/dilatation.h"
 
 // A mode column acts where its patch spans that direction: sum v xi_c^2
 // at least this share of sum v |xi|^2 (a flat patch has no modes across it).

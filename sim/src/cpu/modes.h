@@ -31,7 +31,7 @@
 #define FASCIA_SRC_MODES_H
 
 #include "point/modes.h"
-#include "system.h"
+#include "cpu/system.h"
 
 struct fascia_dilatation;
 

@@ -10,12 +10,12 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "system.h"
-#include "model_arrays.h"
-#include "system_arrays.h"
-#include "wide.h"
-#include "dilatation.h"
-#include "modes.h"
+#include "cpu/system.h"
+#include "model/model_arrays.h"
+#include "cpu/system_arrays.h"
+#include "cpu/wide.h"
+#include "cpu/dilatation.h"
+#include "cpu/modes.h"
 #include "point/frame.h"
 
 #define DOT_BLOCK 2048 // entries per partial sum of fascia_dot (fixed: determinism)

@@ -14,7 +14,7 @@
 
 #include "fascia/model.h"
 #include "point/sample.h"
-#include "status.h"
+#include "util/status.h"
 
 struct fascia_dilatation;
 struct fascia_modes;

@@ -11,7 +11,7 @@
 #ifndef FASCIA_SRC_SYSTEM_ARRAYS_H
 #define FASCIA_SRC_SYSTEM_ARRAYS_H
 
-#include "system.h"
+#include "cpu/system.h"
 
 // X(field, type, count, width, device)
 //   field   the member of fascia_system; type: its element type

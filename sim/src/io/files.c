@@ -18,7 +18,7 @@
 #include <sys/types.h>
 #include <unistd.h>
 
-#include "tempfile.h"
+#include "io/tempfile.h"
 
 // Names tried per file: K = 0 .. TEMP_ATTEMPTS - 1 within one process.
 #define TEMP_ATTEMPTS 1000

@@ -15,7 +15,7 @@
 
 #include "fascia/files.h"
 #include "fascia/model.h"
-#include "h5io.h"
+#include "io/h5io.h"
 
 void fascia_h5_quiet_begin(fascia_h5_quiet *quiet) {
   quiet->func = NULL;

@@ -10,8 +10,8 @@
 #include <hdf5.h>
 
 #include "fascia/results.h"
-#include "status.h"
-#include "tempfile.h"
+#include "util/status.h"
+#include "io/tempfile.h"
 
 /// HDF5's automatic error printer, saved while fascia has it switched off.
 typedef struct fascia_h5_quiet {

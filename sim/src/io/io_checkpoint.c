@@ -63,12 +63,12 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "backend.h"
+#include "solve/backend.h"
 #include "fascia/checkpoint.h"
-#include "fnv.h"
-#include "h5io.h"
-#include "organs.h"
-#include "solver_internal.h"
+#include "util/fnv.h"
+#include "io/h5io.h"
+#include "organs/organs.h"
+#include "solve/solver_internal.h"
 
 #define CHECKPOINT_VERSION 3
 #define CHECKPOINT_UNITS "SI: m, kg, s, Pa"

@@ -29,7 +29,7 @@
 #include "fascia/results.h"
 #include "fascia/solver.h"
 #include "fascia/vtk_xml.h"
-#include "h5io.h"
+#include "io/h5io.h"
 
 #define RESULTS_VERSION 2
 #define RESULTS_UNITS "SI: m, kg, s, Pa"

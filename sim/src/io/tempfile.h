@@ -8,7 +8,7 @@
 
 #include <stddef.h>
 
-#include "status.h"
+#include "util/status.h"
 
 /// Creates a file under the first free name `path.tmp-PID-K` exclusively
 /// (O_EXCL, so two writers never share one) and writes that name into tmp;

@@ -10,7 +10,7 @@
 #include <stdlib.h>
 
 #include "fascia/model.h"
-#include "status.h"
+#include "util/status.h"
 
 static int32_t find_root(int32_t *parent, int32_t i) {
   while (parent[i] != i) {

@@ -81,9 +81,9 @@
 #include <unistd.h>
 
 #include "fascia/model.h"
-#include "fnv.h"
-#include "h5io.h"
-#include "model_arrays.h"
+#include "util/fnv.h"
+#include "io/h5io.h"
+#include "model/model_arrays.h"
 
 // A model with volumetric patches is version 2: a version 1 reader would
 // drop the patches and compute a locking answer without a word.

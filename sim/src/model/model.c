@@ -9,9 +9,9 @@
 #include <string.h>
 
 #include "fascia/model.h"
-#include "fnv.h"
-#include "model_arrays.h"
-#include "status.h"
+#include "util/fnv.h"
+#include "model/model_arrays.h"
+#include "util/status.h"
 
 // Tolerances of the validation: weights are computed in double from rest
 // geometry, so a partition of unity holds to ~1e-12; 1e-9 leaves room for

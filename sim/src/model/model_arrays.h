@@ -22,7 +22,7 @@
 #define FASCIA_SRC_MODEL_ARRAYS_H
 
 #include "fascia/model.h"
-#include "status.h"
+#include "util/status.h"
 
 // X(field, kind, count, plus, width, dataset, unit, fill, flags, since, device)
 //   field    the member of fascia_model

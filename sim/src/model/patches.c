@@ -10,7 +10,7 @@
 #include <string.h>
 
 #include "fascia/model.h"
-#include "status.h"
+#include "util/status.h"
 
 // Largest grid the search may use; past it the cells grow (fewer, larger).
 #define MAX_GRID_CELLS (1 << 22)

@@ -8,7 +8,7 @@
 #include <string.h>
 
 #include "fascia/shape.h"
-#include "status.h"
+#include "util/status.h"
 
 // A tetrahedron is flat when 6 |volume| / (longest edge)^3 is below this.
 #define TET_FLAT_TOLERANCE 1e-12

@@ -8,9 +8,9 @@
 
 #include "fascia/organs.h"
 #include "fascia/shape.h"
-#include "organs.h"
+#include "organs/organs.h"
 #include "point/frame.h"
-#include "solver_internal.h"
+#include "solve/solver_internal.h"
 
 #define SKIN_NEIGHBOURS 8 // frames carrying each vertex of a deformable organ
 

@@ -52,8 +52,8 @@
 #include <string.h>
 
 #include "fascia/organs.h"
-#include "index_set.h"
-#include "organs.h"
+#include "util/index_set.h"
+#include "organs/organs.h"
 #include "point/block6.h"
 #include "point/body.h"
 

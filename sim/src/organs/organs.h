@@ -8,7 +8,7 @@
 #define FASCIA_SRC_ORGANS_H
 
 #include "point/body.h"
-#include "solver_internal.h"
+#include "solve/solver_internal.h"
 
 /// Builds the organ state of a solver: mass properties of rigid organs, the
 /// master and slave frames, the masks. Checks that every coupling frame of a

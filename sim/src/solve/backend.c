@@ -8,8 +8,8 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "backend.h"
-#include "solver_internal.h"
+#include "solve/backend.h"
+#include "solve/solver_internal.h"
 
 #define BUILT_IN 3
 

@@ -13,7 +13,7 @@
 
 #include "fascia/solver.h"
 #include "point/patch.h"
-#include "system.h"
+#include "cpu/system.h"
 
 typedef struct fascia_backend_ops fascia_backend_ops;
 typedef struct fascia_organs fascia_organs; // organs.c

@@ -38,10 +38,10 @@
 #include <string.h>
 #include <time.h>
 
-#include "backend.h"
-#include "dilatation.h"
-#include "organs.h"
-#include "solver_internal.h"
+#include "solve/backend.h"
+#include "cpu/dilatation.h"
+#include "organs/organs.h"
+#include "solve/solver_internal.h"
 
 double fascia_now_ms(void) {
   struct timespec t;

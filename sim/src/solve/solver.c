@@ -7,11 +7,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "backend.h"
-#include "dilatation.h"
-#include "organs.h"
+#include "solve/backend.h"
+#include "cpu/dilatation.h"
+#include "organs/organs.h"
 #include "point/linalg.h"
-#include "solver_internal.h"
+#include "solve/solver_internal.h"
 
 fascia_solver_def fascia_solver_def_default(void) {
   fascia_solver_def d;

@@ -8,8 +8,8 @@
 #define FASCIA_SRC_SOLVER_INTERNAL_H
 
 #include "fascia/solver.h"
-#include "direct.h"
-#include "system.h"
+#include "cpu/direct.h"
+#include "cpu/system.h"
 
 typedef struct fascia_organs fascia_organs; // organs.c: rigid organs, organs driven by the caller
 

@@ -11,7 +11,7 @@
 #include <omp.h>
 #endif
 
-#include "status.h"
+#include "util/status.h"
 
 struct fascia_ctx {
   fascia_ctx_def def;
