@@ -39,30 +39,37 @@ static int barycentric(const double *a, const double *b, const double *c, const 
 // Displacement at rest point p of the shell organ: the wall triangle (a
 // sample's three frames) whose projection holds p, nearest p; there the
 // wall maps p as its samples' weights do, sum_i w_i (x_i + R_i (p - X_i)).
+// Near a vertex of the convex, faceted wall p may project outside every
+// triangle around it: then the triangle it projects closest to, its
+// weights clamped to the triangle.
 static fascia_status probe_displacement(fascia_ctx *ctx, const fascia_model *m, const fascia_solver *solver,
                                         int32_t organ, const double p[3], double u[3]) {
   int32_t best = -1;
   double best_w[3] = {0, 0, 0}, best_off = INFINITY;
   int32_t best_frame[3] = {-1, -1, -1};
-  for (int32_t s = 0; s < m->sample_count; ++s) {
-    if (m->sample_organ[s] != organ) continue;
-    int32_t frame[3], k = 0; // its triangle: the frames it weighs (its other pairs carry gradients alone)
-    for (int32_t j = m->sample_offsets[s]; j < m->sample_offsets[s + 1]; ++j)
-      if (m->pair_weight[j] != 0 && k < 3) frame[k++] = m->pair_frame[j];
-    if (k != 3) continue;
-    const double *X[3];
-    double x3[3][3];
-    for (int j = 0; j < 3; ++j) {
-      for (int r = 0; r < 3; ++r) x3[j][r] = m->frame_position[3 * frame[j] + r];
-      X[j] = x3[j];
+  for (int pass = 0; pass < 2 && best < 0; ++pass) {
+    for (int32_t s = 0; s < m->sample_count; ++s) {
+      if (m->sample_organ[s] != organ) continue;
+      int32_t frame[3], k = 0; // its triangle: the frames it weighs (its other pairs carry gradients alone)
+      for (int32_t j = m->sample_offsets[s]; j < m->sample_offsets[s + 1]; ++j)
+        if (m->pair_weight[j] != 0 && k < 3) frame[k++] = m->pair_frame[j];
+      if (k != 3) continue;
+      const double *X[3];
+      double x3[3][3];
+      for (int j = 0; j < 3; ++j) {
+        for (int r = 0; r < 3; ++r) x3[j][r] = m->frame_position[3 * frame[j] + r];
+        X[j] = x3[j];
+      }
+      double w[3], off;
+      if (!barycentric(X[0], X[1], X[2], p, w, &off)) continue;
+      const double tol = pass ? -0.1 : -1e-9;
+      if (w[0] < tol || w[1] < tol || w[2] < tol || off >= best_off) continue;
+      best = s, best_off = off;
+      double sum = 0;
+      for (int j = 0; j < 3; ++j) sum += best_w[j] = fmax(w[j], 0);
+      for (int j = 0; j < 3; ++j) best_w[j] /= sum;
+      memcpy(best_frame, frame, sizeof frame);
     }
-    double w[3], off;
-    if (!barycentric(X[0], X[1], X[2], p, w, &off)) continue;
-    const double tol = -1e-9;
-    if (w[0] < tol || w[1] < tol || w[2] < tol || off >= best_off) continue;
-    best = s, best_off = off;
-    memcpy(best_w, w, sizeof w);
-    memcpy(best_frame, frame, sizeof frame);
   }
   SCENE_CHECK(best >= 0, ctx, FASCIA_ERR_INTERNAL,
               "shell case: no triangle of the wall lies under the probe (%.4g %.4g %.4g) m", p[0], p[1], p[2]);
