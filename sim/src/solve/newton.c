@@ -228,7 +228,7 @@ fascia_status fascia_newton_minimize(fascia_solver *S, const fascia_step_values 
           // an overshot iterate's tangent factor would slow the next iterations
           // while it decayed by tenths; a tangent that is still indefinite
           // fails its factorization once and the direct solver goes on from a
-          // tenth of its last shift (backend_cpu.c)
+          // tenth of its last shift (cpu/linear_solver.c)
           shift = 0;
           break;
         }

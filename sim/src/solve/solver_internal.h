@@ -109,7 +109,7 @@ struct fascia_solver {
   /// load large enough to make the start unstable
   int start_indefinite;
   /// bumped where the state is set from outside or restored: a backend
-  /// keeps no factorization across it (backend_cpu.c); a checkpoint carries
+  /// keeps no factorization across it (cpu/linear_solver.c); a checkpoint carries
   /// the one kept (backend.h, linear_state_save)
   uint64_t linear_epoch;
 };
