@@ -111,10 +111,11 @@ static const char usage_text[] =
     "usage: demo-calculix [SCENE.json] [--ccx TYPE:VOXEL_MM:SPLIT,...] "
     "[--fascia VOXEL_MM:SCALE[:SAMPLE_SCALE[:TAG]],...]\n"
     "                     [--reference K] [--neighbours N] [--threads N] [--csv FILE] [--cache DIR] [--slip]\n"
-    "                     [--write-reference FILE]\n"
+    "                     [--write-reference FILE] [--ccx-solver NAME]\n"
     "  TYPE 8i (C3D8I) or 20r (C3D20R); SPLIT elements along a voxel's edge; SCALE times the tissue's frame and\n"
     "  sample spacings, SAMPLE_SCALE times the sample spacing on top; TAG nK (K MLS neighbours) or flat (no\n"
-    "  volumetric patches); --reference K: the CalculiX mesh (from 1) errors are taken against, default the last\n";
+    "  volumetric patches); --reference K: the CalculiX mesh (from 1) errors are taken against, default the last;\n"
+    "  --ccx-solver: ccx's linear solver, e.g. \"ITERATIVE CHOLESKY\" (default: ccx's own, SPOOLES)\n";
 
 static int usage(const char *why) {
   fprintf(stderr, "demo-calculix: %s\n%s", why, usage_text);
@@ -282,7 +283,7 @@ static int write_reference(const char *path, const char *scene, const ccx_row *c
 int main(int argc, char **argv) {
   const char *scene = "data/scenes/pelvis-female-demo.json", *ccx_list = "8i:1:1,8i:1:2,20r:1:1",
              *fascia_list = "1:1,1:0.7,1:0.5", *csv_path = NULL,
-             *cache = NULL, *reference_path = NULL;
+             *cache = NULL, *reference_path = NULL, *ccx_solver = NULL;
   int reference = 0, threads = 1, neighbours = 0, slips = 0;
   for (int i = 1; i < argc; ++i) {
     const char *a = argv[i];
@@ -298,6 +299,7 @@ int main(int argc, char **argv) {
     else if (!strcmp(a, "--csv") && i + 1 < argc) csv_path = argv[++i];
     else if (!strcmp(a, "--cache") && i + 1 < argc) cache = argv[++i];
     else if (!strcmp(a, "--slip")) slips = 1;
+    else if (!strcmp(a, "--ccx-solver") && i + 1 < argc) ccx_solver = argv[++i];
     else if (!strcmp(a, "--write-reference") && i + 1 < argc) reference_path = argv[++i];
     else if (a[0] != '-') scene = a;
     else return usage("unknown argument");
@@ -365,6 +367,7 @@ int main(int argc, char **argv) {
     fascia_demo_def d = {scene, cr[k].voxel_mm * 1e-3, 1, 1, neighbours, 0};
     fascia_status st = fascia_demo_prepare(ctx, &d, &s);
     if (st == FASCIA_OK) st = fascia_demo_mesh_build(ctx, &s, cr[k].quadratic, cr[k].split, &cr[k].mesh);
+    cr[k].mesh.solver = ccx_solver;
     if (st == FASCIA_OK && k == 0) {
       base_frame = s.scene->tissues[0].frame_spacing, base_sample = s.scene->tissues[0].sample_spacing;
       organ_count = cr[k].mesh.organ_count;

@@ -262,11 +262,12 @@ static void write_material(FILE *out, double E, double nu) {
           E, nu, mu, (l + mu) / 2, -(l + mu) / 2, 1.0 / 3.0);
 }
 
-static void write_step(FILE *out) {
+static void write_step(FILE *out, const char *solver) {
   // a quarter of the load first (the whole load at once diverges on the
   // demo); residuals 500 times below ccx's default, for forces to 1e-4
-  fprintf(out, "*STEP, NLGEOM, INC=1000\n*STATIC\n0.25, 1.0, 1e-5, 0.5\n"
-               "*CONTROLS, PARAMETERS=FIELD\n1e-5, 1e-5, 0., -1., 0.02, 1e-5, 1e-3, 1e-8\n");
+  fprintf(out, "*STEP, NLGEOM, INC=1000\n*STATIC%s%s\n0.25, 1.0, 1e-5, 0.5\n", solver ? ", SOLVER=" : "",
+          solver ? solver : "");
+  fprintf(out, "*CONTROLS, PARAMETERS=FIELD\n1e-5, 1e-5, 0., -1., 0.02, 1e-5, 1e-3, 1e-8\n");
 }
 
 fascia_status fascia_demo_write_deck(fascia_ctx *ctx, const void *arg, FILE *out) {
@@ -296,7 +297,7 @@ fascia_status fascia_demo_write_deck(fascia_ctx *ctx, const void *arg, FILE *out
   }
   write_material(out, m->youngs_modulus, m->poisson_ratio);
   fprintf(out, "*SOLID SECTION, ELSET=EALL, MATERIAL=TISSUE\n");
-  write_step(out);
+  write_step(out, m->solver);
   fprintf(out, "*BOUNDARY\n");
   for (int64_t k = 0; k < m->node_count; ++k) {
     if (m->node_organ[k] < 0) continue;
@@ -407,7 +408,7 @@ static fascia_status write_one_element(fascia_ctx *ctx, const void *arg, FILE *o
                "*NSET, NSET=NX\n2, 3, 6, 7\n*NSET, NSET=NY\n3, 4, 7, 8\n*NSET, NSET=NZ\n5, 6, 7, 8\n");
   write_material(out, d->E, d->nu);
   fprintf(out, "*SOLID SECTION, ELSET=EALL, MATERIAL=TISSUE\n");
-  write_step(out);
+  write_step(out, NULL);
   fprintf(out, "*BOUNDARY\n");
   for (int q = 0; q < 8; ++q)
     for (int a = 0; a < 3; ++a) {

@@ -53,6 +53,7 @@ typedef struct fascia_demo_mesh {
   int32_t organ_count;           ///< the scene's organs
   char organ_name[FASCIA_DEMO_ORGANS_MAX][FASCIA_NAME_SIZE];
   double youngs_modulus, poisson_ratio; ///< the tissue's
+  const char *solver;            ///< ccx's linear solver (*STATIC, SOLVER=...); NULL: its default
 } fascia_demo_mesh;
 
 /// Builds the mesh from prepared stages (their volume, and the organs'
