@@ -23,15 +23,22 @@
 // two faces (5.2 and 9.3 for two draws); a blow-up reaches 1e4.
 #define STRAIN_BOUND 20.0
 
-// Free tissue frames whose lumped 6x6 block is not positive definite.
+// Free tissue frames whose lumped 6x6 block is not positive definite. The
+// frames on a rigid organ are left out: they move with the organ's six
+// unknowns, whose block is the organ's own mass plus theirs (organs.c),
+// and no solver inverts one of their blocks alone.
 static int indefinite_blocks(fascia_ctx *ctx, const fascia_model *m, const char *name) {
   fascia_system *sys = NULL;
   if (fascia_system_create(ctx, m, 1, &sys) != FASCIA_OK) return -1;
   fascia_real *blocks = malloc(36 * (size_t)m->frame_count * sizeof(fascia_real));
-  int bad = blocks ? 0 : -1;
+  unsigned char *on_rigid = calloc((size_t)m->frame_count + 1, 1);
+  int bad = blocks && on_rigid ? 0 : -1;
+  for (int32_t c = 0; on_rigid && c < m->coupling_count; ++c)
+    if (m->organs[m->coupling_organ[c]].kind == FASCIA_ORGAN_RIGID) on_rigid[m->coupling_frame[c]] = 1;
   if (blocks) fascia_system_mass_lumped(sys, blocks);
-  for (int32_t i = 0; blocks && i < m->frame_count; ++i) {
-    if (m->frame_kind[i] != FASCIA_FRAME_FREE || m->frame_offsets[i] == m->frame_offsets[i + 1]) continue;
+  for (int32_t i = 0; blocks && on_rigid && i < m->frame_count; ++i) {
+    if (m->frame_kind[i] != FASCIA_FRAME_FREE || m->frame_offsets[i] == m->frame_offsets[i + 1] || on_rigid[i])
+      continue;
     fascia_real L[36];
     memcpy(L, blocks + 36 * (size_t)i, sizeof L);
     if (!fascia_pt_cholesky6(L)) {
@@ -40,6 +47,7 @@ static int indefinite_blocks(fascia_ctx *ctx, const fascia_model *m, const char 
     }
   }
   free(blocks);
+  free(on_rigid);
   fascia_system_destroy(&sys);
   return bad;
 }

@@ -7,6 +7,9 @@
 // voxel volume matches it within one voxel layer over its boundary, and every
 // piece of it touches both slabs. Two parallel boxes farther apart than
 // max_gap (but within twice it) get no tissue: no sheet floats in the middle.
+// With min_gap m the slabs slide where they are closer than m: the tissue
+// loses the part of that cross-section with d_A + d_B < m (the same shape,
+// scaled by m / max_gap), reported as slide_volume.
 #define _POSIX_C_SOURCE 200809L // mkdtemp
 #include <math.h>
 
@@ -48,8 +51,9 @@ static fascia_status voxelize(const char *path, fascia_ctx *ctx, fixture_run *r)
   return st;
 }
 
-// The tilted slabs at voxel size h, shifted by `shift` (m) on every axis.
-static int tilted(const char *dir, double h, double shift) {
+// The tilted slabs at voxel size h, shifted by `shift` (m) on every axis,
+// the tissue's min_gap m.
+static int tilted(const char *dir, double h, double shift, double m) {
   const double G = MAX_GAP, s = SLOPE, c = sqrt(1 + s * s), W = 2 * HALF_WIDTH;
   double a[8][3], b[8][3];
   for (int k = 0; k < 8; ++k) {
@@ -59,7 +63,8 @@ static int tilted(const char *dir, double h, double shift) {
   }
   CHECK(write_hex(dir, "a.obj", a) && write_hex(dir, "b.obj", b));
   char text[2048], region[256], path[512];
-  snprintf(region, sizeof region, " \"region\": {\"box\": {\"min\": [-1, %.9g, -1], \"max\": [1, %.9g, 1]}},",
+  snprintf(region, sizeof region,
+           " \"min_gap\": %g, \"region\": {\"box\": {\"min\": [-1, %.9g, -1], \"max\": [1, %.9g, 1]}},", m,
            -HALF_WIDTH + shift, HALF_WIDTH + shift);
   snprintf(text, sizeof text, scene_format, h, G, region);
   CHECK(fixture_write(dir, "scene.json", text));
@@ -72,15 +77,17 @@ static int tilted(const char *dir, double h, double shift) {
     // over B's lower face (0 <= z <= s x, d_A = z, d_B = (s x - z) / c) the
     // triangle (0, 0), (G c / s, 0), (G / s, G); beyond B's end face
     // (x < 0, d_B = -x) the triangle (-G, 0), (0, 0), (0, G)
-    const double area = G * G * c / (2 * s) + G * G / 2;
-    const double exact = area * W;
+    const double area = G * G * c / (2 * s) + G * G / 2, slid = area * (m / G) * (m / G);
+    const double exact = (area - slid) * W;
     const double perimeter = 2 * G + G * sqrt(2.0) + 2 * G * c / s + hypot(G * (c - 1) / s, G);
     const double layer = 0.5 * h * (perimeter * W + 2 * area); // one voxel layer straddling the boundary
     const double got = r.volume->tissues[0].volume;
-    fprintf(stderr, "tilted slabs, voxel %g mm, shift %g mm: tissue %.5g cm^3, exact %.5g cm^3 (%+.2f %%), one voxel "
-                    "layer %.3g cm^3\n",
-            1e3 * h, 1e3 * shift, 1e6 * got, 1e6 * exact, 100 * (got / exact - 1), 1e6 * layer);
+    fprintf(stderr, "tilted slabs, voxel %g mm, shift %g mm, min_gap %g mm: tissue %.5g cm^3, exact %.5g cm^3 "
+                    "(%+.2f %%), one voxel layer %.3g cm^3; slid %.4g cm^3, exact %.4g\n",
+            1e3 * h, 1e3 * shift, 1e3 * m, 1e6 * got, 1e6 * exact, 100 * (got / exact - 1), 1e6 * layer,
+            1e6 * r.volume->tissues[0].slide_volume, 1e6 * slid * W);
     CHECK_NEAR(got, exact, 0, layer);
+    CHECK_NEAR(r.volume->tissues[0].slide_volume, slid * W, 0, layer);
     int pieces = 0;
     CHECK(fixture_pieces_touch(r.volume, 1, 2, &pieces));
     CHECK(pieces >= 1);
@@ -128,8 +135,10 @@ static int parallel(const char *dir, double h, double gap) {
 int main(void) {
   char dir[256];
   if (!fixture_tmpdir(dir)) return 1;
-  int failed = tilted(dir, 0.001, 0.0003);
-  failed |= tilted(dir, 0.0005, 0.00017);
+  int failed = tilted(dir, 0.001, 0.0003, 0);
+  failed |= tilted(dir, 0.0005, 0.00017, 0);
+  failed |= tilted(dir, 0.001, 0.0003, 0.003);
+  failed |= tilted(dir, 0.0005, 0.00017, 0.003);
   failed |= parallel(dir, 0.001, 0.9 * MAX_GAP);
   failed |= parallel(dir, 0.001, 1.5 * MAX_GAP);
   static const char *const files[] = {"a.obj", "b.obj", "scene.json", NULL};

@@ -1,7 +1,9 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
 // A tissue across a gap thinner than its frame spacing keeps free frames:
-// two 30 x 30 mm faces 2 to 6 mm apart, 1 mm voxels, frames every 10 mm.
+// two 30 x 30 mm faces 2 to 6 mm apart, 1 mm voxels, frames every 10 mm,
+// samples every 1 mm (a gap gets mid-layer frames from two sample spacings
+// up; a thinner one is held by its faces, tests/t586).
 // No voxel of such a gap is farther than the coupling tolerance plus a voxel
 // from an organ, so without its mid-layer every frame would lie on a box and
 // move with it, and nothing would be simulated. Each gap must have free
@@ -30,7 +32,7 @@ static const char scene_format[] =
     "              {\"name\": \"B\", \"mesh\": \"b.obj\", \"model\": \"prescribed\", \"motion\": {\"pivot\": [0, 0, 0], \"keys\": [\n"
     "                {\"time\": 0}, {\"time\": 1, \"translation\": [0, 0.0005, 0]}]}}%s],\n"
     " \"tissues\": [{\"name\": \"gap\", \"connects\": [\"A\", \"B\"], \"max_gap\": 0.008, \"material\": \"soft\",\n"
-    "  \"frame_spacing\": 0.01, \"sample_spacing\": 0.002%s}]}\n";
+    "  \"frame_spacing\": 0.01, \"sample_spacing\": 0.001%s}]}\n";
 
 // The gap's free frames: count, and how many lie off its mid-layer.
 static int check_gap(const char *dir, double gap) {

@@ -239,6 +239,7 @@ static cJSON *provenance(const fascia_prep_scene *scene, const fascia_prep_meshe
     for (int32_t k = 0; k < td->organ_count; ++k)
       cJSON_AddItemToArray(con, cJSON_CreateString(scene->organs[td->organs[k]].name));
     cJSON_AddNumberToObject(e, "max_gap", td->max_gap);
+    if (td->form == FASCIA_PREP_FORM_VOLUME) cJSON_AddNumberToObject(e, "min_gap", td->min_gap);
     cJSON_AddItemToObject(e, "region", region_json(&td->region));
     if (td->region_organ >= 0) {
       cJSON_AddStringToObject(e, "region_parts_organ", scene->organs[td->region_organ].name);

@@ -79,6 +79,7 @@ void fascia_prep_points_destroy(fascia_prep_points **points) {
   free(p->sample_tet_frame);
   free(p->sample_cell_frame);
   free(p->tissue_mid_layer_frames);
+  free(p->tissue_held_layer_volume);
   free(p);
   *points = NULL;
 }
@@ -91,6 +92,7 @@ typedef struct point_list {
   int32_t *organ, *triangle;
   int64_t *voxel;
   int64_t *attach;  // [count] voxel of a deformable organ's inside the point is shared with, or -1
+  double *radius;   // [count] its own dart radius, or 0 for the dart grid's
 } point_list;
 
 static int list_push(point_list *l, const double *x, int32_t organ, int32_t triangle, int64_t voxel) {
@@ -111,6 +113,9 @@ static int list_push(point_list *l, const double *x, int32_t organ, int32_t tria
     int64_t *a = realloc(l->attach, (size_t)cap * sizeof(int64_t));
     if (!a) return 0;
     l->attach = a;
+    double *r = realloc(l->radius, (size_t)cap * sizeof(double));
+    if (!r) return 0;
+    l->radius = r;
     l->capacity = cap;
   }
   memcpy(l->position + 3 * l->count, x, 3 * sizeof(double));
@@ -118,6 +123,7 @@ static int list_push(point_list *l, const double *x, int32_t organ, int32_t tria
   l->triangle[l->count] = triangle;
   l->voxel[l->count] = voxel;
   l->attach[l->count] = -1;
+  l->radius[l->count] = 0;
   l->count++;
   return 1;
 }
@@ -128,13 +134,16 @@ static void list_free(point_list *l) {
   free(l->triangle);
   free(l->voxel);
   free(l->attach);
+  free(l->radius);
   memset(l, 0, sizeof *l);
 }
 
 // ------------------------------------------------------------ dart throwing
 
 // Hash grid of accepted points with cell size = radius: a point conflicts
-// only with points in the 27 cells around its own.
+// only with points in the 27 cells around its own. A point may carry a
+// smaller radius of its own (point_list.radius); two points conflict when
+// they lie closer than the smaller of their radii.
 typedef struct dart_grid {
   double radius;
   int64_t table_size;
@@ -167,10 +176,13 @@ static void dart_free(dart_grid *d) {
   d->head = d->next = NULL;
 }
 
-static int dart_conflicts(const dart_grid *d, const double *x) {
+static double point_radius(const point_list *l, int64_t k, double fallback) {
+  return l->radius[k] > 0 ? l->radius[k] : fallback;
+}
+
+static int dart_conflicts(const dart_grid *d, const double *x, double radius) {
   const int64_t c[3] = {(int64_t)floor(x[0] / d->radius), (int64_t)floor(x[1] / d->radius),
                         (int64_t)floor(x[2] / d->radius)};
-  const double r2 = d->radius * d->radius;
   for (int dz = -1; dz <= 1; ++dz)
     for (int dy = -1; dy <= 1; ++dy)
       for (int dx = -1; dx <= 1; ++dx) {
@@ -178,7 +190,8 @@ static int dart_conflicts(const dart_grid *d, const double *x) {
         for (int64_t k = d->head[b]; k >= 0; k = d->next[k]) {
           const double *y = d->points->position + 3 * k;
           const double e0 = x[0] - y[0], e1 = x[1] - y[1], e2 = x[2] - y[2];
-          if (e0 * e0 + e1 * e1 + e2 * e2 < r2) return 1;
+          const double r = fmin(radius, point_radius(d->points, k, d->radius));
+          if (e0 * e0 + e1 * e1 + e2 * e2 < r * r) return 1;
         }
       }
   return 0;
@@ -204,10 +217,30 @@ static int dart_add(dart_grid *d, int64_t k) {
 
 // ------------------------------------------------------------ frames
 
+// The dart radius of a surface frame on organ o at voxel v: the gap there
+// (the distance to o plus the distance to the nearest other organ) where it
+// is thinner than the frame spacing, no less than an eighth of it. Frames of
+// a thin layer then face each other across it at about its thickness, so the
+// layer's samples are held by both faces the way the organs hold it; with
+// face frames a spacing apart, the free frames between them could shear the
+// layer at a fraction of its energy. Only faces that move as one body (not a
+// deformable organ, whose surface frames are its degrees of freedom) get
+// them: they cost no unknowns.
+static double surface_radius(const fascia_prep_scene *scene, const fascia_prep_volume *vol, int32_t o, int64_t v,
+                             double spacing) {
+  if (scene->organs[o].kind == FASCIA_ORGAN_DEFORMABLE) return spacing;
+  double other = INFINITY;
+  for (int32_t p = 0; p < vol->organ_count; ++p)
+    if (p != o && vol->distance[p]) other = fmin(other, vol->distance[p][v]);
+  const double gap = vol->distance[o][v] + other;
+  return fmin(spacing, fmax(gap, spacing / 8));
+}
+
 // Surface candidates of tissue t: closest surface points of region voxels
-// within one voxel of an organ.
-static fascia_status surface_candidates(fascia_ctx *ctx, const fascia_prep_meshes *meshes,
-                                        const fascia_prep_volume *vol, const int64_t *voxels, int64_t voxel_count,
+// within one voxel of an organ, with their dart radii (surface_radius).
+static fascia_status surface_candidates(fascia_ctx *ctx, const fascia_prep_scene *scene,
+                                        const fascia_prep_meshes *meshes, const fascia_prep_volume *vol,
+                                        const int64_t *voxels, int64_t voxel_count, double spacing,
                                         fascia_cgal_tree **trees, point_list *out) {
   const prep_grid g = prep_volume_grid(vol);
   const double h = vol->voxel_size;
@@ -239,7 +272,10 @@ static fascia_status surface_candidates(fascia_ctx *ctx, const fascia_prep_meshe
 #pragma omp parallel for schedule(static) num_threads(fascia_ctx_threads(ctx))
     for (int64_t k = 0; k < count; ++k) fascia_cgal_tree_closest(tree, 1, query + 3 * k, closest + 3 * k, tri + k);
     int ok = 1;
-    for (int64_t k = 0; k < count && ok; ++k) ok = list_push(out, closest + 3 * k, o, tri[k], from[k]);
+    for (int64_t k = 0; k < count && ok; ++k) {
+      ok = list_push(out, closest + 3 * k, o, tri[k], from[k]);
+      if (ok) out->radius[out->count - 1] = surface_radius(scene, vol, o, from[k], spacing);
+    }
     free(query), free(closest), free(tri), free(from);
     PREP_CHECK(ok, ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
   }
@@ -311,9 +347,15 @@ static fascia_status throw_darts(fascia_ctx *ctx, uint64_t seed, const point_lis
   for (int64_t r = 0; r < cand->count; ++r) {
     const int64_t k = order[r].index;
     const double *x = cand->position + 3 * k;
-    if ((taken && taken[cand->voxel[k]]) || dart_conflicts(darts, x)) continue;
+    const double radius = point_radius(cand, k, darts->radius);
+    if ((taken && taken[cand->voxel[k]]) || dart_conflicts(darts, x, radius)) continue;
     if (taken) taken[cand->voxel[k]] = 1;
-    if (!list_push(kept, x, cand->organ[k], cand->triangle[k], cand->voxel[k]) || !dart_add(darts, kept->count - 1)) {
+    if (!list_push(kept, x, cand->organ[k], cand->triangle[k], cand->voxel[k])) {
+      free(order);
+      return PREP_FAIL(ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+    }
+    kept->radius[kept->count - 1] = cand->radius[k];
+    if (!dart_add(darts, kept->count - 1)) {
       free(order);
       return PREP_FAIL(ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
     }
@@ -348,14 +390,18 @@ static int region_targets(const prep_grid *g, const int64_t *voxels, int64_t vox
 // Mid-layer frames of a tissue (the header): candidates are the region
 // voxels on the medial layer between the two nearest organs (their
 // distances within about a voxel of each other) where the gap is thinner
-// than the frame spacing (nearer than half of it to both), off the
-// surfaces. There interior frames are refused: the surface frames on both
-// sides lie within a spacing of every point. Mid-layer frames are thrown
+// than the frame spacing (nearer than half of it to both) but at least two
+// sample spacings thick, off the surfaces. There interior frames are
+// refused: the surface frames on both sides lie within a spacing of every
+// point. A thinner layer is held by its faces alone (surface_radius): a free
+// frame there would reach only the samples within about a gap of it, too
+// few to hold its six degrees of freedom (its lumped mass singular, the
+// layer sheared at a fraction of its energy). Mid-layer frames are thrown
 // with the frame spacing against the frames from index `first` on (the
 // interior ones) only.
 static fascia_status mid_layer_frames(fascia_ctx *ctx, const fascia_prep_volume *vol, const int64_t *voxels,
-                                      int64_t voxel_count,
-                                      double spacing, uint64_t seed, int64_t first, point_list *frames) {
+                                      int64_t voxel_count, double spacing, double sample_spacing, uint64_t seed,
+                                      int64_t first, point_list *frames, double *held_volume) {
   const prep_grid g = prep_volume_grid(vol);
   const double h = g.h;
   point_list cand = {0};
@@ -370,10 +416,11 @@ static fascia_status mid_layer_frames(fascia_ctx *ctx, const fascia_prep_volume 
       if (d < d1) d2 = d1, d1 = d;
       else if (d < d2) d2 = d;
     }
+    if (d1 + d2 < 2 * sample_spacing) *held_volume += h * h * h;
     // (a voxel off the surfaces at least: nearer, a frame beside a surface frame made the wedges where organs
     // meet stiff and strained; a quarter voxel more on the medial bound: a mid-plane halfway between voxel
     // centres puts two layers at exactly one voxel of difference, and distances are floats)
-    if (d1 >= 0.5 * spacing || d1 < 1.0 * h || d2 - d1 > 1.25 * h) continue;
+    if (d1 >= 0.5 * spacing || d1 < sample_spacing || d1 < 1.0 * h || d2 - d1 > 1.25 * h) continue;
     double x[3];
     prep_grid_center(&g, v, x);
     PREP_CHECK_GOTO(list_push(&cand, x, -1, -1, v), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
@@ -836,7 +883,7 @@ static void attach_shared(const fascia_prep_scene *scene, const fascia_prep_mesh
 static fascia_status sample_region(fascia_ctx *ctx, const fascia_prep_scene *scene,
                                    const fascia_prep_meshes *meshes, const fascia_prep_volume *vol, uint8_t label,
                                    fascia_cgal_tree **trees, point_list *frames, point_list *samples,
-                                   sample_data *data, int32_t *mid_layer) {
+                                   sample_data *data, int32_t *mid_layer, double *held_volume) {
   const int32_t organ = prep_label_organ(vol, label);
   const fascia_prep_tissue_def *td = organ < 0 ? scene->tissues + (label - 1) : NULL;
   double frame_spacing, sample_spacing;
@@ -864,7 +911,7 @@ static fascia_status sample_region(fascia_ctx *ctx, const fascia_prep_scene *sce
   PREP_CHECK_GOTO(dart_init(&darts, frame_spacing, voxel_count), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
   darts.points = frames;
   if (td) {
-    PREP_TRY_GOTO(surface_candidates(ctx, meshes, vol, voxels, voxel_count, trees, &cand));
+    PREP_TRY_GOTO(surface_candidates(ctx, scene, meshes, vol, voxels, voxel_count, frame_spacing, trees, &cand));
     PREP_TRY_GOTO(throw_darts(ctx, seed, &cand, &darts, NULL, frames));
   } else {
     for (int64_t k = 0; k < frames->count; ++k)
@@ -885,8 +932,11 @@ static fascia_status sample_region(fascia_ctx *ctx, const fascia_prep_scene *sce
                   "sample: out of memory");
   PREP_TRY_GOTO(throw_darts(ctx, seed + 1, &cand, &darts, NULL, frames));
   const int64_t before_mid_layer = frames->count;
+  double held = 0;
+  if (!held_volume) held_volume = &held;
   if (td)
-    PREP_TRY_GOTO(mid_layer_frames(ctx, vol, voxels, voxel_count, frame_spacing, seed + 2, first_interior, frames));
+    PREP_TRY_GOTO(mid_layer_frames(ctx, vol, voxels, voxel_count, frame_spacing, sample_spacing, seed + 2,
+                                   first_interior, frames, held_volume));
   if (mid_layer) *mid_layer = (int32_t)(frames->count - before_mid_layer);
   PREP_TRY_GOTO(fill_thin_pieces(ctx, vol, label, frame_spacing, frames));
   dart_free(&darts);
@@ -935,8 +985,9 @@ fascia_status fascia_prep_sample(fascia_ctx *ctx, const fascia_prep_scene *scene
   fascia_cgal_tree **trees = prep_calloc(meshes->count, sizeof *trees);
   fascia_prep_points *p = calloc(1, sizeof *p);
   int32_t *mid_layer = p ? (p->tissue_mid_layer_frames = prep_calloc(T, sizeof(int32_t))) : NULL;
+  double *held = p ? (p->tissue_held_layer_volume = prep_calloc(T, sizeof(double))) : NULL;
   int32_t regions = 0;
-  PREP_CHECK_GOTO(p && mid_layer && trees && frame_end && sample_end && region_organ, ctx, FASCIA_ERR_MEMORY,
+  PREP_CHECK_GOTO(p && mid_layer && held && trees && frame_end && sample_end && region_organ, ctx, FASCIA_ERR_MEMORY,
                   "sample: out of memory");
   for (int32_t t = 0; t < T; ++t) {
     fascia_ctx_progress(ctx, "sample", (double)t / (T + O), scene->tissues[t].name);
@@ -944,7 +995,8 @@ fascia_status fascia_prep_sample(fascia_ctx *ctx, const fascia_prep_scene *scene
       PREP_TRY_GOTO(sample_reduced(ctx, scene, meshes, volume, t, trees, &frames, &samples, &data));
     else
       PREP_TRY_GOTO(
-          sample_region(ctx, scene, meshes, volume, (uint8_t)(t + 1), trees, &frames, &samples, &data, mid_layer + t));
+          sample_region(ctx, scene, meshes, volume, (uint8_t)(t + 1), trees, &frames, &samples, &data, mid_layer + t,
+                                  held + t));
     region_organ[regions] = -1;
     frame_end[regions] = (int32_t)frames.count;
     sample_end[regions++] = (int32_t)samples.count;
@@ -961,7 +1013,7 @@ fascia_status fascia_prep_sample(fascia_ctx *ctx, const fascia_prep_scene *scene
     } else {
       attach_shared(scene, meshes, volume, o, tissue_of, &frames);
       PREP_TRY_GOTO(sample_region(ctx, scene, meshes, volume, (uint8_t)volume->organ_label[o], trees, &frames,
-                                  &samples, &data, NULL));
+                                  &samples, &data, NULL, NULL));
     }
     region_organ[regions] = o;
     frame_end[regions] = (int32_t)frames.count;

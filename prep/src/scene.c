@@ -1134,9 +1134,9 @@ static fascia_status parse_tissue(const reader *rd, const fascia_prep_scene *sce
   }
   if (t->form != FASCIA_PREP_FORM_VOLUME) return parse_reduced_tissue(rd, scene, item, path, base_dir, t);
   static const char *const known[] = {"name",           "form",          "connects",       "max_gap",
-                                      "region",         "material",      "frame_spacing",  "sample_spacing",
-                                      "shape_functions", "coupling",     "min_component",  "patch_radius",
-                                      "description",    NULL};
+                                      "min_gap",        "region",        "material",       "frame_spacing",
+                                      "sample_spacing", "shape_functions", "coupling",     "min_component",
+                                      "patch_radius",   "description",   NULL};
   PREP_TRY(check_keys(rd, item, path, known));
   PREP_TRY(get_name(rd, item, path, "name", t->name));
   const char *description;
@@ -1144,6 +1144,7 @@ static fascia_status parse_tissue(const reader *rd, const fascia_prep_scene *sce
   PREP_TRY(get_connects(rd, scene, item, path, 2, t));
   char at[PATH_SIZE];
   PREP_TRY(get_number(rd, item, path, "max_gap", 1, 0, 0, 0, INFINITY, &t->max_gap));
+  PREP_TRY(get_number(rd, item, path, "min_gap", 0, FASCIA_PREP_MIN_GAP, 0, 1, t->max_gap, &t->min_gap));
   t->region_organ = -1;
   const cJSON *region = cJSON_GetObjectItemCaseSensitive(item, "region");
   if (region) {

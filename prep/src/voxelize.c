@@ -702,6 +702,10 @@ static fascia_status build_region(fascia_ctx *ctx, const fascia_prep_scene *scen
     prep_grid_center(&g, v, x);
     if (!prep_region_contains(&td->region, x)) continue;
     if (vol->region[v]) continue; // an earlier tissue owns it
+    if (shortest < td->min_gap) { // organs this close slide on each other: no tissue bonds them
+      vol->tissues[t].slide_volume += g.h * g.h * g.h;
+      continue;
+    }
     const int32_t label = occupied_label(meshes, x);
     if (label) {
       ++occupied_voxels, ++voxels_of[label];
@@ -717,6 +721,12 @@ static fascia_status build_region(fascia_ctx *ctx, const fascia_prep_scene *scen
     status = too_far_apart(ctx, scene, meshes, td, nearest < 0.999 * band ? nearest : INFINITY);
     goto cleanup;
   }
+  PREP_CHECK_GOTO(cut_voxels > 0 || occupied_voxels > 0 || vol->tissues[t].slide_volume == 0, ctx,
+                  FASCIA_ERR_ARGUMENT,
+                  "tissue '%s' (scene '%s' tissues[%d].min_gap): its organs %s are nowhere %g m or more apart, so they "
+                  "slide on each other everywhere and no tissue joins them; lower min_gap (0 bonds them down to "
+                  "contact)",
+                  td->name, scene->path, (int)t, names, td->min_gap);
   PREP_CHECK_GOTO(cut_voxels > 0 || occupied_voxels > 0, ctx, FASCIA_ERR_ARGUMENT,
                   "tissue '%s' (scene '%s' tissues[%d].region): the region selects nothing of the %.3g cm^3 between "
                   "organs %s; check its coordinates (metres, scene frame)",

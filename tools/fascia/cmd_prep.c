@@ -12,6 +12,7 @@
 #include <string.h>
 #include <sys/resource.h>
 #include <time.h>
+#include <math.h>
 #include <unistd.h>
 
 #include "commands.h"
@@ -169,6 +170,14 @@ static void no_free_frame_warning(const prep_run *r, int32_t t, int32_t frames, 
            td->name, (int)frames, 1e3 * td->coupling_tolerance, r->scene->path);
 }
 
+// 1 when all of volume tissue t lies in layers held by their faces (a
+// tissue with no free frame that is nonetheless simulated as it should be).
+static int held_layer_only(const prep_run *r, int32_t t) {
+  const double held = r->points->tissue_held_layer_volume[t];
+  return r->scene->tissues[t].form == FASCIA_PREP_FORM_VOLUME && held > 0 &&
+         held >= 0.99 * r->volume->tissues[t].volume;
+}
+
 // Sizes import found off anatomy's (fascia_prep_meshes.warnings).
 static void print_warnings(const fascia_prep_meshes *meshes) {
   for (int32_t k = 0; meshes && k < meshes->warning_count; ++k) fprintf(stderr, "warning: %s\n", meshes->warnings[k]);
@@ -265,6 +274,10 @@ static void print_summary(const prep_run *r, const step_clock *c, const char *ou
               "%d frames, %d samples\n",
               sc->tissues[t].name, (long long)tr->voxels, 1e3 * h, 1e6 * tr->volume, (int)tr->components,
               (int)tr->dropped_components, 1e6 * tr->dropped_volume, (int)frames, (int)samples);
+    if (tdef->form == FASCIA_PREP_FORM_VOLUME && tr->slide_volume > 0)
+      fprintf(stderr, "  %.3g cm^3 between its organs left out where they are closer than min_gap %.3g mm: they slide "
+                      "on each other there\n",
+              1e6 * tr->slide_volume, 1e3 * tdef->min_gap);
     tissue_hold hold;
     if (tissue_hold_count(r, t, &hold)) {
       const int32_t mid_layer = r->points->tissue_mid_layer_frames[t];
@@ -276,6 +289,12 @@ static void print_summary(const prep_run *r, const step_clock *c, const char *ou
         if (hold.shared[o] && fascia_prep_tissue_connects(sc->tissues + t, o))
           fprintf(stderr, "%s %s %d", printed++ ? "," : "", r->meshes->organs[o].name, (int)hold.shared[o]);
       fprintf(stderr, "%s\n", printed ? "" : " no organ");
+      const double held = r->points->tissue_held_layer_volume[t];
+      if (held > 0)
+        fprintf(stderr,
+                "  %.3g cm^3 (%.0f %%) in gaps thinner than two sample spacings (%.3g mm): layers held by frames on "
+                "both faces, about a gap apart, with no free frame of their own\n",
+                1e6 * held, 100 * held / fmax(tr->volume, held), 2e3 * tdef->sample_spacing);
       for (int32_t o = 0; o < r->meshes->count; ++o) {
         if (fascia_prep_tissue_connects(sc->tissues + t, o) || (!hold.shared[o] && !hold.touched_free[o])) continue;
         if (hold.shared[o])
@@ -286,7 +305,7 @@ static void print_summary(const prep_run *r, const step_clock *c, const char *ou
           fprintf(stderr, "  also touches '%s', which it does not connect: its %d frames there left free\n",
                   r->meshes->organs[o].name, (int)hold.touched_free[o]);
       }
-      if (hold.frames > 0 && hold.free == 0) {
+      if (hold.frames > 0 && hold.free == 0 && !held_layer_only(r, t)) {
         char line[768];
         no_free_frame_warning(r, t, hold.frames, line, sizeof line);
         fprintf(stderr, "warning: %s\n", line);
@@ -440,6 +459,7 @@ static void print_json(const prep_run *r, const step_clock *c, const char *outpu
     cJSON_AddNumberToObject(e, "volume", v->tissues[t].volume);
     cJSON_AddNumberToObject(e, "components", v->tissues[t].components);
     cJSON_AddNumberToObject(e, "dropped_volume", v->tissues[t].dropped_volume);
+    cJSON_AddNumberToObject(e, "slide_volume", v->tissues[t].slide_volume);
     cJSON_AddNumberToObject(e, "organ_face_voxels", (double)v->tissues[t].organ_face_voxels);
     cJSON *pairs = cJSON_AddArrayToObject(e, "pairs"); // the volume each pair of its organs bridges
     const fascia_prep_tissue_def *td = r->scene->tissues + t;
@@ -458,6 +478,7 @@ static void print_json(const prep_run *r, const step_clock *c, const char *outpu
       cJSON_AddNumberToObject(e, "frames", hold.frames);
       cJSON_AddNumberToObject(e, "free_frames", hold.free);
       cJSON_AddNumberToObject(e, "mid_layer_frames", r->points->tissue_mid_layer_frames[t]);
+      cJSON_AddNumberToObject(e, "held_layer_volume", r->points->tissue_held_layer_volume[t]);
       cJSON *shared = cJSON_AddObjectToObject(e, "shared_frames"); // organ name -> frames shared with it
       cJSON *others = cJSON_AddObjectToObject(e, "touches_unconnected"); // organ -> {shared, free}
       for (int32_t o = 0; o < r->meshes->count; ++o) {
@@ -468,7 +489,7 @@ static void print_json(const prep_run *r, const step_clock *c, const char *outpu
         cJSON_AddNumberToObject(other, "free_frames", hold.touched_free[o]);
       }
       cJSON_AddBoolToObject(e, "couple_others", td->couple_others);
-      if (hold.frames > 0 && hold.free == 0) {
+      if (hold.frames > 0 && hold.free == 0 && !held_layer_only(r, t)) {
         char line[768];
         no_free_frame_warning(r, t, hold.frames, line, sizeof line);
         cJSON_AddItemToArray(warnings, cJSON_CreateString(line));

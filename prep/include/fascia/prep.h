@@ -66,6 +66,10 @@ typedef struct fascia_prep_parts {
 /// patch_radius of a tissue or deformable organ left to the rule.
 #define FASCIA_PREP_PATCH_AUTO (-1.0)
 
+/// A volume tissue's min_gap by default, m: organs closer than this slide on
+/// each other (data/scenes/README.md, "Thin gaps").
+#define FASCIA_PREP_MIN_GAP 0.001
+
 /// The volumetric patch radius (m) a region gets by default: 0 (none) below
 /// the Poisson ratio where patches pay, else a multiple of its frame spacing
 /// (docs/mechanics.md, "Volumetric locking", states the rule and its
@@ -169,6 +173,9 @@ typedef struct fascia_prep_tissue_def {
   int32_t organ_count;
   int32_t *organs;           ///< [organ_count] organs it connects
   fascia_real max_gap;       ///< largest gap it bridges, m
+  /// VOLUME: narrowest gap it bonds, m: where its organs are closer than
+  /// this they slide on each other and no tissue joins them there
+  fascia_real min_gap;
   fascia_prep_region region; ///< optional box or sphere
   int32_t region_organ;      ///< with region_parts: limit to near these parts of this organ (-1: none)
   fascia_prep_parts region_parts;
@@ -358,6 +365,7 @@ typedef struct fascia_prep_tissue_report {
   int32_t components;       ///< pieces kept
   int32_t dropped_components;
   fascia_real dropped_volume; ///< m^3 in pieces smaller than min_component
+  fascia_real slide_volume;   ///< m^3 between its organs closer than min_gap, left out: they slide there
   /// Kept voxels with a face neighbour inside an organ: one voxel layer on
   /// the tissue's faces against the organs (the scale of its volume's error).
   int64_t organ_face_voxels;
@@ -460,8 +468,8 @@ typedef struct fascia_prep_points {
   /// gaps thinner than its frame spacing (free frames no interior frame
   /// could give there; 0 for strands and sheets)
   int32_t *tissue_mid_layer_frames;
-  /// [tissue_count] m^3 of each tissue in gaps thinner than its sample
-  /// spacing: layers held by the frames on both their faces, with no free
+  /// [tissue_count] m^3 of each tissue in gaps thinner than two sample
+  /// spacings: layers held by the frames on both their faces, with no free
   /// frame of their own (0 for strands and sheets)
   double *tissue_held_layer_volume;
 } fascia_prep_points;
