@@ -305,24 +305,24 @@ static void cuda_unpin(fascia_launcher *L, void *host) {
   handled(cudaHostUnregister(host));
 }
 
-static void cuda_send(fascia_launcher *L, void *device_dst, const void *host_src, size_t bytes) {
+// One copy between host and device on the launcher's stream (what: "upload"
+// or "download", for the message); not while recording a launch sequence.
+static void cuda_copy(fascia_launcher *L, void *dst, const void *src, size_t bytes, cudaMemcpyKind kind,
+                      const char *what) {
   if (!bytes) return;
   if (L->recording) {
-    remember_error(L, cudaErrorStreamCaptureUnsupported, "upload while recording a launch sequence");
+    remember_error(L, cudaErrorStreamCaptureUnsupported, "%s while recording a launch sequence", what);
     return;
   }
-  remember_error(L, handled(cudaMemcpyAsync(device_dst, host_src, bytes, cudaMemcpyHostToDevice, L->stream)),
-                 "upload of %zu bytes", bytes);
+  remember_error(L, handled(cudaMemcpyAsync(dst, src, bytes, kind, L->stream)), "%s of %zu bytes", what, bytes);
+}
+
+static void cuda_send(fascia_launcher *L, void *device_dst, const void *host_src, size_t bytes) {
+  cuda_copy(L, device_dst, host_src, bytes, cudaMemcpyHostToDevice, "upload");
 }
 
 static void cuda_receive(fascia_launcher *L, void *host_dst, const void *device_src, size_t bytes) {
-  if (!bytes) return;
-  if (L->recording) {
-    remember_error(L, cudaErrorStreamCaptureUnsupported, "download while recording a launch sequence");
-    return;
-  }
-  remember_error(L, handled(cudaMemcpyAsync(host_dst, device_src, bytes, cudaMemcpyDeviceToHost, L->stream)),
-                 "download of %zu bytes", bytes);
+  cuda_copy(L, host_dst, device_src, bytes, cudaMemcpyDeviceToHost, "download");
 }
 
 // --------------------------------------------------------------- launches --

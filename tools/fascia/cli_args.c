@@ -23,6 +23,24 @@ int cli_usage_error(const char *command, const char *format, const char *what) {
   return 2;
 }
 
+int cli_option_value(const char *command, int argc, char **argv, int *k, const char *const *valued,
+                     const char **value) {
+  const char *o = argv[*k];
+  int known = 0;
+  for (const char *const *v = valued; *v; ++v) known |= !strcmp(o, *v);
+  if (!known) return cli_usage_error(command, "unknown option '%s'", o);
+  if (*k + 1 >= argc) return cli_usage_error(command, "option %s needs a value", o);
+  *value = argv[++*k];
+  return -1;
+}
+
+int cli_help(const char *option, const char *usage, const char *more) {
+  if (strcmp(option, "--help") && strcmp(option, "-h")) return 0;
+  fputs(usage, stdout);
+  if (more) fputs(more, stdout);
+  return 1;
+}
+
 // Options that say the same thing, or opposite things: at most one of each
 // group on a command line. Every other option at most once, except these.
 static const char *const option_groups[][3] = {

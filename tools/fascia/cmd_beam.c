@@ -103,23 +103,17 @@ int cmd_beam(int argc, char **argv) {
   int modes_on = 0;                               // --modes on: the shape's set, known after parsing
   for (int k = 1; k < argc; ++k) {
     const char *opt = argv[k];
-    if (!strcmp(opt, "--help") || !strcmp(opt, "-h")) {
-      fputs(beam_usage, stdout);
-      fputs(beam_usage_more, stdout);
-      return 0;
-    }
+    if (cli_help(opt, beam_usage, beam_usage_more)) return 0;
     if (!strcmp(opt, "--json")) {
       json = 1;
       continue;
     }
     if (!strcmp(opt, "--verbose")) continue;
     static const char *const valued[] = {"--frames", "--shape", "--samples-per-cell", "--neighbours", "--E", "--nu", "--lambda", "--mu",
-                                         "--law", "--mass", "--density", "--rotation-coupling", "--rotation-smoothing", "--volumetric", "--patch-radius", "--modes", "--section-points", "-o", "--output"};
-    int known = 0;
-    for (size_t j = 0; j < sizeof valued / sizeof valued[0]; ++j) known |= !strcmp(opt, valued[j]);
-    if (!known) return cli_usage_error("beam", "unknown option '%s'", opt);
-    if (k + 1 >= argc) return cli_usage_error("beam", "option %s needs a value", opt);
-    const char *value = argv[++k];
+                                         "--law", "--mass", "--density", "--rotation-coupling", "--rotation-smoothing", "--volumetric", "--patch-radius", "--modes", "--section-points", "-o", "--output", NULL};
+    const char *value = NULL;
+    const int bad = cli_option_value("beam", argc, argv, &k, valued, &value);
+    if (bad >= 0) return bad;
     int ok = 1;
     if (!strcmp(opt, "--frames"))
       ok = (frames_text = value) != NULL; // read once the shape is known

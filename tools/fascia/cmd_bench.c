@@ -181,11 +181,7 @@ static int parse_options(int argc, char **argv, bench_options *opt) {
   opt->single = FASCIA_SINGLE_AUTO;
   for (int k = 1; k < argc; ++k) {
     const char *o = argv[k];
-    if (!strcmp(o, "--help") || !strcmp(o, "-h")) {
-      fputs(bench_usage, stdout);
-      fputs(bench_usage_sweep, stdout);
-      return 0;
-    }
+    if (cli_help(o, bench_usage, bench_usage_sweep)) return 0;
     if (o[0] != '-') {
       const int rc = add_row_name(opt, o);
       if (rc >= 0) return rc;
@@ -203,12 +199,10 @@ static int parse_options(int argc, char **argv, bench_options *opt) {
       static const char *const valued[] = {"--table", "--backend", "--threads", "--repeats", "--steps", "--csv",
                                            "--scene", "--linear-solver", "--shapes", "--frames",
                                            "--samples-per-cell", "--neighbours", "--rotation-smoothing", "--nu",
-                                           "--volumetric", "--modes"};
-      int known = 0;
-      for (size_t j = 0; j < sizeof valued / sizeof valued[0]; ++j) known |= !strcmp(o, valued[j]);
-      if (!known) return cli_usage_error("bench", "unknown option '%s'", o);
-      if (k + 1 >= argc) return cli_usage_error("bench", "option %s needs a value", o);
-      const char *v = argv[++k];
+                                           "--volumetric", "--modes", NULL};
+      const char *v = NULL;
+      const int bad = cli_option_value("bench", argc, argv, &k, valued, &v);
+      if (bad >= 0) return bad;
       int ok = 1;
       if (!strcmp(o, "--table")) ok = cli_parse_count(v, &opt->table, 2) && opt->table <= 3;
       else if (!strcmp(o, "--backend")) ok = cli_parse_backend(v, &opt->backend);

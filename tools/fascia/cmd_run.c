@@ -200,11 +200,7 @@ static int parse_options(int argc, char **argv, run_options *opt, const fascia_s
   int dt_given = 0;
   for (int k = 1; k < argc; ++k) {
     const char *o = argv[k];
-    if (!strcmp(o, "--help") || !strcmp(o, "-h")) {
-      fputs(run_usage, stdout);
-      fputs(run_usage_notes, stdout);
-      return 0;
-    }
+    if (cli_help(o, run_usage, run_usage_notes)) return 0;
     if (o[0] != '-' || !o[1]) {
       if (opt->model_path) return cli_usage_error("run", "unexpected argument '%s': one model file only", o);
       opt->model_path = o;
@@ -226,12 +222,10 @@ static int parse_options(int argc, char **argv, run_options *opt, const fascia_s
                                            "--threads", "--newton-iterations", "--newton-tolerance",
                                            "--cg-iterations", "--cg-tolerance", "--precond", "--mass", "--damping",
                                            "--load-steps", "--linear-solver", "--preset", "--step-retries",
-                                           "--blow-up-strain", "--static-time"};
-      int known = 0;
-      for (size_t j = 0; j < sizeof valued / sizeof valued[0]; ++j) known |= !strcmp(o, valued[j]);
-      if (!known) return cli_usage_error("run", "unknown option '%s'", o);
-      if (k + 1 >= argc) return cli_usage_error("run", "option %s needs a value", o);
-      const char *v = argv[++k];
+                                           "--blow-up-strain", "--static-time", NULL};
+      const char *v = NULL;
+      const int bad = cli_option_value("run", argc, argv, &k, valued, &v);
+      if (bad >= 0) return bad;
       fascia_solver_def *d = &opt->solver;
       int ok = 1;
       if (!strcmp(o, "--steps")) ok = cli_parse_count(v, &opt->steps, 1), opt->dynamic = 1;

@@ -47,6 +47,14 @@ int cli_fail(const char *command, fascia_ctx *ctx, fascia_status status);
 fascia_ctx *cli_ctx(int threads, int progress);
 /// "fascia COMMAND: <format with what> (see fascia COMMAND --help)" on stderr; returns 2.
 int cli_usage_error(const char *command, const char *format, const char *what);
+/// option is --help or -h: prints usage and more (NULL: none) on stdout
+/// and returns 1; else 0.
+int cli_help(const char *option, const char *usage, const char *more);
+/// argv[*k] is an option that takes a value: one of valued (NULL-ended),
+/// with a value after it. Returns -1 with *value set and *k on the value,
+/// else 2 after the usage error (unknown option, or no value).
+int cli_option_value(const char *command, int argc, char **argv, int *k, const char *const *valued,
+                     const char **value);
 /// Before parsing, for every command: an option given twice (except --drive,
 /// --drive-template, --verbose), or two options that say the same or the
 /// opposite thing (-o and --output, --single and --double, --assembled and

@@ -89,28 +89,37 @@ static fascia_real *organ_now(const fascia_model *m, const fascia_solver *solver
 
 _Static_assert(sizeof(fascia_real) == 8, "the VTK files declare Float64");
 
-// What a piece at `time` shows when opened: `scalars` coloured, `vectors`
-// for Warp By Vector.
-static fascia_vtk_piece piece_at(fascia_real time, const char *scalars, const char *vectors) {
-  fascia_vtk_piece p = fascia_vtk_piece_default();
-  p.time = time;
-  p.scalars = scalars;
-  p.vectors = vectors;
-  return p;
+// Opens DIR/NAME (--paraview) for an UnstructuredGrid at `time` that shows
+// `scalars` coloured and `vectors` for Warp By Vector when opened, and writes
+// its points and cells (fascia_vtk_begin_piece); point data follows, then
+// end_grid. NULL with *st saying why where it cannot be opened.
+static fascia_file *begin_grid(fascia_ctx *ctx, const char *dir, const char *name, fascia_real time,
+                               const char *scalars, const char *vectors, const fascia_real *points,
+                               int64_t point_count, int nodes, const int32_t *cells, int64_t cell_count,
+                               fascia_status *st) {
+  fascia_file *file = open_file(ctx, "--paraview", dir, name, st);
+  if (!file) return NULL;
+  fascia_vtk_piece piece = fascia_vtk_piece_default();
+  piece.time = time;
+  piece.scalars = scalars;
+  piece.vectors = vectors;
+  fascia_vtk_begin_piece(fascia_file_stream(file), "UnstructuredGrid", &piece, points, point_count, nodes, cells,
+                         cell_count);
+  return file;
+}
+
+static fascia_status end_grid(fascia_file **file) {
+  fascia_vtk_end(fascia_file_stream(*file), "UnstructuredGrid");
+  return fascia_file_commit(file);
 }
 
 // One organ surface at its current pose: triangles in an UnstructuredGrid.
 static fascia_status write_organ(fascia_ctx *ctx, const char *dir, const char *name, const fascia_organ *o,
                                  const fascia_real *positions, fascia_real time) {
   fascia_status st = FASCIA_OK;
-  fascia_file *file = open_file(ctx, "--paraview", dir, name, &st);
-  if (!file) return st;
-  FILE *f = fascia_file_stream(file);
-  const fascia_vtk_piece piece = piece_at(time, NULL, NULL);
-  fascia_vtk_begin_piece(f, "UnstructuredGrid", &piece, positions, o->vertex_count, 3, o->triangles,
-                         o->triangle_count);
-  fascia_vtk_end(f, "UnstructuredGrid");
-  return fascia_file_commit(&file);
+  fascia_file *file =
+      begin_grid(ctx, dir, name, time, NULL, NULL, positions, o->vertex_count, 3, o->triangles, o->triangle_count, &st);
+  return file ? end_grid(&file) : st;
 }
 
 // The samples (tissue and deformable organs) at the solver's state as an
@@ -123,11 +132,10 @@ static fascia_status write_samples(run_outputs *out, fascia_ctx *ctx, const fasc
   fascia_solver_sample_strain(solver, out->strain, out->stress);
   for (int64_t k = 0; k < 3 * S; ++k) out->scratch[k] = out->positions[k] - m->sample_position[k];
   fascia_status st = FASCIA_OK;
-  fascia_file *file = open_file(ctx, "--paraview", out->paraview_dir, name, &st);
+  fascia_file *file =
+      begin_grid(ctx, out->paraview_dir, name, time, "strain", "displacement", out->positions, S, 1, NULL, S, &st);
   if (!file) return st;
   FILE *f = fascia_file_stream(file);
-  const fascia_vtk_piece piece = piece_at(time, "strain", "displacement");
-  fascia_vtk_begin_piece(f, "UnstructuredGrid", &piece, out->positions, S, 1, NULL, S);
   fascia_vtk_array(f, "displacement", 3, out->scratch, NULL, S);
   fascia_vtk_array(f, "rest_position", 3, m->sample_position, NULL, S);
   fascia_vtk_array(f, "strain", 1, out->strain, NULL, S);
@@ -135,8 +143,7 @@ static fascia_status write_samples(run_outputs *out, fascia_ctx *ctx, const fasc
   fascia_vtk_array(f, "volume", 1, m->sample_volume, NULL, S);
   fascia_vtk_array(f, "material", 1, NULL, m->sample_material, S);
   fascia_vtk_array(f, "organ", 1, NULL, m->sample_organ, S);
-  fascia_vtk_end(f, "UnstructuredGrid");
-  return fascia_file_commit(&file);
+  return end_grid(&file);
 }
 
 // The frames at the solver's state: displacement, rest position, their axes
@@ -148,11 +155,9 @@ static fascia_status write_frames(run_outputs *out, fascia_ctx *ctx, const fasci
   const fascia_real *x = fascia_solver_frame_positions(solver);
   fascia_frame_axes(fascia_solver_frame_rotations(solver), N, out->axes);
   fascia_status st = FASCIA_OK;
-  fascia_file *file = open_file(ctx, "--paraview", out->paraview_dir, name, &st);
+  fascia_file *file = begin_grid(ctx, out->paraview_dir, name, time, NULL, "displacement", x, N, 1, NULL, N, &st);
   if (!file) return st;
   FILE *f = fascia_file_stream(file);
-  const fascia_vtk_piece piece = piece_at(time, NULL, "displacement");
-  fascia_vtk_begin_piece(f, "UnstructuredGrid", &piece, x, N, 1, NULL, N);
   for (int64_t k = 0; k < 3 * N; ++k) out->scratch[k] = x[k] - m->frame_position[k];
   fascia_vtk_array(f, "displacement", 3, out->scratch, NULL, N);
   fascia_vtk_array(f, "rest_position", 3, m->frame_position, NULL, N);
@@ -164,8 +169,7 @@ static fascia_status write_frames(run_outputs *out, fascia_ctx *ctx, const fasci
   fascia_vtk_array(f, "kind", 1, NULL, m->frame_kind, N);
   fascia_vtk_array(f, "organ", 1, NULL, m->frame_organ, N);
   fascia_vtk_array(f, "coupled_organ", 1, NULL, out->coupled_organ, N);
-  fascia_vtk_end(f, "UnstructuredGrid");
-  return fascia_file_commit(&file);
+  return end_grid(&file);
 }
 
 // The tissue surface (model->tissue_surface) where the frames carry it, with
@@ -179,17 +183,16 @@ static fascia_status write_tissue(run_outputs *out, fascia_ctx *ctx, const fasci
   fascia_status st = x && u && strain ? fascia_solver_tissue_surface(solver, x, strain)
                                       : fascia_ctx_fail(ctx, FASCIA_ERR_MEMORY, __FILE__, __LINE__,
                                                         "run: out of memory for the tissue surface");
-  fascia_file *file = st == FASCIA_OK ? open_file(ctx, "--paraview", out->paraview_dir, name, &st) : NULL;
+  fascia_file *file = st == FASCIA_OK ? begin_grid(ctx, out->paraview_dir, name, time, "strain", "displacement", x, V,
+                                                   3, ts->triangles, ts->triangle_count, &st)
+                                      : NULL;
   if (file) {
     FILE *f = fascia_file_stream(file);
     for (int64_t k = 0; k < 3 * V; ++k) u[k] = x[k] - ts->vertices[k];
-    const fascia_vtk_piece piece = piece_at(time, "strain", "displacement");
-    fascia_vtk_begin_piece(f, "UnstructuredGrid", &piece, x, V, 3, ts->triangles, ts->triangle_count);
     fascia_vtk_array(f, "displacement", 3, u, NULL, V);
     fascia_vtk_array(f, "rest_position", 3, ts->vertices, NULL, V);
     fascia_vtk_array(f, "strain", 1, strain, NULL, V);
-    fascia_vtk_end(f, "UnstructuredGrid");
-    st = fascia_file_commit(&file);
+    st = end_grid(&file);
   }
   free(x), free(u), free(strain);
   return st;
@@ -202,15 +205,12 @@ static fascia_status write_tetrahedra(run_outputs *out, fascia_ctx *ctx, const f
   const int64_t N = m->frame_count;
   const fascia_real *x = fascia_solver_frame_positions(solver);
   fascia_status st = FASCIA_OK;
-  fascia_file *file = open_file(ctx, "--paraview", out->paraview_dir, name, &st);
+  fascia_file *file = begin_grid(ctx, out->paraview_dir, name, time, NULL, "displacement", x, N, 4, m->tetrahedra,
+                                 m->tetrahedron_count, &st);
   if (!file) return st;
-  FILE *f = fascia_file_stream(file);
-  const fascia_vtk_piece piece = piece_at(time, NULL, "displacement");
-  fascia_vtk_begin_piece(f, "UnstructuredGrid", &piece, x, N, 4, m->tetrahedra, m->tetrahedron_count);
   for (int64_t k = 0; k < 3 * N; ++k) out->scratch[k] = x[k] - m->frame_position[k];
-  fascia_vtk_array(f, "displacement", 3, out->scratch, NULL, N);
-  fascia_vtk_end(f, "UnstructuredGrid");
-  return fascia_file_commit(&file);
+  fascia_vtk_array(fascia_file_stream(file), "displacement", 3, out->scratch, NULL, N);
+  return end_grid(&file);
 }
 
 // A collection entry: names and file names are data, escaped.
