@@ -15,6 +15,21 @@
 #include "point/frame.h"
 #include "solve/solver_internal.h"
 
+// The backend's own arrays, declared once: member, element type, values per
+// frame. The members, their allocation, check and freeing follow.
+#define CPU_ARRAYS(X)                                                                                                  \
+  X(target_M, fascia_real, 6)          /* M (h u) */                                                                   \
+  X(d_trial, fascia_real, 6)           /* the trial d + alpha p */                                                     \
+  X(gradient_trial, fascia_real, 6)    /* its gradient */                                                              \
+  X(direction, fascia_real, 6)         /* p */                                                                         \
+  X(rhs, fascia_real, 6)               /* -gradient, the linear solve's */                                             \
+  X(mass_blocks, fascia_real, 36)      /* the lumped mass's 6x6 blocks */                                              \
+  X(scratch, fascia_real, 12)          /* M d, then the operator's scratch */                                          \
+  X(saved, fascia_real, 13)            /* the watched iterate (cpu_save): anchor x, q and increments */                \
+  X(prolonged, fascia_real, 6)         /* the operator's P v for rigid organs */                                       \
+  X(frame_moves, unsigned char, 1)     /* a frame with a free unknown, a body's slave included (assembly) */
+
+#define CPU_MEMBER(name, type, width) type *name;
 typedef struct cpu_backend {
   fascia_backend base;
   fascia_solver *S; ///< the state the trials write (x, q) and the rigid organs read
@@ -27,15 +42,10 @@ typedef struct cpu_backend {
   fascia_step_values values;
   fascia_real *x_base, *q_base, *d; ///< the solver's anchor and iterate (the organs read them there)
   fascia_real *gradient;            ///< the current gradient: the solver's
-  fascia_real *target_M;            ///< M (h u) [6N]
   fascia_real target_norm;          ///< (h u).M(h u)
-  // work
-  fascia_real *d_trial, *gradient_trial, *direction, *rhs, *mass_blocks, *scratch;
-  fascia_real *saved; ///< [13N] the watched iterate (cpu_save): anchor x, q and increments
+  CPU_ARRAYS(CPU_MEMBER)
   const fascia_pt_bodies *bodies; ///< rigid organs (point/body.h), NULL for none
   const unsigned char *full_mask; ///< [6N] every frame the tissue moves (the bodies' slaves too)
-  fascia_real *prolonged;         ///< [6N] the operator's P v for rigid organs
-  unsigned char *frame_moves;     ///< [N] a frame with a free unknown, a body's slave included (assembly)
   fascia_linear *linear;          ///< the Newton systems' solver: CG or direct, the factorization kept
   fascia_real gradient_norm2, trial_norm2; ///< of the current and the trial gradient (cpu_evaluate)
   char text[96];
@@ -55,9 +65,9 @@ static void cpu_destroy(fascia_backend *backend) {
   cpu_backend *B = (cpu_backend *)backend;
   if (!B) return;
   fascia_linear_destroy(&B->linear);
-  free(B->target_M), free(B->d_trial), free(B->gradient_trial), free(B->direction), free(B->rhs);
-  free(B->mass_blocks), free(B->scratch);
-  free(B->saved), free(B->prolonged), free(B->frame_moves);
+#define FREE_ARRAY(name, ...) free(B->name);
+  CPU_ARRAYS(FREE_ARRAY)
+#undef FREE_ARRAY
   free(B);
 }
 
@@ -74,19 +84,12 @@ static fascia_status cpu_create(const fascia_backend_setup *setup, fascia_backen
   B->bodies = setup->bodies;
   B->full_mask = setup->full_mask;
   B->frame_count = setup->model->frame_count;
-  const int64_t N = B->frame_count, n = 6 * N;
-  B->target_M = fascia_calloc(n, sizeof(fascia_real));
-  B->d_trial = fascia_calloc(n, sizeof(fascia_real));
-  B->gradient_trial = fascia_calloc(n, sizeof(fascia_real));
-  B->direction = fascia_calloc(n, sizeof(fascia_real));
-  B->rhs = fascia_calloc(n, sizeof(fascia_real));
-  B->mass_blocks = fascia_calloc(36 * N, sizeof(fascia_real));
-  B->scratch = fascia_calloc(2 * n, sizeof(fascia_real));
-  B->saved = fascia_calloc(13 * N, sizeof(fascia_real));
-  B->prolonged = fascia_calloc(n, sizeof(fascia_real));
-  B->frame_moves = fascia_calloc(N, 1);
-  if (!B->target_M || !B->d_trial || !B->gradient_trial || !B->direction || !B->rhs || !B->mass_blocks ||
-      !B->scratch || !B->saved || !B->prolonged || !B->frame_moves) {
+  const int64_t N = B->frame_count;
+  int allocated = 1;
+#define ALLOC_ARRAY(name, type, width) FASCIA_ALLOC_ROW(B, allocated, name, type, N, width);
+  CPU_ARRAYS(ALLOC_ARRAY)
+#undef ALLOC_ARRAY
+  if (!allocated) {
     cpu_destroy(&B->base);
     return FASCIA_FAIL(setup->ctx, FASCIA_ERR_MEMORY, "solver: out of memory for %lld frames", (long long)N);
   }

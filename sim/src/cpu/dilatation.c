@@ -11,14 +11,9 @@
 #include "util/index_set.h"
 
 void fascia_patch_table_free(fascia_patch_table *t) {
-  free(t->patch_offsets);
-  free(t->patch_samples);
-  free(t->support_offsets);
-  free(t->entry_frame);
-  free(t->entry_patch);
-  free(t->pair_entry);
-  free(t->frame_entry_offsets);
-  free(t->frame_entries);
+#define FREE_ARRAY(name) free(t->name);
+  FASCIA_PATCH_TABLE_ARRAYS(FREE_ARRAY)
+#undef FREE_ARRAY
   memset(t, 0, sizeof *t);
 }
 
@@ -135,17 +130,12 @@ fascia_status fascia_dilatation_create(fascia_system *sys, fascia_dilatation **o
   }
   d->table = table;
   const int32_t P = table.patch_count;
-  d->patch_lambda = fascia_calloc(P, sizeof(fascia_real));
-  d->patch_volume = fascia_calloc(P, sizeof(fascia_real));
-  d->patch_law = fascia_calloc(P, sizeof(int32_t));
-  d->patch_theta = fascia_calloc(P, sizeof(fascia_real));
-  d->patch_energy = fascia_calloc(P, sizeof(fascia_real));
-  d->patch_rate = fascia_calloc(P, sizeof(fascia_real));
-  d->entry_gradient = fascia_calloc(6 * (int64_t)table.entry_count, sizeof(fascia_real));
-  d->sample_pressure = fascia_calloc(m->sample_count, sizeof(fascia_real));
-  d->sample_F = fascia_calloc(9 * (int64_t)m->sample_count, sizeof(fascia_real));
-  if (!d->patch_lambda || !d->patch_volume || !d->patch_law || !d->patch_theta || !d->patch_energy || !d->patch_rate ||
-      !d->entry_gradient || !d->sample_pressure || !d->sample_F) {
+  const int64_t E = table.entry_count, S = m->sample_count;
+  int allocated = 1;
+#define ALLOC_ARRAY(name, type, count, width, view_name) FASCIA_ALLOC_ROW(d, allocated, name, type, count, width);
+  FASCIA_DILATATION_ARRAYS(ALLOC_ARRAY)
+#undef ALLOC_ARRAY
+  if (!allocated) {
     fascia_dilatation_destroy(&d);
     return FASCIA_FAIL(sys->ctx, FASCIA_ERR_MEMORY, "patches: out of memory for %d patches", (int)P);
   }
@@ -164,23 +154,12 @@ fascia_status fascia_dilatation_create(fascia_system *sys, fascia_dilatation **o
   sys->pm.sample_pressure = d->sample_pressure;
   fascia_pt_patches *v = &d->view;
   v->count = P;
-  v->patch_offsets = table.patch_offsets;
-  v->patch_samples = table.patch_samples;
-  v->support_offsets = table.support_offsets;
-  v->entry_frame = table.entry_frame;
-  v->entry_patch = table.entry_patch;
-  v->pair_entry = table.pair_entry;
-  v->frame_entry_offsets = table.frame_entry_offsets;
-  v->frame_entries = table.frame_entries;
-  v->lambda = d->patch_lambda;
-  v->volume = d->patch_volume;
-  v->law = d->patch_law;
-  v->theta = d->patch_theta;
-  v->energy = d->patch_energy;
-  v->rate = d->patch_rate;
-  v->entry_gradient = d->entry_gradient;
-  v->sample_pressure = d->sample_pressure;
-  v->sample_F = d->sample_F;
+#define VIEW_TABLE(name) v->name = table.name;
+  FASCIA_PATCH_TABLE_ARRAYS(VIEW_TABLE)
+#undef VIEW_TABLE
+#define VIEW_ARRAY(name, type, count, width, view_name) v->view_name = d->name;
+  FASCIA_DILATATION_ARRAYS(VIEW_ARRAY)
+#undef VIEW_ARRAY
   *out = d;
   return FASCIA_OK;
 }
@@ -189,15 +168,9 @@ void fascia_dilatation_destroy(fascia_dilatation **dilatation) {
   if (!dilatation || !*dilatation) return;
   fascia_dilatation *d = *dilatation;
   fascia_patch_table_free(&d->table);
-  free(d->patch_lambda);
-  free(d->patch_volume);
-  free(d->patch_law);
-  free(d->patch_theta);
-  free(d->patch_energy);
-  free(d->patch_rate);
-  free(d->entry_gradient);
-  free(d->sample_pressure);
-  free(d->sample_F);
+#define FREE_ARRAY(name, ...) free(d->name);
+  FASCIA_DILATATION_ARRAYS(FREE_ARRAY)
+#undef FREE_ARRAY
   free(d);
   *dilatation = NULL;
 }

@@ -34,16 +34,22 @@
 /// (patch, frame) pair. Patches are numbered by ascending model patch number,
 /// empty ones left out. Built from the model alone (the assembled matrix's
 /// pattern needs it too).
+/// Its arrays, declared once (members of the view, fascia_pt_patches, of the
+/// same names): the members, their freeing and the view follow.
+#define FASCIA_PATCH_TABLE_ARRAYS(X)                                                                                   \
+  X(patch_offsets)       /* [patches+1] CSR into patch_samples */                                                      \
+  X(patch_samples)       /* samples of each patch, ascending */                                                        \
+  X(support_offsets)     /* [patches+1] CSR into entry_frame */                                                        \
+  X(entry_frame)         /* [entries] frames of each patch's support, ascending */                                     \
+  X(entry_patch)         /* [entries] */                                                                               \
+  X(pair_entry)          /* [P] the support entry of pair k's frame, -1 for samples in no patch */                     \
+  X(frame_entry_offsets) /* [N+1] CSR into frame_entries */                                                            \
+  X(frame_entries)       /* the entries of each frame, ascending */
+
+#define FASCIA_PATCH_TABLE_MEMBER(name) int32_t *name;
 typedef struct fascia_patch_table {
   int32_t patch_count, entry_count;
-  int32_t *patch_offsets;       ///< [patches+1] CSR into patch_samples
-  int32_t *patch_samples;       ///< samples of each patch, ascending
-  int32_t *support_offsets;     ///< [patches+1] CSR into entry_frame
-  int32_t *entry_frame;         ///< [entries] frames of each patch's support, ascending
-  int32_t *entry_patch;         ///< [entries]
-  int32_t *pair_entry;          ///< [P] the support entry of pair k's frame, -1 for samples in no patch
-  int32_t *frame_entry_offsets; ///< [N+1] CSR into frame_entries
-  int32_t *frame_entries;       ///< the entries of each frame, ascending
+  FASCIA_PATCH_TABLE_ARRAYS(FASCIA_PATCH_TABLE_MEMBER)
 } fascia_patch_table;
 
 /// Builds the tables; a model without patches gives patch_count 0 and no
@@ -52,19 +58,29 @@ FASCIA_INTERN fascia_status fascia_patch_table_build(fascia_ctx *ctx, const fasc
                                                      fascia_patch_table *table);
 FASCIA_INTERN void fascia_patch_table_free(fascia_patch_table *table);
 
+/// The arrays the mean-dilatation term owns, declared once: member, element
+/// type, the count that sizes it (P patches, E support entries, S samples),
+/// values per row, the view's member. The members, their allocation, check
+/// and freeing and the view follow (dilatation.c).
+#define FASCIA_DILATATION_ARRAYS(X)                                                                                    \
+  X(patch_lambda, fascia_real, P, 1, lambda)                   /* Pa */                                                \
+  X(patch_volume, fascia_real, P, 1, volume)                   /* V_p, m^3 */                                          \
+  X(patch_law, int32_t, P, 1, law)                             /* FASCIA_PT_LAW_* */                                   \
+  X(patch_theta, fascia_real, P, 1, theta)                     /* thetabar_p at the last evaluation */                 \
+  X(patch_energy, fascia_real, P, 1, energy)                   /* J */                                                 \
+  X(patch_rate, fascia_real, P, 1, rate)                       /* scratch of the Hessian product */                    \
+  X(entry_gradient, fascia_real, E, 6, entry_gradient)         /* G_p on the entry's frame (x then theta) */           \
+  X(sample_pressure, fascia_real, S, 1, sample_pressure)       /* lambda_p thetabar_p on p's samples, 0 elsewhere */   \
+  X(sample_F, fascia_real, S, 9, sample_F) /* F of the samples in patches at the last evaluation (the patches and  */  \
+                                           /* the samples' gradient read it) */
+
+#define FASCIA_DILATATION_MEMBER(name, type, ...) type *name;
+
 /// The mean-dilatation term of a system: its tables, the arrays it owns,
 /// and the view of both the per-patch math reads (sim/point/patch.h).
 typedef struct fascia_dilatation {
   fascia_patch_table table;
-  fascia_real *patch_lambda;    ///< [patches] Pa
-  fascia_real *patch_volume;    ///< [patches] V_p, m^3
-  int32_t *patch_law;           ///< [patches] FASCIA_PT_LAW_*
-  fascia_real *patch_theta;     ///< [patches] thetabar_p at the last evaluation
-  fascia_real *patch_energy;    ///< [patches] J
-  fascia_real *patch_rate;      ///< [patches] scratch of the Hessian product
-  fascia_real *entry_gradient;  ///< [6 entries] G_p restricted to the entry's frame (x then theta)
-  fascia_real *sample_pressure; ///< [S] lambda_p thetabar_p on the samples of p, 0 elsewhere
-  fascia_real *sample_F;        ///< [9 S] F of the samples in patches at the last evaluation (the patches and the samples' gradient read it)
+  FASCIA_DILATATION_ARRAYS(FASCIA_DILATATION_MEMBER)
   fascia_pt_patches view;       ///< all of the above, as the per-patch math reads them
   int gradients_current;        ///< entry_gradient is for the last evaluated state
 } fascia_dilatation;

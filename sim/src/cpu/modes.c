@@ -20,14 +20,9 @@ _Static_assert((int)FASCIA_PT_MODES_NINE == (int)FASCIA_MODES_NINE && (int)FASCI
 void fascia_modes_destroy(fascia_modes **modes) {
   if (!modes || !*modes) return;
   fascia_modes *md = *modes;
-  free(md->active);
-  free(md->xi_max);
-  free(md->sample_xi);
-  free(md->amplitude);
-  free(md->sample_enhanced);
-  free(md->entry_factor);
-  free(md->reduced);
-  free(md->failed);
+#define FREE_ARRAY(name, ...) free(md->name);
+  FASCIA_MODES_ARRAYS(FREE_ARRAY)
+#undef FREE_ARRAY
   free(md->sample_share);
   free(md->pair_share);
   free(md);
@@ -48,16 +43,12 @@ fascia_status fascia_modes_create(fascia_system *sys, fascia_modes **out) {
   const int32_t P = t->patch_count, S = m->sample_count;
   fascia_modes *md = calloc(1, sizeof *md);
   FASCIA_CHECK(md, sys->ctx, FASCIA_ERR_MEMORY, "modes: out of memory");
-  md->active = fascia_calloc(P, sizeof(int32_t));
-  md->xi_max = fascia_calloc(3 * (int64_t)P, sizeof(fascia_real));
-  md->sample_xi = fascia_calloc(3 * (int64_t)S, sizeof(fascia_real));
-  md->amplitude = fascia_calloc(9 * (int64_t)P, sizeof(fascia_real));
-  md->sample_enhanced = fascia_calloc(9 * (int64_t)S, sizeof(fascia_real));
-  md->entry_factor = fascia_calloc(54 * (int64_t)t->entry_count, sizeof(fascia_real));
-  md->reduced = fascia_calloc(9 * (int64_t)P, sizeof(fascia_real));
-  md->failed = fascia_calloc(P, sizeof(int32_t));
-  if (!md->active || !md->xi_max || !md->sample_xi || !md->amplitude || !md->sample_enhanced ||
-      !md->entry_factor || !md->reduced || !md->failed) {
+  const int64_t E = t->entry_count;
+  int allocated = 1;
+#define ALLOC_ARRAY(name, type, count, width) FASCIA_ALLOC_ROW(md, allocated, name, type, count, width);
+  FASCIA_MODES_ARRAYS(ALLOC_ARRAY)
+#undef ALLOC_ARRAY
+  if (!allocated) {
     fascia_modes_destroy(&md);
     return FASCIA_FAIL(sys->ctx, FASCIA_ERR_MEMORY, "modes: out of memory for %d patches", (int)P);
   }
@@ -82,15 +73,9 @@ fascia_status fascia_modes_create(fascia_system *sys, fascia_modes **out) {
     for (int j = 0; j < 9; ++j)
       if (total > 0 && spread[j % 3] > SPAN_SHARE * total && fascia_pt_modes_set_has(set, j)) md->active[p] |= 1 << j;
   }
-  fascia_pt_modes *v = &md->view;
-  v->active = md->active;
-  v->xi_max = md->xi_max;
-  v->sample_xi = md->sample_xi;
-  v->amplitude = md->amplitude;
-  v->failed = md->failed;
-  v->sample_enhanced = md->sample_enhanced;
-  v->entry_factor = md->entry_factor;
-  v->reduced = md->reduced;
+#define VIEW_ARRAY(name, ...) md->view.name = md->name;
+  FASCIA_MODES_ARRAYS(VIEW_ARRAY)
+#undef VIEW_ARRAY
   sys->pm.sample_enhanced = md->sample_enhanced;
   *out = md;
   return FASCIA_OK;

@@ -38,10 +38,23 @@ struct fascia_dilatation;
 /// The modes of a system: the arrays it owns and the view the per-patch
 /// math reads (sim/point/modes.h). On the patches of the system's
 /// mean-dilatation term.
+/// The arrays the per-patch math reads, declared once: member (of the view
+/// too), element type, the count that sizes it (P patches, S samples, E
+/// support entries), values per row. From the list follow the members,
+/// their allocation, check and freeing, and the view (modes.c).
+#define FASCIA_MODES_ARRAYS(X)                                                                                         \
+  X(active, int32_t, P, 1)                                                                                             \
+  X(xi_max, fascia_real, P, 3)                                                                                         \
+  X(sample_xi, fascia_real, S, 3)                                                                                      \
+  X(amplitude, fascia_real, P, 9)                                                                                      \
+  X(sample_enhanced, fascia_real, S, 9)                                                                                \
+  X(entry_factor, fascia_real, E, 54)                                                                                  \
+  X(reduced, fascia_real, P, 9)                                                                                        \
+  X(failed, int32_t, P, 1)
+
+#define FASCIA_MODES_MEMBER(name, type, ...) type *name;
 typedef struct fascia_modes {
-  int32_t *active;
-  fascia_real *xi_max, *sample_xi, *amplitude, *sample_enhanced, *entry_factor, *reduced;
-  int32_t *failed;
+  FASCIA_MODES_ARRAYS(FASCIA_MODES_MEMBER)
   fascia_pt_modes view;
   int tangent_current; ///< entry_factor is for the last evaluated state
   /// [81 S] and [54 P]: the samples' and pairs' shares of K_aa and K_ue

@@ -73,13 +73,11 @@ fascia_status fascia_system_create(fascia_ctx *ctx, const fascia_model *m, int t
     const int32_t n = m->sample_offsets[s + 1] - m->sample_offsets[s];
     if (n > sys->max_neighbours) sys->max_neighbours = n;
   }
-  int missing = 0;
-#define ALLOC(field, type, count, width, device)                                                                     \
-  sys->field = fascia_calloc((int64_t)sys->count * (width), sizeof(type));                                           \
-  missing |= !sys->field;
+  int allocated = 1;
+#define ALLOC(field, type, count, width, device) FASCIA_ALLOC_ROW(sys, allocated, field, type, sys->count, width);
   FASCIA_SYSTEM_ARRAYS(ALLOC)
 #undef ALLOC
-  if (missing) {
+  if (!allocated) {
     fascia_system_destroy(&sys);
     return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "system: out of memory for %lld samples, %lld pairs", (long long)S,
                        (long long)P);

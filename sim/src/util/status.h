@@ -36,15 +36,19 @@
 /// up front with a message instead of failing deep inside.
 #define FASCIA_MAX_COUNT ((int64_t)1 << 30)
 
-/// calloc of count elements of size bytes, NULL on overflow or failure.
 /// A monotonic clock in milliseconds, for the solvers' profiles (newton.c).
 FASCIA_INTERN double fascia_now_ms(void);
+/// calloc of count elements of size bytes, NULL on overflow or failure.
 FASCIA_INTERN void *fascia_calloc(int64_t count, size_t size);
 /// The same on pages of its own (aligned, the size rounded up to whole
 /// pages), for arrays that a GPU backend page-locks: locking works page by
 /// page and fails where two arrays share one. Freed with free().
 FASCIA_INTERN void *fascia_calloc_pages(int64_t count, size_t size);
-
+/// One row X(name, type, count, width, ...) of a list of arrays declared
+/// once (cpu/system_arrays.h, modes.h, dilatation.h): owner->name gets
+/// count * width zeroed elements; ok becomes 0 where it could not.
+#define FASCIA_ALLOC_ROW(owner, ok, name, type, count, width)                                                          \
+  ok &= ((owner)->name = fascia_calloc((int64_t)(count) * (width), sizeof(type))) != NULL
 #define FASCIA_DEF_COOKIE 0x5fa5c1a
 
 #endif
