@@ -14,7 +14,6 @@
 #include "solve/backend.h"
 #include "launch.h"
 #include "model/model_arrays.h"
-#include "cpu/modes.h"
 #include "cpu/system_arrays.h"
 
 #define CG_CHUNK 8 // CG iterations per recorded chunk in tolerance mode
@@ -113,7 +112,7 @@ static fascia_status upload_patches(fascia_device *dev, const fascia_pt_patches 
 // The enhanced strain modes on the patches (sim/point/modes.h): their
 // tables, and the work the per-patch math writes; the samples' enhanced F
 // the per-sample math reads.
-static fascia_status upload_modes(fascia_device *dev, const fascia_modes *h, int64_t E) {
+static fascia_status upload_modes(fascia_device *dev, const fascia_pt_modes *h, int64_t E) {
   fascia_dev *D = &dev->D;
   const int64_t P = D->patches.count, S = D->sample_count;
   D->modes_count = D->patches.count;
@@ -213,7 +212,7 @@ static fascia_status upload_model(fascia_device *dev, const fascia_backend_setup
   D->mask = D->full_mask = dev->mask;
   if (setup->bodies) FASCIA_TRY(upload_bodies(dev, setup));
   if (setup->patches->count > 0) FASCIA_TRY(upload_patches(dev, setup->patches, setup->patch_entries));
-  if (setup->sys->modes) FASCIA_TRY(upload_modes(dev, setup->sys->modes, setup->patch_entries));
+  if (setup->modes) FASCIA_TRY(upload_modes(dev, setup->modes, setup->patch_entries));
   // state and work
   MAKE(x_base, 3 * N, fascia_real);
   MAKE(q_base, 4 * N, fascia_real);

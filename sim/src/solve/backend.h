@@ -12,7 +12,7 @@
 #define FASCIA_SRC_BACKEND_H
 
 #include "fascia/solver.h"
-#include "point/patch.h"
+#include "point/modes.h"
 #include "cpu/system.h"
 
 typedef struct fascia_backend_ops fascia_backend_ops;
@@ -46,6 +46,9 @@ typedef struct fascia_backend_setup {
   /// count 0: none), and their support entries (the length of entry_frame)
   const fascia_pt_patches *patches;
   int32_t patch_entries;
+  /// the enhanced strain modes on those patches as the per-patch math reads
+  /// them (host arrays; NULL: none)
+  const fascia_pt_modes *modes;
   /// host arrays that cross to a device every step (the step's and the
   /// result's below), for page-locking; count entries
   void *crossing[8];

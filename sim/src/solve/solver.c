@@ -9,6 +9,7 @@
 
 #include "solve/backend.h"
 #include "cpu/dilatation.h"
+#include "cpu/modes.h"
 #include "organs/organs.h"
 #include "point/linalg.h"
 #include "solve/solver_internal.h"
@@ -176,6 +177,7 @@ fascia_status fascia_solver_create(fascia_ctx *ctx, const fascia_model *model, c
                                 S->organs ? fascia_organs_full_mask(S->organs) : S->mask,
                                 patches ? &patches->view : &no_patches,
                                 patches ? patches->table.entry_count : 0,
+                                S->sys->modes ? &S->sys->modes->view : NULL,
                                 {0},
                                 {0},
                                 0};
