@@ -34,6 +34,29 @@ int cli_option_value(const char *command, int argc, char **argv, int *k, const c
   return -1;
 }
 
+int cli_take_option(int *argc, char **argv, int *k, int *kept, const char *const *names, const char *hint,
+                    const char **option, const char **value) {
+  for (; *k < *argc; ++*k) {
+    const char *o = argv[*k];
+    int mine = 0;
+    for (const char *const *n = names; *n; ++n) mine |= !strcmp(o, *n);
+    if (!mine) {
+      argv[(*kept)++] = argv[*k];
+      continue;
+    }
+    if (*k + 1 >= *argc) {
+      fprintf(stderr, "fascia run: option %s needs a value%s (see fascia run --help)\n", o, hint);
+      return 2;
+    }
+    *option = o;
+    *value = argv[++*k];
+    ++*k;
+    return 1;
+  }
+  *argc = *kept;
+  return 0;
+}
+
 int cli_help(const char *option, const char *usage, const char *more) {
   if (strcmp(option, "--help") && strcmp(option, "-h")) return 0;
   fputs(usage, stdout);

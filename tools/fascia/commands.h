@@ -47,6 +47,14 @@ int cli_fail(const char *command, fascia_ctx *ctx, fascia_status status);
 fascia_ctx *cli_ctx(int threads, int progress);
 /// "fascia COMMAND: <format with what> (see fascia COMMAND --help)" on stderr; returns 2.
 int cli_usage_error(const char *command, const char *format, const char *what);
+/// Takes fascia run's own options out of argv, one at a time: from argv[*k]
+/// (start at 1, *kept 1) the next that is one of names (NULL-ended) and its
+/// value; the arguments before it stay, in order, from argv[*kept] on.
+/// Returns 1 with *option and *value set; 0 when none is left (*argc is
+/// then what stays); 2 after a usage line where a value is missing (hint
+/// follows "needs a value" in it).
+int cli_take_option(int *argc, char **argv, int *k, int *kept, const char *const *names, const char *hint,
+                    const char **option, const char **value);
 /// option is --help or -h: prints usage and more (NULL: none) on stdout
 /// and returns 1; else 0.
 int cli_help(const char *option, const char *usage, const char *more);

@@ -16,6 +16,7 @@
 // header being row 1; blank lines are skipped but counted.
 #define _POSIX_C_SOURCE 200809L
 #include "drive.h"
+#include "commands.h"
 #include "fascia/files.h"
 
 #include <errno.h>
@@ -54,19 +55,11 @@ int run_drive_take(int *argc, char **argv, run_drive *drive) {
     fprintf(stderr, "fascia run: out of memory\n");
     return 1;
   }
-  int kept = 1;
-  for (int k = 1; k < *argc; ++k) {
-    const char *o = argv[k];
+  static const char *const names[] = {"--drive", "--drive-template", NULL};
+  int k = 1, kept = 1, taken;
+  const char *o, *v;
+  while ((taken = cli_take_option(argc, argv, &k, &kept, names, " ORGAN=FILE.csv", &o, &v)) == 1) {
     const int is_template = !strcmp(o, "--drive-template");
-    if (strcmp(o, "--drive") && !is_template) {
-      argv[kept++] = argv[k];
-      continue;
-    }
-    if (k + 1 >= *argc) {
-      fprintf(stderr, "fascia run: option %s needs a value ORGAN=FILE.csv (see fascia run --help)\n", o);
-      return 2;
-    }
-    const char *v = argv[++k];
     drive_organ *list = is_template ? drive->templates : drive->organs;
     int *count = is_template ? &drive->template_count : &drive->count;
     if (!split_value(v, list + *count)) {
@@ -80,8 +73,7 @@ int run_drive_take(int *argc, char **argv, run_drive *drive) {
       }
     ++*count;
   }
-  *argc = kept;
-  return -1;
+  return taken ? taken : -1;
 }
 
 void run_drive_free(run_drive *drive) {

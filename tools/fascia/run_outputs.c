@@ -17,6 +17,7 @@
 //                       for the gnuplot scripts in tools/plots/.
 #define _POSIX_C_SOURCE 200809L
 #include "run_outputs.h"
+#include "commands.h"
 
 #include "fascia/files.h"
 #include "fascia/vtk_xml.h"
@@ -39,24 +40,15 @@ const char run_outputs_usage[] =
 
 int run_outputs_take(int *argc, char **argv, run_outputs *out) {
   memset(out, 0, sizeof *out);
-  int kept = 1;
-  for (int k = 1; k < *argc; ++k) {
-    const char *o = argv[k];
-    if (strcmp(o, "--history") && strcmp(o, "--organs") && strcmp(o, "--paraview") && strcmp(o, "--snapshots")) {
-      argv[kept++] = argv[k];
-      continue;
-    }
-    if (k + 1 >= *argc) {
-      fprintf(stderr, "fascia run: option %s needs a value (see fascia run --help)\n", o);
-      return 2;
-    }
-    const char *v = argv[++k];
+  static const char *const names[] = {"--history", "--organs", "--paraview", "--snapshots", NULL};
+  int k = 1, kept = 1, taken;
+  const char *o, *v;
+  while ((taken = cli_take_option(argc, argv, &k, &kept, names, "", &o, &v)) == 1) {
     if (!strcmp(o, "--history")) out->history_path = v;
     else if (!strcmp(o, "--organs") || !strcmp(o, "--paraview")) out->paraview_dir = v;
     else out->snapshots_dir = v;
   }
-  *argc = kept;
-  return -1;
+  return taken ? taken : -1;
 }
 
 static fascia_status make_dir(fascia_ctx *ctx, const char *dir) {
