@@ -1,15 +1,17 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: MIT
 # The demo's tissue against CalculiX, statically (tools/bench/demo_calculix.c):
-# CalculiX's meshes of the tissue's 1 mm voxels (C3D8I, C3D20R), fascia's
+# CalculiX's meshes of the tissue's 1 mm voxels (C3D8I, C3D20R, C3D8I split
+# in 2 x 2 x 2: the reference, last), fascia's
 # default and finer rungs, their force errors, displacement errors and
 # slip, side by side; then the mechanisms one at a time (no volumetric
 # patches, more MLS neighbours, finer samples or frames alone). Writes
 # tools/bench/results/2core-debian_cpu/demo_calculix.{txt,csv} and, with
 # --reference, data/reference/demo-calculix.csv (tests/t598). CalculiX's
 # answers are kept in $CACHE (default /tmp/fascia-demo-calculix) so that a
-# rerun solves only what is new: the C3D20R mesh takes about 30 minutes of
-# one core, the rest minutes.
+# rerun solves only what is new. On the shared 2-core machine, with ccx's
+# iterative Cholesky: C3D8I 21 s, its split mesh 12 minutes; with SPOOLES
+# (ccx's default, CCX_SOLVER=SPOOLES): C3D8I 2 minutes, C3D20R 22 minutes.
 #   tools/bench/demo-vs-calculix.sh [BUILD_DIR] [--reference]
 set -euo pipefail
 root="$(cd "$(dirname "$0")/../.." && pwd)"
@@ -22,7 +24,8 @@ mkdir -p "$cache" "$out"
 ref=()
 for a in "$@"; do [ "$a" = "--reference" ] && ref=(--write-reference "$root/data/reference/demo-calculix.csv"); done
 cd "$root"
-"$bench" data/scenes/pelvis-female-demo.json --cache "$cache" --ccx "${CCX:-8i:1:1,20r:1:1}" \
+"$bench" data/scenes/pelvis-female-demo.json --cache "$cache" --ccx "${CCX:-8i:1:1,20r:1:1,8i:1:2}" \
+  --ccx-solver "${CCX_SOLVER:-ITERATIVE CHOLESKY}" \
   --fascia "${RUNGS:-1:1,1:0.7,1:0.5,1:0.35,1:1:1:flat,1:0.7:1:flat,1:0.5:1:flat,1:1:1:n12,1:1:1:n16,1:1:0.7,1:1:0.5,1:0.7:1.43}" \
   --slip --csv "$out/demo_calculix.csv" "${ref[@]}" > "$out/demo_calculix.txt.tmp"
 mv "$out/demo_calculix.txt.tmp" "$out/demo_calculix.txt"
