@@ -333,6 +333,33 @@ static int first_triple(const char *p, double v[3]) {
   return 0;
 }
 
+// A number of a .dat line at *p, Fortran's way: an exponent of three digits
+// comes without its E ("1.234567-100"); *p moves past it. 0 when none.
+static int dat_number(const char **p, double *v) {
+  char *end;
+  *v = strtod(*p, &end);
+  if (end == *p) return 0;
+  if ((*end == '-' || *end == '+') && end[1] >= '0' && end[1] <= '9') {
+    char *e2;
+    const long exponent = strtol(end, &e2, 10);
+    *v *= pow(10.0, (double)exponent);
+    end = e2;
+  }
+  *p = end;
+  return 1;
+}
+
+// "node v1 v2 v3" at the start of a .dat line: 4 when read.
+static int dat_line(const char *p, long long *node, double v[3]) {
+  char *end;
+  *node = strtoll(p, &end, 10);
+  if (end == p) return 0;
+  p = end;
+  for (int a = 0; a < 3; ++a)
+    if (!dat_number(&p, v + a)) return a + 1;
+  return 4;
+}
+
 void fascia_demo_result_free(fascia_demo_result *r) {
   if (!r) return;
   free(r->u);
@@ -364,7 +391,6 @@ fascia_status fascia_demo_calculix(fascia_ctx *ctx, const fascia_demo_mesh *m, c
   }
   out->u = malloc((size_t)(3 * m->node_count) * sizeof *out->u);
   const char *p = after_last(dat, "displacements (vx,vy,vz) for set NALL");
-  int64_t got = 0;
   if (!out->u || !p) {
     status = SCENE_FAIL(ctx, out->u ? FASCIA_ERR_FORMAT : FASCIA_ERR_MEMORY,
                         "CalculiX demo tissue: its output lacks the nodes' displacements");
@@ -373,21 +399,22 @@ fascia_status fascia_demo_calculix(fascia_ctx *ctx, const fascia_demo_mesh *m, c
   for (int64_t k = 0; k < 3 * m->node_count; ++k) out->u[k] = NAN;
   while (p && *p) {
     long long node;
-    double a, b, c;
-    if (sscanf(p, "%lld %lf %lf %lf", &node, &a, &b, &c) == 4) {
-      if (node >= 1 && node <= m->node_count) {
-        double *u = out->u + 3 * (node - 1);
-        got += isnan(u[0]);
-        u[0] = a, u[1] = b, u[2] = c;
-      }
+    double v[3];
+    const int n = dat_line(p, &node, v);
+    if (n == 4) {
+      if (node >= 1 && node <= m->node_count) memcpy(out->u + 3 * (node - 1), v, sizeof v);
     } else if (p[strspn(p, " \t\r")] != '\n') {
       break;
     }
     p = strchr(p, '\n');
     if (p) ++p;
   }
-  DEMO_CHECK_GOTO(got == m->node_count, FASCIA_ERR_FORMAT, "CalculiX demo tissue: %lld of %lld nodes' displacements in its output",
-                    (long long)got, (long long)m->node_count);
+  int64_t missing = 0;
+  for (int64_t k = 0; k < m->node_count; ++k)
+    missing += !(isfinite(out->u[3 * k]) && isfinite(out->u[3 * k + 1]) && isfinite(out->u[3 * k + 2]));
+  DEMO_CHECK_GOTO(missing == 0, FASCIA_ERR_FORMAT,
+                  "CalculiX demo tissue: %lld of %lld nodes lack a finite displacement in its output",
+                  (long long)missing, (long long)m->node_count);
 cleanup:
   free(dat);
   if (status != FASCIA_OK) fascia_demo_result_free(out);
