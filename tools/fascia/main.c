@@ -23,7 +23,7 @@ static const fascia_command commands[] = {
     {"inspect", cmd_inspect, "check a model file and print a summary (--json for one JSON object)"},
     {"run", cmd_run, "solve a model statically or with implicit Euler steps; write results"},
     {"bench", cmd_bench, "time the paper's tables (paper) and the cantilever accuracy sweep (cantilever)"},
-    {"tradeoff", cmd_tradeoff, "sweep speed against accuracy on the cantilever: tables, Pareto and convergence plots"},
+    {"tradeoff", cmd_tradeoff, "speed against accuracy on your scene (SCENE.json) or the cantilever: Pareto, advice"},
 };
 static const int command_count = (int)(sizeof commands / sizeof commands[0]);
 
