@@ -69,6 +69,11 @@ int main(int argc, char **argv) {
       {"voxel too large", 0, 0, "0.004", "0.008", 0, 0, 0, {"voxel_size", "too large", "0.00266667"}},
       {"unknown key", 0, 0, 0, 0, 0, ", \"max_gapp\": 1", 0, {"scene.json", "tissues[0].max_gapp", "unknown key"}},
       {"wrong type", 0, 0, 0, "\"8 mm\"", 0, 0, 0, {"scene.json", "tissues[0].max_gap", "expected a number"}},
+      {"min_gap not below max_gap", 0, 0, 0, 0, 0, ", \"min_gap\": 0.008", 0,
+       {"scene.json", "tissues[0].min_gap", "< 0.008"}},
+      {"organs nowhere min_gap apart", 0, 0, 0, 0,
+       ", \"region\": {\"box\": {\"min\": [-1, -0.005, -0.005], \"max\": [1, 0.005, 0.005]}}", ", \"min_gap\": 0.007",
+       0, {"tissues[0].min_gap", "slide on each other everywhere", "lower min_gap"}},
       {"unknown organ", 0, 0, 0, 0, 0, 0,
        "{\"fascia_scene\": 1, \"voxel_size\": 0.001, \"materials\": {\"m\": {\"youngs_modulus\": 1, "
        "\"poisson_ratio\": 0.3}}, \"organs\": [{\"name\": \"A\", \"mesh\": \"a.obj\"}], \"tissues\": [{\"name\": "
