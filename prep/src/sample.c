@@ -387,6 +387,18 @@ static int region_targets(const prep_grid *g, const int64_t *voxels, int64_t vox
   return 1;
 }
 
+// The distances from voxel v to its nearest organ (*d1) and the next (*d2):
+// d1 + d2 is the gap across v.
+static void nearest_organs(const fascia_prep_volume *vol, int64_t v, double *d1, double *d2) {
+  *d1 = *d2 = INFINITY;
+  for (int32_t o = 0; o < vol->organ_count; ++o) {
+    if (!vol->distance[o]) continue;
+    const double d = vol->distance[o][v];
+    if (d < *d1) *d2 = *d1, *d1 = d;
+    else if (d < *d2) *d2 = d;
+  }
+}
+
 // Mid-layer frames of a tissue (the header): candidates are the region
 // voxels on the medial layer between the two nearest organs (their
 // distances within about a voxel of each other) where the gap is thinner
@@ -401,7 +413,7 @@ static int region_targets(const prep_grid *g, const int64_t *voxels, int64_t vox
 // interior ones) only.
 static fascia_status mid_layer_frames(fascia_ctx *ctx, const fascia_prep_volume *vol, const int64_t *voxels,
                                       int64_t voxel_count, double spacing, double sample_spacing, uint64_t seed,
-                                      int64_t first, point_list *frames, double *held_volume) {
+                                      int64_t first, point_list *frames) {
   const prep_grid g = prep_volume_grid(vol);
   const double h = g.h;
   point_list cand = {0};
@@ -409,14 +421,8 @@ static fascia_status mid_layer_frames(fascia_ctx *ctx, const fascia_prep_volume 
   fascia_status status = FASCIA_OK;
   for (int64_t k = 0; k < voxel_count; ++k) {
     const int64_t v = voxels[k];
-    double d1 = INFINITY, d2 = INFINITY; // the two nearest organs' distances
-    for (int32_t o = 0; o < vol->organ_count; ++o) {
-      if (!vol->distance[o]) continue;
-      const double d = vol->distance[o][v];
-      if (d < d1) d2 = d1, d1 = d;
-      else if (d < d2) d2 = d;
-    }
-    if (d1 + d2 < 2 * sample_spacing) *held_volume += h * h * h;
+    double d1, d2;
+    nearest_organs(vol, v, &d1, &d2);
     // (a voxel off the surfaces at least: nearer, a frame beside a surface frame made the wedges where organs
     // meet stiff and strained; a quarter voxel more on the medial bound: a mid-plane halfway between voxel
     // centres puts two layers at exactly one voxel of difference, and distances are floats)
@@ -932,11 +938,14 @@ static fascia_status sample_region(fascia_ctx *ctx, const fascia_prep_scene *sce
                   "sample: out of memory");
   PREP_TRY_GOTO(throw_darts(ctx, seed + 1, &cand, &darts, NULL, frames));
   const int64_t before_mid_layer = frames->count;
-  double held = 0;
-  if (!held_volume) held_volume = &held;
   if (td)
     PREP_TRY_GOTO(mid_layer_frames(ctx, vol, voxels, voxel_count, frame_spacing, sample_spacing, seed + 2,
-                                   first_interior, frames, held_volume));
+                                   first_interior, frames));
+  for (int64_t k = 0; td && held_volume && k < voxel_count; ++k) { // the layers no mid-layer frame may enter
+    double d1, d2;
+    nearest_organs(vol, voxels[k], &d1, &d2);
+    if (d1 + d2 < 2 * sample_spacing) *held_volume += h * h * h;
+  }
   if (mid_layer) *mid_layer = (int32_t)(frames->count - before_mid_layer);
   PREP_TRY_GOTO(fill_thin_pieces(ctx, vol, label, frame_spacing, frames));
   dart_free(&darts);
