@@ -264,10 +264,12 @@ static void grow_outside(const prep_grid *g, const uint8_t *blocked, uint8_t *ou
 }
 
 // inside[v] = 1 for voxels of the organ grid g inside organ o (see the note).
+// parity (may be NULL): the ray-parity vote of the exact surface, for organ_material.
 static fascia_status organ_inside(fascia_ctx *ctx, const fascia_prep_scene *scene, fascia_prep_mesh *o,
-                                  const prep_grid *g, uint8_t *inside) {
+                                  const prep_grid *g, uint8_t *inside, uint8_t *parity) {
   fascia_status status = FASCIA_OK;
   const int64_t n = prep_grid_count(g);
+  PREP_CHECK(n > 0, ctx, FASCIA_ERR_INTERNAL, "organ '%s': an empty grid", o->name);
   uint8_t *blocked = prep_calloc(n, 1), *outside = prep_calloc(n, 1), *wall = NULL;
   int64_t *queue = prep_calloc(n, sizeof(int64_t));
   float *udf = NULL;
@@ -278,6 +280,7 @@ static fascia_status organ_inside(fascia_ctx *ctx, const fascia_prep_scene *scen
     block_triangle(g, o->vertices + 3 * (int64_t)tri[0], o->vertices + 3 * (int64_t)tri[1],
                    o->vertices + 3 * (int64_t)tri[2], blocked);
   }
+  if (parity) parity_vote(g, blocked, parity);
   // rule 1: the exact surface
   flood_outside(g, blocked, NULL, outside, queue);
   int64_t chosen = 0;
@@ -351,6 +354,110 @@ cleanup:
   free(udf);
   free(wall);
   return status;
+}
+
+// The material of a deformable organ, on its grid g: what the outer surface
+// rule puts inside, less the cavities of a hollow organ. A closed surface of
+// nested shells (an outer shell and, inside it, an inner one) holds material
+// where an odd number of shells enclose a point: the ray parity. The repair
+// turns every closed shell outward, so the nesting decides, not the
+// orientation. Parity is trusted only where it is unambiguous: each shell
+// must bound the outside or a cavity, never both (shells that cross, a
+// self-overlap, overlapping parts). Otherwise a small even-parity volume is
+// filled as before and a large one is refused. material: in, the parity
+// vote; out, the material, or NULL'd by the caller when *hollow is 0.
+static fascia_status organ_material(fascia_ctx *ctx, const fascia_prep_scene *scene, fascia_prep_mesh *o,
+                                    const prep_grid *g, const uint8_t *inside, uint8_t *material, int *hollow) {
+  const int64_t n = prep_grid_count(g);
+  int64_t inside_count = 0, cavity = 0;
+  for (int64_t v = 0; v < n; ++v) {
+    inside_count += inside[v];
+    cavity += inside[v] && !material[v];
+  }
+  *hollow = 0;
+  if (cavity * 1000 <= inside_count) return FASCIA_OK; // round-off where a centre lies on the surface
+  const int large = cavity * 10 >= inside_count;
+  int32_t k = 0;
+  while (k + 1 < scene->organ_count && strcmp(scene->organs[k].name, o->name)) ++k;
+  const double cm3 = 1e6 * (double)cavity * g->h * g->h * g->h;
+  if (o->report.border_edges > 0) {
+    PREP_CHECK(!large, ctx, FASCIA_ERR_FORMAT,
+               "deformable organ '%s' (scene '%s' organs[%d].mesh): shells inside its surface enclose %.3g cm^3 (a "
+               "hollow organ's cavity?), but the surface is open (%d border edges), so its wall cannot be told from "
+               "the cavity; close the surface, or make the organ a \"shell\"",
+               o->name, scene->path, (int)k, cm3, (int)o->report.border_edges);
+    return FASCIA_OK;
+  }
+  // the shells: connected components of the triangles
+  const int32_t NV = o->vertex_count, NT = o->triangle_count;
+  int32_t *root = prep_calloc(NV, sizeof(int32_t));
+  int64_t *tally = prep_calloc(3 * (int64_t)NV, sizeof(int64_t)); // per root: triangles, seeing outside, cavity
+  if (!root || !tally) {
+    free(root), free(tally);
+    return PREP_FAIL(ctx, FASCIA_ERR_MEMORY, "organ '%s': out of memory", o->name);
+  }
+  for (int32_t v = 0; v < NV; ++v) root[v] = v;
+  for (int32_t t = 0; t < NT; ++t)
+    for (int r = 1; r < 3; ++r) {
+      int32_t a = o->triangles[3 * (int64_t)t], b = o->triangles[3 * (int64_t)t + r];
+      while (root[a] != a) a = root[a] = root[root[a]];
+      while (root[b] != b) b = root[b] = root[root[b]];
+      if (a != b) root[a > b ? a : b] = a < b ? a : b;
+    }
+  // each triangle looks a voxel to either side of its centroid
+  for (int32_t t = 0; t < NT; ++t) {
+    const int32_t *tri = o->triangles + 3 * (int64_t)t;
+    int32_t c = tri[0];
+    while (root[c] != c) c = root[c];
+    const double *p0 = o->vertices + 3 * (int64_t)tri[0], *p1 = o->vertices + 3 * (int64_t)tri[1],
+                 *p2 = o->vertices + 3 * (int64_t)tri[2];
+    double e1[3], e2[3], nrm[3];
+    for (int r = 0; r < 3; ++r) e1[r] = p1[r] - p0[r], e2[r] = p2[r] - p0[r];
+    nrm[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    nrm[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    nrm[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    const double len = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
+    if (!(len > 0)) continue;
+    int seen_out = 0, seen_cavity = 0;
+    for (int side = -1; side <= 1; side += 2) {
+      double q[3];
+      for (int r = 0; r < 3; ++r) q[r] = (p0[r] + p1[r] + p2[r]) / 3 + side * g->h * nrm[r] / len;
+      const int64_t v = prep_grid_locate(g, q);
+      if (v < 0 || !inside[v]) seen_out = 1;
+      else if (!material[v]) seen_cavity = 1;
+    }
+    tally[3 * (int64_t)c] += 1;
+    tally[3 * (int64_t)c + 1] += seen_out;
+    tally[3 * (int64_t)c + 2] += seen_cavity;
+  }
+  int32_t crossing = -1, inner = 0;
+  for (int32_t c = 0; c < NV; ++c) {
+    const int64_t *q = tally + 3 * (int64_t)c;
+    if (q[0] == 0) continue;
+    const int64_t both = q[1] < q[2] ? q[1] : q[2];
+    if (both * 100 > q[0] && crossing < 0) crossing = c;
+    inner += q[2] > q[1];
+  }
+  int64_t crossing_triangles = crossing >= 0 ? tally[3 * (int64_t)crossing] : 0;
+  free(root);
+  free(tally);
+  if (crossing >= 0) {
+    PREP_CHECK(!large, ctx, FASCIA_ERR_FORMAT,
+               "deformable organ '%s' (scene '%s' organs[%d].mesh): a shell of its surface (%lld triangles) bounds "
+               "both the outside and a %.3g cm^3 space inside other shells: its shells cross, so its wall cannot be "
+               "told from a cavity; for a hollow organ keep the inner shell strictly inside the outer (a wall of two "
+               "voxels or more: lower voxel_size if it is thinner), for overlapping pieces merge them into one surface",
+               o->name, scene->path, (int)k, (long long)crossing_triangles, cm3);
+    return FASCIA_OK;
+  }
+  int64_t kept = 0;
+  for (int64_t v = 0; v < n; ++v) kept += material[v] = inside[v] && material[v];
+  *hollow = 1;
+  snprintf(o->report.inside_rule, sizeof o->report.inside_rule,
+           "the wall between nested closed shells (ray parity: %d inner shell(s) enclose %.3g cm^3 of cavity)",
+           (int)inner, cm3);
+  o->report.enclosed_volume = (double)kept * g->h * g->h * g->h;
+  return FASCIA_OK;
 }
 
 // ------------------------------------------------------------ the tissue domain
@@ -767,16 +874,28 @@ cleanup:
 // (signed distance <= 0, the complement of the tissues' "outside every
 // organ") that no earlier region holds, so an overlap with another deformable
 // organ goes to the one listed first; pieces below min_component are dropped.
+// material (on the organ's grid og; NULL: all of the inside): a hollow
+// organ's wall (organ_material).
 static fascia_status build_organ_region(fascia_ctx *ctx, const fascia_prep_scene *scene, fascia_prep_volume *vol,
-                                        int32_t o, uint8_t label) {
+                                        int32_t o, uint8_t label, const uint8_t *material, const prep_grid *og) {
   const fascia_prep_organ_def *od = scene->organs + o;
   const prep_grid g = prep_volume_grid(vol);
   const int64_t n = prep_grid_count(&g);
   const float *d = vol->distance[o];
   PREP_CHECK(d, ctx, FASCIA_ERR_INTERNAL, "voxelize: deformable organ '%s' has no distance field", od->name);
   int64_t claimed = 0;
-  for (int64_t v = 0; v < n; ++v)
-    if (d[v] <= 0 && !vol->region[v]) vol->region[v] = label, ++claimed;
+  for (int64_t v = 0; v < n; ++v) {
+    if (d[v] > 0 || vol->region[v]) continue;
+    if (material) {
+      int32_t c[3];
+      prep_grid_ijk(&g, v, c);
+      const int32_t x = c[0] + g.lo[0] - og->lo[0], y = c[1] + g.lo[1] - og->lo[1], z = c[2] + g.lo[2] - og->lo[2];
+      if (x < 0 || y < 0 || z < 0 || x >= og->dims[0] || y >= og->dims[1] || z >= og->dims[2] ||
+          !material[prep_grid_index(og, x, y, z)])
+        continue;
+    }
+    vol->region[v] = label, ++claimed;
+  }
   PREP_CHECK(claimed > 0, ctx, FASCIA_ERR_ARGUMENT,
              "deformable organ '%s' (scene '%s'): no voxel of its inside is left at voxel_size %g m (it is thinner "
              "than a voxel, or inside another deformable organ listed before it); lower voxel_size or make it "
@@ -934,7 +1053,7 @@ fascia_status prep_organ_labels(fascia_ctx *ctx, const fascia_prep_scene *scene,
     prep_grid og;
     prep_grid_cover(&og, h, m->bounds, m->bounds + 3, 2);
     uint8_t *inside = prep_calloc(prep_grid_count(&og), 1);
-    status = inside ? organ_inside(ctx, scene, m, &og, inside)
+    status = inside ? organ_inside(ctx, scene, m, &og, inside, NULL)
                     : PREP_FAIL(ctx, FASCIA_ERR_MEMORY, "organ '%s': out of memory", m->name);
     for (int64_t v = 0; status == FASCIA_OK && v < prep_grid_count(&og); ++v) {
       if (!inside[v]) continue;
@@ -961,6 +1080,7 @@ fascia_status fascia_prep_voxelize(fascia_ctx *ctx, const fascia_prep_scene *sce
   const double h = scene->voxel_size;
   fascia_status status = FASCIA_OK;
   uint8_t **insides = NULL; // [organ] inside voxels on the organ's own grid, NULL: not near the grid
+  uint8_t **materials = NULL; // [organ] a hollow deformable organ's wall on its grid, else NULL
   prep_grid *organ_grids = NULL;
   float *udf = NULL;
   fascia_prep_volume *vol = calloc(1, sizeof *vol);
@@ -1037,8 +1157,9 @@ fascia_status fascia_prep_voxelize(fascia_ctx *ctx, const fascia_prep_scene *sce
   // tissue does, by construction): inside/outside on its own grid, kept
   // for the overlaps, and the signed distance on the volume grid
   insides = prep_calloc(meshes->count, sizeof(uint8_t *));
+  materials = prep_calloc(meshes->count, sizeof(uint8_t *));
   organ_grids = prep_calloc(meshes->count, sizeof(prep_grid));
-  PREP_CHECK_GOTO(insides && organ_grids, ctx, FASCIA_ERR_MEMORY, "voxelize: out of memory");
+  PREP_CHECK_GOTO(insides && materials && organ_grids, ctx, FASCIA_ERR_MEMORY, "voxelize: out of memory");
   for (int32_t o = 0; o < meshes->count; ++o) {
     fascia_prep_mesh *m = meshes->organs + o;
     const double band = organ_band(scene, o);
@@ -1057,7 +1178,17 @@ fascia_status fascia_prep_voxelize(fascia_ctx *ctx, const fascia_prep_scene *sce
     udf = prep_calloc(n, sizeof(float));
     PREP_CHECK_GOTO(inside && udf, ctx, FASCIA_ERR_MEMORY, "organ '%s': out of memory for %lld voxels", m->name,
                     (long long)on);
-    PREP_TRY_GOTO(organ_inside(ctx, scene, m, og, inside));
+    const int solid = scene->organs[o].kind == FASCIA_ORGAN_DEFORMABLE && !scene->organs[o].shell;
+    if (solid) {
+      materials[o] = prep_calloc(on, 1);
+      PREP_CHECK_GOTO(materials[o], ctx, FASCIA_ERR_MEMORY, "organ '%s': out of memory", m->name);
+    }
+    PREP_TRY_GOTO(organ_inside(ctx, scene, m, og, inside, materials[o]));
+    if (solid) {
+      int hollow = 0;
+      PREP_TRY_GOTO(organ_material(ctx, scene, m, og, inside, materials[o], &hollow));
+      if (!hollow) free(materials[o]), materials[o] = NULL;
+    }
     PREP_TRY_GOTO(fascia_vdb_unsigned_distance(ctx, m->vertex_count, m->vertices, m->triangle_count, m->triangles, h,
                                                (float)(band / h), g.lo, g.dims, udf));
     // the sign is the inside rule's alone: d <= 0 exactly for its inside
@@ -1090,7 +1221,7 @@ fascia_status fascia_prep_voxelize(fascia_ctx *ctx, const fascia_prep_scene *sce
   for (int32_t o = 0, label = scene->tissue_count + 1; o < scene->organ_count; ++o)
     if (scene->organs[o].kind == FASCIA_ORGAN_DEFORMABLE && !scene->organs[o].shell) {
       fascia_ctx_progress(ctx, "voxelize", 0.95, scene->organs[o].name);
-      PREP_TRY_GOTO(build_organ_region(ctx, scene, vol, o, (uint8_t)label++));
+      PREP_TRY_GOTO(build_organ_region(ctx, scene, vol, o, (uint8_t)label++, materials[o], organ_grids + o));
     }
   fascia_ctx_progress(ctx, "voxelize", 1, "done");
   *out = vol;
@@ -1098,6 +1229,8 @@ fascia_status fascia_prep_voxelize(fascia_ctx *ctx, const fascia_prep_scene *sce
 cleanup:
   for (int32_t o = 0; insides && o < meshes->count; ++o) free(insides[o]);
   free(insides);
+  for (int32_t o = 0; materials && o < meshes->count; ++o) free(materials[o]);
+  free(materials);
   free(organ_grids);
   free(udf);
   fascia_prep_volume_destroy(&vol);
