@@ -543,6 +543,7 @@ static fascia_status device_direction(fascia_backend *backend, fascia_real *shif
     FASCIA_TRY(push_settings(dev));
   }
   FASCIA_TRY(cg_solve(dev, rep));
+  if (dev->set.jacobian) kernel(dev, FASCIA_K_STEP_ROTATION, dev->frame_count, NULL, NULL, 0);
   FASCIA_TRY(slope(dev, out));
   if (!(*out < 0)) { // not a descent direction: preconditioned gradient
     kernel(dev, FASCIA_K_PRECOND_DESCENT, dev->frame_count, NULL, NULL, 0);

@@ -104,6 +104,7 @@ typedef enum fascia_dev_kernel {
   FASCIA_K_DAMPING_WEIGHT,   ///< 6N: the Levenberg weights from the diagonal and the scale
   FASCIA_K_PRECOND_DESCENT,  ///< N: p = -P^-1 g (fallback descent direction)
   FASCIA_K_COPY_GRADIENT,    ///< 6N: g = g_trial
+  FASCIA_K_STEP_ROTATION,    ///< N: dynamic: the direction p back to increments of d (linalg.h)
   FASCIA_K_ACCEPT_STATIC,    ///< N: re-anchor at the iterate, d = 0, g = g_trial
   FASCIA_K_ACCEPT_DYNAMIC,   ///< 6N: d = d_trial, g = g_trial
   FASCIA_K_PATCH_EVALUATE,   ///< patches: mean dilatation, energy, pressures, G_e (before the samples' gradient)
@@ -424,6 +425,7 @@ static inline FASCIA_HD void fascia_dev_item(const fascia_dev *D, int kernel, in
   case FASCIA_K_DAMPING_WEIGHT: D->damping[i] = fascia_pt_levenberg_weight(D->damping[i], (int)(i % 6), D->sc->scale); break;
   case FASCIA_K_PRECOND_DESCENT: fascia_dev_precond_descent_item(D, i32); break;
   case FASCIA_K_COPY_GRADIENT: D->g[i] = D->g_trial[i]; break;
+  case FASCIA_K_STEP_ROTATION: fascia_pt_step_rotation_map(D->d + 6 * i, D->mask + 6 * i, 1, D->p + 6 * i); break;
   case FASCIA_K_ACCEPT_STATIC: fascia_dev_accept_static_item(D, i32); break;
   case FASCIA_K_ACCEPT_DYNAMIC:
     D->d[i] = D->d_trial[i];
@@ -507,6 +509,7 @@ static inline FASCIA_HD void fascia_dev_cg_start_term(const fascia_dev *D, int32
     D->r[i6 + c] = D->mask[i6 + c] ? -D->g[i6 + c] : 0;
     D->p[i6 + c] = 0;
   }
+  if (D->set->jacobian) fascia_pt_step_rotation_map(D->d + i6, D->mask + i6, 0, D->r + i6);
   fascia_pt_block6_apply(fascia_dev_inverse(D, i), D->mask + i6, D->r + i6, D->z + i6);
   t[0] = t[1] = 0;
   for (int c = 0; c < 6; ++c) {

@@ -364,6 +364,7 @@ static void cuda_kernel(fascia_launcher *L, const fascia_dev *D, fascia_dev_kern
   case FASCIA_K_DAMPING_WEIGHT: launch_items<FASCIA_K_DAMPING_WEIGHT>(L, D, n, in, out, value); break;
   case FASCIA_K_PRECOND_DESCENT: launch_items<FASCIA_K_PRECOND_DESCENT>(L, D, n, in, out, value); break;
   case FASCIA_K_COPY_GRADIENT: launch_items<FASCIA_K_COPY_GRADIENT>(L, D, n, in, out, value); break;
+  case FASCIA_K_STEP_ROTATION: launch_items<FASCIA_K_STEP_ROTATION>(L, D, n, in, out, value); break;
   case FASCIA_K_ACCEPT_STATIC: launch_items<FASCIA_K_ACCEPT_STATIC>(L, D, n, in, out, value); break;
   case FASCIA_K_ACCEPT_DYNAMIC: launch_items<FASCIA_K_ACCEPT_DYNAMIC>(L, D, n, in, out, value); break;
   case FASCIA_K_PATCH_EVALUATE: launch_items<FASCIA_K_PATCH_EVALUATE>(L, D, n, in, out, value); break;

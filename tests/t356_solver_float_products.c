@@ -7,7 +7,9 @@
 // has no matrix) takes the default but refuses an explicit float matrix.
 // Float products change only the linear solves: dynamic steps of a falling
 // cantilever solved to a tight Newton tolerance end where the double ones
-// end, to 1e-8 of the largest displacement, in the same Newton iterations.
+// end, to 1e-8 of the largest displacement, within one Newton iteration of
+// them (the last iterations of a quadratic Newton sit at the tolerance,
+// where the linear solves' rounding decides one more or not).
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -113,7 +115,7 @@ int main(void) {
           diff, newton_single, newton_double);
   CHECK(largest > 0.1);
   CHECK(diff <= 1e-8 * largest);
-  CHECK(newton_single == newton_double);
+  CHECK(abs(newton_single - newton_double) <= 1);
   free(single), free(dbl);
   fascia_model_destroy(&m);
   fascia_ctx_destroy(&ctx);

@@ -181,6 +181,37 @@ static inline FASCIA_HD void fascia_pt_left_jacobian_t(const fascia_real *phi, c
   for (int c = 0; c < 3; ++c) out[c] = g[c] - a * pg[c] + b * ppg[c];
 }
 
+/// J_l(phi)^-1 v, or J_l(phi)^-T v where transpose is set: the inverse of
+/// the left Jacobian above (a world-space rotation increment at exp(phi) R
+/// as an increment of phi, and a gradient back).
+static inline FASCIA_HD void fascia_pt_left_jacobian_inv(const fascia_real *phi, const fascia_real *v, int transpose,
+                                                         fascia_real *out) {
+  const fascia_real t2 = fascia_pt_dot3(phi, phi), t = sqrt(t2);
+  fascia_real c;
+  if (t < 1e-3) // series: exact to rounding for small angles
+    c = FASCIA_R(1.0) / 12 + t2 / 720;
+  else
+    c = 1 / t2 - (1 + cos(t)) / (2 * t * sin(t));
+  const fascia_real half = transpose ? FASCIA_R(0.5) : FASCIA_R(-0.5);
+  fascia_real pv[3], ppv[3];
+  fascia_pt_cross(phi, v, pv);
+  fascia_pt_cross(phi, pv, ppv);
+  for (int k = 0; k < 3; ++k) out[k] = v[k] + half * pv[k] + c * ppv[k];
+}
+
+/// The dynamic Newton step's change of coordinates for one frame (6 values
+/// v, its increments d, its mask): the tangent is the energy's for
+/// world-space rotation increments at the iterate, so the right-hand side
+/// goes there (inverse = 0: J_l(d)^-T on the rotation) and the step comes
+/// back to increments of d (inverse = 1: J_l(d)^-1). A frame with a rotation
+/// held (masked) keeps the identity.
+static inline FASCIA_HD void fascia_pt_step_rotation_map(const fascia_real *d, const unsigned char *mask, int back,
+                                                         fascia_real *v) {
+  if (!mask[3] || !mask[4] || !mask[5]) return;
+  const fascia_real r[3] = {v[3], v[4], v[5]};
+  fascia_pt_left_jacobian_inv(d + 3, r, !back, v + 3);
+}
+
 /// Cholesky factor of an n x n matrix in place (row-major, lower triangle
 /// written); 0 if it is not positive definite.
 static inline FASCIA_HD int fascia_pt_cholesky(fascia_real *a, int n) {

@@ -232,7 +232,16 @@ static fascia_status cpu_direction(fascia_backend *backend, fascia_real *shift, 
   const int64_t n = 6 * (int64_t)B->frame_count;
   fascia_real *p = B->direction, *g = B->gradient;
   for (int64_t k = 0; k < n; ++k) B->rhs[k] = -g[k];
+  // dynamic: the tangent is the energy's at the iterate, for world-space
+  // rotation increments there; the Newton step is taken in those
+  // coordinates and mapped back to increments of the step's rotation
+  // vectors d (without it, a step that turns frames by tenths of a radian
+  // converges only linearly)
+  if (B->values.dynamic)
+    for (int64_t i = 0; i < B->frame_count; ++i) fascia_pt_step_rotation_map(B->d + 6 * i, B->mask + 6 * i, 0, B->rhs + 6 * i);
   FASCIA_TRY(fascia_linear_solve(B->linear, B->rhs, p, shift, report));
+  if (B->values.dynamic)
+    for (int64_t i = 0; i < B->frame_count; ++i) fascia_pt_step_rotation_map(B->d + 6 * i, B->mask + 6 * i, 1, p + 6 * i);
   *slope = fascia_dot(p, g, n, B->sys->threads);
   if (!(*slope < 0)) { // not a descent direction: preconditioned gradient
     fascia_linear_precondition(B->linear, g, p);
