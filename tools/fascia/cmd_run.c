@@ -289,6 +289,7 @@ typedef struct run_totals {
   int *newton_per_step, *cg_per_step; ///< [steps done]
   fascia_ctx *ctx;                    ///< for the out-of-memory message
   double solve_ms;                    ///< wall time inside the solver
+  double largest_step_ms;             ///< the solver's wall time in the longest step
   fascia_profile profile;             ///< summed over steps
   fascia_real energy;                 ///< potential energy at the end, J
   fascia_real *organ_force_start;     ///< [3 organs] the tissue's force on each organ before the first step, N
@@ -344,6 +345,7 @@ static fascia_status add_report(run_totals *t, const fascia_solve_report *r) {
   t->profile.precond_ms += r->profile.precond_ms;
   t->profile.cg_ms += r->profile.cg_ms;
   t->profile.total_ms += r->profile.total_ms;
+  if (r->profile.total_ms > t->largest_step_ms) t->largest_step_ms = r->profile.total_ms;
   t->energy = r->energy;
   t->steps++;
   return FASCIA_OK;
@@ -631,6 +633,7 @@ static cJSON *summary_json(const run_options *opt, const fascia_model *m, fascia
   cJSON_AddNumberToObject(root, "cg_iterations", t->cg);
   cJSON_AddNumberToObject(root, "factorizations", t->factorizations);
   cJSON_AddItemToObject(root, "newton_iterations_per_step", int_array(t->newton_per_step, t->steps));
+  cJSON_AddNumberToObject(root, "largest_step_ms", t->largest_step_ms);
   cJSON_AddItemToObject(root, "cg_iterations_per_step", int_array(t->cg_per_step, t->steps));
   cJSON *profile = cJSON_AddObjectToObject(root, "profile_ms_per_step");
   cJSON_AddNumberToObject(profile, "evaluate", t->profile.evaluate_ms / steps);
