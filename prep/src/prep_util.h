@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// Private helpers of the prep stages: error macros over fascia_ctx_fail (prep
+// Private helpers of the prep stages: the names of the error macros (prep
 // sees only the public sim API), allocation, strings, a seeded random
 // generator, and the voxel lattice shared by every grid.
 #ifndef FASCIA_PREP_UTIL_H
@@ -13,29 +13,12 @@
 #include "adapters.h"
 #include "fascia/prep.h"
 
-#define PREP_FAIL(ctx, st, ...) fascia_ctx_fail((ctx), (st), __FILE__, __LINE__, __VA_ARGS__)
-#define PREP_CHECK(cond, ctx, st, ...)                                                                                \
-  do {                                                                                                                \
-    if (!(cond)) return PREP_FAIL(ctx, st, __VA_ARGS__);                                                             \
-  } while (0)
-#define PREP_TRY(expr)                                                                                                \
-  do {                                                                                                                \
-    fascia_status prep_try_st_ = (expr);                                                                              \
-    if (prep_try_st_ != FASCIA_OK) return prep_try_st_;                                                              \
-  } while (0)
-/// Inside a function with `fascia_status status` and a `cleanup:` label.
-#define PREP_TRY_GOTO(expr)                                                                                           \
-  do {                                                                                                                \
-    status = (expr);                                                                                                  \
-    if (status != FASCIA_OK) goto cleanup;                                                                            \
-  } while (0)
-#define PREP_CHECK_GOTO(cond, ctx, st, ...)                                                                           \
-  do {                                                                                                                \
-    if (!(cond)) {                                                                                                    \
-      status = PREP_FAIL(ctx, st, __VA_ARGS__);                                                                       \
-      goto cleanup;                                                                                                   \
-    }                                                                                                                 \
-  } while (0)
+// prep's names for the error macros of fascia/base.h
+#define PREP_FAIL FASCIA_FAIL
+#define PREP_CHECK FASCIA_CHECK
+#define PREP_TRY FASCIA_TRY
+#define PREP_TRY_GOTO FASCIA_TRY_GOTO
+#define PREP_CHECK_GOTO FASCIA_CHECK_GOTO
 
 /// calloc of count elements (count 0 gives a valid pointer), NULL on overflow.
 FASCIA_PREP_INTERN void *prep_calloc(int64_t count, size_t size);

@@ -17,15 +17,6 @@
 #include "scene_util.h"
 #include "tissue_calculix.h"
 
-// A failed check inside a function with a cleanup label: its message, status set.
-#define DEMO_CHECK_GOTO(cond, st, ...)                                                                                \
-  do {                                                                                                                \
-    if (!(cond)) {                                                                                                    \
-      status = SCENE_FAIL(ctx, st, __VA_ARGS__);                                                                      \
-      goto cleanup;                                                                                                   \
-    }                                                                                                                 \
-  } while (0)
-
 // ------------------------------------------------------------ preparing
 
 fascia_status fascia_demo_prepare(fascia_ctx *ctx, const fascia_demo_def *def, fascia_prep_stages *s) {
@@ -76,7 +67,7 @@ static fascia_status organ_poses(fascia_ctx *ctx, const fascia_prep_stages *s, d
   SCENE_TRY_GOTO(fascia_solver_set_time(solver, 1));
   for (int32_t o = 0; o < s->scene->organ_count; ++o) {
     const int32_t k = fascia_model_find_organ(s->model, s->scene->organs[o].name);
-    DEMO_CHECK_GOTO(k >= 0, FASCIA_ERR_INTERNAL, "the model lacks organ '%s'", s->scene->organs[o].name);
+    SCENE_CHECK_GOTO(k >= 0, ctx, FASCIA_ERR_INTERNAL, "the model lacks organ '%s'", s->scene->organs[o].name);
     fascia_real tr[3], q[4];
     SCENE_TRY_GOTO(fascia_solver_organ_pose(solver, k, tr, q));
     const double qd[4] = {q[0], q[1], q[2], q[3]};
@@ -412,9 +403,9 @@ fascia_status fascia_demo_calculix(fascia_ctx *ctx, const fascia_demo_mesh *m, c
   int64_t missing = 0;
   for (int64_t k = 0; k < m->node_count; ++k)
     missing += !(isfinite(out->u[3 * k]) && isfinite(out->u[3 * k + 1]) && isfinite(out->u[3 * k + 2]));
-  DEMO_CHECK_GOTO(missing == 0, FASCIA_ERR_FORMAT,
-                  "CalculiX demo tissue: %lld of %lld nodes lack a finite displacement in its output",
-                  (long long)missing, (long long)m->node_count);
+  SCENE_CHECK_GOTO(missing == 0, ctx, FASCIA_ERR_FORMAT,
+                   "CalculiX demo tissue: %lld of %lld nodes lack a finite displacement in its output",
+                   (long long)missing, (long long)m->node_count);
 cleanup:
   free(dat);
   if (status != FASCIA_OK) fascia_demo_result_free(out);
@@ -537,8 +528,8 @@ static fascia_status surface_slip(fascia_ctx *ctx, const fascia_prep_stages *s, 
   out->surface_slip[o] = malloc((size_t)(organ->vertex_count + 1) * sizeof(double));
   out->surface_distance[o] = malloc((size_t)(organ->vertex_count + 1) * sizeof(double));
   fascia_status status = FASCIA_OK;
-  DEMO_CHECK_GOTO(points && u && out->surface_slip[o] && out->surface_distance[o], FASCIA_ERR_MEMORY,
-                  "demo: out of memory");
+  SCENE_CHECK_GOTO(points && u && out->surface_slip[o] && out->surface_distance[o], ctx, FASCIA_ERR_MEMORY,
+                   "demo: out of memory");
   int64_t n = 0;
   for (int32_t i = 0; i < organ->vertex_count; ++i)
     if (beside_region(s->volume, organ->vertices + 3 * i))
@@ -582,14 +573,14 @@ fascia_status fascia_demo_fascia(fascia_ctx *ctx, const fascia_prep_stages *s, c
   out->organ_count = s->scene->organ_count;
   for (int32_t o = 0; o < s->scene->organ_count; ++o) {
     const int32_t k = fascia_model_find_organ(s->model, s->scene->organs[o].name);
-    DEMO_CHECK_GOTO(k >= 0, FASCIA_ERR_INTERNAL, "the model lacks organ '%s'", s->scene->organs[o].name);
+    SCENE_CHECK_GOTO(k >= 0, ctx, FASCIA_ERR_INTERNAL, "the model lacks organ '%s'", s->scene->organs[o].name);
     fascia_real f[3];
     SCENE_TRY_GOTO(fascia_solver_organ_wrench(solver, k, f, NULL, NULL));
     for (int a = 0; a < 3; ++a) out->force[o][a] = f[a];
   }
   if (at) {
     out->u = malloc((size_t)(3 * at->node_count) * sizeof *out->u);
-    DEMO_CHECK_GOTO(out->u, FASCIA_ERR_MEMORY, "demo: out of memory");
+    SCENE_CHECK_GOTO(out->u, ctx, FASCIA_ERR_MEMORY, "demo: out of memory");
     SCENE_TRY_GOTO(fascia_demo_displacement_at(ctx, s->model, solver, at->node_count, at->node, out->u));
     for (int32_t o = 0; o < s->scene->organ_count; ++o)
       SCENE_TRY_GOTO(surface_slip(ctx, s, solver, o, fascia_model_find_organ(s->model, s->scene->organs[o].name), out));

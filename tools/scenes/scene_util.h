@@ -10,24 +10,14 @@
 #include "fascia/shape.h"
 #include "scenes.h"
 
-/// Most pairs a probe keeps (MLS probes may grow k to avoid coplanar sets).
-// Errors of the generators: record on the context, check, propagate.
-#define SCENE_FAIL(ctx, st, ...) fascia_ctx_fail((ctx), (st), __FILE__, __LINE__, __VA_ARGS__)
-#define SCENE_CHECK(cond, ctx, st, ...)                                                                               \
-  do {                                                                                                                \
-    if (!(cond)) return SCENE_FAIL(ctx, st, __VA_ARGS__);                                                            \
-  } while (0)
-#define SCENE_TRY(expr)                                                                                               \
-  do {                                                                                                                \
-    fascia_status scene_try_st_ = (expr);                                                                             \
-    if (scene_try_st_ != FASCIA_OK) return scene_try_st_;                                                            \
-  } while (0)
-#define SCENE_TRY_GOTO(expr)                                                                                          \
-  do {                                                                                                                \
-    status = (expr);                                                                                                  \
-    if (status != FASCIA_OK) goto cleanup;                                                                            \
-  } while (0)
+// The generators' names for the error macros of fascia/base.h
+#define SCENE_FAIL FASCIA_FAIL
+#define SCENE_CHECK FASCIA_CHECK
+#define SCENE_TRY FASCIA_TRY
+#define SCENE_TRY_GOTO FASCIA_TRY_GOTO
+#define SCENE_CHECK_GOTO FASCIA_CHECK_GOTO
 
+/// Most pairs a probe keeps (MLS probes may grow k to avoid coplanar sets).
 #define SCENE_PROBE_MAX (FASCIA_SHAPE_MAX_NEIGHBOURS)
 
 /// A regular grid of n[0] x n[1] x n[2] frames from lo with spacing step.

@@ -79,6 +79,36 @@ FASCIA_API fascia_status fascia_ctx_fail(fascia_ctx *ctx, fascia_status status, 
 #endif
     ;
 
+// Error propagation for code built on fascia (the library, prep, the scenes):
+// record a status and message on ctx, check a condition, propagate a failure.
+/// Records status and message on ctx, evaluates to status.
+#define FASCIA_FAIL(ctx, st, ...) fascia_ctx_fail((ctx), (st), __FILE__, __LINE__, __VA_ARGS__)
+/// Returns the recorded status from the enclosing function when cond is false.
+#define FASCIA_CHECK(cond, ctx, st, ...)                                                                              \
+  do {                                                                                                                \
+    if (!(cond)) return FASCIA_FAIL(ctx, st, __VA_ARGS__);                                                           \
+  } while (0)
+/// Propagates a failing status.
+#define FASCIA_TRY(expr)                                                                                              \
+  do {                                                                                                                \
+    fascia_status fascia_try_st_ = (expr);                                                                            \
+    if (fascia_try_st_ != FASCIA_OK) return fascia_try_st_;                                                          \
+  } while (0)
+/// Inside a function with `fascia_status status` and a `cleanup:` label.
+#define FASCIA_TRY_GOTO(expr)                                                                                         \
+  do {                                                                                                                \
+    status = (expr);                                                                                                  \
+    if (status != FASCIA_OK) goto cleanup;                                                                            \
+  } while (0)
+/// The same for a check: records the failure in `status`, then goes to cleanup.
+#define FASCIA_CHECK_GOTO(cond, ctx, st, ...)                                                                         \
+  do {                                                                                                                \
+    if (!(cond)) {                                                                                                    \
+      status = FASCIA_FAIL(ctx, st, __VA_ARGS__);                                                                     \
+      goto cleanup;                                                                                                   \
+    }                                                                                                                 \
+  } while (0)
+
 /// Version of the library, "MAJOR.MINOR.PATCH".
 FASCIA_API const char *fascia_version(void);
 

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// Internal error helpers: record a status and a readable message on the
-// context, check a condition, propagate a failure.
+// Internal helpers of the library: hidden visibility, size limits, a clock,
+// allocation; the error macros are in fascia/base.h.
 #ifndef FASCIA_SRC_STATUS_H
 #define FASCIA_SRC_STATUS_H
 
@@ -9,28 +9,7 @@
 
 #define FASCIA_INTERN __attribute__((visibility("hidden")))
 
-/// Records status and message on ctx, evaluates to status.
-#define FASCIA_FAIL(ctx, st, ...) fascia_ctx_fail((ctx), (st), __FILE__, __LINE__, __VA_ARGS__)
-
-/// Returns the recorded status from the enclosing function when cond is false.
-#define FASCIA_CHECK(cond, ctx, st, ...)                                                                              \
-  do {                                                                                                                \
-    if (!(cond)) return FASCIA_FAIL(ctx, st, __VA_ARGS__);                                                           \
-  } while (0)
-
-/// Propagates a failing status.
-#define FASCIA_TRY(expr)                                                                                              \
-  do {                                                                                                                \
-    fascia_status fascia_try_st_ = (expr);                                                                            \
-    if (fascia_try_st_ != FASCIA_OK) return fascia_try_st_;                                                          \
-  } while (0)
-
-/// Inside a function with `fascia_status status` and a `cleanup:` label.
-#define FASCIA_TRY_GOTO(expr)                                                                                         \
-  do {                                                                                                                \
-    status = (expr);                                                                                                  \
-    if (status != FASCIA_OK) goto cleanup;                                                                            \
-  } while (0)
+// FASCIA_FAIL, _CHECK, _TRY, _TRY_GOTO, _CHECK_GOTO: fascia/base.h.
 
 /// Largest element count fascia allocates for one array: refuses absurd sizes
 /// up front with a message instead of failing deep inside.
