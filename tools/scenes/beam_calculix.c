@@ -517,6 +517,33 @@ cleanup:
   return status;
 }
 
+fascia_status fascia_ccx_run_timed(fascia_ctx *ctx, const char *what, fascia_ccx_deck_writer write, const void *arg,
+                                   const char *program, int threads, char **dat, double *ms) {
+  const double t0 = scene_now_ms();
+  double cpu_ms = 0;
+  SCENE_TRY(fascia_ccx_run_deck(ctx, what, write, arg, program, threads, dat, &cpu_ms));
+  *ms = scene_now_ms() - t0;
+  return FASCIA_OK;
+}
+
+const char *fascia_ccx_dat_after(const char *dat, const char *header) {
+  const char *found = NULL;
+  for (const char *p = strstr(dat, header); p; p = strstr(p + 1, header)) found = p;
+  if (!found) return NULL;
+  const char *eol = strchr(found, '\n');
+  return eol ? eol + 1 : NULL;
+}
+
+int fascia_ccx_dat_triple(const char *block, double v[3]) {
+  for (const char *p = block; p && *p;) {
+    if (sscanf(p, "%lf %lf %lf", v, v + 1, v + 2) == 3) return 1;
+    if (p[strspn(p, " \t\r")] != '\n') return 0;
+    const char *eol = strchr(p, '\n');
+    p = eol ? eol + 1 : NULL;
+  }
+  return 0;
+}
+
 // Copied from data/reference/cantilever-calculix.csv (tests/t361 checks the copy).
 static const fascia_ccx_reference references[] = {
     {FASCIA_LAW_STVK, 40000, 0, -1.61135, -6.53479, 0.0002},

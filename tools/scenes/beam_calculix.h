@@ -103,6 +103,17 @@ typedef fascia_status (*fascia_ccx_deck_writer)(fascia_ctx *ctx, const void *arg
 /// *dat is then NULL.
 fascia_status fascia_ccx_run_deck(fascia_ctx *ctx, const char *what, fascia_ccx_deck_writer write, const void *arg,
                                   const char *program, int threads, char **dat, double *cpu_ms);
+/// fascia_ccx_run_deck, timed: *ms gets the wall-clock milliseconds of the
+/// whole run (the deck, ccx, its output), the time the cases report.
+fascia_status fascia_ccx_run_timed(fascia_ctx *ctx, const char *what, fascia_ccx_deck_writer write, const void *arg,
+                                   const char *program, int threads, char **dat, double *ms);
+
+/// The line after the last line of a .dat text that holds `header` (where
+/// ccx's last block of that output starts); NULL if none.
+const char *fascia_ccx_dat_after(const char *dat, const char *header);
+/// The first line of three numbers from `block` on, blank lines skipped (a
+/// block's total); 0 when the block ends first or is NULL.
+int fascia_ccx_dat_triple(const char *block, double v[3]);
 
 /// A converged reference of the tip of fascia's cantilever (the box, mass
 /// and gravity of fascia_scene_beam_def_default()), stored in

@@ -304,26 +304,6 @@ fascia_status fascia_demo_write_deck(fascia_ctx *ctx, const void *arg, FILE *out
   return FASCIA_OK;
 }
 
-// The line after the last line of dat holding `header`; NULL if none.
-static const char *after_last(const char *dat, const char *header) {
-  const char *found = NULL;
-  for (const char *p = strstr(dat, header); p; p = strstr(p + 1, header)) found = p;
-  if (!found) return NULL;
-  const char *eol = strchr(found, '\n');
-  return eol ? eol + 1 : NULL;
-}
-
-// The first line of three numbers after p (blank lines skipped).
-static int first_triple(const char *p, double v[3]) {
-  while (p && *p) {
-    if (sscanf(p, "%lf %lf %lf", v, v + 1, v + 2) == 3) return 1;
-    if (p[strspn(p, " \t\r")] != '\n') return 0;
-    p = strchr(p, '\n');
-    if (p) ++p;
-  }
-  return 0;
-}
-
 // A number of a .dat line at *p, Fortran's way: an exponent of three digits
 // comes without its E ("1.234567-100"); *p moves past it. 0 when none.
 static int dat_number(const char **p, double *v) {
@@ -364,24 +344,21 @@ void fascia_demo_result_free(fascia_demo_result *r) {
 fascia_status fascia_demo_calculix(fascia_ctx *ctx, const fascia_demo_mesh *m, const char *program, int threads,
                                    fascia_demo_result *out) {
   memset(out, 0, sizeof *out);
-  const double t0 = scene_now_ms();
   char *dat = NULL;
-  double cpu_ms = 0;
-  SCENE_TRY(fascia_ccx_run_deck(ctx, "demo tissue", fascia_demo_write_deck, m, program, threads, &dat, &cpu_ms));
-  out->ms = scene_now_ms() - t0;
+  SCENE_TRY(fascia_ccx_run_timed(ctx, "demo tissue", fascia_demo_write_deck, m, program, threads, &dat, &out->ms));
   out->nodes = m->node_count, out->elements = m->element_count, out->organ_count = m->organ_count;
   fascia_status status = FASCIA_OK;
   for (int32_t o = 0; o < m->organ_count; ++o) {
     char header[64];
     snprintf(header, sizeof header, "total force (fx,fy,fz) for set NORGAN%d", (int)o);
     double rf[3] = {0, 0, 0};
-    const char *p = after_last(dat, header);
-    if (p && !first_triple(p, rf)) p = NULL;
+    const char *p = fascia_ccx_dat_after(dat, header);
+    if (p && !fascia_ccx_dat_triple(p, rf)) p = NULL;
     // ccx prints no reaction of an empty set: the organ bears nothing
     for (int a = 0; a < 3; ++a) out->force[o][a] = -rf[a]; // the support's force on the tissue, reversed
   }
   out->u = malloc((size_t)(3 * m->node_count) * sizeof *out->u);
-  const char *p = after_last(dat, "displacements (vx,vy,vz) for set NALL");
+  const char *p = fascia_ccx_dat_after(dat, "displacements (vx,vy,vz) for set NALL");
   if (!out->u || !p) {
     status = SCENE_FAIL(ctx, out->u ? FASCIA_ERR_FORMAT : FASCIA_ERR_MEMORY,
                         "CalculiX demo tissue: its output lacks the nodes' displacements");
@@ -452,7 +429,7 @@ fascia_status fascia_demo_one_element(fascia_ctx *ctx, const char *program, doub
     char header[64];
     snprintf(header, sizeof header, "total force (fx,fy,fz) for set N%c", "XYZ"[c]);
     double f[3];
-    ok = first_triple(after_last(dat, header), f);
+    ok = fascia_ccx_dat_triple(fascia_ccx_dat_after(dat, header), f);
     // the reactions on face X_c = 1 of a unit cube sum to P e_c
     for (int r = 0; r < 3 && ok; ++r) P[3 * r + c] = f[r];
   }

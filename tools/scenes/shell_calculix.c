@@ -374,12 +374,9 @@ fascia_status fascia_shell_calculix(fascia_ctx *ctx, const fascia_shell_def *def
                                     fascia_shell_result *out) {
   SCENE_CHECK(out, ctx, FASCIA_ERR_ARGUMENT, "shell case: NULL result");
   memset(out, 0, sizeof *out);
-  const double t0 = scene_now_ms();
   char *dat = NULL;
-  double cpu_ms = 0;
-  SCENE_TRY(fascia_ccx_run_deck(ctx, def->kind == FASCIA_SHELL_PLATE ? "shell plate" : "shell bowl",
-                                fascia_shell_write_deck, def, program, 1, &dat, &cpu_ms));
-  out->ms = scene_now_ms() - t0;
+  SCENE_TRY(fascia_ccx_run_timed(ctx, def->kind == FASCIA_SHELL_PLATE ? "shell plate" : "shell bowl",
+                                 fascia_shell_write_deck, def, program, 1, &dat, &out->ms));
   int64_t probe = -1;
   fascia_status status = probe_node(ctx, def, &probe, &out->nodes);
   const int ok = status == FASCIA_OK &&

@@ -288,16 +288,6 @@ fascia_status fascia_tissue_pull_write_deck(fascia_ctx *ctx, const void *pull_de
 
 // ------------------------------------------------------------ ccx's answers
 
-// The line after the last header line of a .dat text that starts (after
-// blanks) with `header`; NULL if none.
-static const char *last_block(const char *dat, const char *header) {
-  const char *found = NULL;
-  for (const char *p = strstr(dat, header); p; p = strstr(p + 1, header)) found = p;
-  if (!found) return NULL;
-  const char *eol = strchr(found, '\n');
-  return eol ? eol + 1 : NULL;
-}
-
 // The values of `node` in a block of "node v1 v2 v3" lines (blank lines first).
 static int block_node(const char *block, long long node, double v[3]) {
   for (const char *p = block; p && *p;) {
@@ -317,32 +307,18 @@ static int block_node(const char *block, long long node, double v[3]) {
   return 0;
 }
 
-// The first line of three numbers in a block (a total).
-static int block_total(const char *block, double v[3]) {
-  for (const char *p = block; p && *p;) {
-    if (sscanf(p, "%lf %lf %lf", v, v + 1, v + 2) == 3) return 1;
-    if (p[strspn(p, " \t\r")] != '\n') return 0;
-    const char *eol = strchr(p, '\n');
-    p = eol ? eol + 1 : NULL;
-  }
-  return 0;
-}
-
 fascia_status fascia_tissue_hang_calculix(fascia_ctx *ctx, const fascia_tissue_hang_def *def, const char *program,
                                           fascia_tissue_hang_result *out) {
   SCENE_CHECK(out, ctx, FASCIA_ERR_ARGUMENT, "hanging organ: NULL result");
   memset(out, 0, sizeof *out);
-  const double t0 = scene_now_ms();
   char *dat = NULL;
-  double cpu_ms = 0;
-  SCENE_TRY(fascia_ccx_run_deck(ctx, "hanging organ", fascia_tissue_hang_write_deck, def, program, 1, &dat, &cpu_ms));
-  out->ms = scene_now_ms() - t0;
+  SCENE_TRY(fascia_ccx_run_timed(ctx, "hanging organ", fascia_tissue_hang_write_deck, def, program, 1, &dat, &out->ms));
   const int32_t last = 2 * def->elements + 1, centre = last + 2;
-  const char *u = last_block(dat, "displacements (vx,vy,vz) for set NORGAN");
-  const char *rf = last_block(dat, "total force (fx,fy,fz) for set NFIX");
+  const char *u = fascia_ccx_dat_after(dat, "displacements (vx,vy,vz) for set NORGAN");
+  const char *rf = fascia_ccx_dat_after(dat, "total force (fx,fy,fz) for set NFIX");
   double reaction[3];
   const int ok = u && rf && block_node(u, last, out->end) && block_node(u, centre, out->centre) &&
-                 block_total(rf, reaction);
+                 fascia_ccx_dat_triple(rf, reaction);
   free(dat);
   SCENE_CHECK(ok, ctx, FASCIA_ERR_FORMAT,
               "CalculiX hanging organ: its output lacks the displacements of nodes %d, %d or the reaction at node 1",
@@ -359,18 +335,15 @@ fascia_status fascia_tissue_pull_calculix(fascia_ctx *ctx, const fascia_tissue_p
                                           fascia_tissue_pull_result *out) {
   SCENE_CHECK(out, ctx, FASCIA_ERR_ARGUMENT, "pulled sheet: NULL result");
   memset(out, 0, sizeof *out);
-  const double t0 = scene_now_ms();
   char *dat = NULL;
-  double cpu_ms = 0;
-  SCENE_TRY(fascia_ccx_run_deck(ctx, "pulled sheet", fascia_tissue_pull_write_deck, def, program, 1, &dat, &cpu_ms));
-  out->ms = scene_now_ms() - t0;
+  SCENE_TRY(fascia_ccx_run_timed(ctx, "pulled sheet", fascia_tissue_pull_write_deck, def, program, 1, &dat, &out->ms));
   const int32_t ex = def->elements[0], ey = def->elements[1];
   const int32_t edge = shell_node(def, ex, 2 * ey), centre = shell_node(def, ex, ey);
-  const char *u = last_block(dat, "displacements (vx,vy,vz) for set NPROBE");
-  const char *rf = last_block(dat, "total force (fx,fy,fz) for set NPULL");
+  const char *u = fascia_ccx_dat_after(dat, "displacements (vx,vy,vz) for set NPROBE");
+  const char *rf = fascia_ccx_dat_after(dat, "total force (fx,fy,fz) for set NPULL");
   double reaction[3];
   const int ok = u && rf && block_node(u, edge, out->edge) && block_node(u, centre, out->centre) &&
-                 block_total(rf, reaction);
+                 fascia_ccx_dat_triple(rf, reaction);
   free(dat);
   SCENE_CHECK(ok, ctx, FASCIA_ERR_FORMAT,
               "CalculiX pulled sheet: its output lacks the displacements of nodes %d, %d or the reaction on the "
@@ -396,7 +369,7 @@ fascia_status fascia_tissue_write_box(fascia_ctx *ctx, const char *dir, const ch
 void fascia_tissue_deck_step(FILE *out) { write_step_start(out); }
 
 int fascia_tissue_dat_node(const char *dat, const char *header, long long node, double v[3]) {
-  const char *block = last_block(dat, header);
+  const char *block = fascia_ccx_dat_after(dat, header);
   return block && block_node(block, node, v);
 }
 
