@@ -144,6 +144,24 @@ static int check_one_element(fascia_ctx *ctx, const char *ccx, double E, double 
   return d / n < 1e-5;
 }
 
+// The slip is binned by distance: 1 mm bins, the last one open.
+enum { BINS = 6 };
+static const double bin_mm = 1;
+
+static int slip_bin(double distance) {
+  const int b = (int)(1e3 * distance / bin_mm);
+  return b < BINS ? b : BINS - 1;
+}
+
+// The mean slip of each bin that holds any, in mm, then the line's end.
+static void print_bins(const double sum[BINS], const int64_t count[BINS]) {
+  for (int b = 0; b < BINS; ++b)
+    if (count[b])
+      printf(" %s%g mm %.3f (%lld)", b == BINS - 1 ? ">" : "<", b == BINS - 1 ? bin_mm * b : bin_mm * (b + 1),
+             1e3 * sum[b] / (double)count[b], (long long)count[b]);
+  printf("\n");
+}
+
 // The slip of fascia's tissue on each organ: at the organ-facing nodes of
 // CalculiX's mesh (where CalculiX's tissue moves with the organ exactly),
 // fascia's displacement less the organ's, by the node's distance to the
@@ -152,8 +170,6 @@ static int check_one_element(fascia_ctx *ctx, const char *ccx, double E, double 
 static void print_slip(const fascia_prep_stages *s, const ccx_row *at, const fascia_demo_result *r) {
   const fascia_demo_mesh *m = &at->mesh;
   const fascia_model *model = s->model;
-  enum { BINS = 6 };
-  const double bin_mm = 1;
   for (int32_t o = 0; o < m->organ_count; ++o) {
     const int32_t k = fascia_model_find_organ(model, m->organ_name[o]);
     double sum[BINS] = {0}, motion = 0;
@@ -171,8 +187,7 @@ static void print_slip(const fascia_prep_stages *s, const ccx_row *at, const fas
       }
       const double de[3] = {uf[0] - up[0], uf[1] - up[1], uf[2] - up[2]};
       const double slip = norm3(de);
-      int b = (int)(1e3 * nearest / bin_mm);
-      if (b >= BINS) b = BINS - 1;
+      const int b = slip_bin(nearest);
       sum[b] += slip, ++count[b], sl[n++] = slip, motion += norm3(up);
     }
     if (sl && n > 0) {
@@ -180,11 +195,7 @@ static void print_slip(const fascia_prep_stages *s, const ccx_row *at, const fas
       printf("      slip on %-8s %5lld nodes, organ's motion there %.3f mm on average: p50 %.3f p95 %.3f mm; "
              "mean by distance to its nearest shared frame:",
              m->organ_name[o], (long long)n, 1e3 * motion / (double)n, 1e3 * p50, 1e3 * p95);
-      for (int b = 0; b < BINS; ++b)
-        if (count[b])
-          printf(" %s%g mm %.3f (%lld)", b == BINS - 1 ? ">" : "<", b == BINS - 1 ? bin_mm * b : bin_mm * (b + 1),
-                 1e3 * sum[b] / (double)count[b], (long long)count[b]);
-      printf("\n");
+      print_bins(sum, count);
     }
     free(sl);
     // at the organ's own surface
@@ -192,8 +203,7 @@ static void print_slip(const fascia_prep_stages *s, const ccx_row *at, const fas
     double ssum[BINS] = {0};
     int64_t scount[BINS] = {0};
     for (int64_t j = 0; j < ns; ++j) {
-      int b = (int)(1e3 * r->surface_distance[o][j] / bin_mm);
-      if (b >= BINS) b = BINS - 1;
+      const int b = slip_bin(r->surface_distance[o][j]);
       ssum[b] += r->surface_slip[o][j], ++scount[b];
     }
     double *copy = malloc((size_t)(ns + 1) * sizeof *copy);
@@ -202,11 +212,7 @@ static void print_slip(const fascia_prep_stages *s, const ccx_row *at, const fas
       const double p50 = fascia_demo_percentile(copy, ns, 0.5), p95 = fascia_demo_percentile(copy, ns, 0.95);
       printf("      on %-8s own surface %5lld vertices: p50 %.3f p95 %.3f mm; by distance:", m->organ_name[o],
              (long long)ns, 1e3 * p50, 1e3 * p95);
-      for (int b = 0; b < BINS; ++b)
-        if (scount[b])
-          printf(" %s%g mm %.3f (%lld)", b == BINS - 1 ? ">" : "<", b == BINS - 1 ? bin_mm * b : bin_mm * (b + 1),
-                 1e3 * ssum[b] / (double)scount[b], (long long)scount[b]);
-      printf("\n");
+      print_bins(ssum, scount);
     }
     free(copy);
   }
