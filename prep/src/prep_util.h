@@ -69,6 +69,24 @@ static inline void prep_grid_center(const prep_grid *g, int64_t v, double *p) {
   prep_grid_ijk(g, v, ijk);
   for (int r = 0; r < 3; ++r) p[r] = g->h * (double)(g->lo[r] + ijk[r]);
 }
+/// The voxels next to v that lie in g (sharing a face, an edge or a corner:
+/// up to 26), z slowest and x fastest; d2[k] (when d2 is not NULL): the
+/// squared length of the step to nb[k] in voxels (1, 2 or 3). Returns how many.
+static inline int prep_grid_neighbours(const prep_grid *g, int64_t v, int64_t nb[26], int d2[26]) {
+  int32_t c[3];
+  prep_grid_ijk(g, v, c);
+  int n = 0;
+  for (int dz = -1; dz <= 1; ++dz)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int32_t x = c[0] + dx, y = c[1] + dy, z = c[2] + dz;
+        if (!(dx || dy || dz) || x < 0 || y < 0 || z < 0 || x >= g->dims[0] || y >= g->dims[1] || z >= g->dims[2])
+          continue;
+        if (d2) d2[n] = dx * dx + dy * dy + dz * dz;
+        nb[n++] = prep_grid_index(g, x, y, z);
+      }
+  return n;
+}
 /// Grid covering [min, max] (m) with pad extra voxels on every side.
 FASCIA_PREP_INTERN void prep_grid_cover(prep_grid *g, double h, const double *min, const double *max, int32_t pad);
 /// Voxel of point p in g, or -1 outside.

@@ -455,17 +455,10 @@ static int64_t label_pieces(const prep_grid *g, const uint8_t *region, uint8_t l
     queue[tail++] = s;
     comp[s] = count;
     while (head < tail) {
-      const int64_t v = queue[head++];
-      int32_t c[3];
-      prep_grid_ijk(g, v, c);
-      for (int dz = -1; dz <= 1; ++dz)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dx = -1; dx <= 1; ++dx) {
-            const int32_t x = c[0] + dx, y = c[1] + dy, z = c[2] + dz;
-            if (x < 0 || y < 0 || z < 0 || x >= g->dims[0] || y >= g->dims[1] || z >= g->dims[2]) continue;
-            const int64_t nb = prep_grid_index(g, x, y, z);
-            if (region[nb] == label && !comp[nb]) comp[nb] = count, queue[tail++] = nb;
-          }
+      int64_t nb[26];
+      const int m = prep_grid_neighbours(g, queue[head++], nb, NULL);
+      for (int k = 0; k < m; ++k)
+        if (region[nb[k]] == label && !comp[nb[k]]) comp[nb[k]] = count, queue[tail++] = nb[k];
     }
   }
   return count;
@@ -583,22 +576,18 @@ static fascia_status voronoi_volumes(fascia_ctx *ctx, const fascia_prep_volume *
       continue;
     }
     if (key > dist[v]) continue;
-    int32_t c[3];
-    prep_grid_ijk(&g, v, c);
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const int32_t x = c[0] + dx, y = c[1] + dy, z = c[2] + dz;
-          if (x < 0 || y < 0 || z < 0 || x >= g.dims[0] || y >= g.dims[1] || z >= g.dims[2]) continue;
-          const int64_t nb = prep_grid_index(&g, x, y, z);
-          if (vol->region[nb] != label) continue;
-          const double step = h * sqrt((double)(dx * dx + dy * dy + dz * dz));
-          if (key + step < dist[nb]) {
-            dist[nb] = key + step;
-            owner[nb] = owner[v];
-            PREP_CHECK_GOTO(prep_heap_push(&heap, key + step, nb), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
-          }
-        }
+    int64_t nb[26];
+    int d2[26];
+    const int m = prep_grid_neighbours(&g, v, nb, d2);
+    for (int k = 0; k < m; ++k) {
+      if (vol->region[nb[k]] != label) continue;
+      const double step = h * sqrt((double)d2[k]);
+      if (key + step < dist[nb[k]]) {
+        dist[nb[k]] = key + step;
+        owner[nb[k]] = owner[v];
+        PREP_CHECK_GOTO(prep_heap_push(&heap, key + step, nb[k]), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+      }
+    }
   }
   centroid = prep_calloc(3 * (samples->count - first), sizeof(double));
   volume = prep_calloc(samples->count - first, sizeof(double));

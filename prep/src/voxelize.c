@@ -644,17 +644,10 @@ static fascia_status keep_components(fascia_ctx *ctx, const char *name, fascia_p
     queue[tail++] = s;
     seen[s] = 1;
     while (head < tail) {
-      const int64_t v = queue[head++];
-      int32_t c[3];
-      prep_grid_ijk(&g, v, c);
-      for (int dz = -1; dz <= 1; ++dz)
-        for (int dy = -1; dy <= 1; ++dy)
-          for (int dx = -1; dx <= 1; ++dx) {
-            const int32_t x = c[0] + dx, y = c[1] + dy, z = c[2] + dz;
-            if (x < 0 || y < 0 || z < 0 || x >= g.dims[0] || y >= g.dims[1] || z >= g.dims[2]) continue;
-            const int64_t nb = prep_grid_index(&g, x, y, z);
-            if (vol->region[nb] == label && !seen[nb]) seen[nb] = 1, queue[tail++] = nb;
-          }
+      int64_t nb[26];
+      const int m = prep_grid_neighbours(&g, queue[head++], nb, NULL);
+      for (int k = 0; k < m; ++k)
+        if (vol->region[nb[k]] == label && !seen[nb[k]]) seen[nb[k]] = 1, queue[tail++] = nb[k];
     }
     const double volume = (double)tail * voxel_volume;
     if (volume < min_component) {
