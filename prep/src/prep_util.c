@@ -19,6 +19,15 @@ void *prep_calloc(int64_t count, size_t size) {
   return calloc((size_t)count, size);
 }
 
+int prep_resize(void *array, int64_t count, size_t size) {
+  if (count < 0 || (size > 0 && (uint64_t)count > SIZE_MAX / size)) return 0;
+  void *old, *grown;
+  memcpy(&old, array, sizeof old); // the pointer whatever its type (T ** is no void **)
+  if (!(grown = realloc(old, (size_t)count * size))) return 0;
+  memcpy(array, &grown, sizeof grown);
+  return 1;
+}
+
 char *prep_strdup(const char *s) {
   if (!s) return NULL;
   const size_t n = strlen(s) + 1;
@@ -249,12 +258,8 @@ void prep_triangle_barycentric(const double *a, const double *b, const double *c
 int prep_heap_push(prep_heap *heap, double key, int64_t value) {
   if (heap->count == heap->capacity) {
     const int64_t cap = heap->capacity ? 2 * heap->capacity : 256;
-    double *k = realloc(heap->key, (size_t)cap * sizeof *k);
-    if (!k) return 0;
-    heap->key = k;
-    int64_t *v = realloc(heap->value, (size_t)cap * sizeof *v);
-    if (!v) return 0;
-    heap->value = v;
+    if (!prep_resize(&heap->key, cap, sizeof *heap->key) || !prep_resize(&heap->value, cap, sizeof *heap->value))
+      return 0;
     heap->capacity = cap;
   }
   int64_t i = heap->count++;

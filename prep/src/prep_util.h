@@ -22,6 +22,10 @@
 
 /// calloc of count elements (count 0 gives a valid pointer), NULL on overflow.
 FASCIA_PREP_INTERN void *prep_calloc(int64_t count, size_t size);
+/// Resizes a malloc'ed array to count elements of size bytes, for lists
+/// that grow: `array` is the address of the array's pointer (&list->x).
+/// Returns 0, the array left as it was, when out of memory or count < 0.
+FASCIA_PREP_INTERN int prep_resize(void *array, int64_t count, size_t size);
 /// strdup into malloc'ed memory, NULL on failure.
 FASCIA_PREP_INTERN char *prep_strdup(const char *s);
 /// Opens path for reading ("rb") when it is a regular file; a directory,

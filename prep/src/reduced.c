@@ -206,12 +206,7 @@ typedef struct surface_points {
 static int points_push(surface_points *p, const double *x, int32_t triangle) {
   if (p->count == p->capacity) {
     const int64_t cap = p->capacity ? 2 * p->capacity : 256;
-    double *nx = realloc(p->x, 3 * (size_t)cap * sizeof(double));
-    if (!nx) return 0;
-    p->x = nx;
-    int32_t *nt = realloc(p->triangle, (size_t)cap * sizeof(int32_t));
-    if (!nt) return 0;
-    p->triangle = nt;
+    if (!prep_resize(&p->x, 3 * cap, sizeof *p->x) || !prep_resize(&p->triangle, cap, sizeof *p->triangle)) return 0;
     p->capacity = cap;
   }
   memcpy(p->x + 3 * p->count, x, 3 * sizeof(double));

@@ -98,24 +98,10 @@ typedef struct point_list {
 static int list_push(point_list *l, const double *x, int32_t organ, int32_t triangle, int64_t voxel) {
   if (l->count == l->capacity) {
     const int64_t cap = l->capacity ? 2 * l->capacity : 1024;
-    double *p = realloc(l->position, (size_t)(3 * cap) * sizeof(double));
-    if (!p) return 0;
-    l->position = p;
-    int32_t *o = realloc(l->organ, (size_t)cap * sizeof(int32_t));
-    if (!o) return 0;
-    l->organ = o;
-    int32_t *t = realloc(l->triangle, (size_t)cap * sizeof(int32_t));
-    if (!t) return 0;
-    l->triangle = t;
-    int64_t *v = realloc(l->voxel, (size_t)cap * sizeof(int64_t));
-    if (!v) return 0;
-    l->voxel = v;
-    int64_t *a = realloc(l->attach, (size_t)cap * sizeof(int64_t));
-    if (!a) return 0;
-    l->attach = a;
-    double *r = realloc(l->radius, (size_t)cap * sizeof(double));
-    if (!r) return 0;
-    l->radius = r;
+    if (!prep_resize(&l->position, 3 * cap, sizeof *l->position) || !prep_resize(&l->organ, cap, sizeof *l->organ) ||
+        !prep_resize(&l->triangle, cap, sizeof *l->triangle) || !prep_resize(&l->voxel, cap, sizeof *l->voxel) ||
+        !prep_resize(&l->attach, cap, sizeof *l->attach) || !prep_resize(&l->radius, cap, sizeof *l->radius))
+      return 0;
     l->capacity = cap;
   }
   memcpy(l->position + 3 * l->count, x, 3 * sizeof(double));
@@ -201,9 +187,7 @@ static int dart_conflicts(const dart_grid *d, const double *x, double radius) {
 static int dart_add(dart_grid *d, int64_t k) {
   if (k >= d->capacity) {
     const int64_t cap = 2 * (k + 1) + 1024;
-    int64_t *n = realloc(d->next, (size_t)cap * sizeof(int64_t));
-    if (!n) return 0;
-    d->next = n;
+    if (!prep_resize(&d->next, cap, sizeof *d->next)) return 0;
     d->capacity = cap;
   }
   const double *x = d->points->position + 3 * k;
