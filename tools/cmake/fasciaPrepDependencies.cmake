@@ -66,18 +66,25 @@ endif()
 if(NOT TARGET cjson)
   list(APPEND fascia_prep_missing "cJSON (libcjson-dev)")
 endif()
-# nettle: SHA-256 of the inputs for the provenance; it ships no CMake files
-if(NOT TARGET fascia::nettle)
-  find_path(FASCIA_NETTLE_INCLUDE_DIR nettle/sha2.h)
-  find_library(FASCIA_NETTLE_LIBRARY nettle)
-  if(FASCIA_NETTLE_INCLUDE_DIR AND FASCIA_NETTLE_LIBRARY)
-    add_library(fascia::nettle UNKNOWN IMPORTED)
-    set_target_properties(fascia::nettle PROPERTIES IMPORTED_LOCATION ${FASCIA_NETTLE_LIBRARY}
-                          INTERFACE_INCLUDE_DIRECTORIES ${FASCIA_NETTLE_INCLUDE_DIR})
-  else()
-    list(APPEND fascia_prep_missing "nettle (nettle-dev)")
+# A library that ships no CMake files, imported by hand as `target` from its
+# header and library (cached as PREFIX_INCLUDE_DIR, PREFIX_LIBRARY); when
+# either is not found, `package` is appended to the list `missing`.
+macro(_fascia_import_by_hand target prefix header library package missing)
+  if(NOT TARGET ${target})
+    find_path(${prefix}_INCLUDE_DIR ${header})
+    find_library(${prefix}_LIBRARY ${library})
+    if(${prefix}_INCLUDE_DIR AND ${prefix}_LIBRARY)
+      add_library(${target} UNKNOWN IMPORTED)
+      set_target_properties(${target} PROPERTIES IMPORTED_LOCATION ${${prefix}_LIBRARY}
+                            INTERFACE_INCLUDE_DIRECTORIES ${${prefix}_INCLUDE_DIR})
+    else()
+      list(APPEND ${missing} "${package}")
+    endif()
   endif()
-endif()
+endmacro()
+
+# nettle: SHA-256 of the inputs for the provenance
+_fascia_import_by_hand(fascia::nettle FASCIA_NETTLE nettle/sha2.h nettle "nettle (nettle-dev)" fascia_prep_missing)
 
 # Label maps (optional: without them prep reads meshes only and says so):
 # NIfTI's reference library and teem's nrrd. Imported by hand like nettle:
@@ -96,17 +103,7 @@ if(NOT TARGET fascia::nifti2)
     list(APPEND fascia_prep_labelmap_missing "NIfTI (libnifti2-dev)")
   endif()
 endif()
-if(NOT TARGET fascia::teem)
-  find_path(FASCIA_TEEM_INCLUDE_DIR teem/nrrd.h)
-  find_library(FASCIA_TEEM_LIBRARY teem)
-  if(FASCIA_TEEM_INCLUDE_DIR AND FASCIA_TEEM_LIBRARY)
-    add_library(fascia::teem UNKNOWN IMPORTED)
-    set_target_properties(fascia::teem PROPERTIES IMPORTED_LOCATION ${FASCIA_TEEM_LIBRARY}
-                          INTERFACE_INCLUDE_DIRECTORIES ${FASCIA_TEEM_INCLUDE_DIR})
-  else()
-    list(APPEND fascia_prep_labelmap_missing "teem (libteem-dev)")
-  endif()
-endif()
+_fascia_import_by_hand(fascia::teem FASCIA_TEEM teem/nrrd.h teem "teem (libteem-dev)" fascia_prep_labelmap_missing)
 
 set(CMAKE_MODULE_PATH "${_fascia_module_path}")
 if(_fascia_had_shared)
