@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "adapters.h"
+#include "cgal_fail.hpp"
 
 namespace {
 
@@ -50,20 +51,6 @@ struct Counter {
     return *this;
   }
 };
-
-fascia_status fail_exception(fascia_ctx *ctx, const char *what, const char *where) {
-  try {
-    throw;
-  } catch (const std::bad_alloc &) {
-    return fascia_ctx_fail(ctx, FASCIA_ERR_MEMORY, __FILE__, __LINE__, "%s: out of memory in CGAL %s", what, where);
-  } catch (const std::exception &e) {
-    return fascia_ctx_fail(ctx, FASCIA_ERR_INTERNAL, __FILE__, __LINE__, "%s: CGAL %s failed: %s", what, where,
-                           e.what());
-  } catch (...) {
-    return fascia_ctx_fail(ctx, FASCIA_ERR_INTERNAL, __FILE__, __LINE__, "%s: CGAL %s: unknown exception", what,
-                           where);
-  }
-}
 
 // Signed volume enclosed by the faces of one component (positive: outward).
 double component_volume(const Mesh &mesh, const std::vector<face_descriptor> &fs) {
@@ -209,7 +196,7 @@ extern "C" fascia_status fascia_cgal_repair(fascia_ctx *ctx, const char *what, i
     *out_triangle_count = nf;
     return FASCIA_OK;
   } catch (...) {
-    return fail_exception(ctx, what, "repair");
+    return fascia_cgal_fail(ctx, what, "repair");
   }
 }
 
@@ -248,7 +235,7 @@ extern "C" fascia_status fascia_cgal_tree_create(fascia_ctx *ctx, int32_t vertex
     return FASCIA_OK;
   } catch (...) {
     delete t;
-    return fail_exception(ctx, "surface", "AABB tree");
+    return fascia_cgal_fail(ctx, "surface", "AABB tree");
   }
 }
 
@@ -293,6 +280,6 @@ extern "C" fascia_status fascia_cgal_delaunay(fascia_ctx *ctx, int32_t n, const 
     *out_tet_count = (int32_t)count;
     return FASCIA_OK;
   } catch (...) {
-    return fail_exception(ctx, "frames", "Delaunay tetrahedralisation");
+    return fascia_cgal_fail(ctx, "frames", "Delaunay tetrahedralisation");
   }
 }

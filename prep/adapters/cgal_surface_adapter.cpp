@@ -19,22 +19,7 @@
 #include <vector>
 
 #include "adapters.h"
-
-namespace {
-fascia_status fail_exception(fascia_ctx *ctx, const char *what, const char *where) {
-  try {
-    throw;
-  } catch (const std::bad_alloc &) {
-    return fascia_ctx_fail(ctx, FASCIA_ERR_MEMORY, __FILE__, __LINE__, "%s: out of memory in CGAL's %s", what, where);
-  } catch (const std::exception &e) {
-    return fascia_ctx_fail(ctx, FASCIA_ERR_INTERNAL, __FILE__, __LINE__, "%s: CGAL's %s failed: %s", what, where,
-                           e.what());
-  } catch (...) {
-    return fascia_ctx_fail(ctx, FASCIA_ERR_INTERNAL, __FILE__, __LINE__, "%s: CGAL's %s: unknown exception", what,
-                           where);
-  }
-}
-} // namespace
+#include "cgal_fail.hpp"
 
 extern "C" fascia_status fascia_cgal_surface_triangles(fascia_ctx *ctx, const char *what, int32_t n,
                                                        const double *points, int32_t **out_triangles,
@@ -56,7 +41,7 @@ extern "C" fascia_status fascia_cgal_surface_triangles(fascia_ctx *ctx, const ch
     *out_count = (int32_t)facets.size();
     return FASCIA_OK;
   } catch (...) {
-    return fail_exception(ctx, what, "surface reconstruction");
+    return fascia_cgal_fail(ctx, what, "surface reconstruction");
   }
 }
 
@@ -82,6 +67,6 @@ extern "C" fascia_status fascia_cgal_soup_self_intersections(fascia_ctx *ctx, co
     *out_pairs = (int64_t)pairs.size();
     return FASCIA_OK;
   } catch (...) {
-    return fail_exception(ctx, what, "self-intersection test");
+    return fascia_cgal_fail(ctx, what, "self-intersection test");
   }
 }

@@ -15,8 +15,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <new>
 #include <vector>
 
 #include "adapters.h"
@@ -72,6 +74,21 @@ static void in_voxels(int32_t vertex_count, const double *vertices, int32_t tria
     tris[t] = openvdb::Vec3I((uint32_t)triangles[3 * t], (uint32_t)triangles[3 * t + 1], (uint32_t)triangles[3 * t + 2]);
 }
 
+// The status of the exception being handled: call it only inside a catch
+// block. Out of memory is said with `job`, what was being built; any other
+// error in OpenVDB's words.
+static fascia_status fail_exception(fascia_ctx *ctx, const char *job) {
+  try {
+    throw;
+  } catch (const std::bad_alloc &) {
+    return fascia_ctx_fail(ctx, FASCIA_ERR_MEMORY, __FILE__, __LINE__, "OpenVDB: out of memory %s", job);
+  } catch (const std::exception &e) {
+    return fascia_ctx_fail(ctx, FASCIA_ERR_INTERNAL, __FILE__, __LINE__, "OpenVDB: %s", e.what());
+  } catch (...) {
+    return fascia_ctx_fail(ctx, FASCIA_ERR_INTERNAL, __FILE__, __LINE__, "OpenVDB: unknown exception");
+  }
+}
+
 extern "C" fascia_status fascia_vdb_unsigned_distance(fascia_ctx *ctx, int32_t vertex_count, const double *vertices,
                                                       int32_t triangle_count, const int32_t *triangles, double h,
                                                       float band_voxels, const int32_t lo[3], const int32_t dims[3],
@@ -109,14 +126,10 @@ extern "C" fascia_status fascia_vdb_unsigned_distance(fascia_ctx *ctx, int32_t v
       out[k] = (d > band_voxels ? band_voxels : d) * hf;
     }
     return FASCIA_OK;
-  } catch (const std::bad_alloc &) {
-    return fascia_ctx_fail(ctx, FASCIA_ERR_MEMORY, __FILE__, __LINE__,
-                           "OpenVDB: out of memory for the distance field of %d triangles at voxel size %g m",
-                           (int)triangle_count, h);
-  } catch (const std::exception &e) {
-    return fascia_ctx_fail(ctx, FASCIA_ERR_INTERNAL, __FILE__, __LINE__, "OpenVDB: %s", e.what());
   } catch (...) {
-    return fascia_ctx_fail(ctx, FASCIA_ERR_INTERNAL, __FILE__, __LINE__, "OpenVDB: unknown exception");
+    char job[128];
+    snprintf(job, sizeof job, "for the distance field of %d triangles at voxel size %g m", (int)triangle_count, h);
+    return fail_exception(ctx, job);
   }
 }
 
@@ -178,14 +191,10 @@ extern "C" fascia_status fascia_vdb_indicator_surface(fascia_ctx *ctx, const int
     openvdb::tools::volumeToMesh(*grid, points, tris, quads, -0.5, 0.0, true);
     return to_triangles(ctx, points, tris, quads, 1.0, out_vertices, out_vertex_count, out_triangles,
                         out_triangle_count);
-  } catch (const std::bad_alloc &) {
-    return fascia_ctx_fail(ctx, FASCIA_ERR_MEMORY, __FILE__, __LINE__,
-                           "OpenVDB: out of memory for the surface of %d x %d x %d voxels", (int)dims[0], (int)dims[1],
-                           (int)dims[2]);
-  } catch (const std::exception &e) {
-    return fascia_ctx_fail(ctx, FASCIA_ERR_INTERNAL, __FILE__, __LINE__, "OpenVDB: %s", e.what());
   } catch (...) {
-    return fascia_ctx_fail(ctx, FASCIA_ERR_INTERNAL, __FILE__, __LINE__, "OpenVDB: unknown exception");
+    char job[128];
+    snprintf(job, sizeof job, "for the surface of %d x %d x %d voxels", (int)dims[0], (int)dims[1], (int)dims[2]);
+    return fail_exception(ctx, job);
   }
 }
 
@@ -227,13 +236,9 @@ extern "C" fascia_status fascia_vdb_carve(fascia_ctx *ctx, int32_t vertex_count,
     openvdb::tools::volumeToMesh(*grid, points, tris, quads, 0.0, 0.0, true);
     return to_triangles(ctx, points, tris, quads, h, out_vertices, out_vertex_count, out_triangles,
                         out_triangle_count);
-  } catch (const std::bad_alloc &) {
-    return fascia_ctx_fail(ctx, FASCIA_ERR_MEMORY, __FILE__, __LINE__,
-                           "OpenVDB: out of memory carving a surface of %d triangles at voxel size %g m",
-                           (int)triangle_count, h);
-  } catch (const std::exception &e) {
-    return fascia_ctx_fail(ctx, FASCIA_ERR_INTERNAL, __FILE__, __LINE__, "OpenVDB: %s", e.what());
   } catch (...) {
-    return fascia_ctx_fail(ctx, FASCIA_ERR_INTERNAL, __FILE__, __LINE__, "OpenVDB: unknown exception");
+    char job[128];
+    snprintf(job, sizeof job, "carving a surface of %d triangles at voxel size %g m", (int)triangle_count, h);
+    return fail_exception(ctx, job);
   }
 }
