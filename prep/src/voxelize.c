@@ -263,6 +263,18 @@ static void grow_outside(const prep_grid *g, const uint8_t *blocked, uint8_t *ou
   }
 }
 
+// A further rule of organ_inside, its outside given: what it leaves inside
+// becomes the organ's inside when it is more than twice what the rule kept
+// so far has (*chosen voxels; that one leaked). Returns 1 when it does.
+static int adopt_rule(const uint8_t *outside, int64_t n, uint8_t *inside, int64_t *chosen) {
+  int64_t count = 0;
+  for (int64_t v = 0; v < n; ++v) count += !outside[v];
+  if (*chosen >= count / 2) return 0;
+  for (int64_t v = 0; v < n; ++v) inside[v] = !outside[v];
+  *chosen = count;
+  return 1;
+}
+
 // inside[v] = 1 for voxels of the organ grid g inside organ o (see the note).
 // parity (may be NULL): the ray-parity vote of the exact surface, for organ_material.
 static fascia_status organ_inside(fascia_ctx *ctx, const fascia_prep_scene *scene, fascia_prep_mesh *o,
@@ -295,7 +307,6 @@ static fascia_status organ_inside(fascia_ctx *ctx, const fascia_prep_scene *scen
     const int32_t c = (int32_t)ceil(fmax(0, scene->close_holes / scene->voxel_size - 1) / 2);
     wall = prep_calloc(n, 1);
     PREP_CHECK_GOTO(wall, ctx, FASCIA_ERR_MEMORY, "organ '%s': out of memory for %lld voxels", o->name, (long long)n);
-    int64_t closed = 0, voted = 0;
     if (c > 0) { // rule 2: morphological closing of the holes
       udf = prep_calloc(n, sizeof(float));
       PREP_CHECK_GOTO(udf, ctx, FASCIA_ERR_MEMORY, "organ '%s': out of memory for %lld voxels", o->name, (long long)n);
@@ -304,15 +315,11 @@ static fascia_status organ_inside(fascia_ctx *ctx, const fascia_prep_scene *scen
       for (int64_t v = 0; v < n; ++v) wall[v] = udf[v] <= (c + 0.5) * g->h;
       flood_outside(g, blocked, wall, outside, queue);
       grow_outside(g, blocked, outside, 2 * c + 2, queue);
-      for (int64_t v = 0; v < n; ++v) closed += !outside[v];
-      if (chosen < closed / 2) {
-        for (int64_t v = 0; v < n; ++v) inside[v] = !outside[v];
-        chosen = closed;
+      if (adopt_rule(outside, n, inside, &chosen))
         snprintf(o->report.inside_rule, sizeof o->report.inside_rule,
                  "outer surface after closing holes up to %.3g mm (open mesh, %d border edges: the exact surface "
                  "leaks at this voxel size)",
                  1e3 * (2 * c + 1) * g->h, (int)o->report.border_edges);
-      }
     }
     // rule 3: ray-parity vote, then its outer surface (cavities count as inside)
     parity_vote(g, blocked, wall);
@@ -321,15 +328,11 @@ static fascia_status organ_inside(fascia_ctx *ctx, const fascia_prep_scene *scen
     PREP_CHECK_GOTO(no_segments, ctx, FASCIA_ERR_MEMORY, "organ '%s': out of memory", o->name);
     flood_outside(g, no_segments, wall, outside, queue);
     free(no_segments);
-    for (int64_t v = 0; v < n; ++v) voted += !outside[v];
-    if (chosen < voted / 2) {
-      for (int64_t v = 0; v < n; ++v) inside[v] = !outside[v];
-      chosen = voted;
+    if (adopt_rule(outside, n, inside, &chosen))
       snprintf(o->report.inside_rule, sizeof o->report.inside_rule,
                "ray-parity vote of 6 axis rays, then its outer surface (open mesh, %d border edges: holes too large "
                "to close)",
                (int)o->report.border_edges);
-    }
   }
   // the surface encloses a volume (checked at the repair), but no voxel centre lies in it
   const double *b = o->bounds, thinnest = fmin(fmin(b[3] - b[0], b[4] - b[1]), b[5] - b[2]);
