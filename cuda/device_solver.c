@@ -590,6 +590,20 @@ static fascia_status device_finish(fascia_backend *backend, const fascia_step_re
   return FASCIA_OK;
 }
 
+// The blow-up rule's strain check, reduced on the device at the state of
+// the last evaluation (the one finish gave the host)
+static fascia_status device_strain_past(fascia_backend *backend, fascia_real limit, int *past) {
+  fascia_device *dev = (fascia_device *)backend;
+  if (dev->set.strain_limit != limit) {
+    dev->set.strain_limit = limit;
+    FASCIA_TRY(push_settings(dev));
+  }
+  reduce(dev, FASCIA_T_STRAIN, dev->D.sample_count, NULL, NULL, FASCIA_S_STORE);
+  FASCIA_TRY(pull_scalars(dev));
+  *past = dev->sc.sum[0] > 0;
+  return FASCIA_OK;
+}
+
 // ------------------------------------------------------------ operators --
 
 static fascia_status device_gradient(fascia_backend *backend, const fascia_real *x, const fascia_real *q,
@@ -649,9 +663,10 @@ static int launcher_available(const fascia_launcher_ops *ops, char *detail, size
 }
 
 #define DEVICE_BACKEND_OPS                                                                                            \
-  .supports = device_supports, .destroy = device_destroy, .describe = device_describe, .host_evaluates = 0,            \
+  .supports = device_supports, .destroy = device_destroy, .describe = device_describe,                               \
   .begin = device_begin, .evaluate = device_evaluate, .prepare = device_prepare, .direction = device_direction,        \
   .accept = device_accept, .save = device_save, .restore = device_restore, .finish = device_finish,                     \
+  .strain_past = device_strain_past,                                                                                  \
   .gradient = device_gradient,                                                                                        \
   .hessian_apply = device_hessian_apply, .hessian_diagonal = device_hessian_diagonal
 

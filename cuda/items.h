@@ -34,6 +34,7 @@ typedef struct fascia_dev_settings {
   int32_t jacobian;              ///< 1: gradient with respect to anchored increments (dynamic)
   int32_t consistent_mass;       ///< 1: consistent mass products; 0: lumped blocks
   int32_t precond;               ///< FASCIA_PRECOND_* (solver.h)
+  fascia_real strain_limit;      ///< the blow-up rule's strain (FASCIA_T_STRAIN)
   fascia_pt_cg_limits cg_limits; ///< of every linear solve
 } fascia_dev_settings;
 
@@ -134,6 +135,7 @@ typedef enum fascia_dev_terms {
   FASCIA_T_OPERATOR,    ///< N: dir = z + beta dir, Ad = A dir (skipped unless CG runs); gives dir.Ad, dir.dir
   FASCIA_T_CG_UPDATE,   ///< N: p, r, z by the step's action; gives r.r, r.z
   FASCIA_T_PATCHES,     ///< patches: their volumetric energy
+  FASCIA_T_STRAIN,      ///< S: 1 where the strain at the state is past strain_limit or not finite
   FASCIA_T_COUNT
 } fascia_dev_terms;
 
@@ -558,6 +560,13 @@ static inline FASCIA_HD void fascia_dev_term(const fascia_dev *D, int terms, int
     if (D->sc->cg.running) fascia_dev_operator_term(D, (int32_t)i, t);
     break;
   case FASCIA_T_CG_UPDATE: fascia_dev_cg_update_term(D, (int32_t)i, t); break;
+  case FASCIA_T_STRAIN: {
+    const fascia_pt_state st = fascia_dev_state(D);
+    fascia_real F[9];
+    fascia_pt_sample_F(&D->pm, &st, (int32_t)i, F);
+    t[0] = fascia_pt_strain_norm(F) <= D->set->strain_limit ? 0 : 1;
+    break;
+  }
   case FASCIA_T_PATCHES:
     t[0] = D->patches.energy[i];
     t[1] = D->modes_count > 0 ? D->modes.failed[i] : 0;

@@ -407,6 +407,7 @@ static void cuda_reduce(fascia_launcher *L, const fascia_dev *D, fascia_dev_term
   case FASCIA_T_OPERATOR: launch_reduce<FASCIA_T_OPERATOR>(L, D, n, a, b, step); break;
   case FASCIA_T_CG_UPDATE: launch_reduce<FASCIA_T_CG_UPDATE>(L, D, n, a, b, step); break;
   case FASCIA_T_PATCHES: launch_reduce<FASCIA_T_PATCHES>(L, D, n, a, b, step); break;
+  case FASCIA_T_STRAIN: launch_reduce<FASCIA_T_STRAIN>(L, D, n, a, b, step); break;
   default: remember_error(L, cudaErrorInvalidValue, "reduction %d (no such terms)", (int)terms); break;
   }
 }

@@ -150,6 +150,17 @@ static inline FASCIA_HD void fascia_pt_sample_F(const fascia_pt_model *m, const 
     for (int q = 0; q < 9; ++q) F[q] += m->sample_enhanced[9 * (int64_t)s + q];
 }
 
+/// |E| = |F^T F - I| / 2 (Frobenius norm): the strain the blow-up rule and
+/// the outputs report.
+static inline FASCIA_HD fascia_real fascia_pt_strain_norm(const fascia_real *F) {
+  fascia_real C[9];
+  fascia_pt_mat_tmul(F, F, C);
+  C[0] -= 1;
+  C[4] -= 1;
+  C[8] -= 1;
+  return FASCIA_R(0.5) * sqrt(fascia_pt_ddot(C, C));
+}
+
 /// Energy density of sample s's law at F, rotation coupling included (not
 /// the patch's pressure), and its stress Pt into P[9], the law's aux into aux.
 static inline FASCIA_HD fascia_real fascia_pt_sample_law_stress(const fascia_pt_model *m, const fascia_pt_state *st,

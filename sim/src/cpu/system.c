@@ -375,13 +375,8 @@ void fascia_system_probe_position(const fascia_system *sys, int32_t p, fascia_re
 
 // |E| = |F^T F - I| / 2 of sample s (Frobenius norm), with F for the caller
 static fascia_real strain_norm(const fascia_system *sys, const fascia_pt_state *st, int32_t s, fascia_real *F) {
-  fascia_real C[9];
   fascia_pt_sample_F(&sys->pm, st, s, F);
-  fascia_pt_mat_tmul(F, F, C);
-  C[0] -= 1;
-  C[4] -= 1;
-  C[8] -= 1;
-  return FASCIA_R(0.5) * sqrt(fascia_pt_ddot(C, C));
+  return fascia_pt_strain_norm(F);
 }
 
 fascia_real fascia_system_largest_strain(const fascia_system *sys, int32_t *sample) {

@@ -92,9 +92,6 @@ struct fascia_backend_ops {
   void (*destroy)(fascia_backend *backend);
   /// The backend and its device in words (fascia_solver_device).
   const char *(*describe)(const fascia_backend *backend);
-  /// 1 when the host system holds the state of the last evaluation (its
-  /// energies and cache): the solver then reads energies there.
-  int host_evaluates;
 
   // --- one Newton solve, in this order (newton.c) -------------------------
   fascia_status (*begin)(fascia_backend *backend, const fascia_step_values *values, fascia_solve_report *report);
@@ -122,6 +119,11 @@ struct fascia_backend_ops {
   /// The iterate (the state of the last evaluation) to the host; the host
   /// system's energies and inversion counts set.
   fascia_status (*finish)(fascia_backend *backend, const fascia_step_result *result);
+  /// Optional (NULL: the host checks the state finish gave). The step's
+  /// check (solver.c's blow-up rule): whether some sample's strain
+  /// |F^T F - I| / 2 at the state finish gave is past limit or not finite
+  /// (*past 1, else 0), reduced where the state is kept.
+  fascia_status (*strain_past)(fascia_backend *backend, fascia_real limit, int *past);
 
   // --- optional: the linear solver's state the next step reads -------------
   /// (NULL: none.) A kept factorization the next step may use: its size in

@@ -330,16 +330,15 @@ fascia_status fascia_solver_solve_static(fascia_solver *S, fascia_solve_report *
 // like one the Newton solve could not take.
 #define ENERGY_RISE 0.1
 
-// E_kin + E_pot at the current state. On the CPU the potential is the one
-// of the Newton solve's last evaluation (at the accepted state: nothing is
-// evaluated twice); the device keeps its own, so it is evaluated here.
-static fascia_status total_energy(fascia_solver *S, fascia_real *out) {
-  fascia_real potential = 0;
-  if (!S->backend->ops->host_evaluates) FASCIA_TRY(fascia_solver_potential_energy(S, &potential));
-  else potential = S->sys->energy_internal + S->sys->energy_external + fascia_organs_potential_energy(S->organs, S);
-  *out = potential + fascia_solver_kinetic_energy(S);
-  return FASCIA_OK;
+// E_kin + E_pot at the current state: the potential of the Newton solve's
+// last evaluation, at the accepted state, which every backend's finish
+// leaves in the system (nothing is evaluated twice).
+static fascia_real total_energy(fascia_solver *S) {
+  const fascia_real potential =
+      S->sys->energy_internal + S->sys->energy_external + fascia_organs_potential_energy(S->organs, S);
+  return potential + fascia_solver_kinetic_energy(S);
 }
+
 static fascia_status check_blow_up(fascia_solver *S, const fascia_solve_report *r, int energy_before_known,
                                    fascia_real energy_before) {
   const int64_t N = S->frame_count;
@@ -351,20 +350,24 @@ static fascia_status check_blow_up(fascia_solver *S, const fascia_solve_report *
     return FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
                        "the Newton solve diverged: after %d iterations the residual %.3g is above the load %.3g it "
                        "started from", r->newton_iterations, r->gradient_norm, r->reference_norm);
-  fascia_system_set_state(S->sys, S->x, S->q);
-  if (S->def.blow_up_strain > 0) {
-    const fascia_real strain = fascia_system_largest_strain(S->sys, NULL);
-    if (!(strain <= S->def.blow_up_strain)) {
-      int32_t s = -1;
-      (void)fascia_system_largest_strain(S->sys, &s);
-      return FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
-                         "the solution blew up: sample %d reached a strain of %.3g, past the limit %.3g",
-                         (int)s, strain, S->def.blow_up_strain);
-    }
+  int past = 0;
+  const fascia_backend_ops *ops = S->backend->ops;
+  if (S->def.blow_up_strain > 0 && ops->strain_past) {
+    FASCIA_TRY(ops->strain_past(S->backend, S->def.blow_up_strain, &past));
+  } else if (S->def.blow_up_strain > 0) {
+    fascia_system_set_state(S->sys, S->x, S->q);
+    past = !(fascia_system_largest_strain(S->sys, NULL) <= S->def.blow_up_strain);
+  }
+  if (past) { // where and how much, on the host: only on the way to the message
+    fascia_system_set_state(S->sys, S->x, S->q);
+    int32_t s = -1;
+    const fascia_real strain = fascia_system_largest_strain(S->sys, &s);
+    return FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
+                       "the solution blew up: sample %d reached a strain of %.3g, past the limit %.3g", (int)s, strain,
+                       S->def.blow_up_strain);
   }
   if (energy_before_known) {
-    fascia_real after = 0;
-    FASCIA_TRY(total_energy(S, &after));
+    const fascia_real after = total_energy(S);
     const fascia_real scale = fabs(energy_before) + S->weight_scale;
     if (!(after - energy_before <= ENERGY_RISE * scale))
       return FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
