@@ -53,7 +53,7 @@ static int stored_force(const char *path, const char *name, double f[3]) {
 }
 
 static void check_fine(fascia_ctx *ctx, const char *scene, const char *reference) {
-  fascia_demo_def def = {scene, 0, 1, 1, 0, 0};
+  fascia_demo_def def = {scene, 0, 1, 1, 0, 0, 0, 0};
   fascia_prep_stages s;
   fascia_demo_result r;
   memset(&r, 0, sizeof r);
@@ -132,7 +132,7 @@ int main(int argc, char **argv) {
   CHECK(fascia_ctx_create(&cd, &ctx) == FASCIA_OK);
   check_one_element(ctx, ccx);
 
-  fascia_demo_def def = {argv[1], VOXEL, 1, 1, 0, 0};
+  fascia_demo_def def = {argv[1], VOXEL, 1, 1, 0, 0, 0, 0};
   fascia_prep_stages s;
   fascia_status st = fascia_demo_prepare(ctx, &def, &s);
   if (st != FASCIA_OK) fprintf(stderr, "prepare: %s\n", fascia_ctx_message(ctx));

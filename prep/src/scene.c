@@ -1136,7 +1136,8 @@ static fascia_status parse_tissue(const reader *rd, const fascia_prep_scene *sce
   static const char *const known[] = {"name",           "form",          "connects",       "max_gap",
                                       "min_gap",        "region",        "material",       "frame_spacing",
                                       "sample_spacing", "shape_functions", "coupling",     "min_component",
-                                      "patch_radius",   "description",   NULL};
+                                      "patch_radius",   "description",   "attachment",   "attachment_layer",
+                                      NULL};
   PREP_TRY(check_keys(rd, item, path, known));
   PREP_TRY(get_name(rd, item, path, "name", t->name));
   const char *description;
@@ -1177,6 +1178,14 @@ static fascia_status parse_tissue(const reader *rd, const fascia_prep_scene *sce
   if (t->material < 0) return key_fail(rd, at, "no material is named '%s' in \"materials\"", material);
   PREP_TRY(parse_sampling(rd, scene, item, path, &t->frame_spacing, &t->sample_spacing, &t->shape_kind,
                           &t->neighbours, &t->samples_per_tet, &t->enhanced_modes, &t->min_component, &t->patch_radius));
+  const char *attachment;
+  PREP_TRY(get_string(rd, item, path, "attachment", 0, &attachment));
+  t->attachment = attachment && !strcmp(attachment, "exact") ? FASCIA_PREP_ATTACH_EXACT : FASCIA_PREP_ATTACH_FRAMES;
+  if (attachment && strcmp(attachment, "exact") && strcmp(attachment, "frames")) {
+    sub_key(at, path, "attachment");
+    return key_fail(rd, at, "unknown attachment '%s' (known: frames, exact)", attachment);
+  }
+  PREP_TRY(get_number(rd, item, path, "attachment_layer", 0, 0, 0, 0, INFINITY, &t->attachment_layer));
   t->coupling_tolerance = scene->voxel_size;
   t->couple_others = 1;
   const cJSON *coupling = cJSON_GetObjectItemCaseSensitive(item, "coupling");

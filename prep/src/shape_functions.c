@@ -789,6 +789,305 @@ static void in_span(const fascia_prep_points *pts, int32_t s, double *e) {
   }
 }
 
+// ------------------------------------------------------------ exact attachment
+
+// A tissue with attachment "exact" is held the way the organ holds it: on
+// the whole of the surface, not only at its shared frames. Each organ that
+// moves rigidly (fixed, prescribed or rigid) within a sample's support adds
+// one node to the sample's MLS: the organ's surface point nearest the sample,
+// q = p - r grad r / |grad r| (r the organ's distance, trilinear in the
+// voxels), whose value is the organ's motion. The weight it takes goes to
+// the organ's shared frame nearest the sample: every shared frame of the
+// organ carries the organ's motion of p (x_j + A_j (p - x_j)), whichever it
+// is. Within a layer of thickness L the kernels of the frames that do not
+// move with the organ are scaled by psi(r) = t^2 (3 - 2 t), t = r / L (at
+// least PSI_FLOOR), so at the surface the fit passes through the organ's
+// node and the tissue moves with the organ there; the weights stay an MLS,
+// a partition of unity that reproduces linear fields of its nodes (a field
+// that vanishes on a flat surface and grows linearly away from it is
+// exact). The weights depend on p through q and psi as well, so their
+// gradients are central differences of the whole construction.
+#define PSI_FLOOR 1e-3
+#define GRADIENT_STEP 1e-5 // of the support radius
+#define ATTACH_ORGANS 4    // organs held exactly near one sample, at most
+
+// The signed distance of organ o at p and its gradient, by quadratic
+// B-splines on the voxel centres: its gradient is continuous (the foot point
+// q with it; samples often sit on voxel centres, where a trilinear gradient
+// jumps), and it is exact where the distance is linear (a flat surface).
+// 0 when the stencil leaves the grid.
+static int distance_at(const fascia_prep_volume *vol, const prep_grid *g, int32_t o, const double *p, double *r,
+                       double *grad) {
+  const float *d = vol->distance[o];
+  double b[3][3], db[3][3];
+  int32_t c[3];
+  for (int k = 0; k < 3; ++k) {
+    const double x = p[k] / g->h - g->lo[k];
+    c[k] = (int32_t)floor(x + 0.5);
+    const double u = x - c[k];
+    if (c[k] < 1 || c[k] + 1 >= g->dims[k]) return 0;
+    b[k][0] = 0.5 * (0.5 - u) * (0.5 - u), b[k][1] = 0.75 - u * u, b[k][2] = 0.5 * (0.5 + u) * (0.5 + u);
+    db[k][0] = -(0.5 - u) / g->h, db[k][1] = -2 * u / g->h, db[k][2] = (0.5 + u) / g->h;
+  }
+  *r = 0;
+  grad[0] = grad[1] = grad[2] = 0;
+  for (int k = 0; k < 3; ++k)
+    for (int j = 0; j < 3; ++j)
+      for (int i = 0; i < 3; ++i) {
+        const double v = d[prep_grid_index(g, c[0] + i - 1, c[1] + j - 1, c[2] + k - 1)];
+        *r += v * b[0][i] * b[1][j] * b[2][k];
+        grad[0] += v * db[0][i] * b[1][j] * b[2][k];
+        grad[1] += v * b[0][i] * db[1][j] * b[2][k];
+        grad[2] += v * b[0][i] * b[1][j] * db[2][k];
+      }
+  return 1;
+}
+
+// 1 when tissue td's frames on organ o are all shared with it and follow it
+// rigidly: the blending needs every frame on the surface to carry the organ.
+static int attaches_exactly(const fascia_prep_scene *scene, const fascia_prep_volume *vol,
+                            const fascia_prep_tissue_def *td, int32_t o) {
+  if (scene->organs[o].kind == FASCIA_ORGAN_DEFORMABLE || scene->organs[o].shell || !vol->distance[o]) return 0;
+  for (int32_t k = 0; k < td->coupling_count; ++k)
+    if (td->coupling[k].organ == o)
+      return td->coupling[k].enabled && td->coupling[k].region.kind == FASCIA_PREP_REGION_NONE &&
+             td->coupling[k].parts.count == 0;
+  return td->couple_others || fascia_prep_tissue_connects(td, o);
+}
+
+// The frame of grid nearest to p (the lowest index among ties).
+static int32_t nearest_frame(fascia_ctx *quiet, const fascia_frame_grid *grid, const double *p) {
+  int32_t nearest = 0;
+  fascia_real radius;
+  if (fascia_frame_grid_nearest(quiet, grid, p, 1, &nearest, &radius) == FASCIA_OK) return nearest;
+  // p on a frame: no support radius, but that frame is the nearest
+  const fascia_real *x = fascia_frame_grid_positions(grid);
+  double best = INFINITY;
+  for (int32_t i = 0; i < fascia_frame_grid_count(grid); ++i) {
+    const double d = (x[3 * i] - p[0]) * (x[3 * i] - p[0]) + (x[3 * i + 1] - p[1]) * (x[3 * i + 1] - p[1]) +
+                     (x[3 * i + 2] - p[2]) * (x[3 * i + 2] - p[2]);
+    if (d < best) best = d, nearest = i;
+  }
+  return nearest;
+}
+
+// MLS weights at p of the n nodes x with kernel multipliers k (0: none) and
+// support radius; w[n]. Returns 0 when the moment matrix is singular.
+static int layer_mls(int32_t n, const double *x, const double *k, const double *p, double radius, double *w) {
+  double M[16] = {0}, b[4];
+  for (int32_t i = 0; i < n; ++i) {
+    b[0] = 1;
+    double q2 = 0;
+    for (int r = 0; r < 3; ++r) b[r + 1] = (x[3 * i + r] - p[r]) / radius, q2 += b[r + 1] * b[r + 1];
+    w[i] = k[i] * fascia_shape_kernel(sqrt(q2));
+    for (int a = 0; a < 4; ++a)
+      for (int c = 0; c < 4; ++c) M[4 * a + c] += w[i] * b[a] * b[c];
+  }
+  // M a = e0 by elimination with partial pivoting
+  double A[4][5], scale = 0;
+  for (int a = 0; a < 4; ++a) {
+    for (int c = 0; c < 4; ++c) A[a][c] = M[4 * a + c], scale = fmax(scale, fabs(M[4 * a + c]));
+    A[a][4] = a == 0;
+  }
+  for (int c = 0; c < 4; ++c) {
+    int best = c;
+    for (int a = c + 1; a < 4; ++a)
+      if (fabs(A[a][c]) > fabs(A[best][c])) best = a;
+    if (!(fabs(A[best][c]) > 1e-12 * scale)) return 0;
+    for (int e = 0; e < 5; ++e) {
+      const double t = A[c][e];
+      A[c][e] = A[best][e], A[best][e] = t;
+    }
+    for (int a = c + 1; a < 4; ++a) {
+      const double f = A[a][c] / A[c][c];
+      for (int e = c; e < 5; ++e) A[a][e] -= f * A[c][e];
+    }
+  }
+  double sol[4];
+  for (int a = 3; a >= 0; --a) {
+    sol[a] = A[a][4];
+    for (int c = a + 1; c < 4; ++c) sol[a] -= A[a][c] * sol[c];
+    sol[a] /= A[a][a];
+  }
+  for (int32_t i = 0; i < n; ++i) {
+    double v = sol[0];
+    for (int r = 0; r < 3; ++r) v += sol[r + 1] * (x[3 * i + r] - p[r]) / radius;
+    w[i] *= v;
+  }
+  return 1;
+}
+
+// 1 when the straight segment from p to organ o's surface point q nearest
+// it stays in the sample's region until it reaches the organ: the organ's
+// node, like a frame, must not be reached across another organ or a void.
+static int surface_in_sight(const fascia_prep_volume *vol, const prep_grid *g, int32_t o, const double *p,
+                            uint8_t label) {
+  double r, grad[3];
+  if (!distance_at(vol, g, o, p, &r, grad)) return 0;
+  const double norm = sqrt(grad[0] * grad[0] + grad[1] * grad[1] + grad[2] * grad[2]);
+  if (!(norm > 0) || !(r < vol->band[o] - 2 * g->h)) return 0; // beyond the band the distances are not exact
+  const int32_t steps = (int32_t)ceil(2 * fabs(r) / g->h);
+  for (int32_t k = 1; k <= steps; ++k) {
+    double x[3];
+    for (int c = 0; c < 3; ++c) x[c] = p[c] - (double)k / steps * r * grad[c] / norm;
+    const int64_t v = prep_grid_locate(g, x);
+    if (v < 0) return 0;
+    if (vol->region[v] != label && vol->distance[o][v] > g->h) return 0;
+  }
+  return 1;
+}
+
+// What the weights of one sample in the layer are made of.
+typedef struct layer_sample {
+  int32_t frames;             // the sample's own frames (nodes 0 .. frames - 1)
+  const int32_t *frame;       // [frames]
+  const uint8_t *held;        // [frames] 1: a frame that moves with an organ (its kernel unscaled)
+  int32_t organs;             // the organs' nodes follow
+  const int32_t *organ;       // [organs]
+  double radius, layer;
+} layer_sample;
+
+// Weights of the nodes at p: the frames', then one per organ; 0 when singular.
+static int layer_weights(const layer_sample *ls, const fascia_prep_volume *vol, const prep_grid *g,
+                         const fascia_prep_points *pts, const double *p, double *w) {
+  double x[3 * (MAX_PAIRS + ATTACH_ORGANS)], k[MAX_PAIRS + ATTACH_ORGANS], psi = 1;
+  const int32_t n = ls->frames + ls->organs;
+  for (int32_t j = 0; j < ls->organs; ++j) {
+    double r, grad[3];
+    if (!distance_at(vol, g, ls->organ[j], p, &r, grad)) return 0;
+    const double norm = sqrt(grad[0] * grad[0] + grad[1] * grad[1] + grad[2] * grad[2]);
+    if (!(norm > 0)) return 0;
+    for (int c = 0; c < 3; ++c) x[3 * (ls->frames + j) + c] = p[c] - r * grad[c] / norm;
+    k[ls->frames + j] = 1;
+    const double t = fmin(fmax(r / ls->layer, 0), 1);
+    psi *= t * t * (3 - 2 * t);
+  }
+  psi = fmax(psi, PSI_FLOOR);
+  for (int32_t j = 0; j < ls->frames; ++j) {
+    memcpy(x + 3 * j, pts->frame_position + 3 * (int64_t)ls->frame[j], 3 * sizeof(double));
+    k[j] = ls->held[j] ? 1 : psi;
+  }
+  return layer_mls(n, x, k, p, ls->radius, w);
+}
+
+// The weights of every MLS sample of the tissues with attachment "exact"
+// that lies within its support of an organ they hold to; blended[s] set for
+// the samples it changed.
+static fascia_status exact_attachment(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_volume *vol,
+                                      const fascia_prep_points *pts, int32_t *pair_frame, double *pair_w,
+                                      double *pair_g, int32_t *pair_count, uint8_t *blended) {
+  const prep_grid g = prep_volume_grid(vol);
+  const int32_t N = pts->frame_count, S = pts->sample_count, O = scene->organ_count;
+  fascia_status status = FASCIA_OK;
+  fascia_frame_grid **grids = prep_calloc(O, sizeof *grids);
+  int32_t **ids = prep_calloc(O, sizeof *ids);
+  double *x = prep_calloc(3 * (int64_t)(N > 0 ? N : 1), sizeof(double));
+  fascia_ctx *quiet = NULL;
+  fascia_ctx_def cd = fascia_ctx_def_default();
+  PREP_CHECK_GOTO(grids && ids && x && fascia_ctx_create(&cd, &quiet) == FASCIA_OK, ctx, FASCIA_ERR_MEMORY,
+                  "shape functions: out of memory");
+  for (int32_t t = 0; t < scene->tissue_count; ++t) {
+    const fascia_prep_tissue_def *td = scene->tissues + t;
+    if (td->form != FASCIA_PREP_FORM_VOLUME || td->attachment != FASCIA_PREP_ATTACH_EXACT ||
+        td->shape_kind != FASCIA_PREP_SHAPE_MLS)
+      continue;
+    const double L = td->attachment_layer > 0 ? td->attachment_layer : td->sample_spacing;
+    // the tissue's shared frames on each organ it holds to exactly
+    for (int32_t o = 0; o < O; ++o) {
+      fascia_frame_grid_destroy(grids + o);
+      free(ids[o]);
+      ids[o] = NULL;
+      if (!attaches_exactly(scene, vol, td, o)) continue;
+      int32_t n = 0;
+      for (int32_t i = 0; i < N; ++i) n += pts->frame_tissue[i] == t && pts->frame_organ[i] == o;
+      if (n == 0) continue;
+      ids[o] = prep_calloc(n, sizeof(int32_t));
+      PREP_CHECK_GOTO(ids[o], ctx, FASCIA_ERR_MEMORY, "shape functions: out of memory");
+      n = 0;
+      for (int32_t i = 0; i < N; ++i)
+        if (pts->frame_tissue[i] == t && pts->frame_organ[i] == o) {
+          memcpy(x + 3 * (int64_t)n, pts->frame_position + 3 * (int64_t)i, 3 * sizeof(double));
+          ids[o][n++] = i;
+        }
+      PREP_TRY_GOTO(fascia_frame_grid_create(ctx, n, x, grids + o));
+    }
+    for (int32_t s = 0; s < S; ++s) {
+      if (pts->sample_tissue[s] != t || pts->sample_voxel[s] < 0) continue;
+      const double *p = pts->sample_position + 3 * (int64_t)s;
+      const int64_t base = (int64_t)MAX_PAIRS * s;
+      int32_t *frame = pair_frame + base;
+      double far = 0;
+      for (int32_t j = 0; j < pair_count[s]; ++j) {
+        const double *y = pts->frame_position + 3 * (int64_t)frame[j];
+        far = fmax(far, sqrt((y[0] - p[0]) * (y[0] - p[0]) + (y[1] - p[1]) * (y[1] - p[1]) +
+                             (y[2] - p[2]) * (y[2] - p[2])));
+      }
+      int32_t organ[ATTACH_ORGANS], m = 0;
+      for (int32_t o = 0; o < O && m < ATTACH_ORGANS; ++o) {
+        double r, grad[3];
+        if (grids[o] && distance_at(vol, &g, o, p, &r, grad) && r < FASCIA_SHAPE_SUPPORT_MARGIN * far &&
+            surface_in_sight(vol, &g, o, p, vol->region[pts->sample_voxel[s]]))
+          organ[m++] = o;
+      }
+      if (m == 0) continue;
+      uint8_t held[MAX_PAIRS];
+      for (int32_t j = 0; j < pair_count[s]; ++j) {
+        held[j] = 0;
+        for (int32_t k = 0; k < m; ++k) held[j] |= pts->frame_organ[frame[j]] == organ[k];
+      }
+      const layer_sample ls = {pair_count[s], frame, held, m, organ, FASCIA_SHAPE_SUPPORT_MARGIN * far, L};
+      const int32_t n = pair_count[s] + m;
+      double w[MAX_PAIRS + ATTACH_ORGANS], grad[3 * (MAX_PAIRS + ATTACH_ORGANS)];
+      double wp[MAX_PAIRS + ATTACH_ORGANS], wm[MAX_PAIRS + ATTACH_ORGANS];
+      int ok = layer_weights(&ls, vol, &g, pts, p, w);
+      const double step = GRADIENT_STEP * ls.radius;
+      for (int c = 0; c < 3 && ok; ++c) {
+        double q[3] = {p[0], p[1], p[2]};
+        q[c] = p[c] + step;
+        ok = layer_weights(&ls, vol, &g, pts, q, wp);
+        q[c] = p[c] - step;
+        ok = ok && layer_weights(&ls, vol, &g, pts, q, wm);
+        for (int32_t j = 0; j < n && ok; ++j) grad[3 * j + c] = (wp[j] - wm[j]) / (2 * step);
+      }
+      PREP_CHECK_GOTO(ok, ctx, FASCIA_ERR_NUMERIC,
+                      "tissue '%s' sample %d at (%.4g %.4g %.4g) m: attachment exact: the weights of its %d frames "
+                      "and the organ surface are singular; use attachment \"frames\" or more neighbours",
+                      td->name, (int)s, p[0], p[1], p[2], (int)pair_count[s]);
+      // the frames' weights, then each organ's onto its shared frame nearest the sample
+      memcpy(pair_w + base, w, (size_t)pair_count[s] * sizeof(double));
+      memcpy(pair_g + 3 * base, grad, (size_t)pair_count[s] * 3 * sizeof(double));
+      for (int32_t k = 0; k < m; ++k) {
+        const int32_t target = ids[organ[k]][nearest_frame(quiet, grids[organ[k]], p)];
+        int32_t at = 0;
+        while (at < pair_count[s] && frame[at] < target) ++at;
+        if (at == pair_count[s] || frame[at] != target) {
+          PREP_CHECK_GOTO(pair_count[s] < MAX_PAIRS, ctx, FASCIA_ERR_INTERNAL,
+                          "tissue '%s' sample %d: %d frames already, no room for organ '%s''s (attachment exact)",
+                          td->name, (int)s, MAX_PAIRS, scene->organs[organ[k]].name);
+          const int32_t tail = pair_count[s] - at;
+          memmove(frame + at + 1, frame + at, (size_t)tail * sizeof *frame);
+          memmove(pair_w + base + at + 1, pair_w + base + at, (size_t)tail * sizeof *pair_w);
+          memmove(pair_g + 3 * (base + at + 1), pair_g + 3 * (base + at), (size_t)tail * 3 * sizeof *pair_g);
+          frame[at] = target, pair_w[base + at] = 0;
+          for (int r = 0; r < 3; ++r) pair_g[3 * (base + at) + r] = 0;
+          ++pair_count[s];
+        }
+        pair_w[base + at] += w[ls.frames + k];
+        for (int r = 0; r < 3; ++r) pair_g[3 * (base + at) + r] += grad[3 * (ls.frames + k) + r];
+      }
+      blended[s] = 1;
+    }
+  }
+cleanup:
+  fascia_ctx_destroy(&quiet);
+  for (int32_t o = 0; grids && o < O; ++o) fascia_frame_grid_destroy(grids + o);
+  for (int32_t o = 0; ids && o < O; ++o) free(ids[o]);
+  free(grids);
+  free(ids);
+  free(x);
+  return status;
+}
+
 // ------------------------------------------------------------ the stage
 
 fascia_status fascia_prep_shape_functions(fascia_ctx *ctx, const fascia_prep_scene *scene,
@@ -803,6 +1102,7 @@ fascia_status fascia_prep_shape_functions(fascia_ctx *ctx, const fascia_prep_sce
   fascia_status status = FASCIA_OK;
   local_tables *lt = NULL;
   int64_t *attach_voxel = NULL;
+  uint8_t *blended = NULL;
   fascia_prep_weights *W = calloc(1, sizeof *W);
   int32_t shared = 0;
   for (int32_t i = 0; i < N; ++i) shared += points->frame_organ_voxel[i] >= 0;
@@ -904,7 +1204,11 @@ fascia_status fascia_prep_shape_functions(fascia_ctx *ctx, const fascia_prep_sce
     if (failed != INT32_MAX) prep_label_name(scene, volume, volume->region[points->sample_voxel[failed]], name, sizeof name);
     PREP_CHECK_GOTO(failed == INT32_MAX, ctx, FASCIA_ERR_NUMERIC, "%s %s", name, message);
   }
-  // compact into CSR and measure linear reproduction
+  blended = prep_calloc(S, 1);
+  PREP_CHECK_GOTO(blended, ctx, FASCIA_ERR_MEMORY, "shape functions: out of memory");
+  PREP_TRY_GOTO(exact_attachment(ctx, scene, volume, points, pair_frame, pair_w, pair_g, pair_count, blended));
+  // compact into CSR and measure linear reproduction (a blended sample
+  // reproduces its organ's motion instead)
   int64_t P = 0;
   for (int32_t s = 0; s < S; ++s) P += pair_count[s];
   PREP_CHECK_GOTO(P < INT32_MAX, ctx, FASCIA_ERR_MEMORY, "shape functions: %lld pairs is too many", (long long)P);
@@ -930,7 +1234,7 @@ fascia_status fascia_prep_shape_functions(fascia_ctx *ctx, const fascia_prep_sce
     double e[3];
     for (int r = 0; r < 3; ++r) e[r] = reproduced[r] - points->sample_position[3 * (int64_t)s + r];
     if (points->sample_voxel[s] < 0) in_span(points, s, e); // a strand's section, a sheet's thickness: the rotations'
-    for (int r = 0; r < 3; ++r) W->max_linear_error = fmax(W->max_linear_error, fabs(e[r]));
+    for (int r = 0; r < 3 && !blended[s]; ++r) W->max_linear_error = fmax(W->max_linear_error, fabs(e[r]));
   }
   fascia_ctx_progress(ctx, "shape functions", 1, "done");
   *out = W;
@@ -943,6 +1247,7 @@ cleanup:
     free(lt);
   }
   free(attach_voxel);
+  free(blended);
   fascia_prep_weights_destroy(&W);
   free(fi.head);
   free(fi.next);

@@ -20,7 +20,9 @@
 //   --reference  the CalculiX mesh (from 1) the errors are taken against;
 //             default the last; displacements are compared at the nodes of
 //             the last mesh of each rung's voxel size
-//   TAG       nK: K MLS neighbours; flat: no volumetric patches
+//   TAG       nK: K MLS neighbours; flat: no volumetric patches; frames, e
+//             or eX: attachment frames or exact (layer X sample spacings);
+//             several joined by +
 //   --cache DIR  CalculiX's answers read from DIR when there, else solved and kept there
 //   --write-reference FILE  CalculiX's forces per mesh, the reference last
 //             (data/reference/demo-calculix.csv, read by tests/t598)
@@ -50,12 +52,25 @@ typedef struct ccx_row {
 
 typedef struct fascia_row {
   double voxel_mm, scale, sample_scale;
-  int32_t neighbours, no_patches;
+  int32_t neighbours, no_patches, attachment;
+  double layer_scale;
 } fascia_row;
 
-// A rung's tag: nK (K MLS neighbours) or flat (no volumetric patches).
+// A rung's tag: nK (K MLS neighbours), flat (no volumetric patches), frames
+// (attachment frames), e or eX (attachment exact, its layer X sample spacings).
 static int rung_tag(const char *tag, fascia_row *row) {
+  const char *plus = strchr(tag, '+'); // tags joined by +
+  if (plus) {
+    char first[16];
+    snprintf(first, sizeof first, "%.*s", (int)(plus - tag), tag);
+    return rung_tag(first, row) && rung_tag(plus + 1, row);
+  }
   if (!strcmp(tag, "flat")) return row->no_patches = 1;
+  if (!strcmp(tag, "frames")) return row->attachment = 1 + FASCIA_PREP_ATTACH_FRAMES, 1;
+  if (!strcmp(tag, "e")) return row->attachment = 1 + FASCIA_PREP_ATTACH_EXACT, 1;
+  double x;
+  if (sscanf(tag, "e%lf", &x) == 1 && x > 0)
+    return row->attachment = 1 + FASCIA_PREP_ATTACH_EXACT, row->layer_scale = x, 1;
   int k;
   if (sscanf(tag, "n%d", &k) == 1 && k >= 4) return row->neighbours = k, 1;
   return 0;
@@ -327,10 +342,10 @@ int main(int argc, char **argv) {
   for (const char *p = fascia_list; p && *p && nf < ROWS_MAX;) {
     memset(fr + nf, 0, sizeof fr[nf]);
     fr[nf].sample_scale = 1;
-    char tag[16] = "";
-    if (sscanf(p, "%lf:%lf:%lf:%15[^,]", &fr[nf].voxel_mm, &fr[nf].scale, &fr[nf].sample_scale, tag) < 2 ||
+    char tag[40] = "";
+    if (sscanf(p, "%lf:%lf:%lf:%39[^,]", &fr[nf].voxel_mm, &fr[nf].scale, &fr[nf].sample_scale, tag) < 2 ||
         (tag[0] && !rung_tag(tag, fr + nf)))
-      return usage("--fascia: expected VOXEL_MM:SCALE[:SAMPLE_SCALE[:TAG]], TAG nK or flat");
+      return usage("--fascia: expected VOXEL_MM:SCALE[:SAMPLE_SCALE[:TAG]], TAG nK, flat, frames, e or eX");
     ++nf;
     p = strchr(p, ',');
     if (p) ++p;
@@ -370,7 +385,7 @@ int main(int argc, char **argv) {
   printf("\nCalculiX                        nodes  elements");
   for (int k = 0; k < nc; ++k) {
     fascia_prep_stages s;
-    fascia_demo_def d = {scene, cr[k].voxel_mm * 1e-3, 1, 1, neighbours, 0};
+    fascia_demo_def d = {scene, cr[k].voxel_mm * 1e-3, 1, 1, neighbours, 0, 0, 0};
     fascia_status st = fascia_demo_prepare(ctx, &d, &s);
     if (st == FASCIA_OK) st = fascia_demo_mesh_build(ctx, &s, cr[k].quadratic, cr[k].split, &cr[k].mesh);
     cr[k].mesh.solver = ccx_solver;
@@ -435,7 +450,8 @@ int main(int argc, char **argv) {
       if (fabs(cr[c].voxel_mm - fr[k].voxel_mm) < 1e-9) at = cr + c;
     fascia_prep_stages s;
     fascia_demo_def d = {scene, fr[k].voxel_mm * 1e-3, fr[k].scale, fr[k].sample_scale,
-                         fr[k].neighbours ? fr[k].neighbours : neighbours, fr[k].no_patches};
+                         fr[k].neighbours ? fr[k].neighbours : neighbours, fr[k].no_patches, fr[k].attachment,
+                         fr[k].layer_scale};
     fascia_demo_result r;
     memset(&r, 0, sizeof r);
     fascia_status st = fascia_demo_prepare(ctx, &d, &s);
@@ -447,9 +463,12 @@ int main(int argc, char **argv) {
       continue;
     }
     const double frame = base_frame * fr[k].scale, sample = base_sample * fr[k].scale * fr[k].sample_scale;
-    char tag[16] = "";
-    if (fr[k].no_patches) snprintf(tag, sizeof tag, "flat");
-    else if (fr[k].neighbours) snprintf(tag, sizeof tag, "n%d", (int)fr[k].neighbours);
+    char tag[40] = "";
+    if (fr[k].layer_scale > 0) snprintf(tag, sizeof tag, "e%g", fr[k].layer_scale);
+    else if (fr[k].attachment) snprintf(tag, sizeof tag, fr[k].attachment == 1 ? "frames" : "e");
+    if (fr[k].no_patches) snprintf(tag + strlen(tag), sizeof tag - strlen(tag), "%sflat", tag[0] ? "+" : "");
+    if (fr[k].neighbours)
+      snprintf(tag + strlen(tag), sizeof tag - strlen(tag), "%sn%d", tag[0] ? "+" : "", (int)fr[k].neighbours);
     printf("%-5s %5.2f %5.2f  %5.3f  %6lld %7lld", tag, fr[k].voxel_mm, 1e3 * frame, 1e3 * sample, (long long)r.nodes,
            (long long)r.elements);
     for (int32_t o = 0; o < organ_count; ++o)

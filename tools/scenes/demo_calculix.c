@@ -37,6 +37,8 @@ fascia_status fascia_demo_prepare(fascia_ctx *ctx, const fascia_demo_def *def, f
   td->sample_spacing *= scale * (def->sample_scale > 0 ? def->sample_scale : 1);
   if (def->neighbours > 0) td->neighbours = def->neighbours;
   if (def->no_patches) td->patch_radius = 0;
+  if (def->attachment > 0) td->attachment = def->attachment - 1;
+  if (def->layer_scale > 0) td->attachment_layer = def->layer_scale * td->sample_spacing;
   SCENE_TRY(fascia_prep_import(ctx, sc, &s->meshes));
   SCENE_TRY(fascia_prep_repair(ctx, sc, s->meshes));
   SCENE_TRY(fascia_prep_voxelize(ctx, sc, s->meshes, &s->volume));

@@ -31,6 +31,8 @@ typedef struct fascia_demo_def {
   double sample_scale;  ///< its sample spacing times this on top; 0: 1
   int32_t neighbours;   ///< MLS neighbours; 0: the scene's
   int32_t no_patches;   ///< 1: the tissue without volumetric patches (its whole energy per sample)
+  int32_t attachment;   ///< 0: the scene's; 1: frames; 2: exact (fascia_prep_attachment_kind + 1)
+  double layer_scale;   ///< exact: its layer this times the (scaled) sample spacing; 0: the scene's
 } fascia_demo_def;
 
 /// The scene prepared as `fascia prep` does, gravity set to zero and the

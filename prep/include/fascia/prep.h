@@ -42,6 +42,13 @@ typedef enum fascia_prep_shape_kind {
   FASCIA_PREP_SHAPE_TET = 1  ///< mesh-based: tetrahedra of the frames, samples at their quadrature points
 } fascia_prep_shape_kind;
 
+/// How a volume tissue is held by the organs that carry its frames
+/// (scene key "attachment"; docs/mechanics.md, "The attachment").
+typedef enum fascia_prep_attachment_kind {
+  FASCIA_PREP_ATTACH_FRAMES = 0, ///< through its shared frames only, as the weights give them
+  FASCIA_PREP_ATTACH_EXACT = 1   ///< weights blended to the organ's motion within a layer of its surface
+} fascia_prep_attachment_kind;
+
 /// A box or a sphere that limits a tissue or its coupling.
 typedef enum fascia_prep_shape_region {
   FASCIA_PREP_REGION_NONE = 0,
@@ -200,6 +207,8 @@ typedef struct fascia_prep_tissue_def {
   int32_t couple_others;
   fascia_real min_component;  ///< pieces of region smaller than this are dropped, m^3
   fascia_real patch_radius;   ///< as for a deformable organ
+  int32_t attachment;         ///< VOLUME: fascia_prep_attachment_kind
+  fascia_real attachment_layer; ///< EXACT: thickness of the blended layer, m (0: the sample spacing)
 } fascia_prep_tissue_def;
 
 /// 1 when organ (an index into the scene's organs) is one of those tissue td
