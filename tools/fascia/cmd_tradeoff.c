@@ -466,41 +466,56 @@ static fascia_file *open_out(const tradeoff_options *opt, const char *name) {
 // Finishes f: 0, else 1 after the message (nothing left under its name).
 static int close_out(const tradeoff_options *opt, fascia_file *f) { return cli_tradeoff_commit(opt->ctx, f); }
 
-// Point files for gnuplot: all rows of a set, and its front sorted by time.
-static int write_points(const tradeoff_options *opt, const row *rows, int count, int dynamic, int problem) {
-  char name[96];
-  snprintf(name, sizeof name, "points_%s_%s.dat", dynamic ? "dynamic" : "static", problem_names[problem]);
-  fascia_file *ff = open_out(opt, name);
-  if (!ff) return 1;
-  snprintf(name, sizeof name, "front_%s_%s.dat", dynamic ? "dynamic" : "static", problem_names[problem]);
-  fascia_file *gf = open_out(opt, name);
-  if (!gf) {
-    fascia_file_discard(&ff);
+int cli_tradeoff_write_points(fascia_ctx *ctx, const char *dir, const char *points_name, const char *front_name,
+                              const char *columns, const cli_tradeoff_point *points, int count) {
+  int *order = malloc((size_t)(count > 0 ? count : 1) * sizeof *order);
+  if (!order) {
+    fprintf(stderr, "fascia tradeoff: out of memory for %d points\n", count);
     return 1;
   }
-  FILE *f = fascia_file_stream(ff), *g = fascia_file_stream(gf);
-  fprintf(f, "# ms error_percent label\n");
-  fprintf(g, "# ms error_percent label (Pareto front, by time)\n");
-  int order[MAX_ROWS], n = 0;
-  for (int k = 0; k < count; ++k)
-    if (rows[k].dynamic == dynamic && rows[k].problem == problem && strcmp(rows[k].group, "reference")) {
-      char label[96];
-      row_label(rows + k, label, sizeof label);
-      fprintf(f, "%.4f %.6g \"%s\"\n", rows[k].ms, fmax(rows[k].error_percent, 1e-6), label);
-      if (rows[k].pareto) order[n++] = k;
-    }
-  for (int a = 1; a < n; ++a) // insertion sort by time
-    for (int b = a; b > 0 && rows[order[b]].ms < rows[order[b - 1]].ms; --b) {
+  fascia_file *pf = cli_tradeoff_open(ctx, dir, points_name);
+  fascia_file *ff = pf ? cli_tradeoff_open(ctx, dir, front_name) : NULL;
+  if (!ff) {
+    fascia_file_discard(&pf);
+    free(order);
+    return 1;
+  }
+  FILE *p = fascia_file_stream(pf), *f = fascia_file_stream(ff);
+  fprintf(p, "# %s\n", columns);
+  fprintf(f, "# %s (Pareto front, by time)\n", columns);
+  int n = 0;
+  for (int k = 0; k < count; ++k) {
+    fprintf(p, "%.4f %.6g \"%s\"\n", points[k].ms, points[k].error, points[k].label);
+    if (points[k].pareto) order[n++] = k;
+  }
+  for (int a = 1; a < n; ++a) // insertion sort by time, ties in their order
+    for (int b = a; b > 0 && points[order[b]].ms < points[order[b - 1]].ms; --b) {
       const int t = order[b];
       order[b] = order[b - 1], order[b - 1] = t;
     }
-  for (int k = 0; k < n; ++k) {
-    char label[96];
-    row_label(rows + order[k], label, sizeof label);
-    fprintf(g, "%.4f %.6g \"%s\"\n", rows[order[k]].ms, fmax(rows[order[k]].error_percent, 1e-6), label);
-  }
-  const int rc = close_out(opt, ff);
-  return close_out(opt, gf) | rc;
+  for (int k = 0; k < n; ++k)
+    fprintf(f, "%.4f %.6g \"%s\"\n", points[order[k]].ms, points[order[k]].error, points[order[k]].label);
+  free(order);
+  const int rc = cli_tradeoff_commit(ctx, pf);
+  return cli_tradeoff_commit(ctx, ff) | rc;
+}
+
+// Point files for gnuplot: all rows of a set, and its front sorted by time.
+static int write_points(const tradeoff_options *opt, const row *rows, int count, int dynamic, int problem) {
+  char labels[MAX_ROWS][96];
+  cli_tradeoff_point points[MAX_ROWS];
+  int n = 0;
+  for (int k = 0; k < count; ++k)
+    if (rows[k].dynamic == dynamic && rows[k].problem == problem && strcmp(rows[k].group, "reference")) {
+      row_label(rows + k, labels[n], sizeof labels[n]);
+      points[n] = (cli_tradeoff_point){rows[k].ms, fmax(rows[k].error_percent, 1e-6), labels[n], rows[k].pareto};
+      ++n;
+    }
+  char points_name[96], front_name[96];
+  const char *mode = dynamic ? "dynamic" : "static";
+  snprintf(points_name, sizeof points_name, "points_%s_%s.dat", mode, problem_names[problem]);
+  snprintf(front_name, sizeof front_name, "front_%s_%s.dat", mode, problem_names[problem]);
+  return cli_tradeoff_write_points(opt->ctx, opt->out, points_name, front_name, "ms error_percent label", points, n);
 }
 
 // Hexahedral FEM on the same problem (CalculiX C3D8, nonlinear).

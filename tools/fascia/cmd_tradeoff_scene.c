@@ -987,31 +987,19 @@ static int write_csv(const study *s) {
 
 // Points, front and the gnuplot script of error against ms.
 static int write_plot(const study *s) {
-  fascia_file *pf = open_out(s, "points-scene.dat"), *ff = pf ? open_out(s, "front-scene.dat") : NULL;
-  if (!ff) {
-    fascia_file_discard(&pf);
+  cli_tradeoff_point *points = malloc((size_t)(s->row_count > 0 ? s->row_count : 1) * sizeof *points);
+  if (!points) {
+    fprintf(stderr, "fascia tradeoff: out of memory for %d rows\n", (int)s->row_count);
     return 1;
   }
-  FILE *p = fascia_file_stream(pf), *f = fascia_file_stream(ff);
-  fprintf(p, "# ms_per_step largest_organ_force_error_percent label\n");
-  fprintf(f, "# ms_per_step largest_organ_force_error_percent label (Pareto front, by time)\n");
-  int order[512], n = 0;
+  int n = 0;
   for (int k = 0; k < s->row_count; ++k) {
     const scene_row *r = s->rows + k;
-    if (r->failed) continue;
-    fprintf(p, "%.4f %.6g \"%s\"\n", r->ms, fmax(r->force_error_max, 1e-3), r->label);
-    if (r->pareto && n < 512) order[n++] = k;
+    if (!r->failed) points[n++] = (cli_tradeoff_point){r->ms, fmax(r->force_error_max, 1e-3), r->label, r->pareto};
   }
-  for (int a = 1; a < n; ++a)
-    for (int b = a; b > 0 && s->rows[order[b]].ms < s->rows[order[b - 1]].ms; --b) {
-      const int t = order[b];
-      order[b] = order[b - 1], order[b - 1] = t;
-    }
-  for (int k = 0; k < n; ++k)
-    fprintf(f, "%.4f %.6g \"%s\"\n", s->rows[order[k]].ms, fmax(s->rows[order[k]].force_error_max, 1e-3),
-            s->rows[order[k]].label);
-  int rc = close_out(s, pf);
-  rc |= close_out(s, ff);
+  const int rc = cli_tradeoff_write_points(s->ctx, s->opt->out, "points-scene.dat", "front-scene.dat",
+                                           "ms_per_step largest_organ_force_error_percent label", points, n);
+  free(points);
   fascia_file *gf = rc ? NULL : open_out(s, "pareto-scene.gp");
   if (!gf) return 1;
   FILE *g = fascia_file_stream(gf);
