@@ -176,6 +176,15 @@ static fascia_status nifti_version(fascia_ctx *ctx, const char *path, const unsi
   return FASCIA_OK;
 }
 
+// The fields both NIfTI versions have, from header c (nifti_1_header or
+// nifti_2_header, in host byte order) into h.
+#define COPY_SHARED_FIELDS(h, c)                                                                                      \
+  do {                                                                                                                \
+    for (int d = 0; d < 8; ++d) (h)->dim[d] = (c).dim[d], (h)->pixdim[d] = (c).pixdim[d];                             \
+    (h)->datatype = (c).datatype, (h)->bitpix = (c).bitpix;                                                           \
+    (h)->qform_code = (c).qform_code, (h)->sform_code = (c).sform_code;                                               \
+  } while (0)
+
 static fascia_status nifti_header(fascia_ctx *ctx, const char *path, const unsigned char *b, size_t have,
                                   nifti_head *h) {
   const size_t size = h->version == 1 ? sizeof(nifti_1_header) : sizeof(nifti_2_header);
@@ -195,8 +204,7 @@ static fascia_status nifti_header(fascia_ctx *ctx, const char *path, const unsig
                "label map '%s': bad magic at byte 344 (expected 'n+1'): not a NIfTI-1 file, or its header is "
                "damaged",
                path);
-    for (int d = 0; d < 8; ++d) h->dim[d] = c.dim[d], h->pixdim[d] = c.pixdim[d];
-    h->datatype = c.datatype, h->bitpix = c.bitpix, h->qform_code = c.qform_code, h->sform_code = c.sform_code;
+    COPY_SHARED_FIELDS(h, c);
     PREP_CHECK(isfinite(c.vox_offset) && c.vox_offset == floor(c.vox_offset) && c.vox_offset < 0x1p62, ctx,
                FASCIA_ERR_FORMAT, "label map '%s': vox_offset %g is not a byte offset; the header is damaged", path,
                (double)c.vox_offset);
@@ -209,8 +217,7 @@ static fascia_status nifti_header(fascia_ctx *ctx, const char *path, const unsig
                "label map '%s': bad magic at byte 4 (expected 'n+2' and its 4 check bytes): not a single-file "
                "NIfTI-2, or its header is damaged",
                path);
-    for (int d = 0; d < 8; ++d) h->dim[d] = c.dim[d], h->pixdim[d] = c.pixdim[d];
-    h->datatype = c.datatype, h->bitpix = c.bitpix, h->qform_code = c.qform_code, h->sform_code = c.sform_code;
+    COPY_SHARED_FIELDS(h, c);
     h->vox_offset = c.vox_offset;
   }
   const int64_t ndim = h->dim[0];
