@@ -3,8 +3,9 @@
 // The CPU backend of the Newton loop (backend.h): the step objective on the
 // host system (system.c), the tangent as products or an assembled block
 // matrix, directions by its linear solver (linear_solver.c: CG or sparse
-// Cholesky), and rigid organs as bodies whose frames follow them (organs.c,
-// on the solver's state).
+// Cholesky), and rigid organs as bodies whose frames follow them (organs.c).
+// Like the device, it keeps a step's state in arrays of its own: begin
+// copies the step's values in, finish copies the iterate out.
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -18,6 +19,12 @@
 // The backend's own arrays, declared once: member, element type, values per
 // frame. The members, their allocation, check and freeing follow.
 #define CPU_ARRAYS(X)                                                                                                  \
+  X(x_base, fascia_real, 3)            /* the anchor: positions */                                                     \
+  X(q_base, fascia_real, 4)            /* and rotations */                                                             \
+  X(d, fascia_real, 6)                 /* the iterate: increments from the anchor */                                   \
+  X(gradient, fascia_real, 6)          /* its gradient */                                                              \
+  X(x, fascia_real, 3)                 /* the state of the last evaluation: positions */                               \
+  X(q, fascia_real, 4)                 /* and rotations */                                                             \
   X(target_M, fascia_real, 6)          /* M (h u) */                                                                   \
   X(d_trial, fascia_real, 6)           /* the trial d + alpha p */                                                     \
   X(gradient_trial, fascia_real, 6)    /* its gradient */                                                              \
@@ -32,7 +39,7 @@
 #define CPU_MEMBER(name, type, width) type *name;
 typedef struct cpu_backend {
   fascia_backend base;
-  fascia_solver *S; ///< the state the trials write (x, q) and the rigid organs read
+  fascia_solver *S; ///< for its organs, context and linear-solver epoch
   fascia_system *sys;
   const fascia_model *model;
   const fascia_solver_def *def;
@@ -40,8 +47,6 @@ typedef struct cpu_backend {
   int32_t frame_count;
   // the step
   fascia_step_values values;
-  fascia_real *x_base, *q_base, *d; ///< the solver's anchor and iterate (the organs read them there)
-  fascia_real *gradient;            ///< the current gradient: the solver's
   fascia_real target_norm;          ///< (h u).M(h u)
   CPU_ARRAYS(CPU_MEMBER)
   const fascia_pt_bodies *bodies; ///< rigid organs (point/body.h), NULL for none
@@ -122,20 +127,21 @@ static void mass_apply(cpu_backend *B, const fascia_real *v, fascia_real *out) {
   }
 }
 
-// Anchor and first iterate are the solver's own arrays (the rigid organs
-// read them there); the mass at the anchor for a dynamic step.
+// Anchor and first iterate into the backend's arrays; the mass at the
+// anchor for a dynamic step.
 static fascia_status cpu_begin(fascia_backend *backend, const fascia_step_values *v, fascia_solve_report *report) {
   cpu_backend *B = (cpu_backend *)backend;
   fascia_solver *S = B->S;
-  FASCIA_CHECK(v->x_base == S->x_base && v->q_base == S->q_base && v->d == S->d, S->ctx, FASCIA_ERR_INTERNAL,
-               "cpu backend: the step's arrays are not the solver's");
   B->values = *v;
-  B->x_base = S->x_base, B->q_base = S->q_base, B->d = S->d, B->gradient = S->gradient;
+  const int64_t N = B->frame_count, n = 6 * N;
+  memcpy(B->x_base, v->x_base, 3 * (size_t)N * sizeof(fascia_real));
+  memcpy(B->q_base, v->q_base, 4 * (size_t)N * sizeof(fascia_real));
+  memcpy(B->d, v->d, (size_t)n * sizeof(fascia_real));
+  B->values.x_base = B->x_base, B->values.q_base = B->q_base, B->values.d = B->d;
   B->sys->gravity_scale = v->gravity_scale;
-  const int64_t n = 6 * (int64_t)B->frame_count;
   B->target_norm = 0;
   if (v->dynamic) {
-    fascia_system_set_state(B->sys, v->x_base, v->q_base);
+    fascia_system_set_state(B->sys, B->x_base, B->q_base);
     fascia_system_mass_snapshot(B->sys);
     fascia_system_mass_lumped(B->sys, B->mass_blocks);
     mass_apply(B, v->inertia_target, B->target_M);
@@ -172,11 +178,11 @@ static fascia_status objective(cpu_backend *B, const fascia_real *d, fascia_real
   const int32_t N = B->frame_count;
   const int64_t n = 6 * (int64_t)N;
   for (int32_t i = 0; i < N; ++i) {
-    for (int c = 0; c < 3; ++c) S->x[3 * i + c] = B->x_base[3 * i + c] + d[6 * i + c];
-    memcpy(S->q + 4 * i, B->q_base + 4 * i, 4 * sizeof(fascia_real));
-    fascia_pt_quat_rotate_by(d + 6 * i + 3, S->q + 4 * i);
+    for (int c = 0; c < 3; ++c) B->x[3 * i + c] = B->x_base[3 * i + c] + d[6 * i + c];
+    memcpy(B->q + 4 * i, B->q_base + 4 * i, 4 * sizeof(fascia_real));
+    fascia_pt_quat_rotate_by(d + 6 * i + 3, B->q + 4 * i);
   }
-  fascia_system_set_state(B->sys, S->x, S->q);
+  fascia_system_set_state(B->sys, B->x, B->q);
   fascia_real energy;
   FASCIA_TRY(fascia_system_evaluate(B->sys, gradient, &energy));
   if (v->dynamic)
@@ -195,7 +201,7 @@ static fascia_status objective(cpu_backend *B, const fascia_real *d, fascia_real
   // rigid organs: the bodies' own terms, gradient restricted to their masters
   const fascia_pt_body_step body_step = {v->c1, v->c2, v->gravity_scale, v->dynamic,
                                          {B->sys->gravity[0], B->sys->gravity[1], B->sys->gravity[2]}};
-  energy += fascia_organs_reduce(S->organs, &body_step, S->x, S->q, B->x_base, B->q_base, d, gradient);
+  energy += fascia_organs_reduce(S->organs, &body_step, B->x, B->q, B->x_base, B->q_base, d, gradient);
   for (int64_t k = 0; k < n; ++k)
     if (!B->mask[k]) gradient[k] = 0;
   *phi = energy;
@@ -262,8 +268,8 @@ static void cpu_accept(fascia_backend *backend) {
   } else {
     // static: re-anchor at the accepted state, so d = 0 and the Hessian
     // of the next iteration is exact (no Jacobian of the rotation map)
-    memcpy(B->x_base, B->S->x, 3 * (size_t)N * sizeof(fascia_real));
-    memcpy(B->q_base, B->S->q, 4 * (size_t)N * sizeof(fascia_real));
+    memcpy(B->x_base, B->x, 3 * (size_t)N * sizeof(fascia_real));
+    memcpy(B->q_base, B->q, 4 * (size_t)N * sizeof(fascia_real));
     memset(B->d, 0, n * sizeof(fascia_real));
   }
 }
@@ -285,17 +291,21 @@ static void cpu_restore(fascia_backend *backend) {
   memcpy(B->d, B->saved + 7 * N, 6 * N * sizeof(fascia_real));
 }
 
-// The trials wrote the solver's own arrays: nothing to copy
+// The state of the last evaluation (the iterate) and its increments and
+// gradient to the caller's arrays; the system holds its energies already.
 static fascia_status cpu_finish(fascia_backend *backend, const fascia_step_result *result) {
   cpu_backend *B = (cpu_backend *)backend;
-  FASCIA_CHECK(result->x == B->S->x && result->q == B->S->q && result->d == B->d && result->gradient == B->gradient,
-               B->S->ctx, FASCIA_ERR_INTERNAL, "cpu backend: the result's arrays are not the solver's");
+  const size_t N = (size_t)B->frame_count;
+  memcpy(result->x, B->x, 3 * N * sizeof(fascia_real));
+  memcpy(result->q, B->q, 4 * N * sizeof(fascia_real));
+  memcpy(result->d, B->d, 6 * N * sizeof(fascia_real));
+  memcpy(result->gradient, B->gradient, 6 * N * sizeof(fascia_real));
   return FASCIA_OK;
 }
 
 static fascia_status cpu_strain_past(fascia_backend *backend, fascia_real limit, int *past) {
   cpu_backend *B = (cpu_backend *)backend;
-  fascia_system_set_state(B->sys, B->S->x, B->S->q);
+  fascia_system_set_state(B->sys, B->x, B->q);
   *past = !(fascia_system_largest_strain(B->sys, NULL) <= limit);
   return FASCIA_OK;
 }
