@@ -212,6 +212,10 @@ fascia_status fascia_ccx_beam_write(fascia_ctx *ctx, const fascia_ccx_beam_def *
   if (def->tight) fprintf(out, "*CONTROLS, PARAMETERS=FIELD\n1e-7, 1e-7, 0., -1., 0.02, 1e-5, 1e-3, 1e-8\n");
   fprintf(out, "*DLOAD\nEALL, GRAV, %.13g, %.13g, %.13g, %.13g\n*NODE PRINT, NSET=NTIP\nU\n*END STEP\n", gn,
           gv[0] / gn, gv[1] / gn, gv[2] / gn);
+  return fascia_ccx_deck_written(ctx, out);
+}
+
+fascia_status fascia_ccx_deck_written(fascia_ctx *ctx, FILE *out) {
   if (fflush(out) != 0 || ferror(out))
     return SCENE_FAIL(ctx, FASCIA_ERR_IO, WHO ": writing failed (%s)", strerror(errno));
   return FASCIA_OK;

@@ -89,6 +89,10 @@ const char *fascia_ccx_program(void);
 fascia_status fascia_ccx_beam_solve(fascia_ctx *ctx, const fascia_ccx_beam_def *def, const char *program,
                                     int threads, fascia_ccx_result *out);
 
+/// The end of a deck writer: FASCIA_ERR_IO with the reason when writing
+/// `out` failed (a full disk), else FASCIA_OK.
+fascia_status fascia_ccx_deck_written(fascia_ctx *ctx, FILE *out);
+
 /// Writes a deck to `out`; `arg` is the writer's own definition.
 typedef fascia_status (*fascia_ccx_deck_writer)(fascia_ctx *ctx, const void *arg, FILE *out);
 

@@ -302,8 +302,7 @@ fascia_status fascia_demo_write_deck(fascia_ctx *ctx, const void *arg, FILE *out
   for (int32_t o = 0; o < m->organ_count; ++o)
     fprintf(out, "*NODE PRINT, NSET=NORGAN%d, TOTALS=ONLY\nRF\n", (int)o);
   fprintf(out, "*NODE PRINT, NSET=NALL, FREQUENCY=10000\nU\n*END STEP\n");
-  if (ferror(out)) return SCENE_FAIL(ctx, FASCIA_ERR_IO, "demo deck: writing failed");
-  return FASCIA_OK;
+  return fascia_ccx_deck_written(ctx, out);
 }
 
 // A number of a .dat line at *p, Fortran's way: an exponent of three digits
@@ -415,8 +414,7 @@ static fascia_status write_one_element(fascia_ctx *ctx, const void *arg, FILE *o
     }
   fprintf(out, "*NODE PRINT, NSET=NX, TOTALS=ONLY\nRF\n*NODE PRINT, NSET=NY, TOTALS=ONLY\nRF\n"
                "*NODE PRINT, NSET=NZ, TOTALS=ONLY\nRF\n*END STEP\n");
-  if (ferror(out)) return SCENE_FAIL(ctx, FASCIA_ERR_IO, "one-element deck: writing failed");
-  return FASCIA_OK;
+  return fascia_ccx_deck_written(ctx, out);
 }
 
 fascia_status fascia_demo_one_element(fascia_ctx *ctx, const char *program, double E, double nu, const double F[9],

@@ -8,7 +8,6 @@
 #define _POSIX_C_SOURCE 200809L
 #include "shell_calculix.h"
 
-#include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -365,9 +364,7 @@ fascia_status fascia_shell_write_deck(fascia_ctx *ctx, const void *shell_def, FI
   fprintf(out, "*SHELL SECTION, ELSET=EALL, MATERIAL=WALL\n%.13g\n*BOUNDARY\nNFIX, 1, 6\n", d->thickness);
   fascia_tissue_deck_step(out);
   fprintf(out, "*DLOAD\nEALL, GRAV, %.13g, 0., 0., -1.\n*NODE PRINT, NSET=NPROBE\nU\n*END STEP\n", d->gravity);
-  if (fflush(out) != 0 || ferror(out))
-    return SCENE_FAIL(ctx, FASCIA_ERR_IO, "CalculiX deck: writing failed (%s)", strerror(errno));
-  return FASCIA_OK;
+  return fascia_ccx_deck_written(ctx, out);
 }
 
 fascia_status fascia_shell_calculix(fascia_ctx *ctx, const fascia_shell_def *def, const char *program,

@@ -185,12 +185,6 @@ fascia_status fascia_tissue_pull_write_scene(fascia_ctx *ctx, const void *pull_d
 
 // ------------------------------------------------------------ decks
 
-static fascia_status deck_written(fascia_ctx *ctx, FILE *out) {
-  if (fflush(out) != 0 || ferror(out))
-    return SCENE_FAIL(ctx, FASCIA_ERR_IO, "CalculiX deck: writing failed (%s)", strerror(errno));
-  return FASCIA_OK;
-}
-
 // Increments: a tenth of the load first, ccx growing or cutting them; tight
 // Newton controls as the cantilever's reference (beam_calculix.c).
 static void write_step_start(FILE *out) {
@@ -228,7 +222,7 @@ fascia_status fascia_tissue_hang_write_deck(fascia_ctx *ctx, const void *hang_de
   fprintf(out, "*DLOAD\nESTRAND, GRAV, %.13g, 0., 0., -1.\n*CLOAD\n%d, 3, %.13g\n", d->gravity, (int)centre,
           -mass * d->gravity);
   fprintf(out, "*NODE PRINT, NSET=NORGAN\nU\n*NODE PRINT, NSET=NFIX, TOTALS=ONLY\nRF\n*END STEP\n");
-  return deck_written(ctx, out);
+  return fascia_ccx_deck_written(ctx, out);
 }
 
 // Node id of point (i, j) of the (2 ex + 1) x (2 ey + 1) grid of an S8R mesh.
@@ -283,7 +277,7 @@ fascia_status fascia_tissue_pull_write_deck(fascia_ctx *ctx, const void *pull_de
   fprintf(out, "*BOUNDARY\nNPULL, 1, 1, %.13g\nNPULL, 2, 2, %.13g\nNPULL, 3, 3, %.13g\n", d->pull[0], d->pull[1],
           d->pull[2]);
   fprintf(out, "*NODE PRINT, NSET=NPROBE\nU\n*NODE PRINT, NSET=NPULL, TOTALS=ONLY\nRF\n*END STEP\n");
-  return deck_written(ctx, out);
+  return fascia_ccx_deck_written(ctx, out);
 }
 
 // ------------------------------------------------------------ ccx's answers
