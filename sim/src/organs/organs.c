@@ -336,15 +336,15 @@ void fascia_organs_expand(const fascia_organs *O, const fascia_real *x_base, con
     fascia_pt_body_expand(&O->bodies, i, x_base, q_base, d);
 }
 
-void fascia_organs_step_begin(fascia_organs *O, fascia_solver *S, fascia_real h) {
+void fascia_organs_step_begin(fascia_organs *O, const fascia_organs_state *st, fascia_real h) {
   if (!O) return;
   for (int32_t b = 0; b < O->organ_count; ++b) {
     if (O->driven[b]) {
       for (int32_t f = O->frame_offsets[b]; f < O->frame_offsets[b + 1]; ++f) {
         const int32_t i = O->frames[f];
-        fascia_real *d = S->d + 6 * i, qc[4], rel[4];
-        for (int c = 0; c < 3; ++c) d[c] = O->target_x[3 * i + c] - S->x_base[3 * i + c];
-        quat_conj(S->q_base + 4 * i, qc);
+        fascia_real *d = st->d + 6 * i, qc[4], rel[4];
+        for (int c = 0; c < 3; ++c) d[c] = O->target_x[3 * i + c] - st->x_base[3 * i + c];
+        quat_conj(st->q_base + 4 * i, qc);
         fascia_pt_quat_mul(O->target_q + 4 * i, qc, rel);
         fascia_pt_quat_log(rel, d + 3);
       }
@@ -352,23 +352,22 @@ void fascia_organs_step_begin(fascia_organs *O, fascia_solver *S, fascia_real h)
     }
     if (!active(O, b)) continue;
     fascia_real Q0[4], R0[9], IR[9];
-    fascia_pt_body_rotation(&O->bodies, b, S->q_base, Q0, R0);
+    fascia_pt_body_rotation(&O->bodies, b, st->q_base, Q0, R0);
     fascia_pt_mat_mult(O->inertia + 9 * b, R0, IR); // I R0^T
     fascia_pt_mat_mul(R0, IR, O->world_inertia + 9 * b);
     for (int c = 0; c < 6; ++c) O->target[6 * b + c] = h * O->velocity[6 * b + c];
   }
-  fascia_organs_expand(O, S->x_base, S->q_base, S->d);
+  fascia_organs_expand(O, st->x_base, st->q_base, st->d);
 }
 
-void fascia_organs_step_end(fascia_organs *O, fascia_solver *S, fascia_real h) {
+void fascia_organs_step_end(fascia_organs *O, const fascia_organs_state *st, const fascia_real *g, fascia_real h) {
   if (!O) return;
-  const fascia_real *g = S->sys->gravity;
   for (int32_t b = 0; b < O->organ_count; ++b) {
     fascia_real *v = O->velocity + 6 * b;
     if (active(O, b)) {
-      fascia_pt_body_centre_increment(&O->bodies, b, S->x, S->q, S->x_base, S->q_base, v);
-      for (int c = 0; c < 3; ++c) v[c] /= h, v[3 + c] = S->d[6 * O->master[b] + 3 + c] / h;
-    } else if (S->model->organs[b].kind == FASCIA_ORGAN_RIGID && O->master[b] < 0) {
+      fascia_pt_body_centre_increment(&O->bodies, b, st->x, st->q, st->x_base, st->q_base, v);
+      for (int c = 0; c < 3; ++c) v[c] /= h, v[3 + c] = st->d[6 * O->master[b] + 3 + c] / h;
+    } else if (O->model->organs[b].kind == FASCIA_ORGAN_RIGID && O->master[b] < 0) {
       // free flight, backward Euler: no torque, constant angular velocity
       fascia_real *pose = O->free_pose + 7 * b, phi[3];
       for (int c = 0; c < 3; ++c) v[c] += h * g[c], pose[c] += h * v[c], phi[c] = h * v[3 + c];
@@ -476,9 +475,8 @@ void fascia_organs_reduce_matrix(const fascia_organs *O, const fascia_system *sy
   }
 }
 
-fascia_real fascia_organs_load_norm2(const fascia_organs *O, const fascia_solver *S) {
+fascia_real fascia_organs_load_norm2(const fascia_organs *O, const fascia_system *sys) {
   fascia_real sum = 0;
-  const fascia_system *sys = S->sys;
   for (int32_t b = 0; O && b < O->organ_count; ++b) {
     if (!active(O, b)) continue;
     fascia_real f[3];
@@ -486,7 +484,7 @@ fascia_real fascia_organs_load_norm2(const fascia_organs *O, const fascia_solver
     for (int32_t k = O->frame_offsets[b]; k < O->frame_offsets[b + 1]; ++k) {
       const int32_t i = O->frames[k];
       if (i == O->master[b]) continue;
-      for (int c = 0; c < 3; ++c) f[c] += sys->frame_mass[i] * sys->gravity[c] + S->model->frame_load[6 * i + c];
+      for (int c = 0; c < 3; ++c) f[c] += sys->frame_mass[i] * sys->gravity[c] + O->model->frame_load[6 * i + c];
     }
     sum += sys->gravity_scale * sys->gravity_scale * fascia_pt_dot3(f, f);
   }
@@ -510,11 +508,11 @@ void fascia_organs_restore(fascia_organs *O, const fascia_real *buffer) {
 }
 
 // Puts body b's slaves rigidly on its master, with the rigid velocity field.
-static void place_slaves(fascia_organs *O, fascia_solver *S, int32_t b) {
+static void place_slaves(fascia_organs *O, const fascia_organs_state *st, int32_t b) {
   const int32_t m = O->master[b];
   fascia_real Q[4], R[9], r[3], a[3];
-  fascia_pt_body_rotation(&O->bodies, b, S->q, Q, R);
-  const fascia_real *um = S->u + 6 * m;
+  fascia_pt_body_rotation(&O->bodies, b, st->q, Q, R);
+  const fascia_real *um = st->u + 6 * m;
   for (int32_t f = O->frame_offsets[b]; f < O->frame_offsets[b + 1]; ++f) {
     const int32_t i = O->frames[f];
     if (i == m) continue;
@@ -523,12 +521,12 @@ static void place_slaves(fascia_organs *O, fascia_solver *S, int32_t b) {
     fascia_real wa[3];
     fascia_pt_cross(um + 3, a, wa);
     for (int c = 0; c < 3; ++c) {
-      S->x[3 * i + c] = S->x[3 * m + c] + a[c];
-      S->u[6 * i + c] = um[c] + wa[c];
-      S->u[6 * i + 3 + c] = um[3 + c];
+      st->x[3 * i + c] = st->x[3 * m + c] + a[c];
+      st->u[6 * i + c] = um[c] + wa[c];
+      st->u[6 * i + 3 + c] = um[3 + c];
     }
-    fascia_pt_quat_mul(Q, O->model->frame_rotation + 4 * i, S->q + 4 * i);
-    fascia_pt_quat_normalize(S->q + 4 * i);
+    fascia_pt_quat_mul(Q, O->model->frame_rotation + 4 * i, st->q + 4 * i);
+    fascia_pt_quat_normalize(st->q + 4 * i);
   }
   fascia_pt_body_rest_offset(&O->bodies, b, -1, r);
   fascia_pt_mat_vec(R, r, a);
@@ -537,18 +535,18 @@ static void place_slaves(fascia_organs *O, fascia_solver *S, int32_t b) {
   for (int c = 0; c < 3; ++c) O->velocity[6 * b + c] = um[c] + wa[c], O->velocity[6 * b + 3 + c] = um[3 + c];
 }
 
-void fascia_organs_sync(fascia_organs *O, fascia_solver *S) {
+void fascia_organs_sync(fascia_organs *O, const fascia_organs_state *st) {
   for (int32_t b = 0; O && b < O->organ_count; ++b)
-    if (active(O, b)) place_slaves(O, S, b);
+    if (active(O, b)) place_slaves(O, st, b);
 }
 
-fascia_real fascia_organs_kinetic_energy(const fascia_organs *O, const fascia_solver *S) {
+fascia_real fascia_organs_kinetic_energy(const fascia_organs *O, const fascia_real *q) {
   fascia_real e = 0;
   for (int32_t b = 0; O && b < O->organ_count; ++b) {
-    if (S->model->organs[b].kind != FASCIA_ORGAN_RIGID || O->driven[b]) continue;
+    if (O->model->organs[b].kind != FASCIA_ORGAN_RIGID || O->driven[b]) continue;
     const fascia_real *v = O->velocity + 6 * b;
     fascia_real Q[4], R[9], Rw[3], IRw[3], w[3];
-    if (O->master[b] >= 0) fascia_pt_body_rotation(&O->bodies, b, S->q, Q, R);
+    if (O->master[b] >= 0) fascia_pt_body_rotation(&O->bodies, b, q, Q, R);
     else fascia_pt_quat_to_mat(O->free_pose + 7 * b + 3, R);
     fascia_pt_mat_tvec(R, v + 3, Rw); // body-axes angular velocity
     fascia_pt_mat_vec(O->inertia + 9 * b, Rw, IRw);
@@ -558,22 +556,38 @@ fascia_real fascia_organs_kinetic_energy(const fascia_organs *O, const fascia_so
   return e;
 }
 
-fascia_real fascia_organs_potential_energy(const fascia_organs *O, const fascia_solver *S) {
+// The pose of rigid organ b (not driven) at positions x, rotations q: its
+// master frame's where it has coupling frames, else its free flight's.
+static void rigid_pose(const fascia_organs *O, int32_t b, const fascia_real *x, const fascia_real *q,
+                       fascia_real *translation, fascia_real *rotation) {
+  fascia_real R[9], p[3];
+  if (O->master[b] >= 0) { // x_m = t + Q x_m,rest
+    const int32_t m = O->master[b];
+    fascia_pt_body_rotation(&O->bodies, b, q, rotation, R);
+    fascia_pt_mat_vec(R, O->model->frame_position + 3 * m, p);
+    for (int c = 0; c < 3; ++c) translation[c] = x[3 * m + c] - p[c];
+  } else { // c = t + Q c_rest
+    memcpy(rotation, O->free_pose + 7 * b + 3, 4 * sizeof(fascia_real));
+    fascia_pt_quat_to_mat(rotation, R);
+    fascia_pt_mat_vec(R, O->centre + 3 * b, p);
+    for (int c = 0; c < 3; ++c) translation[c] = O->free_pose[7 * b + c] - p[c];
+  }
+}
+
+fascia_real fascia_organs_potential_energy(const fascia_organs *O, const fascia_real *x, const fascia_real *q,
+                                           const fascia_real *gravity) {
   fascia_real e = 0;
   for (int32_t b = 0; O && b < O->organ_count; ++b) {
-    if (S->model->organs[b].kind != FASCIA_ORGAN_RIGID || O->driven[b]) continue;
-    fascia_real t[3], q[4];
-    (void)fascia_solver_organ_pose(S, b, t, q);
-    fascia_real R[9], c[3];
-    fascia_pt_quat_to_mat(q, R);
+    if (O->model->organs[b].kind != FASCIA_ORGAN_RIGID || O->driven[b]) continue;
+    fascia_real t[3], rotation[4], R[9], c[3];
+    rigid_pose(O, b, x, q, t, rotation);
+    fascia_pt_quat_to_mat(rotation, R);
     fascia_pt_mat_vec(R, O->centre + 3 * b, c);
     for (int k = 0; k < 3; ++k) c[k] += t[k];
-    e -= O->mass[b] * fascia_pt_dot3(S->sys->gravity, c);
+    e -= O->mass[b] * fascia_pt_dot3(gravity, c);
   }
   return e;
 }
-
-// ---------------------------------------------------------------- public API
 
 static fascia_status check_organ(const fascia_solver *S, int32_t organ, const char *what) {
   FASCIA_CHECK(S, NULL, FASCIA_ERR_ARGUMENT, "%s: NULL solver", what);
@@ -616,18 +630,8 @@ fascia_status fascia_solver_organ_pose(const fascia_solver *S, int32_t organ, fa
     fascia_pt_quat_to_mat(rotation, R);
     fascia_pt_mat_vec(R, mo->pivot, p);
     for (int c = 0; c < 3; ++c) translation[c] = mo->pivot[c] + T[c] - p[c];
-  } else if (o->kind == FASCIA_ORGAN_RIGID && O->master[organ] >= 0) {
-    // x_m = t + Q x_m,rest
-    const int32_t m = O->master[organ];
-    fascia_pt_body_rotation(&O->bodies, organ, S->q, rotation, R);
-    fascia_pt_mat_vec(R, S->model->frame_position + 3 * m, p);
-    for (int c = 0; c < 3; ++c) translation[c] = S->x[3 * m + c] - p[c];
   } else if (o->kind == FASCIA_ORGAN_RIGID) {
-    // c = t + Q c_rest
-    memcpy(rotation, O->free_pose + 7 * organ + 3, 4 * sizeof(fascia_real));
-    fascia_pt_quat_to_mat(rotation, R);
-    fascia_pt_mat_vec(R, O->centre + 3 * organ, p);
-    for (int c = 0; c < 3; ++c) translation[c] = O->free_pose[7 * organ + c] - p[c];
+    rigid_pose(O, organ, S->x, S->q, translation, rotation);
   } else {
     for (int c = 0; c < 3; ++c) translation[c] = 0;
     rotation[0] = 1, rotation[1] = rotation[2] = rotation[3] = 0;
@@ -697,7 +701,8 @@ fascia_status fascia_solver_organ_release(fascia_solver *S, int32_t organ) {
   O->driven[organ] = 0;
   O->posed[organ] = 0;
   fascia_organs_masks(O, S->mask);
-  if (active(O, organ)) place_slaves(O, S, organ);
+  const fascia_organs_state st = {S->x, S->q, S->u, S->d, S->x_base, S->q_base};
+  if (active(O, organ)) place_slaves(O, &st, organ);
   fascia_system_set_state(S->sys, S->x, S->q);
   ++S->linear_epoch;
   return FASCIA_OK;

@@ -10,6 +10,14 @@
 #include "point/body.h"
 #include "solve/solver_internal.h"
 
+/// The run's state arrays the organs read and write (the solver's): frame
+/// positions [3N], rotations [4N], velocities [6N], a step's increments [6N]
+/// and its anchor [3N], [4N].
+typedef struct fascia_organs_state {
+  fascia_real *x, *q, *u, *d;
+  const fascia_real *x_base, *q_base;
+} fascia_organs_state;
+
 /// Builds the organ state of a solver: mass properties of rigid organs, the
 /// master and slave frames, the masks. Checks that every coupling frame of a
 /// rigid organ is a free frame of one rigid organ only. *out is NULL when
@@ -25,12 +33,14 @@ FASCIA_INTERN void fascia_organs_masks(fascia_organs *O, unsigned char *mask);
 /// Static solve: puts frames driven by the caller at their targets.
 FASCIA_INTERN void fascia_organs_place(const fascia_organs *O, fascia_real *x, fascia_real *q);
 /// Dynamic step of length h: anchors the bodies at the step's start
-/// (solver->x_base, q_base), sets their inertia targets and world inertia,
-/// the increments of frames driven by the caller, and expands d.
-FASCIA_INTERN void fascia_organs_step_begin(fascia_organs *O, fascia_solver *S, fascia_real h);
-/// After a successful step of length h: the bodies' velocities, and free
-/// flight of rigid organs without coupling frames.
-FASCIA_INTERN void fascia_organs_step_end(fascia_organs *O, fascia_solver *S, fascia_real h);
+/// (st->x_base, q_base), sets their inertia targets and world inertia,
+/// the increments st->d of frames driven by the caller, and expands d.
+FASCIA_INTERN void fascia_organs_step_begin(fascia_organs *O, const fascia_organs_state *st, fascia_real h);
+/// After a successful step of length h (its state st): the bodies'
+/// velocities, and free flight under gravity of rigid organs without
+/// coupling frames.
+FASCIA_INTERN void fascia_organs_step_end(fascia_organs *O, const fascia_organs_state *st, const fascia_real *gravity,
+                                          fascia_real h);
 
 /// The bodies' table that every backend's body math reads (point/body.h);
 /// NULL when the model has no rigid organ with coupling frames. Its active
@@ -65,19 +75,21 @@ FASCIA_INTERN void fascia_organs_reduce_matrix(const fascia_organs *O, const fas
                                                const fascia_bsr *K, fascia_bsr *R);
 /// Squared norm of the loads on the bodies (gravity of the body, loads and
 /// tissue weight on the slave frames), for the Newton tolerance.
-FASCIA_INTERN fascia_real fascia_organs_load_norm2(const fascia_organs *O, const fascia_solver *S);
+FASCIA_INTERN fascia_real fascia_organs_load_norm2(const fascia_organs *O, const fascia_system *sys);
 
 /// Body state that a failed step must restore: size in reals, save, restore.
 FASCIA_INTERN size_t fascia_organs_state_size(const fascia_organs *O);
 FASCIA_INTERN void fascia_organs_save(const fascia_organs *O, fascia_real *buffer);
 FASCIA_INTERN void fascia_organs_restore(fascia_organs *O, const fascia_real *buffer);
 /// After fascia_solver_set_state: bodies take the pose and velocity of
-/// their master frame; slave frames are put rigidly on it.
-FASCIA_INTERN void fascia_organs_sync(fascia_organs *O, fascia_solver *S);
+/// their master frame; slave frames are put rigidly on it (st->x, q, u).
+FASCIA_INTERN void fascia_organs_sync(fascia_organs *O, const fascia_organs_state *st);
 
-/// Kinetic energy of the bodies, and their gravity energy, J.
-FASCIA_INTERN fascia_real fascia_organs_kinetic_energy(const fascia_organs *O, const fascia_solver *S);
-FASCIA_INTERN fascia_real fascia_organs_potential_energy(const fascia_organs *O, const fascia_solver *S);
+/// Kinetic energy of the bodies at rotations q [4N], and their gravity
+/// energy at positions x, rotations q, J.
+FASCIA_INTERN fascia_real fascia_organs_kinetic_energy(const fascia_organs *O, const fascia_real *q);
+FASCIA_INTERN fascia_real fascia_organs_potential_energy(const fascia_organs *O, const fascia_real *x,
+                                                         const fascia_real *q, const fascia_real *gravity);
 
 /// The rigid organ whose body carries frame i (its master or a slave), -1
 /// for none (O may be NULL).

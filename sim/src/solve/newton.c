@@ -106,7 +106,7 @@ static fascia_real load_norm(const fascia_solver *S) {
       const fascia_real t = sys->gravity_scale * S->model->frame_load[6 * i + 3 + c];
       if (S->mask[6 * i + 3 + c]) sum += t * t;
     }
-  return sqrt(sum + fascia_organs_load_norm2(S->organs, S));
+  return sqrt(sum + fascia_organs_load_norm2(S->organs, S->sys));
 }
 
 // Beyond this magnitude an energy or a residual norm is taken for an

@@ -335,7 +335,7 @@ fascia_status fascia_solver_solve_static(fascia_solver *S, fascia_solve_report *
 // leaves in the system (nothing is evaluated twice).
 static fascia_real total_energy(fascia_solver *S) {
   const fascia_real potential =
-      S->sys->energy_internal + S->sys->energy_external + fascia_organs_potential_energy(S->organs, S);
+      S->sys->energy_internal + S->sys->energy_external + fascia_organs_potential_energy(S->organs, S->x, S->q, S->sys->gravity);
   return potential + fascia_solver_kinetic_energy(S);
 }
 
@@ -420,7 +420,8 @@ static fascia_status step_once(fascia_solver *S, fascia_real h, fascia_solve_rep
       fascia_pt_quat_log(rel, d + 3);
     }
   }
-  fascia_organs_step_begin(S->organs, S, h); // rigid bodies, frames driven by the caller
+  const fascia_organs_state organs_state = {S->x, S->q, S->u, S->d, S->x_base, S->q_base};
+  fascia_organs_step_begin(S->organs, &organs_state, h); // rigid bodies, frames driven by the caller
   fascia_status status = minimize(S, h, report);
   if (status == FASCIA_OK && S->def.require_convergence && !report->converged)
     status = FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
@@ -429,7 +430,7 @@ static fascia_status step_once(fascia_solver *S, fascia_real h, fascia_solve_rep
                          S->def.newton_tolerance * report->reference_norm);
   if (status == FASCIA_OK) { // the new velocities, then the blow-up rule on the new state
     for (int64_t k = 0; k < n; ++k) S->u[k] = S->d[k] / h;
-    fascia_organs_step_end(S->organs, S, h);
+    fascia_organs_step_end(S->organs, &organs_state, S->sys->gravity, h);
     status = check_blow_up(S, report, energy_rule, energy_before);
   }
   if (status != FASCIA_OK) {
@@ -622,7 +623,8 @@ fascia_status fascia_solver_set_state(fascia_solver *S, const fascia_real *x, co
   }
   if (u) memcpy(S->u, u, 6 * (size_t)N * sizeof(fascia_real));
   else memset(S->u, 0, 6 * (size_t)N * sizeof(fascia_real));
-  fascia_organs_sync(S->organs, S);
+  const fascia_organs_state organs_state = {S->x, S->q, S->u, S->d, S->x_base, S->q_base};
+  fascia_organs_sync(S->organs, &organs_state);
   fascia_system_set_state(S->sys, S->x, S->q);
   S->energy_known = 0;
   ++S->linear_epoch;
@@ -655,15 +657,15 @@ fascia_real fascia_solver_kinetic_energy(fascia_solver *S) {
       for (int r = 0; r < 6; ++r)
         for (int c = 0; c < 6; ++c)
           e += S->u[6 * i + r] * S->kinetic_blocks[36 * (int64_t)i + 6 * r + c] * S->u[6 * i + c];
-    return FASCIA_R(0.5) * e + fascia_organs_kinetic_energy(S->organs, S);
+    return FASCIA_R(0.5) * e + fascia_organs_kinetic_energy(S->organs, S->q);
   }
   fascia_system_mass_apply(S->sys, S->u, S->scratch);
-  return FASCIA_R(0.5) * fascia_dot(S->u, S->scratch, n, S->sys->threads) + fascia_organs_kinetic_energy(S->organs, S);
+  return FASCIA_R(0.5) * fascia_dot(S->u, S->scratch, n, S->sys->threads) + fascia_organs_kinetic_energy(S->organs, S->q);
 }
 
 fascia_status fascia_solver_potential_energy(fascia_solver *S, fascia_real *energy) {
   fascia_system_set_state(S->sys, S->x, S->q);
   FASCIA_TRY(fascia_system_evaluate(S->sys, NULL, energy));
-  *energy += fascia_organs_potential_energy(S->organs, S);
+  *energy += fascia_organs_potential_energy(S->organs, S->x, S->q, S->sys->gravity);
   return FASCIA_OK;
 }
