@@ -17,7 +17,7 @@
 
 static const char usage[] =
     "usage: strand-sheet-calculix [--spacings MM,...] [--elements N,...] [--cells NXxNY,...]\n"
-    "                             [--shells NXxNY,...] [--pulls NAME,...] [--csv FILE]\n"
+    "                             [--shells NXxNY,...] [--pulls NAME,...] [--thickness MM] [--csv FILE]\n"
     "\n"
     "A strand (20 mm, 2 x 2 mm section, E 100 MPa) hanging a rigid 20 mm organ off a fixed one, and\n"
     "a 20 x 16 x 1 mm sheet (E 100 kPa) between them pulled by the second, solved by fascia and by\n"
@@ -29,6 +29,7 @@ static const char usage[] =
     "  --shells LIST    ccx's S8R elements (default 10x8,20x16,40x32)\n"
     "  --pulls LIST     of shear (B moved 1 mm along y), stretch (1 mm along x), bend (0.1 mm\n"
     "                   along z), sag (2 mm along z); default shear,stretch,bend,sag\n"
+    "  --thickness MM   the sheet's thickness (default 1): a bent sheet that locks errs as (cell / thickness)^2\n"
     "  --csv FILE       also write the rows as CSV\n"
     "The ccx program is $FASCIA_CCX or ccx on the PATH (Debian: calculix-ccx).\n";
 
@@ -80,6 +81,7 @@ int main(int argc, char **argv) {
   int32_t cells[MAX_LADDER][2] = {{4, 4}, {10, 8}, {20, 16}, {40, 32}}, shells[MAX_LADDER][2] = {{10, 8}, {20, 16}, {40, 32}};
   int wanted[PULL_KINDS] = {1, 1, 1, 1};
   const char *csv_path = NULL;
+  double thickness = 0;
   for (int k = 1; k < argc; ++k) {
     const char *a = argv[k], *v = k + 1 < argc ? argv[k + 1] : NULL;
     if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
@@ -105,6 +107,10 @@ int main(int argc, char **argv) {
           if (!strcmp(t, pulls[p].name)) wanted[p] = found = 1;
         if (!found) return usage_error("unknown pull", t);
       }
+    } else if (!strcmp(a, "--thickness")) {
+      char *end;
+      thickness = 1e-3 * strtod(v, &end);
+      if (end == v || *end || !(thickness > 0)) return usage_error("bad --thickness", v);
     } else if (!strcmp(a, "--csv")) {
       csv_path = v;
     } else {
@@ -187,6 +193,7 @@ int main(int argc, char **argv) {
       for (int k = 0; k < (pass ? cell_count : shell_count); ++k) {
         fascia_tissue_pull_def def = fascia_tissue_pull_def_default();
         memcpy(def.pull, pulls[p].pull, sizeof def.pull);
+        if (thickness > 0) def.thickness = thickness;
         if (pass) def.cells[0] = cells[k][0], def.cells[1] = cells[k][1];
         else def.elements[0] = shells[k][0], def.elements[1] = shells[k][1];
         const fascia_status st = pass ? fascia_tissue_pull_fascia(ctx, &def, &res[pass][k])
