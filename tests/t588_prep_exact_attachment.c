@@ -75,6 +75,9 @@ static int run(const char *dir, const char *attachment, double out[4]) {
   CHECK(r.scene->tissues[0].attachment == (strcmp(attachment, "exact") ? FASCIA_PREP_ATTACH_FRAMES
                                                                         : FASCIA_PREP_ATTACH_EXACT));
   CHECK(check_weights(&r, 1e-4, out, out + 1, out + 2, out + 3) == 0);
+  // the provenance names it when asked for (and the default's stays as it was)
+  const char *prov = r.model->provenance;
+  CHECK(prov && (strstr(prov, "\"attachment\":\"exact\",\"attachment_layer\":0.0015") != NULL) == !strcmp(attachment, "exact"));
   printf("%-6s free weight on A's face %.3g; u = x + FACE: largest error %.3g m, of its gradient %.3g; "
          "partition of unity %.3g\n",
          attachment, out[0], out[1], out[2], out[3]);

@@ -255,6 +255,10 @@ static cJSON *provenance(const fascia_prep_scene *scene, const fascia_prep_meshe
     cJSON_AddNumberToObject(e, "coupling_tolerance", td->coupling_tolerance);
     cJSON_AddNumberToObject(e, "min_component", td->min_component);
     cJSON_AddNumberToObject(e, "patch_radius", region_patch_radius(scene, td->material, td->patch_radius, td->frame_spacing));
+    if (td->attachment == FASCIA_PREP_ATTACH_EXACT) { // only when asked: the default's provenance as before
+      cJSON_AddStringToObject(e, "attachment", "exact");
+      cJSON_AddNumberToObject(e, "attachment_layer", td->attachment_layer > 0 ? td->attachment_layer : td->sample_spacing);
+    }
     cJSON *rules = cJSON_AddArrayToObject(e, "coupling_rules");
     for (int32_t k = 0; k < td->coupling_count; ++k) {
       const fascia_prep_coupling_def *c = td->coupling + k;
