@@ -61,25 +61,34 @@
 #include "reduced.h"
 #include "shell.h"
 
+// The arrays of fascia_prep_points sized by its frames (N) or samples (S),
+// declared once: X(member, type, count, width) gives count * width
+// elements; allocation, its check and freeing follow from the list.
+#define POINTS_ARRAYS(X)                                                                                               \
+  X(frame_position, double, N, 3)                                                                                      \
+  X(frame_tissue, int32_t, N, 1)                                                                                       \
+  X(frame_inside_organ, int32_t, N, 1)                                                                                 \
+  X(frame_organ, int32_t, N, 1)                                                                                        \
+  X(frame_triangle, int32_t, N, 1)                                                                                     \
+  X(frame_voxel, int64_t, N, 1)                                                                                        \
+  X(frame_organ_voxel, int64_t, N, 1)                                                                                  \
+  X(sample_position, double, S, 3)                                                                                     \
+  X(sample_volume, double, S, 1)                                                                                       \
+  X(sample_tissue, int32_t, S, 1)                                                                                      \
+  X(sample_inside_organ, int32_t, S, 1)                                                                                \
+  X(sample_voxel, int64_t, S, 1)                                                                                       \
+  X(sample_tet_frame, int32_t, S, 4)                                                                                   \
+  X(sample_cell_frame, int32_t, S, 3)
+
 void fascia_prep_points_destroy(fascia_prep_points **points) {
   if (!points || !*points) return;
   fascia_prep_points *p = *points;
-  free(p->frame_position);
-  free(p->frame_tissue);
-  free(p->frame_organ);
-  free(p->frame_triangle);
-  free(p->frame_voxel);
-  free(p->frame_inside_organ);
-  free(p->frame_organ_voxel);
-  free(p->sample_position);
-  free(p->sample_volume);
-  free(p->sample_tissue);
-  free(p->sample_inside_organ);
-  free(p->sample_voxel);
-  free(p->sample_tet_frame);
-  free(p->sample_cell_frame);
-  free(p->tissue_mid_layer_frames);
+#define FREE_ARRAY(member, type, count, width) free(p->member);
+  POINTS_ARRAYS(FREE_ARRAY)
+#undef FREE_ARRAY
+  free(p->tissue_mid_layer_frames); // per tissue, made at the start of the sampling
   free(p->tissue_held_layer_volume);
+  free(p->sample_drilling);
   free(p);
   *points = NULL;
 }
@@ -617,6 +626,7 @@ typedef struct sample_data {
   double *volume;
   int32_t *tet_frame;
   int32_t *cell_frame;
+  uint8_t *drilling; // a sheet's drilling stabiliser (0 for what a new entry holds)
 } sample_data;
 
 static int data_reserve(sample_data *d, int64_t count) {
@@ -632,6 +642,10 @@ static int data_reserve(sample_data *d, int64_t count) {
   if (!c) return 0;
   d->cell_frame = c;
   for (int64_t k = 3 * d->capacity; k < 3 * cap; ++k) c[k] = -1;
+  uint8_t *g = realloc(d->drilling, (size_t)cap);
+  if (!g) return 0;
+  d->drilling = g;
+  memset(g + d->capacity, 0, (size_t)(cap - d->capacity));
   d->capacity = cap;
   return 1;
 }
@@ -657,6 +671,7 @@ static fascia_status append_reduced(fascia_ctx *ctx, const prep_reduced *r, int6
       const int32_t c = r->sample_cell[3 * (int64_t)s + j];
       data->cell_frame[3 * k + j] = cell_offset < 0 ? c : c < 0 ? -1 : (int32_t)(cell_offset + c);
     }
+    data->drilling[k] = r->sample_drilling ? r->sample_drilling[s] : 0;
   }
   return FASCIA_OK;
 }
@@ -1007,25 +1022,12 @@ fascia_status fascia_prep_sample(fascia_ctx *ctx, const fascia_prep_scene *scene
   const int64_t N = frames.count, S = samples.count;
   p->frame_count = (int32_t)N;
   p->sample_count = (int32_t)S;
-  p->frame_position = prep_calloc(3 * N, sizeof(double));
-  p->frame_tissue = prep_calloc(N, sizeof(int32_t));
-  p->frame_inside_organ = prep_calloc(N, sizeof(int32_t));
-  p->frame_organ = prep_calloc(N, sizeof(int32_t));
-  p->frame_triangle = prep_calloc(N, sizeof(int32_t));
-  p->frame_voxel = prep_calloc(N, sizeof(int64_t));
-  p->frame_organ_voxel = prep_calloc(N, sizeof(int64_t));
-  p->sample_position = prep_calloc(3 * S, sizeof(double));
-  p->sample_volume = prep_calloc(S, sizeof(double));
-  p->sample_tissue = prep_calloc(S, sizeof(int32_t));
-  p->sample_inside_organ = prep_calloc(S, sizeof(int32_t));
-  p->sample_voxel = prep_calloc(S, sizeof(int64_t));
-  p->sample_tet_frame = prep_calloc(4 * S, sizeof(int32_t));
-  p->sample_cell_frame = prep_calloc(3 * S, sizeof(int32_t));
-  PREP_CHECK_GOTO(p->frame_position && p->frame_tissue && p->frame_inside_organ && p->frame_organ &&
-                      p->frame_triangle && p->frame_voxel && p->frame_organ_voxel && p->sample_position &&
-                      p->sample_volume && p->sample_tissue && p->sample_inside_organ && p->sample_voxel &&
-                      p->sample_tet_frame && p->sample_cell_frame,
-                  ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  int allocated = 1;
+#define ALLOC_ARRAY(member, type, count, width)                                                                       \
+  allocated &= (p->member = prep_calloc((width) * (count), sizeof(type))) != NULL;
+  POINTS_ARRAYS(ALLOC_ARRAY)
+#undef ALLOC_ARRAY
+  PREP_CHECK_GOTO(allocated, ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
   if (N) {
     memcpy(p->frame_position, frames.position, (size_t)(3 * N) * sizeof(double));
     memcpy(p->frame_organ, frames.organ, (size_t)N * sizeof(int32_t));
@@ -1040,6 +1042,9 @@ fascia_status fascia_prep_sample(fascia_ctx *ctx, const fascia_prep_scene *scene
     memcpy(p->sample_tet_frame, data.tet_frame, (size_t)(4 * S) * sizeof(int32_t));
     memcpy(p->sample_cell_frame, data.cell_frame, (size_t)(3 * S) * sizeof(int32_t));
   }
+  p->sample_drilling = prep_calloc(S > 0 ? S : 1, sizeof(uint8_t));
+  PREP_CHECK_GOTO(p->sample_drilling, ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  if (S) memcpy(p->sample_drilling, data.drilling, (size_t)S);
   for (int32_t r = 0, i = 0, s = 0; r < regions; ++r) {
     const int32_t o = region_organ[r], t = o < 0 ? r : -1;
     for (; i < frame_end[r]; ++i) p->frame_tissue[i] = t, p->frame_inside_organ[i] = o;
@@ -1060,6 +1065,7 @@ cleanup:
   free(data.volume);
   free(data.tet_frame);
   free(data.cell_frame);
+  free(data.drilling);
   fascia_prep_points_destroy(&p);
   return status;
 }
