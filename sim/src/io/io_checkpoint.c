@@ -625,14 +625,7 @@ fascia_status fascia_checkpoint_load(fascia_ctx *ctx, fascia_solver *solver, con
   if (r.file >= 0) H5Fclose(r.file);
   fascia_h5_quiet_end(&quiet);
   if (status == FASCIA_OK) {
-    // copied as stored: no renormalization, so the next step starts from the very same bits
-    memcpy(solver->x, buffer, 3 * (size_t)N * sizeof(fascia_real));
-    memcpy(solver->q, buffer + 3 * N, 4 * (size_t)N * sizeof(fascia_real));
-    memcpy(solver->u, buffer + 7 * N, 6 * (size_t)N * sizeof(fascia_real));
-    solver->time = h.time;
-    if (B) fascia_organs_restore(solver->organs, buffer + 13 * N);
-    fascia_system_set_state(solver->sys, solver->x, solver->q);
-    ++solver->linear_epoch;
+    fascia_solver_resume(solver, buffer, buffer + 3 * N, buffer + 7 * N, h.time, B ? buffer + 13 * N : NULL);
     // the factorization the saving run kept (where it fits: else the next step factors afresh)
     const fascia_backend_ops *ops = solver->backend->ops;
     if (L && ops->linear_state_load) ops->linear_state_load(solver->backend, linear, L);

@@ -631,6 +631,18 @@ fascia_status fascia_solver_set_state(fascia_solver *S, const fascia_real *x, co
   return FASCIA_OK;
 }
 
+void fascia_solver_resume(fascia_solver *S, const fascia_real *x, const fascia_real *q, const fascia_real *u,
+                          fascia_real time, const fascia_real *organs_state) {
+  const size_t N = (size_t)S->frame_count;
+  memcpy(S->x, x, 3 * N * sizeof(fascia_real));
+  memcpy(S->q, q, 4 * N * sizeof(fascia_real));
+  memcpy(S->u, u, 6 * N * sizeof(fascia_real));
+  S->time = time;
+  if (organs_state) fascia_organs_restore(S->organs, organs_state);
+  fascia_system_set_state(S->sys, S->x, S->q);
+  ++S->linear_epoch;
+}
+
 void fascia_solver_probe_position(const fascia_solver *S, int32_t probe, fascia_real *out) {
   fascia_system_set_state(S->sys, S->x, S->q);
   fascia_system_probe_position(S->sys, probe, out);

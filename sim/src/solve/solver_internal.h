@@ -114,6 +114,12 @@ struct fascia_solver {
   uint64_t linear_epoch;
 };
 
+/// A checkpoint's state back (io_checkpoint.c): positions, rotations and
+/// velocities as stored (no renormalization, so the next step starts from
+/// the very same bits), the time, and the organs' saved state (NULL: none).
+FASCIA_INTERN void fascia_solver_resume(fascia_solver *solver, const fascia_real *x, const fascia_real *q,
+                                        const fascia_real *u, fascia_real time, const fascia_real *organs_state);
+
 /// Minimizes the step objective (static: potential energy, re-anchored at
 /// every iteration; dynamic: inertia + potential with increments d anchored
 /// at the start state) over the free DOFs on the solver's backend. Leaves
