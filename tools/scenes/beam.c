@@ -542,8 +542,6 @@ fascia_status fascia_scene_beam_build(fascia_ctx *ctx, const fascia_scene_beam_d
   fascia_frame_grid *grid = NULL;
   fascia_model *m = NULL;
   scene_probe probe;
-  fascia_model_sizes sizes;
-  memset(&sizes, 0, sizeof sizes);
   if (!position || !provenance) {
     status = SCENE_FAIL(ctx, FASCIA_ERR_MEMORY, "beam generator: out of memory for %d frames", (int)frames);
     goto cleanup;
@@ -552,14 +550,8 @@ fascia_status fascia_scene_beam_build(fascia_ctx *ctx, const fascia_scene_beam_d
   else scene_grid_positions(&g, position);
   if (def->shape == FASCIA_SCENE_MESHLESS || reduced) SCENE_TRY_GOTO(fascia_frame_grid_create(ctx, frames, position, &grid));
   SCENE_TRY_GOTO(tip_probe(ctx, def, &g, grid, &probe));
-  sizes.frames = frames;
-  sizes.samples = samples;
-  sizes.pairs = samples * per_sample;
-  sizes.materials = def->reduced_volumetric ? 2 : 1;
-  sizes.probes = 1;
-  sizes.probe_pairs = probe.count;
-  SCENE_TRY_GOTO(fascia_model_alloc(ctx, &sizes, &m));
-  memcpy(m->frame_position, position, 3 * (size_t)frames * sizeof *position);
+  SCENE_TRY_GOTO(scene_model_alloc(ctx, frames, position, samples, samples * per_sample,
+                                   def->reduced_volumetric ? 2 : 1, &probe, &m));
   // samples are written in order: the (deviatoric) rule, then the volumetric centres
   int32_t next = 0;
   if (reduced) {

@@ -210,8 +210,6 @@ fascia_status fascia_scene_paper_build(fascia_ctx *ctx, const fascia_scene_paper
   fascia_frame_grid *grid = NULL;
   fascia_model *m = NULL;
   scene_probe probe;
-  fascia_model_sizes sizes;
-  memset(&sizes, 0, sizeof sizes);
   const fascia_real tip[3] = {body.length, 0, 0};
   int32_t frame[SCENE_PROBE_MAX];
   fascia_real w[SCENE_PROBE_MAX], grad[3 * SCENE_PROBE_MAX];
@@ -235,14 +233,7 @@ fascia_status fascia_scene_paper_build(fascia_ctx *ctx, const fascia_scene_paper
     }
     if (status != FASCIA_ERR_NUMERIC || n + 1 > frame_count || n + 1 > SCENE_PROBE_MAX) goto cleanup;
   }
-  sizes.frames = frame_count;
-  sizes.samples = row->samples;
-  sizes.pairs = row->samples * k;
-  sizes.materials = 1;
-  sizes.probes = 1;
-  sizes.probe_pairs = probe.count;
-  SCENE_TRY_GOTO(fascia_model_alloc(ctx, &sizes, &m));
-  memcpy(m->frame_position, position, 3 * (size_t)frame_count * sizeof *position);
+  SCENE_TRY_GOTO(scene_model_alloc(ctx, frame_count, position, row->samples, row->samples * k, 1, &probe, &m));
   place_samples(&body, row->samples, m, strata);
   for (int32_t s = 0; s < row->samples; ++s) {
     SCENE_TRY_GOTO(weights_at(ctx, &g, grid, m->sample_position + 3 * (int64_t)s, k, frame, w, grad));

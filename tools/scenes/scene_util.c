@@ -209,6 +209,21 @@ fascia_real scene_density(const fascia_scene_beam_def *def) {
   return def->density > 0 ? def->density : def->mass / (def->length * def->width * def->height);
 }
 
+fascia_status scene_model_alloc(fascia_ctx *ctx, int32_t frames, const fascia_real *position, int32_t samples,
+                                int32_t pairs, int32_t materials, const scene_probe *probe, fascia_model **out) {
+  fascia_model_sizes sizes;
+  memset(&sizes, 0, sizeof sizes);
+  sizes.frames = frames;
+  sizes.samples = samples;
+  sizes.pairs = pairs;
+  sizes.materials = materials;
+  sizes.probes = 1;
+  sizes.probe_pairs = probe->count;
+  SCENE_TRY(fascia_model_alloc(ctx, &sizes, out));
+  memcpy((*out)->frame_position, position, 3 * (size_t)frames * sizeof *position);
+  return FASCIA_OK;
+}
+
 fascia_status scene_finish(fascia_ctx *ctx, fascia_model *m, const fascia_scene_beam_def *def,
                            const scene_probe *probe, const char *provenance, const char *origin) {
   fascia_material *mat = &m->materials[0];

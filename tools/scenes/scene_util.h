@@ -85,6 +85,13 @@ typedef struct scene_probe {
 void scene_probe_set(scene_probe *probe, const fascia_real position[3], int32_t n, const int32_t *frame,
                      const fascia_real *w);
 
+/// A model of `frames` frames at `position` (3 per frame, copied),
+/// `samples` samples with `pairs` pairs in all, `materials` materials and
+/// one probe (`probe`, for its pair count); the rest as fascia_model_alloc
+/// leaves it. On error *out is NULL.
+fascia_status scene_model_alloc(fascia_ctx *ctx, int32_t frames, const fascia_real *position, int32_t samples,
+                                int32_t pairs, int32_t materials, const scene_probe *probe, fascia_model **out);
+
 /// Checks the body and material fields of a beam def (cookie, sizes, law,
 /// E, nu, mass or density, coupling, gravity).
 fascia_status scene_check_body(fascia_ctx *ctx, const fascia_scene_beam_def *def, const char *who);
