@@ -11,6 +11,7 @@
 
 #include "fascia/shape.h"
 #include "prep_util.h"
+#include "reduced.h"
 
 #ifndef FASCIA_PREP_VERSION
 #define FASCIA_PREP_VERSION "unknown"
@@ -734,8 +735,11 @@ fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_scene *scen
   int32_t *section_material = prep_calloc(scene->tissue_count, sizeof(int32_t));
   PREP_CHECK(section_material, ctx, FASCIA_ERR_MEMORY, "package: out of memory");
   int32_t sections = 0;
-  for (int32_t t = 0; t < scene->tissue_count; ++t)
-    section_material[t] = scene->tissues[t].form == FASCIA_PREP_FORM_VOLUME ? -1 : scene->material_count + sections++;
+  for (int32_t t = 0; t < scene->tissue_count; ++t) { // a sheet's drilling stabilisers get the next one
+    const int form = scene->tissues[t].form;
+    section_material[t] = form == FASCIA_PREP_FORM_VOLUME ? -1 : scene->material_count + sections;
+    sections += (form != FASCIA_PREP_FORM_VOLUME) + (form == FASCIA_PREP_FORM_SHEET);
+  }
   z.materials = scene->material_count + sections;
   z.motions = motions;
   z.organs = scene->organ_count;
@@ -754,6 +758,15 @@ fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_scene *scen
     char name[2 * FASCIA_NAME_SIZE + 16];
     snprintf(name, sizeof name, "%s/%s", scene->materials[td->material].name, td->name);
     snprintf(mat->name, sizeof mat->name, "%.*s", (int)sizeof mat->name - 1, name);
+    if (td->form == FASCIA_PREP_FORM_SHEET) { // its drilling stabilisers' (reduced.h), the next one
+      fascia_material *d = mat + 1;
+      const double mu = mat->youngs_modulus / (2 * (1 + mat->poisson_ratio)), nu = PREP_SHEET_DRILLING_POISSON;
+      *d = *mat;
+      d->poisson_ratio = nu;
+      d->youngs_modulus = PREP_SHEET_DRILLING_LAMBDA * mu / PREP_SHEET_DRILLING_SHARE * (1 + nu) * (1 - 2 * nu) / nu;
+      snprintf(name, sizeof name, "%s/%s/drilling", scene->materials[td->material].name, td->name);
+      snprintf(d->name, sizeof d->name, "%.*s", (int)sizeof d->name - 1, name);
+    }
   }
   // organs and their motions
   for (int32_t o = 0, motion = 0; o < scene->organ_count; ++o) {
@@ -801,8 +814,10 @@ fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_scene *scen
   memcpy(m->sample_volume, points->sample_volume, (size_t)points->sample_count * sizeof(double));
   for (int32_t s = 0; s < points->sample_count; ++s) {
     const int32_t t = points->sample_tissue[s];
-    m->sample_material[s] = t >= 0 ? (section_material[t] >= 0 ? section_material[t] : scene->tissues[t].material)
-                                   : scene->organs[points->sample_inside_organ[s]].material;
+    const int drilling = points->sample_drilling && points->sample_drilling[s];
+    m->sample_material[s] = t < 0                      ? scene->organs[points->sample_inside_organ[s]].material
+                            : section_material[t] >= 0 ? section_material[t] + drilling
+                                                       : scene->tissues[t].material;
     m->sample_organ[s] = points->sample_inside_organ[s]; // model organs are the scene's, in order
     m->sample_modes[s] = t >= 0 // settled on the patches below
                              ? scene->tissues[t].form == FASCIA_PREP_FORM_VOLUME && scene->tissues[t].enhanced_modes

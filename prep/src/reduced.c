@@ -44,6 +44,7 @@ void prep_reduced_free(prep_reduced *r) {
   free(r->sample_position);
   free(r->sample_volume);
   free(r->sample_cell);
+  free(r->sample_drilling);
   memset(r, 0, sizeof *r);
 }
 
@@ -73,8 +74,9 @@ static fascia_status reserve(fascia_ctx *ctx, prep_reduced *r, int64_t frames, i
   r->sample_position = prep_calloc(3 * samples, sizeof(double));
   r->sample_volume = prep_calloc(samples, sizeof(double));
   r->sample_cell = prep_calloc(3 * samples, sizeof(int32_t));
+  r->sample_drilling = prep_calloc(samples, sizeof(uint8_t));
   PREP_CHECK(r->frame_position && r->frame_organ && r->frame_triangle && r->sample_position && r->sample_volume &&
-                 r->sample_cell,
+                 r->sample_cell && r->sample_drilling,
              ctx, FASCIA_ERR_MEMORY, "strand or sheet: out of memory for %lld samples", (long long)samples);
   return FASCIA_OK;
 }
@@ -713,10 +715,11 @@ int64_t prep_strand_intervals(const fascia_prep_points *points, int32_t t, int32
 // ------------------------------------------------------------ sheets
 
 // One point per triangle, its centroid (times the points through the
-// thickness): with weights linear on the triangle, the degree-2 rule's three
-// points locked the sheet in bending (as two stations per interval lock a
-// strand), and the centroid leaves no mode without stiffness where frames
-// carry rotations (docs/mechanics.md, "Strands and sheets").
+// thickness), and there its drilling stabiliser (reduced.h): the points'
+// gradients are a quadratic fit's (shape_functions.c), free of the linear
+// triangle's shear locking, and the stabiliser holds the frames' rotations
+// about the normal that the fit leaves free (docs/mechanics.md, "Against
+// CalculiX").
 static const double TRI_RULE[1][3] = {{1.0 / 3, 1.0 / 3, 1.0 / 3}};
 #define TRI_POINTS 1
 
@@ -727,7 +730,7 @@ static fascia_status build_sheet(fascia_ctx *ctx, const fascia_prep_scene *scene
   const fascia_prep_mesh *m = meshes->sheets + t;
   const int32_t V = m->vertex_count, T = m->triangle_count;
   const int q = td->section_points;
-  PREP_TRY(reserve(ctx, out, V, TRI_POINTS * (int64_t)T * q));
+  PREP_TRY(reserve(ctx, out, V, (TRI_POINTS * (int64_t)q + 1) * T));
   out->frame_count = V;
   memcpy(out->frame_position, m->vertices, 3 * (size_t)V * sizeof(double));
   // vertex normals (area-weighted) for the thickness check
@@ -827,10 +830,14 @@ static fascia_status build_sheet(fascia_ctx *ctx, const fascia_prep_scene *scene
       for (int r = 0; r < 3; ++r) station[r] = TRI_RULE[a][0] * p0[r] + TRI_RULE[a][1] * p1[r] + TRI_RULE[a][2] * p2[r];
       for (int j = 0; j < q; ++j, ++s) {
         for (int r = 0; r < 3; ++r) out->sample_position[3 * (int64_t)s + r] = station[r] + offset[3 * j + r];
-        out->sample_volume[s] = area / TRI_POINTS * fraction[j] * td->thickness;
+        out->sample_volume[s] = area / TRI_POINTS * fraction[j] * td->thickness * (1 - PREP_SHEET_DRILLING_SHARE);
         memcpy(out->sample_cell + 3 * (int64_t)s, c, 3 * sizeof(int32_t));
       }
     }
+    for (int r = 0; r < 3; ++r) out->sample_position[3 * (int64_t)s + r] = (p0[r] + p1[r] + p2[r]) / 3;
+    out->sample_volume[s] = area * td->thickness * PREP_SHEET_DRILLING_SHARE;
+    memcpy(out->sample_cell + 3 * (int64_t)s, c, 3 * sizeof(int32_t));
+    out->sample_drilling[s++] = 1;
   }
   out->sample_count = s;
   out->length = area_sum;

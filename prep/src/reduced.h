@@ -15,8 +15,21 @@ typedef struct prep_reduced {
   double *sample_position; ///< [3 sample_count] m
   double *sample_volume;   ///< [sample_count] m^3
   int32_t *sample_cell;    ///< [3 sample_count] frames of its interval (two, -1) or triangle
+  uint8_t *sample_drilling; ///< [sample_count] 1: a sheet triangle's drilling stabiliser; NULL: none
   double length;           ///< strand: m; sheet: its area, m^2
 } prep_reduced;
+
+/// A sheet's drilling stabiliser (docs/mechanics.md, "Against CalculiX"):
+/// one sample per triangle at its centroid holding this share of the
+/// triangle's volume (its points through the thickness hold the rest),
+/// whose gradients are the linear triangle's less the quadratic fit's and
+/// whose law sees the change of area alone: first Lame modulus
+/// PREP_SHEET_DRILLING_LAMBDA times the sheet's shear modulus over the
+/// share, Poisson ratio PREP_SHEET_DRILLING_POISSON (a shear modulus 500
+/// times smaller).
+#define PREP_SHEET_DRILLING_SHARE 1e-3
+#define PREP_SHEET_DRILLING_LAMBDA 4.0
+#define PREP_SHEET_DRILLING_POISSON 0.499
 
 /// Builds tissue t (a strand or a sheet; its sheet mesh in meshes->sheets)
 /// and refuses what cannot be one with a line naming the scene key: an

@@ -78,7 +78,8 @@
   X(sample_inside_organ, int32_t, S, 1)                                                                                \
   X(sample_voxel, int64_t, S, 1)                                                                                       \
   X(sample_tet_frame, int32_t, S, 4)                                                                                   \
-  X(sample_cell_frame, int32_t, S, 3)
+  X(sample_cell_frame, int32_t, S, 3)                                                                                  \
+  X(sample_drilling, uint8_t, S, 1)
 
 void fascia_prep_points_destroy(fascia_prep_points **points) {
   if (!points || !*points) return;
@@ -88,7 +89,6 @@ void fascia_prep_points_destroy(fascia_prep_points **points) {
 #undef FREE_ARRAY
   free(p->tissue_mid_layer_frames); // per tissue, made at the start of the sampling
   free(p->tissue_held_layer_volume);
-  free(p->sample_drilling);
   free(p);
   *points = NULL;
 }
@@ -1041,10 +1041,8 @@ fascia_status fascia_prep_sample(fascia_ctx *ctx, const fascia_prep_scene *scene
     memcpy(p->sample_volume, data.volume, (size_t)S * sizeof(double));
     memcpy(p->sample_tet_frame, data.tet_frame, (size_t)(4 * S) * sizeof(int32_t));
     memcpy(p->sample_cell_frame, data.cell_frame, (size_t)(3 * S) * sizeof(int32_t));
+    memcpy(p->sample_drilling, data.drilling, (size_t)S);
   }
-  p->sample_drilling = prep_calloc(S > 0 ? S : 1, sizeof(uint8_t));
-  PREP_CHECK_GOTO(p->sample_drilling, ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
-  if (S) memcpy(p->sample_drilling, data.drilling, (size_t)S);
   for (int32_t r = 0, i = 0, s = 0; r < regions; ++r) {
     const int32_t o = region_organ[r], t = o < 0 ? r : -1;
     for (; i < frame_end[r]; ++i) p->frame_tissue[i] = t, p->frame_inside_organ[i] = o;

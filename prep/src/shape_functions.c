@@ -590,7 +590,16 @@ static fascia_status cell_weights(fascia_ctx *ctx, const fascia_prep_scene *scen
 // triangle answers it), and SHELL_LINEAR_SHARE of the linear triangle's own
 // gradients is mixed in, which gives drilling a stiffness (and a Newton
 // solve a tangent without a mechanism) at a small cost in bending.
+//
+// A sheet tissue's triangles take the same fit with none of the linear
+// gradients: the drilling that a fit exact on quadratics leaves free (a
+// linear twist about the normal strains no point, just as a uniform bend
+// shears none) is held by the sheet's own stabiliser (reduced.h), whose law
+// sees no shear across the sheet (docs/mechanics.md, "Against CalculiX").
 #define SHELL_STENCIL 9
+// Frames tied in distance with the stencil's last are taken too (a mesh
+// symmetric about the point keeps a symmetric fit), up to this many.
+#define SHELL_QUERY (SHELL_STENCIL + 7)
 #define SHELL_LINEAR_SHARE 0.1
 #define SHELL_BASIS 6
 
@@ -649,19 +658,34 @@ static void shell_sample(const fascia_prep_points *pts, const fascia_frame_grid 
   for (int r = 0; r < 3; ++r) n[r] /= nn, u[r] = e1[r] / l1;
   v[0] = n[1] * u[2] - n[2] * u[1], v[1] = n[2] * u[0] - n[0] * u[2], v[2] = n[0] * u[1] - n[1] * u[0];
   // the stencil: the triangle's frames, then the wall's nearest others
-  int32_t near[SHELL_STENCIL], frame[SHELL_STENCIL + 3];
+  int32_t near[SHELL_QUERY], by_distance[SHELL_QUERY], frame[SHELL_QUERY + 3];
+  double dist[SHELL_QUERY];
   fascia_real radius = 0, at[3] = {centre[0], centre[1], centre[2]};
   fascia_ctx_def cd = fascia_ctx_def_default();
   fascia_ctx *quiet = NULL;
   if (fascia_ctx_create(&cd, &quiet) != FASCIA_OK) return;
-  const int32_t want = fascia_frame_grid_count(grid) < SHELL_STENCIL ? fascia_frame_grid_count(grid) : SHELL_STENCIL;
+  const int32_t count = fascia_frame_grid_count(grid), want = count < SHELL_QUERY ? count : SHELL_QUERY;
   const fascia_status st = fascia_frame_grid_nearest(quiet, grid, at, want, near, &radius);
   fascia_ctx_destroy(&quiet);
   if (st != FASCIA_OK) return;
+  const fascia_real *gx = fascia_frame_grid_positions(grid);
+  for (int32_t j = 0; j < want; ++j) {
+    double d2 = 0;
+    for (int r = 0; r < 3; ++r) d2 += (gx[3 * (int64_t)near[j] + r] - at[r]) * (gx[3 * (int64_t)near[j] + r] - at[r]);
+    dist[j] = sqrt(d2);
+    by_distance[j] = j;
+    for (int32_t i = j; i > 0 && dist[by_distance[i - 1]] > dist[by_distance[i]]; --i) {
+      const int32_t t = by_distance[i];
+      by_distance[i] = by_distance[i - 1], by_distance[i - 1] = t;
+    }
+  }
+  int32_t keep = want < SHELL_STENCIL ? want : SHELL_STENCIL;
+  while (keep < want && dist[by_distance[keep]] <= dist[by_distance[keep - 1]] * (1 + 1e-9)) ++keep;
+  if (keep < want) radius = FASCIA_SHAPE_SUPPORT_MARGIN * dist[by_distance[keep]];
   int32_t m = 0;
   for (int j = 0; j < 3; ++j) frame[m++] = c[j];
-  for (int32_t j = 0; j < want; ++j) {
-    const int32_t f = wall_frame[near[j]];
+  for (int32_t j = 0; j < keep; ++j) {
+    const int32_t f = wall_frame[near[by_distance[j]]];
     if (f != c[0] && f != c[1] && f != c[2]) frame[m++] = f;
   }
   double reach = radius;
@@ -672,7 +696,7 @@ static void shell_sample(const fascia_prep_points *pts, const fascia_frame_grid 
     reach = fmax(reach, FASCIA_SHAPE_SUPPORT_MARGIN * sqrt(d2));
   }
   // weighted least squares of the basis (1, a, b, a^2, ab, b^2) in units of reach
-  double A[SHELL_BASIS * SHELL_BASIS] = {0}, B[SHELL_BASIS * (SHELL_STENCIL + 3)] = {0};
+  double A[SHELL_BASIS * SHELL_BASIS] = {0}, B[SHELL_BASIS * (SHELL_QUERY + 3)] = {0};
   for (int32_t j = 0; j < m; ++j) {
     const double *x = pts->frame_position + 3 * (int64_t)frame[j];
     double d[3];
@@ -688,11 +712,11 @@ static void shell_sample(const fascia_prep_points *pts, const fascia_frame_grid 
   }
   if (m < SHELL_BASIS || !solve_small(A, B, m)) return;
   // the fit's slopes at the centre: rows 1 and 2 of A^-1 B; weights as the triangle's
-  double weight[SHELL_STENCIL + 3] = {0};
+  double weight[SHELL_QUERY + 3] = {0};
   for (int32_t j = 0; j < pair_count[s]; ++j)
     for (int k = 0; k < 3; ++k)
       if (pair_frame[base + j] == c[k]) weight[k] = pair_w[base + j];
-  int32_t order[SHELL_STENCIL + 3];
+  int32_t order[SHELL_QUERY + 3];
   for (int32_t j = 0; j < m; ++j) order[j] = j;
   for (int32_t i = 1; i < m; ++i) // frames ascending, as the model's pairs
     for (int32_t j = i; j > 0 && frame[order[j - 1]] > frame[order[j]]; --j) {
@@ -711,7 +735,7 @@ static void shell_sample(const fascia_prep_points *pts, const fascia_frame_grid 
   for (int k = 0; k < 3; ++k)
     lin_a[k] = (pb[(k + 1) % 3] - pb[(k + 2) % 3]) / det, lin_b[k] = (pa[(k + 2) % 3] - pa[(k + 1) % 3]) / det;
   // the fit's slopes, plus the linear slopes of what it leaves at the corners
-  double slope_a[SHELL_STENCIL + 3], slope_b[SHELL_STENCIL + 3];
+  double slope_a[SHELL_QUERY + 3], slope_b[SHELL_QUERY + 3];
   for (int32_t j = 0; j < m; ++j) slope_a[j] = B[1 * m + j] / reach, slope_b[j] = B[2 * m + j] / reach;
   for (int k = 0; k < 3; ++k) {
     const double a = pa[k] / reach, b = pb[k] / reach, basis[SHELL_BASIS] = {1, a, b, a * a, a * b, b * b};
@@ -721,8 +745,13 @@ static void shell_sample(const fascia_prep_points *pts, const fascia_frame_grid 
       slope_a[j] += lin_a[k] * ((j == k) - fitted), slope_b[j] += lin_b[k] * ((j == k) - fitted);
     }
   }
-  for (int32_t j = 0; j < m; ++j) slope_a[j] *= 1 - SHELL_LINEAR_SHARE, slope_b[j] *= 1 - SHELL_LINEAR_SHARE;
-  for (int k = 0; k < 3; ++k) slope_a[k] += SHELL_LINEAR_SHARE * lin_a[k], slope_b[k] += SHELL_LINEAR_SHARE * lin_b[k];
+  // a sheet's drilling stabiliser (reduced.h) takes what the fit leaves out
+  // of the linear gradients; a sheet's other points the fit alone
+  const int drilling = pts->sample_drilling && pts->sample_drilling[s];
+  const double share = pts->sample_tissue[s] >= 0 ? 0 : SHELL_LINEAR_SHARE;
+  const double fit = drilling ? -1 : 1 - share, linear = drilling ? 1 : share;
+  for (int32_t j = 0; j < m; ++j) slope_a[j] *= fit, slope_b[j] *= fit;
+  for (int k = 0; k < 3; ++k) slope_a[k] += linear * lin_a[k], slope_b[k] += linear * lin_b[k];
   for (int32_t j = 0; j < m; ++j) {
     const int32_t q = order[j];
     pair_frame[base + j] = frame[q];
@@ -732,7 +761,15 @@ static void shell_sample(const fascia_prep_points *pts, const fascia_frame_grid 
   pair_count[s] = m;
 }
 
-// The wall samples of every shell organ (shell_sample); after cell_weights.
+// Whether sample s is a triangle's of wall w: shell organ w, or sheet tissue
+// w - organ_count (a sheet bends as a flat wall: the same cure).
+static int on_wall(const fascia_prep_scene *scene, const fascia_prep_points *pts, int32_t s, int32_t w) {
+  if (pts->sample_voxel[s] >= 0 || pts->sample_cell_frame[3 * (int64_t)s + 2] < 0) return 0;
+  return w < scene->organ_count ? pts->sample_tissue[s] < 0 && pts->sample_inside_organ[s] == w
+                                : pts->sample_tissue[s] == w - scene->organ_count;
+}
+
+// The wall samples of every shell organ and sheet (shell_sample); after cell_weights.
 static fascia_status shell_weights(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_points *pts,
                                    int32_t *pair_frame, double *pair_w, double *pair_g, int32_t *pair_count) {
   const int32_t S = pts->sample_count, N = pts->frame_count;
@@ -742,13 +779,17 @@ static fascia_status shell_weights(fascia_ctx *ctx, const fascia_prep_scene *sce
   fascia_status status = FASCIA_OK;
   fascia_frame_grid *grid = NULL;
   PREP_CHECK_GOTO(wall_frame && on && x, ctx, FASCIA_ERR_MEMORY, "shape functions: out of memory");
-  for (int32_t o = 0; o < scene->organ_count; ++o) {
-    if (!scene->organs[o].shell) continue;
+  for (int32_t s = 0; s < S; ++s) // a drilling stabiliser no fit reaches stays without stiffness
+    if (pts->sample_drilling && pts->sample_drilling[s])
+      memset(pair_g + 3 * (int64_t)MAX_PAIRS * s, 0, 3 * (size_t)pair_count[s] * sizeof(double));
+  for (int32_t o = 0; o < scene->organ_count + scene->tissue_count; ++o) {
+    if (o < scene->organ_count ? !scene->organs[o].shell
+                               : scene->tissues[o - scene->organ_count].form != FASCIA_PREP_FORM_SHEET)
+      continue;
     memset(on, 0, (size_t)N);
     for (int32_t s = 0; s < S; ++s)
-      if (pts->sample_voxel[s] < 0 && pts->sample_tissue[s] < 0 && pts->sample_inside_organ[s] == o)
-        for (int j = 0; j < 3; ++j)
-          if (pts->sample_cell_frame[3 * (int64_t)s + j] >= 0) on[pts->sample_cell_frame[3 * (int64_t)s + j]] = 1;
+      if (on_wall(scene, pts, s, o))
+        for (int j = 0; j < 3; ++j) on[pts->sample_cell_frame[3 * (int64_t)s + j]] = 1;
     int32_t n = 0;
     for (int32_t i = 0; i < N; ++i)
       if (on[i]) {
@@ -758,8 +799,7 @@ static fascia_status shell_weights(fascia_ctx *ctx, const fascia_prep_scene *sce
     if (n < SHELL_BASIS) continue;
     PREP_TRY_GOTO(fascia_frame_grid_create(ctx, n, x, &grid));
     for (int32_t s = 0; s < S; ++s)
-      if (pts->sample_voxel[s] < 0 && pts->sample_tissue[s] < 0 && pts->sample_inside_organ[s] == o &&
-          pts->sample_cell_frame[3 * (int64_t)s + 2] >= 0)
+      if (on_wall(scene, pts, s, o))
         shell_sample(pts, grid, wall_frame, s, pair_frame, pair_w, pair_g, pair_count);
     fascia_frame_grid_destroy(&grid);
   }

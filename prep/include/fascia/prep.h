@@ -473,6 +473,9 @@ typedef struct fascia_prep_points {
   /// volume samples. Such samples and frames have no voxel (sample_voxel,
   /// frame_voxel -1).
   int32_t *sample_cell_frame;
+  /// [S] 1 for a sheet triangle's drilling stabiliser (docs/mechanics.md,
+  /// "Against CalculiX"), 0 for every other sample; NULL: none
+  uint8_t *sample_drilling;
   /// [tissue_count] of each tissue's frames, those on the mid-layers of its
   /// gaps thinner than its frame spacing (free frames no interior frame
   /// could give there; 0 for strands and sheets)
