@@ -26,7 +26,10 @@
 // goes to the nearest sample through the region (multi-source Dijkstra over
 // the 26-neighbourhood), so sample volumes add up to the region volume
 // exactly, and a sample moves to the centroid of its cell when that stays in
-// the region (one Lloyd step: a better quadrature point).
+// the region (one Lloyd step: a better quadrature point). Samples finer than
+// the voxels split each voxel into cells under half a spacing, each going
+// to the nearest sample nearby, so the sample spacing is not floored by the
+// voxel size.
 // A piece of region that receives fewer than 4 frames, or only coplanar ones,
 // gets more frames at its voxels farthest from the frames it has.
 //
@@ -530,11 +533,95 @@ cleanup:
 
 // ------------------------------------------------------------ samples and volumes
 
+static int by_voxel_then_index(const void *a, const void *b) {
+  const int64_t *x = a, *y = b;
+  if (x[0] != y[0]) return x[0] < y[0] ? -1 : 1;
+  return (x[1] > y[1]) - (x[1] < y[1]);
+}
+
+// The first of the (voxel, sample) pairs sorted by voxel whose voxel is v,
+// or count where none is.
+static int64_t first_in_voxel(const int64_t *pairs, int64_t count, int64_t v) {
+  int64_t lo = 0, hi = count;
+  while (lo < hi) {
+    const int64_t mid = lo + (hi - lo) / 2;
+    if (pairs[2 * mid] < v) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo < count && pairs[2 * lo] == v ? lo : count;
+}
+
+// Samples finer than the voxels: each region voxel is split into k^3
+// sub-cells, each going to the nearest sample among those in the voxel,
+// in its region neighbours, and the voxel's owner through the region. A
+// sample is nearer its own sub-cell's centre than any other (they are a
+// spacing apart, the sub-cells under half a spacing), so each keeps a
+// volume. Adds to volume (m^3) and centroid (points weighted by their
+// share of a voxel).
+static fascia_status sub_voxel_cells(fascia_ctx *ctx, const fascia_prep_volume *vol, uint8_t label,
+                                     const point_list *samples, int64_t first, const int64_t *owner, int k,
+                                     double *volume, double *centroid) {
+  const prep_grid g = prep_volume_grid(vol);
+  const int64_t n = prep_grid_count(&g), count = samples->count - first;
+  int64_t *pairs = malloc(2 * (size_t)count * sizeof(int64_t) + 1);
+  PREP_CHECK(pairs, ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  for (int64_t s = 0; s < count; ++s) pairs[2 * s] = samples->voxel[first + s], pairs[2 * s + 1] = first + s;
+  qsort(pairs, (size_t)count, 2 * sizeof(int64_t), by_voxel_then_index);
+  int64_t most = 1; // samples in one voxel
+  for (int64_t r = 0, run = 0; r < count; ++r) {
+    run = r > 0 && pairs[2 * r] == pairs[2 * r - 2] ? run + 1 : 1;
+    if (run > most) most = run;
+  }
+  int64_t *near = malloc((27 * (size_t)most + 1) * sizeof(int64_t));
+  if (!near) {
+    free(pairs);
+    return PREP_FAIL(ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  }
+  const double h = g.h, sub = h / k, cell_volume = sub * sub * sub, share = 1.0 / ((double)k * k * k);
+  for (int64_t u = 0; u < n; ++u) {
+    if (vol->region[u] != label) continue;
+    int64_t nb[27];
+    int64_t near_count = 0;
+    int d2[26];
+    near[near_count++] = owner[u];
+    const int m = prep_grid_neighbours(&g, u, nb, d2);
+    nb[m] = u;
+    for (int j = 0; j <= m; ++j) {
+      if (vol->region[nb[j]] != label) continue;
+      for (int64_t r = first_in_voxel(pairs, count, nb[j]); r < count && pairs[2 * r] == nb[j]; ++r)
+        near[near_count++] = pairs[2 * r + 1];
+    }
+    double c[3];
+    prep_grid_center(&g, u, c);
+    for (int a = 0; a < k; ++a)
+      for (int b = 0; b < k; ++b)
+        for (int e = 0; e < k; ++e) {
+          const double x[3] = {c[0] - h / 2 + (a + 0.5) * sub, c[1] - h / 2 + (b + 0.5) * sub,
+                               c[2] - h / 2 + (e + 0.5) * sub};
+          int64_t best = owner[u];
+          double best_d2 = INFINITY;
+          for (int64_t j = 0; j < near_count; ++j) {
+            const double *p = samples->position + 3 * near[j];
+            const double dd = (x[0] - p[0]) * (x[0] - p[0]) + (x[1] - p[1]) * (x[1] - p[1]) + (x[2] - p[2]) * (x[2] - p[2]);
+            if (dd < best_d2 || (dd == best_d2 && near[j] < best)) best_d2 = dd, best = near[j];
+          }
+          volume[best - first] += cell_volume;
+          for (int r = 0; r < 3; ++r) centroid[3 * (best - first) + r] += share * x[r];
+        }
+  }
+  free(near);
+  free(pairs);
+  return FASCIA_OK;
+}
+
 // Assigns every region voxel of label to its nearest sample through the
 // region; volumes and centroids per sample. A piece of region that got no
 // sample (its candidates all conflicted with samples across a thin organ)
-// gets one at its first voxel. *volume_out: [samples->count - first], malloc'ed.
-static fascia_status voronoi_volumes(fascia_ctx *ctx, const fascia_prep_volume *vol, uint8_t label,
+// gets one at its first voxel. Where the samples are finer than the voxels
+// (spacing below the voxel size), the voxels are split (sub_voxel_cells):
+// the sample spacing is not floored by the voxel size.
+// *volume_out: [samples->count - first], malloc'ed.
+static fascia_status voronoi_volumes(fascia_ctx *ctx, const fascia_prep_volume *vol, uint8_t label, double spacing,
                                      point_list *samples, int64_t first, double **volume_out) {
   const prep_grid g = prep_volume_grid(vol);
   const int64_t n = prep_grid_count(&g);
@@ -589,11 +676,16 @@ static fascia_status voronoi_volumes(fascia_ctx *ctx, const fascia_prep_volume *
     if (vol->region[u] != label) continue;
     PREP_CHECK_GOTO(owner[u] >= 0, ctx, FASCIA_ERR_INTERNAL, "sample: region voxel %lld reached by no sample",
                     (long long)u);
+    if (spacing < h) continue; // split below
     const int64_t s = owner[u] - first;
     double x[3];
     prep_grid_center(&g, u, x);
     volume[s] += h * h * h;
     for (int r = 0; r < 3; ++r) centroid[3 * s + r] += x[r];
+  }
+  if (spacing < h) { // sub-cells under half a spacing
+    const int k = (int)ceil(2 * h / spacing);
+    PREP_TRY_GOTO(sub_voxel_cells(ctx, vol, label, samples, first, owner, k < 16 ? k : 16, volume, centroid));
   }
   for (int64_t s = 0; s < samples->count - first; ++s) {
     double c[3];
@@ -950,10 +1042,12 @@ static fascia_status sample_region(fascia_ctx *ctx, const fascia_prep_scene *sce
                   "sample: out of memory");
   PREP_CHECK_GOTO(dart_init(&darts, sample_spacing, cand.count), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
   darts.points = samples;
-  taken = prep_calloc(n, 1);
-  PREP_CHECK_GOTO(taken, ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  if (sample_spacing >= h) { // one sample per voxel; finer samples split the voxels (voronoi_volumes)
+    taken = prep_calloc(n, 1);
+    PREP_CHECK_GOTO(taken, ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  }
   PREP_TRY_GOTO(throw_darts(ctx, seed + 3, &cand, &darts, taken, samples));
-  PREP_TRY_GOTO(voronoi_volumes(ctx, vol, label, samples, first_sample, &cell_volume));
+  PREP_TRY_GOTO(voronoi_volumes(ctx, vol, label, sample_spacing, samples, first_sample, &cell_volume));
   PREP_CHECK_GOTO(data_reserve(data, samples->count), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
   memcpy(data->volume + first_sample, cell_volume, (size_t)(samples->count - first_sample) * sizeof(double));
   for (int64_t s = 4 * first_sample; s < 4 * samples->count; ++s) data->tet_frame[s] = -1;

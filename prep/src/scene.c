@@ -425,12 +425,13 @@ static fascia_status parse_sampling(const reader *rd, const fascia_prep_scene *s
     return key_fail(rd, at, "%g m is coarser than frame_spacing %g m; samples must be at least as fine as frames",
                     *sample_spacing, *frame_spacing);
   }
-  if (*sample_spacing < scene->voxel_size) {
+  // samples finer than the voxels split them (sample.c), down to an eighth of a voxel
+  if (*sample_spacing < scene->voxel_size / 8) {
     char hint[512];
     prep_units_hint_voxel(scene, hint, sizeof hint);
     sub_key(at, path, "sample_spacing");
-    return key_fail(rd, at, "%g m is finer than the voxel size %g m; raise it or lower voxel_size%s", *sample_spacing,
-                    scene->voxel_size, hint);
+    return key_fail(rd, at, "%g m is finer than an eighth of the voxel size %g m; raise it or lower voxel_size%s",
+                    *sample_spacing, scene->voxel_size, hint);
   }
   *shape_kind = FASCIA_PREP_SHAPE_MLS;
   *neighbours = 8;
