@@ -835,8 +835,8 @@ static void in_span(const fascia_prep_points *pts, int32_t s, double *e) {
 // the whole of the surface, not only at its shared frames. Each organ that
 // moves rigidly (fixed, prescribed or rigid) within a sample's support adds
 // one node to the sample's MLS: the organ's surface point nearest the sample,
-// q = p - r grad r / |grad r| (r the organ's distance, trilinear in the
-// voxels), whose value is the organ's motion. The weight it takes goes to
+// q = p - r grad r / |grad r| (r the organ's signed distance, quadratic
+// B-splines on the voxel centres), whose value is the organ's motion. The weight it takes goes to
 // the organ's shared frame nearest the sample: every shared frame of the
 // organ carries the organ's motion of p (x_j + A_j (p - x_j)), whichever it
 // is. Within a layer of thickness L the kernels of the frames that do not
@@ -884,7 +884,7 @@ static int distance_at(const fascia_prep_volume *vol, const prep_grid *g, int32_
 }
 
 // 1 when tissue td's frames on organ o are all shared with it and follow it
-// rigidly: the blending needs every frame on the surface to carry the organ.
+// rigidly: the organ's node stands for its whole surface.
 static int attaches_exactly(const fascia_prep_scene *scene, const fascia_prep_volume *vol,
                             const fascia_prep_tissue_def *td, int32_t o) {
   if (scene->organs[o].kind == FASCIA_ORGAN_DEFORMABLE || scene->organs[o].shell || !vol->distance[o]) return 0;

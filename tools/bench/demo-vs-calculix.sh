@@ -9,7 +9,10 @@
 # tools/bench/results/2core-debian_cpu/demo_calculix.{txt,csv} and, with
 # --reference, data/reference/demo-calculix.csv (tests/t598). CalculiX's
 # answers are kept in $CACHE (default /tmp/fascia-demo-calculix) so that a
-# rerun solves only what is new. On the shared 2-core machine, with ccx's
+# rerun solves only what is new. CCX and RUNGS pick the meshes and rungs
+# (demo-calculix's --ccx and --fascia), NAME the results' file name
+# (default demo_calculix); RUNGS=exact the attachment "exact" ladder below
+# (written with NAME=demo_calculix_exact CCX=8i:1:1,8i:1:2 RUNGS=exact). On the shared 2-core machine, with ccx's
 # iterative Cholesky: C3D8I 21 s, its split mesh 12 minutes; with SPOOLES
 # (ccx's default, CCX_SOLVER=SPOOLES): C3D8I 2 minutes, C3D20R 22 minutes.
 #   tools/bench/demo-vs-calculix.sh [BUILD_DIR] [--reference]
@@ -20,6 +23,13 @@ build="${1:-$root/build}"
 bench="$build/tools/scenes/demo-calculix"
 out="$root/tools/bench/results/2core-debian_cpu"
 cache="${CACHE:-/tmp/fascia-demo-calculix}"
+name="${NAME:-demo_calculix}"
+# the attachment "exact" (tag e) against "frames", with and without patches,
+# samples converged, other layers, and at 0.5 mm voxels (forces only)
+EXACT_RUNGS="1:1,1:0.7,1:0.5,1:0.35,1:1:1:e,1:0.7:1:e,1:0.5:1:e,1:0.35:1:e,1:1:1:e+flat,1:0.7:1:e+flat,1:0.5:1:e+flat"
+EXACT_RUNGS+=",1:1:0.5:e,1:0.7:0.7:e,1:1:1:e0.5,1:0.5:1:e0.5,1:1:1:e2,1:0.5:1:e2"
+EXACT_RUNGS+=",0.5:1:1:e,0.5:0.7:1:e,0.5:0.5:1:e,0.5:0.7:0.5:e,0.5:0.5:0.5:e,0.5:0.5:0.5:e+flat"
+[ "${RUNGS:-}" = exact ] && RUNGS="$EXACT_RUNGS"
 mkdir -p "$cache" "$out"
 ref=()
 for a in "$@"; do [ "$a" = "--reference" ] && ref=(--write-reference "$root/data/reference/demo-calculix.csv"); done
@@ -27,6 +37,6 @@ cd "$root"
 "$bench" data/scenes/pelvis-female-demo.json --cache "$cache" --ccx "${CCX:-8i:1:1,20r:1:1,8i:1:2}" \
   --ccx-solver "${CCX_SOLVER:-ITERATIVE CHOLESKY}" \
   --fascia "${RUNGS:-1:1,1:0.7,1:0.5,1:0.35,1:1:1:flat,1:0.7:1:flat,1:0.5:1:flat,1:1:1:n12,1:1:1:n16,1:1:0.7,1:1:0.5,1:0.7:1.43}" \
-  --slip --csv "$out/demo_calculix.csv" "${ref[@]}" > "$out/demo_calculix.txt.tmp"
-mv "$out/demo_calculix.txt.tmp" "$out/demo_calculix.txt"
-cat "$out/demo_calculix.txt"
+  --slip --csv "$out/$name.csv" "${ref[@]}" > "$out/$name.txt.tmp"
+mv "$out/$name.txt.tmp" "$out/$name.txt"
+cat "$out/$name.txt"

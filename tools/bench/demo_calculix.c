@@ -40,7 +40,7 @@
 #include "scene_util.h"
 #include "tissue_calculix.h"
 
-#define ROWS_MAX 16
+#define ROWS_MAX 32
 
 typedef struct ccx_row {
   int quadratic;
@@ -329,7 +329,8 @@ int main(int argc, char **argv) {
   fascia_row fr[ROWS_MAX];
   int nc = 0, nf = 0;
   memset(cr, 0, sizeof cr);
-  for (const char *p = ccx_list; p && *p && nc < ROWS_MAX;) {
+  for (const char *p = ccx_list; p && *p;) {
+    if (nc == ROWS_MAX) return usage("--ccx: more meshes than 32");
     char type[8];
     double vox;
     int split;
@@ -339,7 +340,8 @@ int main(int argc, char **argv) {
     p = strchr(p, ',');
     if (p) ++p;
   }
-  for (const char *p = fascia_list; p && *p && nf < ROWS_MAX;) {
+  for (const char *p = fascia_list; p && *p;) {
+    if (nf == ROWS_MAX) return usage("--fascia: more rungs than 32");
     memset(fr + nf, 0, sizeof fr[nf]);
     fr[nf].sample_scale = 1;
     char tag[40] = "";
