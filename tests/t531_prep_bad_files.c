@@ -2,7 +2,7 @@
 // SPDX-FileCopyrightText: fascia developers
 // Input files that `fascia prep` (the CLI, argv[1]) must refuse up front,
 // with one line naming the file and the problem, instead of hanging or
-// reading a part of them: a directory, a FIFO or a device as the scene or
+// reading a part of them: a folder, a FIFO or a device as the scene or
 // a mesh, a scene far larger than any scene, and STL files cut short or garbled (ASCII without "endsolid" or
 // with a facet cut short, binary whose size disagrees with its triangle
 // count) and PLY files whose body holds less than their header declares.
@@ -225,12 +225,12 @@ int main(int argc, char **argv) {
   CHECK(mkdir(sub, 0700) == 0 && mkfifo(fifo, 0600) == 0);
 
   // not regular files, as a mesh: refused before anything reads them
-  refused(cli, "folder as mesh", "folder.obj", "folder.obj", "is a directory", 0);
-  refused(cli, "FIFO as mesh", "pipe.obj", "pipe.obj", "named pipe (FIFO)", 0);
+  refused(cli, "folder as mesh", "folder.obj", "folder.obj", "is a folder", 0);
+  refused(cli, "FIFO as mesh", "pipe.obj", "pipe.obj", "FIFO (named pipe)", 0);
   refused(cli, "/dev/zero as mesh", "/dev/zero", "/dev/zero", "character device", 0);
   // ... and as the scene
-  prep_case_refused(cli, dir, "folder as scene", sub, (const char *const[]){"scene", "is a directory", NULL});
-  prep_case_refused(cli, dir, "FIFO as scene", fifo, (const char *const[]){"scene", "named pipe (FIFO)", NULL});
+  prep_case_refused(cli, dir, "folder as scene", sub, (const char *const[]){"scene", "is a folder", NULL});
+  prep_case_refused(cli, dir, "FIFO as scene", fifo, (const char *const[]){"scene", "FIFO (named pipe)", NULL});
   prep_case_refused(cli, dir, "/dev/zero as scene", "/dev/zero",
                     (const char *const[]){"scene '/dev/zero'", "character device", NULL});
 

@@ -156,7 +156,7 @@ int main(int argc, char **argv) {
     char line[2048];
     snprintf(line, sizeof line, fifo_inputs[k], path, model, dir); // the last one: a folder
     snprintf(command, sizeof command, "timeout 20 '%s' %s", fascia, line);
-    failures += refused_with(1, command, k + 1 == sizeof fifo_inputs / sizeof fifo_inputs[0] ? "a directory" : "FIFO",
+    failures += refused_with(1, command, k + 1 == sizeof fifo_inputs / sizeof fifo_inputs[0] ? "a folder" : "FIFO",
                              model, length);
   }
 

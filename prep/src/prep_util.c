@@ -1,17 +1,17 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
 // Private helpers of the prep stages (see prep_util.h).
-#define _POSIX_C_SOURCE 200809L // open, fstat, fdopen
+#define _POSIX_C_SOURCE 200809L // fstat, fileno
 #include "prep_util.h"
 
 #include <errno.h>
-#include <fcntl.h>
 #include <sys/stat.h>
-#include <unistd.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include "fascia/files.h"
 
 void *prep_calloc(int64_t count, size_t size) {
   if (count < 0 || count > ((int64_t)1 << 36)) return NULL;
@@ -36,37 +36,15 @@ char *prep_strdup(const char *s) {
   return p;
 }
 
-// Why path cannot be read as a file ("is a directory", ...), NULL for a regular file.
-static const char *not_regular(mode_t mode) {
-  if (S_ISREG(mode)) return NULL;
-  if (S_ISDIR(mode)) return "is a directory, not a file";
-  if (S_ISFIFO(mode)) return "is a named pipe (FIFO), not a regular file";
-  if (S_ISCHR(mode)) return "is a character device, not a regular file";
-  if (S_ISBLK(mode)) return "is a block device, not a regular file";
-  if (S_ISSOCK(mode)) return "is a socket, not a regular file";
-  return "is not a regular file";
-}
-
 fascia_status prep_open_regular(fascia_ctx *ctx, const char *path, const char *what, FILE **out, int64_t *size) {
-  *out = NULL;
+  PREP_TRY(fascia_file_open_input(ctx, what, path, out));
   struct stat st;
-  PREP_CHECK(stat(path, &st) == 0, ctx, FASCIA_ERR_IO, "%s '%s': cannot open (%s)", what, path, strerror(errno));
-  const char *why = not_regular(st.st_mode);
-  PREP_CHECK(!why, ctx, FASCIA_ERR_IO, "%s '%s': %s; give the path of a %s file", what, path, why, what);
-  // non-blocking: a FIFO swapped in after the stat must not stall the open
-  const int fd = open(path, O_RDONLY | O_NONBLOCK);
-  PREP_CHECK(fd >= 0, ctx, FASCIA_ERR_IO, "%s '%s': cannot open (%s)", what, path, strerror(errno));
-  if (fstat(fd, &st) != 0 || (why = not_regular(st.st_mode)) != NULL) {
-    close(fd);
-    return PREP_FAIL(ctx, FASCIA_ERR_IO, "%s '%s': %s; give the path of a %s file", what, path,
-                     why ? why : "cannot be examined", what);
+  if (fstat(fileno(*out), &st) != 0) {
+    const int err = errno;
+    fclose(*out);
+    *out = NULL;
+    return PREP_FAIL(ctx, FASCIA_ERR_IO, "%s '%s': cannot stat: %s", what, path, strerror(err));
   }
-  FILE *f = fdopen(fd, "rb");
-  if (!f) {
-    close(fd);
-    return PREP_FAIL(ctx, FASCIA_ERR_IO, "%s '%s': cannot open (%s)", what, path, strerror(errno));
-  }
-  *out = f;
   *size = (int64_t)st.st_size;
   return FASCIA_OK;
 }

@@ -46,17 +46,6 @@ static int same_key(const file_key *a, const file_key *b) {
   return a->exists || !strcmp(a->name, b->name);
 }
 
-static const char *kind_of(mode_t mode) {
-  if (S_ISDIR(mode)) return "a directory";
-  if (S_ISFIFO(mode)) return "a named pipe (FIFO)";
-  if (S_ISCHR(mode)) return "a character device";
-  if (S_ISBLK(mode)) return "a block device";
-  if (S_ISSOCK(mode)) return "a socket";
-  if (S_ISLNK(mode)) return "a symbolic link";
-  if (S_ISREG(mode)) return "a file";
-  return "not a regular file";
-}
-
 static int refuse(const char *command, int status, const char *format, const char *a, const char *b, const char *c) {
   fprintf(stderr, "fascia %s: ", command);
   fprintf(stderr, format, a, b, c);
@@ -87,7 +76,7 @@ static int check_output_file(const char *command, const cli_path *p, const char 
   if (lstat(path, &st) == 0) {
     if (!S_ISREG(st.st_mode))
       return refuse(command, 2, "%s '%s' is %s; give the path of a regular file (it would be replaced by one)",
-                    p->option, path, kind_of(st.st_mode));
+                    p->option, path, fascia_file_kind(st.st_mode));
     key->exists = 1, key->dev = st.st_dev, key->ino = st.st_ino, key->name = NULL;
     return -1;
   }
@@ -104,7 +93,7 @@ static int check_output_dir(const char *command, const cli_path *p) {
   struct stat st;
   if (stat(p->path, &st) != 0) return check_folder(command, p, p->path); // made by the command
   if (!S_ISDIR(st.st_mode))
-    return refuse(command, 2, "%s '%s' is %s, not a folder", p->option, p->path, kind_of(st.st_mode));
+    return refuse(command, 2, "%s '%s' is %s, not a folder", p->option, p->path, fascia_file_kind(st.st_mode));
   if (access(p->path, W_OK | X_OK) != 0)
     return refuse(command, 1, "%s '%s': cannot write in this folder (permission denied)%s", p->option, p->path, "");
   return -1;
@@ -117,7 +106,7 @@ static int check_input(const char *command, const cli_path *p) {
   struct stat st;
   if (stat(p->path, &st) != 0 || S_ISREG(st.st_mode)) return -1;
   return refuse(command, 1, "%s '%s' is %s, not a regular file; give the path of the file itself", p->option, p->path,
-                kind_of(st.st_mode));
+                fascia_file_kind(st.st_mode));
 }
 
 // An input, or another output file, that lies in output folder p and whose

@@ -10,6 +10,7 @@
 #define FASCIA_FILES_H
 
 #include <stdio.h>
+#include <sys/types.h>
 
 #include "fascia/base.h"
 
@@ -46,6 +47,12 @@ FASCIA_API void fascia_file_discard(fascia_file **file);
 /// the path and what it is ("'P' is a FIFO, not a regular file") or why it
 /// cannot be opened.
 FASCIA_API fascia_status fascia_file_open_input(fascia_ctx *ctx, const char *what, const char *path, FILE **out);
+
+/// What a file's type (the st_mode of stat or lstat) makes it, for messages
+/// such as "'P' is a folder, not a regular file": "a file" (regular), "a
+/// folder", "a FIFO (named pipe)", "a character device", "a block device",
+/// "a socket", "a symbolic link", or "a file of unknown kind".
+FASCIA_API const char *fascia_file_kind(mode_t mode);
 
 /// Removes the temporary files `path.tmp-PID-K` that a process of this host
 /// no longer running left next to `path` (a kill during a write). Files of

@@ -115,13 +115,15 @@ fascia_status fascia_file_open(fascia_ctx *ctx, const char *what, const char *pa
   return FASCIA_OK;
 }
 
-static const char *file_kind(mode_t mode) {
-  if (S_ISFIFO(mode)) return "a FIFO (named pipe)";
+const char *fascia_file_kind(mode_t mode) {
+  if (S_ISREG(mode)) return "a file";
   if (S_ISDIR(mode)) return "a folder";
+  if (S_ISFIFO(mode)) return "a FIFO (named pipe)";
   if (S_ISCHR(mode)) return "a character device";
   if (S_ISBLK(mode)) return "a block device";
   if (S_ISSOCK(mode)) return "a socket";
-  return "not a file";
+  if (S_ISLNK(mode)) return "a symbolic link";
+  return "a file of unknown kind";
 }
 
 fascia_status fascia_file_open_input(fascia_ctx *ctx, const char *what, const char *path, FILE **out) {
@@ -143,7 +145,7 @@ fascia_status fascia_file_open_input(fascia_ctx *ctx, const char *what, const ch
   if (!S_ISREG(st.st_mode)) {
     close(fd);
     return FASCIA_FAIL(ctx, FASCIA_ERR_IO, "%s '%s' is %s, not a regular file; give the path of the %s file itself",
-                       what, path, file_kind(st.st_mode), what);
+                       what, path, fascia_file_kind(st.st_mode), what);
   }
   const int flags = fcntl(fd, F_GETFL);
   FILE *f = flags >= 0 && fcntl(fd, F_SETFL, flags & ~O_NONBLOCK) == 0 ? fdopen(fd, "rb") : NULL;
