@@ -10,7 +10,8 @@
 // field and its gradient are that linear field exactly (the organ's node
 // value is its motion, so a field that vanishes on a flat face and grows
 // linearly away from it is reproduced, and the gradients are the weights'
-// derivatives). An unknown attachment is refused naming the key.
+// derivatives). An unknown attachment, and "exact" on tetrahedra, are
+// refused naming the key.
 #define _POSIX_C_SOURCE 200809L // mkdtemp
 #include <math.h>
 #include <stdlib.h>
@@ -109,6 +110,12 @@ int main(void) {
   fascia_prep_scene *sc = NULL;
   CHECK(fascia_prep_scene_load(ctx, path, &sc) == FASCIA_ERR_FORMAT && !sc);
   CHECK(strstr(fascia_ctx_message(ctx), "tissues[0].attachment") != NULL);
+  // and so is exact on tetrahedra, whose weights are their tets'
+  char tet[sizeof scene_head + 80];
+  snprintf(tet, sizeof tet, scene_head, "exact\", \"shape_functions\": {\"kind\": \"tet\"}, \"description\": \"tet");
+  CHECK(fixture_two_boxes(dir, FACE, tet, path));
+  CHECK(fascia_prep_scene_load(ctx, path, &sc) == FASCIA_ERR_FORMAT && !sc);
+  CHECK(strstr(fascia_ctx_message(ctx), "tissues[0].attachment") && strstr(fascia_ctx_message(ctx), "mls"));
   fascia_ctx_destroy(&ctx);
   static const char *const files[] = {"a.obj", "b.obj", "scene.json", NULL};
   fixture_cleanup(dir, files);

@@ -1186,6 +1186,11 @@ static fascia_status parse_tissue(const reader *rd, const fascia_prep_scene *sce
     sub_key(at, path, "attachment");
     return key_fail(rd, at, "unknown attachment '%s' (known: frames, exact)", attachment);
   }
+  if (t->attachment == FASCIA_PREP_ATTACH_EXACT && t->shape_kind != FASCIA_PREP_SHAPE_MLS) {
+    sub_key(at, path, "attachment");
+    return key_fail(rd, at, "\"exact\" needs mls shape functions (tet weights are their tetrahedra's); use "
+                            "\"frames\" or shape_functions.kind \"mls\"");
+  }
   PREP_TRY(get_number(rd, item, path, "attachment_layer", 0, 0, 0, 0, INFINITY, &t->attachment_layer));
   t->coupling_tolerance = scene->voxel_size;
   t->couple_others = 1;
