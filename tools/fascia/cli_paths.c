@@ -31,15 +31,7 @@ typedef struct file_key {
   const char *name; ///< exists == 0: the last component of the path
 } file_key;
 
-const char *cli_folder_of(const char *path, char *out, size_t size) {
-  const char *slash = strrchr(path, '/');
-  if (!slash) snprintf(out, size, ".");
-  else if (slash == path) snprintf(out, size, "/");
-  else snprintf(out, size, "%.*s", (int)(slash - path), path);
-  return out;
-}
-
-static const char *folder_of(const char *path, char *out) { return cli_folder_of(path, out, PATH_TEXT); }
+static const char *folder_of(const char *path, char *out) { return fascia_path_folder(path, out, PATH_TEXT); }
 
 static int same_key(const file_key *a, const file_key *b) {
   if (a->exists != b->exists || a->dev != b->dev || a->ino != b->ino) return 0;

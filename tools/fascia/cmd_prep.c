@@ -251,7 +251,8 @@ static void print_summary(const prep_run *r, const step_clock *c, const char *ou
     double sample_volume = 0;
     for (int32_t i = 0; i < r->points->frame_count; ++i) frames += r->points->frame_tissue[i] == t;
     for (int32_t s = 0; s < r->points->sample_count; ++s)
-      if (r->points->sample_tissue[s] == t) ++samples, sample_volume += r->points->sample_volume[s];
+      if (r->points->sample_tissue[s] == t) // a sheet's drilling stabiliser repeats the volume of others
+        ++samples, sample_volume += r->points->sample_drilling[s] ? 0 : r->points->sample_volume[s];
     voxels += tr->voxels;
     const fascia_prep_tissue_def *tdef = sc->tissues + t;
     if (tdef->form == FASCIA_PREP_FORM_STRAND)
@@ -498,7 +499,8 @@ static void print_json(const prep_run *r, const step_clock *c, const char *outpu
     tissue_hold_free(&hold);
     double sample_volume = 0;
     for (int32_t s = 0; s < r->points->sample_count; ++s)
-      if (r->points->sample_tissue[s] == t) sample_volume += r->points->sample_volume[s];
+      if (r->points->sample_tissue[s] == t && !r->points->sample_drilling[s]) // a stabiliser repeats others'
+        sample_volume += r->points->sample_volume[s];
     const int tet = r->scene->tissues[t].shape_kind == FASCIA_PREP_SHAPE_TET;
     cJSON_AddNumberToObject(e, "sample_volume", sample_volume);
     if (td->form == FASCIA_PREP_FORM_STRAND) {
@@ -607,7 +609,7 @@ static int check_prep_paths(const fascia_prep_scene *scene, const char *output, 
   char table[4096] = "", folder[4096];
   if (seg->file && seg->table && strncmp(seg->table, "totalsegmentator:", 17)) {
     if (seg->table[0] == '/') snprintf(table, sizeof table, "%s", seg->table);
-    else snprintf(table, sizeof table, "%s/%s", cli_folder_of(scene->path, folder, sizeof folder), seg->table);
+    else snprintf(table, sizeof table, "%s/%s", fascia_path_folder(scene->path, folder, sizeof folder), seg->table);
   }
   paths[n++] = (cli_path){"segmentation.file", seg->file ? seg->file_path : NULL, CLI_INPUT, NULL, NULL};
   paths[n++] = (cli_path){"segmentation.labels", table[0] ? table : NULL, CLI_INPUT, NULL, NULL};

@@ -822,7 +822,7 @@ static fascia_status check_results_size(fascia_ctx *ctx, const run_options *opt,
   const double row = 8.0 * (1 + 7.0 * m->frame_count + (opt->samples ? 5.0 * m->sample_count : 0));
   const double bytes = saved * row + (double)FASCIA_RESULTS_SPACE_MARGIN; // as the writer will ask for
   char folder[4096];
-  cli_folder_of(opt->results_path, folder, sizeof folder);
+  fascia_path_folder(opt->results_path, folder, sizeof folder);
   struct statvfs fs;
   if (statvfs(folder, &fs) != 0) return FASCIA_OK;
   const double free_bytes = (double)fs.f_bavail * (double)fs.f_frsize;

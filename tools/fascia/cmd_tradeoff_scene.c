@@ -495,8 +495,10 @@ static void prepare_rung(study *s, rung *r) {
   }
   if (status == FASCIA_OK) {
     r->model = st.model, st.model = NULL;
-    for (int32_t k = 0; k < r->model->sample_count; ++k)
-      if (r->model->sample_organ[k] < 0) r->tissue_volume += r->model->sample_volume[k];
+    for (int32_t k = 0; k < r->model->sample_count; ++k) // a volumetric part repeats the volume of others
+      if (r->model->sample_organ[k] < 0 &&
+          r->model->materials[r->model->sample_material[k]].part != FASCIA_PART_VOLUMETRIC)
+        r->tissue_volume += r->model->sample_volume[k];
   }
   else
     snprintf(r->error, sizeof r->error, "%s",
@@ -598,7 +600,8 @@ static int strain_percentiles(const fascia_model *m, const fascia_solver *solver
   int32_t n = 0;
   double volume = 0;
   for (int32_t k = 0; k < m->sample_count; ++k)
-    if (m->sample_organ[k] < 0) pairs[2 * n] = strain[k], pairs[2 * n + 1] = m->sample_volume[k], volume += pairs[2 * n++ + 1];
+    if (m->sample_organ[k] < 0 && m->materials[m->sample_material[k]].part != FASCIA_PART_VOLUMETRIC)
+      pairs[2 * n] = strain[k], pairs[2 * n + 1] = m->sample_volume[k], volume += pairs[2 * n++ + 1];
   qsort(pairs, (size_t)n, 2 * sizeof *pairs, compare_pairs);
   out[0] = out[1] = out[2] = n ? pairs[2 * (n - 1)] : 0;
   double sum = 0;
@@ -1129,7 +1132,7 @@ static int load_scene(study *s, fascia_prep_scene **scene) {
     return 1;
   }
   text[used] = 0;
-  cli_folder_of(s->opt->scene, s->folder, sizeof s->folder);
+  fascia_path_folder(s->opt->scene, s->folder, sizeof s->folder);
   st = s->prep.scene_parse(s->ctx, text, s->opt->scene, s->folder, scene);
   if (st == FASCIA_OK) s->scene_json = cJSON_Parse(text);
   free(text);

@@ -115,9 +115,6 @@ typedef struct cli_path {
 /// that is missing or read-only.
 int cli_check_paths(const char *command, const cli_path *paths, int count);
 
-/// The folder of path ("." when it names none, "/" for the root), into out.
-const char *cli_folder_of(const char *path, char *out, size_t size);
-
 /// Largest --threads (and OMP_NUM_THREADS) accepted: more threads than this
 /// exhaust the OpenMP runtime (it crashes at about 100000) long before they
 /// help.

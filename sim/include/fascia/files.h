@@ -54,6 +54,10 @@ FASCIA_API fascia_status fascia_file_open_input(fascia_ctx *ctx, const char *wha
 /// "a socket", "a symbolic link", or "a file of unknown kind".
 FASCIA_API const char *fascia_file_kind(mode_t mode);
 
+/// The folder of path, into out (size bytes) and returned: "." when path
+/// names none, "/" for the root.
+FASCIA_API const char *fascia_path_folder(const char *path, char *out, size_t size);
+
 /// Removes the temporary files `path.tmp-PID-K` that a process of this host
 /// no longer running left next to `path` (a kill during a write). Files of
 /// running processes, of other users and other names are left alone.

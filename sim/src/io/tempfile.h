@@ -27,7 +27,4 @@ FASCIA_INTERN fascia_status fascia_temp_name(fascia_ctx *ctx, const char *what, 
 /// and the file at path is untouched.
 FASCIA_INTERN fascia_status fascia_commit_temp(fascia_ctx *ctx, const char *what, const char *tmp, const char *path);
 
-/// The folder of path for messages: "." when path names none.
-FASCIA_INTERN const char *fascia_path_folder(const char *path, char *out, size_t size);
-
 #endif
