@@ -205,15 +205,12 @@ fascia_status fascia_bsr_create(fascia_ctx *ctx, const fascia_model *m, fascia_b
   fascia_patch_table_free(&patches);
   out->rows = N;
   out->blocks = count;
-  out->cols = fascia_calloc(count, sizeof(int32_t));
+  out->cols = fascia_index_set_trim(scratch, count);
   out->values = fascia_calloc(36 * count, sizeof(fascia_real));
-  if (!out->cols || !out->values) {
-    free(scratch);
+  if (!out->values) {
     fascia_bsr_destroy(out);
     return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "assembly: out of memory for %lld 6x6 blocks", (long long)count);
   }
-  memcpy(out->cols, scratch, (size_t)count * sizeof(int32_t));
-  free(scratch);
   for (int32_t i = 0; i < N; ++i)
     for (int32_t b = out->row_offsets[i]; b < out->row_offsets[i + 1]; ++b)
       if (out->cols[b] == i) out->diagonal[i] = b;

@@ -78,17 +78,14 @@ fascia_status fascia_patch_table_build(fascia_ctx *ctx, const fascia_model *m, f
     t->support_offsets[p + 1] = (int32_t)count;
   }
   t->entry_count = (int32_t)count;
-  t->entry_frame = fascia_calloc(count, sizeof(int32_t));
+  t->entry_frame = fascia_index_set_trim(frames, count);
   t->entry_patch = fascia_calloc(count, sizeof(int32_t));
   t->frame_entries = fascia_calloc(count, sizeof(int32_t));
-  if (!t->entry_frame || !t->entry_patch || !t->frame_entries) {
+  if (!t->entry_patch || !t->frame_entries) {
     free(compact);
-    free(frames);
     fascia_patch_table_free(t);
     return FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "patches: out of memory for %lld support entries", (long long)count);
   }
-  memcpy(t->entry_frame, frames, (size_t)count * sizeof(int32_t));
-  free(frames);
   for (int32_t p = 0; p < P; ++p)
     for (int32_t e = t->support_offsets[p]; e < t->support_offsets[p + 1]; ++e) t->entry_patch[e] = p;
   for (int32_t k = 0; k < m->pair_count; ++k) t->pair_entry[k] = -1;

@@ -22,6 +22,14 @@ static inline int32_t fascia_index_set_make(int32_t *index, int32_t count) {
   return unique;
 }
 
+/// Index sets packed into a larger malloc'ed buffer: gives back its tail past
+/// count entries and returns the buffer. Never fails: a shrink that realloc
+/// refuses leaves the buffer as it was, large enough.
+static inline int32_t *fascia_index_set_trim(int32_t *index, int64_t count) {
+  int32_t *trimmed = (int32_t *)realloc(index, (size_t)(count > 0 ? count : 1) * sizeof(int32_t));
+  return trimmed ? trimmed : index;
+}
+
 /// The position of value in the ascending index[lo .. hi-1] (bisection); the
 /// value must be there.
 static inline int32_t fascia_index_set_find(const int32_t *index, int32_t lo, int32_t hi, int32_t value) {
