@@ -65,7 +65,9 @@ static void sample_volume_json(cJSON *e, const fascia_prep_points *pts, int32_t 
   double sum = 0;
   int32_t samples = 0;
   for (int32_t s = 0; s < pts->sample_count; ++s)
-    if (t >= 0 ? pts->sample_tissue[s] == t : pts->sample_inside_organ[s] == o) sum += pts->sample_volume[s], ++samples;
+    if ((t >= 0 ? pts->sample_tissue[s] == t : pts->sample_inside_organ[s] == o) &&
+        !(pts->sample_drilling && pts->sample_drilling[s])) // a stabiliser repeats the volume of others
+      sum += pts->sample_volume[s], ++samples;
   cJSON_AddNumberToObject(e, "sample_volume_m3", sum);
   const int tet = kind == FASCIA_PREP_SHAPE_TET;
   cJSON_AddStringToObject(e, "sample_volume_of", tet ? "tetrahedra kept inside the region" : "region voxels");
@@ -601,7 +603,7 @@ static fascia_status mark_hinged(fascia_ctx *ctx, const fascia_prep_scene *scene
     for (int32_t k = start[r]; k < start[r + 1]; ++k) {
       const int32_t s = order[k];
       ++q.samples;
-      q.volume += m->sample_volume[s];
+      if (m->materials[m->sample_material[s]].part != FASCIA_PART_VOLUMETRIC) q.volume += m->sample_volume[s];
       for (int32_t p = m->sample_offsets[s]; p < m->sample_offsets[s + 1]; ++p) {
         const int32_t f = m->pair_frame[p];
         if (held[f] && stamp[f] != r) stamp[f] = r, list[points++] = f;
@@ -760,10 +762,11 @@ fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_scene *scen
     snprintf(mat->name, sizeof mat->name, "%.*s", (int)sizeof mat->name - 1, name);
     if (td->form == FASCIA_PREP_FORM_SHEET) { // its drilling stabilisers' (reduced.h), the next one
       fascia_material *d = mat + 1;
-      const double mu = mat->youngs_modulus / (2 * (1 + mat->poisson_ratio)), nu = PREP_SHEET_DRILLING_POISSON;
+      const double mu = mat->youngs_modulus / (2 * (1 + mat->poisson_ratio));
       *d = *mat;
-      d->poisson_ratio = nu;
-      d->youngs_modulus = PREP_SHEET_DRILLING_LAMBDA * mu / PREP_SHEET_DRILLING_SHARE * (1 + nu) * (1 - 2 * nu) / nu;
+      d->part = FASCIA_PART_VOLUMETRIC;
+      d->poisson_ratio = 0.25; // lambda = 0.4 E
+      d->youngs_modulus = PREP_SHEET_DRILLING_LAMBDA * mu / 0.4;
       snprintf(name, sizeof name, "%s/%s/drilling", scene->materials[td->material].name, td->name);
       snprintf(d->name, sizeof d->name, "%.*s", (int)sizeof d->name - 1, name);
     }

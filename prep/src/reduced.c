@@ -830,12 +830,12 @@ static fascia_status build_sheet(fascia_ctx *ctx, const fascia_prep_scene *scene
       for (int r = 0; r < 3; ++r) station[r] = TRI_RULE[a][0] * p0[r] + TRI_RULE[a][1] * p1[r] + TRI_RULE[a][2] * p2[r];
       for (int j = 0; j < q; ++j, ++s) {
         for (int r = 0; r < 3; ++r) out->sample_position[3 * (int64_t)s + r] = station[r] + offset[3 * j + r];
-        out->sample_volume[s] = area / TRI_POINTS * fraction[j] * td->thickness * (1 - PREP_SHEET_DRILLING_SHARE);
+        out->sample_volume[s] = area / TRI_POINTS * fraction[j] * td->thickness;
         memcpy(out->sample_cell + 3 * (int64_t)s, c, 3 * sizeof(int32_t));
       }
     }
     for (int r = 0; r < 3; ++r) out->sample_position[3 * (int64_t)s + r] = (p0[r] + p1[r] + p2[r]) / 3;
-    out->sample_volume[s] = area * td->thickness * PREP_SHEET_DRILLING_SHARE;
+    out->sample_volume[s] = area * td->thickness;
     memcpy(out->sample_cell + 3 * (int64_t)s, c, 3 * sizeof(int32_t));
     out->sample_drilling[s++] = 1;
   }

@@ -20,16 +20,13 @@ typedef struct prep_reduced {
 } prep_reduced;
 
 /// A sheet's drilling stabiliser (docs/mechanics.md, "Against CalculiX"):
-/// one sample per triangle at its centroid holding this share of the
-/// triangle's volume (its points through the thickness hold the rest),
+/// one sample per triangle at its centroid, of the triangle's volume,
 /// whose gradients are the linear triangle's less the quadratic fit's and
-/// whose law sees the change of area alone: first Lame modulus
-/// PREP_SHEET_DRILLING_LAMBDA times the sheet's shear modulus over the
-/// share, Poisson ratio PREP_SHEET_DRILLING_POISSON (a shear modulus 500
-/// times smaller).
-#define PREP_SHEET_DRILLING_SHARE 1e-3
+/// whose material integrates the volumetric energy alone (its volume
+/// repeats the points' through the thickness, and it has no mass), with a
+/// first Lame modulus PREP_SHEET_DRILLING_LAMBDA times the sheet's shear
+/// modulus: it sees the change of area, not the shear across the sheet.
 #define PREP_SHEET_DRILLING_LAMBDA 4.0
-#define PREP_SHEET_DRILLING_POISSON 0.499
 
 /// Builds tissue t (a strand or a sheet; its sheet mesh in meshes->sheets)
 /// and refuses what cannot be one with a line naming the scene key: an
