@@ -428,11 +428,14 @@ typedef struct fascia_prep_volume {
 /// inside; open meshes whose holes leak get a morphological closing), measures
 /// overlaps, and builds each tissue's region, then each deformable organ's
 /// (its inside voxels that no earlier region holds; pieces smaller than its
-/// min_component dropped). Every organ a tissue connects gets a distance
+/// min_component dropped; of a closed surface of nested shells, a hollow
+/// organ, only the wall between them, by ray parity: the tissues still see
+/// the cavity as inside). Every organ a tissue connects gets a distance
 /// field wherever the tissue can lie. Errors: voxel size too large for a
 /// gap, organs too far apart for max_gap (the message names the two, their
 /// distance and the max_gap that bridges them), a region that selects
-/// nothing, a deformable organ with no inside left.
+/// nothing, a deformable organ with no inside left, a deformable organ whose
+/// shells cross or whose open surface holds a large cavity.
 FASCIA_API fascia_status fascia_prep_voxelize(fascia_ctx *ctx, const fascia_prep_scene *scene,
                                               fascia_prep_meshes *meshes, fascia_prep_volume **out);
 FASCIA_API void fascia_prep_volume_destroy(fascia_prep_volume **volume);
