@@ -11,7 +11,9 @@
 //   2. a flood fill from the grid's border over unblocked segments reaches
 //      exactly the voxels connected to the outside without crossing the
 //      surface; everything else is inside. Cavities and the space between the
-//      two sheets of a thin shell count as inside, as tissue cannot reach them;
+//      two sheets of a thin shell count as inside, as tissue cannot reach them
+//      (a deformable organ's own region leaves a hollow organ's cavity out:
+//      organ_material);
 //   3. if the surface has holes (border edges) and the fill leaked in, the
 //      fill is redone with walls of voxels within (c + 1/2) h of the surface
 //      (2c + 1 = close_holes / h), then grown back towards the surface over unblocked
