@@ -350,10 +350,7 @@ static fascia_status time_paper_mode(fascia_ctx *ctx, const bench_options *opt, 
       const double t0 = cli_now_ms();
       st = fascia_solver_step(solver, &report);
       ms += cli_now_ms() - t0;
-      sum.evaluate_ms += report.profile.evaluate_ms;
-      sum.precond_ms += report.profile.precond_ms;
-      sum.assemble_ms += report.profile.assemble_ms;
-      sum.cg_ms += report.profile.cg_ms;
+      fascia_profile_add(&sum, &report.profile);
       cg += report.cg_iterations;
     }
     if (st == FASCIA_OK && ms / opt->steps < out->ms) {

@@ -340,11 +340,7 @@ static fascia_status add_report(run_totals *t, const fascia_solve_report *r) {
   t->direct_steps += r->direct != 0;
   t->assembled_steps += r->assembled != 0;
   t->single_steps += r->single_precision_matrix != 0;
-  t->profile.assemble_ms += r->profile.assemble_ms;
-  t->profile.evaluate_ms += r->profile.evaluate_ms;
-  t->profile.precond_ms += r->profile.precond_ms;
-  t->profile.cg_ms += r->profile.cg_ms;
-  t->profile.total_ms += r->profile.total_ms;
+  fascia_profile_add(&t->profile, &r->profile);
   if (r->profile.total_ms > t->largest_step_ms) t->largest_step_ms = r->profile.total_ms;
   t->energy = r->energy;
   t->steps++;

@@ -122,6 +122,9 @@ typedef struct fascia_profile {
   double total_ms;
 } fascia_profile;
 
+/// Adds each stage's time of p to sum's (the profile of several solves).
+FASCIA_API void fascia_profile_add(fascia_profile *sum, const fascia_profile *p);
+
 /// What a solve did.
 typedef struct fascia_solve_report {
   int converged;               ///< 1 when the Newton tolerance was met

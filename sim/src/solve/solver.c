@@ -37,6 +37,14 @@ fascia_solver_def fascia_solver_def_default(void) {
   return d;
 }
 
+void fascia_profile_add(fascia_profile *sum, const fascia_profile *p) {
+  sum->evaluate_ms += p->evaluate_ms;
+  sum->precond_ms += p->precond_ms;
+  sum->assemble_ms += p->assemble_ms;
+  sum->cg_ms += p->cg_ms;
+  sum->total_ms += p->total_ms;
+}
+
 static fascia_status check_time_step(fascia_ctx *ctx, fascia_real time_step) {
   FASCIA_CHECK(isfinite(time_step) && time_step > 0, ctx, FASCIA_ERR_ARGUMENT,
                "solver: time step %g s is impossible; give a positive number of seconds", time_step);
@@ -445,29 +453,21 @@ static fascia_status step_once(fascia_solver *S, fascia_real h, fascia_solve_rep
   return FASCIA_OK;
 }
 
-// Adds the work of one (sub)step to the step's report; the end-of-step
-// values (convergence, gradient, energy, inversions) are the last one's.
+// Adds the work of one (sub)step to the step's report: the counts and the
+// times add up; the end-of-step values (convergence, the linear solver,
+// gradient, energy, inversions) are the last one's.
 static void merge_report(fascia_solve_report *sum, const fascia_solve_report *r) {
-  sum->converged = r->converged;
-  sum->newton_iterations += r->newton_iterations;
-  sum->cg_iterations += r->cg_iterations;
-  sum->line_search_cuts += r->line_search_cuts;
-  sum->watchdog_returns += r->watchdog_returns;
-  sum->factorizations += r->factorizations;
-  sum->negative_curvature += r->negative_curvature;
-  sum->direct = r->direct;
-  sum->assembled = r->assembled;
-  sum->single_precision_matrix = r->single_precision_matrix;
-  sum->gradient_norm = r->gradient_norm;
-  sum->reference_norm = r->reference_norm;
-  sum->energy = r->energy;
-  sum->inverted_samples = r->inverted_samples;
-  sum->substeps += r->substeps;
-  sum->profile.evaluate_ms += r->profile.evaluate_ms;
-  sum->profile.precond_ms += r->profile.precond_ms;
-  sum->profile.assemble_ms += r->profile.assemble_ms;
-  sum->profile.cg_ms += r->profile.cg_ms;
-  sum->profile.total_ms += r->profile.total_ms;
+  fascia_solve_report last = *r;
+  last.newton_iterations += sum->newton_iterations;
+  last.cg_iterations += sum->cg_iterations;
+  last.line_search_cuts += sum->line_search_cuts;
+  last.watchdog_returns += sum->watchdog_returns;
+  last.factorizations += sum->factorizations;
+  last.negative_curvature += sum->negative_curvature;
+  last.substeps += sum->substeps;
+  last.rejected += sum->rejected; // a substep rejects none: step_split counts them
+  fascia_profile_add(&last.profile, &sum->profile);
+  *sum = last;
 }
 
 // A step of length h, rejected and redone as two steps of h/2 when it
