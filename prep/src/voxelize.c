@@ -368,8 +368,9 @@ cleanup:
 // turns every closed shell outward, so the nesting decides, not the
 // orientation. Parity is trusted only where it is unambiguous: each shell
 // must bound the outside or a cavity, never both (shells that cross, a
-// self-overlap, overlapping parts). Otherwise a small even-parity volume is
-// filled as before and a large one is refused. material: in, the parity
+// self-overlap, overlapping parts), and the surface must be closed (an
+// open one is filled by the outer rule, as before). Otherwise a small
+// even-parity volume is filled as before and a large one is refused. material: in, the parity
 // vote; out, the material, or NULL'd by the caller when *hollow is 0.
 static fascia_status organ_material(fascia_ctx *ctx, const fascia_prep_scene *scene, fascia_prep_mesh *o,
                                     const prep_grid *g, const uint8_t *inside, uint8_t *material, int *hollow) {
@@ -381,18 +382,13 @@ static fascia_status organ_material(fascia_ctx *ctx, const fascia_prep_scene *sc
   }
   *hollow = 0;
   if (cavity * 1000 <= inside_count) return FASCIA_OK; // round-off where a centre lies on the surface
+  // an open surface: the parity's rays pass its holes, and the outer rule
+  // may have closed them or leaked through them; it is filled as before
+  if (o->report.border_edges > 0) return FASCIA_OK;
   const int large = cavity * 10 >= inside_count;
   int32_t k = 0;
   while (k + 1 < scene->organ_count && strcmp(scene->organs[k].name, o->name)) ++k;
   const double cm3 = 1e6 * (double)cavity * g->h * g->h * g->h;
-  if (o->report.border_edges > 0) {
-    PREP_CHECK(!large, ctx, FASCIA_ERR_FORMAT,
-               "deformable organ '%s' (scene '%s' organs[%d].mesh): shells inside its surface enclose %.3g cm^3 (a "
-               "hollow organ's cavity?), but the surface is open (%d border edges), so its wall cannot be told from "
-               "the cavity; close the surface, or make the organ a \"shell\"",
-               o->name, scene->path, (int)k, cm3, (int)o->report.border_edges);
-    return FASCIA_OK;
-  }
   // the shells: connected components of the triangles
   const int32_t NV = o->vertex_count, NT = o->triangle_count;
   int32_t *root = prep_calloc(NV, sizeof(int32_t));

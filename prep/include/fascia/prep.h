@@ -435,7 +435,7 @@ typedef struct fascia_prep_volume {
 /// gap, organs too far apart for max_gap (the message names the two, their
 /// distance and the max_gap that bridges them), a region that selects
 /// nothing, a deformable organ with no inside left, a deformable organ whose
-/// shells cross or whose open surface holds a large cavity.
+/// closed shells cross around a large even-parity volume.
 FASCIA_API fascia_status fascia_prep_voxelize(fascia_ctx *ctx, const fascia_prep_scene *scene,
                                               fascia_prep_meshes *meshes, fascia_prep_volume **out);
 FASCIA_API void fascia_prep_volume_destroy(fascia_prep_volume **volume);
