@@ -90,6 +90,20 @@ static fascia_real region_patch_radius(const fascia_prep_scene *scene, int32_t m
                                           : radius;
 }
 
+// How a region (a tissue, or a deformable organ's inside) is sampled, in
+// its provenance entry: the same keys for both.
+static void sampling_json(cJSON *e, const fascia_prep_scene *scene, int32_t material, fascia_real frame_spacing,
+                          fascia_real sample_spacing, int32_t shape_kind, int32_t neighbours, int32_t samples_per_tet,
+                          int32_t enhanced_modes) {
+  cJSON_AddStringToObject(e, "material", scene->materials[material].name);
+  cJSON_AddNumberToObject(e, "frame_spacing", frame_spacing);
+  cJSON_AddNumberToObject(e, "sample_spacing", sample_spacing);
+  cJSON_AddStringToObject(e, "shape_functions", shape_kind == FASCIA_PREP_SHAPE_TET ? "tet" : "mls");
+  cJSON_AddNumberToObject(e, "neighbours", neighbours);
+  if (shape_kind == FASCIA_PREP_SHAPE_TET) cJSON_AddNumberToObject(e, "samples_per_tet", samples_per_tet);
+  cJSON_AddBoolToObject(e, "enhanced_modes", enhanced_modes);
+}
+
 // Patches per material: the largest radius among the regions made of it.
 static fascia_status make_patches(fascia_ctx *ctx, const fascia_prep_scene *scene, fascia_model *m) {
   fascia_real *radius = calloc((size_t)m->material_count + 1, sizeof *radius);
@@ -159,13 +173,8 @@ static cJSON *provenance(const fascia_prep_scene *scene, const fascia_prep_meshe
     cJSON_AddItemToObject(e, "transform_3x4", vector(d->transform, 12));
     cJSON_AddStringToObject(e, "model", organ_kind_name(d->kind));
     if (d->kind == FASCIA_ORGAN_DEFORMABLE) {
-      cJSON_AddStringToObject(e, "material", scene->materials[d->material].name);
-      cJSON_AddNumberToObject(e, "frame_spacing", d->frame_spacing);
-      cJSON_AddNumberToObject(e, "sample_spacing", d->sample_spacing);
-      cJSON_AddStringToObject(e, "shape_functions", d->shape_kind == FASCIA_PREP_SHAPE_TET ? "tet" : "mls");
-      cJSON_AddNumberToObject(e, "neighbours", d->neighbours);
-      if (d->shape_kind == FASCIA_PREP_SHAPE_TET) cJSON_AddNumberToObject(e, "samples_per_tet", d->samples_per_tet);
-      cJSON_AddBoolToObject(e, "enhanced_modes", d->enhanced_modes);
+      sampling_json(e, scene, d->material, d->frame_spacing, d->sample_spacing, d->shape_kind, d->neighbours,
+                    d->samples_per_tet, d->enhanced_modes);
       cJSON_AddNumberToObject(e, "min_component", d->min_component);
       cJSON_AddNumberToObject(e, "patch_radius", region_patch_radius(scene, d->material, d->patch_radius, d->frame_spacing));
     }
@@ -248,13 +257,8 @@ static cJSON *provenance(const fascia_prep_scene *scene, const fascia_prep_meshe
       cJSON_AddStringToObject(e, "region_parts_organ", scene->organs[td->region_organ].name);
       cJSON_AddItemToObject(e, "region_parts", parts_json(&td->region_parts));
     }
-    cJSON_AddStringToObject(e, "material", scene->materials[td->material].name);
-    cJSON_AddNumberToObject(e, "frame_spacing", td->frame_spacing);
-    cJSON_AddNumberToObject(e, "sample_spacing", td->sample_spacing);
-    cJSON_AddStringToObject(e, "shape_functions", td->shape_kind == FASCIA_PREP_SHAPE_TET ? "tet" : "mls");
-    cJSON_AddNumberToObject(e, "neighbours", td->neighbours);
-    if (td->shape_kind == FASCIA_PREP_SHAPE_TET) cJSON_AddNumberToObject(e, "samples_per_tet", td->samples_per_tet);
-    cJSON_AddBoolToObject(e, "enhanced_modes", td->enhanced_modes);
+    sampling_json(e, scene, td->material, td->frame_spacing, td->sample_spacing, td->shape_kind, td->neighbours,
+                  td->samples_per_tet, td->enhanced_modes);
     cJSON_AddNumberToObject(e, "coupling_tolerance", td->coupling_tolerance);
     cJSON_AddNumberToObject(e, "min_component", td->min_component);
     cJSON_AddNumberToObject(e, "patch_radius", region_patch_radius(scene, td->material, td->patch_radius, td->frame_spacing));
