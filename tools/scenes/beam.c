@@ -20,7 +20,6 @@
 
 // Largest model the generator agrees to build (pairs), far above any use.
 #define BEAM_MAX_PAIRS ((int64_t)1 << 28)
-#define PROVENANCE_SIZE 4096
 
 // Points across y of a sheet's cell with n along x: one point along the
 // axis is free of shear locking; two across leave no mode of zero energy.
@@ -537,43 +536,31 @@ fascia_status fascia_scene_beam_build(fascia_ctx *ctx, const fascia_scene_beam_d
   const int32_t frames = def->shape == FASCIA_SCENE_STRAND  ? g.n[0]
                          : def->shape == FASCIA_SCENE_SHEET ? g.n[0] * g.n[1]
                                                             : scene_grid_frame_count(&g);
-  fascia_real *position = malloc(3 * (size_t)frames * sizeof *position);
-  char *provenance = malloc(PROVENANCE_SIZE);
-  fascia_frame_grid *grid = NULL;
-  fascia_model *m = NULL;
+  scene_build b;
+  SCENE_TRY(scene_build_begin(ctx, frames, "beam generator", &b));
   scene_probe probe;
-  if (!position || !provenance) {
-    status = SCENE_FAIL(ctx, FASCIA_ERR_MEMORY, "beam generator: out of memory for %d frames", (int)frames);
-    goto cleanup;
-  }
-  if (reduced) reduced_positions(def, &g, position);
-  else scene_grid_positions(&g, position);
-  if (def->shape == FASCIA_SCENE_MESHLESS || reduced) SCENE_TRY_GOTO(fascia_frame_grid_create(ctx, frames, position, &grid));
-  SCENE_TRY_GOTO(tip_probe(ctx, def, &g, grid, &probe));
-  SCENE_TRY_GOTO(scene_model_alloc(ctx, frames, position, samples, samples * per_sample,
-                                   def->reduced_volumetric ? 2 : 1, &probe, &m));
+  if (reduced) reduced_positions(def, &g, b.position);
+  else scene_grid_positions(&g, b.position);
+  if (def->shape == FASCIA_SCENE_MESHLESS || reduced) SCENE_TRY_GOTO(fascia_frame_grid_create(ctx, frames, b.position, &b.grid));
+  SCENE_TRY_GOTO(tip_probe(ctx, def, &g, b.grid, &probe));
+  SCENE_TRY_GOTO(scene_model_alloc(ctx, frames, b.position, samples, samples * per_sample,
+                                   def->reduced_volumetric ? 2 : 1, &probe, &b.m));
   // samples are written in order: the (deviatoric) rule, then the volumetric centres
   int32_t next = 0;
   if (reduced) {
-    SCENE_TRY_GOTO(fill_reduced_samples(ctx, def, &g, grid, m, &next));
+    SCENE_TRY_GOTO(fill_reduced_samples(ctx, def, &g, b.grid, b.m, &next));
   } else if (def->shape == FASCIA_SCENE_TET) {
-    SCENE_TRY_GOTO(fill_tet_samples(ctx, &g, m, def->samples_per_tet, 0, &next));
-    if (def->reduced_volumetric) SCENE_TRY_GOTO(fill_tet_samples(ctx, &g, m, 1, 1, &next));
+    SCENE_TRY_GOTO(fill_tet_samples(ctx, &g, b.m, def->samples_per_tet, 0, &next));
+    if (def->reduced_volumetric) SCENE_TRY_GOTO(fill_tet_samples(ctx, &g, b.m, 1, 1, &next));
   } else {
-    SCENE_TRY_GOTO(fill_gauss_samples(ctx, def, &g, grid, m, def->samples_per_cell_dir, 0, &next));
-    if (def->reduced_volumetric) SCENE_TRY_GOTO(fill_gauss_samples(ctx, def, &g, grid, m, 1, 1, &next));
+    SCENE_TRY_GOTO(fill_gauss_samples(ctx, def, &g, b.grid, b.m, def->samples_per_cell_dir, 0, &next));
+    if (def->reduced_volumetric) SCENE_TRY_GOTO(fill_gauss_samples(ctx, def, &g, b.grid, b.m, 1, 1, &next));
   }
-  if (def->volumetric_patch == FASCIA_SCENE_PATCH_POISSON) SCENE_TRY_GOTO(fascia_model_make_patches(ctx, m, &def->patch_radius));
-  else if (def->volumetric_patch != FASCIA_SCENE_PATCH_NONE) assign_patches(def, &g, m);
-  for (int32_t s = 0; s < m->sample_count; ++s) m->sample_modes[s] = m->sample_patch[s] >= 0 ? def->enhanced_modes : FASCIA_MODES_NONE;
-  beam_provenance(provenance, PROVENANCE_SIZE, def, m);
-  SCENE_TRY_GOTO(scene_finish(ctx, m, def, &probe, provenance, "beam generator"));
-  *out = m;
-  m = NULL;
+  if (def->volumetric_patch == FASCIA_SCENE_PATCH_POISSON) SCENE_TRY_GOTO(fascia_model_make_patches(ctx, b.m, &def->patch_radius));
+  else if (def->volumetric_patch != FASCIA_SCENE_PATCH_NONE) assign_patches(def, &g, b.m);
+  for (int32_t s = 0; s < b.m->sample_count; ++s) b.m->sample_modes[s] = b.m->sample_patch[s] >= 0 ? def->enhanced_modes : FASCIA_MODES_NONE;
+  beam_provenance(b.provenance, SCENE_PROVENANCE_SIZE, def, b.m);
+  SCENE_TRY_GOTO(scene_finish(ctx, b.m, def, &probe, b.provenance, "beam generator"));
 cleanup:
-  fascia_model_destroy(&m);
-  fascia_frame_grid_destroy(&grid);
-  free(position);
-  free(provenance);
-  return status;
+  return scene_build_end(&b, status, out);
 }

@@ -31,7 +31,6 @@
 
 #define PAPER_SEED 0x2013b05a17ULL // fixed: the same row always gives the same model
 #define PAPER_FRAME_TOLERANCE 0.05 // grid frame count within 5 % of the request when possible
-#define PROVENANCE_SIZE 4096
 
 // Table 2 lists neighbours 4, 8, 6, 10 for the first four rows while the time
 // rises monotonically (32.65 .. 69.56 ms); we keep the paper's text as printed.
@@ -205,27 +204,21 @@ fascia_status fascia_scene_paper_build(fascia_ctx *ctx, const fascia_scene_paper
   choose_frames(&body, row->frames, frames);
   const scene_grid g = scene_grid_of_beam(&body, frames);
   const int32_t frame_count = scene_grid_frame_count(&g), k = row->neighbours;
-  fascia_real *position = malloc(3 * (size_t)frame_count * sizeof *position);
-  char *provenance = malloc(PROVENANCE_SIZE);
-  fascia_frame_grid *grid = NULL;
-  fascia_model *m = NULL;
+  scene_build b;
+  SCENE_TRY(scene_build_begin(ctx, frame_count, "paper generator", &b));
   scene_probe probe;
   const fascia_real tip[3] = {body.length, 0, 0};
   int32_t frame[SCENE_PROBE_MAX];
   fascia_real w[SCENE_PROBE_MAX], grad[3 * SCENE_PROBE_MAX];
-  if (!position || !provenance) {
-    status = SCENE_FAIL(ctx, FASCIA_ERR_MEMORY, "paper generator: out of memory for %d frames", (int)frame_count);
-    goto cleanup;
-  }
   SCENE_TRY_GOTO(k <= frame_count ? FASCIA_OK
                                   : SCENE_FAIL(ctx, FASCIA_ERR_ARGUMENT,
                                                "paper generator, row '%s': %d neighbours but only %d frames",
                                                row->name, (int)k, (int)frame_count));
-  scene_grid_positions(&g, position);
-  if (k != 4) SCENE_TRY_GOTO(fascia_frame_grid_create(ctx, frame_count, position, &grid));
+  scene_grid_positions(&g, b.position);
+  if (k != 4) SCENE_TRY_GOTO(fascia_frame_grid_create(ctx, frame_count, b.position, &b.grid));
   // the tip probe; MLS grows k while the nearest frames are coplanar
   for (int32_t n = k;; ++n) {
-    status = weights_at(ctx, &g, grid, tip, n, frame, w, grad);
+    status = weights_at(ctx, &g, b.grid, tip, n, frame, w, grad);
     if (status == FASCIA_OK) {
       scene_probe_set(&probe, tip, n, frame, w);
       fascia_ctx_clear(ctx);
@@ -233,11 +226,11 @@ fascia_status fascia_scene_paper_build(fascia_ctx *ctx, const fascia_scene_paper
     }
     if (status != FASCIA_ERR_NUMERIC || n + 1 > frame_count || n + 1 > SCENE_PROBE_MAX) goto cleanup;
   }
-  SCENE_TRY_GOTO(scene_model_alloc(ctx, frame_count, position, row->samples, row->samples * k, 1, &probe, &m));
-  place_samples(&body, row->samples, m, strata);
+  SCENE_TRY_GOTO(scene_model_alloc(ctx, frame_count, b.position, row->samples, row->samples * k, 1, &probe, &b.m));
+  place_samples(&body, row->samples, b.m, strata);
   for (int32_t s = 0; s < row->samples; ++s) {
-    SCENE_TRY_GOTO(weights_at(ctx, &g, grid, m->sample_position + 3 * (int64_t)s, k, frame, w, grad));
-    scene_set_pairs(m, s, k, frame, w, grad);
+    SCENE_TRY_GOTO(weights_at(ctx, &g, b.grid, b.m->sample_position + 3 * (int64_t)s, k, frame, w, grad));
+    scene_set_pairs(b.m, s, k, frame, w, grad);
   }
   // frames no sample weighs on (rows with more frames than their samples reach)
   unsigned char *weighed = calloc((size_t)frame_count, 1);
@@ -245,21 +238,14 @@ fascia_status fascia_scene_paper_build(fascia_ctx *ctx, const fascia_scene_paper
     status = SCENE_FAIL(ctx, FASCIA_ERR_MEMORY, "paper generator: out of memory for %d frames", (int)frame_count);
     goto cleanup;
   }
-  for (int64_t q = 0; q < (int64_t)row->samples * k; ++q) weighed[m->pair_frame[q]] = 1;
+  for (int64_t q = 0; q < (int64_t)row->samples * k; ++q) weighed[b.m->pair_frame[q]] = 1;
   int32_t unweighted = 0;
   for (int32_t i = 0; i < frame_count; ++i) unweighted += !weighed[i];
-  paper_provenance(provenance, PROVENANCE_SIZE, row, frames, strata, unweighted, &body);
-  status = scene_finish(ctx, m, &body, &probe, provenance, row->name);
+  paper_provenance(b.provenance, SCENE_PROVENANCE_SIZE, row, frames, strata, unweighted, &body);
+  status = scene_finish(ctx, b.m, &body, &probe, b.provenance, row->name);
   for (int32_t i = 0; status == FASCIA_OK && i < frame_count; ++i)
-    if (!weighed[i]) m->frame_kind[i] = FASCIA_FRAME_FIXED;
+    if (!weighed[i]) b.m->frame_kind[i] = FASCIA_FRAME_FIXED;
   free(weighed);
-  if (status != FASCIA_OK) goto cleanup;
-  *out = m;
-  m = NULL;
 cleanup:
-  fascia_model_destroy(&m);
-  fascia_frame_grid_destroy(&grid);
-  free(position);
-  free(provenance);
-  return status;
+  return scene_build_end(&b, status, out);
 }

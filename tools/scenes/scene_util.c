@@ -224,6 +224,28 @@ fascia_status scene_model_alloc(fascia_ctx *ctx, int32_t frames, const fascia_re
   return FASCIA_OK;
 }
 
+fascia_status scene_build_begin(fascia_ctx *ctx, int32_t frames, const char *who, scene_build *b) {
+  b->position = malloc(3 * (size_t)frames * sizeof *b->position);
+  b->provenance = malloc(SCENE_PROVENANCE_SIZE);
+  b->grid = NULL;
+  b->m = NULL;
+  if (b->position && b->provenance) return FASCIA_OK;
+  return scene_build_end(b, SCENE_FAIL(ctx, FASCIA_ERR_MEMORY, "%s: out of memory for %d frames", who, (int)frames),
+                         NULL);
+}
+
+fascia_status scene_build_end(scene_build *b, fascia_status status, fascia_model **out) {
+  if (status == FASCIA_OK) {
+    *out = b->m;
+    b->m = NULL;
+  }
+  fascia_model_destroy(&b->m);
+  fascia_frame_grid_destroy(&b->grid);
+  free(b->position);
+  free(b->provenance);
+  return status;
+}
+
 fascia_status scene_finish(fascia_ctx *ctx, fascia_model *m, const fascia_scene_beam_def *def,
                            const scene_probe *probe, const char *provenance, const char *origin) {
   fascia_material *mat = &m->materials[0];

@@ -92,6 +92,26 @@ void scene_probe_set(scene_probe *probe, const fascia_real position[3], int32_t 
 fascia_status scene_model_alloc(fascia_ctx *ctx, int32_t frames, const fascia_real *position, int32_t samples,
                                 int32_t pairs, int32_t materials, const scene_probe *probe, fascia_model **out);
 
+/// Bytes of a generator's provenance text.
+#define SCENE_PROVENANCE_SIZE 4096
+
+/// What a generator holds while it builds a model, freed together by
+/// scene_build_end: the frames' rest positions, the provenance text, the
+/// frames' search grid (NULL where the weights need none) and the model.
+typedef struct scene_build {
+  fascia_real *position; ///< [3 frames]
+  char *provenance;      ///< SCENE_PROVENANCE_SIZE bytes
+  fascia_frame_grid *grid;
+  fascia_model *m;
+} scene_build;
+
+/// Allocates the positions of `frames` frames and the provenance text, the
+/// grid and the model still NULL; `who` names the generator in the message.
+fascia_status scene_build_begin(fascia_ctx *ctx, int32_t frames, const char *who, scene_build *b);
+/// Hands the model to *out when status is FASCIA_OK, frees the rest, and
+/// returns status.
+fascia_status scene_build_end(scene_build *b, fascia_status status, fascia_model **out);
+
 /// Checks the body and material fields of a beam def (cookie, sizes, law,
 /// E, nu, mass or density, coupling, gravity).
 fascia_status scene_check_body(fascia_ctx *ctx, const fascia_scene_beam_def *def, const char *who);
