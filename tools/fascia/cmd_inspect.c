@@ -206,8 +206,7 @@ int cmd_inspect(int argc, char **argv) {
   const char *path = NULL;
   int json = 0;
   for (int k = 1; k < argc; ++k) {
-    if (!strcmp(argv[k], "--help") || !strcmp(argv[k], "-h")) {
-      fputs(inspect_usage, stdout);
+    if (cli_help(argv[k], inspect_usage, NULL)) {
       return 0;
     } else if (!strcmp(argv[k], "--json")) {
       json = 1;

@@ -616,10 +616,7 @@ static int parse_options(int argc, char **argv, tradeoff_options *opt) {
   opt->backend = "cpu"; // the published tables are CPU figures
   for (int k = 1; k < argc; ++k) {
     const char *o = argv[k];
-    if (!strcmp(o, "--help") || !strcmp(o, "-h")) {
-      fputs(tradeoff_usage, stdout);
-      return 0;
-    }
+    if (cli_help(o, tradeoff_usage, NULL)) return 0;
     if (!strcmp(o, "--verbose")) continue;
     if (!strcmp(o, "--quick")) opt->quick = 1;
     else if (!strcmp(o, "--json")) opt->json = 1;

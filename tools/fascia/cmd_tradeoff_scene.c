@@ -221,10 +221,7 @@ static int parse_scene_options(int argc, char **argv, scene_options *o) {
   int ladder_given = 0, kinds_given = 0, presets_given = 0;
   for (int k = 1; k < argc; ++k) {
     const char *a = argv[k];
-    if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
-      fputs(scene_usage, stdout);
-      return 0;
-    }
+    if (cli_help(a, scene_usage, NULL)) return 0;
     if (a[0] != '-' || !a[1]) {
       if (o->scene) return cli_usage_error("tradeoff", "one scene file only, found a second: '%s'", a);
       o->scene = a;
