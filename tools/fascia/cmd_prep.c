@@ -654,8 +654,7 @@ int fascia_prep_command(int argc, char **argv) {
   char label_table[4096] = "";
   int json = 0, threads = 0, estimate = 0;
   for (int k = 1; k < argc; ++k) {
-    if (!strcmp(argv[k], "--help") || !strcmp(argv[k], "-h")) {
-      printf("%s", cli_prep_usage);
+    if (cli_help(argv[k], cli_prep_usage, NULL)) {
       return 0;
     } else if (!strcmp(argv[k], "--json")) {
       json = 1;
