@@ -206,12 +206,10 @@ int cmd_inspect(int argc, char **argv) {
   const char *path = NULL;
   int json = 0;
   for (int k = 1; k < argc; ++k) {
-    if (cli_help(argv[k], inspect_usage, NULL)) {
-      return 0;
-    } else if (!strcmp(argv[k], "--json")) {
+    if (cli_help(argv[k], inspect_usage, NULL)) return 0;
+    if (!strcmp(argv[k], "--verbose")) continue; // read by main
+    if (!strcmp(argv[k], "--json")) {
       json = 1;
-    } else if (!strcmp(argv[k], "--verbose")) {
-      // read by main
     } else if (argv[k][0] == '-' && argv[k][1]) {
       fprintf(stderr, "fascia inspect: unknown option '%s' (see fascia inspect --help)\n", argv[k]);
       return 2;
