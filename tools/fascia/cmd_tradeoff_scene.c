@@ -148,6 +148,8 @@ int cli_tradeoff_scene_wanted(int argc, char **argv) {
   return 0;
 }
 
+// The items of a comma-separated list, each named once: their count, or -1
+// for an empty, too long or repeated item, or more than most items.
 static int parse_list(const char *text, char items[][24], int most) {
   int n = 0;
   const char *p = text;
@@ -156,7 +158,10 @@ static int parse_list(const char *text, char items[][24], int most) {
     const size_t len = e ? (size_t)(e - p) : strlen(p);
     if (n == most || len == 0 || len >= 24) return -1;
     memcpy(items[n], p, len);
-    items[n++][len] = 0;
+    items[n][len] = 0;
+    for (int j = 0; j < n; ++j)
+      if (!strcmp(items[j], items[n])) return -1;
+    ++n;
     p += len + (e ? 1 : 0);
     if (e && !*p) return -1;
   }
@@ -192,8 +197,6 @@ static int parse_kinds(const char *v, scene_options *o) {
                   : !strcmp(items[k], "tet") ? FASCIA_PREP_SHAPE_TET
                                              : -2;
     if (o->kinds[k] == -2) return 0;
-    for (int j = 0; j < k; ++j)
-      if (o->kinds[j] == o->kinds[k]) return 0;
   }
   o->kind_count = n;
   return 1;
@@ -206,8 +209,6 @@ static int parse_presets(const char *v, scene_options *o) {
   for (int k = 0; k < n; ++k) {
     fascia_solver_def d = fascia_solver_def_default();
     if (strcmp(items[k], "default") && !cli_preset_apply(items[k], &d)) return 0;
-    for (int j = 0; j < k; ++j)
-      if (!strcmp(items[j], items[k])) return 0;
     o->presets[k] = items[k];
   }
   o->preset_count = n;
