@@ -239,13 +239,16 @@ static fascia_status surface_candidates(fascia_ctx *ctx, const fascia_prep_scene
                                         const int64_t *voxels, int64_t voxel_count, double spacing,
                                         fascia_cgal_tree **trees, point_list *out) {
   const prep_grid g = prep_volume_grid(vol);
-  const double h = vol->voxel_size;
+  // the region voxels within a voxel of the organ: a face on voxel centres
+  // puts the next layer at exactly a voxel, which the float distances store a
+  // rounding above (it then lost four fifths of its surface frames)
+  const double reach = vol->voxel_size * (1 + 1e-5);
   for (int32_t o = 0; o < vol->organ_count; ++o) {
     if (!vol->distance[o]) continue;
     const float *d = vol->distance[o];
     int64_t count = 0;
     for (int64_t k = 0; k < voxel_count; ++k)
-      if (d[voxels[k]] <= h) ++count;
+      if (d[voxels[k]] <= reach) ++count;
     if (count == 0) continue;
     if (!trees[o]) {
       const fascia_prep_mesh *m = meshes->organs + o;
@@ -260,7 +263,7 @@ static fascia_status surface_candidates(fascia_ctx *ctx, const fascia_prep_scene
     }
     int64_t q = 0;
     for (int64_t k = 0; k < voxel_count; ++k)
-      if (d[voxels[k]] <= h) {
+      if (d[voxels[k]] <= reach) {
         prep_grid_center(&g, voxels[k], query + 3 * q);
         from[q++] = voxels[k];
       }
