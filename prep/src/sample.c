@@ -98,22 +98,30 @@ void fascia_prep_points_destroy(fascia_prep_points **points) {
 
 // ------------------------------------------------------------ growable point lists
 
+// The arrays of a point list, declared once: member, type, values per point.
+#define POINT_LIST_ARRAYS(X)                                                                                           \
+  X(position, double, 3)                                                                                               \
+  X(organ, int32_t, 1)                                                                                                 \
+  X(triangle, int32_t, 1)                                                                                              \
+  X(voxel, int64_t, 1)                                                                                                 \
+  X(attach, int64_t, 1) /* voxel of a deformable organ's inside the point is shared with, or -1 */                     \
+  X(radius, double, 1)  /* its own dart radius, or 0 for the dart grid's */
+
+#define POINT_LIST_MEMBER(name, type, width) type *name;
 typedef struct point_list {
   int64_t count, capacity;
-  double *position; // [3 count]
-  int32_t *organ, *triangle;
-  int64_t *voxel;
-  int64_t *attach;  // [count] voxel of a deformable organ's inside the point is shared with, or -1
-  double *radius;   // [count] its own dart radius, or 0 for the dart grid's
+  POINT_LIST_ARRAYS(POINT_LIST_MEMBER)
 } point_list;
+#undef POINT_LIST_MEMBER
 
 static int list_push(point_list *l, const double *x, int32_t organ, int32_t triangle, int64_t voxel) {
   if (l->count == l->capacity) {
     const int64_t cap = l->capacity ? 2 * l->capacity : 1024;
-    if (!prep_resize(&l->position, 3 * cap, sizeof *l->position) || !prep_resize(&l->organ, cap, sizeof *l->organ) ||
-        !prep_resize(&l->triangle, cap, sizeof *l->triangle) || !prep_resize(&l->voxel, cap, sizeof *l->voxel) ||
-        !prep_resize(&l->attach, cap, sizeof *l->attach) || !prep_resize(&l->radius, cap, sizeof *l->radius))
-      return 0;
+    int grown = 1;
+#define POINT_LIST_GROW(name, type, width) grown = grown && prep_resize(&l->name, (width) * cap, sizeof(type));
+    POINT_LIST_ARRAYS(POINT_LIST_GROW)
+#undef POINT_LIST_GROW
+    if (!grown) return 0;
     l->capacity = cap;
   }
   memcpy(l->position + 3 * l->count, x, 3 * sizeof(double));
@@ -127,12 +135,9 @@ static int list_push(point_list *l, const double *x, int32_t organ, int32_t tria
 }
 
 static void list_free(point_list *l) {
-  free(l->position);
-  free(l->organ);
-  free(l->triangle);
-  free(l->voxel);
-  free(l->attach);
-  free(l->radius);
+#define POINT_LIST_FREE(name, ...) free(l->name);
+  POINT_LIST_ARRAYS(POINT_LIST_FREE)
+#undef POINT_LIST_FREE
   memset(l, 0, sizeof *l);
 }
 
