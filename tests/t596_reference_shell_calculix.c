@@ -13,14 +13,18 @@
 //    symmetric; CalculiX's mesh is) within 3 % of the sag; a least-squares
 //    fit's gradients alone leave the wall's hourglass and drilling modes
 //    nearly free: 7 % too soft here;
-//  - the decks: S8R, the clamp, gravity; bad definitions refused by name.
+//  - the decks: S8R, the clamp, gravity; bad definitions refused by name;
+//    fascia's scene carries the definition's seed (the draw of the frames).
 // argv[1]: the reference CSV.
 #define _POSIX_C_SOURCE 200809L // open_memstream
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "check.h"
 #include "shell_calculix.h"
+#include "tissue_calculix.h"
 
 #define TOLERANCE 0.02
 #define SIDEWAYS 0.03
@@ -67,6 +71,19 @@ static void check_decks(fascia_ctx *ctx) {
   CHECK(f && fascia_shell_write_deck(ctx, &bad, f) == FASCIA_ERR_ARGUMENT);
   CHECK(strstr(fascia_ctx_message(ctx), "frame spacing 0.05 m") != NULL);
   if (f) fclose(f);
+  char dir[] = "/tmp/t596-XXXXXX", path[64], text[256] = {0};
+  CHECK(mkdtemp(dir) != NULL);
+  fascia_shell_def seeded = fascia_shell_def_default(FASCIA_SHELL_BOWL);
+  seeded.seed = 7;
+  CHECK(fascia_shell_write_scene(ctx, &seeded, dir) == FASCIA_OK);
+  snprintf(path, sizeof path, "%s/%s", dir, FASCIA_TISSUE_SCENE);
+  FILE *scene = fopen(path, "r");
+  CHECK(scene && fread(text, 1, sizeof text - 1, scene) > 0);
+  CHECK(strstr(text, "\"seed\": 7,") != NULL);
+  if (scene) fclose(scene);
+  const char *const files[] = {FASCIA_TISSUE_SCENE, FASCIA_TISSUE_SHEET, FASCIA_TISSUE_BOX_A, FASCIA_TISSUE_BOX_B};
+  for (int k = 0; k < 4; ++k) snprintf(path, sizeof path, "%s/%s", dir, files[k]), remove(path);
+  rmdir(dir);
 }
 
 // tolerance bounds the error of the displacement; with sideways > 0 it

@@ -20,7 +20,7 @@
 static void usage(FILE *f) {
   fprintf(f,
           "usage: shell-calculix [--case plate|bowl] [--E PA] [--elements N,...] [--spacings M,...]\n"
-          "                      [--reference FILE] [--csv FILE] [--no-fascia] [--no-calculix]\n\n"
+          "                      [--reference FILE] [--csv FILE] [--no-fascia] [--no-calculix] [--seed N]\n\n"
           "fascia's shell organ against CalculiX S8R shells (NLGEOM) under their own weight:\n"
           "  plate  the paper's cantilever as a thin shell, 16 x 1 m, 0.1 m thick, E 4 MPa, the edge\n"
           "         x = 0 clamped; probe: the free end's centre\n"
@@ -32,6 +32,7 @@ static void usage(FILE *f) {
           "  --spacings LIST fascia's frame_spacing values, m of the case\n"
           "  --reference F   write the CalculiX rows (CSV) to F\n"
           "  --csv F         write every row (CSV) to F\n"
+          "  --seed N        fascia's scene seed, the draw of the shell's frames (default 1)\n"
           "The ccx program is $FASCIA_CCX or ccx on the PATH (Debian: calculix-ccx).\n");
 }
 
@@ -55,6 +56,7 @@ static void set_elements(fascia_shell_def *d, double n) {
 int main(int argc, char **argv) {
   int kind = FASCIA_SHELL_PLATE, fascia = 1, calculix = 1;
   double E = 0, elements[MAX_ROWS], spacings[MAX_ROWS];
+  int seed = 1;
   int ne = 0, ns = 0;
   const char *reference = NULL, *csv = NULL;
   for (int k = 1; k < argc; ++k) {
@@ -76,6 +78,8 @@ int main(int argc, char **argv) {
       ns = parse_list(v, spacings, MAX_ROWS), ++k;
     } else if (!strcmp(a, "--reference") && v) {
       reference = v, ++k;
+    } else if (!strcmp(a, "--seed") && v) {
+      seed = atoi(v), ++k;
     } else if (!strcmp(a, "--csv") && v) {
       csv = v, ++k;
     } else if (!strcmp(a, "--no-fascia")) {
@@ -94,6 +98,7 @@ int main(int argc, char **argv) {
   }
   fascia_shell_def def = fascia_shell_def_default(kind);
   if (E > 0) def.youngs_modulus = E;
+  def.seed = seed;
   if (ne == 0) {
     const double plate[] = {32, 64, 128, 256}, bowl[] = {8, 16, 32, 48};
     ne = 4;

@@ -24,7 +24,7 @@ fascia_shell_def fascia_shell_def_default(int32_t kind) {
   fascia_shell_def d;
   memset(&d, 0, sizeof d);
   d.kind = kind;
-  d.poisson_ratio = 0.3, d.gravity = 9.81;
+  d.poisson_ratio = 0.3, d.gravity = 9.81, d.seed = 1;
   if (kind == FASCIA_SHELL_BOWL) {
     d.length = 0.05, d.thickness = 0.001;
     d.youngs_modulus = 1e5, d.density = 1000;
@@ -250,7 +250,7 @@ fascia_status fascia_shell_write_scene(fascia_ctx *ctx, const void *shell_def, c
   FILE *f = fascia_tissue_open(ctx, dir, FASCIA_TISSUE_SCENE, path);
   if (!f) return FASCIA_ERR_IO;
   fprintf(f,
-          "{\"fascia_scene\": 1, \"name\": \"shell %s against CalculiX\", \"voxel_size\": %.17g, \"seed\": 1,\n"
+          "{\"fascia_scene\": 1, \"name\": \"shell %s against CalculiX\", \"voxel_size\": %.17g, \"seed\": %d,\n"
           " \"gravity\": [0, 0, %.17g],\n"
           " \"materials\": {\"wall\": {\"law\": \"stvk\", \"youngs_modulus\": %.17g, \"poisson_ratio\": %.17g,"
           " \"density\": %.17g},\n"
@@ -266,8 +266,9 @@ fascia_status fascia_shell_write_scene(fascia_ctx *ctx, const void *shell_def, c
           "              \"to\": {\"organ\": \"B\", \"point\": [%.17g, 0, 0]}, \"area\": %.17g, \"material\": "
           "\"strand\",\n"
           "              \"frame_spacing\": %.17g}]}\n",
-          plate ? "plate" : "bowl", e / 8, -def->gravity, s * def->youngs_modulus, def->poisson_ratio, def->density,
-          s * def->thickness, sp, lo[0], lo[1], lo[2], hi[0], hi[1], hi[2], x0 + e, x0 + 2 * e, e * e / 64, e / 4);
+          plate ? "plate" : "bowl", e / 8, (int)def->seed, -def->gravity, s * def->youngs_modulus, def->poisson_ratio,
+          def->density, s * def->thickness, sp, lo[0], lo[1], lo[2], hi[0], hi[1], hi[2], x0 + e, x0 + 2 * e,
+          e * e / 64, e / 4);
   return fascia_tissue_close(ctx, f, path);
 }
 
