@@ -13,8 +13,6 @@
 
 #include "solve/backend.h"
 #include "launch.h"
-#include "model/model_arrays.h"
-#include "cpu/system_arrays.h"
 
 #define CG_CHUNK 8 // CG iterations per recorded chunk in tolerance mode
 #define MAX_BUFFERS 96 // the model, the state and work (about 50), the patches (16)

@@ -20,7 +20,7 @@
 
 #include "launch.h"
 extern "C" {
-#include "util/status.h"
+#include "fascia/base.h"
 }
 
 /// Threads of a reduction block: a power of two for the tree sum.

@@ -10,7 +10,7 @@
 #include <string.h>
 
 #include "launch.h"
-#include "util/status.h"
+#include "fascia/base.h"
 
 typedef struct launch_record {
   int reduction; // 0: kernel, 1: reduce

@@ -7,13 +7,17 @@
 // their gradients, wherever it keeps them; the loop sees scalars only, and
 // every value of a step is passed in (docs/backends.md). The registry
 // (backend.c) lists the backends; "auto" walks it in priority order.
-// This header is all a backend outside sim/ includes of the core.
+// This header is all a backend outside sim/ includes of the core
+// (tests/t371 checks cuda/).
 #ifndef FASCIA_SRC_BACKEND_H
 #define FASCIA_SRC_BACKEND_H
 
 #include "fascia/solver.h"
 #include "point/modes.h"
 #include "cpu/system.h"
+// the arrays a backend uploads: each table row's device column names where
+#include "model/model_arrays.h"
+#include "cpu/system_arrays.h"
 
 typedef struct fascia_backend_ops fascia_backend_ops;
 typedef struct fascia_organs fascia_organs; // organs.c
