@@ -12,6 +12,7 @@
 #include "fascia/shape.h"
 #include "prep_util.h"
 #include "reduced.h"
+#include "shell.h"
 
 #ifndef FASCIA_PREP_VERSION
 #define FASCIA_PREP_VERSION "unknown"
@@ -845,6 +846,7 @@ fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_scene *scen
   memcpy(m->pair_weight, weights->pair_weight, (size_t)weights->pair_count * sizeof(double));
   memcpy(m->pair_gradient, weights->pair_gradient, 3 * (size_t)weights->pair_count * sizeof(double));
   PREP_TRY_GOTO(fascia_model_build_reverse(ctx, m));
+  PREP_TRY_GOTO(prep_shell_pressure_loads(ctx, scene, meshes, points, m)); // before the frames are compacted
   PREP_TRY_GOTO(collect_tetrahedra(ctx, points, m));
   dropped = cJSON_CreateArray();
   PREP_CHECK_GOTO(dropped, ctx, FASCIA_ERR_MEMORY, "package: out of memory");

@@ -729,6 +729,7 @@ static fascia_status parse_shell(const reader *rd, fascia_prep_scene *scene, con
   int q;
   PREP_TRY(get_int(rd, item, path, "section_points", 0, 2, 1, 4, &q));
   o->section_points = q;
+  PREP_TRY(get_number(rd, item, path, "pressure", 0, 0, -INFINITY, 0, INFINITY, &o->pressure));
   const cJSON *hold = cJSON_GetObjectItemCaseSensitive(item, "hold");
   if (hold) {
     sub_key(at, path, "hold");
@@ -759,7 +760,8 @@ static fascia_status parse_organ(const reader *rd, fascia_prep_scene *scene, con
                                       "units",         "transform",      "model",           "motion",
                                       "material",      "frame_spacing",  "sample_spacing",  "shape_functions",
                                       "min_component", "patch_radius",   "description",    "optional",
-                                      "thickness",     "section_points", "hold",           NULL};
+                                      "thickness",     "section_points", "hold",           "pressure",
+                                      NULL};
   PREP_TRY(check_keys(rd, item, path, known));
   PREP_TRY(get_name(rd, item, path, "name", o->name));
   int optional = 0;
@@ -808,7 +810,7 @@ static fascia_status parse_organ(const reader *rd, fascia_prep_scene *scene, con
   else
     return key_fail(rd, at, "unknown model '%s' (known: fixed, prescribed, rigid, deformable, shell)", model);
   if (o->shell) return parse_shell(rd, scene, item, path, o);
-  static const char *const shell_keys[] = {"thickness", "section_points", "hold", NULL};
+  static const char *const shell_keys[] = {"thickness", "section_points", "hold", "pressure", NULL};
   for (int k = 0; shell_keys[k]; ++k)
     if (cJSON_GetObjectItemCaseSensitive(item, shell_keys[k])) {
       sub_key(at, path, shell_keys[k]);

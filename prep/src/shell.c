@@ -445,6 +445,10 @@ fascia_status prep_shell_build(fascia_ctx *ctx, const fascia_prep_scene *scene, 
   memset(out, 0, sizeof *out);
   const fascia_prep_organ_def *od = scene->organs + o;
   const fascia_prep_mesh *m = meshes->organs + o;
+  PREP_CHECK(od->pressure == 0 || m->report.border_edges == 0, ctx, FASCIA_ERR_ARGUMENT,
+             "scene '%s' organs[%d].pressure: shell '%s' is open (%d free edges): an open wall holds no pressure "
+             "inside; close its mesh or leave pressure out",
+             scene->path, (int)o, od->name, (int)m->report.border_edges);
   if (!trees[o])
     PREP_TRY(fascia_cgal_tree_create(ctx, m->vertex_count, m->vertices, m->triangle_count, m->triangles, trees + o));
   const double spacing = od->frame_spacing, area = mesh_area(m);
@@ -543,4 +547,47 @@ cleanup:
   free(tri);
   if (status != FASCIA_OK) prep_reduced_free(out);
   return status;
+}
+
+// ------------------------------------------------------------ inside pressure
+
+fascia_status prep_shell_pressure_loads(fascia_ctx *ctx, const fascia_prep_scene *scene,
+                                        const fascia_prep_meshes *meshes, const fascia_prep_points *points,
+                                        fascia_model *model) {
+  for (int32_t s = 0; s < points->sample_count; ++s) {
+    const int32_t o = points->sample_inside_organ[s];
+    if (o < 0 || !scene->organs[o].shell || scene->organs[o].pressure == 0) continue;
+    const fascia_prep_organ_def *od = scene->organs + o;
+    const int32_t *c = points->sample_cell_frame + 3 * (int64_t)s;
+    PREP_CHECK(c[0] >= 0 && c[1] >= 0 && c[2] >= 0, ctx, FASCIA_ERR_INTERNAL,
+               "shell '%s' sample %d: no wall triangle recorded for its pressure", od->name, (int)s);
+    const double *x0 = points->frame_position + 3 * (int64_t)c[0];
+    double e1[3], e2[3], n[3], outward[3] = {0, 0, 0}, on[3];
+    sub3(points->frame_position + 3 * (int64_t)c[1], x0, e1);
+    sub3(points->frame_position + 3 * (int64_t)c[2], x0, e2);
+    cross3(e1, e2, n);
+    // the wall's triangles are joined without an orientation: the organ's
+    // surface under its corners (outward, as repaired) gives it
+    for (int j = 0; j < 3; ++j)
+      if (points->frame_organ[c[j]] == o && points->frame_triangle[c[j]] >= 0) {
+        triangle_normal(meshes->organs + o, points->frame_triangle[c[j]], on);
+        for (int r = 0; r < 3; ++r) outward[r] += on[r];
+      }
+    const double nn = norm3(n), side = n[0] * outward[0] + n[1] * outward[1] + n[2] * outward[2];
+    PREP_CHECK(nn > 0 && side != 0, ctx, FASCIA_ERR_INTERNAL,
+               "shell '%s' sample %d: its wall triangle has no area or no side of the organ's surface", od->name,
+               (int)s);
+    // the sample's share of the wall's area (its volume / thickness) under
+    // the pressure, f, carried by its frames as their weights share a
+    // point's displacement: force w f. Its rotational part, torques
+    // w (x - x_i) x f (which add up to none over the sample's frames), is
+    // left out: the solver gives frame_load's torques no energy
+    // (sim/point/frame.h), and its line search stalls on them.
+    const double scale = (side > 0 ? 1 : -1) * od->pressure * model->sample_volume[s] / od->thickness / nn;
+    for (int32_t k = model->sample_offsets[s]; k < model->sample_offsets[s + 1]; ++k) {
+      fascia_real *load = model->frame_load + 6 * (int64_t)model->pair_frame[k];
+      for (int r = 0; r < 3; ++r) load[r] += model->pair_weight[k] * scale * n[r];
+    }
+  }
+  return FASCIA_OK;
 }

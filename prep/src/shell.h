@@ -31,4 +31,13 @@ FASCIA_PREP_INTERN fascia_status prep_shell_build(fascia_ctx *ctx, const fascia_
                                                   const fascia_prep_meshes *meshes, int32_t o,
                                                   const prep_shell_frames *frames, fascia_cgal_tree **trees,
                                                   prep_reduced *out);
+
+/// A shell organ's inside pressure (its "pressure", Pa) as dead forces on
+/// the frames of its wall (model->frame_load, added to): each wall sample's
+/// share of the wall's area times the pressure, f, along the organ's
+/// outward normal, shared by its frames as their weights (w f; no torque).
+/// The model's samples and pairs are the points'.
+FASCIA_PREP_INTERN fascia_status prep_shell_pressure_loads(fascia_ctx *ctx, const fascia_prep_scene *scene,
+                                                           const fascia_prep_meshes *meshes,
+                                                           const fascia_prep_points *points, fascia_model *model);
 #endif

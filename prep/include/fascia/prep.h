@@ -123,6 +123,7 @@ typedef struct fascia_prep_organ_def {
   fascia_real thickness;     ///< SHELL: wall thickness, m
   int32_t section_points;    ///< SHELL: Gauss points through the wall
   fascia_prep_region hold;   ///< SHELL: its frames in this box or sphere are fixed (NONE: none)
+  fascia_real pressure;      ///< SHELL: inside pressure on its wall, Pa (dead load; 0: none)
 } fascia_prep_organ_def;
 
 /// Coupling rule of a tissue for one organ.
