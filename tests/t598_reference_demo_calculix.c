@@ -140,9 +140,9 @@ int main(int argc, char **argv) {
   if (st == FASCIA_OK) check_displacement_at(ctx, s.model);
   fascia_demo_mesh mesh;
   memset(&mesh, 0, sizeof mesh);
-  CHECK(fascia_demo_mesh_build(ctx, &s, 0, 5, &mesh) == FASCIA_ERR_ARGUMENT);
+  CHECK(fascia_demo_mesh_build(ctx, &s, 0, 5, 0, &mesh) == FASCIA_ERR_ARGUMENT);
   CHECK(strstr(fascia_ctx_message(ctx), "5 elements per voxel edge") != NULL);
-  st = st == FASCIA_OK ? fascia_demo_mesh_build(ctx, &s, 0, 1, &mesh) : st;
+  st = st == FASCIA_OK ? fascia_demo_mesh_build(ctx, &s, 0, 1, 0, &mesh) : st;
   CHECK(st == FASCIA_OK);
   fascia_demo_result ref, r;
   memset(&ref, 0, sizeof ref), memset(&r, 0, sizeof r);

@@ -11,9 +11,11 @@
 //
 //   demo-calculix [SCENE.json] [--ccx LIST] [--fascia LIST] [--reference K]
 //                 [--neighbours N] [--threads N] [--csv FILE]
-//   --ccx     meshes, comma-separated TYPE:VOXEL_MM:SPLIT (TYPE 8i = C3D8I,
-//             20r = C3D20R; SPLIT elements along a voxel's edge); default
-//             8i:1:1,8i:1:2,20r:1:1
+//   --ccx     meshes, comma-separated TYPE:VOXEL_MM:SPLIT[:surface] (TYPE
+//             8i = C3D8I, 20r = C3D20R; SPLIT elements along a voxel's edge;
+//             surface: the held nodes moved onto the organs' smooth
+//             surfaces, where fascia holds the tissue, not left on the voxel
+//             faces' staircase); default 8i:1:1,8i:1:2,20r:1:1
 //   --fascia  rungs, comma-separated VOXEL_MM:SCALE[:SAMPLE_SCALE] (the
 //             tissue's frame and sample spacings times SCALE, the sample
 //             spacing times SAMPLE_SCALE on top); default 1:1,1:0.7,1:0.5
@@ -46,6 +48,7 @@ typedef struct ccx_row {
   int quadratic;
   double voxel_mm;
   int32_t split;
+  int on_surface; ///< the held nodes on the organs' smooth surfaces, not the voxel faces
   fascia_demo_mesh mesh;
   fascia_demo_result result;
 } ccx_row;
@@ -79,8 +82,8 @@ static int rung_tag(const char *tag, fascia_row *row) {
 // CalculiX's answers kept between runs (--cache DIR): forces and node
 // displacements of a mesh, keyed by its kind, voxel and split.
 static void cache_path(const char *dir, const ccx_row *c, char *path, size_t size) {
-  snprintf(path, size, "%s/ccx-%s-%gmm-split%d.txt", dir, c->quadratic ? "c3d20r" : "c3d8i", c->voxel_mm,
-           (int)c->split);
+  snprintf(path, size, "%s/ccx-%s-%gmm-split%d%s.txt", dir, c->quadratic ? "c3d20r" : "c3d8i", c->voxel_mm,
+           (int)c->split, c->on_surface ? "-surface" : "");
 }
 
 static int cache_load(const char *dir, ccx_row *c) {
@@ -123,11 +126,12 @@ static void cache_save(const char *dir, const ccx_row *c) {
 }
 
 static const char usage_text[] =
-    "usage: demo-calculix [SCENE.json] [--ccx TYPE:VOXEL_MM:SPLIT,...] "
+    "usage: demo-calculix [SCENE.json] [--ccx TYPE:VOXEL_MM:SPLIT[:surface],...] "
     "[--fascia VOXEL_MM:SCALE[:SAMPLE_SCALE[:TAG]],...]\n"
     "                     [--reference K] [--neighbours N] [--threads N] [--csv FILE] [--cache DIR] [--slip]\n"
     "                     [--write-reference FILE] [--ccx-solver NAME]\n"
-    "  TYPE 8i (C3D8I) or 20r (C3D20R); SPLIT elements along a voxel's edge; SCALE times the tissue's frame and\n"
+    "  TYPE 8i (C3D8I) or 20r (C3D20R); SPLIT elements along a voxel's edge; surface: held nodes on the organs'\n"
+    "  smooth surfaces, not the voxel faces; SCALE times the tissue's frame and\n"
     "  sample spacings, SAMPLE_SCALE times the sample spacing on top; TAG nK (K MLS neighbours) or flat (no\n"
     "  volumetric patches); --reference K: the CalculiX mesh (from 1) errors are taken against, default the last;\n"
     "  --ccx-solver: ccx's linear solver, e.g. \"ITERATIVE CHOLESKY\" (default: ccx's own, SPOOLES)\n";
@@ -289,7 +293,8 @@ static int write_reference(const char *path, const char *scene, const ccx_row *c
   for (int j = 0; j < nc; ++j) {
     const int k = j < reference - 1 ? j : j == nc - 1 ? reference - 1 : j + 1;
     for (int32_t o = 0; o < cr[k].mesh.organ_count; ++o)
-      fprintf(f, "%s-split%d,%g,%lld,%lld,%s,%.7g,%.7g,%.7g\n", cr[k].quadratic ? "C3D20R" : "C3D8I", (int)cr[k].split,
+      fprintf(f, "%s-split%d%s,%g,%lld,%lld,%s,%.7g,%.7g,%.7g\n", cr[k].quadratic ? "C3D20R" : "C3D8I", (int)cr[k].split,
+              cr[k].on_surface ? "-surface" : "",
               cr[k].voxel_mm, (long long)cr[k].result.nodes, (long long)cr[k].result.elements, cr[k].mesh.organ_name[o],
               cr[k].result.force[o][0], cr[k].result.force[o][1], cr[k].result.force[o][2]);
   }
@@ -331,12 +336,14 @@ int main(int argc, char **argv) {
   memset(cr, 0, sizeof cr);
   for (const char *p = ccx_list; p && *p;) {
     if (nc == ROWS_MAX) return usage("--ccx: more meshes than 32");
-    char type[8];
+    char type[8], hold[16] = "";
     double vox;
     int split;
-    if (sscanf(p, "%7[^:]:%lf:%d", type, &vox, &split) != 3 || (strcmp(type, "8i") && strcmp(type, "20r")))
-      return usage("--ccx: expected TYPE:VOXEL_MM:SPLIT with TYPE 8i or 20r");
-    cr[nc].quadratic = !strcmp(type, "20r"), cr[nc].voxel_mm = vox, cr[nc].split = split, ++nc;
+    const int fields = sscanf(p, "%7[^:]:%lf:%d:%15[^,]", type, &vox, &split, hold);
+    if (fields < 3 || (strcmp(type, "8i") && strcmp(type, "20r")) || (fields == 4 && strcmp(hold, "surface")))
+      return usage("--ccx: expected TYPE:VOXEL_MM:SPLIT[:surface] with TYPE 8i or 20r");
+    cr[nc].quadratic = !strcmp(type, "20r"), cr[nc].voxel_mm = vox, cr[nc].split = split;
+    cr[nc].on_surface = fields == 4, ++nc;
     p = strchr(p, ',');
     if (p) ++p;
   }
@@ -389,7 +396,7 @@ int main(int argc, char **argv) {
     fascia_prep_stages s;
     fascia_demo_def d = {scene, cr[k].voxel_mm * 1e-3, 1, 1, neighbours, 0, 0, 0};
     fascia_status st = fascia_demo_prepare(ctx, &d, &s);
-    if (st == FASCIA_OK) st = fascia_demo_mesh_build(ctx, &s, cr[k].quadratic, cr[k].split, &cr[k].mesh);
+    if (st == FASCIA_OK) st = fascia_demo_mesh_build(ctx, &s, cr[k].quadratic, cr[k].split, cr[k].on_surface, &cr[k].mesh);
     cr[k].mesh.solver = ccx_solver;
     if (st == FASCIA_OK && k == 0) {
       base_frame = s.scene->tissues[0].frame_spacing, base_sample = s.scene->tissues[0].sample_spacing;
@@ -415,6 +422,7 @@ int main(int argc, char **argv) {
     snprintf(name, sizeof name, "%d %s %g mm%s", k + 1, cr[k].quadratic ? "C3D20R" : "C3D8I", cr[k].voxel_mm,
              cr[k].split > 1 ? " split" : "");
     if (cr[k].split > 1) snprintf(name + strlen(name), sizeof name - strlen(name), " %d", (int)cr[k].split);
+    if (cr[k].on_surface) snprintf(name + strlen(name), sizeof name - strlen(name), " surface");
     printf("  %-26s %8lld %9lld", name, (long long)cr[k].result.nodes, (long long)cr[k].result.elements);
     for (int32_t o = 0; o < organ_count; ++o) printf("  %16.5f", norm3(cr[k].result.force[o]));
     printf("  %6.1f%s\n", 1e-3 * cr[k].result.ms, cached ? " (cached)" : "");

@@ -119,8 +119,28 @@ static double organ_distance(const fascia_prep_volume *v, int32_t o, const doubl
   return d;
 }
 
+// Moves x onto organ o's surface along the distance field's gradient (three
+// Newton steps on the signed distance): a held node on the smooth surface
+// the organ's mesh has, where fascia's shared frames hold the tissue, not
+// on the voxel faces' staircase.
+static void onto_surface(const fascia_prep_volume *v, int32_t o, double x[3]) {
+  const double step = 0.25 * v->voxel_size;
+  for (int it = 0; it < 3; ++it) {
+    const double d = organ_distance(v, o, x);
+    double g[3], g2 = 0;
+    for (int a = 0; a < 3; ++a) {
+      double xp[3] = {x[0], x[1], x[2]}, xm[3] = {x[0], x[1], x[2]};
+      xp[a] += step, xm[a] -= step;
+      g[a] = (organ_distance(v, o, xp) - organ_distance(v, o, xm)) / (2 * step);
+      g2 += g[a] * g[a];
+    }
+    if (!(g2 > 0) || !isfinite(d)) return;
+    for (int a = 0; a < 3; ++a) x[a] -= d * g[a] / g2;
+  }
+}
+
 fascia_status fascia_demo_mesh_build(fascia_ctx *ctx, const fascia_prep_stages *s, int quadratic,
-                                     int32_t subdivide, fascia_demo_mesh *out) {
+                                     int32_t subdivide, int on_surface, fascia_demo_mesh *out) {
   memset(out, 0, sizeof *out);
   SCENE_CHECK(subdivide >= 1 && subdivide <= 4, ctx, FASCIA_ERR_ARGUMENT,
               "demo mesh: %d elements per voxel edge, expected 1 .. 4", (int)subdivide);
@@ -224,6 +244,7 @@ fascia_status fascia_demo_mesh_build(fascia_ctx *ctx, const fascia_prep_stages *
     for (int a = 0; a < 3; ++a) x[a] = v->origin[a] + v->voxel_size * (lo[a] - 0.5) + h * (double)ijk[a];
     const int32_t o = organ[p];
     out->node_organ[k] = o;
+    if (o >= 0 && on_surface) onto_surface(v, o, x);
     out->node_distance[k] = o >= 0 ? organ_distance(v, o, x) : NAN;
     if (o < 0) continue;
     for (int a = 0; a < 3; ++a)

@@ -59,11 +59,13 @@ typedef struct fascia_demo_mesh {
 } fascia_demo_mesh;
 
 /// Builds the mesh from prepared stages (their volume, and the organs'
-/// poses at time 1 from a solver on their model). The tissue must be a
+/// poses at time 1 from a solver on their model). on_surface: the held
+/// nodes moved onto the organs' smooth surfaces (where fascia holds the
+/// tissue), else left on the voxel faces' staircase. The tissue must be a
 /// volume of the stable Neo-Hookean. Errors: FASCIA_ERR_ARGUMENT (subdivide
 /// outside 1..4, another law, too many organs), FASCIA_ERR_MEMORY.
 fascia_status fascia_demo_mesh_build(fascia_ctx *ctx, const fascia_prep_stages *stages, int quadratic,
-                                     int32_t subdivide, fascia_demo_mesh *out);
+                                     int32_t subdivide, int on_surface, fascia_demo_mesh *out);
 void fascia_demo_mesh_free(fascia_demo_mesh *mesh);
 
 /// What a solve gave (either code).
