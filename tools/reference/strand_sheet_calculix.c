@@ -17,7 +17,8 @@
 
 static const char usage[] =
     "usage: strand-sheet-calculix [--spacings MM,...] [--elements N,...] [--cells NXxNY,...]\n"
-    "                             [--shells NXxNY,...] [--pulls NAME,...] [--thickness MM] [--csv FILE]\n"
+    "                             [--shells NXxNY,...] [--pulls NAME,...] [--thickness MM] [--mesh KIND]\n"
+    "                             [--no-strand] [--csv FILE]\n"
     "\n"
     "A strand (20 mm, 2 x 2 mm section, E 100 MPa) hanging a rigid 20 mm organ off a fixed one, and\n"
     "a 20 x 16 x 1 mm sheet (E 100 kPa) between them pulled by the second, solved by fascia and by\n"
@@ -30,6 +31,11 @@ static const char usage[] =
     "  --pulls LIST     of shear (B moved 1 mm along y), stretch (1 mm along x), bend (0.1 mm\n"
     "                   along z), sag (2 mm along z); default shear,stretch,bend,sag\n"
     "  --thickness MM   the sheet's thickness (default 1): a bent sheet that locks errs as (cell / thickness)^2\n"
+    "  --mesh KIND      fascia's sheet triangles: right (squares split by alternating diagonals, the\n"
+    "                   default), shifted (rows shifted by half a square: near-equilateral), jittered\n"
+    "                   (those with inner vertices moved by up to a fifth of a square); ccx's S8R mesh\n"
+    "                   is the same for all\n"
+    "  --no-strand      only the sheet\n"
     "  --csv FILE       also write the rows as CSV\n"
     "The ccx program is $FASCIA_CCX or ccx on the PATH (Debian: calculix-ccx).\n";
 
@@ -82,11 +88,16 @@ int main(int argc, char **argv) {
   int wanted[PULL_KINDS] = {1, 1, 1, 1};
   const char *csv_path = NULL;
   double thickness = 0;
+  int32_t mesh = FASCIA_TISSUE_MESH_RIGHT;
+  int strand = 1;
   for (int k = 1; k < argc; ++k) {
     const char *a = argv[k], *v = k + 1 < argc ? argv[k + 1] : NULL;
     if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
       fputs(usage, stdout);
       return 0;
+    } else if (!strcmp(a, "--no-strand")) {
+      strand = 0;
+      continue;
     } else if (!v) {
       return usage_error("missing value after", a);
     } else if (!strcmp(a, "--spacings")) {
@@ -111,6 +122,9 @@ int main(int argc, char **argv) {
       char *end;
       thickness = 1e-3 * strtod(v, &end);
       if (end == v || *end || !(thickness > 0)) return usage_error("bad --thickness", v);
+    } else if (!strcmp(a, "--mesh")) {
+      for (mesh = 0; fascia_tissue_mesh_name(mesh) && strcmp(fascia_tissue_mesh_name(mesh), v); ++mesh) continue;
+      if (!fascia_tissue_mesh_name(mesh)) return usage_error("bad --mesh (right, shifted or jittered)", v);
     } else if (!strcmp(a, "--csv")) {
       csv_path = v;
     } else {
@@ -140,7 +154,7 @@ int main(int argc, char **argv) {
   // strand's end's, c = the strand's force on the fixed organ (N)
   fascia_tissue_hang_result hang[2][MAX_LADDER];
   int hang_ok[2][MAX_LADDER];
-  for (int pass = 0; pass < 2; ++pass)
+  for (int pass = 0; pass < 2 && strand; ++pass)
     for (int k = 0; k < (pass ? spacings : beam_count); ++k) {
       fascia_tissue_hang_def def = fascia_tissue_hang_def_default();
       if (pass) def.frame_spacing = 1e-3 * spacing[k];
@@ -154,10 +168,11 @@ int main(int argc, char **argv) {
         failed = 1;
       }
     }
-  const fascia_tissue_hang_result *ref = hang_ok[0][beam_count - 1] ? &hang[0][beam_count - 1] : NULL;
-  printf("strand hanging an organ: displacements in mm, force in mN, angle in mrad; errors against ccx's last\n");
-  printf("%-8s %-12s %6s %28s %28s %26s %8s | err centre  end  force  angle\n", "code", "resolution", "nodes",
-         "organ centre", "strand end", "force on A", "angle");
+  const fascia_tissue_hang_result *ref = strand && hang_ok[0][beam_count - 1] ? &hang[0][beam_count - 1] : NULL;
+  if (strand) printf("strand hanging an organ: displacements in mm, force in mN, angle in mrad; errors against ccx's last\n");
+  if (strand)
+    printf("%-8s %-12s %6s %28s %28s %26s %8s | err centre  end  force  angle\n", "code", "resolution", "nodes",
+           "organ centre", "strand end", "force on A", "angle");
   for (int pass = 0; pass < 2 && ref; ++pass)
     for (int k = 0; k < (pass ? spacings : beam_count); ++k) {
       if (!hang_ok[pass][k]) continue;
@@ -183,9 +198,10 @@ int main(int argc, char **argv) {
   // middle's displacement relative to the centre's, c = the centre's
   for (int p = 0; p < PULL_KINDS; ++p) {
     if (!wanted[p]) continue;
-    printf("\nsheet under a pull, %s: B moved by (%g, %g, %g) mm; force in mN, displacements in mm\n", pulls[p].name,
-           1e3 * pulls[p].pull[0], 1e3 * pulls[p].pull[1], 1e3 * pulls[p].pull[2]);
-    printf("%-8s %-12s %6s %30s %28s %28s | err force  edge  centre\n", "code", "resolution", "nodes", "force on B",
+    printf("\nsheet under a pull, %s: B moved by (%g, %g, %g) mm; force in mN, displacements in mm; fascia's mesh %s\n",
+           pulls[p].name, 1e3 * pulls[p].pull[0], 1e3 * pulls[p].pull[1], 1e3 * pulls[p].pull[2],
+           fascia_tissue_mesh_name(mesh));
+    printf("%-8s %-12s %6s %30s %28s %28s | err force  edge  centre newton/indefinite\n", "code", "resolution", "nodes", "force on B",
            "free edge's middle - centre", "centre");
     fascia_tissue_pull_result res[2][MAX_LADDER];
     int ok[2][MAX_LADDER];
@@ -194,6 +210,7 @@ int main(int argc, char **argv) {
         fascia_tissue_pull_def def = fascia_tissue_pull_def_default();
         memcpy(def.pull, pulls[p].pull, sizeof def.pull);
         if (thickness > 0) def.thickness = thickness;
+        def.mesh = mesh;
         if (pass) def.cells[0] = cells[k][0], def.cells[1] = cells[k][1];
         else def.elements[0] = shells[k][0], def.elements[1] = shells[k][1];
         const fascia_status st = pass ? fascia_tissue_pull_fascia(ctx, &def, &res[pass][k])
@@ -215,10 +232,11 @@ int main(int argc, char **argv) {
                  (int)(pass ? cells : shells)[k][1], pass ? "" : " S8R");
         const double e[3] = {fascia_tissue_error3(r->force, pref->force), fascia_tissue_error3(r->edge, pref->edge),
                              fascia_tissue_error3(r->centre, pref->centre)};
-        printf("%-8s %-12s %6d %10.5f %9.5f %9.5f %9.5f %9.5f %9.5f %9.5f %9.5f %9.5f | %6.2f%% %5.2f%% %5.2f%%\n",
+        printf("%-8s %-12s %6d %10.5f %9.5f %9.5f %9.5f %9.5f %9.5f %9.5f %9.5f %9.5f | %6.2f%% %5.2f%% %5.2f%% %6d/%d\n",
                pass ? "fascia" : "ccx", resolution, (int)r->nodes, 1e3 * r->force[0], 1e3 * r->force[1],
                1e3 * r->force[2], 1e3 * r->edge[0], 1e3 * r->edge[1], 1e3 * r->edge[2], 1e3 * r->centre[0],
-               1e3 * r->centre[1], 1e3 * r->centre[2], 100 * e[0], 100 * e[1], 100 * e[2]);
+               1e3 * r->centre[1], 1e3 * r->centre[2], 100 * e[0], 100 * e[1], 100 * e[2], (int)r->newton_iterations,
+               (int)r->negative_curvature);
         if (csv)
           fprintf(csv, "%s,%s,%s,%d,%.4g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,,%.4g,%.4g,%.4g,\n",
                   pulls[p].name, pass ? "fascia" : "ccx", resolution, (int)r->nodes, r->ms, r->force[0], r->force[1],

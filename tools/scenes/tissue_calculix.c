@@ -83,6 +83,8 @@ static fascia_status check_pull(fascia_ctx *ctx, const fascia_tissue_pull_def *d
                 "pulled sheet: %d CalculiX elements along %c, expected an even count 2 .. 400", (int)d->elements[a],
                 "xy"[a]);
   }
+  SCENE_CHECK(fascia_tissue_mesh_name(d->mesh), ctx, FASCIA_ERR_ARGUMENT,
+              "pulled sheet: mesh %d, expected 0 (right), 1 (shifted) or 2 (jittered)", (int)d->mesh);
   return FASCIA_OK;
 }
 
@@ -145,6 +147,66 @@ fascia_status fascia_tissue_hang_write_scene(fascia_ctx *ctx, const void *hang_d
   return close_file(ctx, f, path);
 }
 
+const char *fascia_tissue_mesh_name(int32_t mesh) {
+  static const char *const names[] = {"right", "shifted", "jittered"};
+  return mesh >= 0 && mesh < 3 ? names[mesh] : NULL;
+}
+
+// Row j of the shifted mesh: shifted when it is an inner row an odd number
+// of rows from the middle one (the centre and the free edges' middles stay
+// on vertices); its vertices' x, from the edge on A to the edge on B.
+static int32_t row_x(const fascia_tissue_pull_def *d, int32_t j, double *x) {
+  const int32_t nx = d->cells[0], ny = d->cells[1];
+  const double h = d->gap / nx;
+  const int shifted = j > 0 && j < ny && (j - ny / 2) % 2 != 0;
+  int32_t n = 0;
+  x[n++] = -d->gap / 2;
+  for (int32_t i = 1; i < nx + shifted; ++i) x[n++] = -d->gap / 2 + h * (i - 0.5 * shifted);
+  x[n++] = d->gap / 2;
+  return n;
+}
+
+// The shifted or jittered mesh: rows of vertices, consecutive rows zipped
+// into triangles (counter-clockwise seen from +z), each step advancing the
+// row whose next vertex lies nearer the edge on A.
+static void write_zipped_rows(FILE *f, const fascia_tissue_pull_def *d) {
+  const int32_t nx = d->cells[0], ny = d->cells[1];
+  const double hx = d->gap / nx, hy = d->width / ny;
+  double x[2][402], y[2][402];
+  int32_t count[2] = {0, 0}, first[2] = {0, 0}, next = 1;
+  uint64_t seed = 0x9e3779b97f4a7c15u;
+  for (int32_t j = 0; j <= ny; ++j) {
+    const int r = j % 2;
+    count[r] = row_x(d, j, x[r]);
+    first[r] = next;
+    for (int32_t i = 0; i < count[r]; ++i) {
+      y[r][i] = -d->width / 2 + d->width * j / ny;
+      const int inner = j > 0 && j < ny && i > 0 && i < count[r] - 1 && !(2 * j == ny && fabs(x[r][i]) < hx / 4);
+      if (d->mesh == FASCIA_TISSUE_MESH_JITTERED && inner)
+        for (int a = 0; a < 2; ++a) { // xorshift: the same mesh on every machine
+          seed ^= seed << 13, seed ^= seed >> 7, seed ^= seed << 17;
+          const double u = (double)(seed >> 11) / 9007199254740992.0 - 0.5;
+          if (a == 0) x[r][i] += 0.4 * u * hx;
+          else y[r][i] += 0.4 * u * hy;
+        }
+      fprintf(f, "v %.17g %.17g 0\n", x[r][i], y[r][i]);
+    }
+    next += count[r];
+    if (j == 0) continue;
+    const int lo = 1 - r, up = r;
+    int32_t p = 0, q = 0;
+    while (p < count[lo] - 1 || q < count[up] - 1) {
+      if (q == count[up] - 1 || (p < count[lo] - 1 && x[lo][p + 1] <= x[up][q + 1])) {
+        fprintf(f, "f %d %d %d\n", first[lo] + p, first[lo] + p + 1, first[up] + q);
+        ++p;
+      } else {
+        fprintf(f, "f %d %d %d\n", first[lo] + p, first[up] + q + 1, first[up] + q);
+        ++q;
+      }
+    }
+  }
+}
+
 fascia_status fascia_tissue_pull_write_scene(fascia_ctx *ctx, const void *pull_def, const char *dir) {
   const fascia_tissue_pull_def *def = pull_def;
   SCENE_TRY(check_pull(ctx, def));
@@ -153,16 +215,20 @@ fascia_status fascia_tissue_pull_write_scene(fascia_ctx *ctx, const void *pull_d
   FILE *f = open_in(ctx, dir, FASCIA_TISSUE_SHEET, path);
   if (!f) return FASCIA_ERR_IO;
   const int32_t nx = def->cells[0], ny = def->cells[1];
-  for (int32_t j = 0; j <= ny; ++j)
-    for (int32_t i = 0; i <= nx; ++i)
-      fprintf(f, "v %.17g %.17g 0\n", -def->gap / 2 + def->gap * i / nx, -def->width / 2 + def->width * j / ny);
-  // diagonals alternating from square to square: no direction of shear preferred
-  for (int32_t j = 0; j < ny; ++j)
-    for (int32_t i = 0; i < nx; ++i) {
-      const int32_t a = 1 + i + (nx + 1) * j, b = a + 1, c = b + nx + 1, d = a + nx + 1;
-      if ((i + j) % 2) fprintf(f, "f %d %d %d\nf %d %d %d\n", a, b, d, b, c, d);
-      else fprintf(f, "f %d %d %d\nf %d %d %d\n", a, b, c, a, c, d);
-    }
+  if (def->mesh == FASCIA_TISSUE_MESH_RIGHT) {
+    for (int32_t j = 0; j <= ny; ++j)
+      for (int32_t i = 0; i <= nx; ++i)
+        fprintf(f, "v %.17g %.17g 0\n", -def->gap / 2 + def->gap * i / nx, -def->width / 2 + def->width * j / ny);
+    // diagonals alternating from square to square: no direction of shear preferred
+    for (int32_t j = 0; j < ny; ++j)
+      for (int32_t i = 0; i < nx; ++i) {
+        const int32_t a = 1 + i + (nx + 1) * j, b = a + 1, c = b + nx + 1, d = a + nx + 1;
+        if ((i + j) % 2) fprintf(f, "f %d %d %d\nf %d %d %d\n", a, b, d, b, c, d);
+        else fprintf(f, "f %d %d %d\nf %d %d %d\n", a, b, c, a, c, d);
+      }
+  } else {
+    write_zipped_rows(f, def);
+  }
   SCENE_TRY(close_file(ctx, f, path));
   f = open_in(ctx, dir, FASCIA_TISSUE_SCENE, path);
   if (!f) return FASCIA_ERR_IO;

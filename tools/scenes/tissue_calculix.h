@@ -17,7 +17,8 @@
 //  - pull: a flat sheet of `thickness` in the plane z = 0 filling the gap
 //    (x in [-gap/2, gap/2], y in [-width/2, width/2]), its edges on A and B
 //    clamped, B translated by `pull`. fascia: a triangle mesh of cells[0] x
-//    cells[1] squares, diagonals alternating; CalculiX: S8R shells on
+//    cells[1] squares, diagonals alternating (right triangles), or of rows
+//    shifted by half a square (near-equilateral), or those jittered; CalculiX: S8R shells on
 //    elements[0] x elements[1] squares, the edge on A held in all six
 //    degrees of freedom, the edge on B moved by `pull` and not rotated; NLGEOM.
 #ifndef FASCIA_TOOLS_TISSUE_CALCULIX_H
@@ -55,6 +56,20 @@ typedef struct fascia_tissue_hang_result {
   double ms;        ///< wall time of the solve (fascia: prep excluded; CalculiX: deck, ccx, output)
 } fascia_tissue_hang_result;
 
+/// fascia's sheet mesh: squares split by alternating diagonals (right
+/// triangles); every other row of vertices shifted by half a square, the
+/// rows zipped (isosceles triangles of angles 53-63-63 degrees, as a
+/// mesher's near-equilateral ones); those with their inner vertices moved
+/// by a fixed pseudo-random fifth of a square (irregular, as a real
+/// membrane's mesh). The centre and the free edges' middles stay vertices.
+typedef enum fascia_tissue_mesh {
+  FASCIA_TISSUE_MESH_RIGHT = 0,
+  FASCIA_TISSUE_MESH_SHIFTED = 1,
+  FASCIA_TISSUE_MESH_JITTERED = 2,
+} fascia_tissue_mesh;
+/// "right", "shifted", "jittered"; NULL for another value.
+const char *fascia_tissue_mesh_name(int32_t mesh);
+
 /// The sheet under a pull. Start from fascia_tissue_pull_def_default().
 typedef struct fascia_tissue_pull_def {
   double gap;            ///< m, the sheet's length along x; default 0.02
@@ -65,6 +80,7 @@ typedef struct fascia_tissue_pull_def {
   double poisson_ratio;  ///< default 0.3
   double pull[3];        ///< m, B's translation; default (0, 0.001, 0): in-plane shear
   int32_t cells[2];      ///< fascia: mesh squares along x, y (each split in two triangles), even; default 10 x 8
+  int32_t mesh;          ///< fascia: a fascia_tissue_mesh; default FASCIA_TISSUE_MESH_RIGHT
   int32_t elements[2];   ///< CalculiX: S8R elements along x, y, even; default 20 x 16
 } fascia_tissue_pull_def;
 
@@ -80,6 +96,8 @@ typedef struct fascia_tissue_pull_result {
   double centre[3]; ///< displacement of the sheet's centre (0, 0, 0), m
   int32_t nodes;    ///< fascia: frames; CalculiX: shell nodes
   double ms;        ///< wall time of the solve
+  int32_t newton_iterations;  ///< fascia: of the static solve; CalculiX: 0
+  int32_t negative_curvature; ///< fascia: its linear solves that met a tangent not positive definite
 } fascia_tissue_pull_result;
 
 /// File names a scene folder gets: the organs' boxes, the sheet's mesh, the scene.

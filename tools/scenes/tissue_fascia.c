@@ -68,9 +68,13 @@ fascia_status fascia_tissue_solve_static(fascia_ctx *ctx, const fascia_model *m,
   return FASCIA_OK;
 }
 
-static fascia_status solve(fascia_ctx *ctx, const fascia_model *m, fascia_solver **solver, double *ms) {
+static fascia_status solve(fascia_ctx *ctx, const fascia_model *m, fascia_solver **solver, double *ms,
+                           fascia_tissue_pull_result *pull) {
   fascia_solve_report report;
-  return fascia_tissue_solve_static(ctx, m, solver, &report, ms);
+  memset(&report, 0, sizeof report);
+  const fascia_status st = fascia_tissue_solve_static(ctx, m, solver, &report, ms);
+  if (pull) pull->newton_iterations = report.newton_iterations, pull->negative_curvature = report.negative_curvature;
+  return st;
 }
 
 // Sum of the tissue's forces on an organ's coupling frames (N).
@@ -100,7 +104,7 @@ static fascia_status hang_from_model(fascia_ctx *ctx, const fascia_model *m, fas
   SCENE_CHECK(A >= 0 && B >= 0, ctx, FASCIA_ERR_INTERNAL, "hanging organ: the model lacks organ A or B");
   fascia_solver *solver = NULL;
   fascia_status status = FASCIA_OK;
-  SCENE_TRY_GOTO(solve(ctx, m, &solver, &out->ms));
+  SCENE_TRY_GOTO(solve(ctx, m, &solver, &out->ms, NULL));
   fascia_real translation[3], q[4], mass, centre[3];
   SCENE_TRY_GOTO(fascia_solver_organ_pose(solver, B, translation, q));
   SCENE_TRY_GOTO(fascia_solver_organ_mass(solver, B, &mass, centre, NULL));
@@ -152,7 +156,7 @@ static fascia_status pull_from_model(fascia_ctx *ctx, const fascia_tissue_pull_d
   SCENE_CHECK(B >= 0, ctx, FASCIA_ERR_INTERNAL, "pulled sheet: the model lacks organ B");
   fascia_solver *solver = NULL;
   fascia_status status = FASCIA_OK;
-  SCENE_TRY_GOTO(solve(ctx, m, &solver, &out->ms));
+  SCENE_TRY_GOTO(solve(ctx, m, &solver, &out->ms, out));
   const double edge_at[3] = {0, def->width / 2, 0}, centre_at[3] = {0, 0, 0};
   const int32_t edge = nearest_frame(m, edge_at), centre = nearest_frame(m, centre_at);
   const fascia_real *x = fascia_solver_frame_positions(solver);
