@@ -715,9 +715,9 @@ int64_t prep_strand_intervals(const fascia_prep_points *points, int32_t t, int32
 // ------------------------------------------------------------ sheets
 
 // One point per triangle, its centroid (times the points through the
-// thickness), and there its drilling stabiliser (reduced.h): the points'
-// gradients are a quadratic fit's (shape_functions.c), free of the linear
-// triangle's shear locking, and the stabiliser holds the frames' rotations
+// thickness), and there its drilling stabiliser's gauges (reduced.h): the
+// points' gradients are a quadratic fit's (shape_functions.c), free of the
+// linear triangle's shear locking, and the gauges hold the frames' rotations
 // about the normal that the fit leaves free (docs/mechanics.md, "Against
 // CalculiX").
 static const double TRI_RULE[1][3] = {{1.0 / 3, 1.0 / 3, 1.0 / 3}};
@@ -730,7 +730,7 @@ static fascia_status build_sheet(fascia_ctx *ctx, const fascia_prep_scene *scene
   const fascia_prep_mesh *m = meshes->sheets + t;
   const int32_t V = m->vertex_count, T = m->triangle_count;
   const int q = td->section_points;
-  PREP_TRY(reserve(ctx, out, V, (TRI_POINTS * (int64_t)q + 1) * T));
+  PREP_TRY(reserve(ctx, out, V, (TRI_POINTS * (int64_t)q + PREP_SHEET_DRILLING_GAUGES) * T));
   out->frame_count = V;
   memcpy(out->frame_position, m->vertices, 3 * (size_t)V * sizeof(double));
   // vertex normals (area-weighted) for the thickness check
@@ -834,10 +834,12 @@ static fascia_status build_sheet(fascia_ctx *ctx, const fascia_prep_scene *scene
         memcpy(out->sample_cell + 3 * (int64_t)s, c, 3 * sizeof(int32_t));
       }
     }
-    for (int r = 0; r < 3; ++r) out->sample_position[3 * (int64_t)s + r] = (p0[r] + p1[r] + p2[r]) / 3;
-    out->sample_volume[s] = area * td->thickness;
-    memcpy(out->sample_cell + 3 * (int64_t)s, c, 3 * sizeof(int32_t));
-    out->sample_drilling[s++] = 1;
+    for (int g = 1; g <= PREP_SHEET_DRILLING_GAUGES; ++g, ++s) {
+      for (int r = 0; r < 3; ++r) out->sample_position[3 * (int64_t)s + r] = (p0[r] + p1[r] + p2[r]) / 3;
+      out->sample_volume[s] = area * td->thickness;
+      memcpy(out->sample_cell + 3 * (int64_t)s, c, 3 * sizeof(int32_t));
+      out->sample_drilling[s] = (uint8_t)g;
+    }
   }
   out->sample_count = s;
   out->length = area_sum;

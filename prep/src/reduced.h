@@ -15,18 +15,25 @@ typedef struct prep_reduced {
   double *sample_position; ///< [3 sample_count] m
   double *sample_volume;   ///< [sample_count] m^3
   int32_t *sample_cell;    ///< [3 sample_count] frames of its interval (two, -1) or triangle
-  uint8_t *sample_drilling; ///< [sample_count] 1: a sheet triangle's drilling stabiliser; NULL: none
+  uint8_t *sample_drilling; ///< [sample_count] 1 .. 3: a sheet triangle's drilling stabiliser's gauge; NULL: none
   double length;           ///< strand: m; sheet: its area, m^2
 } prep_reduced;
 
 /// A sheet's drilling stabiliser (docs/mechanics.md, "Against CalculiX"):
-/// one sample per triangle at its centroid, of the triangle's volume,
-/// whose gradients are the linear triangle's less the quadratic fit's and
-/// whose material integrates the volumetric energy alone (its volume
-/// repeats the points' through the thickness, and it has no mass), with a
-/// first Lame modulus PREP_SHEET_DRILLING_LAMBDA times the sheet's shear
-/// modulus: it sees the change of area, not the shear across the sheet.
+/// PREP_SHEET_DRILLING_GAUGES samples per triangle at its centroid, each of
+/// the triangle's volume, whose material integrates the volumetric energy
+/// alone (their volume repeats the points' through the thickness, and they
+/// have no mass), with a first Lame modulus PREP_SHEET_DRILLING_LAMBDA times
+/// the sheet's shear modulus. Gauge 1's gradients (a, b) in the triangle's
+/// axes are the linear triangle's less the quadratic fit's, so it sees that
+/// difference's change of area; gauges 2 and 3 take (a, -b) and (b, a),
+/// whose traces are its two in-plane deviatoric parts: together they hold
+/// the whole in-plane strain of linear minus fit, which a drilling field
+/// puts in shear without a change of area on a near-equilateral triangle,
+/// and none of the shear across the sheet. Their F carries one corner
+/// frame's rotation (weight 1 there), not the corners' weighted mean.
 #define PREP_SHEET_DRILLING_LAMBDA 4.0
+#define PREP_SHEET_DRILLING_GAUGES 3
 
 /// Builds tissue t (a strand or a sheet; its sheet mesh in meshes->sheets)
 /// and refuses what cannot be one with a line naming the scene key: an

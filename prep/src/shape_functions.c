@@ -594,8 +594,9 @@ static fascia_status cell_weights(fascia_ctx *ctx, const fascia_prep_scene *scen
 // A sheet tissue's triangles take the same fit with none of the linear
 // gradients: the drilling that a fit exact on quadratics leaves free (a
 // linear twist about the normal strains no point, just as a uniform bend
-// shears none) is held by the sheet's own stabiliser (reduced.h), whose law
-// sees no shear across the sheet (docs/mechanics.md, "Against CalculiX").
+// shears none) is held by the sheet's own stabiliser (reduced.h), whose
+// gauges see the whole in-plane strain of linear minus fit and no shear
+// across the sheet (docs/mechanics.md, "Against CalculiX").
 #define SHELL_STENCIL 9
 // Frames tied in distance with the stencil's last are taken too (a mesh
 // symmetric about the point keeps a symmetric fit), up to this many.
@@ -716,6 +717,10 @@ static void shell_sample(const fascia_prep_points *pts, const fascia_frame_grid 
   for (int32_t j = 0; j < pair_count[s]; ++j)
     for (int k = 0; k < 3; ++k)
       if (pair_frame[base + j] == c[k]) weight[k] = pair_w[base + j];
+  // a drilling gauge's F carries one corner's rotation, not the corners'
+  // mean, which is no rotation where they differ (a bent sheet): the gauge
+  // would take that shrinkage for a change of area
+  if (pts->sample_drilling && pts->sample_drilling[s]) weight[0] = 1, weight[1] = weight[2] = 0;
   int32_t order[SHELL_QUERY + 3];
   for (int32_t j = 0; j < m; ++j) order[j] = j;
   for (int32_t i = 1; i < m; ++i) // frames ascending, as the model's pairs
@@ -752,6 +757,13 @@ static void shell_sample(const fascia_prep_points *pts, const fascia_frame_grid 
   const double fit = drilling ? -1 : 1 - share, linear = drilling ? 1 : share;
   for (int32_t j = 0; j < m; ++j) slope_a[j] *= fit, slope_b[j] *= fit;
   for (int k = 0; k < 3; ++k) slope_a[k] += linear * lin_a[k], slope_b[k] += linear * lin_b[k];
+  if (drilling && pts->sample_drilling[s] == 2) // the deviatoric gauges (reduced.h)
+    for (int32_t j = 0; j < m; ++j) slope_b[j] = -slope_b[j];
+  if (drilling && pts->sample_drilling[s] == 3)
+    for (int32_t j = 0; j < m; ++j) {
+      const double t = slope_a[j];
+      slope_a[j] = slope_b[j], slope_b[j] = t;
+    }
   for (int32_t j = 0; j < m; ++j) {
     const int32_t q = order[j];
     pair_frame[base + j] = frame[q];
