@@ -1286,7 +1286,9 @@ fascia_status fascia_prep_shape_functions(fascia_ctx *ctx, const fascia_prep_sce
     double e[3];
     for (int r = 0; r < 3; ++r) e[r] = reproduced[r] - points->sample_position[3 * (int64_t)s + r];
     if (points->sample_voxel[s] < 0) in_span(points, s, e); // a strand's section, a sheet's thickness: the rotations'
-    for (int r = 0; r < 3 && !blended[s]; ++r) W->max_linear_error = fmax(W->max_linear_error, fabs(e[r]));
+    // a sheet's drilling gauge weighs one corner alone: its position is that corner's offset, not a weighted mean
+    const int gauge = points->sample_drilling && points->sample_drilling[s];
+    for (int r = 0; r < 3 && !blended[s] && !gauge; ++r) W->max_linear_error = fmax(W->max_linear_error, fabs(e[r]));
   }
   fascia_ctx_progress(ctx, "shape functions", 1, "done");
   *out = W;
