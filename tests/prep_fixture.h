@@ -155,4 +155,100 @@ static inline fascia_ctx *fixture_ctx(void) {
   return ctx;
 }
 
+/// Writes an icosphere of the given radius about centre as OBJ file dir/name:
+/// the icosahedron refined `levels` times (20 4^levels triangles), each new
+/// vertex put on the sphere; lower_half keeps only the triangles wholly at
+/// or below the centre's z (an open bowl). 1 on success.
+static inline int fixture_icosphere(const char *dir, const char *name, const double *centre, double radius, int levels,
+                                    int lower_half) {
+  int nt = 20, nv = 12, mt = 20, mv = 12;
+  for (int l = 0; l < levels; ++l) mt *= 4, mv = 4 * mv - 6;
+  double *v = (double *)malloc(3 * sizeof(double) * (size_t)mv);
+  int *t = (int *)malloc(3 * sizeof(int) * (size_t)mt), *t2 = (int *)malloc(3 * sizeof(int) * (size_t)mt);
+  int *number = (int *)calloc((size_t)mv, sizeof(int));
+  char *text = (char *)malloc(96 * ((size_t)mv + (size_t)mt) + 1);
+  int ok = v && t && t2 && number && text;
+  const double g = (1 + sqrt(5.0)) / 2;
+  const double v0[12][3] = {{-1, g, 0}, {1, g, 0}, {-1, -g, 0}, {1, -g, 0}, {0, -1, g}, {0, 1, g},
+                            {0, -1, -g}, {0, 1, -g}, {g, 0, -1}, {g, 0, 1}, {-g, 0, -1}, {-g, 0, 1}};
+  const int t0[20][3] = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                         {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8},
+                         {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
+  for (int i = 0; ok && i < 12; ++i) {
+    const double len = sqrt(v0[i][0] * v0[i][0] + v0[i][1] * v0[i][1] + v0[i][2] * v0[i][2]);
+    for (int r = 0; r < 3; ++r) v[3 * i + r] = v0[i][r] / len;
+  }
+  for (int k = 0; ok && k < 20; ++k)
+    for (int r = 0; r < 3; ++r) t[3 * k + r] = t0[k][r];
+  for (int level = 0; ok && level < levels; ++level) {
+    int n2 = 0;
+    for (int k = 0; k < nt; ++k) {
+      int mid[3];
+      for (int e = 0; e < 3; ++e) {
+        const int a = t[3 * k + e], b = t[3 * k + (e + 1) % 3];
+        double p[3];
+        for (int r = 0; r < 3; ++r) p[r] = 0.5 * (v[3 * a + r] + v[3 * b + r]);
+        const double len = sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+        for (int r = 0; r < 3; ++r) p[r] /= len;
+        int found = -1; // midpoints are shared by two triangles: look them up
+        for (int i = 0; i < nv && found < 0; ++i)
+          if (fabs(v[3 * i] - p[0]) + fabs(v[3 * i + 1] - p[1]) + fabs(v[3 * i + 2] - p[2]) < 1e-12) found = i;
+        if (found < 0) {
+          memcpy(v + 3 * nv, p, sizeof p);
+          found = nv++;
+        }
+        mid[e] = found;
+      }
+      const int c[4][3] = {{t[3 * k], mid[0], mid[2]}, {mid[0], t[3 * k + 1], mid[1]},
+                           {mid[2], mid[1], t[3 * k + 2]}, {mid[0], mid[1], mid[2]}};
+      for (int j = 0; j < 4; ++j, ++n2)
+        for (int r = 0; r < 3; ++r) t2[3 * n2 + r] = c[j][r];
+    }
+    nt = n2;
+    memcpy(t, t2, 3 * sizeof(int) * (size_t)nt);
+  }
+  int kept = 0, count = 0;
+  size_t n = 0;
+  for (int k = 0; ok && k < nt; ++k) {
+    if (lower_half && (v[3 * t[3 * k] + 2] > 1e-9 || v[3 * t[3 * k + 1] + 2] > 1e-9 || v[3 * t[3 * k + 2] + 2] > 1e-9))
+      continue;
+    for (int r = 0; r < 3; ++r) number[t[3 * k + r]] = 1, t[3 * kept + r] = t[3 * k + r];
+    ++kept;
+  }
+  for (int i = 0; ok && i < nv; ++i) {
+    if (!number[i]) continue;
+    number[i] = ++count;
+    n += (size_t)sprintf(text + n, "v %.9f %.9f %.9f\n", centre[0] + radius * v[3 * i], centre[1] + radius * v[3 * i + 1],
+                         centre[2] + radius * v[3 * i + 2]);
+  }
+  for (int k = 0; ok && k < kept; ++k)
+    n += (size_t)sprintf(text + n, "f %d %d %d\n", number[t[3 * k]], number[t[3 * k + 1]], number[t[3 * k + 2]]);
+  ok = ok && fixture_write(dir, name, text);
+  free(v), free(t), free(t2), free(number), free(text);
+  return ok;
+}
+
+/// Prepares the scene at path into *r and solves its static equilibrium at
+/// time 1 on one CPU thread; force: the tissue's force on organ `organ`
+/// (model order), N. 1 on success, else 0 with the message on stderr.
+static inline int fixture_prep_static(const char *path, int32_t organ, fixture_run *r, double force[3]) {
+  fascia_ctx *ctx = fixture_ctx();
+  int ok = ctx && fixture_prep(ctx, path, r) == FASCIA_OK;
+  fascia_solver *solver = NULL;
+  fascia_solver_def def = fascia_solver_def_default();
+  def.backend = "cpu";
+  def.threads = 1;
+  def.newton_iterations = 100;
+  fascia_solve_report report;
+  ok = ok && fascia_solver_create(ctx, r->model, &def, &solver) == FASCIA_OK &&
+       fascia_solver_set_time(solver, 1) == FASCIA_OK && fascia_solver_solve_static(solver, &report) == FASCIA_OK;
+  fascia_real f[3] = {0, 0, 0}, torque[3], point[3];
+  ok = ok && fascia_solver_organ_wrench(solver, organ, f, torque, point) == FASCIA_OK;
+  for (int c = 0; c < 3; ++c) force[c] = f[c];
+  if (!ok) fprintf(stderr, "%s: %s\n", path, ctx ? fascia_ctx_message(ctx) : "no context");
+  fascia_solver_destroy(&solver);
+  fascia_ctx_destroy(&ctx);
+  return ok;
+}
+
 #endif

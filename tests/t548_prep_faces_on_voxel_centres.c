@@ -40,25 +40,12 @@ static int prepare(const char *dir, const char *tag, double shift, answer *out) 
   snprintf(name, sizeof name, "scene-%s.json", tag);
   snprintf(path, sizeof path, "%s/%s", dir, name);
   if (!fixture_box(dir, a, a_lo, a_hi) || !fixture_box(dir, b, b_lo, b_hi) || !fixture_write(dir, name, text)) return 0;
-  fascia_ctx *ctx = fixture_ctx();
   fixture_run run = {0};
-  int ok = fixture_prep(ctx, path, &run) == FASCIA_OK;
-  fascia_solver *solver = NULL;
-  fascia_solver_def def = fascia_solver_def_default();
-  def.backend = "cpu";
-  def.threads = 1;
-  def.newton_iterations = 100;
-  fascia_solve_report report;
-  ok = ok && fascia_solver_create(ctx, run.model, &def, &solver) == FASCIA_OK &&
-       fascia_solver_set_time(solver, 1) == FASCIA_OK && fascia_solver_solve_static(solver, &report) == FASCIA_OK;
-  fascia_real force[3] = {0, 0, 0}, torque[3], point[3];
-  ok = ok && fascia_solver_organ_wrench(solver, 0, force, torque, point) == FASCIA_OK;
+  double force[3];
+  const int ok = fixture_prep_static(path, 0, &run, force);
   out->shared_a = ok ? run.coupling->per_organ[0] : 0;
   out->force = force[0];
-  if (!ok) fprintf(stderr, "%s: %s\n", tag, fascia_ctx_message(ctx));
-  fascia_solver_destroy(&solver);
   fixture_free(&run);
-  fascia_ctx_destroy(&ctx);
   return ok;
 }
 

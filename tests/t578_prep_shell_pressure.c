@@ -33,72 +33,8 @@
 
 // An icosphere of RADIUS about the origin, refined 4 times (5120 triangles).
 static int write_sphere(const char *dir, const char *name, int lower_half) {
-  enum { MAXV = 2600, MAXT = 5120 };
-  static double v[3 * MAXV];
-  static int t[3 * MAXT], t2[3 * MAXT];
-  const double g = (1 + sqrt(5.0)) / 2;
-  const double v0[12][3] = {{-1, g, 0}, {1, g, 0}, {-1, -g, 0}, {1, -g, 0}, {0, -1, g}, {0, 1, g},
-                            {0, -1, -g}, {0, 1, -g}, {g, 0, -1}, {g, 0, 1}, {-g, 0, -1}, {-g, 0, 1}};
-  const int t0[20][3] = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
-                         {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8},
-                         {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
-  int nv = 12, nt = 20;
-  for (int i = 0; i < 12; ++i) {
-    const double len = sqrt(v0[i][0] * v0[i][0] + v0[i][1] * v0[i][1] + v0[i][2] * v0[i][2]);
-    for (int r = 0; r < 3; ++r) v[3 * i + r] = v0[i][r] / len;
-  }
-  for (int k = 0; k < 20; ++k)
-    for (int r = 0; r < 3; ++r) t[3 * k + r] = t0[k][r];
-  for (int level = 0; level < 4; ++level) {
-    int n2 = 0;
-    for (int k = 0; k < nt; ++k) {
-      int mid[3];
-      for (int e = 0; e < 3; ++e) {
-        const int a = t[3 * k + e], b = t[3 * k + (e + 1) % 3];
-        double p[3];
-        for (int r = 0; r < 3; ++r) p[r] = 0.5 * (v[3 * a + r] + v[3 * b + r]);
-        const double len = sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
-        for (int r = 0; r < 3; ++r) p[r] /= len;
-        int found = -1; // midpoints are shared by two triangles: look them up
-        for (int i = 0; i < nv && found < 0; ++i)
-          if (fabs(v[3 * i] - p[0]) + fabs(v[3 * i + 1] - p[1]) + fabs(v[3 * i + 2] - p[2]) < 1e-12) found = i;
-        if (found < 0) {
-          memcpy(v + 3 * nv, p, sizeof p);
-          found = nv++;
-        }
-        mid[e] = found;
-      }
-      const int c[4][3] = {{t[3 * k], mid[0], mid[2]}, {mid[0], t[3 * k + 1], mid[1]},
-                           {mid[2], mid[1], t[3 * k + 2]}, {mid[0], mid[1], mid[2]}};
-      for (int j = 0; j < 4; ++j, ++n2)
-        for (int r = 0; r < 3; ++r) t2[3 * n2 + r] = c[j][r];
-    }
-    nt = n2;
-    memcpy(t, t2, 3 * sizeof(int) * (size_t)nt);
-  }
-  // the lower half: its triangles wholly below z = 0 and the vertices they use
-  static int used[MAXV];
-  for (int i = 0; i < nv; ++i) used[i] = 0;
-  int kept = 0;
-  for (int k = 0; k < nt; ++k) {
-    if (lower_half && (v[3 * t[3 * k] + 2] > 1e-9 || v[3 * t[3 * k + 1] + 2] > 1e-9 || v[3 * t[3 * k + 2] + 2] > 1e-9))
-      continue;
-    for (int r = 0; r < 3; ++r) used[t[3 * k + r]] = 1, t[3 * kept + r] = t[3 * k + r];
-    ++kept;
-  }
-  static char text[400000];
-  static int number[MAXV];
-  int n = 0, count = 0;
-  for (int i = 0; i < nv; ++i) {
-    if (!used[i]) continue;
-    number[i] = ++count;
-    n += snprintf(text + n, sizeof text - (size_t)n, "v %.9f %.9f %.9f\n", RADIUS * v[3 * i], RADIUS * v[3 * i + 1],
-                  RADIUS * v[3 * i + 2]);
-  }
-  for (int k = 0; k < kept; ++k)
-    n += snprintf(text + n, sizeof text - (size_t)n, "f %d %d %d\n", number[t[3 * k]], number[t[3 * k + 1]],
-                  number[t[3 * k + 2]]);
-  return fixture_write(dir, name, text);
+  const double origin[3] = {0, 0, 0};
+  return fixture_icosphere(dir, name, origin, RADIUS, 4, lower_half);
 }
 
 static int write_scene(const char *dir, const char *mesh, double spacing, const char *pressure, char *path) {
