@@ -303,13 +303,6 @@ static fascia_status cpu_finish(fascia_backend *backend, const fascia_step_resul
   return FASCIA_OK;
 }
 
-static fascia_status cpu_strain_past(fascia_backend *backend, fascia_real limit, int *past) {
-  cpu_backend *B = (cpu_backend *)backend;
-  fascia_system_set_state(B->sys, B->x, B->q);
-  *past = !(fascia_system_largest_strain(B->sys, NULL) <= limit);
-  return FASCIA_OK;
-}
-
 static fascia_status cpu_gradient(fascia_backend *backend, const fascia_real *x, const fascia_real *q,
                                   fascia_real *gradient, fascia_real *energy) {
   cpu_backend *B = (cpu_backend *)backend;
@@ -364,7 +357,6 @@ const fascia_backend_ops fascia_backend_cpu = {
     .save = cpu_save,
     .restore = cpu_restore,
     .finish = cpu_finish,
-    .strain_past = cpu_strain_past,
     .linear_state_size = cpu_linear_state_size,
     .linear_state_save = cpu_linear_state_save,
     .linear_state_load = cpu_linear_state_load,

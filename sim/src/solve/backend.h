@@ -123,7 +123,8 @@ struct fascia_backend_ops {
   /// The iterate (the state of the last evaluation) to the host; the host
   /// system's energies and inversion counts set.
   fascia_status (*finish)(fascia_backend *backend, const fascia_step_result *result);
-  /// Optional (NULL: the host checks the state finish gave). The step's
+  /// Optional (NULL: the host checks the state finish gave, which is where
+  /// the CPU keeps it). The step's
   /// check (solver.c's blow-up rule): whether some sample's strain
   /// |F^T F - I| / 2 at the state finish gave is past limit or not finite
   /// (*past 1, else 0), reduced where the state is kept.
