@@ -13,9 +13,11 @@
 //    no wall triangle stands across the surface at the rim (8 did before
 //    prep dropped them, 6 with gradients over 5 / spacing), and each wall
 //    sample's gradients give a linear field along its plane its slope;
+//  - the same bowl with samples at a third of the frame spacing: 9 points
+//    per triangle, the same volume, each point's gradients its own;
 //  - every refusal is one line naming the key: a wall not thinner than its
 //    frame spacing, a wall thicker than the organ (a 2 mm slab), a sample
-//    spacing, shell keys on another model.
+//    spacing out of range, a volume's key, shell keys on another model.
 #define _POSIX_C_SOURCE 200809L // mkdtemp
 #include <math.h>
 
@@ -203,22 +205,35 @@ done:
 // triangle lies along the surface (the rim's frames make no sliver standing
 // across it, whose gradients would be many times 1 / spacing), and every
 // wall sample's gradients reproduce linear fields in its triangle's plane.
+// With a sample spacing of a third of the frames', each triangle gives 9
+// points: 9 times as many, the same volume, each point's gradients its own
+// (a quadratic field flat at the point, f = ((x - p) . t)^2 with t in the
+// plane, has no slope there: only the share of the linear triangle's
+// gradients, SHELL_LINEAR_SHARE = 0.1 in prep, answers it). The split
+// point's gradients were the centroid's before: 2 (c - p) . t off.
 #define BOWL_SPACING 0.0025
-static int check_open_wall(const char *dir) {
+#define LINEAR_SHARE 0.1
+typedef struct wall_counts {
+  int samples;
+  double volume;
+} wall_counts;
+static int check_open_wall(const char *dir, int split, wall_counts *counts) {
   char path[512], organ[512];
   snprintf(organ, sizeof organ,
            "\"model\": \"shell\", \"material\": \"wall\", \"thickness\": 0.0005, \"frame_spacing\": %g, "
-           "\"hold\": {\"box\": {\"min\": [0, -0.02, -0.0005], \"max\": [0.03, 0.02, 0.0005]}}",
-           BOWL_SPACING);
+           "\"sample_spacing\": %g, \"hold\": {\"box\": {\"min\": [0, -0.02, -0.0005], \"max\": [0.03, 0.02, 0.0005]}}",
+           BOWL_SPACING, BOWL_SPACING / split);
   CHECK(write_scene(dir, "bowl.obj", organ, path));
   fascia_ctx *ctx = fixture_ctx();
   fixture_run r;
   CHECK_OK(fixture_prep(ctx, path, &r), ctx);
   const fascia_model *m = r.model;
-  int wall = 0, across = 0, steep = 0, unreproduced = 0;
+  int wall = 0, across = 0, steep = 0, unreproduced = 0, sloped = 0;
+  double volume = 0;
   for (int32_t s = 0; m && s < m->sample_count; ++s) {
     if (m->sample_organ[s] != 1) continue;
     ++wall;
+    volume += m->sample_volume[s];
     int32_t corner[3], k = 0;
     double gx[9] = {0}, largest = 0;
     for (int32_t j = m->sample_offsets[s]; j < m->sample_offsets[s + 1]; ++j) {
@@ -252,14 +267,39 @@ static int check_open_wall(const char *dir) {
       for (int b = 0; b < 3; ++b)
         for (int q = 0; q < 3; ++q) pgp[3 * a + b] += pg[3 * a + q] * P[3 * q + b];
     for (int a = 0; a < 9; ++a) unreproduced += fabs(pgp[a] - P[a]) > 1e-9;
+    // f = ((x - p) . t)^2, t = e1 / |e1|: the slope the points' gradients
+    // give it, less the linear triangle's share, is none
+    const fascia_real *p = m->sample_position + 3 * s;
+    double t[3], slope[3] = {0}, linear[3] = {0}, len = sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]);
+    for (int a = 0; a < 3; ++a) t[a] = e1[a] / len;
+    for (int32_t j = m->sample_offsets[s]; j < m->sample_offsets[s + 1]; ++j) {
+      const fascia_real *g = m->pair_gradient + 3 * j, *x = m->frame_position + 3 * m->pair_frame[j];
+      double along = 0;
+      for (int a = 0; a < 3; ++a) along += (x[a] - p[a]) * t[a];
+      for (int a = 0; a < 3; ++a) slope[a] += along * along * g[a];
+    }
+    const fascia_real *c[3] = {p0, p1, p2};
+    for (int i = 0; i < 3; ++i) { // grad of corner i's linear weight: n x (x_k - x_j) / |n|^2
+      const fascia_real *xj = c[(i + 1) % 3], *xk = c[(i + 2) % 3];
+      const double d[3] = {xk[0] - xj[0], xk[1] - xj[1], xk[2] - xj[2]};
+      const double grad[3] = {n[1] * d[2] - n[2] * d[1], n[2] * d[0] - n[0] * d[2], n[0] * d[1] - n[1] * d[0]};
+      double along = 0;
+      for (int a = 0; a < 3; ++a) along += (c[i][a] - p[a]) * t[a];
+      for (int a = 0; a < 3; ++a) linear[a] += along * along * grad[a] / (nn * nn);
+    }
+    double off = 0;
+    for (int a = 0; a < 3; ++a) off += (slope[a] - LINEAR_SHARE * linear[a]) * (slope[a] - LINEAR_SHARE * linear[a]);
+    sloped += sqrt(off) > 1e-6 * BOWL_SPACING;
   }
-  printf("t595: open bowl: %d wall samples, %d across its surface, %d with gradients over 5 / spacing, %d not "
-         "reproducing linear fields\n",
-         wall, across, steep, unreproduced);
+  printf("t595: open bowl split %d: %d wall samples, %d across its surface, %d with gradients over 5 / spacing, %d "
+         "not reproducing linear fields, %d giving a flat quadratic a slope\n",
+         split, wall, across, steep, unreproduced, sloped);
   CHECK(wall > 50);
   CHECK(across == 0);
   CHECK(steep == 0);
   CHECK(unreproduced == 0);
+  CHECK(sloped == 0);
+  counts->samples = wall, counts->volume = volume;
   fixture_free(&r);
   fascia_ctx_destroy(&ctx);
   return 0;
@@ -288,8 +328,12 @@ static void check_refusals(const char *dir) {
           "\"model\": \"shell\", \"material\": \"wall\", \"thickness\": 0.003, \"frame_spacing\": 0.004",
           "organs[1].thickness", "thicker than the organ");
   char organ[512];
-  snprintf(organ, sizeof organ, "%s, \"sample_spacing\": 0.002", shell);
-  refused(dir, "b.obj", organ, "organs[1].sample_spacing", "one sample per triangle");
+  snprintf(organ, sizeof organ, "%s, \"sample_spacing\": 0.0004", shell);
+  refused(dir, "b.obj", organ, "organs[1].sample_spacing", "outside [frame_spacing / 8, frame_spacing]");
+  snprintf(organ, sizeof organ, "%s, \"sample_spacing\": 0.005", shell);
+  refused(dir, "b.obj", organ, "organs[1].sample_spacing", "outside [frame_spacing / 8, frame_spacing]");
+  snprintf(organ, sizeof organ, "%s, \"patch_radius\": 0.004", shell);
+  refused(dir, "b.obj", organ, "organs[1].patch_radius", "leave patch_radius out");
   refused(dir, "b.obj", "\"model\": \"fixed\", \"thickness\": 0.001", "organs[1].thickness", "only a \"shell\"");
   refused(dir, "b.obj", "\"model\": \"shell\", \"thickness\": 0.001, \"frame_spacing\": 0.004", "organs[1].material",
           "missing");
@@ -303,7 +347,12 @@ int main(void) {
   CHECK(fixture_box(dir, "a.obj", a_lo, a_hi) && write_sphere(dir, "b.obj") &&
         write_bowl(dir, "bowl.obj") && fixture_box(dir, "slab.obj", slab_lo, slab_hi));
   const int stopped = check_shell(dir); // 1: a stage failed (printed)
-  const int open_stopped = check_open_wall(dir);
+  wall_counts one, nine;
+  const int open_stopped = check_open_wall(dir, 1, &one) || check_open_wall(dir, 3, &nine);
+  if (!open_stopped) {
+    CHECK(nine.samples == 9 * one.samples);
+    CHECK_NEAR(nine.volume, one.volume, 1e-12, 0);
+  }
   check_refusals(dir);
   static const char *const files[] = {"a.obj", "b.obj", "bowl.obj", "slab.obj", "scene.json", NULL};
   fixture_cleanup(dir, files);

@@ -16,6 +16,7 @@
 #include "labels.h"
 #include "prep_util.h"
 #include "scene_optional.h"
+#include "shell.h"
 
 typedef struct reader {
   fascia_ctx *ctx;
@@ -718,14 +719,20 @@ static fascia_status parse_shell(const reader *rd, fascia_prep_scene *scene, con
     return key_fail(rd, at, "%g m is not thinner than frame_spacing %g m: a wall that thick is a volume; make the "
                     "organ \"deformable\", or space its frames wider", o->thickness, o->frame_spacing);
   }
-  static const char *const volume_keys[] = {"sample_spacing", "shape_functions", "min_component", "patch_radius", NULL};
+  static const char *const volume_keys[] = {"shape_functions", "min_component", "patch_radius", NULL};
   for (int k = 0; volume_keys[k]; ++k)
     if (cJSON_GetObjectItemCaseSensitive(item, volume_keys[k])) {
       sub_key(at, path, volume_keys[k]);
-      return key_fail(rd, at, "a shell takes one sample per triangle of its frames, at its centroid, times "
-                      "section_points through the wall (more points lock the wall in bending, docs/mechanics.md); "
-                      "leave %s out", volume_keys[k]);
+      return key_fail(rd, at, "a shell's points lie on the triangles of its frames (their weights linear, their "
+                      "gradients a quadratic fit over the wall, docs/organs.md); leave %s out", volume_keys[k]);
     }
+  // the wall's triangles split into round(frame_spacing / sample_spacing)^2
+  PREP_TRY(get_number(rd, item, path, "sample_spacing", 0, o->frame_spacing, 0, 0, INFINITY, &o->sample_spacing));
+  if (o->sample_spacing > o->frame_spacing || o->sample_spacing * PREP_SHELL_SPLIT_MAX < o->frame_spacing * (1 - 1e-9)) {
+    sub_key(at, path, "sample_spacing");
+    return key_fail(rd, at, "%g m is outside [frame_spacing / %d, frame_spacing] = [%g, %g] m", o->sample_spacing,
+                    PREP_SHELL_SPLIT_MAX, o->frame_spacing / PREP_SHELL_SPLIT_MAX, o->frame_spacing);
+  }
   int q;
   PREP_TRY(get_int(rd, item, path, "section_points", 0, 2, 1, 4, &q));
   o->section_points = q;
@@ -738,7 +745,6 @@ static fascia_status parse_shell(const reader *rd, fascia_prep_scene *scene, con
     PREP_TRY(get_shape_region(rd, hold, at, &o->hold));
     if (o->hold.kind == FASCIA_PREP_REGION_NONE) return key_fail(rd, at, "give a \"box\" or a \"sphere\"");
   }
-  o->sample_spacing = o->frame_spacing;
   o->shape_kind = FASCIA_PREP_SHAPE_MLS;
   o->neighbours = 3;
   o->patch_radius = 0; // the section is carried by the rotations: nothing locks volumetrically

@@ -641,7 +641,7 @@ static int solve_small(double *a, double *b, int columns) {
 
 // One wall sample: its triangle's frames (pairs already there, linear
 // weights) and the wall's nearest frames; the gradients of the quadratic
-// fit at the triangle's centroid. Leaves the sample as it is (the linear
+// fit at the point. Leaves the sample as it is (the linear
 // gradients) where the frames do not determine a quadratic.
 static void shell_sample(const fascia_prep_points *pts, const fascia_frame_grid *grid, const int32_t *wall_frame,
                          int32_t s, int32_t *pair_frame, double *pair_w, double *pair_g, int32_t *pair_count) {
@@ -649,8 +649,8 @@ static void shell_sample(const fascia_prep_points *pts, const fascia_frame_grid 
   const int32_t *c = pts->sample_cell_frame + 3 * (int64_t)s;
   const double *x0 = pts->frame_position + 3 * (int64_t)c[0], *x1 = pts->frame_position + 3 * (int64_t)c[1],
                *x2 = pts->frame_position + 3 * (int64_t)c[2];
-  double centre[3], e1[3], e2[3], n[3];
-  for (int r = 0; r < 3; ++r) centre[r] = (x0[r] + x1[r] + x2[r]) / 3, e1[r] = x1[r] - x0[r], e2[r] = x2[r] - x0[r];
+  double here[3], e1[3], e2[3], n[3];
+  for (int r = 0; r < 3; ++r) here[r] = (x0[r] + x1[r] + x2[r]) / 3, e1[r] = x1[r] - x0[r], e2[r] = x2[r] - x0[r];
   n[0] = e1[1] * e2[2] - e1[2] * e2[1], n[1] = e1[2] * e2[0] - e1[0] * e2[2], n[2] = e1[0] * e2[1] - e1[1] * e2[0];
   const double nn = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
   const double l1 = sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]);
@@ -658,10 +658,16 @@ static void shell_sample(const fascia_prep_points *pts, const fascia_frame_grid 
   double u[3], v[3]; // the wall's plane
   for (int r = 0; r < 3; ++r) n[r] /= nn, u[r] = e1[r] / l1;
   v[0] = n[1] * u[2] - n[2] * u[1], v[1] = n[2] * u[0] - n[0] * u[2], v[2] = n[0] * u[1] - n[1] * u[0];
+  // the point's place on the triangle: its centroid, or a part's where the
+  // triangle is split (shell.c); off the plane only by its section offset
+  const double *p = pts->sample_position + 3 * (int64_t)s;
+  double along_u = 0, along_v = 0;
+  for (int r = 0; r < 3; ++r) along_u += (p[r] - here[r]) * u[r], along_v += (p[r] - here[r]) * v[r];
+  for (int r = 0; r < 3; ++r) here[r] += along_u * u[r] + along_v * v[r];
   // the stencil: the triangle's frames, then the wall's nearest others
   int32_t near[SHELL_QUERY], by_distance[SHELL_QUERY], frame[SHELL_QUERY + 3];
   double dist[SHELL_QUERY];
-  fascia_real radius = 0, at[3] = {centre[0], centre[1], centre[2]};
+  fascia_real radius = 0, at[3] = {here[0], here[1], here[2]};
   fascia_ctx_def cd = fascia_ctx_def_default();
   fascia_ctx *quiet = NULL;
   if (fascia_ctx_create(&cd, &quiet) != FASCIA_OK) return;
@@ -692,8 +698,8 @@ static void shell_sample(const fascia_prep_points *pts, const fascia_frame_grid 
   double reach = radius;
   for (int j = 0; j < 3; ++j) {
     double d2 = 0;
-    for (int r = 0; r < 3; ++r) d2 += (pts->frame_position[3 * (int64_t)c[j] + r] - centre[r]) *
-                                      (pts->frame_position[3 * (int64_t)c[j] + r] - centre[r]);
+    for (int r = 0; r < 3; ++r) d2 += (pts->frame_position[3 * (int64_t)c[j] + r] - here[r]) *
+                                      (pts->frame_position[3 * (int64_t)c[j] + r] - here[r]);
     reach = fmax(reach, FASCIA_SHAPE_SUPPORT_MARGIN * sqrt(d2));
   }
   // weighted least squares of the basis (1, a, b, a^2, ab, b^2) in units of reach
@@ -701,7 +707,7 @@ static void shell_sample(const fascia_prep_points *pts, const fascia_frame_grid 
   for (int32_t j = 0; j < m; ++j) {
     const double *x = pts->frame_position + 3 * (int64_t)frame[j];
     double d[3];
-    for (int r = 0; r < 3; ++r) d[r] = x[r] - centre[r];
+    for (int r = 0; r < 3; ++r) d[r] = x[r] - here[r];
     const double a = (d[0] * u[0] + d[1] * u[1] + d[2] * u[2]) / reach;
     const double b = (d[0] * v[0] + d[1] * v[1] + d[2] * v[2]) / reach;
     const double w = fascia_shape_kernel(sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) / reach);
@@ -712,7 +718,7 @@ static void shell_sample(const fascia_prep_points *pts, const fascia_frame_grid 
     }
   }
   if (m < SHELL_BASIS || !solve_small(A, B, m)) return;
-  // the fit's slopes at the centre: rows 1 and 2 of A^-1 B; weights as the triangle's
+  // the fit's slopes at the here: rows 1 and 2 of A^-1 B; weights as the triangle's
   double weight[SHELL_QUERY + 3] = {0};
   for (int32_t j = 0; j < pair_count[s]; ++j)
     for (int k = 0; k < 3; ++k)
@@ -733,7 +739,7 @@ static void shell_sample(const fascia_prep_points *pts, const fascia_frame_grid 
   for (int k = 0; k < 3; ++k) {
     const double *x = pts->frame_position + 3 * (int64_t)c[k];
     pa[k] = pb[k] = 0;
-    for (int r = 0; r < 3; ++r) pa[k] += (x[r] - centre[r]) * u[r], pb[k] += (x[r] - centre[r]) * v[r];
+    for (int r = 0; r < 3; ++r) pa[k] += (x[r] - here[r]) * u[r], pb[k] += (x[r] - here[r]) * v[r];
   }
   const double det = (pa[1] - pa[0]) * (pb[2] - pb[0]) - (pa[2] - pa[0]) * (pb[1] - pb[0]);
   if (!(fabs(det) > 0)) return;

@@ -389,7 +389,7 @@ static fascia_status check_thickness(fascia_ctx *ctx, const fascia_prep_scene *s
 static fascia_status wall_samples(fascia_ctx *ctx, const fascia_prep_organ_def *od, const double *x,
                                   const int64_t *global, const int32_t *tri, int32_t T, prep_reduced *out,
                                   double *area_sum) {
-  const int q = od->section_points;
+  const int q = od->section_points, split = prep_shell_split(od);
   int32_t s = 0;
   *area_sum = 0;
   for (int32_t k = 0; k < T; ++k) {
@@ -407,12 +407,19 @@ static fascia_status wall_samples(fascia_ctx *ctx, const fascia_prep_organ_def *
     double offset[3 * 4], fraction[4];
     PREP_TRY(fascia_shape_section_points(ctx, 2, q, n, NULL, od->thickness, 0, offset, fraction));
     *area_sum += 0.5 * twice;
-    for (int j = 0; j < q; ++j, ++s) {
-      for (int r = 0; r < 3; ++r)
-        out->sample_position[3 * (int64_t)s + r] = (p0[r] + p1[r] + p2[r]) / 3 + offset[3 * j + r];
-      out->sample_volume[s] = 0.5 * twice * fraction[j] * od->thickness;
-      for (int r = 0; r < 3; ++r) out->sample_cell[3 * (int64_t)s + r] = (int32_t)global[c[r]];
-    }
+    // the centroids of the split x split parts, at p0 + a e1 + b e2: those
+    // pointing as the triangle (third 1/3), then those pointing back (2/3)
+    for (int back = 0; back < 2; ++back)
+      for (int i = 0; i < split - back; ++i)
+        for (int i2 = 0; i + i2 < split - back; ++i2) {
+          const double third = back ? 2.0 / 3 : 1.0 / 3, a = (i + third) / split, b = (i2 + third) / split;
+          for (int j = 0; j < q; ++j, ++s) {
+            for (int r = 0; r < 3; ++r)
+              out->sample_position[3 * (int64_t)s + r] = p0[r] + a * e1[r] + b * e2[r] + offset[3 * j + r];
+            out->sample_volume[s] = 0.5 * twice * fraction[j] * od->thickness / (split * split);
+            for (int r = 0; r < 3; ++r) out->sample_cell[3 * (int64_t)s + r] = (int32_t)global[c[r]];
+          }
+        }
   }
   out->sample_count = s;
   return FASCIA_OK;
@@ -518,9 +525,13 @@ fascia_status prep_shell_build(fascia_ctx *ctx, const fascia_prep_scene *scene, 
   out->frame_position = prep_calloc(3 * (int64_t)out->frame_count, sizeof(double));
   out->frame_organ = prep_calloc(out->frame_count, sizeof(int32_t));
   out->frame_triangle = prep_calloc(out->frame_count, sizeof(int32_t));
-  out->sample_position = prep_calloc(3 * (int64_t)T * od->section_points, sizeof(double));
-  out->sample_volume = prep_calloc((int64_t)T * od->section_points, sizeof(double));
-  out->sample_cell = prep_calloc(3 * (int64_t)T * od->section_points, sizeof(int32_t));
+  const int64_t points = (int64_t)T * od->section_points * prep_shell_split(od) * prep_shell_split(od);
+  PREP_CHECK_GOTO(points < INT32_MAX, ctx, FASCIA_ERR_ARGUMENT,
+                  "scene '%s' organs[%d].sample_spacing: %.3g mm gives too many points on '%s'; raise it", scene->path,
+                  (int)o, 1e3 * od->sample_spacing, od->name);
+  out->sample_position = prep_calloc(3 * points, sizeof(double));
+  out->sample_volume = prep_calloc(points, sizeof(double));
+  out->sample_cell = prep_calloc(3 * points, sizeof(int32_t));
   PREP_CHECK_GOTO(out->frame_position && out->frame_organ && out->frame_triangle && out->sample_position &&
                       out->sample_volume && out->sample_cell,
                   ctx, FASCIA_ERR_MEMORY, "shell '%s': out of memory", od->name);

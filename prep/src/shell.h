@@ -17,12 +17,22 @@ typedef struct prep_shell_frames {
   const int32_t *tissue;   ///< [tissue_count] their tissue
 } prep_shell_frames;
 
+/// Each wall triangle is split into split x split alike triangles, one
+/// point each (times the section's): split = frame_spacing /
+/// sample_spacing, rounded, 1..PREP_SHELL_SPLIT_MAX.
+#define PREP_SHELL_SPLIT_MAX 8
+static inline int prep_shell_split(const fascia_prep_organ_def *od) {
+  const int k = (int)(od->frame_spacing / od->sample_spacing + 0.5);
+  return k < 1 ? 1 : k > PREP_SHELL_SPLIT_MAX ? PREP_SHELL_SPLIT_MAX : k;
+}
+
 /// The wall of shell organ o: its frames are the tissue frames on its
 /// surface that their tissue's coupling rules allow (shared, as the
 /// coupling stage couples them) and its own frames, Poisson-disk on the
 /// surface at its frame_spacing from those; the frames are joined into
-/// triangles over the surface, and each triangle gives section_points
-/// samples through the wall at its centroid, area x thickness in all.
+/// triangles over the surface, and each triangle's parts (prep_shell_split)
+/// give section_points samples each through the wall at their centroids,
+/// area x thickness in all.
 /// out: its own frames (appended after frames->count), its samples, their
 /// triangles in sample_cell as frame indices of the whole scene (not local).
 /// Refuses, naming the scene key: a surface that intersects itself, frames

@@ -20,7 +20,8 @@
 static void usage(FILE *f) {
   fprintf(f,
           "usage: shell-calculix [--case plate|bowl] [--E PA] [--elements N,...] [--spacings M,...]\n"
-          "                      [--reference FILE] [--csv FILE] [--no-fascia] [--no-calculix] [--seed N]\n\n"
+          "                      [--reference FILE] [--csv FILE] [--no-fascia] [--no-calculix] [--seed N]\n"
+          "                      [--split K]\n\n"
           "fascia's shell organ against CalculiX S8R shells (NLGEOM) under their own weight:\n"
           "  plate  the paper's cantilever as a thin shell, 16 x 1 m, 0.1 m thick, E 4 MPa, the edge\n"
           "         x = 0 clamped; probe: the free end's centre\n"
@@ -33,6 +34,8 @@ static void usage(FILE *f) {
           "  --reference F   write the CalculiX rows (CSV) to F\n"
           "  --csv F         write every row (CSV) to F\n"
           "  --seed N        fascia's scene seed, the draw of the shell's frames (default 1)\n"
+          "  --split K       fascia's sample_spacing = frame_spacing / K: each wall triangle split into\n"
+          "                  K x K points (default 1: one point per triangle)\n"
           "The ccx program is $FASCIA_CCX or ccx on the PATH (Debian: calculix-ccx).\n");
 }
 
@@ -56,7 +59,7 @@ static void set_elements(fascia_shell_def *d, double n) {
 int main(int argc, char **argv) {
   int kind = FASCIA_SHELL_PLATE, fascia = 1, calculix = 1;
   double E = 0, elements[MAX_ROWS], spacings[MAX_ROWS];
-  int seed = 1;
+  int seed = 1, split = 1;
   int ne = 0, ns = 0;
   const char *reference = NULL, *csv = NULL;
   for (int k = 1; k < argc; ++k) {
@@ -80,6 +83,8 @@ int main(int argc, char **argv) {
       reference = v, ++k;
     } else if (!strcmp(a, "--seed") && v) {
       seed = atoi(v), ++k;
+    } else if (!strcmp(a, "--split") && v) {
+      split = atoi(v), ++k;
     } else if (!strcmp(a, "--csv") && v) {
       csv = v, ++k;
     } else if (!strcmp(a, "--no-fascia")) {
@@ -99,6 +104,7 @@ int main(int argc, char **argv) {
   fascia_shell_def def = fascia_shell_def_default(kind);
   if (E > 0) def.youngs_modulus = E;
   def.seed = seed;
+  def.split = split;
   if (ne == 0) {
     const double plate[] = {32, 64, 128, 256}, bowl[] = {8, 16, 32, 48};
     ne = 4;

@@ -24,7 +24,7 @@ fascia_shell_def fascia_shell_def_default(int32_t kind) {
   fascia_shell_def d;
   memset(&d, 0, sizeof d);
   d.kind = kind;
-  d.poisson_ratio = 0.3, d.gravity = 9.81, d.seed = 1;
+  d.poisson_ratio = 0.3, d.gravity = 9.81, d.seed = 1, d.split = 1;
   if (kind == FASCIA_SHELL_BOWL) {
     d.length = 0.05, d.thickness = 0.001;
     d.youngs_modulus = 1e5, d.density = 1000;
@@ -257,7 +257,7 @@ fascia_status fascia_shell_write_scene(fascia_ctx *ctx, const void *shell_def, c
           "               \"strand\": {\"law\": \"stvk\", \"youngs_modulus\": 1e5, \"poisson_ratio\": 0.3}},\n"
           " \"organs\": [{\"name\": \"shell\", \"mesh\": \"" FASCIA_TISSUE_SHEET "\", \"model\": \"shell\","
           " \"material\": \"wall\",\n"
-          "             \"thickness\": %.17g, \"frame_spacing\": %.17g,\n"
+          "             \"thickness\": %.17g, \"frame_spacing\": %.17g, \"sample_spacing\": %.17g,\n"
           "             \"hold\": {\"box\": {\"min\": [%.17g, %.17g, %.17g], \"max\": [%.17g, %.17g, %.17g]}}},\n"
           "            {\"name\": \"A\", \"mesh\": \"" FASCIA_TISSUE_BOX_A "\", \"model\": \"fixed\"},\n"
           "            {\"name\": \"B\", \"mesh\": \"" FASCIA_TISSUE_BOX_B "\", \"model\": \"fixed\"}],\n"
@@ -267,7 +267,7 @@ fascia_status fascia_shell_write_scene(fascia_ctx *ctx, const void *shell_def, c
           "\"strand\",\n"
           "              \"frame_spacing\": %.17g}]}\n",
           plate ? "plate" : "bowl", e / 8, (int)def->seed, -def->gravity, s * def->youngs_modulus, def->poisson_ratio,
-          def->density, s * def->thickness, sp, lo[0], lo[1], lo[2], hi[0], hi[1], hi[2], x0 + e, x0 + 2 * e,
+          def->density, s * def->thickness, sp, sp / (def->split > 1 ? def->split : 1), lo[0], lo[1], lo[2], hi[0], hi[1], hi[2], x0 + e, x0 + 2 * e,
           e * e / 64, e / 4);
   return fascia_tissue_close(ctx, f, path);
 }

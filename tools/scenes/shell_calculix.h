@@ -43,6 +43,7 @@ typedef struct fascia_shell_def {
   double scale;          ///< fascia's scene: lengths and E times this (<= 1)
   int32_t elements[2];   ///< CalculiX S8R: plate along x, y (y even); bowl around, along the meridian
   int32_t seed;          ///< fascia's scene seed (the draw of the shell's frames), default 1
+  int32_t split;         ///< fascia: sample_spacing = frame_spacing / split; 1 (default): none given
 } fascia_shell_def;
 
 /// plate: 16 x 1 m, 0.1 m thick, E 4 MPa, nu 0.3, 0.3125 kg/m^3 (the
