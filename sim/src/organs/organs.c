@@ -81,7 +81,6 @@ struct fascia_organs {
   fascia_real *target_x;    ///< [3N] targets of frames driven by the caller
   fascia_real *target_q;    ///< [4N]
   unsigned char *full_mask; ///< [6N]
-  fascia_real *reaction;    ///< [6N] the gradient fascia_solver_organ_reaction reads
   unsigned char *active;    ///< [O] 1: a body the solver moves now (rigid, with coupling frames, not driven)
   fascia_pt_bodies bodies;  ///< the table every backend's body math reads (point/body.h)
 };
@@ -160,7 +159,7 @@ void fascia_organs_destroy(fascia_organs **organs) {
   free(O->frame_offsets), free(O->frames), free(O->driven), free(O->master), free(O->mass), free(O->centre);
   free(O->inertia), free(O->velocity), free(O->free_pose), free(O->target), free(O->world_inertia);
   free(O->geometric), free(O->frame_body), free(O->target_x), free(O->target_q), free(O->full_mask);
-  free(O->active), free(O->reaction), free(O->posed), free(O->pose), free(O->reference);
+  free(O->active), free(O->posed), free(O->pose), free(O->reference);
   free(O);
   *organs = NULL;
 }
@@ -247,14 +246,13 @@ fascia_status fascia_organs_create(fascia_ctx *ctx, const fascia_model *m, fasci
   O->target_q = fascia_calloc(4 * N, sizeof(fascia_real));
   O->full_mask = fascia_calloc(6 * N, 1);
   O->active = fascia_calloc(K, 1);
-  O->reaction = fascia_calloc(6 * N, sizeof(fascia_real));
   O->posed = fascia_calloc(K, 1);
   O->pose = fascia_calloc(7 * K, sizeof(fascia_real));
   O->reference = fascia_calloc(3 * K, sizeof(fascia_real));
   fascia_status status = FASCIA_OK;
   if (!O->frame_offsets || !O->frames || !O->driven || !O->master || !O->mass || !O->centre || !O->inertia ||
       !O->velocity || !O->free_pose || !O->target || !O->world_inertia || !O->geometric || !O->frame_body ||
-      !O->target_x || !O->target_q || !O->full_mask || !O->active || !O->reaction || !O->posed || !O->pose ||
+      !O->target_x || !O->target_q || !O->full_mask || !O->active || !O->posed || !O->pose ||
       !O->reference) {
     status = FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "organs: out of memory for %lld frames", (long long)N);
     goto cleanup;
@@ -589,139 +587,83 @@ fascia_real fascia_organs_potential_energy(const fascia_organs *O, const fascia_
   return e;
 }
 
-static fascia_status check_organ(const fascia_solver *S, int32_t organ, const char *what) {
-  FASCIA_CHECK(S, NULL, FASCIA_ERR_ARGUMENT, "%s: NULL solver", what);
-  FASCIA_CHECK(organ >= 0 && organ < S->model->organ_count, S->ctx, FASCIA_ERR_ARGUMENT,
-               "%s: organ %d does not exist (the model has %d organs)", what, (int)organ, (int)S->model->organ_count);
-  return FASCIA_OK;
+// ---------------------------------------------------------------- the organ API's parts (solve/organ_api.c)
+
+int fascia_organs_mass_properties(const fascia_organ *o, fascia_real *mass, fascia_real *centre, fascia_real *inertia) {
+  return mass_properties(o, FASCIA_ORGAN_DENSITY, mass, centre, inertia);
 }
 
-fascia_status fascia_solver_organ_mass(const fascia_solver *S, int32_t organ, fascia_real *mass, fascia_real *centre,
-                                       fascia_real *inertia) {
-  FASCIA_TRY(check_organ(S, organ, "organ mass"));
-  fascia_real mm, cc[3], II[9];
-  const fascia_organ *o = S->model->organs + organ;
-  FASCIA_CHECK(mass_properties(o, FASCIA_ORGAN_DENSITY, &mm, cc, II), S->ctx, FASCIA_ERR_ARGUMENT,
-               "organ '%s': its surface encloses no volume", o->name);
-  if (mass) *mass = mm;
-  if (centre) memcpy(centre, cc, sizeof cc);
-  if (inertia) memcpy(inertia, II, sizeof II);
-  return FASCIA_OK;
+int32_t fascia_organs_frames(const fascia_organs *O, int32_t organ, const int32_t **frames) {
+  if (!O) return 0;
+  *frames = O->frames + O->frame_offsets[organ];
+  return O->frame_offsets[organ + 1] - O->frame_offsets[organ];
 }
 
-fascia_status fascia_solver_organ_pose(const fascia_solver *S, int32_t organ, fascia_real *translation,
-                                       fascia_real *rotation) {
-  FASCIA_TRY(check_organ(S, organ, "organ pose"));
-  const fascia_organs *O = S->organs;
-  const fascia_organ *o = S->model->organs + organ;
+int fascia_organs_pose(const fascia_organs *O, int32_t organ, fascia_real time, const fascia_real *x,
+                       const fascia_real *q, fascia_real *translation, fascia_real *rotation) {
+  const fascia_organ *o = O->model->organs + organ;
   if (O->driven[organ] && O->posed[organ]) {
     memcpy(translation, O->pose + 7 * organ, 3 * sizeof(fascia_real));
     memcpy(rotation, O->pose + 7 * organ + 3, 4 * sizeof(fascia_real));
-    return FASCIA_OK;
+    return 1;
   }
-  FASCIA_CHECK(!O->driven[organ], S->ctx, FASCIA_ERR_UNSUPPORTED,
-               "organ '%s' is driven frame by frame by the caller: it has no pose of its own", o->name);
+  if (O->driven[organ]) return 0;
   fascia_real R[9], p[3];
   if (o->kind == FASCIA_ORGAN_PRESCRIBED && o->motion >= 0) {
     // x = pivot + T + Q (x_rest - pivot)
-    const fascia_motion *mo = S->model->motions + o->motion;
+    const fascia_motion *mo = O->model->motions + o->motion;
     fascia_real T[3];
-    fascia_motion_pose(mo, S->time, T, rotation);
+    fascia_motion_pose(mo, time, T, rotation);
     fascia_pt_quat_to_mat(rotation, R);
     fascia_pt_mat_vec(R, mo->pivot, p);
     for (int c = 0; c < 3; ++c) translation[c] = mo->pivot[c] + T[c] - p[c];
   } else if (o->kind == FASCIA_ORGAN_RIGID) {
-    rigid_pose(O, organ, S->x, S->q, translation, rotation);
+    rigid_pose(O, organ, x, q, translation, rotation);
   } else {
     for (int c = 0; c < 3; ++c) translation[c] = 0;
     rotation[0] = 1, rotation[1] = rotation[2] = rotation[3] = 0;
   }
-  return FASCIA_OK;
+  return 1;
 }
 
-fascia_status fascia_solver_organ_velocity(const fascia_solver *S, int32_t organ, fascia_real *linear,
-                                           fascia_real *angular) {
-  FASCIA_TRY(check_organ(S, organ, "organ velocity"));
-  const int rigid = S->model->organs[organ].kind == FASCIA_ORGAN_RIGID && !S->organs->driven[organ];
+void fascia_organs_velocity(const fascia_organs *O, int32_t organ, fascia_real *linear, fascia_real *angular) {
+  const int rigid = O->model->organs[organ].kind == FASCIA_ORGAN_RIGID && !O->driven[organ];
   for (int c = 0; c < 3; ++c) {
-    if (linear) linear[c] = rigid ? S->organs->velocity[6 * organ + c] : 0;
-    if (angular) angular[c] = rigid ? S->organs->velocity[6 * organ + 3 + c] : 0;
+    if (linear) linear[c] = rigid ? O->velocity[6 * organ + c] : 0;
+    if (angular) angular[c] = rigid ? O->velocity[6 * organ + 3 + c] : 0;
   }
-  return FASCIA_OK;
 }
 
-int32_t fascia_solver_organ_frame_count(const fascia_solver *S, int32_t organ) {
-  if (!S || !S->organs || organ < 0 || organ >= S->model->organ_count) return 0;
-  return S->organs->frame_offsets[organ + 1] - S->organs->frame_offsets[organ];
-}
-
-fascia_status fascia_solver_organ_frames(const fascia_solver *S, int32_t organ, int32_t *frames) {
-  FASCIA_TRY(check_organ(S, organ, "organ frames"));
-  const fascia_organs *O = S->organs;
-  for (int32_t f = O->frame_offsets[organ]; f < O->frame_offsets[organ + 1]; ++f)
-    frames[f - O->frame_offsets[organ]] = O->frames[f];
-  return FASCIA_OK;
-}
-
-fascia_status fascia_solver_organ_set_frames(fascia_solver *S, int32_t organ, const fascia_real *positions,
-                                             const fascia_real *rotations) {
-  FASCIA_TRY(check_organ(S, organ, "set organ frames"));
-  fascia_organs *O = S->organs;
-  const char *name = S->model->organs[organ].name;
-  const int32_t begin = O->frame_offsets[organ], count = O->frame_offsets[organ + 1] - begin;
-  FASCIA_CHECK(positions && rotations, S->ctx, FASCIA_ERR_ARGUMENT, "set organ '%s' frames: NULL array", name);
-  for (int32_t k = 0; k < count; ++k) {
-    const fascia_real *x = positions + 3 * k, *q = rotations + 4 * k;
-    const fascia_real norm = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    FASCIA_CHECK(isfinite(x[0]) && isfinite(x[1]) && isfinite(x[2]) && isfinite(norm) && norm > 1e-12, S->ctx,
-                 FASCIA_ERR_ARGUMENT,
-                 "set organ '%s' frames: coupling frame %d (frame %d) has a non-finite position or a zero or "
-                 "non-finite rotation; nothing changed",
-                 name, (int)k, (int)O->frames[begin + k]);
-  }
-  for (int32_t k = 0; k < count; ++k) {
-    const int32_t i = O->frames[begin + k];
+void fascia_organs_drive(fascia_organs *O, int32_t organ, const fascia_real *positions, const fascia_real *rotations,
+                         const fascia_real *pose, unsigned char *mask) {
+  for (int32_t f = O->frame_offsets[organ]; f < O->frame_offsets[organ + 1]; ++f) {
+    const int32_t i = O->frames[f], k = f - O->frame_offsets[organ];
     const fascia_real *q = rotations + 4 * k;
     const fascia_real norm = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
     memcpy(O->target_x + 3 * i, positions + 3 * k, 3 * sizeof(fascia_real));
     for (int c = 0; c < 4; ++c) O->target_q[4 * i + c] = q[c] / norm;
   }
-  O->posed[organ] = 0;
+  O->posed[organ] = pose != NULL;
+  if (pose) memcpy(O->pose + 7 * organ, pose, 7 * sizeof(fascia_real));
   if (!O->driven[organ]) {
     O->driven[organ] = 1;
-    fascia_organs_masks(O, S->mask);
+    fascia_organs_masks(O, mask);
   }
-  return FASCIA_OK;
 }
 
-fascia_status fascia_solver_organ_release(fascia_solver *S, int32_t organ) {
-  FASCIA_TRY(check_organ(S, organ, "release organ"));
-  fascia_organs *O = S->organs;
-  if (!O->driven[organ]) return FASCIA_OK;
+int fascia_organs_release(fascia_organs *O, int32_t organ, const fascia_organs_state *st, unsigned char *mask) {
+  if (!O->driven[organ]) return 0;
   O->driven[organ] = 0;
   O->posed[organ] = 0;
-  fascia_organs_masks(O, S->mask);
-  const fascia_organs_state st = {S->x, S->q, S->u, S->d, S->x_base, S->q_base};
-  if (active(O, organ)) place_slaves(O, &st, organ);
-  fascia_system_set_state(S->sys, S->x, S->q);
-  ++S->linear_epoch;
-  return FASCIA_OK;
+  fascia_organs_masks(O, mask);
+  if (active(O, organ)) place_slaves(O, st, organ);
+  return 1;
 }
 
-fascia_status fascia_solver_organ_reaction(fascia_solver *S, int32_t organ, fascia_real *forces,
-                                           fascia_real *torques) {
-  FASCIA_TRY(check_organ(S, organ, "organ reaction"));
-  FASCIA_CHECK(forces, S->ctx, FASCIA_ERR_ARGUMENT, "organ reaction: NULL forces");
-  fascia_organs *O = S->organs;
-  fascia_real energy, *g = O->reaction;
-  const fascia_real scale = S->sys->gravity_scale;
-  S->sys->gravity_scale = 1;
-  fascia_system_set_state(S->sys, S->x, S->q);
-  fascia_status st = fascia_system_evaluate(S->sys, g, &energy);
-  S->sys->gravity_scale = scale;
-  FASCIA_TRY(st);
+void fascia_organs_reaction(const fascia_organs *O, int32_t organ, const fascia_real *g, fascia_real *forces,
+                            fascia_real *torques) {
   // the gradient holds -frame_load too: take it out
-  const fascia_real *load = S->model->frame_load;
+  const fascia_real *load = O->model->frame_load;
   for (int32_t f = O->frame_offsets[organ]; f < O->frame_offsets[organ + 1]; ++f) {
     const int32_t i = O->frames[f], k = f - O->frame_offsets[organ];
     for (int c = 0; c < 3; ++c) {
@@ -729,97 +671,31 @@ fascia_status fascia_solver_organ_reaction(fascia_solver *S, int32_t organ, fasc
       if (torques) torques[3 * k + c] = -(g[6 * i + 3 + c] + load[6 * i + 3 + c]);
     }
   }
-  return FASCIA_OK;
-}
-
-fascia_status fascia_solver_organ_set_pose(fascia_solver *S, int32_t organ, const fascia_real *translation,
-                                           const fascia_real *rotation) {
-  FASCIA_TRY(check_organ(S, organ, "set organ pose"));
-  const char *name = S->model->organs[organ].name;
-  FASCIA_CHECK(translation && rotation, S->ctx, FASCIA_ERR_ARGUMENT, "set organ '%s' pose: NULL array", name);
-  const fascia_real norm =
-      sqrt(rotation[0] * rotation[0] + rotation[1] * rotation[1] + rotation[2] * rotation[2] + rotation[3] * rotation[3]);
-  FASCIA_CHECK(isfinite(translation[0]) && isfinite(translation[1]) && isfinite(translation[2]) && isfinite(norm) &&
-                   norm > 1e-12,
-               S->ctx, FASCIA_ERR_ARGUMENT,
-               "set organ '%s' pose: translation (%g %g %g) m and rotation (%g %g %g %g) must be finite, the rotation "
-               "a nonzero quaternion w x y z; nothing changed",
-               name, translation[0], translation[1], translation[2], rotation[0], rotation[1], rotation[2], rotation[3]);
-  fascia_organs *O = S->organs;
-  const int32_t begin = O->frame_offsets[organ], count = O->frame_offsets[organ + 1] - begin;
-  fascia_real *x = malloc(7 * ((size_t)count + 1) * sizeof(fascia_real)), *q = x + 3 * ((size_t)count + 1);
-  FASCIA_CHECK(x, S->ctx, FASCIA_ERR_MEMORY, "set organ '%s' pose: out of memory", name);
-  fascia_real Q[4], R[9];
-  for (int c = 0; c < 4; ++c) Q[c] = rotation[c] / norm;
-  fascia_pt_quat_to_mat(Q, R);
-  const fascia_model *m = S->model;
-  for (int32_t k = 0; k < count; ++k) { // x = R x_rest + t, q = Q q_rest
-    const int32_t i = O->frames[begin + k];
-    fascia_pt_mat_vec(R, m->frame_position + 3 * (int64_t)i, x + 3 * k);
-    for (int c = 0; c < 3; ++c) x[3 * k + c] += translation[c];
-    fascia_pt_quat_mul(Q, m->frame_rotation + 4 * (int64_t)i, q + 4 * k);
-  }
-  const fascia_status st = fascia_solver_organ_set_frames(S, organ, x, q);
-  free(x);
-  FASCIA_TRY(st);
-  O->posed[organ] = 1;
-  memcpy(O->pose + 7 * organ, translation, 3 * sizeof(fascia_real));
-  memcpy(O->pose + 7 * organ + 3, Q, 4 * sizeof(fascia_real));
-  return FASCIA_OK;
 }
 
 // The pose that carries the organ's reference point: its own where it has
 // one, its first coupling frame's rigid motion where it is driven frame by
 // frame, the rest pose for a deformable organ.
-static void wrench_pose(const fascia_solver *S, int32_t organ, fascia_real *translation, fascia_real *rotation) {
-  const fascia_organs *O = S->organs;
+void fascia_organs_reference_point(const fascia_organs *O, int32_t organ, fascia_real time, const fascia_real *x,
+                                   const fascia_real *q, fascia_real *point) {
   const int32_t begin = O->frame_offsets[organ];
+  fascia_real translation[3] = {0, 0, 0}, rotation[4] = {1, 0, 0, 0}, R[9], p[3];
   if (O->driven[organ] && !O->posed[organ] && begin < O->frame_offsets[organ + 1]) {
     const int32_t f = O->frames[begin];
-    fascia_real qc[4], R[9], p[3];
-    quat_conj(S->model->frame_rotation + 4 * (int64_t)f, qc);
-    fascia_pt_quat_mul(S->q + 4 * (int64_t)f, qc, rotation);
+    fascia_real qc[4];
+    quat_conj(O->model->frame_rotation + 4 * (int64_t)f, qc);
+    fascia_pt_quat_mul(q + 4 * (int64_t)f, qc, rotation);
     fascia_pt_quat_normalize(rotation);
     fascia_pt_quat_to_mat(rotation, R);
-    fascia_pt_mat_vec(R, S->model->frame_position + 3 * (int64_t)f, p);
-    for (int c = 0; c < 3; ++c) translation[c] = S->x[3 * (int64_t)f + c] - p[c];
-    return;
+    fascia_pt_mat_vec(R, O->model->frame_position + 3 * (int64_t)f, p);
+    for (int c = 0; c < 3; ++c) translation[c] = x[3 * (int64_t)f + c] - p[c];
+  } else if (!fascia_organs_pose(O, organ, time, x, q, translation, rotation)) {
+    translation[0] = translation[1] = translation[2] = 0;
+    rotation[0] = 1, rotation[1] = rotation[2] = rotation[3] = 0;
   }
-  if (fascia_solver_organ_pose(S, organ, translation, rotation) == FASCIA_OK) return;
-  translation[0] = translation[1] = translation[2] = 0;
-  rotation[0] = 1, rotation[1] = rotation[2] = rotation[3] = 0;
-}
-
-fascia_status fascia_solver_organ_wrench(fascia_solver *S, int32_t organ, fascia_real *force, fascia_real *torque,
-                                         fascia_real *point) {
-  FASCIA_TRY(check_organ(S, organ, "organ wrench"));
-  FASCIA_CHECK(force, S->ctx, FASCIA_ERR_ARGUMENT, "organ wrench: NULL force");
-  const fascia_organs *O = S->organs;
-  const int32_t begin = O->frame_offsets[organ], count = O->frame_offsets[organ + 1] - begin;
-  fascia_real t[3], Q[4], R[9], p[3];
-  wrench_pose(S, organ, t, Q);
-  fascia_pt_quat_to_mat(Q, R);
-  fascia_pt_mat_vec(R, O->reference + 3 * organ, p);
-  for (int c = 0; c < 3; ++c) p[c] += t[c];
-  fascia_real F[3] = {0, 0, 0}, M[3] = {0, 0, 0};
-  if (count > 0) {
-    fascia_real *f = malloc(6 * (size_t)count * sizeof(fascia_real));
-    FASCIA_CHECK(f, S->ctx, FASCIA_ERR_MEMORY, "organ wrench: out of memory");
-    const fascia_status st = fascia_solver_organ_reaction(S, organ, f, f + 3 * count);
-    for (int32_t k = 0; st == FASCIA_OK && k < count; ++k) {
-      const fascia_real *x = S->x + 3 * (int64_t)O->frames[begin + k], *fk = f + 3 * k;
-      fascia_real arm[3], moment[3];
-      for (int c = 0; c < 3; ++c) arm[c] = x[c] - p[c];
-      fascia_pt_cross(arm, fk, moment);
-      for (int c = 0; c < 3; ++c) F[c] += fk[c], M[c] += f[3 * count + 3 * k + c] + moment[c];
-    }
-    free(f);
-    FASCIA_TRY(st);
-  }
-  memcpy(force, F, sizeof F);
-  if (torque) memcpy(torque, M, sizeof M);
-  if (point) memcpy(point, p, sizeof p);
-  return FASCIA_OK;
+  fascia_pt_quat_to_mat(rotation, R);
+  fascia_pt_mat_vec(R, O->reference + 3 * organ, point);
+  for (int c = 0; c < 3; ++c) point[c] += translation[c];
 }
 
 int32_t fascia_model_organ_count(const fascia_model *m) { return m ? m->organ_count : 0; }

@@ -8,7 +8,11 @@
 #define FASCIA_SRC_ORGANS_H
 
 #include "point/body.h"
-#include "solve/solver_internal.h"
+#include "cpu/assemble.h"
+#include "cpu/system.h"
+#include "solve/motion.h"
+
+typedef struct fascia_organs fascia_organs;
 
 /// The run's state arrays the organs read and write (the solver's): frame
 /// positions [3N], rotations [4N], velocities [6N], a step's increments [6N]
@@ -104,5 +108,40 @@ FASCIA_INTERN int fascia_organs_driven(const fascia_organs *O, int32_t organ);
 /// Number of rigid organs simulated as bodies with coupling frames (0: the
 /// reduced and full coordinates coincide).
 FASCIA_INTERN int32_t fascia_organs_body_count(const fascia_organs *O);
+
+// The parts of the organ API (solve/organ_api.c); organ is a valid index.
+/// Mass, centre and inertia of the organ's closed surface at
+/// FASCIA_ORGAN_DENSITY; 0 where it encloses no volume.
+FASCIA_INTERN int fascia_organs_mass_properties(const fascia_organ *o, fascia_real *mass, fascia_real *centre,
+                                                fascia_real *inertia);
+/// The organ's coupling frames: their count, and *frames (O's own array).
+FASCIA_INTERN int32_t fascia_organs_frames(const fascia_organs *O, int32_t organ, const int32_t **frames);
+/// The organ's pose now (translation [3], rotation [4] w x y z) at time
+/// and state x, q: a posed organ's own, a prescribed organ's motion, a
+/// rigid body's, identity for a deformable one. 0 (nothing written) for an
+/// organ the caller drives frame by frame, which has no pose of its own.
+FASCIA_INTERN int fascia_organs_pose(const fascia_organs *O, int32_t organ, fascia_real time, const fascia_real *x,
+                                     const fascia_real *q, fascia_real *translation, fascia_real *rotation);
+/// A rigid body's velocity, zero for any other organ (linear or angular may be NULL).
+FASCIA_INTERN void fascia_organs_velocity(const fascia_organs *O, int32_t organ, fascia_real *linear,
+                                          fascia_real *angular);
+/// The caller drives the organ's coupling frames to positions [3 count]
+/// and nonzero rotations [4 count] (normalized here); pose [7]
+/// (translation, unit rotation) where they come from one, else NULL. The
+/// solver's mask follows.
+FASCIA_INTERN void fascia_organs_drive(fascia_organs *O, int32_t organ, const fascia_real *positions,
+                                       const fascia_real *rotations, const fascia_real *pose, unsigned char *mask);
+/// Hands a driven organ back to its model (a rigid body takes its slaves
+/// again, st); 1 when it was driven, 0 (nothing changed) otherwise.
+FASCIA_INTERN int fascia_organs_release(fascia_organs *O, int32_t organ, const fascia_organs_state *st,
+                                        unsigned char *mask);
+/// The tissue's force and torque on each coupling frame of the organ
+/// (torques may be NULL) from the gradient g [6N] of the potential energy
+/// at full load (the frames' loads taken out).
+FASCIA_INTERN void fascia_organs_reaction(const fascia_organs *O, int32_t organ, const fascia_real *g,
+                                          fascia_real *forces, fascia_real *torques);
+/// The organ's reference point where the organ is now (at time, state x, q).
+FASCIA_INTERN void fascia_organs_reference_point(const fascia_organs *O, int32_t organ, fascia_real time,
+                                                 const fascia_real *x, const fascia_real *q, fascia_real *point);
 
 #endif

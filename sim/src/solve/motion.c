@@ -4,7 +4,7 @@
 // and spherically (slerp) in rotation, held at the last key afterwards and at
 // the first key before it.
 #include "point/linalg.h"
-#include "solve/solver_internal.h"
+#include "solve/motion.h"
 
 static void slerp(const fascia_real *a, const fascia_real *b, fascia_real s, fascia_real *out) {
   fascia_real c = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3], sign = 1;

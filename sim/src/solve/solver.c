@@ -237,13 +237,33 @@ static fascia_status save_state(fascia_solver *S, fascia_real **backup) {
   return FASCIA_OK;
 }
 
+// The system (the host's evaluation of the model) at the solver's state,
+// for what the host reads between steps: the output queries, the organs'
+// reactions, the blow-up message. With the CPU backend's trial states, the
+// only writer of the system's state; it is the solver's state of this
+// moment (a query is read from where the state is now, never from a stale
+// copy), so nothing else needs to keep the two in step.
+static fascia_system *host_system(const fascia_solver *S) {
+  fascia_system_set_state(S->sys, S->x, S->q);
+  return S->sys;
+}
+
+fascia_status fascia_solver_host_gradient(fascia_solver *S, fascia_real load_factor, fascia_real *gradient,
+                                          fascia_real *energy) {
+  fascia_system *sys = host_system(S);
+  const fascia_real kept = sys->gravity_scale;
+  sys->gravity_scale = load_factor;
+  const fascia_status status = fascia_system_evaluate(sys, gradient, energy);
+  sys->gravity_scale = kept;
+  return status;
+}
+
 static void restore_state(fascia_solver *S, fascia_real *backup) {
   const size_t N = (size_t)S->frame_count;
   memcpy(S->x, backup, 3 * N * sizeof(fascia_real));
   memcpy(S->q, backup + 3 * N, 4 * N * sizeof(fascia_real));
   memcpy(S->u, backup + 7 * N, 6 * N * sizeof(fascia_real));
   fascia_organs_restore(S->organs, backup + 13 * N);
-  fascia_system_set_state(S->sys, S->x, S->q);
 }
 
 static fascia_status check_blow_up(fascia_solver *S, const fascia_solve_report *r, int energy_before_known,
@@ -363,13 +383,11 @@ static fascia_status check_blow_up(fascia_solver *S, const fascia_solve_report *
   if (S->def.blow_up_strain > 0 && ops->strain_past) {
     FASCIA_TRY(ops->strain_past(S->backend, S->def.blow_up_strain, &past));
   } else if (S->def.blow_up_strain > 0) {
-    fascia_system_set_state(S->sys, S->x, S->q);
-    past = !(fascia_system_largest_strain(S->sys, NULL) <= S->def.blow_up_strain);
+    past = !(fascia_system_largest_strain(host_system(S), NULL) <= S->def.blow_up_strain);
   }
   if (past) { // where and how much, on the host: only on the way to the message
-    fascia_system_set_state(S->sys, S->x, S->q);
     int32_t s = -1;
-    const fascia_real strain = fascia_system_largest_strain(S->sys, &s);
+    const fascia_real strain = fascia_system_largest_strain(host_system(S), &s);
     return FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
                        "the solution blew up: sample %d reached a strain of %.3g, past the limit %.3g", (int)s, strain,
                        S->def.blow_up_strain);
@@ -625,7 +643,6 @@ fascia_status fascia_solver_set_state(fascia_solver *S, const fascia_real *x, co
   else memset(S->u, 0, 6 * (size_t)N * sizeof(fascia_real));
   const fascia_organs_state organs_state = {S->x, S->q, S->u, S->d, S->x_base, S->q_base};
   fascia_organs_sync(S->organs, &organs_state);
-  fascia_system_set_state(S->sys, S->x, S->q);
   S->energy_known = 0;
   ++S->linear_epoch;
   return FASCIA_OK;
@@ -639,29 +656,24 @@ void fascia_solver_resume(fascia_solver *S, const fascia_real *x, const fascia_r
   memcpy(S->u, u, 6 * N * sizeof(fascia_real));
   S->time = time;
   if (organs_state) fascia_organs_restore(S->organs, organs_state);
-  fascia_system_set_state(S->sys, S->x, S->q);
   ++S->linear_epoch;
 }
 
 void fascia_solver_probe_position(const fascia_solver *S, int32_t probe, fascia_real *out) {
-  fascia_system_set_state(S->sys, S->x, S->q);
-  fascia_system_probe_position(S->sys, probe, out);
+  fascia_system_probe_position(host_system(S), probe, out);
 }
 
 void fascia_solver_sample_positions(const fascia_solver *S, fascia_real *out) {
-  fascia_system_set_state(S->sys, S->x, S->q);
-  fascia_system_sample_positions(S->sys, out);
+  fascia_system_sample_positions(host_system(S), out);
 }
 
 void fascia_solver_sample_strain(const fascia_solver *S, fascia_real *strain, fascia_real *stress) {
-  fascia_system_set_state(S->sys, S->x, S->q);
-  fascia_system_sample_strain(S->sys, strain, stress);
+  fascia_system_sample_strain(host_system(S), strain, stress);
 }
 
 fascia_real fascia_solver_kinetic_energy(fascia_solver *S) {
   const int64_t n = 6 * (int64_t)S->frame_count;
-  fascia_system_set_state(S->sys, S->x, S->q);
-  fascia_system_mass_snapshot(S->sys);
+  fascia_system_mass_snapshot(host_system(S));
   if (S->def.mass == FASCIA_MASS_LUMPED) {
     fascia_system_mass_lumped(S->sys, S->kinetic_blocks);
     fascia_real e = 0;
@@ -676,8 +688,7 @@ fascia_real fascia_solver_kinetic_energy(fascia_solver *S) {
 }
 
 fascia_status fascia_solver_potential_energy(fascia_solver *S, fascia_real *energy) {
-  fascia_system_set_state(S->sys, S->x, S->q);
-  FASCIA_TRY(fascia_system_evaluate(S->sys, NULL, energy));
+  FASCIA_TRY(fascia_solver_host_gradient(S, S->sys->gravity_scale, NULL, energy));
   *energy += fascia_organs_potential_energy(S->organs, S->x, S->q, S->sys->gravity);
   return FASCIA_OK;
 }

@@ -10,6 +10,7 @@
 #include "fascia/solver.h"
 #include "cpu/direct.h"
 #include "cpu/system.h"
+#include "solve/motion.h"
 
 typedef struct fascia_organs fascia_organs; // organs.c: rigid organs, organs driven by the caller
 
@@ -70,12 +71,6 @@ FASCIA_INTERN fascia_cg_result fascia_cg_solve(const fascia_operator *op, const 
                                                const fascia_real *b, fascia_real *p, int max_iterations, int fixed,
                                                fascia_real tolerance, fascia_real *work);
 
-/// Pose of a prescribed motion at time t: translation [3], rotation [4].
-FASCIA_INTERN void fascia_motion_pose(const fascia_motion *motion, fascia_real t, fascia_real *translation,
-                                      fascia_real *rotation);
-/// Position and rotation of frame i following its motion at time t.
-FASCIA_INTERN void fascia_motion_frame(const fascia_model *model, int32_t i, fascia_real t, fascia_real *x,
-                                       fascia_real *q);
 
 struct fascia_backend;
 struct fascia_step_values;
@@ -119,6 +114,12 @@ struct fascia_solver {
 /// the very same bits), the time, and the organs' saved state (NULL: none).
 FASCIA_INTERN void fascia_solver_resume(fascia_solver *solver, const fascia_real *x, const fascia_real *q,
                                         const fascia_real *u, fascia_real time, const fascia_real *organs_state);
+
+/// The potential energy (gradient: its gradient [6N], may be NULL) at the
+/// solver's state, at load factor load_factor on gravity and the frames'
+/// loads, evaluated on the host (the organs' reactions: 1, the full load).
+FASCIA_INTERN fascia_status fascia_solver_host_gradient(fascia_solver *solver, fascia_real load_factor,
+                                                        fascia_real *gradient, fascia_real *energy);
 
 /// Minimizes the step objective (static: potential energy, re-anchored at
 /// every iteration; dynamic: inertia + potential with increments d anchored

@@ -1,0 +1,45 @@
+#!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
+# SPDX-FileCopyrightText: fascia developers
+# The writers map of docs/architecture.md, as the code must keep it:
+#  - the organs (sim/src/organs/) know no solver: of sim/src/solve they
+#    include motion.h alone (the prescribed motions), never the solver's
+#    internals or the backend contract; the organ API that hands them the
+#    solver's arrays is solve/organ_api.c;
+#  - the system's state (x, q, A) is written by fascia_system_set_state
+#    from three places only: system.c (the rest state at creation), the CPU
+#    backend (its trial states, cpu/backend_cpu.c) and the solver's
+#    host_system (solve/solver.c), which every host query goes through.
+# A breach fails with the file and line.
+import pathlib
+import re
+import sys
+
+root = pathlib.Path(sys.argv[1] if len(sys.argv) > 1 else pathlib.Path(__file__).resolve().parent.parent)
+src = root / "sim" / "src"
+bad = []
+organs = sorted(p for p in (src / "organs").iterdir() if p.suffix in (".c", ".h"))
+for path in organs:
+    for number, line in enumerate(path.read_text().splitlines(), 1):
+        m = re.match(r'\s*#\s*include\s+"(solve/[^"]+)"', line)
+        if m and m.group(1) != "solve/motion.h":
+            bad.append(f"{path.relative_to(root)}:{number}: includes sim/src/{m.group(1)}: the organs know no solver")
+calls = 0
+for path in sorted(src.rglob("*.c")):
+    function = None
+    for number, line in enumerate(path.read_text().splitlines(), 1):
+        m = re.match(r"^[a-z].*?\b(\w+)\(", line)
+        if m and not line.startswith(("typedef", "return")):
+            function = m.group(1)
+        if "fascia_system_set_state(" not in line or line.startswith("void fascia_system_set_state("):
+            continue
+        calls += 1
+        name = path.relative_to(src).as_posix()
+        if name in ("cpu/system.c", "cpu/backend_cpu.c") or (name == "solve/solver.c" and function == "host_system"):
+            continue
+        bad.append(f"{path.relative_to(root)}:{number}: writes the system's state in {function}(); "
+                   "go through the solver's host_system or the backend")
+for b in bad:
+    print(b)
+print(f"t372: {len(organs)} files of sim/src/organs read, {calls} writes of the system's state, {len(bad)} out of place")
+sys.exit(1 if bad or not organs or calls == 0 else 0)
