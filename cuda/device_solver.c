@@ -50,6 +50,7 @@ typedef struct fascia_device {
   unsigned char *mask, *full_mask;     ///< device copies (D.mask, D.full_mask)
   unsigned char *active;
   fascia_real *world_inertia, *target;
+  fascia_real *sample_output;          ///< [5S] the outputs' queries (FASCIA_K_SAMPLE_OUTPUT)
   char name[256];
 } fascia_device;
 
@@ -242,6 +243,7 @@ static fascia_status upload_model(fascia_device *dev, const fascia_backend_setup
   MAKE(cache, Sn * FASCIA_PT_CACHE_SIZE, fascia_real);
   MAKE(sample_energy, Sn, fascia_real);
   MAKE(sample_flags, Sn, int);
+  FASCIA_TRY(make(dev, 5 * (size_t)Sn * sizeof(fascia_real), (void **)&dev->sample_output));
   FASCIA_TRY(make(dev, sizeof(fascia_dev_settings), (void **)&dev->set_dev));
   FASCIA_TRY(make(dev, sizeof(fascia_dev_scalars), (void **)&dev->sc_dev));
   D->set = dev->set_dev;
@@ -602,6 +604,30 @@ static fascia_status device_strain_past(fascia_backend *backend, fascia_real lim
   return FASCIA_OK;
 }
 
+// The outputs' per-sample values at x, q: the solver's state, which the
+// host may have set since the last step. The state's kernels as an
+// evaluation runs them, then FASCIA_K_SAMPLE_OUTPUT; what is asked for
+// comes back. Between steps: the next begin sends a step's own anchor.
+static fascia_status device_sample_outputs(fascia_backend *backend, const fascia_real *x, const fascia_real *q,
+                                           fascia_real *positions, fascia_real *strain, fascia_real *stress) {
+  fascia_device *dev = (fascia_device *)backend;
+  fascia_dev *D = &dev->D;
+  const size_t N = (size_t)dev->frame_count, S = (size_t)D->sample_count;
+  FASCIA_TRY(dev->ops->upload(dev->L, D->x_base, x, 3 * N * sizeof(fascia_real)));
+  FASCIA_TRY(dev->ops->upload(dev->L, D->q_base, q, 4 * N * sizeof(fascia_real)));
+  FASCIA_TRY(dev->ops->upload(dev->L, D->d, dev->zeros, 6 * N * sizeof(fascia_real)));
+  kernel(dev, FASCIA_K_TRIAL, 6 * (int64_t)N, NULL, NULL, 0);
+  kernel(dev, FASCIA_K_STATE, (int64_t)N, NULL, NULL, 0);
+  if (D->modes_count > 0) kernel(dev, FASCIA_K_MODES_EVALUATE, D->modes_count, NULL, NULL, 0);
+  if (D->patches.count > 0) kernel(dev, FASCIA_K_PATCH_EVALUATE, D->patches.count, NULL, NULL, 0);
+  kernel(dev, FASCIA_K_SAMPLE_OUTPUT, (int64_t)S, NULL, dev->sample_output, 0);
+  if (strain) FASCIA_TRY(dev->ops->download(dev->L, strain, dev->sample_output, S * sizeof(fascia_real)));
+  if (stress) FASCIA_TRY(dev->ops->download(dev->L, stress, dev->sample_output + S, S * sizeof(fascia_real)));
+  if (positions)
+    FASCIA_TRY(dev->ops->download(dev->L, positions, dev->sample_output + 2 * S, 3 * S * sizeof(fascia_real)));
+  return FASCIA_OK;
+}
+
 // ------------------------------------------------------------ operators --
 
 static fascia_status device_gradient(fascia_backend *backend, const fascia_real *x, const fascia_real *q,
@@ -664,7 +690,7 @@ static int launcher_available(const fascia_launcher_ops *ops, char *detail, size
   .supports = device_supports, .destroy = device_destroy, .describe = device_describe,                               \
   .begin = device_begin, .evaluate = device_evaluate, .prepare = device_prepare, .direction = device_direction,        \
   .accept = device_accept, .save = device_save, .restore = device_restore, .finish = device_finish,                     \
-  .strain_past = device_strain_past,                                                                                  \
+  .strain_past = device_strain_past, .sample_outputs = device_sample_outputs,                                        \
   .gradient = device_gradient,                                                                                        \
   .hessian_apply = device_hessian_apply, .hessian_diagonal = device_hessian_diagonal
 

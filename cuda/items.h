@@ -115,6 +115,7 @@ typedef enum fascia_dev_kernel {
   FASCIA_K_MODES_REDUCE,     ///< patches: the condensed terms' coefficients of in (skipped when CG is not running)
   FASCIA_K_SAVE,             ///< N: saved = the iterate (x_base, q_base, d)
   FASCIA_K_RESTORE,          ///< N: the iterate = saved
+  FASCIA_K_SAMPLE_OUTPUT,    ///< S: out [5S]: strain, stress, position [3] (point/sample.h, the outputs' queries)
   // rigid organs (point/body.h); the operator's three run only inside CG
   FASCIA_K_BODY_EXPAND,      ///< N: slaves' d_trial from their master's
   FASCIA_K_BODY_GRADIENT,    ///< organs: g_trial folded into the masters, the bodies' energy and terms
@@ -459,6 +460,13 @@ static inline FASCIA_HD void fascia_dev_item(const fascia_dev *D, int kernel, in
     break;
   case FASCIA_K_SAVE:
   case FASCIA_K_RESTORE: fascia_dev_saved_item(D, i32, kernel == FASCIA_K_SAVE); break;
+  case FASCIA_K_SAMPLE_OUTPUT: {
+    const fascia_pt_state st = fascia_dev_state(D);
+    const int64_t S = D->sample_count;
+    out[i] = fascia_pt_sample_output(&D->pm, &st, i32, out + S + i);
+    fascia_pt_sample_position(&D->pm, &st, i32, out + 2 * S + 3 * i);
+    break;
+  }
   case FASCIA_K_BODY_EXPAND: fascia_pt_body_expand(&D->bodies, i32, D->x_base, D->q_base, D->d_trial); break;
   case FASCIA_K_BODY_GRADIENT: fascia_dev_body_gradient_item(D, i32); break;
   case FASCIA_K_BODY_PROLONG:

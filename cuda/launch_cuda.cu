@@ -374,6 +374,7 @@ static void cuda_kernel(fascia_launcher *L, const fascia_dev *D, fascia_dev_kern
   case FASCIA_K_MODES_REDUCE: launch_items<FASCIA_K_MODES_REDUCE>(L, D, n, in, out, value); break;
   case FASCIA_K_SAVE: launch_items<FASCIA_K_SAVE>(L, D, n, in, out, value); break;
   case FASCIA_K_RESTORE: launch_items<FASCIA_K_RESTORE>(L, D, n, in, out, value); break;
+  case FASCIA_K_SAMPLE_OUTPUT: launch_items<FASCIA_K_SAMPLE_OUTPUT>(L, D, n, in, out, value); break;
   case FASCIA_K_BODY_EXPAND: launch_items<FASCIA_K_BODY_EXPAND>(L, D, n, in, out, value); break;
   case FASCIA_K_BODY_GRADIENT: launch_items<FASCIA_K_BODY_GRADIENT>(L, D, n, in, out, value); break;
   case FASCIA_K_BODY_PROLONG: launch_items<FASCIA_K_BODY_PROLONG>(L, D, n, in, out, value); break;

@@ -171,13 +171,33 @@ static inline int check_run(fascia_ctx *ctx, const char *name, const fascia_mode
     CHECK(relative_difference("sample strain", eb, ea, S) <= tolerance);
     CHECK(relative_difference("sample stress", sb, sa, S) <= tolerance);
   }
-  free(ea);
   if (again) {
     CHECK(!memcmp(fascia_solver_frame_positions(again), xb, 3 * N * sizeof(double)));
     CHECK(!memcmp(fascia_solver_frame_rotations(again), fascia_solver_frame_rotations(dev), 4 * N * sizeof(double)));
     printf("  repeated run: %s\n",
            memcmp(fascia_solver_frame_positions(again), xb, 3 * N * sizeof(double)) ? "DIFFERENT" : "bit-identical");
   }
+  // the same queries, and the samples' positions, at a state the caller set
+  // after the run (half the CPU's displacement): a device must answer from
+  // that state, not from its last step's
+  {
+    double *xs = malloc(7 * N * sizeof *xs), *qs = xs + 3 * N, *pa = malloc(6 * S * sizeof *pa + 1), *pb = pa + 3 * S;
+    for (int64_t k = 0; k < 3 * N; ++k) xs[k] = m->frame_position[k] + 0.5 * ua[k];
+    memcpy(qs, fascia_solver_frame_rotations(cpu), 4 * N * sizeof *qs);
+    CHECK_OK(fascia_solver_set_state(cpu, xs, qs, NULL), ctx);
+    CHECK_OK(fascia_solver_set_state(dev, xs, qs, NULL), ctx);
+    fascia_solver_sample_strain(cpu, ea, sa);
+    fascia_solver_sample_strain(dev, eb, sb);
+    fascia_solver_sample_positions(cpu, pa);
+    fascia_solver_sample_positions(dev, pb);
+    CHECK(relative_difference("sample positions at a set state", pb, pa, 3 * S) <= tolerance);
+    if (max_abs(ea, S) > 1e-8) {
+      CHECK(relative_difference("sample strain at a set state", eb, ea, S) <= tolerance);
+      CHECK(relative_difference("sample stress at a set state", sb, sa, S) <= tolerance);
+    }
+    free(xs), free(pa);
+  }
+  free(ea);
   free(ua), free(ub);
   fascia_solver_destroy(&cpu);
   fascia_solver_destroy(&dev);

@@ -161,6 +161,27 @@ static inline FASCIA_HD fascia_real fascia_pt_strain_norm(const fascia_real *F) 
   return FASCIA_R(0.5) * sqrt(fascia_pt_ddot(C, C));
 }
 
+/// What the outputs report of sample s at st: returns its strain
+/// (fascia_pt_strain_norm); where stress is not NULL, *stress gets the
+/// Frobenius norm of its law's first Piola-Kirchhoff stress plus its
+/// patch's pressure (m->sample_pressure at this state, where there are
+/// patches).
+static inline FASCIA_HD fascia_real fascia_pt_sample_output(const fascia_pt_model *m, const fascia_pt_state *st,
+                                                            int32_t s, fascia_real *stress) {
+  fascia_real F[9], P[9], aux[FASCIA_PT_AUX_SIZE];
+  fascia_pt_sample_F(m, st, s, F);
+  if (stress) {
+    fascia_pt_stress(m->sample_law[s], m->sample_lambda[s], m->sample_mu[s], F, P, aux);
+    if (m->sample_pressure) {
+      fascia_real dtheta[9];
+      fascia_pt_dilatation(m->sample_law[s], F, dtheta);
+      for (int q = 0; q < 9; ++q) P[q] += m->sample_pressure[s] * dtheta[q];
+    }
+    *stress = sqrt(fascia_pt_ddot(P, P));
+  }
+  return fascia_pt_strain_norm(F);
+}
+
 /// Energy density of sample s's law at F, rotation coupling included (not
 /// the patch's pressure), and its stress Pt into P[9], the law's aux into aux.
 static inline FASCIA_HD fascia_real fascia_pt_sample_law_stress(const fascia_pt_model *m, const fascia_pt_state *st,

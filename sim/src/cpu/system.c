@@ -408,19 +408,8 @@ void fascia_system_sample_strain(fascia_system *sys, fascia_real *strain, fascia
   if (sys->modes) fascia_modes_evaluate(sys, sys->modes); // F has the modes at this state
   if (stress && sys->dilatation) fascia_dilatation_evaluate(sys, sys->dilatation);
 #pragma omp parallel for num_threads(sys->threads) schedule(static)
-  for (int32_t s = 0; s < sys->sample_count; ++s) {
-    fascia_real F[9], P[9], aux[FASCIA_PT_AUX_SIZE];
-    strain[s] = strain_norm(sys, &st, s, F);
-    if (stress) {
-      fascia_pt_stress(sys->sample_law[s], sys->sample_lambda[s], sys->sample_mu[s], F, P, aux);
-      if (sys->pm.sample_pressure) { // the patch's pressure
-        fascia_real dtheta[9];
-        fascia_pt_dilatation(sys->sample_law[s], F, dtheta);
-        for (int q = 0; q < 9; ++q) P[q] += sys->pm.sample_pressure[s] * dtheta[q];
-      }
-      stress[s] = sqrt(fascia_pt_ddot(P, P));
-    }
-  }
+  for (int32_t s = 0; s < sys->sample_count; ++s)
+    strain[s] = fascia_pt_sample_output(&sys->pm, &st, s, stress ? stress + s : NULL);
 }
 
 int fascia_threads_free(int wanted, int64_t pairs) {

@@ -129,6 +129,13 @@ struct fascia_backend_ops {
   /// |F^T F - I| / 2 at the state finish gave is past limit or not finite
   /// (*past 1, else 0), reduced where the state is kept.
   fascia_status (*strain_past)(fascia_backend *backend, fascia_real limit, int *past);
+  /// Optional (NULL: the host evaluates them at the solver's state). The
+  /// outputs' per-sample values at the state x [3N], q [4N]: positions
+  /// [3S], strain [S] and stress [S] (point/sample.h,
+  /// fascia_pt_sample_output); each may be NULL. Called between steps
+  /// only: it may use a step's work arrays.
+  fascia_status (*sample_outputs)(fascia_backend *backend, const fascia_real *x, const fascia_real *q,
+                                  fascia_real *positions, fascia_real *strain, fascia_real *stress);
 
   // --- optional: the linear solver's state the next step reads -------------
   /// (NULL: none.) A kept factorization the next step may use: its size in

@@ -663,12 +663,19 @@ void fascia_solver_probe_position(const fascia_solver *S, int32_t probe, fascia_
   fascia_system_probe_position(host_system(S), probe, out);
 }
 
+// Whether the backend answered an output query where it keeps the state
+// (a device); else the host answers it.
+static int backend_outputs(const fascia_solver *S, fascia_real *positions, fascia_real *strain, fascia_real *stress) {
+  const fascia_backend_ops *ops = S->backend->ops;
+  return ops->sample_outputs && ops->sample_outputs(S->backend, S->x, S->q, positions, strain, stress) == FASCIA_OK;
+}
+
 void fascia_solver_sample_positions(const fascia_solver *S, fascia_real *out) {
-  fascia_system_sample_positions(host_system(S), out);
+  if (!backend_outputs(S, out, NULL, NULL)) fascia_system_sample_positions(host_system(S), out);
 }
 
 void fascia_solver_sample_strain(const fascia_solver *S, fascia_real *strain, fascia_real *stress) {
-  fascia_system_sample_strain(host_system(S), strain, stress);
+  if (!backend_outputs(S, NULL, strain, stress)) fascia_system_sample_strain(host_system(S), strain, stress);
 }
 
 fascia_real fascia_solver_kinetic_energy(fascia_solver *S) {
