@@ -250,14 +250,11 @@ static inline FASCIA_HD void fascia_dev_frame_gradient_item(const fascia_dev *D,
   fascia_real gi[6];
   fascia_dev_gather6(D, D->pair_buffer, i, gi);
   // gravity and frame loads, scaled by the load factor
-  const fascia_real external = fascia_pt_frame_external(
+  fascia_real external = fascia_pt_frame_external(
       D->A + 9 * (int64_t)i, D->frame_moment + 3 * (int64_t)i, D->frame_mass[i], D->gravity, set->gravity_scale,
       D->x + 3 * (int64_t)i, D->frame_load + i6, gi, D->torque + 3 * (int64_t)i);
   const fascia_real *d = D->d_trial + i6;
-  if (set->jacobian) {
-    const fascia_real t[3] = {gi[3], gi[4], gi[5]};
-    fascia_pt_left_jacobian_t(d + 3, t, gi + 3);
-  }
+  external += fascia_pt_frame_step_rotation(D->frame_load + i6, set->gravity_scale, d, set->jacobian, gi);
   fascia_real dMd = 0, dz = 0;
   if (set->c1 != 0 || set->c2 != 0) {
     fascia_real Md[6];

@@ -126,9 +126,13 @@ int main(void) {
   fascia_model *m = NULL;
   CHECK_OK(fixture_model(ctx, 0, &m), ctx);
   CHECK_OK(fascia_model_save(ctx, m, model_path), ctx);
+  // the fixture is no mechanics test: any step gives a checkpoint. Its
+  // frame 3 has one sample, so nothing resists a turn about the axis to
+  // it: the file keeps the fixture's torque there, the run goes without
+  for (int r = 3; r < 6; ++r) m->frame_load[6 * 3 + r] = 0;
   fascia_solver_def sd = fascia_solver_def_default();
   sd.backend = "cpu";
-  sd.require_convergence = 0; // the fixture is no mechanics test: any step gives a checkpoint
+  sd.require_convergence = 0;
   fascia_solver *solver = NULL;
   CHECK_OK(fascia_solver_create(ctx, m, &sd, &solver), ctx);
   CHECK_OK(fascia_solver_step(solver, NULL), ctx);

@@ -13,9 +13,10 @@
 //    against the thin sphere's p R^2 (1 - nu) / (2 E t), at frames 4, 3 and
 //    2 mm apart (printed; docs/measured.md), and dynamic steps at the
 //    defaults converge;
-//  - the torques prep leaves out, w (x - x_i) x f, put in frame_load (world
-//    torques) bring the growth nearer the thin sphere's, the opposite sign
-//    farther: the solver reads them as the virtual work has them;
+//  - prep's loads are the forces w_i f and torques w_i (x - x_i) x f of the
+//    wall's samples; without the torques the growth is farther from the
+//    thin sphere's, with their opposite farther still: the solver reads
+//    them as the virtual work has them;
 //  - pressure on an open surface (a bowl) is refused with one line naming
 //    the key, and a scene without it has no loads.
 #define _POSIX_C_SOURCE 200809L // mkdtemp
@@ -147,8 +148,8 @@ static double growth_error(const char *dir, double spacing, const char *pressure
   CHECK(netn < 1e-9 * pA);
   CHECK(outward > 0.9 * pA && outward <= pA); // the frames lie on the sphere, the forces on its chords
   CHECK(momentn < 1e-9 * pA * RADIUS);
-  const double forces = static_growth(ctx, m, spacing, "forces", 1);
-  error = forces;
+  const double with_torques = static_growth(ctx, m, spacing, "forces and torques", 1);
+  error = with_torques;
   // dynamic steps at the defaults converge under the loads
   fascia_solver_def def = fascia_solver_def_default();
   def.backend = "cpu";
@@ -159,10 +160,7 @@ static double growth_error(const char *dir, double spacing, const char *pressure
   for (int k = 0; k < 3 && solver; ++k) CHECK_OK(fascia_solver_step(solver, &report), ctx);
   fascia_solver_destroy(&solver);
   // the loads again, from the wall's samples (outward: away from the
-  // centre), with the torques w (x - x_i) x f prep leaves out: the same
-  // forces; the torques, as the solver reads frame_load, bring the growth
-  // nearer the thin sphere's, and the opposite sign farther (line search
-  // off: the solver gives them no energy)
+  // centre): forces w f and torques w (x - x_i) x f, as prep puts them
   double *torque = calloc(3 * (size_t)m->frame_count, sizeof(double));
   double *force = calloc(3 * (size_t)m->frame_count, sizeof(double));
   CHECK(torque && force);
@@ -191,19 +189,23 @@ static double growth_error(const char *dir, double spacing, const char *pressure
       for (int c = 0; c < 3; ++c) force[3 * i + c] += w * f[c];
     }
   }
-  double worst = 0, largest = 0;
-  for (int32_t i = 0; force && i < 3 * m->frame_count; ++i)
-    worst = fmax(worst, fabs(force[i] - m->frame_load[6 * (i / 3) + i % 3])), largest = fmax(largest, fabs(force[i]));
-  CHECK(largest > 0 && worst <= 1e-12 * largest);
-  double with[2] = {NAN, NAN};
+  double worst[2] = {0, 0}, largest[2] = {0, 0}; // forces, torques
+  for (int32_t i = 0; force && torque && i < 3 * m->frame_count; ++i) {
+    worst[0] = fmax(worst[0], fabs(force[i] - m->frame_load[6 * (i / 3) + i % 3]));
+    worst[1] = fmax(worst[1], fabs(torque[i] - m->frame_load[6 * (i / 3) + 3 + i % 3]));
+    largest[0] = fmax(largest[0], fabs(force[i])), largest[1] = fmax(largest[1], fabs(torque[i]));
+  }
+  CHECK(largest[0] > 0 && worst[0] <= 1e-12 * largest[0]);
+  CHECK(largest[1] > 0 && worst[1] <= 1e-12 * largest[1]);
+  // the torques as the solver reads them: without them the growth is
+  // farther from the thin sphere's, with the opposite sign farther still
+  double without[2] = {NAN, NAN};
   for (int sign = 0; torque && sign < 2; ++sign) {
     for (int32_t i = 0; i < m->frame_count; ++i)
-      for (int c = 0; c < 3; ++c) m->frame_load[6 * i + 3 + c] = (sign ? -1 : 1) * torque[3 * i + c];
-    with[sign] = static_growth(ctx, m, spacing, sign ? "opposite torques" : "torques", 0);
+      for (int c = 0; c < 3; ++c) m->frame_load[6 * i + 3 + c] = sign ? -torque[3 * i + c] : 0;
+    without[sign] = static_growth(ctx, m, spacing, sign ? "opposite torques" : "forces only", 1);
   }
-  for (int32_t i = 0; i < m->frame_count; ++i)
-    for (int c = 0; c < 3; ++c) m->frame_load[6 * i + 3 + c] = 0;
-  CHECK(fabs(with[0]) < fabs(with[1]) && fabs(with[0]) < fabs(forces));
+  CHECK(fabs(with_torques) < fabs(without[0]) && fabs(without[0]) < fabs(without[1]));
   free(torque);
   free(force);
 done:
@@ -219,11 +221,10 @@ int main(void) {
   const double a_lo[3] = {-0.003, -0.003, -0.02}, a_hi[3] = {0.003, 0.003, -0.012};
   CHECK(fixture_box(dir, "a.obj", a_lo, a_hi) && write_sphere(dir, "sphere.obj", 0) && write_sphere(dir, "bowl.obj", 1));
   snprintf(key, sizeof key, ", \"pressure\": %g", PRESSURE);
-  const double spacings[] = {0.004, 0.003, 0.002}, tolerance[] = {0.25, 0.15, 0.15}; // 4 mm: 2.5 per radius
+  const double spacings[] = {0.004, 0.003, 0.002}, tolerance[] = {0.12, 0.12, 0.12}; // 4 mm: 2.5 per radius
   for (int k = 0; k < 3; ++k) {
     const double error = growth_error(dir, spacings[k], key);
-    // the wall's frames carry the loads' translation only (shell.c), and the
-    // wall is soft in its plane by about nu / 10 (docs/measured.md)
+    // the wall is soft in its plane by several per cent (docs/measured.md)
     CHECK(fabs(error) < tolerance[k]);
   }
   // no pressure, no loads

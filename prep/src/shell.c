@@ -590,14 +590,18 @@ fascia_status prep_shell_pressure_loads(fascia_ctx *ctx, const fascia_prep_scene
                (int)s);
     // the sample's share of the wall's area (its volume / thickness) under
     // the pressure, f, carried by its frames as their weights share a
-    // point's displacement: force w f. Its rotational part, torques
-    // w (x - x_i) x f (which add up to none over the sample's frames), is
-    // left out: the solver gives frame_load's torques no energy
-    // (sim/point/frame.h), and its line search stalls on them.
+    // point's displacement (u = sum w_i (dx_i + dtheta_i x (x - x_i))):
+    // force w_i f and torque w_i (x - x_i) x f on frame i
     const double scale = (side > 0 ? 1 : -1) * od->pressure * model->sample_volume[s] / od->thickness / nn;
+    const double *x = points->sample_position + 3 * (int64_t)s;
     for (int32_t k = model->sample_offsets[s]; k < model->sample_offsets[s + 1]; ++k) {
-      fascia_real *load = model->frame_load + 6 * (int64_t)model->pair_frame[k];
-      for (int r = 0; r < 3; ++r) load[r] += model->pair_weight[k] * scale * n[r];
+      const int32_t i = model->pair_frame[k];
+      fascia_real *load = model->frame_load + 6 * (int64_t)i;
+      double f[3], arm[3], torque[3];
+      for (int r = 0; r < 3; ++r) f[r] = model->pair_weight[k] * scale * n[r];
+      sub3(x, points->frame_position + 3 * (int64_t)i, arm);
+      cross3(arm, f, torque);
+      for (int r = 0; r < 3; ++r) load[r] += f[r], load[3 + r] += torque[r];
     }
   }
   return FASCIA_OK;

@@ -32,8 +32,9 @@ static inline FASCIA_HD void fascia_pt_frame_A(const fascia_real *q, const fasci
 
 /// Gravity g and the frame's load (force, torque [6]) at load factor gs on
 /// a frame of mass M and mass moment D at x: E = -gs (g.(M x + A D) +
-/// f.x). Subtracts the gradient from gi[6], puts the conservative torque
-/// (internal + gravity) in torque[3], returns E.
+/// f.x). Subtracts the gradient from gi[6] (the torque's too), puts the
+/// conservative torque (internal + gravity) in torque[3], returns E (the
+/// torque's work is the step's: fascia_pt_frame_step_rotation).
 static inline FASCIA_HD fascia_real fascia_pt_frame_external(const fascia_real *A, const fascia_real *moment,
                                                              fascia_real mass, const fascia_real *g, fascia_real gs,
                                                              const fascia_real *x, const fascia_real *load,
@@ -50,6 +51,26 @@ static inline FASCIA_HD fascia_real fascia_pt_frame_external(const fascia_real *
     gi[3 + c] -= gs * load[3 + c];
   }
   return external;
+}
+
+/// The step objective's part of frame i's gradient gi[6] (the energy's at
+/// the state, its load included) and its load's torque tau (load[3..5]) at
+/// load factor gs. A dead torque has no potential on the rotations: the
+/// step takes its work along the step's own rotation increment d_theta
+/// from the anchor (d[3..5]), -gs tau.d_theta, returned, whose gradient
+/// with respect to d_theta is -gs tau. With the increments' Jacobian
+/// (jacobian: dynamic steps, the gradient with respect to d_theta) the
+/// rest of the rotation part becomes J^T g; the torque's stays -gs tau.
+static inline FASCIA_HD fascia_real fascia_pt_frame_step_rotation(const fascia_real *load, fascia_real gs,
+                                                                   const fascia_real *d, int jacobian,
+                                                                   fascia_real *gi) {
+  if (jacobian) {
+    fascia_real t[3];
+    for (int c = 0; c < 3; ++c) t[c] = gi[3 + c] + gs * load[3 + c];
+    fascia_pt_left_jacobian_t(d + 3, t, gi + 3);
+    for (int c = 0; c < 3; ++c) gi[3 + c] -= gs * load[3 + c];
+  }
+  return -gs * fascia_pt_dot3(load + 3, d + 3);
 }
 
 /// Gravity's own stiffness on a variation v[6], frame-local:

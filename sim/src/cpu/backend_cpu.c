@@ -185,11 +185,13 @@ static fascia_status objective(cpu_backend *B, const fascia_real *d, fascia_real
   fascia_system_set_state(B->sys, B->x, B->q);
   fascia_real energy;
   FASCIA_TRY(fascia_system_evaluate(B->sys, gradient, &energy));
-  if (v->dynamic)
-    for (int32_t i = 0; i < N; ++i) {
-      fascia_real g[3] = {gradient[6 * i + 3], gradient[6 * i + 4], gradient[6 * i + 5]};
-      fascia_pt_left_jacobian_t(d + 6 * i + 3, g, gradient + 6 * i + 3);
-    }
+  // the loads' torques' work along the step, external energy here as on the device
+  const fascia_real *load = S->model->frame_load;
+  fascia_real torque_work = 0;
+  for (int32_t i = 0; i < N; ++i)
+    torque_work += fascia_pt_frame_step_rotation(load + 6 * i, v->gravity_scale, d + 6 * i, v->dynamic, gradient + 6 * i);
+  energy += torque_work;
+  B->sys->energy_external += torque_work;
   if (v->c1 != 0 || v->c2 != 0) {
     // c1/2 (d - hu).M(d - hu) + c2/2 d.M d with M(hu) precomputed
     mass_apply(B, d, B->scratch);

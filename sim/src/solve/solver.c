@@ -393,13 +393,20 @@ static fascia_status check_blow_up(fascia_solver *S, const fascia_solve_report *
                        S->def.blow_up_strain);
   }
   if (energy_before_known) {
+    // the backends count the loads' torques' work along the step, W, in the
+    // external energy (they have no potential): after + W is the energy
+    // now, and after - before the rise beyond the work done
+    fascia_real work = 0;
+    for (int32_t i = 0; i < S->frame_count; ++i)
+      work += fascia_pt_dot3(S->model->frame_load + 6 * i + 3, S->d + 6 * i + 3);
+    work *= S->sys->gravity_scale;
     const fascia_real after = total_energy(S);
-    const fascia_real scale = fabs(energy_before) + S->weight_scale;
+    const fascia_real scale = fabs(energy_before) + S->weight_scale + fabs(work);
     if (!(after - energy_before <= ENERGY_RISE * scale))
       return FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
-                         "the solution blew up: the energy rose from %.4g J to %.4g J in one step with nothing "
-                         "doing work on the tissue", energy_before, after);
-    S->energy_last = after; // kept by the caller only if the step is accepted
+                         "the solution blew up: the energy rose from %.4g J to %.4g J in one step, %.4g J more than "
+                         "the loads' work on the tissue", energy_before, after + work, after - energy_before);
+    S->energy_last = after + work; // kept by the caller only if the step is accepted
   }
   return FASCIA_OK;
 }
@@ -505,23 +512,27 @@ static fascia_status step_split(fascia_solver *S, fascia_real h, int depth, fasc
   return status;
 }
 
-// Where a failed attempt went wrong, for the message: the free frame with the
-// largest residual force, and the lowest inverted sample if any (the state of
-// the last attempt, before it is restored).
+// Where a failed attempt went wrong, for the message: the free frames with
+// the largest residual force and torque, and the lowest inverted sample if
+// any (the state of the last attempt, before it is restored).
 static void describe_failure(const fascia_solver *S, char *text, size_t size) {
-  int32_t worst = -1;
-  fascia_real worst_norm = -1;
-  for (int32_t i = 0; i < S->frame_count; ++i) {
-    if (!S->mask[6 * (int64_t)i]) continue;
-    const fascia_real *g = S->gradient + 6 * (int64_t)i;
-    const fascia_real norm = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
-    if (norm > worst_norm || (worst < 0 && !isfinite(norm))) worst = i, worst_norm = norm;
-  }
+  int32_t worst[2] = {-1, -1}; // force, torque
+  fascia_real worst_norm[2] = {-1, -1};
+  for (int32_t i = 0; i < S->frame_count; ++i)
+    for (int part = 0; part < 2; ++part) {
+      if (!S->mask[6 * (int64_t)i + 3 * part]) continue;
+      const fascia_real *g = S->gradient + 6 * (int64_t)i + 3 * part;
+      const fascia_real norm = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+      if (norm > worst_norm[part] || (worst[part] < 0 && !isfinite(norm))) worst[part] = i, worst_norm[part] = norm;
+    }
   int n = 0;
-  if (worst >= 0)
-    n = snprintf(text, size, "; largest residual force %.3g N at frame %d (rest position %.4g %.4g %.4g m)",
-                 worst_norm, (int)worst, S->model->frame_position[3 * worst], S->model->frame_position[3 * worst + 1],
-                 S->model->frame_position[3 * worst + 2]);
+  for (int part = 0; part < 2; ++part) {
+    const int32_t w = worst[part];
+    if (w < 0 || n < 0 || (size_t)n >= size) continue;
+    n += snprintf(text + n, size - (size_t)n, "; largest residual %s %.3g %s at frame %d (rest position %.4g %.4g %.4g m)",
+                  part ? "torque" : "force", worst_norm[part], part ? "N m" : "N", (int)w, S->model->frame_position[3 * w],
+                  S->model->frame_position[3 * w + 1], S->model->frame_position[3 * w + 2]);
+  }
   if (n < 0 || (size_t)n >= size || S->sys->inverted_count <= 0) return;
   // the cause named is one the inverted samples' own law has
   int32_t stvk = 0;
