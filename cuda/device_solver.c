@@ -297,6 +297,7 @@ static fascia_status device_create(const fascia_backend_setup *setup, const fasc
   dev->set.consistent_mass = def->mass == FASCIA_MASS_CONSISTENT;
   dev->set.precond = (int32_t)def->precond;
   dev->set.gravity_scale = 1;
+  dev->set.project = 1;
   const char *terms = dev->stiffness == FASCIA_K_SAMPLE_STIFFNESS_PAPER       ? "the paper's terms"
                       : dev->stiffness == FASCIA_K_SAMPLE_STIFFNESS_SMOOTHING ? "no rotation coupling"
                                                                               : "all terms";
@@ -628,6 +629,40 @@ static fascia_status device_sample_outputs(fascia_backend *backend, const fascia
   return FASCIA_OK;
 }
 
+// The potential energy's gradient at x, q under the load factor, every
+// frame's (the organs' reactions read their fixed and driven frames): the
+// evaluation's kernels up to the frames' gradients, unprojected, without
+// the bodies' folding. Between steps: the next begin sends a step's own
+// anchor, loads and settings.
+static fascia_status device_energy_gradient(fascia_backend *backend, const fascia_real *x, const fascia_real *q,
+                                            fascia_real load_factor, fascia_real *gradient) {
+  fascia_device *dev = (fascia_device *)backend;
+  fascia_dev *D = &dev->D;
+  const size_t N = (size_t)dev->frame_count;
+  FASCIA_TRY(dev->ops->upload(dev->L, D->x_base, x, 3 * N * sizeof(fascia_real)));
+  FASCIA_TRY(dev->ops->upload(dev->L, D->q_base, q, 4 * N * sizeof(fascia_real)));
+  FASCIA_TRY(dev->ops->upload(dev->L, D->d, dev->zeros, 6 * N * sizeof(fascia_real)));
+  FASCIA_TRY(dev->ops->upload(dev->L, dev->frame_load, dev->host_load, 6 * N * sizeof(fascia_real)));
+  fascia_dev_settings kept = dev->set;
+  dev->set.c1 = dev->set.c2 = dev->set.mass_coefficient = dev->set.shift = 0;
+  dev->set.jacobian = 0;
+  dev->set.gravity_scale = load_factor;
+  dev->set.project = 0;
+  fascia_status st = push_settings(dev);
+  if (st == FASCIA_OK) {
+    kernel(dev, FASCIA_K_TRIAL, 6 * (int64_t)N, NULL, NULL, 0);
+    kernel(dev, FASCIA_K_STATE, (int64_t)N, NULL, NULL, 0);
+    if (D->modes_count > 0) kernel(dev, FASCIA_K_MODES_EVALUATE, D->modes_count, NULL, NULL, 0);
+    if (D->patches.count > 0) kernel(dev, FASCIA_K_PATCH_EVALUATE, D->patches.count, NULL, NULL, 0);
+    kernel(dev, FASCIA_K_SAMPLE_GRADIENT, D->sample_count, NULL, NULL, 0);
+    kernel(dev, FASCIA_K_FRAME_GRADIENT, (int64_t)N, NULL, NULL, 0);
+    st = dev->ops->download(dev->L, gradient, D->g_trial, 6 * N * sizeof(fascia_real));
+  }
+  dev->set = kept;
+  const fascia_status pushed = push_settings(dev);
+  return st != FASCIA_OK ? st : pushed;
+}
+
 // ------------------------------------------------------------ operators --
 
 static fascia_status device_gradient(fascia_backend *backend, const fascia_real *x, const fascia_real *q,
@@ -691,6 +726,7 @@ static int launcher_available(const fascia_launcher_ops *ops, char *detail, size
   .begin = device_begin, .evaluate = device_evaluate, .prepare = device_prepare, .direction = device_direction,        \
   .accept = device_accept, .save = device_save, .restore = device_restore, .finish = device_finish,                     \
   .strain_past = device_strain_past, .sample_outputs = device_sample_outputs,                                        \
+  .energy_gradient = device_energy_gradient,                                                                          \
   .gradient = device_gradient,                                                                                        \
   .hessian_apply = device_hessian_apply, .hessian_diagonal = device_hessian_diagonal
 

@@ -35,6 +35,7 @@ typedef struct fascia_dev_settings {
   int32_t consistent_mass;       ///< 1: consistent mass products; 0: lumped blocks
   int32_t precond;               ///< FASCIA_PRECOND_* (solver.h)
   fascia_real strain_limit;      ///< the blow-up rule's strain (FASCIA_T_STRAIN)
+  int32_t project;               ///< 1: g_trial on the DOFs the tissue moves (steps); 0: every frame's (reactions)
   fascia_pt_cg_limits cg_limits; ///< of every linear solve
 } fascia_dev_settings;
 
@@ -268,7 +269,7 @@ static inline FASCIA_HD void fascia_dev_frame_gradient_item(const fascia_dev *D,
   }
   fascia_real gg = 0;
   for (int c = 0; c < 6; ++c) { // a body's slaves keep theirs until the body folds them (FASCIA_K_BODY_GRADIENT)
-    if (!D->full_mask[i6 + c]) gi[c] = 0;
+    if (set->project && !D->full_mask[i6 + c]) gi[c] = 0;
     D->g_trial[i6 + c] = gi[c];
     gg += gi[c] * gi[c];
   }

@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "check.h"
+#include "fascia/organs.h"
 #include "solve/backend.h"
 #include "backend_arg.h"
 #include "solve/solver_internal.h"
@@ -194,6 +195,17 @@ static inline int check_run(fascia_ctx *ctx, const char *name, const fascia_mode
     if (max_abs(ea, S) > 1e-8) {
       CHECK(relative_difference("sample strain at a set state", eb, ea, S) <= tolerance);
       CHECK(relative_difference("sample stress at a set state", sb, sa, S) <= tolerance);
+    }
+    // and the tissue's reaction on each organ there, which the device
+    // evaluates too (every frame's gradient, not the free DOFs')
+    for (int32_t o = 0; o < m->organ_count; ++o) {
+      const int32_t count = fascia_solver_organ_frame_count(cpu, o);
+      if (count == 0) continue;
+      double *ra = malloc(12 * (size_t)count * sizeof *ra), *rb = ra + 6 * count;
+      CHECK_OK(fascia_solver_organ_reaction(cpu, o, ra, ra + 3 * count), ctx);
+      CHECK_OK(fascia_solver_organ_reaction(dev, o, rb, rb + 3 * count), ctx);
+      CHECK(relative_difference("organ reaction at a set state", rb, ra, 6 * count) <= tolerance);
+      free(ra);
     }
     free(xs), free(pa);
   }

@@ -136,6 +136,12 @@ struct fascia_backend_ops {
   /// only: it may use a step's work arrays.
   fascia_status (*sample_outputs)(fascia_backend *backend, const fascia_real *x, const fascia_real *q,
                                   fascia_real *positions, fascia_real *strain, fascia_real *stress);
+  /// Optional (NULL: the host evaluates it). The gradient [6N] of the
+  /// potential energy at the state x, q under the load factor, every
+  /// frame's (not projected on the free DOFs: the organs' reactions read
+  /// their fixed and driven frames). Called between steps only.
+  fascia_status (*energy_gradient)(fascia_backend *backend, const fascia_real *x, const fascia_real *q,
+                                   fascia_real load_factor, fascia_real *gradient);
 
   // --- optional: the linear solver's state the next step reads -------------
   /// (NULL: none.) A kept factorization the next step may use: its size in

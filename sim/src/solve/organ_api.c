@@ -98,9 +98,9 @@ fascia_status fascia_solver_organ_reaction(fascia_solver *S, int32_t organ, fasc
                                            fascia_real *torques) {
   FASCIA_TRY(check_organ(S, organ, "organ reaction"));
   FASCIA_CHECK(forces, S->ctx, FASCIA_ERR_ARGUMENT, "organ reaction: NULL forces");
-  fascia_real energy;
-  FASCIA_TRY(fascia_solver_host_gradient(S, 1, S->scratch, &energy));
-  fascia_organs_reaction(S->organs, organ, S->scratch, forces, torques);
+  const fascia_real *gradient;
+  FASCIA_TRY(fascia_solver_loads_gradient(S, &gradient));
+  fascia_organs_reaction(S->organs, organ, gradient, forces, torques);
   return FASCIA_OK;
 }
 

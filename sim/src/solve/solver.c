@@ -158,8 +158,10 @@ fascia_status fascia_solver_create(fascia_ctx *ctx, const fascia_model *model, c
   S->gradient = fascia_calloc_pages(n, sizeof(fascia_real));
   S->kinetic_blocks = fascia_calloc(36 * N, sizeof(fascia_real));
   S->scratch = fascia_calloc(n, sizeof(fascia_real));
+  S->reaction = fascia_calloc(n, sizeof(fascia_real));
+  S->reaction_at = fascia_calloc(13 * N, sizeof(fascia_real));
   if (!S->x || !S->q || !S->u || !S->mask || !S->x_base || !S->q_base || !S->d || !S->inertia_target ||
-      !S->gradient || !S->kinetic_blocks || !S->scratch) {
+      !S->gradient || !S->kinetic_blocks || !S->scratch || !S->reaction || !S->reaction_at) {
     status = FASCIA_FAIL(ctx, FASCIA_ERR_MEMORY, "solver: out of memory for %lld frames", (long long)N);
     goto cleanup;
   }
@@ -213,6 +215,7 @@ void fascia_solver_destroy(fascia_solver **solver) {
   fascia_organs_destroy(&S->organs);
   free(S->x), free(S->q), free(S->u), free(S->mask), free(S->x_base), free(S->q_base), free(S->d);
   free(S->inertia_target), free(S->gradient), free(S->kinetic_blocks), free(S->scratch);
+  free(S->reaction), free(S->reaction_at);
   free(S);
   *solver = NULL;
 }
@@ -248,14 +251,31 @@ static fascia_system *host_system(const fascia_solver *S) {
   return S->sys;
 }
 
-fascia_status fascia_solver_host_gradient(fascia_solver *S, fascia_real load_factor, fascia_real *gradient,
-                                          fascia_real *energy) {
-  fascia_system *sys = host_system(S);
-  const fascia_real kept = sys->gravity_scale;
-  sys->gravity_scale = load_factor;
-  const fascia_status status = fascia_system_evaluate(sys, gradient, energy);
-  sys->gravity_scale = kept;
-  return status;
+fascia_status fascia_solver_loads_gradient(fascia_solver *S, const fascia_real **gradient) {
+  const size_t N = (size_t)S->frame_count;
+  fascia_real *at = S->reaction_at;
+  if (!(S->reaction_known && !memcmp(at, S->x, 3 * N * sizeof *at) && !memcmp(at + 3 * N, S->q, 4 * N * sizeof *at) &&
+        !memcmp(at + 7 * N, S->model->frame_load, 6 * N * sizeof *at))) {
+    S->reaction_known = 0;
+    const fascia_backend_ops *ops = S->backend->ops;
+    if (ops->energy_gradient) {
+      FASCIA_TRY(ops->energy_gradient(S->backend, S->x, S->q, 1, S->reaction));
+    } else {
+      fascia_system *sys = host_system(S);
+      const fascia_real kept = sys->gravity_scale;
+      fascia_real energy;
+      sys->gravity_scale = 1;
+      const fascia_status status = fascia_system_evaluate(sys, S->reaction, &energy);
+      sys->gravity_scale = kept;
+      FASCIA_TRY(status);
+    }
+    memcpy(at, S->x, 3 * N * sizeof *at);
+    memcpy(at + 3 * N, S->q, 4 * N * sizeof *at);
+    memcpy(at + 7 * N, S->model->frame_load, 6 * N * sizeof *at);
+    S->reaction_known = 1;
+  }
+  *gradient = S->reaction;
+  return FASCIA_OK;
 }
 
 static void restore_state(fascia_solver *S, fascia_real *backup) {
@@ -706,7 +726,7 @@ fascia_real fascia_solver_kinetic_energy(fascia_solver *S) {
 }
 
 fascia_status fascia_solver_potential_energy(fascia_solver *S, fascia_real *energy) {
-  FASCIA_TRY(fascia_solver_host_gradient(S, S->sys->gravity_scale, NULL, energy));
+  FASCIA_TRY(fascia_system_evaluate(host_system(S), NULL, energy));
   *energy += fascia_organs_potential_energy(S->organs, S->x, S->q, S->sys->gravity);
   return FASCIA_OK;
 }

@@ -89,6 +89,10 @@ struct fascia_solver {
   fascia_real *d, *inertia_target;  ///< increments [6N], h u [6N]
   fascia_real *gradient;            ///< [6N]
   fascia_real *kinetic_blocks, *scratch; ///< the kinetic energy's lumped blocks [36N] and M u [6N]
+  // the organs' reactions: the energy's gradient at full load [6N], and the
+  // x, q and frame loads [13N] it was taken at (fascia_solver_loads_gradient)
+  fascia_real *reaction, *reaction_at;
+  int reaction_known;
   struct fascia_backend *backend;   ///< where the Newton solve's vector work runs (backend.h)
   char backend_name[16];
   fascia_organs *organs; ///< NULL without organs (organs.c)
@@ -115,11 +119,12 @@ struct fascia_solver {
 FASCIA_INTERN void fascia_solver_resume(fascia_solver *solver, const fascia_real *x, const fascia_real *q,
                                         const fascia_real *u, fascia_real time, const fascia_real *organs_state);
 
-/// The potential energy (gradient: its gradient [6N], may be NULL) at the
-/// solver's state, at load factor load_factor on gravity and the frames'
-/// loads, evaluated on the host (the organs' reactions: 1, the full load).
-FASCIA_INTERN fascia_status fascia_solver_host_gradient(fascia_solver *solver, fascia_real load_factor,
-                                                        fascia_real *gradient, fascia_real *energy);
+/// The gradient [6N] of the potential energy at the solver's state under
+/// the full load, every frame's (the organs' reactions): the backend's where
+/// it keeps the state, else the host's. Kept while the state and the frame
+/// loads stay as they were: the organs' queries of one state evaluate once.
+/// The result is the solver's own (valid until the next call).
+FASCIA_INTERN fascia_status fascia_solver_loads_gradient(fascia_solver *solver, const fascia_real **gradient);
 
 /// Minimizes the step objective (static: potential energy, re-anchored at
 /// every iteration; dynamic: inertia + potential with increments d anchored
