@@ -361,18 +361,6 @@ void fascia_system_sample_positions(const fascia_system *sys, fascia_real *out) 
   for (int32_t s = 0; s < sys->sample_count; ++s) fascia_pt_sample_position(&sys->pm, &st, s, out + 3 * (int64_t)s);
 }
 
-void fascia_system_probe_position(const fascia_system *sys, int32_t p, fascia_real *out) {
-  const fascia_model *m = sys->model;
-  out[0] = out[1] = out[2] = 0;
-  for (int32_t k = m->probe_offsets[p]; k < m->probe_offsets[p + 1]; ++k) {
-    const int32_t i = m->probe_frame[k];
-    fascia_real d[3], a[3];
-    for (int c = 0; c < 3; ++c) d[c] = m->probe_position[3 * p + c] - m->frame_position[3 * i + c];
-    fascia_pt_mat_vec(sys->A + 9 * i, d, a);
-    for (int c = 0; c < 3; ++c) out[c] += m->probe_weight[k] * (sys->x[3 * i + c] + a[c]);
-  }
-}
-
 // |E| = |F^T F - I| / 2 of sample s (Frobenius norm), with F for the caller
 static fascia_real strain_norm(const fascia_system *sys, const fascia_pt_state *st, int32_t s, fascia_real *F) {
   fascia_pt_sample_F(&sys->pm, st, s, F);

@@ -116,9 +116,8 @@ FASCIA_INTERN void fascia_system_mass_apply(fascia_system *sys, const fascia_rea
 /// Lumped (row-sum) 6x6 mass blocks at the snapshot [36N].
 FASCIA_INTERN void fascia_system_mass_lumped(fascia_system *sys, fascia_real *blocks);
 
-/// Deformed sample positions [3S], probe positions [3Q].
+/// Deformed sample positions [3S].
 FASCIA_INTERN void fascia_system_sample_positions(const fascia_system *sys, fascia_real *out);
-FASCIA_INTERN void fascia_system_probe_position(const fascia_system *sys, int32_t probe, fascia_real *out);
 
 /// Green-Lagrange strain magnitude |E| (Frobenius) per sample [S] at the
 /// current state, and von Mises-like stress magnitude |P| (Pa) if stress

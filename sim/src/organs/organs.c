@@ -302,8 +302,12 @@ int32_t fascia_organs_body_count(const fascia_organs *O) {
   return count;
 }
 
-void fascia_organs_masks(fascia_organs *O, unsigned char *mask) {
-  const fascia_model *m = O->model;
+void fascia_organs_masks(const fascia_model *m, fascia_organs *O, unsigned char *mask) {
+  if (!O) { // no organ: the free frames
+    for (int32_t i = 0; i < m->frame_count; ++i)
+      for (int c = 0; c < 6; ++c) mask[6 * (int64_t)i + c] = m->frame_kind[i] == FASCIA_FRAME_FREE;
+    return;
+  }
   for (int32_t k = 0; k < O->organ_count; ++k) O->active[k] = O->master[k] >= 0 && !O->driven[k];
   for (int32_t i = 0; i < O->frame_count; ++i)
     for (int c = 0; c < 6; ++c) O->full_mask[6 * i + c] = m->frame_kind[i] == FASCIA_FRAME_FREE;
@@ -647,7 +651,7 @@ void fascia_organs_drive(fascia_organs *O, int32_t organ, const fascia_real *pos
   if (pose) memcpy(O->pose + 7 * organ, pose, 7 * sizeof(fascia_real));
   if (!O->driven[organ]) {
     O->driven[organ] = 1;
-    fascia_organs_masks(O, mask);
+    fascia_organs_masks(O->model, O, mask);
   }
 }
 
@@ -655,7 +659,7 @@ int fascia_organs_release(fascia_organs *O, int32_t organ, const fascia_organs_s
   if (!O->driven[organ]) return 0;
   O->driven[organ] = 0;
   O->posed[organ] = 0;
-  fascia_organs_masks(O, mask);
+  fascia_organs_masks(O->model, O, mask);
   if (active(O, organ)) place_slaves(O, st, organ);
   return 1;
 }

@@ -29,10 +29,11 @@ typedef struct fascia_organs_state {
 FASCIA_INTERN fascia_status fascia_organs_create(fascia_ctx *ctx, const fascia_model *model, fascia_organs **out);
 FASCIA_INTERN void fascia_organs_destroy(fascia_organs **organs);
 
-/// Fills the solver's mask (free DOFs of the reduced coordinates: free
-/// tissue frames and the master frame of each simulated rigid organ) and
-/// the organs' own full mask (every frame the tissue may move).
-FASCIA_INTERN void fascia_organs_masks(fascia_organs *O, unsigned char *mask);
+/// Fills the solver's mask, its only writer (free DOFs of the reduced
+/// coordinates: free tissue frames and the master frame of each simulated
+/// rigid organ), and the organs' own full mask (every frame the tissue may
+/// move). O NULL (a model without organs): the free frames.
+FASCIA_INTERN void fascia_organs_masks(const fascia_model *m, fascia_organs *O, unsigned char *mask);
 
 /// Static solve: puts frames driven by the caller at their targets.
 FASCIA_INTERN void fascia_organs_place(const fascia_organs *O, fascia_real *x, fascia_real *q);

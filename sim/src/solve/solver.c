@@ -11,6 +11,7 @@
 #include "cpu/dilatation.h"
 #include "cpu/modes.h"
 #include "organs/organs.h"
+#include "point/frame.h"
 #include "point/linalg.h"
 #include "solve/solver_internal.h"
 
@@ -168,9 +169,7 @@ fascia_status fascia_solver_create(fascia_ctx *ctx, const fascia_model *model, c
   FASCIA_TRY_GOTO(fascia_organs_create(ctx, model, &S->organs));
   memcpy(S->x, model->frame_position, 3 * (size_t)N * sizeof(fascia_real));
   memcpy(S->q, model->frame_rotation, 4 * (size_t)N * sizeof(fascia_real));
-  for (int64_t i = 0; i < N; ++i)
-    for (int c = 0; c < 6; ++c) S->mask[6 * i + c] = model->frame_kind[i] == FASCIA_FRAME_FREE;
-  if (S->organs) fascia_organs_masks(S->organs, S->mask);
+  fascia_organs_masks(model, S->organs, S->mask);
   FASCIA_TRY_GOTO(check_mass(S));
   energy_scale(S);
   static const fascia_pt_patches no_patches;
@@ -690,8 +689,19 @@ void fascia_solver_resume(fascia_solver *S, const fascia_real *x, const fascia_r
   ++S->linear_epoch;
 }
 
+// A probe moves as a sample does, with its own frames' positions and
+// rotations: read from the state, nothing evaluated.
 void fascia_solver_probe_position(const fascia_solver *S, int32_t probe, fascia_real *out) {
-  fascia_system_probe_position(host_system(S), probe, out);
+  const fascia_model *m = S->model;
+  out[0] = out[1] = out[2] = 0;
+  for (int32_t k = m->probe_offsets[probe]; k < m->probe_offsets[probe + 1]; ++k) {
+    const int32_t i = m->probe_frame[k];
+    fascia_real A[9], d[3], a[3];
+    fascia_pt_frame_A(S->q + 4 * (int64_t)i, m->frame_rotation + 4 * (int64_t)i, A);
+    for (int c = 0; c < 3; ++c) d[c] = m->probe_position[3 * probe + c] - m->frame_position[3 * i + c];
+    fascia_pt_mat_vec(A, d, a);
+    for (int c = 0; c < 3; ++c) out[c] += m->probe_weight[k] * (S->x[3 * i + c] + a[c]);
+  }
 }
 
 // Whether the backend answered an output query where it keeps the state
