@@ -343,7 +343,17 @@ static void print_summary(const prep_run *r, const step_clock *c, const char *ou
     const fascia_prep_tissue_report *dr = v->organ_regions + o;
     int32_t frames = 0, samples = 0;
     for (int32_t i = 0; i < r->points->frame_count; ++i) frames += r->points->frame_inside_organ[i] == o;
-    for (int32_t s = 0; s < r->points->sample_count; ++s) samples += r->points->sample_inside_organ[s] == o;
+    double wall = 0; // a shell's samples carry its wall, area x thickness
+    for (int32_t s = 0; s < r->points->sample_count; ++s)
+      if (r->points->sample_inside_organ[s] == o) ++samples, wall += r->points->sample_volume[s];
+    if (sc->organs[o].shell) {
+      fprintf(stderr,
+              "shell organ '%s': wall %.3g mm thick, %.4g cm^2; %d frames of its own and %d shared with tissues, "
+              "%d samples\n",
+              sc->organs[o].name, 1e3 * sc->organs[o].thickness, 1e4 * wall / sc->organs[o].thickness, (int)frames,
+              (int)r->coupling->per_organ[o], (int)samples);
+      continue;
+    }
     fprintf(stderr,
             "deformable organ '%s': %lld voxels of %.3g mm, %.4g cm^3 in %d piece(s) (%d smaller pieces, %.3g cm^3, "
             "dropped); %d frames of its own and %d shared with tissues, %d samples\n",
