@@ -15,6 +15,7 @@
 //    sample's gradients give a linear field along its plane its slope;
 //  - the same bowl with samples at a third of the frame spacing: 9 points
 //    per triangle, the same volume, each point's gradients its own;
+//  - a cube's wall is built (its edges are no sign of a too-thick wall);
 //  - every refusal is one line naming the key: a wall not thinner than its
 //    frame spacing, a wall thicker than the organ (a 2 mm slab), a sample
 //    spacing out of range, a volume's key, shell keys on another model.
@@ -320,6 +321,25 @@ static void refused(const char *dir, const char *mesh, const char *organ, const 
   fascia_ctx_destroy(&ctx);
 }
 
+// A cube as a shell (a box-shaped organ): its frames on the edges are no
+// sign of a wall thicker than the organ, though the wall's inner face
+// meets the adjacent side there.
+static int check_cube(const char *dir) {
+  char path[512];
+  CHECK(write_scene(dir, "cube.obj", shell, path));
+  fascia_ctx *ctx = fixture_ctx();
+  fixture_run r;
+  CHECK_OK(fixture_prep(ctx, path, &r), ctx);
+  double wall = 0;
+  for (int32_t s = 0; r.model && s < r.model->sample_count; ++s)
+    if (r.model->sample_organ[s] == 1) wall += r.model->sample_volume[s];
+  printf("t595: cube: wall %.4g of its area x thickness\n", wall / (6 * 0.02 * 0.02 * 0.001));
+  CHECK_NEAR(wall, 6 * 0.02 * 0.02 * 0.001, 1e-6, 0);
+  fixture_free(&r);
+  fascia_ctx_destroy(&ctx);
+  return 0;
+}
+
 static void check_refusals(const char *dir) {
   refused(dir, "b.obj",
           "\"model\": \"shell\", \"material\": \"wall\", \"thickness\": 0.004, \"frame_spacing\": 0.004",
@@ -344,8 +364,10 @@ int main(void) {
   if (!fixture_tmpdir(dir)) return 1;
   const double a_lo[3] = {-0.03, -0.012, -0.012}, a_hi[3] = {-0.0005, 0.012, 0.012};
   const double slab_lo[3] = {0.005, -0.012, -0.012}, slab_hi[3] = {0.007, 0.012, 0.012};
+  const double cube_lo[3] = {0.005, -0.01, -0.01}, cube_hi[3] = {0.025, 0.01, 0.01};
   CHECK(fixture_box(dir, "a.obj", a_lo, a_hi) && write_sphere(dir, "b.obj") &&
-        write_bowl(dir, "bowl.obj") && fixture_box(dir, "slab.obj", slab_lo, slab_hi));
+        write_bowl(dir, "bowl.obj") && fixture_box(dir, "slab.obj", slab_lo, slab_hi) &&
+        fixture_box(dir, "cube.obj", cube_lo, cube_hi));
   const int stopped = check_shell(dir); // 1: a stage failed (printed)
   wall_counts one, nine;
   const int open_stopped = check_open_wall(dir, 1, &one) || check_open_wall(dir, 3, &nine);
@@ -353,8 +375,9 @@ int main(void) {
     CHECK(nine.samples == 9 * one.samples);
     CHECK_NEAR(nine.volume, one.volume, 1e-12, 0);
   }
+  const int cube_stopped = check_cube(dir);
   check_refusals(dir);
-  static const char *const files[] = {"a.obj", "b.obj", "bowl.obj", "slab.obj", "scene.json", NULL};
+  static const char *const files[] = {"a.obj", "b.obj", "bowl.obj", "slab.obj", "cube.obj", "scene.json", NULL};
   fixture_cleanup(dir, files);
-  return stopped || open_stopped || CHECK_RESULT();
+  return stopped || open_stopped || cube_stopped || CHECK_RESULT();
 }

@@ -37,6 +37,10 @@
 // rest of the surface (the tilt of the closest triangle's normal is allowed
 // for on a curved, faceted surface).
 #define FACE_CLEARANCE 0.7
+// ... where the rest of the surface faces the wall's face back: its normal
+// more than about 105 degrees from the frame's (a sharp edge's other side
+// stands at 90)
+#define FACING_COS (-0.25)
 // The frames' triangles must cover the organ's surface to this fraction (a
 // faceted wall is smaller than a voxel-stepped or wrinkled surface).
 #define AREA_TOLERANCE 0.25
@@ -373,7 +377,13 @@ static fascia_status check_thickness(fascia_ctx *ctx, const fascia_prep_scene *s
       for (int r = 0; r < 3; ++r) y[r] = x[3 * (int64_t)i + r] + side * 0.5 * t * normal[r];
       fascia_cgal_tree_closest(tree, 1, y, c, &k);
       const double clear = dist3(y, c);
-      PREP_CHECK(clear >= FACE_CLEARANCE * 0.5 * t, ctx, FASCIA_ERR_ARGUMENT,
+      // only a part of the surface that faces the wall's face back counts
+      // (the organ thinner than the wall there): beside a sharp edge the
+      // inner face comes near the adjacent side, which faces across
+      double nearby[3];
+      triangle_normal(m, k, nearby);
+      const int facing = normal[0] * nearby[0] + normal[1] * nearby[1] + normal[2] * nearby[2] < FACING_COS;
+      PREP_CHECK(!facing || clear >= FACE_CLEARANCE * 0.5 * t, ctx, FASCIA_ERR_ARGUMENT,
                  "scene '%s' organs[%d].thickness: the wall of '%s', %.3g mm thick, is thicker than the organ near "
                  "(%.4g %.4g %.4g) m: its face there comes within %.3g mm of another part of the surface (expected "
                  "about %.3g mm); give a thinner wall, or make the organ \"deformable\"",
