@@ -9,7 +9,9 @@
 #  - the system's state (x, q, A) is written by fascia_system_set_state
 #    from three places only: system.c (the rest state at creation), the CPU
 #    backend (its trial states, cpu/backend_cpu.c) and the solver's
-#    host_system (solve/solver.c), which every host query goes through.
+#    host_system (solve/solver.c), which every host query goes through;
+#    its load factor (gravity_scale) by the same three, and by the solver's
+#    loads gradient (the reactions' full load, put back after).
 # A breach fails with the file and line.
 import pathlib
 import re
@@ -39,7 +41,24 @@ for path in sorted(src.rglob("*.c")):
             continue
         bad.append(f"{path.relative_to(root)}:{number}: writes the system's state in {function}(); "
                    "go through the solver's host_system or the backend")
+scales = 0
+for path in sorted(src.rglob("*.c")):
+    function = None
+    for number, line in enumerate(path.read_text().splitlines(), 1):
+        m = re.match(r"^[a-z].*?\b(\w+)\(", line)
+        if m and not line.startswith(("typedef", "return")):
+            function = m.group(1)
+        if not re.search(r"sys->gravity_scale\s*=[^=]", line):
+            continue
+        scales += 1
+        name = path.relative_to(src).as_posix()
+        if (name, function) in (("cpu/system.c", "fascia_system_create"), ("cpu/backend_cpu.c", "cpu_begin"),
+                                ("solve/solver.c", "host_system"), ("solve/solver.c", "fascia_solver_loads_gradient")):
+            continue
+        bad.append(f"{path.relative_to(root)}:{number}: writes the system's load factor in {function}(); "
+                   "the solver's load_factor is the run's, the backend's step values carry it")
 for b in bad:
     print(b)
-print(f"t372: {len(organs)} files of sim/src/organs read, {calls} writes of the system's state, {len(bad)} out of place")
-sys.exit(1 if bad or not organs or calls == 0 else 0)
+print(f"t372: {len(organs)} files of sim/src/organs read, {calls} writes of the system's state, {scales} of its load "
+      f"factor, {len(bad)} out of place")
+sys.exit(1 if bad or not organs or calls == 0 or scales == 0 else 0)

@@ -477,7 +477,7 @@ void fascia_organs_reduce_matrix(const fascia_organs *O, const fascia_system *sy
   }
 }
 
-fascia_real fascia_organs_load_norm2(const fascia_organs *O, const fascia_system *sys) {
+fascia_real fascia_organs_load_norm2(const fascia_organs *O, const fascia_system *sys, fascia_real gs) {
   fascia_real sum = 0;
   for (int32_t b = 0; O && b < O->organ_count; ++b) {
     if (!active(O, b)) continue;
@@ -488,7 +488,7 @@ fascia_real fascia_organs_load_norm2(const fascia_organs *O, const fascia_system
       if (i == O->master[b]) continue;
       for (int c = 0; c < 3; ++c) f[c] += sys->frame_mass[i] * sys->gravity[c] + O->model->frame_load[6 * i + c];
     }
-    sum += sys->gravity_scale * sys->gravity_scale * fascia_pt_dot3(f, f);
+    sum += gs * gs * fascia_pt_dot3(f, f);
   }
   return sum;
 }

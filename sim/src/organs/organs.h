@@ -79,8 +79,9 @@ FASCIA_INTERN void fascia_organs_reduce_matrix(const fascia_organs *O, const fas
                                                const unsigned char *moves, fascia_real mass_coefficient,
                                                const fascia_bsr *K, fascia_bsr *R);
 /// Squared norm of the loads on the bodies (gravity of the body, loads and
-/// tissue weight on the slave frames), for the Newton tolerance.
-FASCIA_INTERN fascia_real fascia_organs_load_norm2(const fascia_organs *O, const fascia_system *sys);
+/// tissue weight on the slave frames) at load factor gs, for the Newton
+/// tolerance.
+FASCIA_INTERN fascia_real fascia_organs_load_norm2(const fascia_organs *O, const fascia_system *sys, fascia_real gs);
 
 /// Body state that a failed step must restore: size in reals, save, restore.
 FASCIA_INTERN size_t fascia_organs_state_size(const fascia_organs *O);

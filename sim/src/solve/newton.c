@@ -95,18 +95,18 @@ static fascia_status no_decrease(const fascia_solver *S, int iteration, fascia_r
                      iteration, gnorm, tolerance);
 }
 
-// |external load| over free DOFs: the scale of the Newton tolerance
-static fascia_real load_norm(const fascia_solver *S) {
+// |external load| over free DOFs at load factor gs: the scale of the Newton tolerance
+static fascia_real load_norm(const fascia_solver *S, fascia_real gs) {
   const fascia_system *sys = S->sys;
   fascia_real sum = 0;
   for (int32_t i = 0; i < S->frame_count; ++i)
     for (int c = 0; c < 3; ++c) {
-      const fascia_real f = sys->gravity_scale * (sys->frame_mass[i] * sys->gravity[c] + S->model->frame_load[6 * i + c]);
+      const fascia_real f = gs * (sys->frame_mass[i] * sys->gravity[c] + S->model->frame_load[6 * i + c]);
       if (S->mask[6 * i + c]) sum += f * f;
-      const fascia_real t = sys->gravity_scale * S->model->frame_load[6 * i + 3 + c];
+      const fascia_real t = gs * S->model->frame_load[6 * i + 3 + c];
       if (S->mask[6 * i + 3 + c]) sum += t * t;
     }
-  return sqrt(sum + fascia_organs_load_norm2(S->organs, S->sys));
+  return sqrt(sum + fascia_organs_load_norm2(S->organs, S->sys, gs));
 }
 
 // Beyond this magnitude an energy or a residual norm is taken for an
@@ -136,7 +136,7 @@ fascia_status fascia_newton_minimize(fascia_solver *S, const fascia_step_values 
   FASCIA_TRY(ops->evaluate(be, 0, 1, &now));
   rep->profile.evaluate_ms += fascia_now_ms() - t;
   const fascia_real g0 = sqrt(now.gradient_norm2);
-  const fascia_real load = load_norm(S);
+  const fascia_real load = load_norm(S, values->gravity_scale);
   fascia_real reference = load;
   if (values->dynamic || reference == 0) reference = reference > g0 ? reference : g0;
   if (reference == 0) reference = 1;

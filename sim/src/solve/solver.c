@@ -172,6 +172,7 @@ fascia_status fascia_solver_create(fascia_ctx *ctx, const fascia_model *model, c
   fascia_organs_masks(model, S->organs, S->mask);
   FASCIA_TRY_GOTO(check_mass(S));
   energy_scale(S);
+  S->load_factor = 1;
   static const fascia_pt_patches no_patches;
   const fascia_dilatation *patches = S->sys->dilatation;
   fascia_backend_setup setup = {ctx,
@@ -247,6 +248,7 @@ static fascia_status save_state(fascia_solver *S, fascia_real **backup) {
 // copy), so nothing else needs to keep the two in step.
 static fascia_system *host_system(const fascia_solver *S) {
   fascia_system_set_state(S->sys, S->x, S->q);
+  S->sys->gravity_scale = S->load_factor;
   return S->sys;
 }
 
@@ -261,11 +263,10 @@ fascia_status fascia_solver_loads_gradient(fascia_solver *S, const fascia_real *
       FASCIA_TRY(ops->energy_gradient(S->backend, S->x, S->q, 1, S->reaction));
     } else {
       fascia_system *sys = host_system(S);
-      const fascia_real kept = sys->gravity_scale;
       fascia_real energy;
-      sys->gravity_scale = 1;
+      sys->gravity_scale = 1; // the reactions' full load
       const fascia_status status = fascia_system_evaluate(sys, S->reaction, &energy);
-      sys->gravity_scale = kept;
+      sys->gravity_scale = S->load_factor;
       FASCIA_TRY(status);
     }
     memcpy(at, S->x, 3 * N * sizeof *at);
@@ -292,7 +293,7 @@ static fascia_status check_blow_up(fascia_solver *S, const fascia_solve_report *
 // an implicit Euler step of length h
 static fascia_status minimize(fascia_solver *S, fascia_real h, fascia_solve_report *report) {
   const fascia_step_values values = {h > 0, h > 0 ? 1 / (h * h) : 0, h > 0 ? S->def.mass_damping / h : 0,
-                                     S->sys->gravity_scale, S->x_base, S->q_base, S->d, S->inertia_target};
+                                     S->load_factor, S->x_base, S->q_base, S->d, S->inertia_target};
   return fascia_newton_minimize(S, &values, S->def.newton_iterations, report);
 }
 
@@ -308,7 +309,7 @@ fascia_status fascia_solver_solve_static(fascia_solver *S, fascia_solve_report *
   const int steps = S->def.load_steps;
   int mechanism = 0; // the tangent where the solve started was not positive definite
   for (int l = 1; l <= steps && status == FASCIA_OK; ++l) {
-    S->sys->gravity_scale = (fascia_real)l / steps;
+    S->load_factor = (fascia_real)l / steps;
     memcpy(S->x_base, S->x, 3 * (size_t)N * sizeof(fascia_real));
     memcpy(S->q_base, S->q, 4 * (size_t)N * sizeof(fascia_real));
     memset(S->d, 0, 6 * (size_t)N * sizeof(fascia_real));
@@ -328,7 +329,7 @@ fascia_status fascia_solver_solve_static(fascia_solver *S, fascia_solve_report *
                            l, steps, cause);
     }
   }
-  S->sys->gravity_scale = 1;
+  S->load_factor = 1;
   S->energy_known = 0;
   memset(S->u, 0, 6 * (size_t)N * sizeof(fascia_real));
   if (status != FASCIA_OK) return status;
@@ -418,7 +419,7 @@ static fascia_status check_blow_up(fascia_solver *S, const fascia_solve_report *
     fascia_real work = 0;
     for (int32_t i = 0; i < S->frame_count; ++i)
       work += fascia_pt_dot3(S->model->frame_load + 6 * i + 3, S->d + 6 * i + 3);
-    work *= S->sys->gravity_scale;
+    work *= S->load_factor;
     const fascia_real after = total_energy(S);
     const fascia_real scale = fabs(energy_before) + S->weight_scale + fabs(work);
     if (!(after - energy_before <= ENERGY_RISE * scale))

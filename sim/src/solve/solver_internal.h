@@ -102,6 +102,7 @@ struct fascia_solver {
   fascia_real weight_scale;     ///< model mass * |g| * size, J: the energy scale of the rule
   fascia_real model_size;       ///< diagonal of the frames' bounding box, m (> 0)
   int energy_known;             ///< 1: energy_last is E_kin + E_pot of the current state
+  fascia_real load_factor;      ///< on gravity and the frames' loads: 1, or a static solve's load step's share
   fascia_real energy_last;
   /// the last static Newton solve's first tangent was not positive definite
   /// (a failed factorization, or CG's negative curvature): a mechanism, or a
