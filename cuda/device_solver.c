@@ -605,15 +605,12 @@ static fascia_status device_strain_past(fascia_backend *backend, fascia_real lim
   return FASCIA_OK;
 }
 
-// The outputs' per-sample values at x, q: the solver's state, which the
-// host may have set since the last step. The state's kernels as an
-// evaluation runs them, then FASCIA_K_SAMPLE_OUTPUT; what is asked for
-// comes back. Between steps: the next begin sends a step's own anchor.
-static fascia_status device_sample_outputs(fascia_backend *backend, const fascia_real *x, const fascia_real *q,
-                                           fascia_real *positions, fascia_real *strain, fascia_real *stress) {
-  fascia_device *dev = (fascia_device *)backend;
+// A query's state between steps: x, q as the anchor with no increment,
+// the frames' rotations and the patches' and modes' values there, as an
+// evaluation makes them (the next begin sends a step's own anchor).
+static fascia_status query_state(fascia_device *dev, const fascia_real *x, const fascia_real *q) {
   fascia_dev *D = &dev->D;
-  const size_t N = (size_t)dev->frame_count, S = (size_t)D->sample_count;
+  const size_t N = (size_t)dev->frame_count;
   FASCIA_TRY(dev->ops->upload(dev->L, D->x_base, x, 3 * N * sizeof(fascia_real)));
   FASCIA_TRY(dev->ops->upload(dev->L, D->q_base, q, 4 * N * sizeof(fascia_real)));
   FASCIA_TRY(dev->ops->upload(dev->L, D->d, dev->zeros, 6 * N * sizeof(fascia_real)));
@@ -621,6 +618,16 @@ static fascia_status device_sample_outputs(fascia_backend *backend, const fascia
   kernel(dev, FASCIA_K_STATE, (int64_t)N, NULL, NULL, 0);
   if (D->modes_count > 0) kernel(dev, FASCIA_K_MODES_EVALUATE, D->modes_count, NULL, NULL, 0);
   if (D->patches.count > 0) kernel(dev, FASCIA_K_PATCH_EVALUATE, D->patches.count, NULL, NULL, 0);
+  return FASCIA_OK;
+}
+
+// The outputs' per-sample values at x, q: the solver's state, which the
+// host may have set since the last step; what is asked for comes back.
+static fascia_status device_sample_outputs(fascia_backend *backend, const fascia_real *x, const fascia_real *q,
+                                           fascia_real *positions, fascia_real *strain, fascia_real *stress) {
+  fascia_device *dev = (fascia_device *)backend;
+  const size_t S = (size_t)dev->D.sample_count;
+  FASCIA_TRY(query_state(dev, x, q));
   kernel(dev, FASCIA_K_SAMPLE_OUTPUT, (int64_t)S, NULL, dev->sample_output, 0);
   if (strain) FASCIA_TRY(dev->ops->download(dev->L, strain, dev->sample_output, S * sizeof(fascia_real)));
   if (stress) FASCIA_TRY(dev->ops->download(dev->L, stress, dev->sample_output + S, S * sizeof(fascia_real)));
@@ -633,15 +640,12 @@ static fascia_status device_sample_outputs(fascia_backend *backend, const fascia
 // frame's (the organs' reactions read their fixed and driven frames): the
 // evaluation's kernels up to the frames' gradients, unprojected, without
 // the bodies' folding. Between steps: the next begin sends a step's own
-// anchor, loads and settings.
+// loads and settings.
 static fascia_status device_energy_gradient(fascia_backend *backend, const fascia_real *x, const fascia_real *q,
                                             fascia_real load_factor, fascia_real *gradient) {
   fascia_device *dev = (fascia_device *)backend;
   fascia_dev *D = &dev->D;
   const size_t N = (size_t)dev->frame_count;
-  FASCIA_TRY(dev->ops->upload(dev->L, D->x_base, x, 3 * N * sizeof(fascia_real)));
-  FASCIA_TRY(dev->ops->upload(dev->L, D->q_base, q, 4 * N * sizeof(fascia_real)));
-  FASCIA_TRY(dev->ops->upload(dev->L, D->d, dev->zeros, 6 * N * sizeof(fascia_real)));
   FASCIA_TRY(dev->ops->upload(dev->L, dev->frame_load, dev->host_load, 6 * N * sizeof(fascia_real)));
   fascia_dev_settings kept = dev->set;
   dev->set.c1 = dev->set.c2 = dev->set.mass_coefficient = dev->set.shift = 0;
@@ -649,11 +653,8 @@ static fascia_status device_energy_gradient(fascia_backend *backend, const fasci
   dev->set.gravity_scale = load_factor;
   dev->set.project = 0;
   fascia_status st = push_settings(dev);
+  if (st == FASCIA_OK) st = query_state(dev, x, q);
   if (st == FASCIA_OK) {
-    kernel(dev, FASCIA_K_TRIAL, 6 * (int64_t)N, NULL, NULL, 0);
-    kernel(dev, FASCIA_K_STATE, (int64_t)N, NULL, NULL, 0);
-    if (D->modes_count > 0) kernel(dev, FASCIA_K_MODES_EVALUATE, D->modes_count, NULL, NULL, 0);
-    if (D->patches.count > 0) kernel(dev, FASCIA_K_PATCH_EVALUATE, D->patches.count, NULL, NULL, 0);
     kernel(dev, FASCIA_K_SAMPLE_GRADIENT, D->sample_count, NULL, NULL, 0);
     kernel(dev, FASCIA_K_FRAME_GRADIENT, (int64_t)N, NULL, NULL, 0);
     st = dev->ops->download(dev->L, gradient, D->g_trial, 6 * N * sizeof(fascia_real));

@@ -718,7 +718,7 @@ static void shell_sample(const fascia_prep_points *pts, const fascia_frame_grid 
     }
   }
   if (m < SHELL_BASIS || !solve_small(A, B, m)) return;
-  // the fit's slopes at the here: rows 1 and 2 of A^-1 B; weights as the triangle's
+  // the fit's slopes at the point: rows 1 and 2 of A^-1 B; weights as the triangle's
   double weight[SHELL_QUERY + 3] = {0};
   for (int32_t j = 0; j < pair_count[s]; ++j)
     for (int k = 0; k < 3; ++k)

@@ -535,7 +535,8 @@ fascia_status prep_shell_build(fascia_ctx *ctx, const fascia_prep_scene *scene, 
   out->frame_position = prep_calloc(3 * (int64_t)out->frame_count, sizeof(double));
   out->frame_organ = prep_calloc(out->frame_count, sizeof(int32_t));
   out->frame_triangle = prep_calloc(out->frame_count, sizeof(int32_t));
-  const int64_t points = (int64_t)T * od->section_points * prep_shell_split(od) * prep_shell_split(od);
+  const int split = prep_shell_split(od);
+  const int64_t points = (int64_t)T * od->section_points * split * split;
   PREP_CHECK_GOTO(points < INT32_MAX, ctx, FASCIA_ERR_ARGUMENT,
                   "scene '%s' organs[%d].sample_spacing: %.3g mm gives too many points on '%s'; raise it", scene->path,
                   (int)o, 1e3 * od->sample_spacing, od->name);
