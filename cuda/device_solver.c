@@ -23,7 +23,6 @@ enum { SLOT_CG_FIXED = 0, SLOT_CG_CHUNK = 1 };
 typedef struct fascia_device {
   fascia_backend base;
   fascia_ctx *ctx;
-  fascia_system *sys;            ///< the host system: its energies and inversions follow the device's
   int32_t frame_count;
   const fascia_launcher_ops *ops;
   fascia_launcher *L;
@@ -37,9 +36,10 @@ typedef struct fascia_device {
   size_t bytes;                  ///< device memory held
   int recorded[FASCIA_LAUNCH_SLOTS];
   fascia_dev_kernel stiffness;   ///< the stiffness product kernel for this model's terms
-  void *pinned[MAX_PINNED];      ///< the solver's arrays that cross every step, page-locked
+  void *pinned[MAX_PINNED];      ///< the host arrays that cross every step, page-locked
   int pinned_count;
   fascia_real *zeros;            ///< host [6N]
+  fascia_real *result;           ///< host [19N]: a solve's x, q, d, gradient (device_finish)
   // what crosses at every step's begin: the masks and the frame loads (a
   // caller may fix DOFs, drive an organ or change loads between steps, as
   // on the CPU) and the bodies' per-step values
@@ -261,6 +261,7 @@ static void device_destroy(fascia_backend *backend) {
   for (int k = 0; k < dev->pinned_count; ++k) dev->ops->unpin(dev->L, dev->pinned[k]);
   if (dev->L) dev->ops->destroy(dev->L);
   free(dev->zeros);
+  free(dev->result);
   free(dev);
 }
 
@@ -271,13 +272,14 @@ static fascia_status device_create(const fascia_backend_setup *setup, const fasc
   FASCIA_CHECK(dev, setup->ctx, FASCIA_ERR_MEMORY, "device: out of memory");
   dev->base.ops = backend;
   dev->ctx = setup->ctx;
-  dev->sys = setup->sys;
   dev->frame_count = setup->model->frame_count;
   dev->host_mask = setup->mask;
   dev->host_load = setup->model->frame_load;
   dev->ops = ops;
   dev->zeros = calloc(6 * (size_t)dev->frame_count + 1, sizeof(fascia_real));
-  fascia_status status = dev->zeros ? FASCIA_OK : FASCIA_FAIL(setup->ctx, FASCIA_ERR_MEMORY, "device: out of memory");
+  dev->result = calloc(19 * (size_t)dev->frame_count + 1, sizeof(fascia_real));
+  fascia_status status =
+      dev->zeros && dev->result ? FASCIA_OK : FASCIA_FAIL(setup->ctx, FASCIA_ERR_MEMORY, "device: out of memory");
   if (status == FASCIA_OK) status = ops->create(setup->ctx, setup->sys->threads, &dev->L);
   if (status == FASCIA_OK) status = upload_model(dev, setup);
   if (status == FASCIA_OK) status = ops->finish(dev->L);
@@ -290,6 +292,8 @@ static fascia_status device_create(const fascia_backend_setup *setup, const fasc
   // copies, only slower)
   for (int k = 0; k < setup->crossing_count && dev->pinned_count < MAX_PINNED; ++k)
     if (ops->pin(dev->L, setup->crossing[k], setup->crossing_bytes[k])) dev->pinned[dev->pinned_count++] = setup->crossing[k];
+  if (dev->pinned_count < MAX_PINNED && ops->pin(dev->L, dev->result, 19 * (size_t)dev->frame_count * sizeof(fascia_real)))
+    dev->pinned[dev->pinned_count++] = dev->result;
   const fascia_solver_def *def = setup->def;
   dev->set.cg_limits.max = def->cg_iterations;
   dev->set.cg_limits.fixed = def->cg_fixed;
@@ -572,22 +576,27 @@ static void device_restore(fascia_backend *backend) {
   kernel(dev, FASCIA_K_RESTORE, dev->frame_count, NULL, NULL, 0);
 }
 
-// The state of the last evaluation back to the host, with the host system's
-// energies and inversions.
-static fascia_status device_finish(fascia_backend *backend, const fascia_step_result *result) {
+// The state of the last evaluation back to the host, into the backend's
+// own arrays, with its energies and inversions.
+static fascia_status device_finish(fascia_backend *backend, fascia_step_result *result) {
   fascia_device *dev = (fascia_device *)backend;
   const size_t N = (size_t)dev->frame_count;
   const fascia_launcher_ops *ops = dev->ops;
-  ops->receive(dev->L, result->x, dev->D.x, 3 * N * sizeof(fascia_real));
-  ops->receive(dev->L, result->q, dev->D.q, 4 * N * sizeof(fascia_real));
-  ops->receive(dev->L, result->d, dev->D.d, 6 * N * sizeof(fascia_real));
-  ops->receive(dev->L, result->gradient, dev->D.g_trial, 6 * N * sizeof(fascia_real));
+  fascia_real *x = dev->result, *q = x + 3 * N, *d = q + 4 * N, *gradient = d + 6 * N;
+  ops->receive(dev->L, x, dev->D.x, 3 * N * sizeof(fascia_real));
+  ops->receive(dev->L, q, dev->D.q, 4 * N * sizeof(fascia_real));
+  ops->receive(dev->L, d, dev->D.d, 6 * N * sizeof(fascia_real));
+  ops->receive(dev->L, gradient, dev->D.g_trial, 6 * N * sizeof(fascia_real));
   FASCIA_TRY(ops->finish(dev->L)); // one wait for the four
-  // the host system's own state is set where it is read (probes, strain)
-  dev->sys->energy_internal = dev->sc.energy_internal;
-  dev->sys->energy_external = dev->sc.energy_external;
-  dev->sys->inverted_count = (int32_t)dev->sc.inverted;
-  dev->sys->first_inverted = dev->sc.inverted > 0 ? first_flagged(dev, FASCIA_PT_FLAG_INVERTED) : -1;
+  *result = (fascia_step_result){.x = x,
+                                 .q = q,
+                                 .d = d,
+                                 .gradient = gradient,
+                                 .energy_internal = dev->sc.energy_internal,
+                                 .energy_external = dev->sc.energy_external,
+                                 .inverted_count = (int32_t)dev->sc.inverted,
+                                 .first_inverted =
+                                     dev->sc.inverted > 0 ? first_flagged(dev, FASCIA_PT_FLAG_INVERTED) : -1};
   return FASCIA_OK;
 }
 
@@ -667,7 +676,7 @@ static fascia_status device_energy_gradient(fascia_backend *backend, const fasci
 // ------------------------------------------------------------ operators --
 
 static fascia_status device_gradient(fascia_backend *backend, const fascia_real *x, const fascia_real *q,
-                                     fascia_real *gradient, fascia_real *energy) {
+                                     fascia_real load_factor, fascia_real *gradient, fascia_real *energy) {
   fascia_device *dev = (fascia_device *)backend;
   const size_t N = (size_t)dev->frame_count;
   FASCIA_TRY(dev->ops->upload(dev->L, dev->D.x_base, x, 3 * N * sizeof(fascia_real)));
@@ -675,7 +684,7 @@ static fascia_status device_gradient(fascia_backend *backend, const fascia_real 
   FASCIA_TRY(dev->ops->upload(dev->L, dev->D.d, dev->zeros, 6 * N * sizeof(fascia_real)));
   dev->set.c1 = dev->set.c2 = dev->set.mass_coefficient = dev->set.shift = 0;
   dev->set.jacobian = 0;
-  dev->set.gravity_scale = dev->sys->gravity_scale;
+  dev->set.gravity_scale = load_factor;
   FASCIA_TRY(push_settings(dev));
   fascia_real phi, gg;
   FASCIA_TRY(objective(dev, 0, &phi, &gg));

@@ -28,6 +28,7 @@ typedef struct toy {
   int64_t n;
   int descends; ///< 0: directions point uphill
   double *a, *t, *d, *d_trial, *p, *g, *g_trial;
+  double *x, *q; ///< the state of the result (toy_finish), [3N], [4N]
   char calls[4096]; ///< the operations, a letter each
   int call_count;
   int nonlinear; ///< 0: the quadratic; 1: Rosenbrock in d0, d1; 2: sqrt(1 + d0^2) (both plus |d_rest|^2 / 2)
@@ -135,11 +136,18 @@ static void toy_accept(fascia_backend *b) {
   memcpy(T->g, T->g_trial, (size_t)T->n * sizeof(double));
 }
 
-static fascia_status toy_finish(fascia_backend *b, const fascia_step_result *result) {
+// The result from the toy's own arrays: its iterate, gradient and the
+// state x = x_base + d, q = q_base rotated by d.
+static fascia_status toy_finish(fascia_backend *b, fascia_step_result *result) {
   toy *T = (toy *)b;
   called(T, 'F');
-  memcpy(result->d, T->d, (size_t)T->n * sizeof(double));
-  memcpy(result->gradient, T->g, (size_t)T->n * sizeof(double));
+  const int64_t N = T->n / 6;
+  for (int64_t i = 0; i < N; ++i) {
+    for (int c = 0; c < 3; ++c) T->x[3 * i + c] = T->x_base[3 * i + c] + T->d[6 * i + c];
+    memcpy(T->q + 4 * i, T->q_base + 4 * i, 4 * sizeof(double));
+    fascia_pt_quat_rotate_by(T->d + 6 * i + 3, T->q + 4 * i);
+  }
+  *result = (fascia_step_result){.x = T->x, .q = T->q, .d = T->d, .gradient = T->g, .first_inverted = -1};
   return FASCIA_OK;
 }
 
@@ -170,23 +178,13 @@ static void toy_destroy(fascia_backend *b) {
   toy *T = (toy *)b;
   if (!T) return;
   free(T->a), free(T->t), free(T->d), free(T->d_trial), free(T->p), free(T->g), free(T->g_trial);
+  free(T->x), free(T->q);
   free(T);
 }
 static fascia_status toy_create(const fascia_backend_setup *setup, fascia_backend **out);
 static const char *toy_describe(const fascia_backend *b) {
   (void)b;
   return "toy, a quadratic in its own storage";
-}
-static fascia_status toy_finish_state(fascia_backend *b, const fascia_step_result *result) {
-  toy *T = (toy *)b;
-  toy_finish(b, result);
-  const int64_t N = T->n / 6;
-  for (int64_t i = 0; i < N; ++i) {
-    for (int c = 0; c < 3; ++c) result->x[3 * i + c] = T->x_base[3 * i + c] + T->d[6 * i + c];
-    memcpy(result->q + 4 * i, T->q_base + 4 * i, 4 * sizeof(double));
-    fascia_pt_quat_rotate_by(T->d + 6 * i + 3, result->q + 4 * i);
-  }
-  return FASCIA_OK;
 }
 static const fascia_backend_ops toy_registered_ops = {.name = "toy",
                                                       .automatic = 0,
@@ -200,16 +198,16 @@ static const fascia_backend_ops toy_registered_ops = {.name = "toy",
                                                       .prepare = toy_prepare,
                                                       .direction = toy_direction,
                                                       .accept = toy_accept,
-                                                      .finish = toy_finish_state};
+                                                      .finish = toy_finish};
 static fascia_status toy_create(const fascia_backend_setup *setup, fascia_backend **out) {
   toy *T = calloc(1, sizeof *T);
   FASCIA_CHECK(T, setup->ctx, FASCIA_ERR_MEMORY, "toy: out of memory");
   T->base.ops = &toy_registered_ops;
   T->n = 6 * (int64_t)setup->model->frame_count;
   T->descends = 1;
-  double **arrays[7] = {&T->a, &T->t, &T->d, &T->d_trial, &T->p, &T->g, &T->g_trial};
-  for (int k = 0; k < 7; ++k) *arrays[k] = calloc((size_t)T->n, sizeof(double));
-  if (!T->a || !T->t || !T->d || !T->d_trial || !T->p || !T->g || !T->g_trial) {
+  double **arrays[9] = {&T->a, &T->t, &T->d, &T->d_trial, &T->p, &T->g, &T->g_trial, &T->x, &T->q};
+  for (int k = 0; k < 9; ++k) *arrays[k] = calloc((size_t)T->n, sizeof(double));
+  if (!T->a || !T->t || !T->d || !T->d_trial || !T->p || !T->g || !T->g_trial || !T->x || !T->q) {
     toy_destroy(&T->base);
     return FASCIA_FAIL(setup->ctx, FASCIA_ERR_MEMORY, "toy: out of memory");
   }
@@ -243,12 +241,14 @@ static fascia_status nonlinear_solve(fascia_solver *S, int kind, int watchdog, d
                                      fascia_solve_report *report, double *x) {
   toy T = {.base = {watchdog ? &toy_watchdog_ops : &toy_ops}, .n = 6 * (int64_t)S->frame_count, .descends = 1,
            .nonlinear = kind};
-  double *buffers[8];
-  for (int k = 0; k < 8; ++k) buffers[k] = calloc((size_t)T.n, sizeof(double));
+  double *buffers[10];
+  for (int k = 0; k < 10; ++k) buffers[k] = calloc((size_t)T.n, sizeof(double));
   T.a = buffers[0], T.t = buffers[1], T.d = buffers[2], T.d_trial = buffers[3], T.p = buffers[4], T.g = buffers[5];
-  T.g_trial = buffers[6], T.saved = buffers[7];
+  T.g_trial = buffers[6], T.saved = buffers[7], T.x = buffers[8], T.q = buffers[9];
   fascia_backend *cpu = S->backend;
   S->backend = &T.base;
+  memcpy(S->x_base, S->x, (size_t)T.n / 2 * sizeof(double)); // the anchor the result's state is taken from
+  memcpy(S->q_base, S->q, (size_t)T.n / 6 * 4 * sizeof(double));
   memset(S->d, 0, (size_t)T.n * sizeof(double));
   S->d[0] = x0, S->d[1] = y0, S->d[2] = 0.5;
   memset(report, 0, sizeof *report);
@@ -259,7 +259,7 @@ static fascia_status nonlinear_solve(fascia_solver *S, int kind, int watchdog, d
   printf("%s toy, %s: status %s, %d Newton iterations, %d watchdog returns, x = (%.12g, %.12g)\n",
          kind == 1 ? "Rosenbrock" : "sqrt(1 + x^2)", watchdog ? "watchdog" : "monotone", fascia_status_name(st),
          report->newton_iterations, report->watchdog_returns, x[0], x[1]);
-  for (int k = 0; k < 8; ++k) free(buffers[k]);
+  for (int k = 0; k < 10; ++k) free(buffers[k]);
   return st;
 }
 
@@ -267,13 +267,15 @@ static fascia_status nonlinear_solve(fascia_solver *S, int kind, int watchdog, d
 // and the load scale); 0 when it behaved as the contract says.
 static int toy_solve(fascia_ctx *ctx, fascia_solver *S, int descends) {
   toy T = {.base = {&toy_ops}, .n = 6 * (int64_t)S->frame_count, .descends = descends};
-  double *buffers[7];
-  for (int k = 0; k < 7; ++k) buffers[k] = calloc((size_t)T.n, sizeof(double));
+  double *buffers[9];
+  for (int k = 0; k < 9; ++k) buffers[k] = calloc((size_t)T.n, sizeof(double));
   T.a = buffers[0], T.t = buffers[1], T.d = buffers[2], T.d_trial = buffers[3], T.p = buffers[4], T.g = buffers[5];
-  T.g_trial = buffers[6];
+  T.g_trial = buffers[6], T.x = buffers[7], T.q = buffers[8];
   for (int64_t k = 0; k < T.n; ++k) T.a[k] = 1 + (double)(k % 7), T.t[k] = 0.01 * (double)((k % 5) - 2);
   fascia_backend *cpu = S->backend;
   S->backend = &T.base;
+  memcpy(S->x_base, S->x, (size_t)T.n / 2 * sizeof(double)); // the anchor the result's state is taken from
+  memcpy(S->q_base, S->q, (size_t)T.n / 6 * 4 * sizeof(double));
   memset(S->d, 0, (size_t)T.n * sizeof(double));
   fascia_solve_report report;
   memset(&report, 0, sizeof report);
@@ -297,7 +299,7 @@ static int toy_solve(fascia_ctx *ctx, fascia_solver *S, int descends) {
     CHECK(T.calls[T.call_count - 1] == 'F'); // the state goes back to the host even on failure
     fascia_ctx_clear(ctx);
   }
-  for (int k = 0; k < 7; ++k) free(buffers[k]);
+  for (int k = 0; k < 9; ++k) free(buffers[k]);
   return 0;
 }
 

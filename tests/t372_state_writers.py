@@ -11,7 +11,12 @@
 #    backend (its trial states, cpu/backend_cpu.c) and the solver's
 #    host_system (solve/solver.c), which every host query goes through;
 #    its load factor (gravity_scale) by the same three, and by the solver's
-#    loads gradient (the reactions' full load, put back after).
+#    loads gradient (the reactions' full load, put back after);
+#  - the run's state, the solver's x, q, u, d and gradient, is written in
+#    solve/solver.c alone: a backend hands its result back read-only
+#    (fascia_step_result) and fascia_solver_take_result copies it; the
+#    organs' functions get the arrays (fascia_organs_state) from solver.c,
+#    or from solve/organ_api.c for an organ's release.
 # A breach fails with the file and line.
 import pathlib
 import re
@@ -42,19 +47,25 @@ def writes(pattern, allowed, what, advice):
             count += 1
             if (name, None) in allowed or (name, function) in allowed:
                 continue
-            bad.append(f"{path.relative_to(root)}:{number}: writes the system's {what} in {function}(); {advice}")
+            bad.append(f"{path.relative_to(root)}:{number}: writes the {what} in {function}(); {advice}")
     return count
 
 
 calls = writes(r"(?<!void )fascia_system_set_state\(", {("cpu/system.c", None), ("cpu/backend_cpu.c", None),
                                                           ("solve/solver.c", "host_system")},
-               "state", "go through the solver's host_system or the backend")
+               "system's state", "go through the solver's host_system or the backend")
 scales = writes(r"sys->gravity_scale\s*=[^=]", {("cpu/system.c", "fascia_system_create"),
-                                                ("cpu/backend_cpu.c", "cpu_begin"), ("solve/solver.c", "host_system"),
+                                                ("cpu/backend_cpu.c", "cpu_begin"), ("cpu/backend_cpu.c", "cpu_gradient"),
+                                                ("solve/solver.c", "host_system"),
                                                 ("solve/solver.c", "fascia_solver_loads_gradient")},
-                "load factor", "the solver's load_factor is the run's, the backend's step values carry it")
+                "system's load factor", "the solver's load_factor is the run's, the backend's step values carry it")
+run = r"(S|solver)->(x|q|u|d|gradient)\b"
+states = writes(rf"(memcpy|memset)\(\s*{run}|{run}\s*\[[^]]*\]\s*[-+*/]?=[^=]|fascia_step_result\b.*=.*(S|solver)->",
+                {("solve/solver.c", None)}, "run's state", "solver.c owns it: hand results back read-only")
+handed = writes(r"fascia_organs_state\s+\w+\s*=", {("solve/solver.c", None), ("solve/organ_api.c", None)},
+                "run's state (to the organs)", "only the solver hands the organs its arrays")
 for b in bad:
     print(b)
 print(f"t372: {len(organs)} files of sim/src/organs read, {calls} writes of the system's state, {scales} of its load "
-      f"factor, {len(bad)} out of place")
-sys.exit(1 if bad or not organs or calls == 0 or scales == 0 else 0)
+      f"factor, {states} of the run's state, {handed} hand-overs to the organs, {len(bad)} out of place")
+sys.exit(1 if bad or not organs or 0 in (calls, scales, states, handed) else 0)

@@ -5,7 +5,7 @@
 // matrix, directions by its linear solver (linear_solver.c: CG or sparse
 // Cholesky), and rigid organs as bodies whose frames follow them (organs.c).
 // Like the device, it keeps a step's state in arrays of its own: begin
-// copies the step's values in, finish copies the iterate out.
+// copies the step's values in, finish hands the iterate back to be copied.
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -53,6 +53,7 @@ typedef struct cpu_backend {
   const unsigned char *full_mask; ///< [6N] every frame the tissue moves (the bodies' slaves too)
   fascia_linear *linear;          ///< the Newton systems' solver: CG or direct, the factorization kept
   fascia_real gradient_norm2, trial_norm2; ///< of the current and the trial gradient (cpu_evaluate)
+  fascia_real torque_work;                 ///< the loads' torques' work at the last evaluation (objective)
   char text[96];
 } cpu_backend;
 
@@ -191,7 +192,7 @@ static fascia_status objective(cpu_backend *B, const fascia_real *d, fascia_real
   for (int32_t i = 0; i < N; ++i)
     torque_work += fascia_pt_frame_step_rotation(load + 6 * i, v->gravity_scale, d + 6 * i, v->dynamic, gradient + 6 * i);
   energy += torque_work;
-  B->sys->energy_external += torque_work;
+  B->torque_work = torque_work;
   if (v->c1 != 0 || v->c2 != 0) {
     // c1/2 (d - hu).M(d - hu) + c2/2 d.M d with M(hu) precomputed
     mass_apply(B, d, B->scratch);
@@ -224,7 +225,7 @@ static fascia_status cpu_evaluate(fascia_backend *backend, fascia_real alpha, in
   FASCIA_TRY(objective(B, d, &out->phi, g));
   out->gradient_norm2 = fascia_dot(g, g, n, B->sys->threads);
   *(current ? &B->gradient_norm2 : &B->trial_norm2) = out->gradient_norm2;
-  out->energy_size = fabs(B->sys->energy_internal) + fabs(B->sys->energy_external);
+  out->energy_size = fabs(B->sys->energy_internal) + fabs(B->sys->energy_external + B->torque_work);
   return FASCIA_OK;
 }
 
@@ -293,22 +294,27 @@ static void cpu_restore(fascia_backend *backend) {
   memcpy(B->d, B->saved + 7 * N, 6 * N * sizeof(fascia_real));
 }
 
-// The state of the last evaluation (the iterate) and its increments and
-// gradient to the caller's arrays; the system holds its energies already.
-static fascia_status cpu_finish(fascia_backend *backend, const fascia_step_result *result) {
+// The state of the last evaluation (the iterate), its increments and
+// gradient, from the backend's own arrays, and the system's energies there.
+static fascia_status cpu_finish(fascia_backend *backend, fascia_step_result *result) {
   cpu_backend *B = (cpu_backend *)backend;
-  const size_t N = (size_t)B->frame_count;
-  memcpy(result->x, B->x, 3 * N * sizeof(fascia_real));
-  memcpy(result->q, B->q, 4 * N * sizeof(fascia_real));
-  memcpy(result->d, B->d, 6 * N * sizeof(fascia_real));
-  memcpy(result->gradient, B->gradient, 6 * N * sizeof(fascia_real));
+  const fascia_system *sys = B->sys;
+  *result = (fascia_step_result){.x = B->x,
+                                 .q = B->q,
+                                 .d = B->d,
+                                 .gradient = B->gradient,
+                                 .energy_internal = sys->energy_internal,
+                                 .energy_external = sys->energy_external + B->torque_work,
+                                 .inverted_count = sys->inverted_count,
+                                 .first_inverted = sys->inverted_count > 0 ? sys->first_inverted : -1};
   return FASCIA_OK;
 }
 
 static fascia_status cpu_gradient(fascia_backend *backend, const fascia_real *x, const fascia_real *q,
-                                  fascia_real *gradient, fascia_real *energy) {
+                                  fascia_real load_factor, fascia_real *gradient, fascia_real *energy) {
   cpu_backend *B = (cpu_backend *)backend;
   fascia_system_set_state(B->sys, x, q);
+  B->sys->gravity_scale = load_factor;
   FASCIA_TRY(fascia_system_evaluate(B->sys, gradient, energy));
   for (int64_t k = 0; k < 6 * (int64_t)B->frame_count; ++k)
     if (!B->mask[k]) gradient[k] = 0;

@@ -109,7 +109,7 @@ fascia_status fascia_backend_pick(const fascia_backend_setup *setup, fascia_back
 
 fascia_status fascia_solver_backend_gradient(fascia_solver *S, const fascia_real *x, const fascia_real *q,
                                              fascia_real *gradient, fascia_real *energy) {
-  return S->backend->ops->gradient(S->backend, x, q, gradient, energy);
+  return S->backend->ops->gradient(S->backend, x, q, S->load_factor, gradient, energy);
 }
 
 fascia_status fascia_solver_backend_hessian_apply(fascia_solver *S, const fascia_real *v, fascia_real *out) {

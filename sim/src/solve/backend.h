@@ -77,11 +77,17 @@ typedef struct fascia_trial_values {
   fascia_real energy_size;    ///< |internal| + |external| potential energy: the line search's round-off scale
 } fascia_trial_values;
 
-/// Where a Newton solve's result goes (host arrays).
+/// A Newton solve's result as the backend hands it back: its own host
+/// arrays (read-only, valid until its next begin), which the solver copies
+/// into the run's state, and the potential at that state.
 typedef struct fascia_step_result {
-  fascia_real *x, *q; ///< state [3N], [4N]
-  fascia_real *d;     ///< increments [6N]
-  fascia_real *gradient; ///< projected gradient [6N]
+  const fascia_real *x, *q;       ///< state [3N], [4N]
+  const fascia_real *d;           ///< increments [6N]
+  const fascia_real *gradient;    ///< projected gradient [6N]
+  fascia_real energy_internal;    ///< the patches' volumetric energy included
+  fascia_real energy_external;    ///< gravity and loads times the load factor, the loads' torques' work
+  int32_t inverted_count;         ///< samples inverted at that state
+  int32_t first_inverted;         ///< the lowest of them, -1 for none
 } fascia_step_result;
 
 struct fascia_backend_ops {
@@ -120,9 +126,9 @@ struct fascia_backend_ops {
   /// (the watchdog, newton.c).
   void (*save)(fascia_backend *backend);
   void (*restore)(fascia_backend *backend);
-  /// The iterate (the state of the last evaluation) to the host; the host
-  /// system's energies and inversion counts set.
-  fascia_status (*finish)(fascia_backend *backend, const fascia_step_result *result);
+  /// The iterate (the state of the last evaluation) on the host, with its
+  /// energies and inversions; the backend writes no array of the solver's.
+  fascia_status (*finish)(fascia_backend *backend, fascia_step_result *result);
   /// Optional (NULL: the host checks the state finish gave, which is where
   /// the CPU keeps it). The step's
   /// check (solver.c's blow-up rule): whether some sample's strain
@@ -154,9 +160,10 @@ struct fascia_backend_ops {
   int (*linear_state_load)(fascia_backend *backend, const fascia_real *in, int64_t count);
 
   // --- operators at a given state, for the tests of every backend ---------
-  /// Potential energy and projected gradient [6N] at x, q.
+  /// Potential energy and projected gradient [6N] at x, q under the load
+  /// factor.
   fascia_status (*gradient)(fascia_backend *backend, const fascia_real *x, const fascia_real *q,
-                            fascia_real *gradient, fascia_real *energy);
+                            fascia_real load_factor, fascia_real *gradient, fascia_real *energy);
   /// out = H v on the free DOFs at the state of the last gradient().
   fascia_status (*hessian_apply)(fascia_backend *backend, const fascia_real *v, fascia_real *out);
   /// The 6x6 diagonal blocks of H [36N] at that state.

@@ -278,8 +278,9 @@ fascia_status fascia_newton_minimize(fascia_solver *S, const fascia_step_values 
     now = trial;
   }
   t = fascia_now_ms();
-  const fascia_step_result result = {S->x, S->q, S->d, S->gradient};
+  fascia_step_result result;
   const fascia_status down = ops->finish(be, &result);
+  if (down == FASCIA_OK) fascia_solver_take_result(S, &result); // a failed solve's too: its message reads it
   rep->profile.evaluate_ms += fascia_now_ms() - t;
   rep->newton_iterations += iteration;
   rep->gradient_norm = gnorm;
@@ -287,7 +288,7 @@ fascia_status fascia_newton_minimize(fascia_solver *S, const fascia_step_values 
   if (status != FASCIA_OK) return status;
   FASCIA_TRY(down);
   rep->converged = converged;
-  rep->inverted_samples = S->sys->inverted_count;
+  rep->inverted_samples = S->inverted_count;
   rep->profile.total_ms += fascia_now_ms() - t0;
   return FASCIA_OK;
 }

@@ -148,15 +148,15 @@ fascia_status fascia_solver_create(fascia_ctx *ctx, const fascia_model *model, c
   FASCIA_TRY_GOTO(fascia_system_create(ctx, model, def->threads > 0 ? def->threads : fascia_ctx_threads(ctx), &S->sys));
   const int64_t N = model->frame_count, n = 6 * N;
   // the arrays a GPU backend copies every step are on pages of their own
-  S->x = fascia_calloc_pages(3 * N, sizeof(fascia_real));
-  S->q = fascia_calloc_pages(4 * N, sizeof(fascia_real));
+  S->x = fascia_calloc(3 * N, sizeof(fascia_real));
+  S->q = fascia_calloc(4 * N, sizeof(fascia_real));
   S->u = fascia_calloc(n, sizeof(fascia_real));
   S->mask = fascia_calloc(n, 1);
   S->x_base = fascia_calloc_pages(3 * N, sizeof(fascia_real));
   S->q_base = fascia_calloc_pages(4 * N, sizeof(fascia_real));
   S->d = fascia_calloc_pages(n, sizeof(fascia_real));
   S->inertia_target = fascia_calloc_pages(n, sizeof(fascia_real));
-  S->gradient = fascia_calloc_pages(n, sizeof(fascia_real));
+  S->gradient = fascia_calloc(n, sizeof(fascia_real));
   S->kinetic_blocks = fascia_calloc(36 * N, sizeof(fascia_real));
   S->scratch = fascia_calloc(n, sizeof(fascia_real));
   S->reaction = fascia_calloc(n, sizeof(fascia_real));
@@ -173,6 +173,7 @@ fascia_status fascia_solver_create(fascia_ctx *ctx, const fascia_model *model, c
   FASCIA_TRY_GOTO(check_mass(S));
   energy_scale(S);
   S->load_factor = 1;
+  S->first_inverted = -1;
   static const fascia_pt_patches no_patches;
   const fascia_dilatation *patches = S->sys->dilatation;
   fascia_backend_setup setup = {ctx,
@@ -191,8 +192,8 @@ fascia_status fascia_solver_create(fascia_ctx *ctx, const fascia_model *model, c
                                 {0},
                                 {0},
                                 0};
-  void *const crossing[] = {S->x_base, S->q_base, S->d, S->inertia_target, S->x, S->q, S->gradient};
-  const size_t sizes[] = {3, 4, 6, 6, 3, 4, 6};
+  void *const crossing[] = {S->x_base, S->q_base, S->d, S->inertia_target};
+  const size_t sizes[] = {3, 4, 6, 6};
   for (size_t k = 0; k < sizeof crossing / sizeof crossing[0]; ++k) {
     setup.crossing[k] = crossing[k];
     setup.crossing_bytes[k] = sizes[k] * (size_t)N * sizeof(fascia_real);
@@ -383,7 +384,7 @@ fascia_status fascia_solver_solve_static(fascia_solver *S, fascia_solve_report *
 // leaves in the system (nothing is evaluated twice).
 static fascia_real total_energy(fascia_solver *S) {
   const fascia_real potential =
-      S->sys->energy_internal + S->sys->energy_external + fascia_organs_potential_energy(S->organs, S->x, S->q, S->sys->gravity);
+      S->energy_internal + S->energy_external + fascia_organs_potential_energy(S->organs, S->x, S->q, S->sys->gravity);
   return potential + fascia_solver_kinetic_energy(S);
 }
 
@@ -553,19 +554,17 @@ static void describe_failure(const fascia_solver *S, char *text, size_t size) {
                   part ? "torque" : "force", worst_norm[part], part ? "N m" : "N", (int)w, S->model->frame_position[3 * w],
                   S->model->frame_position[3 * w + 1], S->model->frame_position[3 * w + 2]);
   }
-  if (n < 0 || (size_t)n >= size || S->sys->inverted_count <= 0) return;
-  // the cause named is one the inverted samples' own law has
-  int32_t stvk = 0;
-  for (int32_t s = 0; s < S->sys->sample_count; ++s)
-    stvk += (S->sys->sample_flags[s] & FASCIA_PT_FLAG_INVERTED) && S->sys->sample_law[s] == FASCIA_LAW_STVK;
-  if (stvk > 0)
-    snprintf(text + n, size - (size_t)n, "; %d inverted samples (%d StVK), the first sample %d (likely cause: the "
+  if (n < 0 || (size_t)n >= size || S->inverted_count <= 0) return;
+  // the cause named is one the first inverted sample's own law has
+  const int32_t first = S->first_inverted;
+  if (first >= 0 && S->sys->sample_law[first] == FASCIA_LAW_STVK)
+    snprintf(text + n, size - (size_t)n, "; %d inverted samples, the first sample %d of StVK (likely cause: the "
              "material is crushed; StVK loses stiffness in compression, the stable Neo-Hookean does not)",
-             (int)S->sys->inverted_count, (int)stvk, (int)S->sys->first_inverted);
+             (int)S->inverted_count, (int)first);
   else
-    snprintf(text + n, size - (size_t)n, "; %d inverted samples (all Neo-Hookean), the first sample %d (likely cause: "
+    snprintf(text + n, size - (size_t)n, "; %d inverted samples, the first sample %d of Neo-Hookean (likely cause: "
              "the step moves the tissue farther than its Newton iterations follow, so the last iterate crushes it)",
-             (int)S->sys->inverted_count, (int)S->sys->first_inverted);
+             (int)S->inverted_count, (int)first);
 }
 
 fascia_status fascia_solver_step(fascia_solver *S, fascia_solve_report *report) {
@@ -677,6 +676,18 @@ fascia_status fascia_solver_set_state(fascia_solver *S, const fascia_real *x, co
   S->energy_known = 0;
   ++S->linear_epoch;
   return FASCIA_OK;
+}
+
+void fascia_solver_take_result(fascia_solver *S, const fascia_step_result *r) {
+  const size_t N = (size_t)S->frame_count;
+  memcpy(S->x, r->x, 3 * N * sizeof(fascia_real));
+  memcpy(S->q, r->q, 4 * N * sizeof(fascia_real));
+  memcpy(S->d, r->d, 6 * N * sizeof(fascia_real));
+  memcpy(S->gradient, r->gradient, 6 * N * sizeof(fascia_real));
+  S->energy_internal = r->energy_internal;
+  S->energy_external = r->energy_external;
+  S->inverted_count = r->inverted_count;
+  S->first_inverted = r->first_inverted;
 }
 
 void fascia_solver_resume(fascia_solver *S, const fascia_real *x, const fascia_real *q, const fascia_real *u,

@@ -88,6 +88,9 @@ struct fascia_solver {
   fascia_real *x_base, *q_base;     ///< anchor of the increments d
   fascia_real *d, *inertia_target;  ///< increments [6N], h u [6N]
   fascia_real *gradient;            ///< [6N]
+  // the potential and the inversions at the last solve's result
+  fascia_real energy_internal, energy_external;
+  int32_t inverted_count, first_inverted;
   fascia_real *kinetic_blocks, *scratch; ///< the kinetic energy's lumped blocks [36N] and M u [6N]
   // the organs' reactions: the energy's gradient at full load [6N], and the
   // x, q and frame loads [13N] it was taken at (fascia_solver_loads_gradient)
@@ -113,6 +116,13 @@ struct fascia_solver {
   /// the one kept (backend.h, linear_state_save)
   uint64_t linear_epoch;
 };
+
+struct fascia_step_result;
+/// A Newton solve's result (the backend's finish) into the run's state:
+/// positions, rotations, increments, gradient, energies and inversions.
+/// Every backend's result goes through here: the backends write no array
+/// of the solver's.
+FASCIA_INTERN void fascia_solver_take_result(fascia_solver *solver, const struct fascia_step_result *result);
 
 /// A checkpoint's state back (io_checkpoint.c): positions, rotations and
 /// velocities as stored (no renormalization, so the next step starts from
