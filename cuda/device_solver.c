@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// The device backend of the core's Newton loop (sim/src/solve/backend.h): the
+// The device backend of the core's Newton loop (sim/contract/backend.h): the
 // model's arrays uploaded once, and every operation of the loop run on the
 // device through a launcher (launch.h), on a GPU or in the host emulation.
 // The loop reads a few scalars per operation (energy, slope, gradient norm);
@@ -11,7 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "solve/backend.h"
+#include "contract/backend.h"
 #include "launch.h"
 
 #define CG_CHUNK 8 // CG iterations per recorded chunk in tolerance mode
@@ -159,23 +159,24 @@ static fascia_status upload_bodies(fascia_device *dev, const fascia_backend_setu
   return FASCIA_OK;
 }
 
-// The model's and the system's arrays whose device column (model_arrays.h,
-// system_arrays.h) names a member of fascia_dev: DEVICE(member) uploads the
-// array into D->member, POINT(member) into D->pm.member, HOST leaves it on
-// the host.
-static fascia_status upload_arrays(fascia_device *dev, const fascia_model *m, const fascia_system *sys) {
+// The model's and the system's arrays whose device column (the contract's
+// model_table.h, system_table.h) names a member of fascia_dev: DEVICE(member)
+// uploads the array into D->member, POINT(member) into D->pm.member, HOST
+// leaves it on the host.
+static fascia_status put_row(fascia_device *dev, const fascia_array_data *row, void **slot) {
+  return put(dev, row->data, row->bytes, slot);
+}
+
+static fascia_status upload_arrays(fascia_device *dev, const fascia_backend_setup *setup) {
   fascia_dev *D = &dev->D;
-  fascia_model_view views[FASCIA_MA_COUNT];
-  fascia_model_views(m, views);
   void **slot;
 #define HOST NULL
 #define DEVICE(member) (void **)&D->member
 #define POINT(member) DEVICE(pm.member)
 #define MODEL(field, kind, count, plus, width, path, unit, fill, flags, since, device)                                \
-  if ((slot = device))                                                                                                \
-    FASCIA_TRY(put(dev, views[FASCIA_MA_ID_##field].data, fascia_model_view_bytes(views + FASCIA_MA_ID_##field), slot));
+  if ((slot = device)) FASCIA_TRY(put_row(dev, setup->model_arrays + FASCIA_MA_ID_##field, slot));
 #define SYSTEM(field, type, count, width, device)                                                                     \
-  if ((slot = device)) FASCIA_TRY(put(dev, sys->field, (size_t)sys->count * (width) * sizeof(type), slot));
+  if ((slot = device)) FASCIA_TRY(put_row(dev, setup->system_arrays + FASCIA_SA_ID_##field, slot));
   FASCIA_MODEL_ARRAYS(MODEL)
   FASCIA_SYSTEM_ARRAYS(SYSTEM)
 #undef SYSTEM
@@ -187,25 +188,26 @@ static fascia_status upload_arrays(fascia_device *dev, const fascia_model *m, co
 }
 
 static fascia_status upload_model(fascia_device *dev, const fascia_backend_setup *setup) {
-  const fascia_system *sys = setup->sys;
   const fascia_model *m = setup->model;
   const int64_t N = m->frame_count, Sn = m->sample_count, P = m->pair_count;
   fascia_dev *D = &dev->D;
   D->frame_count = m->frame_count;
   D->sample_count = m->sample_count;
   D->pair_count = P;
-  D->max_neighbours = sys->max_neighbours;
+  D->max_neighbours = setup->max_neighbours;
   // the leanest stiffness kernel that has every term this model uses
   int coupling = 0, smoothing = 0;
+  const fascia_real *sample_coupling = setup->system_arrays[FASCIA_SA_ID_sample_coupling].data;
+  const fascia_real *sample_curvature = setup->system_arrays[FASCIA_SA_ID_sample_curvature].data;
   for (int64_t s = 0; s < Sn; ++s) {
-    coupling |= sys->sample_coupling[s] > 0;
-    smoothing |= sys->sample_curvature[s] > 0;
+    coupling |= sample_coupling[s] > 0;
+    smoothing |= sample_curvature[s] > 0;
   }
   dev->stiffness = coupling    ? FASCIA_K_SAMPLE_STIFFNESS
                    : smoothing ? FASCIA_K_SAMPLE_STIFFNESS_SMOOTHING
                                : FASCIA_K_SAMPLE_STIFFNESS_PAPER;
-  for (int c = 0; c < 3; ++c) D->gravity[c] = sys->gravity[c];
-  FASCIA_TRY(upload_arrays(dev, m, sys));
+  for (int c = 0; c < 3; ++c) D->gravity[c] = setup->gravity[c];
+  FASCIA_TRY(upload_arrays(dev, setup));
   dev->frame_load = (fascia_real *)D->frame_load; // sent again at every step's begin
   FASCIA_TRY(put(dev, setup->mask, 6 * (size_t)N, (void **)&dev->mask));
   D->mask = D->full_mask = dev->mask;
@@ -280,7 +282,7 @@ static fascia_status device_create(const fascia_backend_setup *setup, const fasc
   dev->result = calloc(19 * (size_t)dev->frame_count + 1, sizeof(fascia_real));
   fascia_status status =
       dev->zeros && dev->result ? FASCIA_OK : FASCIA_FAIL(setup->ctx, FASCIA_ERR_MEMORY, "device: out of memory");
-  if (status == FASCIA_OK) status = ops->create(setup->ctx, setup->sys->threads, &dev->L);
+  if (status == FASCIA_OK) status = ops->create(setup->ctx, setup->threads, &dev->L);
   if (status == FASCIA_OK) status = upload_model(dev, setup);
   if (status == FASCIA_OK) status = ops->finish(dev->L);
   if (status != FASCIA_OK) {

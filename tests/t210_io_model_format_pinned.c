@@ -6,7 +6,7 @@
 // (docs/model-format.md). The values are pinned for the hand-built fixture,
 // full, minimal and full with enhanced strain modes (file versions 2, 1 and
 // 4): reordering, renaming or reshaping a row of the model's table
-// (sim/src/model/model_arrays.h) fails here. --print shows what this build gives.
+// (sim/contract/model_table.h) fails here. --print shows what this build gives.
 #define _POSIX_C_SOURCE 200809L
 #include <hdf5.h>
 #include <inttypes.h>

@@ -12,7 +12,7 @@
 
 #include "cpu/system.h"
 #include "model/model_arrays.h"
-#include "cpu/system_arrays.h"
+#include "contract/system_table.h"
 #include "cpu/wide.h"
 #include "cpu/dilatation.h"
 #include "cpu/modes.h"
@@ -150,6 +150,13 @@ int32_t fascia_model_pair_owner(const fascia_model *m, int32_t k) {
     else hi = mid - 1;
   }
   return lo;
+}
+
+void fascia_system_arrays(const fascia_system *sys, fascia_array_data data[FASCIA_SA_COUNT]) {
+#define DATA(field, type, count, width, device)                                                                       \
+  data[FASCIA_SA_ID_##field] = (fascia_array_data){sys->field, (size_t)sys->count * (width) * sizeof(type)};
+  FASCIA_SYSTEM_ARRAYS(DATA)
+#undef DATA
 }
 
 void fascia_system_destroy(fascia_system **sys) {

@@ -12,6 +12,7 @@
 #ifndef FASCIA_SRC_SYSTEM_H
 #define FASCIA_SRC_SYSTEM_H
 
+#include "contract/backend.h"
 #include "fascia/model.h"
 #include "point/sample.h"
 #include "util/status.h"
@@ -85,6 +86,9 @@ FASCIA_INTERN int32_t fascia_model_pair_owner(const fascia_model *model, int32_t
 FASCIA_INTERN fascia_status fascia_system_create(fascia_ctx *ctx, const fascia_model *model, int threads,
                                                  fascia_system **out);
 FASCIA_INTERN void fascia_system_destroy(fascia_system **sys);
+/// The system's arrays by row of contract/system_table.h, for a backend's
+/// upload.
+FASCIA_INTERN void fascia_system_arrays(const fascia_system *sys, fascia_array_data data[FASCIA_SA_COUNT]);
 
 /// Sets the frame state (x [3N], q [4N] unit quaternions) and A.
 FASCIA_INTERN void fascia_system_set_state(fascia_system *sys, const fascia_real *x, const fascia_real *q);

@@ -297,7 +297,7 @@ static fascia_status write_organs(writer *w, const fascia_model *m) {
   return FASCIA_OK;
 }
 
-// The table's arrays (model_arrays.h) in its order, but for an EARLY row
+// The table's arrays (contract/model_table.h) in its order, but for an EARLY row
 // written before the row above; each group before its first dataset.
 static fascia_status write_arrays(writer *w, const fascia_model *m, const fascia_model_view *views) {
   char group[PATH_SIZE] = "";
@@ -929,7 +929,7 @@ static fascia_status read_organs(reader *r, fascia_model *m) {
   return FASCIA_OK;
 }
 
-// The table's arrays (model_arrays.h) in its order. A dataset of a later
+// The table's arrays (contract/model_table.h) in its order. A dataset of a later
 // version than the file's keeps its fill, as does an optional one the file
 // lacks (organ owners came with deformable organs: files without them are
 // all tissue).

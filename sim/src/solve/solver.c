@@ -10,6 +10,7 @@
 #include "solve/backend.h"
 #include "cpu/dilatation.h"
 #include "cpu/modes.h"
+#include "model/model_arrays.h"
 #include "organs/organs.h"
 #include "point/frame.h"
 #include "point/linalg.h"
@@ -176,8 +177,20 @@ fascia_status fascia_solver_create(fascia_ctx *ctx, const fascia_model *model, c
   S->first_inverted = -1;
   static const fascia_pt_patches no_patches;
   const fascia_dilatation *patches = S->sys->dilatation;
+  // the arrays a backend uploads, by row of the contract's tables
+  fascia_model_view views[FASCIA_MA_COUNT];
+  fascia_array_data model_arrays[FASCIA_MA_COUNT], system_arrays[FASCIA_SA_COUNT];
+  fascia_model_views(model, views);
+  for (int k = 0; k < FASCIA_MA_COUNT; ++k)
+    model_arrays[k] = (fascia_array_data){views[k].data, fascia_model_view_bytes(views + k)};
+  fascia_system_arrays(S->sys, system_arrays);
   fascia_backend_setup setup = {ctx,
                                 model,
+                                model_arrays,
+                                system_arrays,
+                                S->sys->max_neighbours,
+                                {S->sys->gravity[0], S->sys->gravity[1], S->sys->gravity[2]},
+                                S->sys->threads,
                                 S->sys,
                                 S->mask,
                                 &S->def,

@@ -24,7 +24,7 @@ FASCIA_INTERN void *fascia_calloc(int64_t count, size_t size);
 /// page and fails where two arrays share one. Freed with free().
 FASCIA_INTERN void *fascia_calloc_pages(int64_t count, size_t size);
 /// One row X(name, type, count, width, ...) of a list of arrays declared
-/// once (cpu/system_arrays.h, modes.h, dilatation.h): owner->name gets
+/// once (contract/system_table.h, modes.h, dilatation.h): owner->name gets
 /// count * width zeroed elements; ok becomes 0 where it could not.
 #define FASCIA_ALLOC_ROW(owner, ok, name, type, count, width)                                                          \
   ok &= ((owner)->name = fascia_calloc((int64_t)(count) * (width), sizeof(type))) != NULL

@@ -1,22 +1,22 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// The arrays the CPU system owns (fascia_system, system.h), declared once:
+// The arrays the CPU system owns (fascia_system, sim/src/cpu/system.h), declared once:
 // what the model gives the per-sample math after a pass over it (Lame
 // parameters, masses, offsets), the frame state and the scratch of an
 // evaluation. system.c allocates, checks and frees them from this list and
 // sets the per-sample math's view from it, and the device backend uploads
 // the rows whose last column names a member of its arrays
-// (cuda/device_solver.c). The model's own arrays: model_arrays.h.
+// (cuda/device_solver.c) from the data fascia_system_arrays gives it: the
+// table is part of the backend contract (backend.h). The model's own
+// arrays: model_table.h.
 // The smoothing graph (made by the first assembly) is outside the list.
-#ifndef FASCIA_SRC_SYSTEM_ARRAYS_H
-#define FASCIA_SRC_SYSTEM_ARRAYS_H
-
-#include "cpu/system.h"
+#ifndef FASCIA_CONTRACT_SYSTEM_TABLE_H
+#define FASCIA_CONTRACT_SYSTEM_TABLE_H
 
 // X(field, type, count, width, device)
 //   field   the member of fascia_system; type: its element type
 //   count   the member of fascia_system that sizes it: count * width values
-//   device  POINT(member), DEVICE(member) or HOST, as in model_arrays.h
+//   device  POINT(member), DEVICE(member) or HOST, as in model_table.h
 #define FASCIA_SYSTEM_ARRAYS(X)                                                                                        \
   X(pair_offset, fascia_real, pair_count, 3, POINT(pair_offset))                                                       \
   X(sample_lambda, fascia_real, sample_count, 1, POINT(sample_lambda))                                                 \
@@ -40,5 +40,13 @@
   X(sample_flags, int, sample_count, 1, HOST)                                                                          \
   X(conservative_torque, fascia_real, frame_count, 3, HOST)                                                            \
   X(gradient_scratch, fascia_real, frame_count, 6, HOST)
+
+/// Row numbers: FASCIA_SA_ID_pair_offset, ...
+enum {
+#define FASCIA_SA_ID_(field, ...) FASCIA_SA_ID_##field,
+  FASCIA_SYSTEM_ARRAYS(FASCIA_SA_ID_)
+#undef FASCIA_SA_ID_
+  FASCIA_SA_COUNT
+};
 
 #endif
