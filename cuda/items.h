@@ -176,20 +176,11 @@ static inline FASCIA_HD void fascia_dev_gather6(const fascia_dev *D, const fasci
   fascia_pt_frame_gather(D->frame_offsets, D->frame_pairs, buffer, i, sum);
 }
 
-// out = B v for a 6x6 block
-static inline FASCIA_HD void fascia_dev_block_apply(const fascia_real *B, const fascia_real *v, fascia_real *out) {
-  for (int r = 0; r < 6; ++r) {
-    fascia_real s = 0;
-    for (int c = 0; c < 6; ++c) s += B[6 * r + c] * v[c];
-    out[r] = s;
-  }
-}
-
 // frame i's share of M v: lumped block, or the gathered consistent products
 static inline FASCIA_HD void fascia_dev_frame_mass(const fascia_dev *D, int32_t i, const fascia_real *v,
                                                    fascia_real *out) {
   if (D->set->consistent_mass) fascia_dev_gather6(D, D->pair_mass, i, out);
-  else fascia_dev_block_apply(D->mass_blocks + 36 * (int64_t)i, v + 6 * (int64_t)i, out);
+  else fascia_pt_block6_mul(D->mass_blocks + 36 * (int64_t)i, v + 6 * (int64_t)i, out);
 }
 
 static inline FASCIA_HD void fascia_dev_rest_A(const fascia_dev *D, int32_t i, const fascia_real *q, fascia_real *A) {

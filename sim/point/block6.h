@@ -1,12 +1,22 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// 6x6 frame blocks of the preconditioners (Jacobi, block Jacobi), shared by
-// the CPU backend (precond.c) and the device kernels (cuda/): Cholesky,
+// 6x6 frame blocks, shared by the CPU backend and the device kernels
+// (cuda/): the product of a block (a lumped mass block) with a frame's
+// vector, and the preconditioners' (Jacobi, block Jacobi): Cholesky,
 // inverse, and the masked block product z = B r.
 #ifndef FASCIA_POINT_BLOCK6_H
 #define FASCIA_POINT_BLOCK6_H
 
 #include "linalg.h"
+
+/// out = B v for a 6x6 block B (row-major) and one frame's 6 entries v.
+static inline FASCIA_HD void fascia_pt_block6_mul(const fascia_real *B, const fascia_real *v, fascia_real *out) {
+  for (int r = 0; r < 6; ++r) {
+    fascia_real s = 0;
+    for (int c = 0; c < 6; ++c) s += B[6 * r + c] * v[c];
+    out[r] = s;
+  }
+}
 
 /// Cholesky factor of a 6x6 block in place (lower triangle); 0 if the block
 /// is not positive definite.

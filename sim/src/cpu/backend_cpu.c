@@ -13,6 +13,7 @@
 #include "solve/backend.h"
 #include "cpu/linear_solver.h"
 #include "organs/organs.h"
+#include "point/block6.h"
 #include "point/frame.h"
 #include "solve/solver_internal.h"
 
@@ -115,14 +116,8 @@ static const char *cpu_describe(const fascia_backend *backend) { return ((const 
 
 static void mass_apply(cpu_backend *B, const fascia_real *v, fascia_real *out) {
   if (B->def->mass == FASCIA_MASS_LUMPED) {
-    for (int32_t i = 0; i < B->frame_count; ++i) {
-      const fascia_real *M = B->mass_blocks + 36 * (int64_t)i, *vi = v + 6 * (int64_t)i;
-      for (int r = 0; r < 6; ++r) {
-        fascia_real s = 0;
-        for (int c = 0; c < 6; ++c) s += M[6 * r + c] * vi[c];
-        out[6 * (int64_t)i + r] = s;
-      }
-    }
+    for (int32_t i = 0; i < B->frame_count; ++i)
+      fascia_pt_block6_mul(B->mass_blocks + 36 * (int64_t)i, v + 6 * (int64_t)i, out + 6 * (int64_t)i);
   } else {
     fascia_system_mass_apply(B->sys, v, out);
   }

@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "point/block6.h"
 #include "point/body.h"
 #include "point/cg.h"
 #include "solve/solver_internal.h"
@@ -49,12 +50,9 @@ void fascia_operator_apply(const fascia_operator *op, const fascia_real *v, fasc
   if (op->mass_coefficient != 0 && !op->assembled) {
     if (op->mass == FASCIA_MASS_LUMPED) {
       for (int32_t i = 0; i < sys->frame_count; ++i) {
-        const fascia_real *B = op->mass_blocks + 36 * (int64_t)i, *vi = v + 6 * (int64_t)i;
-        for (int r = 0; r < 6; ++r) {
-          fascia_real s = 0;
-          for (int c = 0; c < 6; ++c) s += B[6 * r + c] * vi[c];
-          out[6 * (int64_t)i + r] += op->mass_coefficient * s;
-        }
+        fascia_real Mv[6];
+        fascia_pt_block6_mul(op->mass_blocks + 36 * (int64_t)i, v + 6 * (int64_t)i, Mv);
+        for (int r = 0; r < 6; ++r) out[6 * (int64_t)i + r] += op->mass_coefficient * Mv[r];
       }
     } else {
       fascia_system_mass_apply(sys, v, op->scratch);
