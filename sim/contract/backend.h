@@ -45,8 +45,9 @@ typedef struct fascia_backend {
 /// table (point/body.h), whose per-step values and active flags the solver
 /// sets before each step, and the full mask of every frame the tissue moves.
 /// organs is for the CPU's direct solver, which assembles P^T K P
-/// (organs.c); sys and solver are the CPU backend's own (it evaluates the
-/// host system; a device reads neither).
+/// (organs.c); sys and linear_epoch are the CPU backend's own (it evaluates
+/// the host system, and keeps a factorization while the epoch stays; a
+/// device reads neither).
 typedef struct fascia_backend_setup {
   fascia_ctx *ctx;
   const fascia_model *model;
@@ -58,7 +59,7 @@ typedef struct fascia_backend_setup {
   fascia_system *sys;
   const unsigned char *mask;     ///< [6N] 1 free
   const fascia_solver_def *def;
-  struct fascia_solver *solver;
+  const uint64_t *linear_epoch; ///< bumped where the run's state is set from outside or restored
   fascia_organs *organs;
   int32_t rigid_bodies; ///< rigid organs simulated as bodies now
   const struct fascia_pt_bodies *bodies; ///< NULL: no rigid organ with coupling frames
@@ -76,6 +77,11 @@ typedef struct fascia_backend_setup {
   size_t crossing_bytes[8];
   int crossing_count;
 } fascia_backend_setup;
+
+/// The relative Levenberg shift beyond which the Newton loop gives up; a
+/// backend that raises the shift in direction() (a factorization that
+/// needs a positive definite matrix) gives up there too.
+#define FASCIA_NEWTON_MAX_SHIFT 1e12
 
 /// The values of one Newton solve.
 typedef struct fascia_step_values {

@@ -10,12 +10,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "solve/backend.h"
+#include "contract/backend.h"
 #include "cpu/linear_solver.h"
 #include "organs/organs.h"
 #include "point/block6.h"
 #include "point/frame.h"
-#include "solve/solver_internal.h"
 
 // The backend's own arrays, declared once: member, element type, values per
 // frame. The members, their allocation, check and freeing follow.
@@ -40,7 +39,9 @@
 #define CPU_MEMBER(name, type, width) type *name;
 typedef struct cpu_backend {
   fascia_backend base;
-  fascia_solver *S; ///< for its organs, context and linear-solver epoch
+  fascia_ctx *ctx;
+  fascia_organs *organs;
+  const uint64_t *linear_epoch; ///< the solver's: a kept factorization is used while it stays
   fascia_system *sys;
   const fascia_model *model;
   const fascia_solver_def *def;
@@ -83,7 +84,9 @@ static fascia_status cpu_create(const fascia_backend_setup *setup, fascia_backen
   cpu_backend *B = calloc(1, sizeof *B);
   FASCIA_CHECK(B, setup->ctx, FASCIA_ERR_MEMORY, "solver: out of memory");
   B->base.ops = &fascia_backend_cpu;
-  B->S = setup->solver;
+  B->ctx = setup->ctx;
+  B->organs = setup->organs;
+  B->linear_epoch = setup->linear_epoch;
   B->sys = setup->sys;
   B->model = setup->model;
   B->def = setup->def;
@@ -127,7 +130,6 @@ static void mass_apply(cpu_backend *B, const fascia_real *v, fascia_real *out) {
 // anchor for a dynamic step.
 static fascia_status cpu_begin(fascia_backend *backend, const fascia_step_values *v, fascia_solve_report *report) {
   cpu_backend *B = (cpu_backend *)backend;
-  fascia_solver *S = B->S;
   B->values = *v;
   const int64_t N = B->frame_count, n = 6 * N;
   memcpy(B->x_base, v->x_base, 3 * (size_t)N * sizeof(fascia_real));
@@ -159,17 +161,16 @@ static fascia_status cpu_begin(fascia_backend *backend, const fascia_step_values
                         .mask = B->mask,
                         .scratch = B->scratch + n};
   // rigid organs: the table says which bodies move in this step (the caller may drive one)
-  op.bodies = fascia_organs_body_count(S->organs) > 0 ? B->bodies : NULL;
+  op.bodies = fascia_organs_body_count(B->organs) > 0 ? B->bodies : NULL;
   op.full_mask = B->full_mask;
   op.prolonged = B->prolonged;
-  fascia_linear_begin(B->linear, &op, v->dynamic, S->linear_epoch, report);
+  fascia_linear_begin(B->linear, &op, v->dynamic, *B->linear_epoch, report);
   return FASCIA_OK;
 }
 
 // Phi and its projected gradient at increments d (newton.c's header has the
 // objective).
 static fascia_status objective(cpu_backend *B, const fascia_real *d, fascia_real *phi, fascia_real *gradient) {
-  fascia_solver *S = B->S;
   const fascia_step_values *v = &B->values;
   const int32_t N = B->frame_count;
   const int64_t n = 6 * (int64_t)N;
@@ -182,7 +183,7 @@ static fascia_status objective(cpu_backend *B, const fascia_real *d, fascia_real
   fascia_real energy;
   FASCIA_TRY(fascia_system_evaluate(B->sys, gradient, &energy));
   // the loads' torques' work along the step, external energy here as on the device
-  const fascia_real *load = S->model->frame_load;
+  const fascia_real *load = B->model->frame_load;
   fascia_real torque_work = 0;
   for (int32_t i = 0; i < N; ++i)
     torque_work += fascia_pt_frame_step_rotation(load + 6 * i, v->gravity_scale, d + 6 * i, v->dynamic, gradient + 6 * i);
@@ -199,12 +200,12 @@ static fascia_status objective(cpu_backend *B, const fascia_real *d, fascia_real
   // rigid organs: the bodies' own terms, gradient restricted to their masters
   const fascia_pt_body_step body_step = {v->c1, v->c2, v->gravity_scale, v->dynamic,
                                          {B->sys->gravity[0], B->sys->gravity[1], B->sys->gravity[2]}};
-  energy += fascia_organs_reduce(S->organs, &body_step, B->x, B->q, B->x_base, B->q_base, d, gradient);
+  energy += fascia_organs_reduce(B->organs, &body_step, B->x, B->q, B->x_base, B->q_base, d, gradient);
   for (int64_t k = 0; k < n; ++k)
     if (!B->mask[k]) gradient[k] = 0;
   *phi = energy;
   return isfinite(energy) ? FASCIA_OK
-                          : FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC, "solver: the energy is not finite");
+                          : FASCIA_FAIL(B->ctx, FASCIA_ERR_NUMERIC, "solver: the energy is not finite");
 }
 
 static fascia_status cpu_evaluate(fascia_backend *backend, fascia_real alpha, int current, fascia_trial_values *out) {
@@ -214,7 +215,7 @@ static fascia_status cpu_evaluate(fascia_backend *backend, fascia_real alpha, in
   fascia_real *g = current ? B->gradient : B->gradient_trial;
   if (!current) {
     for (int64_t k = 0; k < n; ++k) B->d_trial[k] = B->d[k] + alpha * B->direction[k];
-    fascia_organs_expand(B->S->organs, B->x_base, B->q_base, B->d_trial); // slaves of rigid organs follow their master
+    fascia_organs_expand(B->organs, B->x_base, B->q_base, B->d_trial); // slaves of rigid organs follow their master
     d = B->d_trial;
   }
   FASCIA_TRY(objective(B, d, &out->phi, g));
@@ -332,7 +333,7 @@ static fascia_status cpu_hessian_diagonal(fascia_backend *backend, fascia_real *
 // The kept factorization, for checkpoints (linear_solver.h)
 static int64_t cpu_linear_state_size(fascia_backend *backend) {
   cpu_backend *B = (cpu_backend *)backend;
-  return fascia_linear_state_size(B->linear, B->S->linear_epoch);
+  return fascia_linear_state_size(B->linear, *B->linear_epoch);
 }
 
 static void cpu_linear_state_save(fascia_backend *backend, fascia_real *out) {
@@ -341,7 +342,7 @@ static void cpu_linear_state_save(fascia_backend *backend, fascia_real *out) {
 
 static int cpu_linear_state_load(fascia_backend *backend, const fascia_real *in, int64_t count) {
   cpu_backend *B = (cpu_backend *)backend;
-  return fascia_linear_state_load(B->linear, in, count, B->S->linear_epoch);
+  return fascia_linear_state_load(B->linear, in, count, *B->linear_epoch);
 }
 
 const fascia_backend_ops fascia_backend_cpu = {

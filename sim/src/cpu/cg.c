@@ -14,7 +14,7 @@
 #include "point/block6.h"
 #include "point/body.h"
 #include "point/cg.h"
-#include "solve/solver_internal.h"
+#include "cpu/operator.h"
 
 // Rigid organs: P^T A P v, A on every frame the tissue moves, plus the
 // bodies' own terms (point/body.h).

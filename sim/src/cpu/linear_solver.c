@@ -6,6 +6,7 @@
 // stalled CG to the direct solver.
 #include <stdlib.h>
 
+#include "contract/backend.h"
 #include "cpu/linear_solver.h"
 #include "organs/organs.h"
 #include "point/frame.h"

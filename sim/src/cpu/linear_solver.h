@@ -11,7 +11,7 @@
 #ifndef FASCIA_SRC_LINEAR_SOLVER_H
 #define FASCIA_SRC_LINEAR_SOLVER_H
 
-#include "solve/solver_internal.h"
+#include "cpu/operator.h"
 
 typedef struct fascia_linear fascia_linear;
 

@@ -8,7 +8,7 @@
 
 #include "point/block6.h"
 #include "point/body.h"
-#include "solve/solver_internal.h"
+#include "cpu/operator.h"
 
 void fascia_precond_build(fascia_preconditioner *pc, const fascia_operator *op, fascia_real *blocks) {
   fascia_system *sys = op->sys;

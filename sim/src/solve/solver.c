@@ -194,7 +194,7 @@ fascia_status fascia_solver_create(fascia_ctx *ctx, const fascia_model *model, c
                                 S->sys,
                                 S->mask,
                                 &S->def,
-                                S,
+                                &S->linear_epoch,
                                 S->organs,
                                 fascia_organs_body_count(S->organs),
                                 fascia_organs_bodies(S->organs),
