@@ -279,7 +279,10 @@ static fascia_status device_create(const fascia_backend_setup *setup, const fasc
   dev->host_load = setup->model->frame_load;
   dev->ops = ops;
   dev->zeros = calloc(6 * (size_t)dev->frame_count + 1, sizeof(fascia_real));
-  dev->result = calloc(19 * (size_t)dev->frame_count + 1, sizeof(fascia_real));
+  // on pages of its own: page-locking works page by page
+  const size_t page = 4096, result_bytes = (19 * (size_t)dev->frame_count + 1) * sizeof(fascia_real);
+  dev->result = aligned_alloc(page, (result_bytes + page - 1) / page * page);
+  if (dev->result) memset(dev->result, 0, result_bytes);
   fascia_status status =
       dev->zeros && dev->result ? FASCIA_OK : FASCIA_FAIL(setup->ctx, FASCIA_ERR_MEMORY, "device: out of memory");
   if (status == FASCIA_OK) status = ops->create(setup->ctx, setup->threads, &dev->L);

@@ -56,7 +56,7 @@ typedef struct fascia_backend_setup {
   int32_t max_neighbours;                 ///< the most frames a sample has
   fascia_real gravity[3];                 ///< m/s^2
   int threads;                            ///< host threads the backend may use
-  fascia_system *sys;
+  fascia_system *sys;                     ///< the CPU backend's host system
   const unsigned char *mask;     ///< [6N] 1 free
   const fascia_solver_def *def;
   const uint64_t *linear_epoch; ///< bumped where the run's state is set from outside or restored
@@ -71,8 +71,8 @@ typedef struct fascia_backend_setup {
   /// the enhanced strain modes on those patches as the per-patch math reads
   /// them (host arrays; NULL: none)
   const fascia_pt_modes *modes;
-  /// host arrays that cross to a device every step (the step's and the
-  /// result's below), for page-locking; count entries
+  /// the solver's host arrays that cross to a device at every step's begin
+  /// (the step's values below), for page-locking; count entries
   void *crossing[8];
   size_t crossing_bytes[8];
   int crossing_count;
