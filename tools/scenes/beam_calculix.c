@@ -363,9 +363,10 @@ static int read_dat(const char *dir, double tip[3], double *time) {
       pending = 1;
       continue;
     }
-    long long node;
+    char *end;
     double u[3];
-    if (pending && sscanf(line, "%lld %lf %lf %lf", &node, u, u + 1, u + 2) == 4) {
+    strtoll(line, &end, 10);
+    if (pending && end != line && fascia_ccx_dat_numbers(end, u, 3)) {
       memcpy(tip, u, sizeof u);
       *time = t;
       found = 1;
@@ -538,10 +539,40 @@ const char *fascia_ccx_dat_after(const char *dat, const char *header) {
   return eol ? eol + 1 : NULL;
 }
 
+int fascia_ccx_dat_numbers(const char *line, double *v, int count) {
+  const char *p = line;
+  for (int k = 0; k < count; ++k) {
+    char *end;
+    v[k] = strtod(p, &end);
+    if (end == p) return 0;
+    if ((*end == '-' || *end == '+') && end[1] >= '0' && end[1] <= '9') { // "1.234567-100"
+      const long exponent = strtol(end, &end, 10);
+      v[k] *= pow(10.0, (double)exponent);
+    }
+    p = end;
+  }
+  return 1;
+}
+
 int fascia_ccx_dat_triple(const char *block, double v[3]) {
   for (const char *p = block; p && *p;) {
-    if (sscanf(p, "%lf %lf %lf", v, v + 1, v + 2) == 3) return 1;
+    if (fascia_ccx_dat_numbers(p, v, 3)) return 1;
     if (p[strspn(p, " \t\r")] != '\n') return 0;
+    const char *eol = strchr(p, '\n');
+    p = eol ? eol + 1 : NULL;
+  }
+  return 0;
+}
+
+int fascia_ccx_dat_node(const char *block, long long node, double v[3]) {
+  for (const char *p = block; p && *p;) {
+    char *end;
+    const long long id = strtoll(p, &end, 10);
+    if (end != p && fascia_ccx_dat_numbers(end, v, 3)) {
+      if (id == node) return 1;
+    } else if (p[strspn(p, " \t\r")] != '\n') {
+      return 0; // the block ended
+    }
     const char *eol = strchr(p, '\n');
     p = eol ? eol + 1 : NULL;
   }

@@ -118,6 +118,13 @@ const char *fascia_ccx_dat_after(const char *dat, const char *header);
 /// The first line of three numbers from `block` on, blank lines skipped (a
 /// block's total); 0 when the block ends first or is NULL.
 int fascia_ccx_dat_triple(const char *block, double v[3]);
+/// The three values of `node` in a block of "node v1 v2 v3" lines (blank
+/// lines first); 0 when the block ends first or is NULL.
+int fascia_ccx_dat_node(const char *block, long long node, double v[3]);
+/// The `count` numbers of a .dat line from `line` on, read Fortran's way: an
+/// exponent of three digits comes without its E ("1.234567-100", which a C
+/// reader takes for 1.234567); 0 unless all of them are there.
+int fascia_ccx_dat_numbers(const char *line, double *v, int count);
 
 /// A converged reference of the tip of fascia's cantilever (the box, mass
 /// and gravity of fascia_scene_beam_def_default()), stored in

@@ -348,25 +348,6 @@ fascia_status fascia_tissue_pull_write_deck(fascia_ctx *ctx, const void *pull_de
 
 // ------------------------------------------------------------ ccx's answers
 
-// The values of `node` in a block of "node v1 v2 v3" lines (blank lines first).
-static int block_node(const char *block, long long node, double v[3]) {
-  for (const char *p = block; p && *p;) {
-    long long id;
-    double a, b, c;
-    const char *eol = strchr(p, '\n');
-    if (sscanf(p, "%lld %lf %lf %lf", &id, &a, &b, &c) == 4) {
-      if (id == node) {
-        v[0] = a, v[1] = b, v[2] = c;
-        return 1;
-      }
-    } else if (p[strspn(p, " \t\r")] != '\n') {
-      return 0; // the block ended
-    }
-    p = eol ? eol + 1 : NULL;
-  }
-  return 0;
-}
-
 fascia_status fascia_tissue_hang_calculix(fascia_ctx *ctx, const fascia_tissue_hang_def *def, const char *program,
                                           fascia_tissue_hang_result *out) {
   SCENE_CHECK(out, ctx, FASCIA_ERR_ARGUMENT, "hanging organ: NULL result");
@@ -377,7 +358,7 @@ fascia_status fascia_tissue_hang_calculix(fascia_ctx *ctx, const fascia_tissue_h
   const char *u = fascia_ccx_dat_after(dat, "displacements (vx,vy,vz) for set NORGAN");
   const char *rf = fascia_ccx_dat_after(dat, "total force (fx,fy,fz) for set NFIX");
   double reaction[3];
-  const int ok = u && rf && block_node(u, last, out->end) && block_node(u, centre, out->centre) &&
+  const int ok = u && rf && fascia_ccx_dat_node(u, last, out->end) && fascia_ccx_dat_node(u, centre, out->centre) &&
                  fascia_ccx_dat_triple(rf, reaction);
   free(dat);
   SCENE_CHECK(ok, ctx, FASCIA_ERR_FORMAT,
@@ -402,7 +383,7 @@ fascia_status fascia_tissue_pull_calculix(fascia_ctx *ctx, const fascia_tissue_p
   const char *u = fascia_ccx_dat_after(dat, "displacements (vx,vy,vz) for set NPROBE");
   const char *rf = fascia_ccx_dat_after(dat, "total force (fx,fy,fz) for set NPULL");
   double reaction[3];
-  const int ok = u && rf && block_node(u, edge, out->edge) && block_node(u, centre, out->centre) &&
+  const int ok = u && rf && fascia_ccx_dat_node(u, edge, out->edge) && fascia_ccx_dat_node(u, centre, out->centre) &&
                  fascia_ccx_dat_triple(rf, reaction);
   free(dat);
   SCENE_CHECK(ok, ctx, FASCIA_ERR_FORMAT,
@@ -430,7 +411,7 @@ void fascia_tissue_deck_step(FILE *out) { write_step_start(out); }
 
 int fascia_tissue_dat_node(const char *dat, const char *header, long long node, double v[3]) {
   const char *block = fascia_ccx_dat_after(dat, header);
-  return block && block_node(block, node, v);
+  return block && fascia_ccx_dat_node(block, node, v);
 }
 
 FILE *fascia_tissue_open(fascia_ctx *ctx, const char *dir, const char *name, char *path) {
