@@ -15,7 +15,9 @@
 //             8i = C3D8I, 20r = C3D20R; SPLIT elements along a voxel's edge;
 //             surface: the held nodes moved onto the organs' smooth
 //             surfaces, where fascia holds the tissue, not left on the voxel
-//             faces' staircase); default 8i:1:1,8i:1:2,20r:1:1
+//             faces' staircase); default 8i:1:1,8i:1:2,20r:1:1; or
+//             t10:VOXEL_MM:SIZE_MM, C3D10 tetrahedra of circumradius at most
+//             SIZE_MM that follow the organs' smooth surfaces
 //   --fascia  rungs, comma-separated VOXEL_MM:SCALE[:SAMPLE_SCALE] (the
 //             tissue's frame and sample spacings times SCALE, the sample
 //             spacing times SAMPLE_SCALE on top); default 1:1,1:0.7,1:0.5
@@ -28,6 +30,8 @@
 //   --cache DIR  CalculiX's answers read from DIR when there, else solved and kept there
 //   --write-reference FILE  CalculiX's forces per mesh, the reference last
 //             (data/reference/demo-calculix.csv, read by tests/t598)
+//   --mesh-only  CalculiX's meshes built and described, nothing solved
+//   --deck FILE  ... and the (last) mesh's CalculiX deck written to FILE
 //   --slip    per rung, the tissue's slip on each organ by distance to the
 //             organ's nearest shared frame, and where the largest error lies
 #define _POSIX_C_SOURCE 200809L
@@ -46,6 +50,8 @@
 
 typedef struct ccx_row {
   int quadratic;
+  int tetrahedra;  ///< C3D10 of fascia_demo_tet_mesh_build, size_mm its tetrahedra's circumradius bound
+  double size_mm;
   double voxel_mm;
   int32_t split;
   int on_surface; ///< the held nodes on the organs' smooth surfaces, not the voxel faces
@@ -82,6 +88,10 @@ static int rung_tag(const char *tag, fascia_row *row) {
 // CalculiX's answers kept between runs (--cache DIR): forces and node
 // displacements of a mesh, keyed by its kind, voxel and split.
 static void cache_path(const char *dir, const ccx_row *c, char *path, size_t size) {
+  if (c->tetrahedra) {
+    snprintf(path, size, "%s/ccx-c3d10-%gmm-size%g.txt", dir, c->voxel_mm, c->size_mm);
+    return;
+  }
   snprintf(path, size, "%s/ccx-%s-%gmm-split%d%s.txt", dir, c->quadratic ? "c3d20r" : "c3d8i", c->voxel_mm,
            (int)c->split, c->on_surface ? "-surface" : "");
 }
@@ -126,12 +136,13 @@ static void cache_save(const char *dir, const ccx_row *c) {
 }
 
 static const char usage_text[] =
-    "usage: demo-calculix [SCENE.json] [--ccx TYPE:VOXEL_MM:SPLIT[:surface],...] "
+    "usage: demo-calculix [SCENE.json] [--ccx TYPE:VOXEL_MM:SPLIT[:surface]|t10:VOXEL_MM:SIZE_MM,...] "
     "[--fascia VOXEL_MM:SCALE[:SAMPLE_SCALE[:TAG]],...]\n"
     "                     [--reference K] [--neighbours N] [--threads N] [--csv FILE] [--cache DIR] [--slip]\n"
-    "                     [--write-reference FILE] [--ccx-solver NAME]\n"
+    "                     [--write-reference FILE] [--ccx-solver NAME] [--mesh-only] [--deck FILE]\n"
     "  TYPE 8i (C3D8I) or 20r (C3D20R); SPLIT elements along a voxel's edge; surface: held nodes on the organs'\n"
-    "  smooth surfaces, not the voxel faces; SCALE times the tissue's frame and\n"
+    "  smooth surfaces, not the voxel faces; t10: C3D10 tetrahedra of circumradius SIZE_MM on the organs' smooth\n"
+    "  surfaces (CGAL Mesh_3); SCALE times the tissue's frame and\n"
     "  sample spacings, SAMPLE_SCALE times the sample spacing on top; TAG nK (K MLS neighbours) or flat (no\n"
     "  volumetric patches); --reference K: the CalculiX mesh (from 1) errors are taken against, default the last;\n"
     "  --ccx-solver: ccx's linear solver, e.g. \"ITERATIVE CHOLESKY\" (default: ccx's own, SPOOLES)\n";
@@ -140,6 +151,8 @@ static int usage(const char *why) {
   fprintf(stderr, "demo-calculix: %s\n%s", why, usage_text);
   return 2;
 }
+
+static const char *mesh_type(const ccx_row *c) { return c->tetrahedra ? "C3D10" : c->quadratic ? "C3D20R" : "C3D8I"; }
 
 static double norm3(const double v[3]) { return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
 
@@ -293,7 +306,7 @@ static int write_reference(const char *path, const char *scene, const ccx_row *c
   for (int j = 0; j < nc; ++j) {
     const int k = j < reference - 1 ? j : j == nc - 1 ? reference - 1 : j + 1;
     for (int32_t o = 0; o < cr[k].mesh.organ_count; ++o)
-      fprintf(f, "%s-split%d%s,%g,%lld,%lld,%s,%.7g,%.7g,%.7g\n", cr[k].quadratic ? "C3D20R" : "C3D8I", (int)cr[k].split,
+      fprintf(f, "%s-split%d%s,%g,%lld,%lld,%s,%.7g,%.7g,%.7g\n", mesh_type(cr + k), (int)cr[k].split,
               cr[k].on_surface ? "-surface" : "",
               cr[k].voxel_mm, (long long)cr[k].result.nodes, (long long)cr[k].result.elements, cr[k].mesh.organ_name[o],
               cr[k].result.force[o][0], cr[k].result.force[o][1], cr[k].result.force[o][2]);
@@ -309,8 +322,8 @@ static int write_reference(const char *path, const char *scene, const ccx_row *c
 int main(int argc, char **argv) {
   const char *scene = "data/scenes/pelvis-female-demo.json", *ccx_list = "8i:1:1,8i:1:2,20r:1:1",
              *fascia_list = "1:1,1:0.7,1:0.5", *csv_path = NULL,
-             *cache = NULL, *reference_path = NULL, *ccx_solver = NULL;
-  int reference = 0, threads = 1, neighbours = 0, slips = 0;
+             *cache = NULL, *reference_path = NULL, *ccx_solver = NULL, *deck_path = NULL;
+  int reference = 0, threads = 1, neighbours = 0, slips = 0, mesh_only = 0;
   for (int i = 1; i < argc; ++i) {
     const char *a = argv[i];
     if (!strcmp(a, "--help")) {
@@ -325,6 +338,8 @@ int main(int argc, char **argv) {
     else if (!strcmp(a, "--csv") && i + 1 < argc) csv_path = argv[++i];
     else if (!strcmp(a, "--cache") && i + 1 < argc) cache = argv[++i];
     else if (!strcmp(a, "--slip")) slips = 1;
+    else if (!strcmp(a, "--mesh-only")) mesh_only = 1;
+    else if (!strcmp(a, "--deck") && i + 1 < argc) deck_path = argv[++i], mesh_only = 1;
     else if (!strcmp(a, "--ccx-solver") && i + 1 < argc) ccx_solver = argv[++i];
     else if (!strcmp(a, "--write-reference") && i + 1 < argc) reference_path = argv[++i];
     else if (a[0] != '-') scene = a;
@@ -337,11 +352,19 @@ int main(int argc, char **argv) {
   for (const char *p = ccx_list; p && *p;) {
     if (nc == ROWS_MAX) return usage("--ccx: more meshes than 32");
     char type[8], hold[16] = "";
-    double vox;
+    double vox, size;
     int split;
+    if (sscanf(p, "t10:%lf:%lf", &vox, &size) == 2) {
+      if (!(vox > 0 && size > 0)) return usage("--ccx: t10:VOXEL_MM:SIZE_MM expects positive sizes");
+      cr[nc].tetrahedra = 1, cr[nc].quadratic = 1, cr[nc].voxel_mm = vox, cr[nc].size_mm = size;
+      cr[nc].split = 1, cr[nc].on_surface = 1, ++nc;
+      p = strchr(p, ',');
+      if (p) ++p;
+      continue;
+    }
     const int fields = sscanf(p, "%7[^:]:%lf:%d:%15[^,]", type, &vox, &split, hold);
     if (fields < 3 || (strcmp(type, "8i") && strcmp(type, "20r")) || (fields == 4 && strcmp(hold, "surface")))
-      return usage("--ccx: expected TYPE:VOXEL_MM:SPLIT[:surface] with TYPE 8i or 20r");
+      return usage("--ccx: expected TYPE:VOXEL_MM:SPLIT[:surface] with TYPE 8i or 20r, or t10:VOXEL_MM:SIZE_MM");
     cr[nc].quadratic = !strcmp(type, "20r"), cr[nc].voxel_mm = vox, cr[nc].split = split;
     cr[nc].on_surface = fields == 4, ++nc;
     p = strchr(p, ',');
@@ -396,7 +419,9 @@ int main(int argc, char **argv) {
     fascia_prep_stages s;
     fascia_demo_def d = {scene, cr[k].voxel_mm * 1e-3, 1, 1, neighbours, 0, 0, 0};
     fascia_status st = fascia_demo_prepare(ctx, &d, &s);
-    if (st == FASCIA_OK) st = fascia_demo_mesh_build(ctx, &s, cr[k].quadratic, cr[k].split, cr[k].on_surface, &cr[k].mesh);
+    if (st == FASCIA_OK && cr[k].tetrahedra) st = fascia_demo_tet_mesh_build(ctx, &s, cr[k].size_mm * 1e-3, &cr[k].mesh);
+    else if (st == FASCIA_OK)
+      st = fascia_demo_mesh_build(ctx, &s, cr[k].quadratic, cr[k].split, cr[k].on_surface, &cr[k].mesh);
     cr[k].mesh.solver = ccx_solver;
     if (st == FASCIA_OK && k == 0) {
       base_frame = s.scene->tissues[0].frame_spacing, base_sample = s.scene->tissues[0].sample_spacing;
@@ -410,6 +435,22 @@ int main(int argc, char **argv) {
       if (!check_one_element(ctx, ccx, cr[k].mesh.youngs_modulus, cr[k].mesh.poisson_ratio)) rc = 1;
     }
     fascia_prep_stages_free(&s);
+    if (st == FASCIA_OK && mesh_only) {
+      printf("  %d %s %g mm: %lld nodes, %lld elements (not solved)\n", k + 1, mesh_type(cr + k), cr[k].voxel_mm,
+             (long long)cr[k].mesh.node_count, (long long)cr[k].mesh.element_count);
+      print_offsets(&cr[k].mesh);
+      if (cr[k].tetrahedra)
+        printf("    tetrahedra: smallest dihedral angle %.2f degrees; C3D10's Jacobian at least %.3f of the straight "
+               "element's, %lld inverted\n",
+               cr[k].mesh.min_dihedral, cr[k].mesh.min_jacobian_ratio, (long long)cr[k].mesh.inverted);
+      fflush(stdout);
+      FILE *deck = deck_path ? fopen(deck_path, "w") : NULL;
+      if (deck_path && (!deck || fascia_demo_write_deck(ctx, &cr[k].mesh, deck) != FASCIA_OK || fclose(deck) != 0)) {
+        fprintf(stderr, "demo-calculix: cannot write the deck %s\n", deck_path);
+        rc = 1;
+      }
+      continue;
+    }
     const int cached = st == FASCIA_OK && cache && cache_load(cache, cr + k);
     if (st == FASCIA_OK && !cached) st = fascia_demo_calculix(ctx, &cr[k].mesh, ccx, threads, &cr[k].result);
     if (st == FASCIA_OK && cache && !cached) cache_save(cache, cr + k);
@@ -419,16 +460,22 @@ int main(int argc, char **argv) {
       goto done;
     }
     char name[64];
-    snprintf(name, sizeof name, "%d %s %g mm%s", k + 1, cr[k].quadratic ? "C3D20R" : "C3D8I", cr[k].voxel_mm,
+    snprintf(name, sizeof name, "%d %s %g mm%s", k + 1, mesh_type(cr + k), cr[k].voxel_mm,
              cr[k].split > 1 ? " split" : "");
     if (cr[k].split > 1) snprintf(name + strlen(name), sizeof name - strlen(name), " %d", (int)cr[k].split);
-    if (cr[k].on_surface) snprintf(name + strlen(name), sizeof name - strlen(name), " surface");
+    if (cr[k].tetrahedra) snprintf(name + strlen(name), sizeof name - strlen(name), " size %g", cr[k].size_mm);
+    else if (cr[k].on_surface) snprintf(name + strlen(name), sizeof name - strlen(name), " surface");
     printf("  %-26s %8lld %9lld", name, (long long)cr[k].result.nodes, (long long)cr[k].result.elements);
     for (int32_t o = 0; o < organ_count; ++o) printf("  %16.5f", norm3(cr[k].result.force[o]));
     printf("  %6.1f%s\n", 1e-3 * cr[k].result.ms, cached ? " (cached)" : "");
     print_offsets(&cr[k].mesh);
+    if (cr[k].tetrahedra)
+      printf("    tetrahedra: smallest dihedral angle %.2f degrees; C3D10's Jacobian at corners and integration points "
+             "at least %.3f of the straight element's, %lld inverted\n",
+             cr[k].mesh.min_dihedral, cr[k].mesh.min_jacobian_ratio, (long long)cr[k].mesh.inverted);
     fflush(stdout);
   }
+  if (mesh_only) goto done;
   const fascia_demo_result *ref = &cr[reference - 1].result;
   if (reference_path && !write_reference(reference_path, scene, cr, nc, reference)) rc = 1;
   printf("reference: mesh %d; the errors below are against it (vector error |F - F_ref| / |F_ref|, then the\n"
@@ -443,7 +490,7 @@ int main(int argc, char **argv) {
     if (csv)
       for (int32_t o = 0; o < organ_count; ++o)
         fprintf(csv, "calculix,%s%s%d,%g,,,%lld,%lld,%s,%.6g,%.6g,%.6g,%.4f,%.4f,,,,,,,%.0f\n",
-                cr[k].quadratic ? "C3D20R" : "C3D8I", "-split", (int)cr[k].split, cr[k].voxel_mm,
+                mesh_type(cr + k), "-split", (int)cr[k].split, cr[k].voxel_mm,
                 (long long)cr[k].result.nodes, (long long)cr[k].result.elements, organs[o], cr[k].result.force[o][0],
                 cr[k].result.force[o][1], cr[k].result.force[o][2],
                 100 * fascia_tissue_error3(cr[k].result.force[o], ref->force[o]),

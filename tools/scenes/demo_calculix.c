@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "beam_calculix.h"
+#include "cgal_mesh3.h"
 #include "fascia/organs.h"
 #include "fascia/shape.h"
 #include "scene_util.h"
@@ -259,6 +260,394 @@ cleanup:
   return status;
 }
 
+// ------------------------------------------------------------ the tetrahedral mesh
+
+// The domain Mesh_3 meshes: the region's voxels, with the organ voxels that
+// touch them, as an indicator blurred by [1 2 1] / 4 along each axis and
+// cut at 1/2 between the voxel centres (a smooth free boundary through the
+// region's outer faces), less every organ's inside (its distance field's
+// zero set: the smooth surface, where the tissue is held).
+typedef struct tet_domain {
+  const fascia_prep_volume *v;
+  float *mask;          ///< [voxels] the blurred indicator
+  double near;          ///< m: facets this close to an organ's surface are held to near_distance
+  double near_distance, far_distance;
+} tet_domain;
+
+static double mask_at(const tet_domain *d, const double x[3]) {
+  const fascia_prep_volume *v = d->v;
+  double f[3];
+  int32_t c[3];
+  for (int a = 0; a < 3; ++a) {
+    const double t = (x[a] - v->origin[a]) / v->voxel_size;
+    c[a] = (int32_t)floor(t), f[a] = t - c[a];
+    if (c[a] < 0 || c[a] + 1 >= v->dims[a]) return 0;
+  }
+  double m = 0;
+  for (int q = 0; q < 8; ++q) {
+    const int32_t i = c[0] + (q & 1), j = c[1] + ((q >> 1) & 1), k = c[2] + ((q >> 2) & 1);
+    const double w = ((q & 1) ? f[0] : 1 - f[0]) * (((q >> 1) & 1) ? f[1] : 1 - f[1]) * (((q >> 2) & 1) ? f[2] : 1 - f[2]);
+    m += w * d->mask[i + (int64_t)v->dims[0] * (j + (int64_t)v->dims[1] * k)];
+  }
+  return m;
+}
+
+static int tet_label(void *user, const double x[3]) {
+  const tet_domain *d = user;
+  if (mask_at(d, x) < 0.5) return 0;
+  for (int32_t o = 0; o < d->v->organ_count; ++o)
+    if (organ_distance(d->v, o, x) <= 0) return 0; // NAN (no field, off the grid) compares false
+  return 1;
+}
+
+static double tet_facet_distance(void *user, const double x[3]) {
+  const tet_domain *d = user;
+  for (int32_t o = 0; o < d->v->organ_count; ++o)
+    if (fabs(organ_distance(d->v, o, x)) < d->near) return d->near_distance;
+  return d->far_distance;
+}
+
+// The blurred indicator of the region and the organ voxels among its 26 neighbours.
+static float *tet_mask(const fascia_prep_volume *v) {
+  const int32_t *n = v->dims;
+  const int64_t count = (int64_t)n[0] * n[1] * n[2], stride[3] = {1, n[0], (int64_t)n[0] * n[1]};
+  float *m = calloc((size_t)count, sizeof *m), *t = malloc((size_t)count * sizeof *t);
+  if (!m || !t) {
+    free(m), free(t);
+    return NULL;
+  }
+  for (int64_t w = 0; w < count; ++w) {
+    if (v->region[w] != 1) continue;
+    const int32_t c[3] = {(int32_t)(w % n[0]), (int32_t)((w / n[0]) % n[1]), (int32_t)(w / stride[2])};
+    m[w] = 1;
+    for (int q = 0; q < 27; ++q) {
+      const int32_t d[3] = {c[0] + q % 3 - 1, c[1] + (q / 3) % 3 - 1, c[2] + q / 9 - 1};
+      if (d[0] < 0 || d[1] < 0 || d[2] < 0 || d[0] >= n[0] || d[1] >= n[1] || d[2] >= n[2]) continue;
+      const int64_t u = d[0] + stride[1] * d[1] + stride[2] * d[2];
+      for (int32_t o = 0; o < v->organ_count; ++o)
+        if (inside(v, o, u)) m[u] = 1;
+    }
+  }
+  for (int a = 0; a < 3; ++a) { // [1 2 1] / 4 along axis a, the grid's edge clamped
+    for (int64_t w = 0; w < count; ++w) {
+      const int32_t c = (int32_t)((w / stride[a]) % n[a]);
+      const float lo = c > 0 ? m[w - stride[a]] : m[w], hi = c + 1 < n[a] ? m[w + stride[a]] : m[w];
+      t[w] = 0.25f * lo + 0.5f * m[w] + 0.25f * hi;
+    }
+    float *swap = m;
+    m = t, t = swap;
+  }
+  free(t);
+  return m;
+}
+
+// Points on the domain's boundary, at most one per cube of edge `spacing`:
+// bisected between a region voxel's centre inside and a face neighbour's
+// outside. *out malloc'ed [3 count].
+static fascia_status tet_seeds(fascia_ctx *ctx, tet_domain *d, const double lo[3], const double hi[3],
+                               double spacing, double **out, int64_t *count) {
+  const fascia_prep_volume *v = d->v;
+  const int32_t *n = v->dims;
+  const int64_t voxels = (int64_t)n[0] * n[1] * n[2];
+  int64_t cells[3];
+  for (int a = 0; a < 3; ++a) cells[a] = (int64_t)ceil((hi[a] - lo[a]) / spacing) + 1;
+  uint8_t *taken = calloc((size_t)(cells[0] * cells[1] * cells[2]), 1);
+  int64_t capacity = 1024, k = 0;
+  double *p = malloc((size_t)(3 * capacity) * sizeof *p);
+  *out = NULL, *count = 0;
+  if (!taken || !p) {
+    free(taken), free(p);
+    return SCENE_FAIL(ctx, FASCIA_ERR_MEMORY, "demo tetrahedra: out of memory for the seeds");
+  }
+  for (int64_t w = 0; w < voxels; ++w) {
+    if (v->region[w] != 1) continue;
+    const int32_t c[3] = {(int32_t)(w % n[0]), (int32_t)((w / n[0]) % n[1]), (int32_t)(w / ((int64_t)n[0] * n[1]))};
+    double a_in[3];
+    for (int a = 0; a < 3; ++a) a_in[a] = v->origin[a] + v->voxel_size * c[a];
+    if (!tet_label(d, a_in)) continue;
+    for (int q = 0; q < 6; ++q) {
+      double in[3] = {a_in[0], a_in[1], a_in[2]}, outp[3] = {a_in[0], a_in[1], a_in[2]};
+      outp[q / 2] += (q & 1 ? 1 : -1) * v->voxel_size;
+      if (tet_label(d, outp)) continue;
+      for (int it = 0; it < 50; ++it) {
+        double mid[3];
+        for (int a = 0; a < 3; ++a) mid[a] = 0.5 * (in[a] + outp[a]);
+        memcpy(tet_label(d, mid) ? in : outp, mid, sizeof mid);
+      }
+      int64_t b[3], key;
+      for (int a = 0; a < 3; ++a) b[a] = (int64_t)floor((in[a] - lo[a]) / spacing);
+      if (b[0] < 0 || b[1] < 0 || b[2] < 0 || b[0] >= cells[0] || b[1] >= cells[1] || b[2] >= cells[2]) continue;
+      key = b[0] + cells[0] * (b[1] + cells[1] * b[2]);
+      if (taken[key]) continue;
+      taken[key] = 1;
+      if (k == capacity) {
+        double *grown = realloc(p, (size_t)(6 * capacity) * sizeof *p);
+        if (!grown) {
+          free(taken), free(p);
+          return SCENE_FAIL(ctx, FASCIA_ERR_MEMORY, "demo tetrahedra: out of memory for the seeds");
+        }
+        p = grown, capacity *= 2;
+      }
+      memcpy(p + 3 * k++, in, sizeof in);
+    }
+  }
+  free(taken);
+  *out = p, *count = k;
+  return FASCIA_OK;
+}
+
+// A sorted pair or triple of vertex indices with the element it came from.
+typedef struct tet_key {
+  int32_t v[3];
+  int64_t element;
+  int32_t local;
+} tet_key;
+
+static int compare_key(const void *a, const void *b) {
+  const tet_key *x = a, *y = b;
+  for (int i = 0; i < 3; ++i)
+    if (x->v[i] != y->v[i]) return (x->v[i] > y->v[i]) - (x->v[i] < y->v[i]);
+  return 0;
+}
+
+static void sort3(int32_t v[3]) {
+  for (int i = 0; i < 2; ++i)
+    for (int j = 0; j < 2 - i; ++j)
+      if (v[j] > v[j + 1]) {
+        const int32_t t = v[j];
+        v[j] = v[j + 1], v[j + 1] = t;
+      }
+}
+
+// C3D10's mid-edge nodes 5..10 (from 1) between these corners (from 0).
+static const int tet_edge[6][2] = {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}};
+
+// The smallest dihedral angle (degrees) of the straight tetrahedron p.
+static double tet_min_dihedral(const double p[4][3]) {
+  static const int face[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+  double nrm[4][3];
+  for (int f = 0; f < 4; ++f) {
+    const double *o = p[face[f][0]], *b = p[face[f][1]], *c = p[face[f][2]];
+    const double u[3] = {b[0] - o[0], b[1] - o[1], b[2] - o[2]}, w[3] = {c[0] - o[0], c[1] - o[1], c[2] - o[2]};
+    double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+    const double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    for (int a = 0; a < 3; ++a) nrm[f][a] = len > 0 ? n[a] / len : 0;
+  }
+  double smallest = 180;
+  for (int f = 0; f < 4; ++f)
+    for (int g = f + 1; g < 4; ++g) {
+      const double c = -(nrm[f][0] * nrm[g][0] + nrm[f][1] * nrm[g][1] + nrm[f][2] * nrm[g][2]);
+      smallest = fmin(smallest, 180 / acos(-1.0) * acos(fmax(-1, fmin(1, c))));
+    }
+  return smallest;
+}
+
+static double det3(const double J[9]) {
+  return J[0] * (J[4] * J[8] - J[5] * J[7]) - J[1] * (J[3] * J[8] - J[5] * J[6]) + J[2] * (J[3] * J[7] - J[4] * J[6]);
+}
+
+// The smallest ratio of C3D10's Jacobian determinant at its corners, centre
+// and four integration points to the straight element's (x: [10][3], ccx's order).
+static double tet_jacobian_ratio(const double x[10][3]) {
+  static const double grad_l[4][3] = {{-1, -1, -1}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  const double a = 0.5854101966249685, b = 0.1381966011250105;
+  const double at[9][4] = {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}, {.25, .25, .25, .25},
+                           {a, b, b, b}, {b, a, b, b}, {b, b, a, b}, {b, b, b, a}};
+  double Jl[9];
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) Jl[3 * r + c] = x[c + 1][r] - x[0][r];
+  const double straight = det3(Jl);
+  double smallest = INFINITY;
+  for (int q = 0; q < 9; ++q) {
+    const double *L = at[q];
+    double J[9] = {0};
+    for (int n = 0; n < 10; ++n) {
+      double g[3];
+      if (n < 4) {
+        for (int c = 0; c < 3; ++c) g[c] = (4 * L[n] - 1) * grad_l[n][c];
+      } else {
+        const int i = tet_edge[n - 4][0], j = tet_edge[n - 4][1];
+        for (int c = 0; c < 3; ++c) g[c] = 4 * (L[j] * grad_l[i][c] + L[i] * grad_l[j][c]);
+      }
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) J[3 * r + c] += x[n][r] * g[c];
+    }
+    smallest = fmin(smallest, det3(J) / straight);
+  }
+  return smallest;
+}
+
+fascia_status fascia_demo_tet_mesh_build(fascia_ctx *ctx, const fascia_prep_stages *s, double size,
+                                         fascia_demo_mesh *out) {
+  memset(out, 0, sizeof *out);
+  SCENE_CHECK(size > 0 && isfinite(size), ctx, FASCIA_ERR_ARGUMENT, "demo tetrahedra: size %g m, expected > 0", size);
+  const fascia_prep_scene *sc = s->scene;
+  const fascia_prep_volume *v = s->volume;
+  const fascia_material *mat = sc->materials + sc->tissues[0].material;
+  SCENE_CHECK(mat->law == FASCIA_LAW_NEOHOOKEAN, ctx, FASCIA_ERR_ARGUMENT,
+              "demo mesh: tissue '%s' is not of the stable Neo-Hookean law (the *HYPERFOAM card writes that law)",
+              sc->tissues[0].name);
+  SCENE_CHECK(sc->organ_count <= FASCIA_DEMO_ORGANS_MAX, ctx, FASCIA_ERR_ARGUMENT, "demo mesh: %d organs, at most %d",
+              (int)sc->organ_count, FASCIA_DEMO_ORGANS_MAX);
+  out->tetrahedra = 1, out->quadratic = 1, out->subdivide = 1;
+  out->youngs_modulus = mat->youngs_modulus, out->poisson_ratio = mat->poisson_ratio;
+  out->organ_count = sc->organ_count;
+  for (int32_t o = 0; o < sc->organ_count; ++o)
+    snprintf(out->organ_name[o], FASCIA_NAME_SIZE, "%s", sc->organs[o].name);
+  double R[FASCIA_DEMO_ORGANS_MAX][9], T[FASCIA_DEMO_ORGANS_MAX][3];
+  SCENE_TRY(organ_poses(ctx, s, R, T));
+  const double h = v->voxel_size;
+  tet_domain dom = {v, tet_mask(v), 0.25 * h, 0.05 * h, 0.2 * h};
+  double *seeds = NULL, *xyz = NULL;
+  int32_t *tets = NULL;
+  tet_key *keys = NULL;
+  int64_t seed_count = 0, nv = 0, nt = 0;
+  int32_t *held = NULL, *edge_id = NULL;
+  fascia_status status = FASCIA_OK;
+  SCENE_CHECK_GOTO(dom.mask, ctx, FASCIA_ERR_MEMORY, "demo tetrahedra: out of memory for the indicator");
+
+  // 1. the box, the seeds, Mesh_3
+  double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  const int64_t voxels = (int64_t)v->dims[0] * v->dims[1] * v->dims[2];
+  for (int64_t w = 0; w < voxels; ++w) {
+    if (v->region[w] != 1) continue;
+    const int64_t c[3] = {w % v->dims[0], (w / v->dims[0]) % v->dims[1], w / ((int64_t)v->dims[0] * v->dims[1])};
+    for (int a = 0; a < 3; ++a) {
+      const double x = v->origin[a] + h * (double)c[a];
+      lo[a] = fmin(lo[a], x - 2 * h), hi[a] = fmax(hi[a], x + 2 * h);
+    }
+  }
+  SCENE_CHECK_GOTO(lo[0] < hi[0], ctx, FASCIA_ERR_ARGUMENT, "demo tetrahedra: tissue '%s' has no voxel",
+                   sc->tissues[0].name);
+  SCENE_TRY_GOTO(tet_seeds(ctx, &dom, lo, hi, size, &seeds, &seed_count));
+  fascia_cgal_tet_def def = {{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}, tet_label, tet_facet_distance, &dom,
+                             size, size, 25, 2, 1e-7, seeds, seed_count};
+  SCENE_TRY_GOTO(fascia_cgal_tet_mesh(ctx, "demo tetrahedra", &def, &xyz, &nv, &tets, &nt));
+
+  // 2. the corners an organ holds: those on its surface (to the bisection's error)
+  held = malloc((size_t)nv * sizeof *held);
+  keys = malloc((size_t)(6 * nt) * sizeof *keys);
+  edge_id = malloc((size_t)(6 * nt) * sizeof *edge_id);
+  SCENE_CHECK_GOTO(held && keys && edge_id, ctx, FASCIA_ERR_MEMORY, "demo tetrahedra: out of memory (%lld tetrahedra)",
+                   (long long)nt);
+  const double on = 1e-3 * h;
+  for (int64_t k = 0; k < nv; ++k) {
+    held[k] = -1;
+    double best = on;
+    for (int32_t o = 0; o < v->organ_count; ++o) {
+      const double d = fabs(organ_distance(v, o, xyz + 3 * k));
+      if (d < best) best = d, held[k] = o;
+    }
+  }
+  // 3. the boundary facets (faces of one tetrahedron), then the edges, numbered
+  for (int64_t e = 0; e < nt; ++e)
+    for (int f = 0; f < 4; ++f) {
+      tet_key *k = keys + 4 * e + f;
+      for (int i = 0, j = 0; i < 4; ++i)
+        if (i != f) k->v[j++] = tets[4 * e + i];
+      sort3(k->v), k->element = e, k->local = f;
+    }
+  qsort(keys, (size_t)(4 * nt), sizeof *keys, compare_key);
+  // an organ's facet: a boundary facet whose corners it all holds; its edges are the organ's
+  int32_t (*organ_edge)[3] = NULL; // [facets x 3 edges] sorted pairs and organ, gathered below
+  organ_edge = malloc((size_t)(3 * 4 * nt + 1) * sizeof *organ_edge);
+  SCENE_CHECK_GOTO(organ_edge, ctx, FASCIA_ERR_MEMORY, "demo tetrahedra: out of memory");
+  int64_t organ_edges = 0;
+  for (int64_t i = 0; i < 4 * nt; ++i) {
+    const int twin = (i > 0 && !compare_key(keys + i, keys + i - 1)) || (i + 1 < 4 * nt && !compare_key(keys + i, keys + i + 1));
+    if (twin) continue;
+    const int32_t *t = keys[i].v, o = held[t[0]];
+    if (o < 0 || held[t[1]] != o || held[t[2]] != o) continue;
+    const int32_t pair[3][2] = {{t[0], t[1]}, {t[0], t[2]}, {t[1], t[2]}};
+    for (int q = 0; q < 3; ++q)
+      organ_edge[organ_edges][0] = pair[q][0], organ_edge[organ_edges][1] = pair[q][1], organ_edge[organ_edges++][2] = o;
+  }
+  for (int64_t e = 0; e < nt; ++e)
+    for (int q = 0; q < 6; ++q) {
+      tet_key *k = keys + 6 * e + q;
+      const int32_t a = tets[4 * e + tet_edge[q][0]], b = tets[4 * e + tet_edge[q][1]];
+      k->v[0] = a < b ? a : b, k->v[1] = a < b ? b : a, k->v[2] = 0, k->element = e, k->local = q;
+    }
+  qsort(keys, (size_t)(6 * nt), sizeof *keys, compare_key);
+  int64_t edges = 0;
+  for (int64_t i = 0; i < 6 * nt; ++i) {
+    if (i > 0 && compare_key(keys + i, keys + i - 1)) ++edges;
+    edge_id[6 * keys[i].element + keys[i].local] = (int32_t)(nv + edges);
+  }
+  ++edges;
+
+  // 4. the nodes: corners, then mid-edges (an organ's edges projected onto its surface)
+  out->node_count = nv + edges, out->element_count = nt;
+  const int64_t nn = out->node_count;
+  out->node = malloc((size_t)(3 * nn) * sizeof *out->node);
+  out->node_u = calloc((size_t)(3 * nn), sizeof *out->node_u);
+  out->node_organ = malloc((size_t)nn * sizeof *out->node_organ);
+  out->node_distance = malloc((size_t)nn * sizeof *out->node_distance);
+  out->element = malloc((size_t)(10 * nt) * sizeof *out->element);
+  SCENE_CHECK_GOTO(out->node && out->node_u && out->node_organ && out->node_distance && out->element, ctx,
+                   FASCIA_ERR_MEMORY, "demo tetrahedra: out of memory (%lld nodes)", (long long)nn);
+  memcpy(out->node, xyz, (size_t)(3 * nv) * sizeof *xyz);
+  memcpy(out->node_organ, held, (size_t)nv * sizeof *held);
+  for (int64_t k = nv; k < nn; ++k) out->node_organ[k] = -1;
+  for (int64_t e = 0; e < nt; ++e)
+    for (int q = 0; q < 10; ++q) out->element[10 * e + q] = q < 4 ? tets[4 * e + q] : edge_id[6 * e + q - 4];
+  for (int64_t i = 0; i < 6 * nt; ++i) { // the mid-edge's position, once per edge
+    if (i > 0 && !compare_key(keys + i, keys + i - 1)) continue;
+    const int64_t k = edge_id[6 * keys[i].element + keys[i].local];
+    for (int a = 0; a < 3; ++a) out->node[3 * k + a] = 0.5 * (xyz[3 * keys[i].v[0] + a] + xyz[3 * keys[i].v[1] + a]);
+  }
+  for (int64_t j = 0; j < organ_edges; ++j) {
+    tet_key probe = {{organ_edge[j][0], organ_edge[j][1], 0}, 0, 0};
+    const tet_key *found = bsearch(&probe, keys, (size_t)(6 * nt), sizeof *keys, compare_key);
+    if (!found) continue;
+    const int64_t k = edge_id[6 * found->element + found->local];
+    if (out->node_organ[k] >= 0) continue;
+    out->node_organ[k] = organ_edge[j][2];
+    onto_surface(v, organ_edge[j][2], out->node + 3 * k);
+  }
+  free(organ_edge);
+
+  // 5. an element that the projections fold (a flat one whose four corners
+  //    lie on the surface) gets its mid-edges back on its straight edges:
+  //    held there, off the surface by at most the facet distance
+  for (int pass = 0; pass < 4; ++pass) {
+    int64_t folded = 0;
+    for (int64_t e = 0; e < nt; ++e) {
+      double x[10][3];
+      for (int q = 0; q < 10; ++q) memcpy(x[q], out->node + 3 * out->element[10 * e + q], sizeof x[q]);
+      if (tet_jacobian_ratio((const double(*)[3])x) > 0.1) continue;
+      ++folded;
+      for (int q = 4; q < 10; ++q)
+        for (int a = 0; a < 3; ++a)
+          out->node[3 * out->element[10 * e + q] + a] = 0.5 * (x[tet_edge[q - 4][0]][a] + x[tet_edge[q - 4][1]][a]);
+    }
+    if (!folded) break;
+  }
+  for (int64_t k = 0; k < nn; ++k) {
+    const int32_t o = out->node_organ[k];
+    const double *x = out->node + 3 * k;
+    out->node_distance[k] = o >= 0 ? organ_distance(v, o, x) : NAN;
+    if (o < 0) continue;
+    for (int a = 0; a < 3; ++a)
+      out->node_u[3 * k + a] = R[o][3 * a] * x[0] + R[o][3 * a + 1] * x[1] + R[o][3 * a + 2] * x[2] + T[o][a] - x[a];
+  }
+
+  // 6. quality: the straight tetrahedra's dihedral angles, the curved ones' Jacobians
+  out->min_dihedral = 180, out->min_jacobian_ratio = INFINITY, out->inverted = 0;
+  for (int64_t e = 0; e < nt; ++e) {
+    double x[10][3];
+    for (int q = 0; q < 10; ++q) memcpy(x[q], out->node + 3 * out->element[10 * e + q], sizeof x[q]);
+    out->min_dihedral = fmin(out->min_dihedral, tet_min_dihedral((const double(*)[3])x));
+    const double ratio = tet_jacobian_ratio((const double(*)[3])x);
+    out->min_jacobian_ratio = fmin(out->min_jacobian_ratio, ratio);
+    out->inverted += !(ratio > 0);
+  }
+cleanup:
+  free(dom.mask), free(seeds), free(xyz), free(tets), free(keys), free(held), free(edge_id);
+  if (status != FASCIA_OK) fascia_demo_mesh_free(out);
+  return status;
+}
+
 // ------------------------------------------------------------ CalculiX
 
 // The stable Neo-Hookean, psi = mu/2 (I1 - 3) + l/2 (J - a)^2 - mu^2/(2 l),
@@ -284,19 +673,23 @@ static void write_step(FILE *out, const char *solver) {
   fprintf(out, "*CONTROLS, PARAMETERS=FIELD\n1e-5, 1e-5, 0., -1., 0.02, 1e-5, 1e-3, 1e-8\n");
 }
 
+// Numbers go out with 12 digits: ccx reads a field's first 20 characters,
+// and 15 digits with a sign and an exponent take 21 ("-1.23456789012345e-05"
+// would be read as -1.23 m).
 fascia_status fascia_demo_write_deck(fascia_ctx *ctx, const void *arg, FILE *out) {
   const fascia_demo_mesh *m = arg;
   SCENE_CHECK(m && m->node_count > 0 && m->element_count > 0, ctx, FASCIA_ERR_ARGUMENT, "demo deck: an empty mesh");
-  const int per = m->quadratic ? 20 : 8;
+  const int per = m->tetrahedra ? 10 : m->quadratic ? 20 : 8;
+  const char *type = m->tetrahedra ? "C3D10" : m->quadratic ? "C3D20R" : "C3D8I";
   fprintf(out,
-          "** a scene's tissue region as voxels (tools/scenes/demo_calculix.c): %lld %s elements, %lld nodes;\n"
-          "** the nodes on faces bordering an organ moved with its pose at time 1, gravity off, static\n"
+          "** a scene's tissue region (tools/scenes/demo_calculix.c): %lld %s elements, %lld nodes;\n"
+          "** the nodes an organ holds moved with its pose at time 1, gravity off, static\n"
           "*HEADING\nfascia demo tissue against CalculiX\n*NODE, NSET=NALL\n",
-          (long long)m->element_count, m->quadratic ? "C3D20R" : "C3D8I", (long long)m->node_count);
+          (long long)m->element_count, type, (long long)m->node_count);
   for (int64_t k = 0; k < m->node_count; ++k)
-    fprintf(out, "%lld, %.15g, %.15g, %.15g\n", (long long)k + 1, m->node[3 * k], m->node[3 * k + 1],
+    fprintf(out, "%lld, %.12g, %.12g, %.12g\n", (long long)k + 1, m->node[3 * k], m->node[3 * k + 1],
             m->node[3 * k + 2]);
-  fprintf(out, "*ELEMENT, TYPE=%s, ELSET=EALL\n", m->quadratic ? "C3D20R" : "C3D8I");
+  fprintf(out, "*ELEMENT, TYPE=%s, ELSET=EALL\n", type);
   for (int64_t e = 0; e < m->element_count; ++e) {
     fprintf(out, "%lld", (long long)e + 1);
     for (int q = 0; q < per; ++q) fprintf(out, q == 15 ? ",\n%d" : ", %d", (int)m->element[e * per + q] + 1);
@@ -318,7 +711,7 @@ fascia_status fascia_demo_write_deck(fascia_ctx *ctx, const void *arg, FILE *out
     const double *u = m->node_u + 3 * k;
     if (u[0] == 0 && u[1] == 0 && u[2] == 0) fprintf(out, "%lld, 1, 3\n", (long long)k + 1);
     else
-      for (int a = 0; a < 3; ++a) fprintf(out, "%lld, %d, %d, %.15g\n", (long long)k + 1, a + 1, a + 1, u[a]);
+      for (int a = 0; a < 3; ++a) fprintf(out, "%lld, %d, %d, %.12g\n", (long long)k + 1, a + 1, a + 1, u[a]);
   }
   for (int32_t o = 0; o < m->organ_count; ++o)
     fprintf(out, "*NODE PRINT, NSET=NORGAN%d, TOTALS=ONLY\nRF\n", (int)o);
@@ -431,7 +824,7 @@ static fascia_status write_one_element(fascia_ctx *ctx, const void *arg, FILE *o
     for (int a = 0; a < 3; ++a) {
       const double *X = node_offset[q];
       const double u = d->F[3 * a] * X[0] + d->F[3 * a + 1] * X[1] + d->F[3 * a + 2] * X[2] - X[a];
-      fprintf(out, "%d, %d, %d, %.15g\n", q + 1, a + 1, a + 1, u);
+      fprintf(out, "%d, %d, %d, %.12g\n", q + 1, a + 1, a + 1, u);
     }
   fprintf(out, "*NODE PRINT, NSET=NX, TOTALS=ONLY\nRF\n*NODE PRINT, NSET=NY, TOTALS=ONLY\nRF\n"
                "*NODE PRINT, NSET=NZ, TOTALS=ONLY\nRF\n*END STEP\n");

@@ -41,7 +41,8 @@ fascia_status fascia_demo_prepare(fascia_ctx *ctx, const fascia_demo_def *def, f
 
 /// CalculiX's mesh of the first tissue's region.
 typedef struct fascia_demo_mesh {
-  int quadratic;                 ///< 0: C3D8I, 1: C3D20R
+  int quadratic;                 ///< 0: C3D8I, 1: C3D20R (hexahedra) or C3D10 (tetrahedra)
+  int tetrahedra;                ///< 1: C3D10 tetrahedra of fascia_demo_tet_mesh_build
   int32_t subdivide;             ///< elements along a voxel's edge
   int64_t node_count, element_count;
   double *node;                  ///< [3 nodes] rest, m
@@ -51,7 +52,13 @@ typedef struct fascia_demo_mesh {
   /// positive off the organ, into the tissue: where CalculiX holds the
   /// tissue, against fascia's shared frames on the surface); NAN when free
   double *node_distance;
-  int32_t *element;              ///< [8 or 20 per element] node indices from 0, ccx's order
+  int32_t *element;              ///< [8, 20 or 10 per element] node indices from 0, ccx's order
+  /// tetrahedra: the smallest dihedral angle of the straight tetrahedra
+  /// (degrees), the smallest ratio of the quadratic element's Jacobian at a
+  /// corner or integration point to its straight one, and the elements where
+  /// that ratio is not positive (inverted)
+  double min_dihedral, min_jacobian_ratio;
+  int64_t inverted;
   int32_t organ_count;           ///< the scene's organs
   char organ_name[FASCIA_DEMO_ORGANS_MAX][FASCIA_NAME_SIZE];
   double youngs_modulus, poisson_ratio; ///< the tissue's
@@ -67,6 +74,19 @@ typedef struct fascia_demo_mesh {
 fascia_status fascia_demo_mesh_build(fascia_ctx *ctx, const fascia_prep_stages *stages, int quadratic,
                                      int32_t subdivide, int on_surface, fascia_demo_mesh *out);
 void fascia_demo_mesh_free(fascia_demo_mesh *mesh);
+
+/// The same region as conforming quadratic tetrahedra (C3D10) whose held
+/// nodes lie on the organs' smooth surfaces: the domain is a smoothed
+/// indicator of the region's voxels (with the organ voxels beside them)
+/// less the organs' insides (their signed distance fields), meshed by CGAL's
+/// Mesh_3 with tetrahedra of circumradius at most `size` (m) and facets
+/// within a twentieth of a voxel of the organs' surfaces. A node is held by
+/// an organ when it lies on its surface (corners) or on an edge of a facet
+/// whose corners all do (mid-edge nodes, projected onto the surface).
+/// Errors: FASCIA_ERR_ARGUMENT (size not positive, another law, too many
+/// organs, an empty region), those of the mesher, FASCIA_ERR_MEMORY.
+fascia_status fascia_demo_tet_mesh_build(fascia_ctx *ctx, const fascia_prep_stages *stages, double size,
+                                         fascia_demo_mesh *out);
 
 /// What a solve gave (either code).
 typedef struct fascia_demo_result {
