@@ -1,12 +1,20 @@
 // SPDX-License-Identifier: MIT
 // SPDX-FileCopyrightText: fascia developers
-// CalculiX's .dat values are read as ccx writes them. Its Fortran E format
-// drops the E of a three-digit exponent ("1.234567-100"), which a C reader
-// takes for 1.234567: a tiny reaction would be read as a large one. Every
-// reader of the references (the block totals, a node's values, the
-// cantilever's tip) goes through fascia_ccx_dat_numbers.
+// CalculiX reads and writes numbers its own way, and the references must
+// follow both:
+//  - its Fortran E format drops the E of a three-digit exponent
+//    ("1.234567-100"), which a C reader takes for 1.234567: a tiny reaction
+//    would be read as a large one. Every reader of the references (the
+//    block totals, a node's values, the cantilever's tip) goes through
+//    fascia_ccx_dat_numbers;
+//  - it reads 20 characters of a deck's field and cuts the rest without a
+//    word: -7.61426191299358e-05 is read as -7.6. Every deck is checked
+//    (fascia_ccx_deck_fits) before ccx runs it.
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
 
 #include "beam_calculix.h"
 #include "check.h"
@@ -34,6 +42,28 @@ int main(void) {
   CHECK(fascia_ccx_dat_node(block, 7, v) && close_to(v[1], 2e-102));
   CHECK(!fascia_ccx_dat_node(block, 99, v)); // past the block's end
   CHECK(!fascia_ccx_dat_node(NULL, 7, v));
-  printf("t368: CalculiX's numbers read with and without the E of their exponent\n");
+  // decks: a 21-character field is refused with its line; a heading's text,
+  // keywords and comments are not fields
+  const char *tmp = getenv("TMPDIR");
+  char path[1024], why[256];
+  snprintf(path, sizeof path, "%s/t368-%d.inp", tmp && tmp[0] ? tmp : "/tmp", (int)getpid());
+  FILE *f = fopen(path, "w");
+  CHECK(f != NULL);
+  if (f) {
+    fputs("*HEADING\nthe demo tissue against CalculiX, a long heading line\n** a comment, of any length at all\n"
+          "*NODE, NSET=NALL\n1, -7.614261912994e-05, 0.5, 1.25\n", f);
+    fclose(f);
+  }
+  CHECK(fascia_ccx_deck_fits(path, why, sizeof why));
+  f = fopen(path, "a");
+  if (f) {
+    fputs("2, -7.61426191299358e-05, 0.5, 1.25\n", f);
+    fclose(f);
+  }
+  CHECK(!fascia_ccx_deck_fits(path, why, sizeof why) && strstr(why, "line 6") && strstr(why, "21 characters"));
+  printf("t368: refused: %s\n", why);
+  remove(path);
+  CHECK(!fascia_ccx_deck_fits(path, why, sizeof why)); // gone: cannot read it
+  printf("t368: CalculiX's numbers read with and without the E of their exponent; decks' fields fit\n");
   return CHECK_RESULT();
 }

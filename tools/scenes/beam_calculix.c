@@ -18,6 +18,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
@@ -286,6 +287,48 @@ static char **ccx_environment(int threads, char settings[CCX_THREAD_NAMES][64]) 
   return env;
 }
 
+int fascia_ccx_deck_fits(const char *path, char *why, size_t size) {
+  FILE *f = fopen(path, "r");
+  if (!f) {
+    snprintf(why, size, "cannot read it (%s)", strerror(errno));
+    return 0;
+  }
+  char line[4096];
+  int ok = 1, heading = 0;
+  for (long number = 1; ok && fgets(line, sizeof line, f); ++number) {
+    if (line[0] == '*') { // keyword and comment lines: no fields; a heading's lines are text
+      if (line[1] != '*') heading = !strncasecmp(line, "*HEADING", 8);
+      continue;
+    }
+    if (heading) continue;
+    for (const char *field = line;; ++field) {
+      const size_t length = strcspn(field, ",\r\n");
+      const char *a = field, *b = field + length; // the field without its blanks
+      while (a < b && (*a == ' ' || *a == '\t')) ++a;
+      while (b > a && (b[-1] == ' ' || b[-1] == '\t')) --b;
+      if (b - a > FASCIA_CCX_FIELD) {
+        snprintf(why, size, "line %ld has a field of %d characters, '%.*s' (ccx reads %d)", number, (int)(b - a),
+                 (int)(b - a), a, FASCIA_CCX_FIELD);
+        ok = 0;
+        break;
+      }
+      field += length;
+      if (*field != ',') break;
+    }
+  }
+  fclose(f);
+  return ok;
+}
+
+// The deck of the run in dir, checked before ccx reads it.
+static fascia_status deck_check(fascia_ctx *ctx, const char *what, const char *dir) {
+  char path[PATH_SIZE], why[256];
+  snprintf(path, sizeof path, "%s/" JOB ".inp", dir);
+  return fascia_ccx_deck_fits(path, why, sizeof why)
+             ? FASCIA_OK
+             : SCENE_FAIL(ctx, FASCIA_ERR_FORMAT, "CalculiX %s: the deck %s: %s", what, path, why);
+}
+
 // Runs `program -i beam` in dir, output to ccx.log; its exit status (128 +
 // the signal that ended it), or -1 with why in *why when it could not be
 // started; its processor time (user + system) in *cpu_ms. Spawned (glibc: a
@@ -423,6 +466,7 @@ fascia_status fascia_ccx_beam_solve(fascia_ctx *ctx, const fascia_ccx_beam_def *
   status = fascia_ccx_beam_write(ctx, def, f);
   if (fclose(f) != 0 && status == FASCIA_OK)
     status = SCENE_FAIL(ctx, FASCIA_ERR_IO, WHO ": cannot write %s (%s)", deck, strerror(errno));
+  if (status == FASCIA_OK) status = deck_check(ctx, "cantilever", dir);
   if (status != FASCIA_OK) goto cleanup;
   const char *why = "";
   const int rc = run_ccx(dir, program, threads, &out->cpu_ms, &why);
@@ -496,6 +540,7 @@ fascia_status fascia_ccx_run_deck(fascia_ctx *ctx, const char *what, fascia_ccx_
   status = write(ctx, arg, f);
   if (fclose(f) != 0 && status == FASCIA_OK)
     status = SCENE_FAIL(ctx, FASCIA_ERR_IO, "CalculiX %s: cannot write %s (%s)", what, path, strerror(errno));
+  if (status == FASCIA_OK) status = deck_check(ctx, what, dir);
   if (status != FASCIA_OK) goto cleanup;
   const char *why = "";
   const int rc = run_ccx(dir, program, threads, cpu_ms, &why);

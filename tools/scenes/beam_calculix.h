@@ -112,6 +112,15 @@ fascia_status fascia_ccx_run_deck(fascia_ctx *ctx, const char *what, fascia_ccx_
 fascia_status fascia_ccx_run_timed(fascia_ctx *ctx, const char *what, fascia_ccx_deck_writer write, const void *arg,
                                    const char *program, int threads, char **dat, double *ms);
 
+/// The characters of a deck's data field that ccx reads: it cuts a longer
+/// one without a word (-7.61426191299358e-05 is read as -7.6).
+#define FASCIA_CCX_FIELD 20
+/// 1 when every field of the data lines of the deck at `path` fits in
+/// FASCIA_CCX_FIELD characters; else 0 and, in why, the line and field.
+/// Every deck is checked before ccx runs it (fascia_ccx_run_deck, the
+/// cantilever's run).
+int fascia_ccx_deck_fits(const char *path, char *why, size_t size);
+
 /// The line after the last line of a .dat text that holds `header` (where
 /// ccx's last block of that output starts); NULL if none.
 const char *fascia_ccx_dat_after(const char *dat, const char *header);
