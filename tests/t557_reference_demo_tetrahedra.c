@@ -94,13 +94,13 @@ int main(int argc, char **argv) {
   CHECK(st == FASCIA_OK);
   if (st == FASCIA_OK) {
     fascia_demo_mesh m;
-    st = fascia_demo_tet_mesh_build(ctx, &s, SIZE, &m);
+    st = fascia_demo_tet_mesh_build(ctx, &s, SIZE, 0, &m);
     if (st != FASCIA_OK) fprintf(stderr, "tetrahedra: %s\n", fascia_ctx_message(ctx));
     CHECK(st == FASCIA_OK);
     if (st == FASCIA_OK) check_mesh(&s, &m);
     fascia_demo_mesh_free(&m);
     // a size that is no size: refused, naming it
-    CHECK(fascia_demo_tet_mesh_build(ctx, &s, 0, &m) == FASCIA_ERR_ARGUMENT);
+    CHECK(fascia_demo_tet_mesh_build(ctx, &s, 0, 0, &m) == FASCIA_ERR_ARGUMENT);
     CHECK(strstr(fascia_ctx_message(ctx), "size") != NULL);
     fascia_demo_mesh_free(&m);
   }

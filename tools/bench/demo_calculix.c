@@ -16,8 +16,9 @@
 //             surface: the held nodes moved onto the organs' smooth
 //             surfaces, where fascia holds the tissue, not left on the voxel
 //             faces' staircase); default 8i:1:1,8i:1:2,20r:1:1; or
-//             t10:VOXEL_MM:SIZE_MM, C3D10 tetrahedra of circumradius at most
-//             SIZE_MM that follow the organs' smooth surfaces
+//             t10:VOXEL_MM:SIZE_MM[:FACET_MM], C3D10 tetrahedra of
+//             circumradius at most SIZE_MM that follow the organs' smooth
+//             surfaces to FACET_MM (default a twentieth of a voxel)
 //   --fascia  rungs, comma-separated VOXEL_MM:SCALE[:SAMPLE_SCALE] (the
 //             tissue's frame and sample spacings times SCALE, the sample
 //             spacing times SAMPLE_SCALE on top); default 1:1,1:0.7,1:0.5
@@ -52,6 +53,7 @@ typedef struct ccx_row {
   int quadratic;
   int tetrahedra;  ///< C3D10 of fascia_demo_tet_mesh_build, size_mm its tetrahedra's circumradius bound
   double size_mm;
+  double facet_mm; ///< tetrahedra: their facets' distance bound on the organs; 0: the mesher's default
   double voxel_mm;
   int32_t split;
   int on_surface; ///< the held nodes on the organs' smooth surfaces, not the voxel faces
@@ -89,7 +91,8 @@ static int rung_tag(const char *tag, fascia_row *row) {
 // displacements of a mesh, keyed by its kind, voxel and split.
 static void cache_path(const char *dir, const ccx_row *c, char *path, size_t size) {
   if (c->tetrahedra) {
-    snprintf(path, size, "%s/ccx-c3d10-%gmm-size%g.txt", dir, c->voxel_mm, c->size_mm);
+    snprintf(path, size, "%s/ccx-c3d10-%gmm-size%g%s%g.txt", dir, c->voxel_mm, c->size_mm, c->facet_mm > 0 ? "-facet" : "",
+             c->facet_mm > 0 ? c->facet_mm : 0);
     return;
   }
   snprintf(path, size, "%s/ccx-%s-%gmm-split%d%s.txt", dir, c->quadratic ? "c3d20r" : "c3d8i", c->voxel_mm,
@@ -136,13 +139,13 @@ static void cache_save(const char *dir, const ccx_row *c) {
 }
 
 static const char usage_text[] =
-    "usage: demo-calculix [SCENE.json] [--ccx TYPE:VOXEL_MM:SPLIT[:surface]|t10:VOXEL_MM:SIZE_MM,...] "
+    "usage: demo-calculix [SCENE.json] [--ccx TYPE:VOXEL_MM:SPLIT[:surface]|t10:VOXEL_MM:SIZE_MM[:FACET_MM],...] "
     "[--fascia VOXEL_MM:SCALE[:SAMPLE_SCALE[:TAG]],...]\n"
     "                     [--reference K] [--neighbours N] [--threads N] [--csv FILE] [--cache DIR] [--slip]\n"
     "                     [--write-reference FILE] [--ccx-solver NAME] [--mesh-only] [--deck FILE]\n"
     "  TYPE 8i (C3D8I) or 20r (C3D20R); SPLIT elements along a voxel's edge; surface: held nodes on the organs'\n"
     "  smooth surfaces, not the voxel faces; t10: C3D10 tetrahedra of circumradius SIZE_MM on the organs' smooth\n"
-    "  surfaces (CGAL Mesh_3); SCALE times the tissue's frame and\n"
+    "  surfaces (CGAL Mesh_3), facets within FACET_MM of them; SCALE times the tissue's frame and\n"
     "  sample spacings, SAMPLE_SCALE times the sample spacing on top; TAG nK (K MLS neighbours) or flat (no\n"
     "  volumetric patches); --reference K: the CalculiX mesh (from 1) errors are taken against, default the last;\n"
     "  --ccx-solver: ccx's linear solver, e.g. \"ITERATIVE CHOLESKY\" (default: ccx's own, SPOOLES)\n";
@@ -155,6 +158,33 @@ static int usage(const char *why) {
 static const char *mesh_type(const ccx_row *c) { return c->tetrahedra ? "C3D10" : c->quadratic ? "C3D20R" : "C3D8I"; }
 
 static double norm3(const double v[3]) { return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
+
+// The tetrahedra's edge lengths (each element's six, m): 5th, 50th, 95th percentiles.
+static void tet_edges(const fascia_demo_mesh *m, double q[3]) {
+  double *len = malloc((size_t)(6 * m->element_count + 1) * sizeof *len);
+  q[0] = q[1] = q[2] = NAN;
+  if (!len) return;
+  static const int pair[6][2] = {{0, 1}, {1, 2}, {2, 0}, {0, 3}, {1, 3}, {2, 3}};
+  for (int64_t e = 0; e < m->element_count; ++e)
+    for (int k = 0; k < 6; ++k) {
+      const double *a = m->node + 3 * m->element[10 * e + pair[k][0]], *b = m->node + 3 * m->element[10 * e + pair[k][1]];
+      const double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+      len[6 * e + k] = norm3(d);
+    }
+  q[0] = fascia_demo_percentile(len, 6 * m->element_count, 0.05);
+  q[1] = fascia_demo_percentile(len, 6 * m->element_count, 0.5);
+  q[2] = fascia_demo_percentile(len, 6 * m->element_count, 0.95);
+  free(len);
+}
+
+// The tetrahedra's quality line.
+static void print_tet_quality(const fascia_demo_mesh *m) {
+  double q[3];
+  tet_edges(m, q);
+  printf("    tetrahedra: edges p5 %.3f, p50 %.3f, p95 %.3f mm; smallest dihedral angle %.2f degrees; C3D10's "
+         "Jacobian at its corners and integration points at least %.3f of the straight element's, %lld inverted\n",
+         1e3 * q[0], 1e3 * q[1], 1e3 * q[2], m->min_dihedral, m->min_jacobian_ratio, (long long)m->inverted);
+}
 
 // The stable Neo-Hookean's P from fascia's own law against CalculiX's one element.
 static int check_one_element(fascia_ctx *ctx, const char *ccx, double E, double nu) {
@@ -354,9 +384,11 @@ int main(int argc, char **argv) {
     char type[8], hold[16] = "";
     double vox, size;
     int split;
-    if (sscanf(p, "t10:%lf:%lf", &vox, &size) == 2) {
-      if (!(vox > 0 && size > 0)) return usage("--ccx: t10:VOXEL_MM:SIZE_MM expects positive sizes");
-      cr[nc].tetrahedra = 1, cr[nc].quadratic = 1, cr[nc].voxel_mm = vox, cr[nc].size_mm = size;
+    double facet = 0;
+    if (sscanf(p, "t10:%lf:%lf:%lf", &vox, &size, &facet) >= 2) {
+      if (!(vox > 0 && size > 0 && facet >= 0))
+        return usage("--ccx: t10:VOXEL_MM:SIZE_MM[:FACET_MM] expects positive sizes");
+      cr[nc].tetrahedra = 1, cr[nc].quadratic = 1, cr[nc].voxel_mm = vox, cr[nc].size_mm = size, cr[nc].facet_mm = facet;
       cr[nc].split = 1, cr[nc].on_surface = 1, ++nc;
       p = strchr(p, ',');
       if (p) ++p;
@@ -364,7 +396,7 @@ int main(int argc, char **argv) {
     }
     const int fields = sscanf(p, "%7[^:]:%lf:%d:%15[^,]", type, &vox, &split, hold);
     if (fields < 3 || (strcmp(type, "8i") && strcmp(type, "20r")) || (fields == 4 && strcmp(hold, "surface")))
-      return usage("--ccx: expected TYPE:VOXEL_MM:SPLIT[:surface] with TYPE 8i or 20r, or t10:VOXEL_MM:SIZE_MM");
+      return usage("--ccx: expected TYPE:VOXEL_MM:SPLIT[:surface] with TYPE 8i or 20r, or t10:VOXEL_MM:SIZE_MM[:FACET_MM]");
     cr[nc].quadratic = !strcmp(type, "20r"), cr[nc].voxel_mm = vox, cr[nc].split = split;
     cr[nc].on_surface = fields == 4, ++nc;
     p = strchr(p, ',');
@@ -419,7 +451,8 @@ int main(int argc, char **argv) {
     fascia_prep_stages s;
     fascia_demo_def d = {scene, cr[k].voxel_mm * 1e-3, 1, 1, neighbours, 0, 0, 0};
     fascia_status st = fascia_demo_prepare(ctx, &d, &s);
-    if (st == FASCIA_OK && cr[k].tetrahedra) st = fascia_demo_tet_mesh_build(ctx, &s, cr[k].size_mm * 1e-3, &cr[k].mesh);
+    if (st == FASCIA_OK && cr[k].tetrahedra)
+      st = fascia_demo_tet_mesh_build(ctx, &s, cr[k].size_mm * 1e-3, cr[k].facet_mm * 1e-3, &cr[k].mesh);
     else if (st == FASCIA_OK)
       st = fascia_demo_mesh_build(ctx, &s, cr[k].quadratic, cr[k].split, cr[k].on_surface, &cr[k].mesh);
     cr[k].mesh.solver = ccx_solver;
@@ -439,10 +472,7 @@ int main(int argc, char **argv) {
       printf("  %d %s %g mm: %lld nodes, %lld elements (not solved)\n", k + 1, mesh_type(cr + k), cr[k].voxel_mm,
              (long long)cr[k].mesh.node_count, (long long)cr[k].mesh.element_count);
       print_offsets(&cr[k].mesh);
-      if (cr[k].tetrahedra)
-        printf("    tetrahedra: smallest dihedral angle %.2f degrees; C3D10's Jacobian at least %.3f of the straight "
-               "element's, %lld inverted\n",
-               cr[k].mesh.min_dihedral, cr[k].mesh.min_jacobian_ratio, (long long)cr[k].mesh.inverted);
+      if (cr[k].tetrahedra) print_tet_quality(&cr[k].mesh);
       fflush(stdout);
       FILE *deck = deck_path ? fopen(deck_path, "w") : NULL;
       if (deck_path && (!deck || fascia_demo_write_deck(ctx, &cr[k].mesh, deck) != FASCIA_OK || fclose(deck) != 0)) {
@@ -464,15 +494,13 @@ int main(int argc, char **argv) {
              cr[k].split > 1 ? " split" : "");
     if (cr[k].split > 1) snprintf(name + strlen(name), sizeof name - strlen(name), " %d", (int)cr[k].split);
     if (cr[k].tetrahedra) snprintf(name + strlen(name), sizeof name - strlen(name), " size %g", cr[k].size_mm);
+    if (cr[k].facet_mm > 0) snprintf(name + strlen(name), sizeof name - strlen(name), " facet %g", cr[k].facet_mm);
     else if (cr[k].on_surface) snprintf(name + strlen(name), sizeof name - strlen(name), " surface");
     printf("  %-26s %8lld %9lld", name, (long long)cr[k].result.nodes, (long long)cr[k].result.elements);
     for (int32_t o = 0; o < organ_count; ++o) printf("  %16.5f", norm3(cr[k].result.force[o]));
     printf("  %6.1f%s\n", 1e-3 * cr[k].result.ms, cached ? " (cached)" : "");
     print_offsets(&cr[k].mesh);
-    if (cr[k].tetrahedra)
-      printf("    tetrahedra: smallest dihedral angle %.2f degrees; C3D10's Jacobian at corners and integration points "
-             "at least %.3f of the straight element's, %lld inverted\n",
-             cr[k].mesh.min_dihedral, cr[k].mesh.min_jacobian_ratio, (long long)cr[k].mesh.inverted);
+    if (cr[k].tetrahedra) print_tet_quality(&cr[k].mesh);
     fflush(stdout);
   }
   if (mesh_only) goto done;

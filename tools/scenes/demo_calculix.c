@@ -366,9 +366,17 @@ static fascia_status tet_seeds(fascia_ctx *ctx, tet_domain *d, const double lo[3
     for (int a = 0; a < 3; ++a) a_in[a] = v->origin[a] + v->voxel_size * c[a];
     if (!tet_label(d, a_in)) continue;
     for (int q = 0; q < 6; ++q) {
-      double in[3] = {a_in[0], a_in[1], a_in[2]}, outp[3] = {a_in[0], a_in[1], a_in[2]};
+      // the ends jittered off the voxel lines: seeds in general position
+      // (coplanar seeds leave flat tetrahedra in the Delaunay mesh)
+      double in[3], outp[3];
+      uint64_t hash = (uint64_t)(6 * w + q) * 0x9E3779B97F4A7C15ull;
+      for (int a = 0; a < 3; ++a) {
+        hash ^= hash >> 29, hash *= 0xBF58476D1CE4E5B9ull;
+        const double jitter = 0.3 * v->voxel_size * ((double)(hash >> 11) / 9007199254740992.0 - 0.5);
+        in[a] = a_in[a] + jitter, outp[a] = a_in[a] + jitter;
+      }
       outp[q / 2] += (q & 1 ? 1 : -1) * v->voxel_size;
-      if (tet_label(d, outp)) continue;
+      if (!tet_label(d, in) || tet_label(d, outp)) continue;
       for (int it = 0; it < 50; ++it) {
         double mid[3];
         for (int a = 0; a < 3; ++a) mid[a] = 0.5 * (in[a] + outp[a]);
@@ -478,7 +486,7 @@ static double tet_jacobian_ratio(const double x[10][3]) {
 }
 
 fascia_status fascia_demo_tet_mesh_build(fascia_ctx *ctx, const fascia_prep_stages *s, double size,
-                                         fascia_demo_mesh *out) {
+                                         double facet_distance, fascia_demo_mesh *out) {
   memset(out, 0, sizeof *out);
   SCENE_CHECK(size > 0 && isfinite(size), ctx, FASCIA_ERR_ARGUMENT, "demo tetrahedra: size %g m, expected > 0", size);
   const fascia_prep_scene *sc = s->scene;
@@ -497,7 +505,11 @@ fascia_status fascia_demo_tet_mesh_build(fascia_ctx *ctx, const fascia_prep_stag
   double R[FASCIA_DEMO_ORGANS_MAX][9], T[FASCIA_DEMO_ORGANS_MAX][3];
   SCENE_TRY(organ_poses(ctx, s, R, T));
   const double h = v->voxel_size;
-  tet_domain dom = {v, tet_mask(v), 0.25 * h, 0.05 * h, 0.2 * h};
+  SCENE_CHECK(facet_distance >= 0 && facet_distance < h, ctx, FASCIA_ERR_ARGUMENT,
+              "demo tetrahedra: facet distance %g m, expected 0 (the default) up to the voxel size %g m", facet_distance,
+              h);
+  const double near = facet_distance > 0 ? facet_distance : 0.05 * h;
+  tet_domain dom = {v, tet_mask(v), 0.25 * h, near, fmax(0.2 * h, near)};
   double *seeds = NULL, *xyz = NULL;
   int32_t *tets = NULL;
   tet_key *keys = NULL;
@@ -610,7 +622,7 @@ fascia_status fascia_demo_tet_mesh_build(fascia_ctx *ctx, const fascia_prep_stag
   // 5. an element that the projections fold (a flat one whose four corners
   //    lie on the surface) gets its mid-edges back on its straight edges:
   //    held there, off the surface by at most the facet distance
-  for (int pass = 0; pass < 4; ++pass) {
+  for (int pass = 0; pass < 100; ++pass) {
     int64_t folded = 0;
     for (int64_t e = 0; e < nt; ++e) {
       double x[10][3];
@@ -665,11 +677,13 @@ static void write_material(FILE *out, double E, double nu) {
           E, nu, mu, (l + mu) / 2, -(l + mu) / 2, 1.0 / 3.0);
 }
 
-static void write_step(FILE *out, const char *solver) {
-  // a quarter of the load first (the whole load at once diverges on the
-  // demo); residuals 500 times below ccx's default, for forces to 1e-4
-  fprintf(out, "*STEP, NLGEOM, INC=1000\n*STATIC%s%s\n0.25, 1.0, 1e-5, 0.5\n", solver ? ", SOLVER=" : "",
-          solver ? solver : "");
+static void write_step(FILE *out, const char *solver, double first) {
+  // a part of the load first (the whole load at once diverges on the demo;
+  // ccx moves only the held nodes in an increment's first iteration, which
+  // folds the tetrahedra's thin layers on the organs unless the part is
+  // small); residuals 500 times below ccx's default, for forces to 1e-4
+  fprintf(out, "*STEP, NLGEOM, INC=1000\n*STATIC%s%s\n%g, 1.0, 1e-5, 0.5\n", solver ? ", SOLVER=" : "",
+          solver ? solver : "", first);
   fprintf(out, "*CONTROLS, PARAMETERS=FIELD\n1e-5, 1e-5, 0., -1., 0.02, 1e-5, 1e-3, 1e-8\n");
 }
 
@@ -704,7 +718,7 @@ fascia_status fascia_demo_write_deck(fascia_ctx *ctx, const void *arg, FILE *out
   }
   write_material(out, m->youngs_modulus, m->poisson_ratio);
   fprintf(out, "*SOLID SECTION, ELSET=EALL, MATERIAL=TISSUE\n");
-  write_step(out, m->solver);
+  write_step(out, m->solver, m->tetrahedra ? 0.0625 : 0.25);
   fprintf(out, "*BOUNDARY\n");
   for (int64_t k = 0; k < m->node_count; ++k) {
     if (m->node_organ[k] < 0) continue;
@@ -818,7 +832,7 @@ static fascia_status write_one_element(fascia_ctx *ctx, const void *arg, FILE *o
                "*NSET, NSET=NX\n2, 3, 6, 7\n*NSET, NSET=NY\n3, 4, 7, 8\n*NSET, NSET=NZ\n5, 6, 7, 8\n");
   write_material(out, d->E, d->nu);
   fprintf(out, "*SOLID SECTION, ELSET=EALL, MATERIAL=TISSUE\n");
-  write_step(out, NULL);
+  write_step(out, NULL, 0.25);
   fprintf(out, "*BOUNDARY\n");
   for (int q = 0; q < 8; ++q)
     for (int a = 0; a < 3; ++a) {

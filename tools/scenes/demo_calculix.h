@@ -80,13 +80,14 @@ void fascia_demo_mesh_free(fascia_demo_mesh *mesh);
 /// indicator of the region's voxels (with the organ voxels beside them)
 /// less the organs' insides (their signed distance fields), meshed by CGAL's
 /// Mesh_3 with tetrahedra of circumradius at most `size` (m) and facets
-/// within a twentieth of a voxel of the organs' surfaces. A node is held by
+/// within `facet_distance` (m; 0: a twentieth of a voxel) of the organs'
+/// surfaces. A node is held by
 /// an organ when it lies on its surface (corners) or on an edge of a facet
 /// whose corners all do (mid-edge nodes, projected onto the surface).
 /// Errors: FASCIA_ERR_ARGUMENT (size not positive, another law, too many
 /// organs, an empty region), those of the mesher, FASCIA_ERR_MEMORY.
 fascia_status fascia_demo_tet_mesh_build(fascia_ctx *ctx, const fascia_prep_stages *stages, double size,
-                                         fascia_demo_mesh *out);
+                                         double facet_distance, fascia_demo_mesh *out);
 
 /// What a solve gave (either code).
 typedef struct fascia_demo_result {
