@@ -345,15 +345,10 @@ static inline FASCIA_HD void fascia_dev_frame_operator(const fascia_dev *D, int3
   fascia_pt_frame_gravity_product(D->A + 9 * (int64_t)i, D->frame_moment + 3 * (int64_t)i, D->gravity,
                                   set->gravity_scale, v + i6, out);
   fascia_pt_frame_symmetrizing_product(D->torque + 3 * (int64_t)i, v + i6, out);
-  if (set->mass_coefficient != 0) {
-    fascia_real Mv[6];
-    fascia_dev_frame_mass(D, i, v, Mv);
-    for (int c = 0; c < 6; ++c) out[c] += set->mass_coefficient * Mv[c];
-  }
-  if (set->shift != 0)
-    for (int c = 0; c < 6; ++c) out[c] += set->shift * D->damping[i6 + c] * v[i6 + c];
-  for (int c = 0; c < 6; ++c)
-    if (!mask[i6 + c]) out[c] = 0;
+  fascia_real Mv[6];
+  if (set->mass_coefficient != 0) fascia_dev_frame_mass(D, i, v, Mv);
+  fascia_pt_frame_operator_end(set->mass_coefficient, set->mass_coefficient != 0 ? Mv : NULL, set->shift,
+                               D->damping + i6, v + i6, mask + i6, out);
 }
 
 // Body b's part of the objective: its slaves' gradient folded into the

@@ -85,6 +85,23 @@ static inline FASCIA_HD void fascia_pt_frame_gravity_product(const fascia_real *
   for (int c = 0; c < 3; ++c) out[3 + c] -= gs * vbg[c];
 }
 
+/// The end of a frame's row of the Newton operator A v = H v +
+/// mass_coefficient M v + shift D v (cg.c's operator, the device's frame
+/// operator): out, holding H v, gets the mass term (Mv: this frame's M v;
+/// NULL: none) and the Levenberg term (damping: D's 6 entries), and the
+/// entries the mask fixes become 0.
+static inline FASCIA_HD void fascia_pt_frame_operator_end(fascia_real mass_coefficient, const fascia_real *Mv,
+                                                          fascia_real shift, const fascia_real *damping,
+                                                          const fascia_real *v, const unsigned char *mask,
+                                                          fascia_real *out) {
+  if (Mv)
+    for (int c = 0; c < 6; ++c) out[c] += mass_coefficient * Mv[c];
+  if (shift != 0)
+    for (int c = 0; c < 6; ++c) out[c] += shift * damping[c] * v[c];
+  for (int c = 0; c < 6; ++c)
+    if (!mask[c]) out[c] = 0;
+}
+
 /// The symmetrizing term of the rotation update (docs/mechanics.md):
 /// out[3..5] += 1/2 torque x v_theta.
 static inline FASCIA_HD void fascia_pt_frame_symmetrizing_product(const fascia_real *torque, const fascia_real *v,

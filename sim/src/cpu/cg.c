@@ -14,6 +14,7 @@
 #include "point/block6.h"
 #include "point/body.h"
 #include "point/cg.h"
+#include "point/frame.h"
 #include "cpu/operator.h"
 
 // Rigid organs: P^T A P v, A on every frame the tissue moves, plus the
@@ -39,7 +40,6 @@ void fascia_operator_apply(const fascia_operator *op, const fascia_real *v, fasc
     return;
   }
   fascia_system *sys = op->sys;
-  const int64_t n = 6 * (int64_t)sys->frame_count;
   if (op->assembled && op->single) {
     fascia_bsr_apply_single(op->assembled, sys->threads, op->frame_moves, v, out);
   } else if (op->assembled) {
@@ -47,22 +47,16 @@ void fascia_operator_apply(const fascia_operator *op, const fascia_real *v, fasc
   } else {
     fascia_system_hessian_apply(sys, v, out);
   }
-  if (op->mass_coefficient != 0 && !op->assembled) {
-    if (op->mass == FASCIA_MASS_LUMPED) {
-      for (int32_t i = 0; i < sys->frame_count; ++i) {
-        fascia_real Mv[6];
-        fascia_pt_block6_mul(op->mass_blocks + 36 * (int64_t)i, v + 6 * (int64_t)i, Mv);
-        for (int r = 0; r < 6; ++r) out[6 * (int64_t)i + r] += op->mass_coefficient * Mv[r];
-      }
-    } else {
-      fascia_system_mass_apply(sys, v, op->scratch);
-      for (int64_t k = 0; k < n; ++k) out[k] += op->mass_coefficient * op->scratch[k];
-    }
+  // the assembled matrix holds the mass term already
+  const int mass = op->mass_coefficient != 0 && !op->assembled, lumped = op->mass == FASCIA_MASS_LUMPED;
+  if (mass && !lumped) fascia_system_mass_apply(sys, v, op->scratch);
+  for (int64_t i = 0; i < sys->frame_count; ++i) {
+    fascia_real lumped_Mv[6];
+    const fascia_real *Mv = !mass ? NULL : lumped ? lumped_Mv : op->scratch + 6 * i;
+    if (mass && lumped) fascia_pt_block6_mul(op->mass_blocks + 36 * i, v + 6 * i, lumped_Mv);
+    const fascia_real *damping = op->damping_diagonal ? op->damping_diagonal + 6 * i : NULL; // read where shifted
+    fascia_pt_frame_operator_end(op->mass_coefficient, Mv, op->shift, damping, v + 6 * i, op->mask + 6 * i, out + 6 * i);
   }
-  if (op->shift != 0)
-    for (int64_t k = 0; k < n; ++k) out[k] += op->shift * op->damping_diagonal[k] * v[k];
-  for (int64_t k = 0; k < n; ++k)
-    if (!op->mask[k]) out[k] = 0;
 }
 
 #define CG_BLOCK_FRAMES 256 // frames per partial sum (fixed: determinism)
