@@ -148,11 +148,11 @@ fascia_status fascia_solver_create(fascia_ctx *ctx, const fascia_model *model, c
   S->frame_count = model->frame_count;
   FASCIA_TRY_GOTO(fascia_system_create(ctx, model, def->threads > 0 ? def->threads : fascia_ctx_threads(ctx), &S->sys));
   const int64_t N = model->frame_count, n = 6 * N;
-  // the arrays a GPU backend copies every step are on pages of their own
   S->x = fascia_calloc(3 * N, sizeof(fascia_real));
   S->q = fascia_calloc(4 * N, sizeof(fascia_real));
   S->u = fascia_calloc(n, sizeof(fascia_real));
   S->mask = fascia_calloc(n, 1);
+  // the arrays a GPU backend copies at every step's begin are on pages of their own
   S->x_base = fascia_calloc_pages(3 * N, sizeof(fascia_real));
   S->q_base = fascia_calloc_pages(4 * N, sizeof(fascia_real));
   S->d = fascia_calloc_pages(n, sizeof(fascia_real));
@@ -394,7 +394,7 @@ fascia_status fascia_solver_solve_static(fascia_solver *S, fascia_solve_report *
 
 // E_kin + E_pot at the current state: the potential of the Newton solve's
 // last evaluation, at the accepted state, which every backend's finish
-// leaves in the system (nothing is evaluated twice).
+// hands back (nothing is evaluated twice).
 static fascia_real total_energy(fascia_solver *S) {
   const fascia_real potential =
       S->energy_internal + S->energy_external + fascia_organs_potential_energy(S->organs, S->x, S->q, S->sys->gravity);
@@ -571,11 +571,11 @@ static void describe_failure(const fascia_solver *S, char *text, size_t size) {
   // the cause named is one the first inverted sample's own law has
   const int32_t first = S->first_inverted;
   if (first >= 0 && S->sys->sample_law[first] == FASCIA_LAW_STVK)
-    snprintf(text + n, size - (size_t)n, "; %d inverted samples, the first sample %d of StVK (likely cause: the "
+    snprintf(text + n, size - (size_t)n, "; %d inverted samples, the first sample %d (StVK; likely cause: the "
              "material is crushed; StVK loses stiffness in compression, the stable Neo-Hookean does not)",
              (int)S->inverted_count, (int)first);
   else
-    snprintf(text + n, size - (size_t)n, "; %d inverted samples, the first sample %d of Neo-Hookean (likely cause: "
+    snprintf(text + n, size - (size_t)n, "; %d inverted samples, the first sample %d (Neo-Hookean; likely cause: "
              "the step moves the tissue farther than its Newton iterations follow, so the last iterate crushes it)",
              (int)S->inverted_count, (int)first);
 }
