@@ -30,13 +30,23 @@ EXACT_RUNGS="1:1,1:0.7,1:0.5,1:0.35,1:1:1:e,1:0.7:1:e,1:0.5:1:e,1:0.35:1:e,1:1:1
 EXACT_RUNGS+=",1:1:0.5:e,1:0.7:0.7:e,1:1:1:e0.5,1:0.5:1:e0.5,1:1:1:e2,1:0.5:1:e2"
 EXACT_RUNGS+=",0.5:1:1:e,0.5:0.7:1:e,0.5:0.5:1:e,0.5:0.7:0.5:e,0.5:0.5:0.5:e,0.5:0.5:0.5:e+flat"
 [ "${RUNGS:-}" = exact ] && RUNGS="$EXACT_RUNGS"
+# against the converged tetrahedra held on the smooth surfaces: the default
+# rungs, 10 MLS neighbours, and the exact ladder's other rungs (written with
+# NAME=demo_calculix_tet RUNGS=tet and CCX the tetrahedra of
+# tools/bench/results/2core-debian_cpu/demo_calculix_tet.txt, the finest last)
+DEFAULT_RUNGS="1:1,1:0.7,1:0.5,1:0.35,1:1:1:flat,1:0.7:1:flat,1:0.5:1:flat,1:1:1:n12,1:1:1:n16,1:1:0.7,1:1:0.5,1:0.7:1.43"
+TET_RUNGS="$DEFAULT_RUNGS,1:1:1:n10,1:0.7:1:n10,1:0.5:1:n10"
+TET_RUNGS+=",1:1:1:e,1:0.7:1:e,1:0.5:1:e,1:0.35:1:e,1:1:1:e+flat,1:0.7:1:e+flat,1:0.5:1:e+flat"
+TET_RUNGS+=",1:1:0.5:e,1:0.7:0.7:e,1:1:1:e0.5,1:0.5:1:e0.5"
+TET_RUNGS+=",0.5:1:1:e,0.5:0.7:1:e,0.5:0.5:1:e,0.5:0.7:0.5:e,0.5:0.5:0.5:e,0.5:0.5:0.5:e+flat"
+[ "${RUNGS:-}" = tet ] && RUNGS="$TET_RUNGS"
 mkdir -p "$cache" "$out"
 ref=()
 for a in "$@"; do [ "$a" = "--reference" ] && ref=(--write-reference "$root/data/reference/demo-calculix.csv"); done
 cd "$root"
 "$bench" data/scenes/pelvis-female-demo.json --cache "$cache" --ccx "${CCX:-8i:1:1,20r:1:1,8i:1:2}" \
   --ccx-solver "${CCX_SOLVER:-ITERATIVE CHOLESKY}" \
-  --fascia "${RUNGS:-1:1,1:0.7,1:0.5,1:0.35,1:1:1:flat,1:0.7:1:flat,1:0.5:1:flat,1:1:1:n12,1:1:1:n16,1:1:0.7,1:1:0.5,1:0.7:1.43}" \
+  --fascia "${RUNGS:-$DEFAULT_RUNGS}" \
   --slip --csv "$out/$name.csv" "${ref[@]}" > "$out/$name.txt.tmp"
 mv "$out/$name.txt.tmp" "$out/$name.txt"
 cat "$out/$name.txt"

@@ -91,8 +91,9 @@ static int rung_tag(const char *tag, fascia_row *row) {
 // displacements of a mesh, keyed by its kind, voxel and split.
 static void cache_path(const char *dir, const ccx_row *c, char *path, size_t size) {
   if (c->tetrahedra) {
-    snprintf(path, size, "%s/ccx-c3d10-%gmm-size%g%s%g.txt", dir, c->voxel_mm, c->size_mm, c->facet_mm > 0 ? "-facet" : "",
-             c->facet_mm > 0 ? c->facet_mm : 0);
+    char facet[32] = "";
+    if (c->facet_mm > 0) snprintf(facet, sizeof facet, "-facet%g", c->facet_mm);
+    snprintf(path, size, "%s/ccx-c3d10-%gmm-size%g%s.txt", dir, c->voxel_mm, c->size_mm, facet);
     return;
   }
   snprintf(path, size, "%s/ccx-%s-%gmm-split%d%s.txt", dir, c->quadratic ? "c3d20r" : "c3d8i", c->voxel_mm,
@@ -495,7 +496,7 @@ int main(int argc, char **argv) {
     if (cr[k].split > 1) snprintf(name + strlen(name), sizeof name - strlen(name), " %d", (int)cr[k].split);
     if (cr[k].tetrahedra) snprintf(name + strlen(name), sizeof name - strlen(name), " size %g", cr[k].size_mm);
     if (cr[k].facet_mm > 0) snprintf(name + strlen(name), sizeof name - strlen(name), " facet %g", cr[k].facet_mm);
-    else if (cr[k].on_surface) snprintf(name + strlen(name), sizeof name - strlen(name), " surface");
+    if (cr[k].on_surface && !cr[k].tetrahedra) snprintf(name + strlen(name), sizeof name - strlen(name), " surface");
     printf("  %-26s %8lld %9lld", name, (long long)cr[k].result.nodes, (long long)cr[k].result.elements);
     for (int32_t o = 0; o < organ_count; ++o) printf("  %16.5f", norm3(cr[k].result.force[o]));
     printf("  %6.1f%s\n", 1e-3 * cr[k].result.ms, cached ? " (cached)" : "");

@@ -677,13 +677,13 @@ static void write_material(FILE *out, double E, double nu) {
           E, nu, mu, (l + mu) / 2, -(l + mu) / 2, 1.0 / 3.0);
 }
 
-static void write_step(FILE *out, const char *solver, double first) {
+static void write_step(FILE *out, const char *solver, double first, double largest) {
   // a part of the load first (the whole load at once diverges on the demo;
   // ccx moves only the held nodes in an increment's first iteration, which
   // folds the tetrahedra's thin layers on the organs unless the part is
   // small); residuals 500 times below ccx's default, for forces to 1e-4
-  fprintf(out, "*STEP, NLGEOM, INC=1000\n*STATIC%s%s\n%g, 1.0, 1e-5, 0.5\n", solver ? ", SOLVER=" : "",
-          solver ? solver : "", first);
+  fprintf(out, "*STEP, NLGEOM, INC=1000\n*STATIC%s%s\n%g, 1.0, 1e-5, %g\n", solver ? ", SOLVER=" : "",
+          solver ? solver : "", first, largest);
   fprintf(out, "*CONTROLS, PARAMETERS=FIELD\n1e-5, 1e-5, 0., -1., 0.02, 1e-5, 1e-3, 1e-8\n");
 }
 
@@ -718,7 +718,7 @@ fascia_status fascia_demo_write_deck(fascia_ctx *ctx, const void *arg, FILE *out
   }
   write_material(out, m->youngs_modulus, m->poisson_ratio);
   fprintf(out, "*SOLID SECTION, ELSET=EALL, MATERIAL=TISSUE\n");
-  write_step(out, m->solver, m->tetrahedra ? 0.0625 : 0.25);
+  write_step(out, m->solver, m->tetrahedra ? 0.0625 : 0.25, m->tetrahedra ? 0.25 : 0.5);
   fprintf(out, "*BOUNDARY\n");
   for (int64_t k = 0; k < m->node_count; ++k) {
     if (m->node_organ[k] < 0) continue;
@@ -832,7 +832,7 @@ static fascia_status write_one_element(fascia_ctx *ctx, const void *arg, FILE *o
                "*NSET, NSET=NX\n2, 3, 6, 7\n*NSET, NSET=NY\n3, 4, 7, 8\n*NSET, NSET=NZ\n5, 6, 7, 8\n");
   write_material(out, d->E, d->nu);
   fprintf(out, "*SOLID SECTION, ELSET=EALL, MATERIAL=TISSUE\n");
-  write_step(out, NULL, 0.25);
+  write_step(out, NULL, 0.25, 0.5);
   fprintf(out, "*BOUNDARY\n");
   for (int q = 0; q < 8; ++q)
     for (int a = 0; a < 3; ++a) {
