@@ -140,6 +140,25 @@ static void onto_surface(const fascia_prep_volume *v, int32_t o, double x[3]) {
   }
 }
 
+// What both meshes take from the scene: the tissue's law (the stable
+// Neo-Hookean, which the *HYPERFOAM card writes), its E and nu, the organs'
+// names and their poses at time 1.
+static fascia_status mesh_setup(fascia_ctx *ctx, const fascia_prep_stages *s, fascia_demo_mesh *out,
+                                double (*R)[9], double (*T)[3]) {
+  const fascia_prep_scene *sc = s->scene;
+  const fascia_material *mat = sc->materials + sc->tissues[0].material;
+  SCENE_CHECK(mat->law == FASCIA_LAW_NEOHOOKEAN, ctx, FASCIA_ERR_ARGUMENT,
+              "demo mesh: tissue '%s' is not of the stable Neo-Hookean law (the *HYPERFOAM card writes that law)",
+              sc->tissues[0].name);
+  SCENE_CHECK(sc->organ_count <= FASCIA_DEMO_ORGANS_MAX, ctx, FASCIA_ERR_ARGUMENT, "demo mesh: %d organs, at most %d",
+              (int)sc->organ_count, FASCIA_DEMO_ORGANS_MAX);
+  out->youngs_modulus = mat->youngs_modulus, out->poisson_ratio = mat->poisson_ratio;
+  out->organ_count = sc->organ_count;
+  for (int32_t o = 0; o < sc->organ_count; ++o)
+    snprintf(out->organ_name[o], FASCIA_NAME_SIZE, "%s", sc->organs[o].name);
+  return organ_poses(ctx, s, R, T);
+}
+
 fascia_status fascia_demo_mesh_build(fascia_ctx *ctx, const fascia_prep_stages *s, int quadratic,
                                      int32_t subdivide, int on_surface, fascia_demo_mesh *out) {
   memset(out, 0, sizeof *out);
@@ -147,17 +166,9 @@ fascia_status fascia_demo_mesh_build(fascia_ctx *ctx, const fascia_prep_stages *
               "demo mesh: %d elements per voxel edge, expected 1 .. 4", (int)subdivide);
   const fascia_prep_scene *sc = s->scene;
   const fascia_prep_volume *v = s->volume;
-  const fascia_material *mat = sc->materials + sc->tissues[0].material;
-  SCENE_CHECK(mat->law == FASCIA_LAW_NEOHOOKEAN, ctx, FASCIA_ERR_ARGUMENT,
-              "demo mesh: tissue '%s' is not of the stable Neo-Hookean law (the *HYPERFOAM card writes that law)",
-              sc->tissues[0].name);
-  out->quadratic = quadratic, out->subdivide = subdivide;
-  out->youngs_modulus = mat->youngs_modulus, out->poisson_ratio = mat->poisson_ratio;
-  out->organ_count = sc->organ_count;
-  for (int32_t o = 0; o < sc->organ_count; ++o)
-    snprintf(out->organ_name[o], FASCIA_NAME_SIZE, "%s", sc->organs[o].name);
   double R[FASCIA_DEMO_ORGANS_MAX][9], T[FASCIA_DEMO_ORGANS_MAX][3];
-  SCENE_TRY(organ_poses(ctx, s, R, T));
+  SCENE_TRY(mesh_setup(ctx, s, out, R, T));
+  out->quadratic = quadratic, out->subdivide = subdivide;
 
   // the region's bounds, and a lattice of r points per voxel edge over them
   const int32_t *dims = v->dims;
@@ -491,19 +502,9 @@ fascia_status fascia_demo_tet_mesh_build(fascia_ctx *ctx, const fascia_prep_stag
   SCENE_CHECK(size > 0 && isfinite(size), ctx, FASCIA_ERR_ARGUMENT, "demo tetrahedra: size %g m, expected > 0", size);
   const fascia_prep_scene *sc = s->scene;
   const fascia_prep_volume *v = s->volume;
-  const fascia_material *mat = sc->materials + sc->tissues[0].material;
-  SCENE_CHECK(mat->law == FASCIA_LAW_NEOHOOKEAN, ctx, FASCIA_ERR_ARGUMENT,
-              "demo mesh: tissue '%s' is not of the stable Neo-Hookean law (the *HYPERFOAM card writes that law)",
-              sc->tissues[0].name);
-  SCENE_CHECK(sc->organ_count <= FASCIA_DEMO_ORGANS_MAX, ctx, FASCIA_ERR_ARGUMENT, "demo mesh: %d organs, at most %d",
-              (int)sc->organ_count, FASCIA_DEMO_ORGANS_MAX);
-  out->tetrahedra = 1, out->quadratic = 1, out->subdivide = 1;
-  out->youngs_modulus = mat->youngs_modulus, out->poisson_ratio = mat->poisson_ratio;
-  out->organ_count = sc->organ_count;
-  for (int32_t o = 0; o < sc->organ_count; ++o)
-    snprintf(out->organ_name[o], FASCIA_NAME_SIZE, "%s", sc->organs[o].name);
   double R[FASCIA_DEMO_ORGANS_MAX][9], T[FASCIA_DEMO_ORGANS_MAX][3];
-  SCENE_TRY(organ_poses(ctx, s, R, T));
+  SCENE_TRY(mesh_setup(ctx, s, out, R, T));
+  out->tetrahedra = 1, out->quadratic = 1, out->subdivide = 1;
   const double h = v->voxel_size;
   SCENE_CHECK(facet_distance >= 0 && facet_distance < h, ctx, FASCIA_ERR_ARGUMENT,
               "demo tetrahedra: facet distance %g m, expected 0 (the default) up to the voxel size %g m", facet_distance,
