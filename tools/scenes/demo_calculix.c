@@ -795,12 +795,13 @@ fascia_status fascia_demo_calculix(fascia_ctx *ctx, const fascia_demo_mesh *m, c
     goto cleanup;
   }
   for (int64_t k = 0; k < 3 * m->node_count; ++k) out->u[k] = NAN;
+  int64_t read = 0;
   while (p && *p) {
     long long node;
     double v[3];
     const int n = dat_line(p, &node, v);
     if (n == 4) {
-      if (node >= 1 && node <= m->node_count) memcpy(out->u + 3 * (node - 1), v, sizeof v);
+      if (node >= 1 && node <= m->node_count) memcpy(out->u + 3 * (node - 1), v, sizeof v), ++read;
     } else if (p[strspn(p, " \t\r")] != '\n') {
       break;
     }
@@ -810,9 +811,13 @@ fascia_status fascia_demo_calculix(fascia_ctx *ctx, const fascia_demo_mesh *m, c
   int64_t missing = 0;
   for (int64_t k = 0; k < m->node_count; ++k)
     missing += !(isfinite(out->u[3 * k]) && isfinite(out->u[3 * k + 1]) && isfinite(out->u[3 * k + 2]));
+  // ccx can call an increment converged whose residual is NaN: say which it was
   SCENE_CHECK_GOTO(missing == 0, ctx, FASCIA_ERR_FORMAT,
-                   "CalculiX demo tissue: %lld of %lld nodes lack a finite displacement in its output",
-                   (long long)missing, (long long)m->node_count);
+                   "CalculiX demo tissue: %lld of %lld nodes lack a finite displacement in its output (%lld read, "
+                   "%lld of them not finite%s%.*s)",
+                   (long long)missing, (long long)m->node_count, (long long)read,
+                   (long long)(missing - (m->node_count - read)), p && *p ? "; it stops at: " : "",
+                   p && *p ? (int)fmin(60, (double)strcspn(p, "\r\n")) : 0, p && *p ? p : "");
 cleanup:
   free(dat);
   if (status != FASCIA_OK) fascia_demo_result_free(out);
