@@ -734,31 +734,12 @@ fascia_status fascia_demo_write_deck(fascia_ctx *ctx, const void *arg, FILE *out
   return fascia_ccx_deck_written(ctx, out);
 }
 
-// A number of a .dat line at *p, Fortran's way: an exponent of three digits
-// comes without its E ("1.234567-100"); *p moves past it. 0 when none.
-static int dat_number(const char **p, double *v) {
-  char *end;
-  *v = strtod(*p, &end);
-  if (end == *p) return 0;
-  if ((*end == '-' || *end == '+') && end[1] >= '0' && end[1] <= '9') {
-    char *e2;
-    const long exponent = strtol(end, &e2, 10);
-    *v *= pow(10.0, (double)exponent);
-    end = e2;
-  }
-  *p = end;
-  return 1;
-}
-
-// "node v1 v2 v3" at the start of a .dat line: 4 when read.
+// "node v1 v2 v3" at the start of a .dat line (fascia_ccx_dat_numbers reads
+// the values as ccx writes them): 4 when read.
 static int dat_line(const char *p, long long *node, double v[3]) {
   char *end;
   *node = strtoll(p, &end, 10);
-  if (end == p) return 0;
-  p = end;
-  for (int a = 0; a < 3; ++a)
-    if (!dat_number(&p, v + a)) return a + 1;
-  return 4;
+  return end != p && fascia_ccx_dat_numbers(end, v, 3) ? 4 : 0;
 }
 
 void fascia_demo_result_free(fascia_demo_result *r) {
