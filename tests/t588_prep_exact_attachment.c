@@ -93,7 +93,7 @@ int main(void) {
   double frames[4], exact[4];
   CHECK(run(dir, "frames", frames) == 0);
   CHECK(run(dir, "exact", exact) == 0);
-  CHECK(frames[0] > 0.05); // between the shared frames the free frames carry the surface
+  CHECK(frames[0] > 0.02); // between the shared frames the free frames carry the surface, ten times exact's bound
   CHECK(exact[0] < 2e-3);  // the organ does (its kernel floor)
   for (int k = 0; k < 2; ++k) {
     const double *e = k ? exact : frames;

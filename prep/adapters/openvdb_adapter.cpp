@@ -233,7 +233,10 @@ extern "C" fascia_status fascia_vdb_carve(fascia_ctx *ctx, int32_t vertex_count,
     std::vector<openvdb::Vec3s> points;
     std::vector<openvdb::Vec3I> tris;
     std::vector<openvdb::Vec4I> quads;
-    openvdb::tools::volumeToMesh(*grid, points, tris, quads, 0.0, 0.0, true);
+    // adaptive: the carve's cells are a fraction of the layer, far finer than
+    // the voxels; merging them where the surface is flat keeps its shape
+    // without a triangle per cell for every later stage to voxelize
+    openvdb::tools::volumeToMesh(*grid, points, tris, quads, 0.0, 0.3, true);
     return to_triangles(ctx, points, tris, quads, h, out_vertices, out_vertex_count, out_triangles,
                         out_triangle_count);
   } catch (...) {

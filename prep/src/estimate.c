@@ -20,7 +20,8 @@
 // voxels go through the meshing of its labels). Fitted as upper bounds to
 // the shipped scenes' peaks at one and two threads (docs/cohort.md, where
 // the figures are): a label map's grids cost more per voxel than a mesh
-// scene's, its organs being meshed on grids of their own.
+// scene's, its organs being meshed on grids of their own, and carving their
+// interface layer costs per cell of the carve's grid on their surfaces.
 #define BASE_BYTES (56.0 * 1048576)
 #define BYTES_PER_TRIANGLE 1000.0
 #define MESH_BYTES_PER_GRID_VOXEL 32.0
@@ -28,6 +29,7 @@
 #define MESH_BYTES_PER_FILE_BYTE 6.0
 #define LABEL_BYTES_PER_GRID_VOXEL 70.0
 #define LABEL_BYTES_PER_MAP_VOXEL 100.0
+#define LABEL_BYTES_PER_CARVE_CELL 120.0
 
 static void grow(double *bounds, const double *p) {
   for (int r = 0; r < 3; ++r) {
@@ -37,9 +39,10 @@ static void grow(double *bounds, const double *p) {
 }
 
 // Bounds (m, world) of each label organ's voxels (bounds[6 o ..]) and the
-// faces between an organ's voxel and another value (about two triangles each).
+// faces between an organ's voxel and another value (about two triangles
+// each), with their area (m^2).
 static fascia_status label_extent(fascia_ctx *ctx, const fascia_prep_scene *scene, double *bounds, double *faces,
-                                  double *map_voxels) {
+                                  double *area, double *map_voxels) {
   prep_labelmap *map = NULL;
   PREP_TRY(prep_labelmap_read(ctx, scene->segmentation.file_path, scene->segmentation.frame, &map));
   *map_voxels = (double)map->dims[0] * map->dims[1] * map->dims[2];
@@ -56,6 +59,15 @@ static fascia_status label_extent(fascia_ctx *ctx, const fascia_prep_scene *scen
   for (int32_t o = 0; o < scene->organ_count; ++o)
     for (int r = 0; r < 3; ++r) box[6 * o + r] = d[r], box[6 * o + 3 + r] = -1;
   const int64_t stride[3] = {1, d[0], (int64_t)d[0] * d[1]};
+  double face_area[3]; // of a face across axis r: the other two columns' cross product
+  for (int r = 0; r < 3; ++r) {
+    const double *m = map->to_world;
+    const int s = (r + 1) % 3, t = (r + 2) % 3;
+    const double a[3] = {m[s], m[4 + s], m[8 + s]}, b[3] = {m[t], m[4 + t], m[8 + t]};
+    const double c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+    const double zero[3] = {0, 0, 0};
+    face_area[r] = prep_dist3(c, zero);
+  }
   for (int32_t k = 0; k < d[2]; ++k)
     for (int32_t j = 0; j < d[1]; ++j)
       for (int32_t i = 0; i < d[0]; ++i) {
@@ -66,8 +78,9 @@ static fascia_status label_extent(fascia_ctx *ctx, const fascia_prep_scene *scen
         int32_t *b = box + 6 * o;
         for (int r = 0; r < 3; ++r) {
           b[r] = c[r] < b[r] ? c[r] : b[r], b[3 + r] = c[r] > b[3 + r] ? c[r] : b[3 + r];
-          *faces += c[r] == 0 || map->labels[v - stride[r]] != l;
-          *faces += c[r] == d[r] - 1 || map->labels[v + stride[r]] != l;
+          const int n = (c[r] == 0 || map->labels[v - stride[r]] != l) + (c[r] == d[r] - 1 || map->labels[v + stride[r]] != l);
+          *faces += n;
+          *area += n * face_area[r];
         }
       }
   for (int32_t o = 0; o < scene->organ_count; ++o)
@@ -140,7 +153,7 @@ static double tissue_grid_voxels(const fascia_prep_scene *scene, const double *b
 fascia_status fascia_prep_estimate(fascia_ctx *ctx, const fascia_prep_scene *scene, fascia_prep_estimate_report *out) {
   PREP_CHECK(ctx && scene && out, ctx, FASCIA_ERR_ARGUMENT, "fascia_prep_estimate: NULL argument");
   memset(out, 0, sizeof *out);
-  double *bounds = prep_calloc(6 * (int64_t)scene->organ_count, sizeof *bounds), faces = 0;
+  double *bounds = prep_calloc(6 * (int64_t)scene->organ_count, sizeof *bounds), faces = 0, area = 0;
   PREP_CHECK(bounds, ctx, FASCIA_ERR_MEMORY, "estimate: out of memory");
   for (int32_t o = 0; o < scene->organ_count; ++o)
     for (int r = 0; r < 3; ++r) bounds[6 * o + r] = INFINITY, bounds[6 * o + 3 + r] = -INFINITY;
@@ -158,7 +171,7 @@ fascia_status fascia_prep_estimate(fascia_ctx *ctx, const fascia_prep_scene *sce
     fascia_prep_meshes_destroy(&m);
     out->input_bytes = mesh_file_bytes(scene);
   } else {
-    PREP_TRY_GOTO(label_extent(ctx, scene, bounds, &faces, &out->input_voxels));
+    PREP_TRY_GOTO(label_extent(ctx, scene, bounds, &faces, &area, &out->input_voxels));
     out->triangles = 2 * faces;
   }
   const double h = scene->voxel_size;
@@ -176,9 +189,12 @@ fascia_status fascia_prep_estimate(fascia_ctx *ctx, const fascia_prep_scene *sce
   if (meshes)
     out->peak_bytes = BASE_BYTES + BYTES_PER_TRIANGLE * out->triangles + MESH_BYTES_PER_GRID_VOXEL * out->grid_voxels +
                       MESH_BYTES_PER_ORGAN_VOXEL * out->organ_voxels + MESH_BYTES_PER_FILE_BYTE * out->input_bytes;
-  else
+  else {
+    const double carve_cell = scene->segmentation.interface_layer / 6; // label_organs.c's carve
     out->peak_bytes = BASE_BYTES + BYTES_PER_TRIANGLE * out->triangles + LABEL_BYTES_PER_GRID_VOXEL * out->grid_voxels +
-                      LABEL_BYTES_PER_MAP_VOXEL * out->input_voxels;
+                      LABEL_BYTES_PER_MAP_VOXEL * out->input_voxels +
+                      (carve_cell > 0 ? LABEL_BYTES_PER_CARVE_CELL * area / (carve_cell * carve_cell) : 0);
+  }
 cleanup:
   free(bounds);
   return status;

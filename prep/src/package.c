@@ -522,10 +522,6 @@ static fascia_status collect_tetrahedra(fascia_ctx *ctx, const fascia_prep_point
 // their pieces are left alone.
 #define HINGE_TOLERANCE 1e-2 // held points within this fraction of their span from one line
 
-static double dist3(const double *a, const double *b) {
-  return sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
-}
-
 static int32_t hinge_root(int32_t *parent, int32_t i) {
   while (parent[i] != i) i = parent[i] = parent[parent[i]];
   return i;
@@ -539,12 +535,12 @@ static double off_line(const double *x, const int32_t *list, int32_t count) {
   int32_t a = list[0], b = list[0];
   double far = 0, worst = 0, e[3];
   for (int32_t k = 0; k < count; ++k)
-    if (dist3(x + 3 * (int64_t)list[k], x + 3 * (int64_t)list[0]) > far)
-      far = dist3(x + 3 * (int64_t)list[k], x + 3 * (int64_t)list[0]), a = list[k];
+    if (prep_dist3(x + 3 * (int64_t)list[k], x + 3 * (int64_t)list[0]) > far)
+      far = prep_dist3(x + 3 * (int64_t)list[k], x + 3 * (int64_t)list[0]), a = list[k];
   far = 0;
   for (int32_t k = 0; k < count; ++k)
-    if (dist3(x + 3 * (int64_t)list[k], x + 3 * (int64_t)a) > far)
-      far = dist3(x + 3 * (int64_t)list[k], x + 3 * (int64_t)a), b = list[k];
+    if (prep_dist3(x + 3 * (int64_t)list[k], x + 3 * (int64_t)a) > far)
+      far = prep_dist3(x + 3 * (int64_t)list[k], x + 3 * (int64_t)a), b = list[k];
   if (!(far > 0)) return 0;
   for (int c = 0; c < 3; ++c) e[c] = (x[3 * (int64_t)b + c] - x[3 * (int64_t)a + c]) / far;
   for (int32_t k = 0; k < count; ++k) {

@@ -6,6 +6,7 @@
 #ifndef FASCIA_PREP_UTIL_H
 #define FASCIA_PREP_UTIL_H
 
+#include <math.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -56,6 +57,11 @@ typedef struct prep_grid {
   int32_t lo[3];
   int32_t dims[3];
 } prep_grid;
+
+/// The distance between two points.
+static inline double prep_dist3(const double *a, const double *b) {
+  return sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+}
 
 static inline int64_t prep_grid_count(const prep_grid *g) {
   return (int64_t)g->dims[0] * g->dims[1] * g->dims[2];

@@ -2,15 +2,17 @@
 // SPDX-FileCopyrightText: fascia developers
 // Stage 4, sample: Poisson-disk frames and samples in each tissue region.
 //
-//   surface frames  candidates are the closest organ-surface points of the
-//                   region voxels that touch an organ (CGAL AABB tree), so
-//                   that frames shared with an organ lie exactly on it;
+//   surface frames  candidates are points of the organ surfaces (a
+//                   lattice on each triangle, a twentieth of the frame
+//                   spacing apart) next to region voxels that touch the
+//                   organ, so that frames shared with an organ lie exactly
+//                   on it;
 //   interior frames candidates are cell targets (below) in the region
 //                   farther than the coupling tolerance from every organ;
 //   mid-layer frames where a gap is thinner than the frame spacing (the
 //                   surface frames on both sides refuse every interior
-//                   candidate), centres of its medial voxels (about as far
-//                   from the two nearest organs), thrown against the
+//                   candidate), the midpoints of the two nearest organs'
+//                   closest points to cell targets in the gap, thrown against the
 //                   interior frames only: a thin tissue keeps a layer of
 //                   free frames instead of being all surface frames that
 //                   move with the organs;
@@ -237,53 +239,113 @@ static double surface_radius(const fascia_prep_scene *scene, const fascia_prep_v
   return fmin(spacing, fmax(gap, spacing / 8));
 }
 
-// Surface candidates of tissue t: closest surface points of region voxels
-// within one voxel of an organ, with their dart radii (surface_radius).
+// The first voxel of mask along the line through p in direction n (unit),
+// within one and a half voxels of p on either side, or -1.
+static int64_t normal_hit(const prep_grid *g, const uint8_t *mask, const double *p, const double *n, double h) {
+  for (int k = 0; k < 12; ++k) {
+    const double along = (k % 2 ? -1 : 1) * (k / 2 + 1) * h / 4;
+    const double x[3] = {p[0] + along * n[0], p[1] + along * n[1], p[2] + along * n[2]};
+    const int64_t v = prep_grid_locate(g, x);
+    if (v >= 0 && mask[v]) return v;
+  }
+  return -1;
+}
+
+// Whether a voxel of mask lies in the box of triangle (a, a + e1, a + e2)
+// grown by a voxel.
+static int box_meets(const prep_grid *g, const uint8_t *mask, const double *a, const double *e1, const double *e2) {
+  int32_t lo[3], hi[3];
+  for (int r = 0; r < 3; ++r) {
+    const double min = a[r] + fmin(0, fmin(e1[r], e2[r])), max = a[r] + fmax(0, fmax(e1[r], e2[r]));
+    lo[r] = (int32_t)fmax(0, floor((min - g->h) / g->h + 0.5) - g->lo[r]);
+    hi[r] = (int32_t)fmin(g->dims[r] - 1, floor((max + g->h) / g->h + 0.5) - g->lo[r]);
+  }
+  for (int32_t k = lo[2]; k <= hi[2]; ++k)
+    for (int32_t j = lo[1]; j <= hi[1]; ++j)
+      for (int32_t i = lo[0]; i <= hi[0]; ++i)
+        if (mask[prep_grid_index(g, i, j, k)]) return 1;
+  return 0;
+}
+
+// Surface candidates of a tissue: points of the organs' surfaces, at most a
+// twentieth of the frame spacing apart (the centroids of each triangle cut
+// into m^2 similar ones), kept where the normal through the point meets,
+// within a voxel of it, a region voxel that lies within a voxel of the
+// organ, with their dart radii (surface_radius) from
+// that voxel. Their density does not follow the voxels: dart throwing keeps
+// more frames from denser candidates, so one candidate per voxel gave a
+// thin layer's faces fewer frames at coarser voxels.
 static fascia_status surface_candidates(fascia_ctx *ctx, const fascia_prep_scene *scene,
                                         const fascia_prep_meshes *meshes, const fascia_prep_volume *vol,
                                         const int64_t *voxels, int64_t voxel_count, double spacing,
-                                        fascia_cgal_tree **trees, point_list *out) {
+                                        point_list *out) {
   const prep_grid g = prep_volume_grid(vol);
-  // the region voxels within a voxel of the organ: a face on voxel centres
-  // puts the next layer at exactly a voxel, which the float distances store a
-  // rounding above (it then lost four fifths of its surface frames)
-  const double reach = vol->voxel_size * (1 + 1e-5);
-  for (int32_t o = 0; o < vol->organ_count; ++o) {
+  const double h = g.h, step = spacing / 20;
+  // the region voxels next to the organ: a normal leaves the organ through
+  // its staircase of voxels, whose centres lie up to a voxel's diagonal
+  // beyond the surface where it runs askew to the grid
+  const double reach = 2 * h;
+  uint8_t *near = prep_calloc(prep_grid_count(&g), 1);
+  PREP_CHECK(near, ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  fascia_status status = FASCIA_OK;
+  for (int32_t o = 0; o < vol->organ_count && status == FASCIA_OK; ++o) {
     if (!vol->distance[o]) continue;
     const float *d = vol->distance[o];
     int64_t count = 0;
-    for (int64_t k = 0; k < voxel_count; ++k)
-      if (d[voxels[k]] <= reach) ++count;
+    for (int64_t k = 0; k < voxel_count; ++k) count += near[voxels[k]] = d[voxels[k]] <= reach;
     if (count == 0) continue;
-    if (!trees[o]) {
-      const fascia_prep_mesh *m = meshes->organs + o;
-      PREP_TRY(fascia_cgal_tree_create(ctx, m->vertex_count, m->vertices, m->triangle_count, m->triangles, trees + o));
-    }
-    double *query = prep_calloc(3 * count, sizeof(double)), *closest = prep_calloc(3 * count, sizeof(double));
-    int32_t *tri = prep_calloc(count, sizeof(int32_t));
-    int64_t *from = prep_calloc(count, sizeof(int64_t));
-    if (!query || !closest || !tri || !from) {
-      free(query), free(closest), free(tri), free(from);
-      return PREP_FAIL(ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
-    }
-    int64_t q = 0;
-    for (int64_t k = 0; k < voxel_count; ++k)
-      if (d[voxels[k]] <= reach) {
-        prep_grid_center(&g, voxels[k], query + 3 * q);
-        from[q++] = voxels[k];
+    const fascia_prep_mesh *m = meshes->organs + o;
+    for (int32_t t = 0; t < m->triangle_count && status == FASCIA_OK; ++t) {
+      double a[3], e1[3], e2[3];
+      for (int r = 0; r < 3; ++r) {
+        a[r] = m->vertices[3 * m->triangles[3 * t] + r];
+        e1[r] = m->vertices[3 * m->triangles[3 * t + 1] + r] - a[r];
+        e2[r] = m->vertices[3 * m->triangles[3 * t + 2] + r] - a[r];
       }
-    const fascia_cgal_tree *tree = trees[o];
-#pragma omp parallel for schedule(static) num_threads(fascia_ctx_threads(ctx))
-    for (int64_t k = 0; k < count; ++k) fascia_cgal_tree_closest(tree, 1, query + 3 * k, closest + 3 * k, tri + k);
-    int ok = 1;
-    for (int64_t k = 0; k < count && ok; ++k) {
-      ok = list_push(out, closest + 3 * k, o, tri[k], from[k]);
-      if (ok) out->radius[out->count - 1] = surface_radius(scene, vol, o, from[k], spacing);
+      const double zero[3] = {0, 0, 0};
+      const double longest = fmax(fmax(prep_dist3(e1, zero), prep_dist3(e2, zero)), prep_dist3(e1, e2));
+      double normal[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+      const double twice_area = prep_dist3(normal, zero);
+      if (!(twice_area > 0)) continue;
+      for (int r = 0; r < 3; ++r) normal[r] /= twice_area;
+      double tangent[2][3]; // along the triangle, at right angles
+      const double l1 = prep_dist3(e1, zero);
+      for (int r = 0; r < 3; ++r) tangent[0][r] = e1[r] / l1;
+      tangent[1][0] = normal[1] * tangent[0][2] - normal[2] * tangent[0][1];
+      tangent[1][1] = normal[2] * tangent[0][0] - normal[0] * tangent[0][2];
+      tangent[1][2] = normal[0] * tangent[0][1] - normal[1] * tangent[0][0];
+      if (!box_meets(&g, near, a, e1, e2)) continue; // the most of an organ lies far from the tissue
+      const int cuts = (int)fmax(1, ceil(longest / step));
+      for (int i = 0; i < cuts; ++i)
+        for (int j = 0; i + j < cuts; ++j)
+          for (int flip = 0; flip < 2 && (flip == 0 || i + j + 2 <= cuts); ++flip) {
+            const double u = (i + (flip ? 2.0 : 1.0) / 3) / cuts, w = (j + (flip ? 2.0 : 1.0) / 3) / cuts;
+            double p[3];
+            for (int r = 0; r < 3; ++r) p[r] = a[r] + u * e1[r] + w * e2[r];
+            // the first region voxel next to the organ along the normal, on
+            // either side (a winding may be either way; the organ's own
+            // voxels are no region's); and the same half a voxel to each
+            // side along the surface, so that the candidates stop where the
+            // region's voxel centres do, not at their voxels' far faces
+            const int64_t from = normal_hit(&g, near, p, normal, h);
+            int inside = from >= 0;
+            for (int side = 0; side < 4 && inside; ++side) {
+              double q[3];
+              for (int r = 0; r < 3; ++r) q[r] = p[r] + (side % 2 ? -0.5 : 0.5) * h * tangent[side / 2][r];
+              inside = normal_hit(&g, near, q, normal, h) >= 0;
+            }
+            if (!inside) continue;
+            if (!list_push(out, p, o, t, from)) {
+              status = PREP_FAIL(ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+              break;
+            }
+            out->radius[out->count - 1] = surface_radius(scene, vol, o, from, spacing);
+          }
     }
-    free(query), free(closest), free(tri), free(from);
-    PREP_CHECK(ok, ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+    for (int64_t k = 0; k < voxel_count; ++k) near[voxels[k]] = 0;
   }
-  return FASCIA_OK;
+  free(near);
+  return status;
 }
 
 // The order darts are thrown in, drawn from the seed but not from the voxel
@@ -403,11 +465,16 @@ static void nearest_organs(const fascia_prep_volume *vol, int64_t v, double *d1,
   }
 }
 
-// Mid-layer frames of a tissue (the header): candidates are the region
-// voxels on the medial layer between the two nearest organs (their
-// distances within about a voxel of each other) where the gap is thinner
+// Mid-layer frames of a tissue (the header): candidates are points of the
+// medial layer between the two nearest organs where the gap is thinner
 // than the frame spacing (nearer than half of it to both) but at least two
-// sample spacings thick, off the surfaces. There interior frames are
+// sample spacings thick, off the surfaces. They do not depend on the voxel
+// grid: the cell targets of a quarter of the sample spacing in the region,
+// each moved to the midpoint of its closest points on the two organs'
+// surfaces, kept where that midpoint lies in the region about as far from
+// both (within a quarter of the gap) and no third organ is nearer: a thin
+// gap holds few such frames, and voxel centres would gain or lose one as the
+// voxels are refined, moving the gap's force with it. There interior frames are
 // refused: the surface frames on both sides lie within a spacing of every
 // point. A thinner layer is held by its faces alone (surface_radius): a free
 // frame there would reach only the samples within about a gap of it, too
@@ -415,26 +482,79 @@ static void nearest_organs(const fascia_prep_volume *vol, int64_t v, double *d1,
 // layer sheared at a fraction of its energy). Mid-layer frames are thrown
 // with the frame spacing against the frames from index `first` on (the
 // interior ones) only.
-static fascia_status mid_layer_frames(fascia_ctx *ctx, const fascia_prep_volume *vol, const int64_t *voxels,
-                                      int64_t voxel_count, double spacing, double sample_spacing, uint64_t seed,
-                                      int64_t first, point_list *frames) {
+static fascia_status mid_layer_frames(fascia_ctx *ctx, const fascia_prep_meshes *meshes, const fascia_prep_volume *vol,
+                                      uint8_t label, const int64_t *voxels, int64_t voxel_count, double spacing,
+                                      double sample_spacing, uint64_t seed, fascia_cgal_tree **trees, int64_t first,
+                                      point_list *frames) {
   const prep_grid g = prep_volume_grid(vol);
   const double h = g.h;
-  point_list cand = {0};
+  point_list targets = {0}, cand = {0};
   dart_grid darts = {0};
   fascia_status status = FASCIA_OK;
-  for (int64_t k = 0; k < voxel_count; ++k) {
-    const int64_t v = voxels[k];
-    double d1, d2;
-    nearest_organs(vol, v, &d1, &d2);
+  double *mid = NULL; // per target: its midpoint, or NAN where it gives no candidate
+  int64_t *mid_voxel = NULL;
+  PREP_CHECK_GOTO(region_targets(&g, voxels, voxel_count, seed ^ 0x5bd1e995ull, sample_spacing, &targets), ctx,
+                  FASCIA_ERR_MEMORY, "sample: out of memory");
+  for (int32_t o = 0; o < vol->organ_count; ++o)
+    if (vol->distance[o] && !trees[o]) {
+      const fascia_prep_mesh *mesh = meshes->organs + o;
+      PREP_TRY_GOTO(fascia_cgal_tree_create(ctx, mesh->vertex_count, mesh->vertices, mesh->triangle_count,
+                                            mesh->triangles, trees + o));
+    }
+  mid = prep_calloc(3 * targets.count, sizeof(double));
+  mid_voxel = prep_calloc(targets.count, sizeof(int64_t));
+  PREP_CHECK_GOTO(mid && mid_voxel, ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+  // the gap through a target bounds twice its midpoint's distances: targets
+  // whose voxel (within a voxel's diagonal of them) says the test below
+  // cannot pass are left out before the closest-point queries; in a wedge
+  // a midpoint is nearer than half the gap, so wider gaps are kept up to
+  // twice the spacing
+  const double thinnest = 2 * fmax(sample_spacing, h) - sqrt(3.0) * h, widest = 2 * spacing;
+#pragma omp parallel for schedule(dynamic, 256) num_threads(fascia_ctx_threads(ctx))
+  for (int64_t k = 0; k < targets.count; ++k) {
+    const double *x = targets.position + 3 * k;
+    const int64_t v = targets.voxel[k];
+    mid[3 * k] = NAN;
+    int32_t os[2] = {-1, -1};
+    double d1 = INFINITY, d2 = INFINITY;
+    for (int32_t o = 0; o < vol->organ_count; ++o) {
+      if (!vol->distance[o]) continue;
+      const double d = vol->distance[o][v];
+      if (d < d1) d2 = d1, os[1] = os[0], d1 = d, os[0] = o;
+      else if (d < d2) d2 = d, os[1] = o;
+    }
+    if (os[1] < 0 || d1 + d2 < thinnest || d1 + d2 >= widest) continue;
+    double c[2][3], m[3], e[2];
+    for (int j = 0; j < 2; ++j) {
+      int32_t tri;
+      fascia_cgal_tree_closest(trees[os[j]], 1, x, c[j], &tri);
+    }
+    for (int r = 0; r < 3; ++r) m[r] = 0.5 * (c[0][r] + c[1][r]);
+    // the midpoint is no farther than half the chord from either organ, and
+    // must lie in the region: both known before its own queries
+    const int64_t w = prep_grid_locate(&g, m);
+    if (prep_dist3(c[0], c[1]) < 2 * fmax(sample_spacing, h) || w < 0 || vol->region[w] != label) continue;
+    for (int j = 0; j < 2; ++j) {
+      double q[3];
+      int32_t tri;
+      fascia_cgal_tree_closest(trees[os[j]], 1, m, q, &tri);
+      e[j] = prep_dist3(m, q);
+    }
     // (a voxel off the surfaces at least: nearer, a frame beside a surface frame made the wedges where organs
-    // meet stiff and strained; a quarter voxel more on the medial bound: a mid-plane halfway between voxel
-    // centres puts two layers at exactly one voxel of difference, and distances are floats)
-    if (d1 >= 0.5 * spacing || d1 < sample_spacing || d1 < 1.0 * h || d2 - d1 > 1.25 * h) continue;
-    double x[3];
-    prep_grid_center(&g, v, x);
-    PREP_CHECK_GOTO(list_push(&cand, x, -1, -1, v), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
+    // meet stiff and strained)
+    const double near = fmin(e[0], e[1]);
+    if (fabs(e[0] - e[1]) > 0.25 * (e[0] + e[1]) || near < sample_spacing || near < h || near >= 0.5 * spacing) continue;
+    int other = 0; // no third organ nearer than these two
+    for (int32_t o = 0; o < vol->organ_count && !other; ++o)
+      if (o != os[0] && o != os[1] && vol->distance[o] && vol->distance[o][w] < near - h) other = 1;
+    if (other) continue;
+    for (int r = 0; r < 3; ++r) mid[3 * k + r] = m[r];
+    mid_voxel[k] = w;
   }
+  for (int64_t k = 0; k < targets.count; ++k)
+    if (!isnan(mid[3 * k]))
+      PREP_CHECK_GOTO(list_push(&cand, mid + 3 * k, -1, -1, mid_voxel[k]), ctx, FASCIA_ERR_MEMORY,
+                      "sample: out of memory");
   if (cand.count == 0) goto cleanup;
   PREP_CHECK_GOTO(dart_init(&darts, spacing, frames->count - first + cand.count), ctx, FASCIA_ERR_MEMORY,
                   "sample: out of memory");
@@ -443,6 +563,9 @@ static fascia_status mid_layer_frames(fascia_ctx *ctx, const fascia_prep_volume 
     PREP_CHECK_GOTO(dart_add(&darts, k), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
   PREP_TRY_GOTO(throw_darts(ctx, seed, &cand, &darts, NULL, frames));
 cleanup:
+  free(mid);
+  free(mid_voxel);
+  list_free(&targets);
   list_free(&cand);
   dart_free(&darts);
   return status;
@@ -1005,7 +1128,7 @@ static fascia_status sample_region(fascia_ctx *ctx, const fascia_prep_scene *sce
   PREP_CHECK_GOTO(dart_init(&darts, frame_spacing, voxel_count), ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
   darts.points = frames;
   if (td) {
-    PREP_TRY_GOTO(surface_candidates(ctx, scene, meshes, vol, voxels, voxel_count, frame_spacing, trees, &cand));
+    PREP_TRY_GOTO(surface_candidates(ctx, scene, meshes, vol, voxels, voxel_count, frame_spacing, &cand));
     PREP_TRY_GOTO(throw_darts(ctx, seed, &cand, &darts, NULL, frames));
   } else {
     for (int64_t k = 0; k < frames->count; ++k)
@@ -1027,8 +1150,8 @@ static fascia_status sample_region(fascia_ctx *ctx, const fascia_prep_scene *sce
   PREP_TRY_GOTO(throw_darts(ctx, seed + 1, &cand, &darts, NULL, frames));
   const int64_t before_mid_layer = frames->count;
   if (td)
-    PREP_TRY_GOTO(mid_layer_frames(ctx, vol, voxels, voxel_count, frame_spacing, sample_spacing, seed + 2,
-                                   first_interior, frames));
+    PREP_TRY_GOTO(mid_layer_frames(ctx, meshes, vol, label, voxels, voxel_count, frame_spacing, sample_spacing,
+                                   seed + 2, trees, first_interior, frames));
   for (int64_t k = 0; td && held_volume && k < voxel_count; ++k) { // the layers no mid-layer frame may enter
     double d1, d2;
     nearest_organs(vol, voxels[k], &d1, &d2);
