@@ -27,28 +27,7 @@ echo "# tools/bench/voxel-convergence.sh $(basename "$scene"), seeds ${SEEDS:-1 
 for voxel in "$@"; do
   for seed in ${SEEDS:-1 2 3}; do
     copy="$work/scene-$voxel-$seed.json"
-    python3 - "$scene" "$voxel" "$seed" "${SPACING:-1}" "$copy" <<'EOF'
-import json, os, sys
-scene, voxel, seed, factor, out = sys.argv[1], float(sys.argv[2]), int(sys.argv[3]), float(sys.argv[4]), sys.argv[5]
-base = os.path.dirname(scene)
-s = json.load(open(scene))
-s["voxel_size"] = voxel
-s["seed"] = seed
-s.pop("output", None)
-absolute = lambda p: p if os.path.isabs(p) else os.path.normpath(os.path.join(base, p))
-if "segmentation" in s:
-    s["segmentation"]["file"] = absolute(s["segmentation"]["file"])
-    labels = s["segmentation"].get("labels", "")
-    if isinstance(labels, str) and not labels.startswith("totalsegmentator:"):
-        s["segmentation"]["labels"] = absolute(labels)
-for part in s.get("organs", []) + s.get("tissues", []):
-    if "mesh" in part:
-        part["mesh"] = absolute(part["mesh"])
-    for key in ("frame_spacing", "sample_spacing"):
-        if key in part:
-            part[key] *= factor
-json.dump(s, open(out, "w"), indent=1)
-EOF
+    python3 "$root/tools/bench/scene_copy.py" "$scene" "$copy" --voxel "$voxel" --seed "$seed" --spacing "${SPACING:-1}"
     model="$work/model-$voxel-$seed.h5"
     /usr/bin/time -f "%e %M" -o "$work/time" "$fascia" prep "$copy" -o "$model" --json >"$work/prep.json" 2>/dev/null
     read -r seconds peak_kb <"$work/time"
