@@ -148,6 +148,14 @@ static inline fascia_status fixture_prep(fascia_ctx *ctx, const char *path, fixt
 
 static inline void fixture_free(fixture_run *r) { fascia_prep_stages_free(r); }
 
+/// Writes text as dir/scene.json and runs every stage on it.
+static inline fascia_status fixture_prep_text(fascia_ctx *ctx, const char *dir, const char *text, fixture_run *r) {
+  char path[512];
+  snprintf(path, sizeof path, "%s/scene.json", dir);
+  if (!fixture_write(dir, "scene.json", text)) return FASCIA_ERR_IO;
+  return fixture_prep(ctx, path, r);
+}
+
 static inline fascia_ctx *fixture_ctx(void) {
   fascia_ctx_def def = fascia_ctx_def_default();
   fascia_ctx *ctx = NULL;

@@ -64,15 +64,13 @@ typedef struct outcome {
 // Prepares the scene on file (in frame) with organ A as given; fills *out.
 static int prepare(const char *dir, const char *file, const char *frame, const char *organ_a, double half_gap,
                    double layer, outcome *out) {
-  char text[4096], path[512];
+  char text[4096];
   const double max_gap = 2e-3 * half_gap + (layer > 0 ? layer : 0) + 0.002;
   snprintf(text, sizeof text, scene_format, file, frame, layer, organ_a, max_gap);
   CHECK(fixture_write(dir, "labels.tsv", table));
-  CHECK(fixture_write(dir, "scene.json", text));
-  snprintf(path, sizeof path, "%s/scene.json", dir);
   fascia_ctx *ctx = fixture_ctx();
   fixture_run r;
-  const fascia_status st = fixture_prep(ctx, path, &r);
+  const fascia_status st = fixture_prep_text(ctx, dir, text, &r);
   CHECK_OK(st, ctx);
   memset(out, 0, sizeof *out);
   if (st == FASCIA_OK) {

@@ -37,13 +37,11 @@ typedef struct frames {
 
 // The model's frames away from the faces' edges, at this voxel size.
 static int prepare(const char *dir, double voxel, frames *out) {
-  char text[2048], path[512];
+  char text[2048];
   snprintf(text, sizeof text, scene_format, voxel);
-  CHECK(fixture_write(dir, "scene.json", text));
-  snprintf(path, sizeof path, "%s/scene.json", dir);
   fascia_ctx *ctx = fixture_ctx();
   fixture_run r;
-  const fascia_status st = fixture_prep(ctx, path, &r);
+  const fascia_status st = fixture_prep_text(ctx, dir, text, &r);
   CHECK_OK(st, ctx);
   out->count = 0;
   for (int32_t i = 0; st == FASCIA_OK && i < r.model->frame_count && out->count < 400; ++i) {
