@@ -270,8 +270,9 @@ static int box_meets(const prep_grid *g, const uint8_t *mask, const double *a, c
 // Surface candidates of a tissue: points of the organs' surfaces, at most a
 // twentieth of the frame spacing apart (the centroids of each triangle cut
 // into m^2 similar ones), kept where the normal through the point meets,
-// within a voxel of it, a region voxel that lies within a voxel of the
-// organ, with their dart radii (surface_radius) from
+// within a voxel and a half of it, a region voxel within two voxels of the
+// organ, and so do the normals half a voxel to each side along the surface;
+// with their dart radii (surface_radius) from
 // that voxel. Their density does not follow the voxels: dart throwing keeps
 // more frames from denser candidates, so one candidate per voxel gave a
 // thin layer's faces fewer frames at coarser voxels.
