@@ -239,10 +239,16 @@ static double surface_radius(const fascia_prep_scene *scene, const fascia_prep_v
   return fmin(spacing, fmax(gap, spacing / 8));
 }
 
+// normal_hit's quarter-voxel steps to each side of the surface (a voxel and a
+// half), and the reach of a candidate's hits from its triangle: that along
+// the normal with half a voxel along the surface (surface_candidates).
+#define HIT_STEPS 6
+#define HIT_REACH_VOXELS 2
+
 // The first voxel of mask along the line through p in direction n (unit),
 // within one and a half voxels of p on either side, or -1.
 static int64_t normal_hit(const prep_grid *g, const uint8_t *mask, const double *p, const double *n, double h) {
-  for (int k = 0; k < 12; ++k) {
+  for (int k = 0; k < 2 * HIT_STEPS; ++k) {
     const double along = (k % 2 ? -1 : 1) * (k / 2 + 1) * h / 4;
     const double x[3] = {p[0] + along * n[0], p[1] + along * n[1], p[2] + along * n[2]};
     const int64_t v = prep_grid_locate(g, x);
@@ -252,13 +258,14 @@ static int64_t normal_hit(const prep_grid *g, const uint8_t *mask, const double 
 }
 
 // Whether a voxel of mask lies in the box of triangle (a, a + e1, a + e2)
-// grown by a voxel.
+// grown by as far as a candidate's hits reach.
 static int box_meets(const prep_grid *g, const uint8_t *mask, const double *a, const double *e1, const double *e2) {
+  const double grow = HIT_REACH_VOXELS * g->h;
   int32_t lo[3], hi[3];
   for (int r = 0; r < 3; ++r) {
     const double min = a[r] + fmin(0, fmin(e1[r], e2[r])), max = a[r] + fmax(0, fmax(e1[r], e2[r]));
-    lo[r] = (int32_t)fmax(0, floor((min - g->h) / g->h + 0.5) - g->lo[r]);
-    hi[r] = (int32_t)fmin(g->dims[r] - 1, floor((max + g->h) / g->h + 0.5) - g->lo[r]);
+    lo[r] = (int32_t)fmax(0, floor((min - grow) / g->h + 0.5) - g->lo[r]);
+    hi[r] = (int32_t)fmin(g->dims[r] - 1, floor((max + grow) / g->h + 0.5) - g->lo[r]);
   }
   for (int32_t k = lo[2]; k <= hi[2]; ++k)
     for (int32_t j = lo[1]; j <= hi[1]; ++j)
@@ -303,6 +310,7 @@ static fascia_status surface_candidates(fascia_ctx *ctx, const fascia_prep_scene
         e1[r] = m->vertices[3 * m->triangles[3 * t + 1] + r] - a[r];
         e2[r] = m->vertices[3 * m->triangles[3 * t + 2] + r] - a[r];
       }
+      if (!box_meets(&g, near, a, e1, e2)) continue; // the most of an organ lies far from the tissue
       const double zero[3] = {0, 0, 0};
       const double longest = fmax(fmax(prep_dist3(e1, zero), prep_dist3(e2, zero)), prep_dist3(e1, e2));
       double normal[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
@@ -315,11 +323,10 @@ static fascia_status surface_candidates(fascia_ctx *ctx, const fascia_prep_scene
       tangent[1][0] = normal[1] * tangent[0][2] - normal[2] * tangent[0][1];
       tangent[1][1] = normal[2] * tangent[0][0] - normal[0] * tangent[0][2];
       tangent[1][2] = normal[0] * tangent[0][1] - normal[1] * tangent[0][0];
-      if (!box_meets(&g, near, a, e1, e2)) continue; // the most of an organ lies far from the tissue
       const int cuts = (int)fmax(1, ceil(longest / step));
-      for (int i = 0; i < cuts; ++i)
-        for (int j = 0; i + j < cuts; ++j)
-          for (int flip = 0; flip < 2 && (flip == 0 || i + j + 2 <= cuts); ++flip) {
+      for (int i = 0; i < cuts && status == FASCIA_OK; ++i)
+        for (int j = 0; i + j < cuts && status == FASCIA_OK; ++j)
+          for (int flip = 0; flip < 2 && (flip == 0 || i + j + 2 <= cuts) && status == FASCIA_OK; ++flip) {
             const double u = (i + (flip ? 2.0 : 1.0) / 3) / cuts, w = (j + (flip ? 2.0 : 1.0) / 3) / cuts;
             double p[3];
             for (int r = 0; r < 3; ++r) p[r] = a[r] + u * e1[r] + w * e2[r];
@@ -336,11 +343,10 @@ static fascia_status surface_candidates(fascia_ctx *ctx, const fascia_prep_scene
               inside = normal_hit(&g, near, q, normal, h) >= 0;
             }
             if (!inside) continue;
-            if (!list_push(out, p, o, t, from)) {
+            if (!list_push(out, p, o, t, from))
               status = PREP_FAIL(ctx, FASCIA_ERR_MEMORY, "sample: out of memory");
-              break;
-            }
-            out->radius[out->count - 1] = surface_radius(scene, vol, o, from, spacing);
+            else
+              out->radius[out->count - 1] = surface_radius(scene, vol, o, from, spacing);
           }
     }
     for (int64_t k = 0; k < voxel_count; ++k) near[voxels[k]] = 0;
