@@ -5,7 +5,8 @@
 // element: every held corner lies on its organ's surface, the held mid-edge
 // nodes were projected onto it (those of a straightened element stay within
 // the facet distance), both organs hold nodes, no C3D10 Jacobian is
-// non-positive, the mesh fills the region's volume, and a bad size is refused
+// non-positive, the mesh fills the region's volume, the bench's volume by
+// distance counts every element and sample once, and a bad size is refused
 // by name. On 2 mm voxels, tetrahedra of 4 mm circumradius: seconds.
 // argv[1]: the demo scene.
 #include <math.h>
@@ -79,6 +80,16 @@ static void check_mesh(const fascia_prep_stages *s, const fascia_demo_mesh *m) {
   CHECK(straightened <= STRAIGHTENED_SHARE * (double)mid);
   CHECK(fabs(volume - region) <= VOLUME_TOLERANCE * region);
   for (int32_t o = 0; o < m->organ_count; ++o) CHECK(held[o] >= 100);
+  // the bench's volume by distance to the organs: every tetrahedron and
+  // every tissue sample counted once, and both have volume in the first voxel
+  const double edge[2] = {0, VOXEL};
+  double mesh_band[3], sample_band[3];
+  fascia_demo_volume_bands(s, m, 3, edge, mesh_band);
+  fascia_demo_volume_bands(s, NULL, 3, edge, sample_band);
+  const double samples = fascia_model_tissue_volume(s->model);
+  CHECK(fabs(mesh_band[0] + mesh_band[1] + mesh_band[2] - volume) <= 1e-9 * volume);
+  CHECK(fabs(sample_band[0] + sample_band[1] + sample_band[2] - samples) <= 1e-9 * samples);
+  CHECK(mesh_band[1] > 0 && sample_band[1] > 0);
 }
 
 int main(int argc, char **argv) {

@@ -34,7 +34,9 @@
 //   --mesh-only  CalculiX's meshes built and described, nothing solved
 //   --deck FILE  ... and the (last) mesh's CalculiX deck written to FILE
 //   --slip    per rung, the tissue's slip on each organ by distance to the
-//             organ's nearest shared frame, and where the largest error lies
+//             organ's nearest shared frame, where the largest error lies,
+//             and the tissue's volume by distance to its nearest organ
+//             (CalculiX's tetrahedra against fascia's samples)
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdio.h>
@@ -176,6 +178,22 @@ static void tet_edges(const fascia_demo_mesh *m, double q[3]) {
   q[1] = fascia_demo_percentile(len, 6 * m->element_count, 0.5);
   q[2] = fascia_demo_percentile(len, 6 * m->element_count, 0.95);
   free(len);
+}
+
+// The tissue's volume by distance to the nearest organ, CalculiX's mesh against fascia's samples.
+static void print_volume_bands(const fascia_prep_stages *s, const fascia_demo_mesh *m) {
+  enum { BANDS = 6 };
+  static const double edge[BANDS - 1] = {0, 0.25e-3, 0.5e-3, 1e-3, 2e-3};
+  static const char *name[BANDS] = {"<0", "0-0.25", "0.25-0.5", "0.5-1", "1-2", ">2"};
+  double ref[BANDS], own[BANDS], total[2] = {0, 0};
+  fascia_demo_volume_bands(s, m, BANDS, edge, ref);
+  fascia_demo_volume_bands(s, NULL, BANDS, edge, own);
+  printf("      volume mm3 by distance to the nearest organ (mm), CalculiX's mesh / fascia's samples:");
+  for (int k = 0; k < BANDS; ++k) {
+    printf(" %s %.1f/%.1f", name[k], 1e9 * ref[k], 1e9 * own[k]);
+    total[0] += ref[k], total[1] += own[k];
+  }
+  printf("; all %.1f/%.1f\n", 1e9 * total[0], 1e9 * total[1]);
 }
 
 // The tetrahedra's quality line.
@@ -589,7 +607,10 @@ int main(int argc, char **argv) {
     }
     printf("  %20.1f %5.1f %5.1f %9.1f  %11.3f %4.3f  %8.0f\n", pct[0], pct[1], pct[2], free95, slip[0], slip[1],
            r.ms);
-    if (at && slips) print_slip(&s, at, &r);
+    if (at && slips) {
+      print_slip(&s, at, &r);
+      if (at->mesh.tetrahedra) print_volume_bands(&s, &at->mesh);
+    }
     fascia_prep_stages_free(&s);
     if (at && k == 0) printf("  (displacements at the nodes of CalculiX's last %g mm mesh, its largest %.4f mm)\n", fr[k].voxel_mm, 1e3 * largest);
     fflush(stdout);

@@ -983,6 +983,47 @@ cleanup:
   return status;
 }
 
+static double nearest_organ(const fascia_prep_volume *v, const double x[3]) {
+  double best = INFINITY;
+  for (int32_t o = 0; o < v->organ_count; ++o) {
+    const double d = organ_distance(v, o, x);
+    if (d < best) best = d; // NAN (no field, off the grid) compares false
+  }
+  return best;
+}
+
+static void add_to_band(int bands, const double *edge, double d, double dv, double *volume) {
+  int k = 0;
+  while (k < bands - 1 && !(d < edge[k])) ++k;
+  volume[k] += dv;
+}
+
+void fascia_demo_volume_bands(const fascia_prep_stages *s, const fascia_demo_mesh *mesh, int bands, const double *edge,
+                              double *volume) {
+  for (int k = 0; k < bands; ++k) volume[k] = 0;
+  if (mesh) {
+    for (int64_t e = 0; e < mesh->element_count && mesh->tetrahedra; ++e) {
+      const double *p[4];
+      for (int q = 0; q < 4; ++q) p[q] = mesh->node + 3 * mesh->element[10 * e + q];
+      double J[9], c[3];
+      for (int a = 0; a < 3; ++a) {
+        for (int q = 0; q < 3; ++q) J[3 * a + q] = p[q + 1][a] - p[0][a];
+        c[a] = 0.25 * (p[0][a] + p[1][a] + p[2][a] + p[3][a]);
+      }
+      const double det = J[0] * (J[4] * J[8] - J[5] * J[7]) - J[1] * (J[3] * J[8] - J[5] * J[6]) +
+                         J[2] * (J[3] * J[7] - J[4] * J[6]);
+      add_to_band(bands, edge, nearest_organ(s->volume, c), fabs(det) / 6, volume);
+    }
+    return;
+  }
+  const fascia_model *m = s->model;
+  for (int32_t k = 0; k < m->sample_count; ++k) {
+    if (m->sample_organ[k] >= 0) continue;
+    const double x[3] = {m->sample_position[3 * k], m->sample_position[3 * k + 1], m->sample_position[3 * k + 2]};
+    add_to_band(bands, edge, nearest_organ(s->volume, x), m->sample_volume[k], volume);
+  }
+}
+
 static int compare_double(const void *a, const void *b) {
   const double x = *(const double *)a, y = *(const double *)b;
   return (x > y) - (x < y);

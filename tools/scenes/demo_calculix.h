@@ -136,6 +136,13 @@ fascia_status fascia_demo_one_element(fascia_ctx *ctx, const char *program, doub
 
 /// Percentiles of n values (sorted in place): q in [0, 1], nearest rank.
 double fascia_demo_percentile(double *values, int64_t n, double q);
+/// The tissue's volume by distance to its nearest organ (the stages' signed
+/// distance fields): bands [edge[k-1], edge[k]) m for k < bands (edge[-1] =
+/// -inf), into volume[bands] (m^3), the last band everything beyond. Of the
+/// mesh's tetrahedra (straight, at their centroids) when mesh is not NULL,
+/// else of the model's tissue samples (at their positions).
+void fascia_demo_volume_bands(const fascia_prep_stages *stages, const fascia_demo_mesh *mesh, int bands,
+                              const double *edge, double *volume);
 
 #ifdef __cplusplus
 }
