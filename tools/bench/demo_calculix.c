@@ -28,7 +28,8 @@
 //   TAG       nK: K MLS neighbours; flat: no volumetric patches; frames, e
 //             or eX: attachment frames or exact (layer X sample spacings);
 //             several joined by +
-//   --cache DIR  CalculiX's answers read from DIR when there, else solved and kept there
+//   --cache DIR  CalculiX's answers read from DIR when there for the same deck,
+//             else solved and kept there with their deck
 //   --write-reference FILE  CalculiX's forces per mesh, the reference last
 //             (data/reference/demo-calculix.csv, read by tests/t598)
 //   --mesh-only  CalculiX's meshes built and described, nothing solved
@@ -90,7 +91,10 @@ static int rung_tag(const char *tag, fascia_row *row) {
 }
 
 // CalculiX's answers kept between runs (--cache DIR): forces and node
-// displacements of a mesh, keyed by its kind, voxel and split.
+// displacements of a mesh, in a file named by its kind, voxel and split,
+// beside the deck they answer. The name alone does not say the scene, its
+// material or its motion: an answer counts only when its deck is the one
+// the run would solve, byte for byte.
 static void cache_path(const char *dir, const ccx_row *c, char *path, size_t size) {
   if (c->tetrahedra) {
     char facet[32] = "";
@@ -102,9 +106,39 @@ static void cache_path(const char *dir, const ccx_row *c, char *path, size_t siz
            (int)c->split, c->on_surface ? "-surface" : "");
 }
 
-static int cache_load(const char *dir, ccx_row *c) {
-  char path[1200];
+// The mesh's CalculiX deck as text (malloc'd), or NULL.
+static char *deck_text(fascia_ctx *ctx, const ccx_row *c, size_t *length) {
+  char *text = NULL;
+  FILE *f = open_memstream(&text, length);
+  if (!f) return NULL;
+  const fascia_status st = fascia_demo_write_deck(ctx, &c->mesh, f);
+  if (fclose(f) != 0 || st != FASCIA_OK) {
+    free(text);
+    return NULL;
+  }
+  return text;
+}
+
+// Whether the file holds exactly these bytes.
+static int file_equals(const char *path, const char *text, size_t length) {
+  FILE *f = fopen(path, "rb");
+  if (!f) return 0;
+  char buffer[65536];
+  size_t at = 0, got;
+  int same = 1;
+  while (same && (got = fread(buffer, 1, sizeof buffer, f)) > 0) {
+    same = at + got <= length && !memcmp(buffer, text + at, got);
+    at += got;
+  }
+  fclose(f);
+  return same && at == length;
+}
+
+static int cache_load(const char *dir, ccx_row *c, const char *deck, size_t deck_length) {
+  char path[1200], deck_path[1300];
   cache_path(dir, c, path, sizeof path);
+  snprintf(deck_path, sizeof deck_path, "%s.inp", path);
+  if (!deck || !file_equals(deck_path, deck, deck_length)) return 0;
   FILE *f = fopen(path, "r");
   if (!f) return 0;
   fascia_demo_result *r = &c->result;
@@ -126,11 +160,21 @@ static int cache_load(const char *dir, ccx_row *c) {
   return 1;
 }
 
-static void cache_save(const char *dir, const ccx_row *c) {
+static void cache_save(const char *dir, const ccx_row *c, const char *deck, size_t deck_length) {
   char path[1200], tmp[1300];
   cache_path(dir, c, path, sizeof path);
+  if (!deck) return;
+  snprintf(tmp, sizeof tmp, "%s.inp.tmp", path); // the deck first: an answer never sits beside another's deck
+  FILE *f = fopen(tmp, "wb");
+  if (!f) return;
+  const int wrote = fwrite(deck, 1, deck_length, f) == deck_length;
+  if (fclose(f) != 0 || !wrote) return;
+  char deck_path[1300];
+  snprintf(deck_path, sizeof deck_path, "%s.inp", path);
+  remove(path);
+  if (rename(tmp, deck_path) != 0) return;
   snprintf(tmp, sizeof tmp, "%s.tmp", path);
-  FILE *f = fopen(tmp, "w");
+  f = fopen(tmp, "w");
   if (!f) return;
   const fascia_demo_result *r = &c->result;
   fprintf(f, "%lld %lld %d %.1f\n", (long long)r->nodes, (long long)r->elements, (int)r->organ_count, r->ms);
@@ -500,9 +544,12 @@ int main(int argc, char **argv) {
       }
       continue;
     }
-    const int cached = st == FASCIA_OK && cache && cache_load(cache, cr + k);
+    size_t deck_length = 0;
+    char *deck = st == FASCIA_OK && cache ? deck_text(ctx, cr + k, &deck_length) : NULL;
+    const int cached = st == FASCIA_OK && cache && cache_load(cache, cr + k, deck, deck_length);
     if (st == FASCIA_OK && !cached) st = fascia_demo_calculix(ctx, &cr[k].mesh, ccx, threads, &cr[k].result);
-    if (st == FASCIA_OK && cache && !cached) cache_save(cache, cr + k);
+    if (st == FASCIA_OK && cache && !cached) cache_save(cache, cr + k, deck, deck_length);
+    free(deck);
     if (st != FASCIA_OK) {
       fprintf(stderr, "demo-calculix: CalculiX mesh %d: %s\n", k + 1, fascia_ctx_message(ctx));
       rc = 1;
