@@ -64,7 +64,8 @@ static fascia_status label_extent(fascia_ctx *ctx, const fascia_prep_scene *scen
     const double *m = map->to_world;
     const int s = (r + 1) % 3, t = (r + 2) % 3;
     const double a[3] = {m[s], m[4 + s], m[8 + s]}, b[3] = {m[t], m[4 + t], m[8 + t]};
-    const double c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+    double c[3];
+    prep_cross3(a, b, c);
     const double zero[3] = {0, 0, 0};
     face_area[r] = prep_dist3(c, zero);
   }
@@ -190,7 +191,7 @@ fascia_status fascia_prep_estimate(fascia_ctx *ctx, const fascia_prep_scene *sce
     out->peak_bytes = BASE_BYTES + BYTES_PER_TRIANGLE * out->triangles + MESH_BYTES_PER_GRID_VOXEL * out->grid_voxels +
                       MESH_BYTES_PER_ORGAN_VOXEL * out->organ_voxels + MESH_BYTES_PER_FILE_BYTE * out->input_bytes;
   else {
-    const double carve_cell = scene->segmentation.interface_layer / 6; // label_organs.c's carve
+    const double carve_cell = prep_carve_cell(scene->segmentation.interface_layer);
     out->peak_bytes = BASE_BYTES + BYTES_PER_TRIANGLE * out->triangles + LABEL_BYTES_PER_GRID_VOXEL * out->grid_voxels +
                       LABEL_BYTES_PER_MAP_VOXEL * out->input_voxels +
                       (carve_cell > 0 ? LABEL_BYTES_PER_CARVE_CELL * area / (carve_cell * carve_cell) : 0);

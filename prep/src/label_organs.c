@@ -306,11 +306,10 @@ static int bounds_near(const double *a, const double *b, double reach) {
 // gives up half the interface layer.
 static fascia_status carve(fascia_ctx *ctx, const fascia_prep_scene *scene, const fascia_prep_meshes *original,
                            int32_t o, fascia_prep_mesh *mesh) {
-  // three cells across each side's half layer whatever the voxel size: the
-  // carved faces set the layer's thinnest gap, and with it the force across
-  // it, so they must not move as the voxels are refined
+  // the carved faces set the layer's thinnest gap, and with it the force
+  // across it: their cell does not follow the voxels (prep_carve_cell)
   const double depth = 0.5 * scene->segmentation.interface_layer;
-  const double h = depth / 3;
+  const double h = prep_carve_cell(scene->segmentation.interface_layer);
   const fascia_prep_mesh *self = original->organs + o;
   int64_t nv = 0, nt = 0;
   for (int32_t k = 0; k < scene->organ_count; ++k)

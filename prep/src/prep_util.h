@@ -63,6 +63,16 @@ static inline double prep_dist3(const double *a, const double *b) {
   return sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
 }
 
+/// out = a x b (out must not alias a or b).
+static inline void prep_cross3(const double *a, const double *b, double *out) {
+  out[0] = a[1] * b[2] - a[2] * b[1], out[1] = a[2] * b[0] - a[0] * b[2], out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/// The cell of a label map's interface carve (label_organs.c): three cells
+/// across each side's half of the layer whatever the voxel size, so the
+/// carved faces do not move as the voxels are refined.
+static inline double prep_carve_cell(double interface_layer) { return interface_layer / 6; }
+
 static inline int64_t prep_grid_count(const prep_grid *g) {
   return (int64_t)g->dims[0] * g->dims[1] * g->dims[2];
 }

@@ -313,16 +313,15 @@ static fascia_status surface_candidates(fascia_ctx *ctx, const fascia_prep_scene
       if (!box_meets(&g, near, a, e1, e2)) continue; // the most of an organ lies far from the tissue
       const double zero[3] = {0, 0, 0};
       const double longest = fmax(fmax(prep_dist3(e1, zero), prep_dist3(e2, zero)), prep_dist3(e1, e2));
-      double normal[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+      double normal[3];
+      prep_cross3(e1, e2, normal);
       const double twice_area = prep_dist3(normal, zero);
       if (!(twice_area > 0)) continue;
       for (int r = 0; r < 3; ++r) normal[r] /= twice_area;
       double tangent[2][3]; // along the triangle, at right angles
       const double l1 = prep_dist3(e1, zero);
       for (int r = 0; r < 3; ++r) tangent[0][r] = e1[r] / l1;
-      tangent[1][0] = normal[1] * tangent[0][2] - normal[2] * tangent[0][1];
-      tangent[1][1] = normal[2] * tangent[0][0] - normal[0] * tangent[0][2];
-      tangent[1][2] = normal[0] * tangent[0][1] - normal[1] * tangent[0][0];
+      prep_cross3(normal, tangent[0], tangent[1]);
       const int cuts = (int)fmax(1, ceil(longest / step));
       for (int i = 0; i < cuts && status == FASCIA_OK; ++i)
         for (int j = 0; i + j < cuts && status == FASCIA_OK; ++j)
@@ -461,15 +460,18 @@ static int region_targets(const prep_grid *g, const int64_t *voxels, int64_t vox
 }
 
 // The distances from voxel v to its nearest organ (*d1) and the next (*d2):
-// d1 + d2 is the gap across v.
-static void nearest_organs(const fascia_prep_volume *vol, int64_t v, double *d1, double *d2) {
+// d1 + d2 is the gap across v. which (may be NULL): those two organs, -1
+// where there is none.
+static void nearest_organs(const fascia_prep_volume *vol, int64_t v, double *d1, double *d2, int32_t *which) {
+  int32_t os[2] = {-1, -1};
   *d1 = *d2 = INFINITY;
   for (int32_t o = 0; o < vol->organ_count; ++o) {
     if (!vol->distance[o]) continue;
     const double d = vol->distance[o][v];
-    if (d < *d1) *d2 = *d1, *d1 = d;
-    else if (d < *d2) *d2 = d;
+    if (d < *d1) *d2 = *d1, os[1] = os[0], *d1 = d, os[0] = o;
+    else if (d < *d2) *d2 = d, os[1] = o;
   }
+  if (which) which[0] = os[0], which[1] = os[1];
 }
 
 // Mid-layer frames of a tissue (the header): candidates are points of the
@@ -522,14 +524,9 @@ static fascia_status mid_layer_frames(fascia_ctx *ctx, const fascia_prep_meshes 
     const double *x = targets.position + 3 * k;
     const int64_t v = targets.voxel[k];
     mid[3 * k] = NAN;
-    int32_t os[2] = {-1, -1};
-    double d1 = INFINITY, d2 = INFINITY;
-    for (int32_t o = 0; o < vol->organ_count; ++o) {
-      if (!vol->distance[o]) continue;
-      const double d = vol->distance[o][v];
-      if (d < d1) d2 = d1, os[1] = os[0], d1 = d, os[0] = o;
-      else if (d < d2) d2 = d, os[1] = o;
-    }
+    int32_t os[2];
+    double d1, d2;
+    nearest_organs(vol, v, &d1, &d2, os);
     if (os[1] < 0 || d1 + d2 < thinnest || d1 + d2 >= widest) continue;
     double c[2][3], m[3], e[2];
     for (int j = 0; j < 2; ++j) {
@@ -1161,7 +1158,7 @@ static fascia_status sample_region(fascia_ctx *ctx, const fascia_prep_scene *sce
                                    seed + 2, trees, first_interior, frames));
   for (int64_t k = 0; td && held_volume && k < voxel_count; ++k) { // the layers no mid-layer frame may enter
     double d1, d2;
-    nearest_organs(vol, voxels[k], &d1, &d2);
+    nearest_organs(vol, voxels[k], &d1, &d2, NULL);
     if (d1 + d2 < 2 * sample_spacing) *held_volume += h * h * h;
   }
   if (mid_layer) *mid_layer = (int32_t)(frames->count - before_mid_layer);

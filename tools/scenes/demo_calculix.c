@@ -1010,9 +1010,7 @@ void fascia_demo_volume_bands(const fascia_prep_stages *s, const fascia_demo_mes
         for (int q = 0; q < 3; ++q) J[3 * a + q] = p[q + 1][a] - p[0][a];
         c[a] = 0.25 * (p[0][a] + p[1][a] + p[2][a] + p[3][a]);
       }
-      const double det = J[0] * (J[4] * J[8] - J[5] * J[7]) - J[1] * (J[3] * J[8] - J[5] * J[6]) +
-                         J[2] * (J[3] * J[7] - J[4] * J[6]);
-      add_to_band(bands, edge, nearest_organ(s->volume, c), fabs(det) / 6, volume);
+      add_to_band(bands, edge, nearest_organ(s->volume, c), fabs(det3(J)) / 6, volume);
     }
     return;
   }
