@@ -160,7 +160,9 @@ fascia_status fascia_tissue_close(fascia_ctx *ctx, FILE *f, const char *path);
 /// a fresh folder under $TMPDIR or /tmp, prep's stages run into *stages (to
 /// free with fascia_prep_stages_free), the folder removed again. And the
 /// cases' static solve at time 1 (CPU, one thread, Newton tolerance 1e-10;
-/// FASCIA_ERR_NUMERIC when not converged; *solver to destroy).
+/// the motion at once, or where that fails in 4 and then 16 load steps;
+/// FASCIA_ERR_NUMERIC when not converged; *solver, NULL or a solver to
+/// replace, to destroy).
 struct fascia_prep_stages; // fascia/prep.h: the solved cases need prep
 fascia_status fascia_tissue_prepare(fascia_ctx *ctx, fascia_tissue_scene_writer write, const void *def,
                                     struct fascia_prep_stages *stages);

@@ -89,7 +89,10 @@ typedef struct fascia_solver_def {
   fascia_mass_kind mass;         ///< default lumped (frames carry rotational inertia; docs/mechanics.md)
   fascia_real mass_damping;      ///< Rayleigh mass damping alpha, 1/s (default 0)
   int line_search;               ///< 1: backtracking line search on the energy (default 1)
-  int load_steps;                ///< static solve: external load applied in this many increments (default 1)
+  /// Static solve: the external load, and the prescribed motion from the
+  /// time its frames were last placed at to the solver's time, applied in
+  /// this many increments (default 1).
+  int load_steps;
   /// Dynamic steps: a step that fails (FASCIA_ERR_NUMERIC from its Newton
   /// solve, or unconverged when require_convergence is set) is rejected and
   /// redone as two steps of half the time step, each of which may be split

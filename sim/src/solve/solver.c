@@ -241,6 +241,7 @@ static void place_prescribed(fascia_solver *S, fascia_real t) {
   for (int32_t i = 0; i < S->frame_count; ++i)
     if (m->frame_kind[i] == FASCIA_FRAME_PRESCRIBED) fascia_motion_frame(m, i, t, S->x + 3 * i, S->q + 4 * i);
   fascia_organs_place(S->organs, S->x, S->q);
+  S->placed_time = t;
 }
 
 static fascia_status save_state(fascia_solver *S, fascia_real **backup) {
@@ -318,12 +319,16 @@ fascia_status fascia_solver_solve_static(fascia_solver *S, fascia_solve_report *
   memset(report, 0, sizeof *report);
   const int32_t N = S->frame_count;
   S->sys->threads = fascia_threads_free(S->sys->threads_max, S->sys->pair_count);
-  place_prescribed(S, S->time);
   fascia_status status = FASCIA_OK;
   const int steps = S->def.load_steps;
   int mechanism = 0; // the tangent where the solve started was not positive definite
+  // the prescribed motion comes in the same increments as the loads, along
+  // its own path from where its frames were placed: moved at once, a large
+  // motion inverts the tissue beside it before Newton starts
+  const fascia_real from = S->placed_time, to = S->time;
   for (int l = 1; l <= steps && status == FASCIA_OK; ++l) {
     S->load_factor = (fascia_real)l / steps;
+    place_prescribed(S, l == steps ? to : from + (to - from) * (fascia_real)l / steps);
     memcpy(S->x_base, S->x, 3 * (size_t)N * sizeof(fascia_real));
     memcpy(S->q_base, S->q, 4 * (size_t)N * sizeof(fascia_real));
     memset(S->d, 0, 6 * (size_t)N * sizeof(fascia_real));
@@ -507,7 +512,7 @@ static fascia_status step_once(fascia_solver *S, fascia_real h, fascia_solve_rep
     return status;
   }
   free(backup);
-  S->time = t1;
+  S->time = S->placed_time = t1;
   report->substeps = 1;
   return FASCIA_OK;
 }
@@ -709,7 +714,7 @@ void fascia_solver_resume(fascia_solver *S, const fascia_real *x, const fascia_r
   memcpy(S->x, x, 3 * N * sizeof(fascia_real));
   memcpy(S->q, q, 4 * N * sizeof(fascia_real));
   memcpy(S->u, u, 6 * N * sizeof(fascia_real));
-  S->time = time;
+  S->time = S->placed_time = time;
   if (organs_state) fascia_organs_restore(S->organs, organs_state);
   ++S->linear_epoch;
 }

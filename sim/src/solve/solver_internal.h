@@ -22,6 +22,7 @@ struct fascia_solver {
   fascia_system *sys;
   int32_t frame_count;
   fascia_real time;
+  fascia_real placed_time;          ///< the time the state's prescribed frames were placed at
   fascia_real *x, *q, *u;           ///< state [3N], [4N], velocity [6N]
   unsigned char *mask;              ///< [6N]
   // a step's Newton solve: its anchor and iterate, and the result's gradient
