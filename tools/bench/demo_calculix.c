@@ -391,9 +391,11 @@ static int write_reference(const char *path, const char *scene, const ccx_row *c
     fprintf(stderr, "demo-calculix: cannot write %s\n", tmp);
     return 0;
   }
-  fprintf(f, "# CalculiX on the first tissue of %s (tools/scenes/demo_calculix.h): its voxels as hexahedra, the\n"
-             "# organ-facing nodes moved with the organs at time 1, gravity off, static; the tissue's force on each\n"
-             "# organ (N), the reference mesh last (demo-calculix --write-reference)\n"
+  fprintf(f, "# CalculiX on the first tissue of %s (tools/scenes/demo_calculix.h): C3D8I and C3D20R mesh its\n"
+             "# voxels as hexahedra held at their organ-facing nodes (-surface: those nodes moved onto the organs'\n"
+             "# surfaces), C3D10 meshes the region as tetrahedra held on the organs' smooth surfaces; the held nodes\n"
+             "# moved with the organs at time 1, gravity off, static; the tissue's force on each organ (N), the\n"
+             "# reference mesh last (demo-calculix --write-reference)\n"
              "mesh,voxel_mm,nodes,elements,organ,fx,fy,fz\n",
           scene);
   for (int j = 0; j < nc; ++j) {
