@@ -76,8 +76,10 @@ FASCIA_PREP_INTERN fascia_status fascia_cgal_delaunay(fascia_ctx *ctx, int32_t n
 
 /// Triangles over n points spread over a surface (a shell's frames): 3
 /// point indices each (malloc'ed), each point joined only to its neighbours
-/// on the surface (advancing-front reconstruction). what names the surface
-/// in messages.
+/// on the surface (advancing-front reconstruction). The triangles come in a
+/// canonical order, a function of the points alone: each from its smallest
+/// index, sorted by their indices; their winding is the reconstruction's, not
+/// to be relied on. what names the surface in messages.
 FASCIA_PREP_INTERN fascia_status fascia_cgal_surface_triangles(fascia_ctx *ctx, const char *what, int32_t n,
                                                                const double *points, int32_t **out_triangles,
                                                                int32_t *out_count);

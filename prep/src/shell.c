@@ -512,7 +512,19 @@ fascia_status prep_shell_build(fascia_ctx *ctx, const fascia_prep_scene *scene, 
     fascia_cgal_tree_closest(trees[o], 1, centre, closest, &on);
     if (open && dist3(centre, closest) > OFF_SURFACE * spacing) continue;
     if (open && across_surface(m, on, x, tri + 3 * (int64_t)k)) continue;
-    memmove(tri + 3 * (int64_t)kept++, tri + 3 * (int64_t)k, 3 * sizeof(int32_t));
+    memmove(tri + 3 * (int64_t)kept, tri + 3 * (int64_t)k, 3 * sizeof(int32_t));
+    // wound as the organ's surface under it: the samples' order through the
+    // wall then follows the geometry, not the reconstruction's winding
+    int32_t *c = tri + 3 * (int64_t)kept++;
+    double e1[3], e2[3], normal[3], surface[3];
+    sub3(x + 3 * (int64_t)c[1], x + 3 * (int64_t)c[0], e1);
+    sub3(x + 3 * (int64_t)c[2], x + 3 * (int64_t)c[0], e2);
+    cross3(e1, e2, normal);
+    triangle_normal(m, on, surface);
+    if (normal[0] * surface[0] + normal[1] * surface[1] + normal[2] * surface[2] < 0) {
+      const int32_t swap = c[1];
+      c[1] = c[2], c[2] = swap;
+    }
   }
   T = kept;
   int64_t fins = 0;
