@@ -76,18 +76,70 @@ static void sample_volume_json(cJSON *e, const fascia_prep_points *pts, int32_t 
 }
 
 // The volumetric patch rule (docs/mechanics.md, "Volumetric locking"):
-// patches from FASCIA_PATCH_MIN_POISSON on, of this radius per frame
-// spacing (measured on the prepared pelvis tissue and the cantilever).
-#define PATCH_RADIUS_PER_FRAME_SPACING 1.0
+// patches from FASCIA_PATCH_MIN_POISSON on, one frame spacing wide where the
+// frames are too coarse for the region's layer. The layer locks as
+// (lambda/mu) (s/T)^2 for frame spacing s and thickness T, so below
+// s = PATCH_FADE_DEPTHS x depth x sqrt(mu/lambda) the patches shrink as that
+// square, and under a sample spacing they are left out. depth: the region's
+// mean distance to the surfaces that hold it (0: unknown, no fading).
+#define PATCH_FADE_DEPTHS 2.5
 
-fascia_real fascia_prep_patch_radius(fascia_real poisson_ratio, fascia_real frame_spacing) {
-  return poisson_ratio >= FASCIA_PATCH_MIN_POISSON ? PATCH_RADIUS_PER_FRAME_SPACING * frame_spacing : 0;
+fascia_real fascia_prep_patch_radius(fascia_real poisson_ratio, fascia_real frame_spacing, fascia_real sample_spacing,
+                                     fascia_real depth) {
+  if (!(poisson_ratio >= FASCIA_PATCH_MIN_POISSON)) return 0;
+  const double lambda_per_mu = poisson_ratio < 0.5 ? 2 * poisson_ratio / (1 - 2 * poisson_ratio) : INFINITY;
+  const double fade = depth > 0 ? PATCH_FADE_DEPTHS * depth / sqrt(lambda_per_mu) : 0;
+  const double ratio = frame_spacing < fade ? frame_spacing / fade : 1;
+  const double radius = frame_spacing * ratio * ratio;
+  return radius < sample_spacing ? 0 : radius;
+}
+
+// Each volume region's mean depth, m (fascia_prep_patch_radius): its voxels'
+// distance to the nearest of its organs (a tissue, [t]) or to its own surface
+// (a deformable organ's inside, [tissue_count + o]), each at most the exact
+// band of that distance; 0 where there is none.
+static double *region_depths(const fascia_prep_scene *scene, const fascia_prep_volume *vol) {
+  const int32_t T = scene->tissue_count, O = scene->organ_count;
+  double *depth = prep_calloc((size_t)(T + O) + 1, sizeof *depth);
+  int64_t *count = prep_calloc((size_t)(T + O) + 1, sizeof *count);
+  int32_t *organ_of_label = prep_calloc(256, sizeof *organ_of_label);
+  if (!depth || !count || !organ_of_label) {
+    free(depth), free(count), free(organ_of_label);
+    return NULL;
+  }
+  for (int l = 0; l < 256; ++l) organ_of_label[l] = -1;
+  for (int32_t o = 0; o < O; ++o)
+    if (vol->organ_label[o] > 0) organ_of_label[vol->organ_label[o]] = o;
+  const int64_t n = (int64_t)vol->dims[0] * vol->dims[1] * vol->dims[2];
+  for (int64_t v = 0; v < n; ++v) {
+    const int label = vol->region[v];
+    if (!label) continue;
+    double d = INFINITY;
+    int32_t k = -1;
+    if (label <= T && scene->tissues[label - 1].form == FASCIA_PREP_FORM_VOLUME) {
+      const fascia_prep_tissue_def *td = scene->tissues + label - 1;
+      for (int32_t i = 0; i < td->organ_count; ++i) {
+        const int32_t o = td->organs[i];
+        if (vol->distance[o]) d = fmin(d, fmin(vol->distance[o][v], vol->band[o]));
+      }
+      k = label - 1;
+    } else if (label > T && organ_of_label[label] >= 0) {
+      const int32_t o = organ_of_label[label];
+      if (vol->distance[o]) d = fmin(-vol->distance[o][v], vol->band[o]);
+      k = T + o;
+    }
+    if (k >= 0 && isfinite(d)) depth[k] += fmax(d, 0), ++count[k];
+  }
+  for (int32_t k = 0; k < T + O; ++k) depth[k] = count[k] ? depth[k] / (double)count[k] : 0;
+  free(count), free(organ_of_label);
+  return depth;
 }
 
 // A region's patch radius: its own, or the rule's for its material.
 static fascia_real region_patch_radius(const fascia_prep_scene *scene, int32_t material, fascia_real radius,
-                                       fascia_real frame_spacing) {
-  return radius == FASCIA_PREP_PATCH_AUTO ? fascia_prep_patch_radius(scene->materials[material].poisson_ratio, frame_spacing)
+                                       fascia_real frame_spacing, fascia_real sample_spacing, fascia_real depth) {
+  return radius == FASCIA_PREP_PATCH_AUTO ? fascia_prep_patch_radius(scene->materials[material].poisson_ratio,
+                                                                     frame_spacing, sample_spacing, depth)
                                           : radius;
 }
 
@@ -106,19 +158,22 @@ static void sampling_json(cJSON *e, const fascia_prep_scene *scene, int32_t mate
 }
 
 // Patches per material: the largest radius among the regions made of it.
-static fascia_status make_patches(fascia_ctx *ctx, const fascia_prep_scene *scene, fascia_model *m) {
+static fascia_status make_patches(fascia_ctx *ctx, const fascia_prep_scene *scene, const double *depth,
+                                  fascia_model *m) {
   fascia_real *radius = calloc((size_t)m->material_count + 1, sizeof *radius);
   PREP_CHECK(radius, ctx, FASCIA_ERR_MEMORY, "package: out of memory");
   for (int32_t t = 0; t < scene->tissue_count; ++t) {
     const fascia_prep_tissue_def *d = scene->tissues + t;
     if (d->form != FASCIA_PREP_FORM_VOLUME) continue; // a section carried by rotations does not lock
-    const fascia_real r = region_patch_radius(scene, d->material, d->patch_radius, d->frame_spacing);
+    const fascia_real r =
+        region_patch_radius(scene, d->material, d->patch_radius, d->frame_spacing, d->sample_spacing, depth[t]);
     if (r > radius[d->material]) radius[d->material] = r;
   }
   for (int32_t o = 0; o < scene->organ_count; ++o) {
     const fascia_prep_organ_def *d = scene->organs + o;
     if (d->kind != FASCIA_ORGAN_DEFORMABLE) continue;
-    const fascia_real r = region_patch_radius(scene, d->material, d->patch_radius, d->frame_spacing);
+    const fascia_real r = region_patch_radius(scene, d->material, d->patch_radius, d->frame_spacing, d->sample_spacing,
+                                              depth[scene->tissue_count + o]);
     if (r > radius[d->material]) radius[d->material] = r;
   }
   const fascia_status status = fascia_model_make_patches(ctx, m, radius);
@@ -147,7 +202,7 @@ static fascia_status modes_on_patches(fascia_ctx *ctx, fascia_model *m) {
 
 static cJSON *provenance(const fascia_prep_scene *scene, const fascia_prep_meshes *meshes,
                          const fascia_prep_volume *vol, const fascia_prep_points *pts, const fascia_prep_weights *W,
-                         const fascia_prep_coupling *cpl, const fascia_prep_run_info *info) {
+                         const fascia_prep_coupling *cpl, const double *depth, const fascia_prep_run_info *info) {
   cJSON *root = cJSON_CreateObject();
   cJSON_AddStringToObject(root, "tool", info && info->tool ? info->tool : "fascia_prep");
   cJSON_AddStringToObject(root, "fascia_version", fascia_version());
@@ -177,7 +232,10 @@ static cJSON *provenance(const fascia_prep_scene *scene, const fascia_prep_meshe
       sampling_json(e, scene, d->material, d->frame_spacing, d->sample_spacing, d->shape_kind, d->neighbours,
                     d->samples_per_tet, d->enhanced_modes);
       cJSON_AddNumberToObject(e, "min_component", d->min_component);
-      cJSON_AddNumberToObject(e, "patch_radius", region_patch_radius(scene, d->material, d->patch_radius, d->frame_spacing));
+      const double at = depth[scene->tissue_count + o];
+      cJSON_AddNumberToObject(e, "patch_radius", region_patch_radius(scene, d->material, d->patch_radius,
+                                                                     d->frame_spacing, d->sample_spacing, at));
+      cJSON_AddNumberToObject(e, "mean_depth", at);
     }
     cJSON_AddItemToArray(inputs, e);
   }
@@ -262,7 +320,9 @@ static cJSON *provenance(const fascia_prep_scene *scene, const fascia_prep_meshe
                   td->samples_per_tet, td->enhanced_modes);
     cJSON_AddNumberToObject(e, "coupling_tolerance", td->coupling_tolerance);
     cJSON_AddNumberToObject(e, "min_component", td->min_component);
-    cJSON_AddNumberToObject(e, "patch_radius", region_patch_radius(scene, td->material, td->patch_radius, td->frame_spacing));
+    cJSON_AddNumberToObject(e, "patch_radius", region_patch_radius(scene, td->material, td->patch_radius,
+                                                                   td->frame_spacing, td->sample_spacing, depth[t]));
+    if (td->form == FASCIA_PREP_FORM_VOLUME) cJSON_AddNumberToObject(e, "mean_depth", depth[t]);
     if (td->attachment == FASCIA_PREP_ATTACH_EXACT) { // only when asked: the default's provenance as before
       cJSON_AddStringToObject(e, "attachment", "exact");
       cJSON_AddNumberToObject(e, "attachment_layer", td->attachment_layer > 0 ? td->attachment_layer : td->sample_spacing);
@@ -728,6 +788,7 @@ fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_scene *scen
   char *prov_text = NULL;
   int32_t empty_frames = 0;
   int32_t motions = 0;
+  double *depth = NULL;
   for (int32_t o = 0; o < scene->organ_count; ++o) motions += scene->organs[o].kind == FASCIA_ORGAN_PRESCRIBED;
   fascia_model_sizes z;
   memset(&z, 0, sizeof z);
@@ -847,11 +908,13 @@ fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_scene *scen
   dropped = cJSON_CreateArray();
   PREP_CHECK_GOTO(dropped, ctx, FASCIA_ERR_MEMORY, "package: out of memory");
   PREP_TRY_GOTO(drop_unheld(ctx, scene, points, &m, dropped, &empty_frames));
-  PREP_TRY_GOTO(make_patches(ctx, scene, m));
+  depth = region_depths(scene, volume);
+  PREP_CHECK_GOTO(depth, ctx, FASCIA_ERR_MEMORY, "package: out of memory");
+  PREP_TRY_GOTO(make_patches(ctx, scene, depth, m));
   PREP_TRY_GOTO(modes_on_patches(ctx, m));
   PREP_TRY_GOTO(prep_tissue_surface(ctx, scene, meshes, volume, points, &m->tissue_surface));
   // provenance (its counts are those before the unheld pieces were dropped)
-  prov = provenance(scene, meshes, volume, points, weights, coupling, info);
+  prov = provenance(scene, meshes, volume, points, weights, coupling, depth, info);
   cJSON *reports = prov ? cJSON_GetObjectItem(prov, "reports") : NULL;
   PREP_CHECK_GOTO(reports, ctx, FASCIA_ERR_MEMORY, "package: out of memory for the provenance");
   cJSON_AddItemToObject(reports, "unheld_pieces_dropped", dropped);
@@ -865,6 +928,7 @@ fascia_status fascia_prep_package(fascia_ctx *ctx, const fascia_prep_scene *scen
   m = NULL;
 cleanup:
   free(section_material);
+  free(depth);
   cJSON_Delete(prov);
   cJSON_Delete(dropped);
   free(prov_text);

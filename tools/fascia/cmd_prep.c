@@ -396,8 +396,8 @@ static void print_summary(const prep_run *r, const step_clock *c, const char *ou
                     "in the scene, docs/mechanics.md)\n",
             (int)patches, (int)patched, FASCIA_PATCH_MIN_POISSON);
   else
-    fprintf(stderr, "volumetric patches: none (every material's Poisson ratio is below %.2g, or patch_radius is 0; "
-                    "strands and sheets have none)\n",
+    fprintf(stderr, "volumetric patches: none (every material's Poisson ratio is below %.2g, patch_radius is 0, or "
+                    "the frames are fine for the layer's depth, docs/mechanics.md; strands and sheets have none)\n",
             FASCIA_PATCH_MIN_POISSON);
   if (preview)
     fprintf(stderr, "preview: open %s/preview.pvd in ParaView (the organs, region, frames, samples, coupling; strands "

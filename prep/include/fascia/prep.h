@@ -78,10 +78,13 @@ typedef struct fascia_prep_parts {
 #define FASCIA_PREP_MIN_GAP 0.001
 
 /// The volumetric patch radius (m) a region gets by default: 0 (none) below
-/// the Poisson ratio where patches pay, else a multiple of its frame spacing
-/// (docs/mechanics.md, "Volumetric locking", states the rule and its
-/// measurements).
-FASCIA_API fascia_real fascia_prep_patch_radius(fascia_real poisson_ratio, fascia_real frame_spacing);
+/// the Poisson ratio where patches pay, else its frame spacing, shrinking
+/// once the frames resolve a layer of this mean depth (m, its distance to
+/// the surfaces that hold it; 0: not known), and 0 once smaller than the
+/// sample spacing (docs/mechanics.md, "Volumetric locking", states the rule
+/// and its measurements).
+FASCIA_API fascia_real fascia_prep_patch_radius(fascia_real poisson_ratio, fascia_real frame_spacing,
+                                                fascia_real sample_spacing, fascia_real depth);
 
 /// One organ of the scene: a surface mesh file, or labels of the scene's
 /// segmentation (docs/labelmaps.md).
