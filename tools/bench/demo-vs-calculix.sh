@@ -7,7 +7,8 @@
 # slip, side by side; then the mechanisms one at a time (no volumetric
 # patches, more MLS neighbours, finer samples or frames alone). Writes
 # tools/bench/results/2core-debian_cpu/demo_calculix.{txt,csv} and, with
-# --reference, data/reference/demo-calculix.csv (tests/t598). CalculiX's
+# --reference, data/reference/demo-calculix.csv (tests/t598; CCX then defaults
+# to the C3D10 tetrahedra held on the organs' smooth surfaces). CalculiX's
 # answers are kept in $CACHE (default /tmp/fascia-demo-calculix) so that a
 # rerun solves only what is new. CCX and RUNGS pick the meshes and rungs
 # (demo-calculix's --ccx and --fascia), NAME the results' file name
@@ -43,6 +44,8 @@ TET_RUNGS+=",0.5:1:1:e,0.5:0.7:1:e,0.5:0.5:1:e,0.5:0.7:0.5:e,0.5:0.5:0.5:e,0.5:0
 mkdir -p "$cache" "$out"
 ref=()
 for a in "$@"; do [ "$a" = "--reference" ] && ref=(--write-reference "$root/data/reference/demo-calculix.csv"); done
+# the stored reference is the tetrahedra held on the smooth surfaces (data/reference/README.md)
+[ ${#ref[@]} -gt 0 ] && CCX="${CCX:-t10:1:1.5:0.025}"
 cd "$root"
 "$bench" data/scenes/pelvis-female-demo.json --cache "$cache" --ccx "${CCX:-8i:1:1,20r:1:1,8i:1:2}" \
   --ccx-solver "${CCX_SOLVER:-ITERATIVE CHOLESKY}" \
