@@ -435,19 +435,28 @@ static fascia_status wall_samples(fascia_ctx *ctx, const fascia_prep_organ_def *
   return FASCIA_OK;
 }
 
+// A wall triangle of frames c against the organ's surface under it (its
+// triangle on): the dot product of their normals, the wall's unnormalised
+// (its length in *length).
+static double against_surface(const fascia_prep_mesh *m, int32_t on, const double *x, const int32_t *c,
+                              double *length) {
+  double e1[3], e2[3], n[3], surface[3];
+  sub3(x + 3 * (int64_t)c[1], x + 3 * (int64_t)c[0], e1);
+  sub3(x + 3 * (int64_t)c[2], x + 3 * (int64_t)c[0], e2);
+  cross3(e1, e2, n);
+  *length = norm3(n);
+  triangle_normal(m, on, surface);
+  return n[0] * surface[0] + n[1] * surface[1] + n[2] * surface[2];
+}
+
 // Whether a wall triangle stands across the organ's surface rather than
 // along it: three frames of an open surface's free edge, where it curves,
 // join into a sliver in the edge's plane (a lip of the lid the
 // reconstruction would put over the opening), its normal in the surface.
 static int across_surface(const fascia_prep_mesh *m, int32_t on, const double *x, const int32_t *c) {
-  double e1[3], e2[3], n[3], surface[3];
-  sub3(x + 3 * (int64_t)c[1], x + 3 * (int64_t)c[0], e1);
-  sub3(x + 3 * (int64_t)c[2], x + 3 * (int64_t)c[0], e2);
-  cross3(e1, e2, n);
-  const double nn = norm3(n);
-  if (!(nn > 0)) return 1;
-  triangle_normal(m, on, surface);
-  return fabs(n[0] * surface[0] + n[1] * surface[1] + n[2] * surface[2]) < ACROSS_COS * nn;
+  double nn;
+  const double along = against_surface(m, on, x, c, &nn);
+  return !(nn > 0) || fabs(along) < ACROSS_COS * nn;
 }
 
 static double mesh_area(const fascia_prep_mesh *m) {
@@ -516,12 +525,8 @@ fascia_status prep_shell_build(fascia_ctx *ctx, const fascia_prep_scene *scene, 
     // wound as the organ's surface under it: the samples' order through the
     // wall then follows the geometry, not the reconstruction's winding
     int32_t *c = tri + 3 * (int64_t)kept++;
-    double e1[3], e2[3], normal[3], surface[3];
-    sub3(x + 3 * (int64_t)c[1], x + 3 * (int64_t)c[0], e1);
-    sub3(x + 3 * (int64_t)c[2], x + 3 * (int64_t)c[0], e2);
-    cross3(e1, e2, normal);
-    triangle_normal(m, on, surface);
-    if (normal[0] * surface[0] + normal[1] * surface[1] + normal[2] * surface[2] < 0) {
+    double length;
+    if (against_surface(m, on, x, c, &length) < 0) {
       const int32_t swap = c[1];
       c[1] = c[2], c[2] = swap;
     }
