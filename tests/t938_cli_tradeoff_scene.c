@@ -5,11 +5,13 @@
 // largest organ-force error is what its own forces and the reference's give,
 // a rung that cannot be prepared is reported in its rows while the others
 // run, the recommendation respects --budget (none fits: exit 1, no model
-// written), -o writes a model `fascia inspect` reads, bad arguments are
+// written), -o writes a model `fascia inspect` reads, a scene whose tissue
+// is held exactly still gets its tetrahedral rows, bad arguments are
 // refused with one line and exit 2.
 // Usage: t938_cli_tradeoff_scene PATH/TO/fascia WORK_DIR SCENE.json SHELL-SCENE.json
 #define _POSIX_C_SOURCE 200809L
 #include <cjson/cJSON.h>
+#include <libgen.h>
 #include <math.h>
 
 #include "check.h"
@@ -49,6 +51,32 @@ static double recomputed_error(const cJSON *row, const cJSON *ref) {
     top = fmax(top, 100 * norm3(d) / fmax(norm3(r), 0.01 * largest));
   }
   return top;
+}
+
+// The scene at `from` with its meshes named by absolute path and every tissue
+// held by the organs' whole surfaces ("attachment": "exact"), written to `to`.
+static int write_exact_scene(const char *from, const char *to) {
+  static char text[1 << 16];
+  if (cli_read_file(from, text, sizeof text) <= 0) return 0;
+  cJSON *scene = cJSON_Parse(text);
+  char folder[1024], path[2048];
+  snprintf(folder, sizeof folder, "%s", from);
+  const char *dir = dirname(folder);
+  cJSON *item;
+  cJSON_ArrayForEach(item, cJSON_GetObjectItemCaseSensitive(scene, "organs")) {
+    const char *mesh = cJSON_GetStringValue(cJSON_GetObjectItemCaseSensitive(item, "mesh"));
+    if (!mesh) continue;
+    snprintf(path, sizeof path, "%s/%s", dir, mesh);
+    cJSON_ReplaceItemInObjectCaseSensitive(item, "mesh", cJSON_CreateString(path));
+  }
+  cJSON_ArrayForEach(item, cJSON_GetObjectItemCaseSensitive(scene, "tissues"))
+    cJSON_AddStringToObject(item, "attachment", "exact");
+  char *out = cJSON_Print(scene);
+  FILE *f = out ? fopen(to, "wb") : NULL;
+  int ok = f && fputs(out, f) >= 0;
+  if (f) ok &= fclose(f) == 0;
+  cJSON_free(out), cJSON_Delete(scene);
+  return ok;
 }
 
 int main(int argc, char **argv) {
@@ -131,6 +159,25 @@ int main(int argc, char **argv) {
   CHECK(number(coarse, "factor") == 1 && cJSON_IsNull(cJSON_GetObjectItemCaseSensitive(coarse, "error")));
   const char *why = cJSON_GetStringValue(cJSON_GetObjectItemCaseSensitive(fine, "error"));
   CHECK(number(fine, "factor") == 0.5 && why && strstr(why, "prep: ") && strstr(why, "thickness"));
+  cJSON_Delete(rows);
+
+  // the tissue held exactly: its tetrahedral rung drops the attachment, which
+  // only MLS weights have, rather than failing to prepare
+  char exact[1200];
+  snprintf(exact, sizeof exact, "%s/exact.json", dir);
+  CHECK(write_exact_scene(scene, exact));
+  snprintf(args, sizeof args,
+           "tradeoff '%s' --ladder 1 --kinds scene,tet --presets interactive --no-tissues --steps 3 --repeats 1 "
+           "--threads 1 --out '%s' --json --no-plot",
+           exact, dir);
+  CHECK(cli_exec(fascia, args, err, &result) && result.status == 0);
+  rows = cJSON_Parse(result.out);
+  CHECK(cJSON_GetArraySize(rows) == 2);
+  cJSON_ArrayForEach(row, rows) {
+    const cJSON *error = cJSON_GetObjectItemCaseSensitive(row, "error");
+    CHECK(cJSON_IsNull(error));
+    if (!cJSON_IsNull(error)) fprintf(stderr, "%s\n", cJSON_GetStringValue(error));
+  }
   cJSON_Delete(rows);
 
   // a budget no row meets: exit 1 saying so, no model written

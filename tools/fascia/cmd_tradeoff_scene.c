@@ -419,8 +419,11 @@ static char *rung_text(study *s, rung *r) {
     if (!shape) shape = cJSON_AddObjectToObject(t, "shape_functions");
     cJSON_DeleteItemFromObjectCaseSensitive(shape, "kind");
     cJSON_AddStringToObject(shape, "kind", kind_name(r->kind));
-    if (r->kind == FASCIA_PREP_SHAPE_TET) cJSON_DeleteItemFromObjectCaseSensitive(shape, "neighbours");
-    else cJSON_DeleteItemFromObjectCaseSensitive(shape, "samples_per_tet");
+    if (r->kind == FASCIA_PREP_SHAPE_TET) { // a tetrahedron's weights are its corners': no exact attachment
+      cJSON_DeleteItemFromObjectCaseSensitive(shape, "neighbours");
+      cJSON_DeleteItemFromObjectCaseSensitive(t, "attachment");
+      cJSON_DeleteItemFromObjectCaseSensitive(t, "attachment_layer");
+    } else cJSON_DeleteItemFromObjectCaseSensitive(shape, "samples_per_tet");
   }
   cJSON *organs = cJSON_GetObjectItemCaseSensitive(root, "organs"), *o;
   index = 0;
