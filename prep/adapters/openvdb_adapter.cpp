@@ -10,6 +10,7 @@
 #include <openvdb/tools/MeshToVolume.h>
 #include <openvdb/tools/Morphology.h>
 #include <openvdb/tools/VolumeToMesh.h>
+#include <tbb/global_control.h>
 
 #include <unistd.h>
 
@@ -22,6 +23,13 @@
 #include <vector>
 
 #include "adapters.h"
+
+// OpenVDB's tools run on TBB, which takes every core unless told: each
+// call holds it to the threads prep was given (--threads), as the
+// OpenMP loops are (a global_control lasts while it is in scope).
+static size_t tbb_threads(const fascia_ctx *ctx) { return (size_t)std::max(1, fascia_ctx_threads(ctx)); }
+#define HOLD_TBB_THREADS(ctx) \
+  tbb::global_control tbb_limit(tbb::global_control::max_allowed_parallelism, tbb_threads(ctx))
 
 // OpenVDB runs out of memory inside its worker threads, where a bad_alloc
 // can end in a destructor and abort the process: the narrow band's size is
@@ -106,6 +114,7 @@ extern "C" fascia_status fascia_vdb_unsigned_distance(fascia_ctx *ctx, int32_t v
     fascia_status status;
     if (!band_fits(ctx, "distance field", vertex_count, vertices, triangle_count, triangles, h, reach, &status))
       return status;
+    HOLD_TBB_THREADS(ctx);
     openvdb::initialize();
     std::vector<openvdb::Vec3s> points;
     std::vector<openvdb::Vec3I> tris;
@@ -170,6 +179,7 @@ extern "C" fascia_status fascia_vdb_indicator_surface(fascia_ctx *ctx, const int
                                                       int32_t *out_vertex_count, int32_t **out_triangles,
                                                       int32_t *out_triangle_count) {
   try {
+    HOLD_TBB_THREADS(ctx);
     openvdb::initialize();
     // -1 inside, 0 outside: the -1/2 level lies midway between voxel centres,
     // on the faces of the labelled voxels where no smoothing moves it
@@ -222,6 +232,7 @@ extern "C" fascia_status fascia_vdb_carve(fascia_ctx *ctx, int32_t vertex_count,
         !band_fits(ctx, "carving", other_vertex_count, other_vertices, other_triangle_count, other_triangles, h, reach,
                    &status))
       return status;
+    HOLD_TBB_THREADS(ctx);
     openvdb::initialize();
     openvdb::FloatGrid::Ptr grid = signed_distance(vertex_count, vertices, triangle_count, triangles, h, 3.0f, reach);
     openvdb::FloatGrid::Ptr other = signed_distance(other_vertex_count, other_vertices, other_triangle_count,
