@@ -301,6 +301,24 @@ static void restore_state(fascia_solver *S, fascia_real *backup) {
   fascia_organs_restore(S->organs, backup + 13 * N);
 }
 
+// Whether every frame sample s takes weight from is fixed, prescribed or in
+// a rigid organ: then their motion alone deforms it, and no time step or
+// solver setting changes that, so a failure there must not blame the step.
+static int sample_held(const fascia_solver *S, int32_t s) {
+  const fascia_model *m = S->model;
+  if (s < 0 || s >= m->sample_count) return 0;
+  for (int32_t k = m->sample_offsets[s]; k < m->sample_offsets[s + 1]; ++k) {
+    const int32_t i = m->pair_frame[k];
+    if (S->mask[6 * (int64_t)i] && fascia_organs_frame_body(S->organs, i) < 0) return 0;
+  }
+  return 1;
+}
+
+#define HELD_CAUSE                                                                                                 \
+  "its frames are all fixed, prescribed or in rigid organs, so their motion alone deforms it and no time step "    \
+  "or solver setting changes that: the tissue there needs free frames (a finer frame spacing) or more room "       \
+  "between the organs (a thicker interface layer)"
+
 static fascia_status check_blow_up(fascia_solver *S, const fascia_solve_report *r, int energy_before_known,
                                    fascia_real energy_before);
 
@@ -427,9 +445,10 @@ static fascia_status check_blow_up(fascia_solver *S, const fascia_solve_report *
   if (past) { // where and how much, on the host: only on the way to the message
     int32_t s = -1;
     const fascia_real strain = fascia_system_largest_strain(host_system(S), &s);
+    S->held_failure = sample_held(S, s);
     return FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
-                       "the solution blew up: sample %d reached a strain of %.3g, past the limit %.3g", (int)s, strain,
-                       S->def.blow_up_strain);
+                       "the solution blew up: sample %d reached a strain of %.3g, past the limit %.3g%s%s", (int)s,
+                       strain, S->def.blow_up_strain, S->held_failure ? "; " : "", S->held_failure ? HELD_CAUSE : "");
   }
   if (energy_before_known) {
     // the backends count the loads' torques' work along the step, W, in the
@@ -456,6 +475,7 @@ static fascia_status check_blow_up(fascia_solver *S, const fascia_solve_report *
 // require_convergence (then with a message saying so).
 static fascia_status step_once(fascia_solver *S, fascia_real h, fascia_solve_report *report) {
   memset(report, 0, sizeof *report);
+  S->held_failure = 0;
   const int32_t N = S->frame_count;
   const int64_t n = 6 * (int64_t)N;
   const fascia_real t1 = S->time + h;
@@ -554,7 +574,7 @@ static fascia_status step_split(fascia_solver *S, fascia_real h, int depth, fasc
 // Where a failed attempt went wrong, for the message: the free frames with
 // the largest residual force and torque, and the lowest inverted sample if
 // any (the state of the last attempt, before it is restored).
-static void describe_failure(const fascia_solver *S, char *text, size_t size) {
+static void describe_failure(fascia_solver *S, char *text, size_t size) {
   int32_t worst[2] = {-1, -1}; // force, torque
   fascia_real worst_norm[2] = {-1, -1};
   for (int32_t i = 0; i < S->frame_count; ++i)
@@ -575,7 +595,11 @@ static void describe_failure(const fascia_solver *S, char *text, size_t size) {
   if (n < 0 || (size_t)n >= size || S->inverted_count <= 0) return;
   // the cause named is one the first inverted sample's own law has
   const int32_t first = S->first_inverted;
-  if (first >= 0 && S->sys->sample_law[first] == FASCIA_LAW_STVK)
+  if (sample_held(S, first)) {
+    snprintf(text + n, size - (size_t)n, "; %d inverted samples, the first sample %d (%s)", (int)S->inverted_count,
+             (int)first, S->held_failure ? "its frames too are all fixed, prescribed or in rigid organs" : HELD_CAUSE);
+    S->held_failure = 1;
+  } else if (first >= 0 && S->sys->sample_law[first] == FASCIA_LAW_STVK)
     snprintf(text + n, size - (size_t)n, "; %d inverted samples, the first sample %d (StVK; likely cause: the "
              "material is crushed; StVK loses stiffness in compression, the stable Neo-Hookean does not)",
              (int)S->inverted_count, (int)first);
@@ -610,18 +634,18 @@ fascia_status fascia_solver_step(fascia_solver *S, fascia_solve_report *report) 
              report->substeps > 1 ? " (split)" : "");
     fascia_ctx_progress(S->ctx, "step", -1, detail);
   } else {
-    char where[384] = "";
+    char where[768] = "";
     if (status == FASCIA_ERR_NUMERIC) describe_failure(S, where, sizeof where);
     restore_state(S, backup);
     S->time = t0;
     if (status == FASCIA_ERR_NUMERIC) {
-      char cause[512];
+      char cause[1024];
       snprintf(cause, sizeof cause, "%s", fascia_ctx_message(S->ctx));
       status = FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
                            "solver: the step from t = %.6g s failed%s (shortest step tried %.3g s, %d rejected): %s%s; "
-                           "the state is the one before the step; use a shorter time step, more Newton "
-                           "iterations or step retries",
-                           t0, S->def.step_retries > 0 ? " even split" : "", smallest, report->rejected, cause, where);
+                           "the state is the one before the step%s",
+                           t0, S->def.step_retries > 0 ? " even split" : "", smallest, report->rejected, cause, where,
+                           S->held_failure ? "" : "; use a shorter time step, more Newton iterations or step retries");
     }
   }
   free(backup);

@@ -32,6 +32,7 @@ struct fascia_solver {
   // the potential and the inversions at the last solve's result
   fascia_real energy_internal, energy_external;
   int32_t inverted_count, first_inverted;
+  int held_failure; ///< the last step attempt failed at a sample whose frames all move as prescribed (solver.c)
   fascia_real *kinetic_blocks, *scratch; ///< the kinetic energy's lumped blocks [36N] and M u [6N]
   // the organs' reactions: the energy's gradient at full load [6N], and the
   // x, q and frame loads [13N] it was taken at (fascia_solver_loads_gradient)
