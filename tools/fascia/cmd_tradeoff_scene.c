@@ -322,7 +322,7 @@ typedef struct scene_row {
   double *force_error, *torque_error, *change; ///< [organs] %: against the reference; change: against the base
   double force_error_max, torque_error_max, change_max, extrapolated_error;
   int force_error_organ;
-  double *share;                 ///< [organs x tissues] signed part of each organ's force its tissue holds, %
+  double *share;                 ///< [organs x tissues] part of each organ's force its tissue holds, % (floored as the errors)
   double *displacement;          ///< [3 probes] m, NAN where the model has no tissue there
   double disp[3];                ///< median, 95th percentile, largest error, % of the largest displacement
   int probes_compared;
@@ -552,6 +552,8 @@ static int map_probes(const study *s, rung *r) {
   return 1;
 }
 
+static double norm3(const double *v) { return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
+
 static void quat_matrix(const double *q, double R[9]) {
   const double w = q[0], x = q[1], y = q[2], z = q[3];
   R[0] = 1 - 2 * (y * y + z * z), R[1] = 2 * (x * y - w * z), R[2] = 2 * (x * z + w * y);
@@ -637,12 +639,20 @@ static fascia_status measure_forces(study *s, const rung *r, fascia_solver *solv
       const int32_t t = r->frame_tissue[frames[c]];
       for (int a = 0; t >= 0 && t < s->tissue_count && a < 3; ++a) part[3 * t + a] += forces[3 * c + a];
     }
-    const double *F = row->force + 3 * o;
-    const double F2 = F[0] * F[0] + F[1] * F[1] + F[2] * F[2];
+    const double *F = row->force + 3 * o, Fn = norm3(F);
     for (int t = 0; st == FASCIA_OK && t < s->tissue_count; ++t)
       row->share[o * s->tissue_count + t] =
-          F2 > 0 ? 100 * (part[3 * t] * F[0] + part[3 * t + 1] * F[1] + part[3 * t + 2] * F[2]) / F2 : 0;
+          Fn > 0 ? (part[3 * t] * F[0] + part[3 * t + 1] * F[1] + part[3 * t + 2] * F[2]) / Fn : 0;
     free(frames), free(forces), free(part);
+  }
+  // The parts along each organ's force in % of it, or of the floor the
+  // errors use where the force is smaller: a net force near zero (a free
+  // rigid organ at rest) would otherwise blow its parts up to 1e12 %.
+  double largest = 0;
+  for (int o = 0; o < s->organ_count; ++o) largest = fmax(largest, norm3(row->force + 3 * o));
+  for (int o = 0; st == FASCIA_OK && o < s->organ_count; ++o) {
+    const double scale = fmax(norm3(row->force + 3 * o), fmax(FORCE_FLOOR * largest, 1e-300));
+    for (int t = 0; t < s->tissue_count; ++t) row->share[o * s->tissue_count + t] *= 100 / scale;
   }
   return st;
 }
@@ -704,8 +714,6 @@ static void run_row(study *s, scene_row *row) {
 }
 
 // ------------------------------------------------------------ measures --
-
-static double norm3(const double *v) { return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
 
 static double dist3(const double *a, const double *b) {
   const double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
@@ -1069,7 +1077,7 @@ static void print_front(const study *s, FILE *out) {
 static void print_tissues(const study *s, int base, FILE *out) {
   const double target = s->opt->error > 0 ? s->opt->error : DEFAULT_ERROR;
   if (base >= 0 && !s->rows[base].failed) {
-    fprintf(out, "\neach organ's force held by each tissue (%% of the organ's force, row %s):\n", s->rows[base].label);
+    fprintf(out, "\neach organ's force held by each tissue (%% of the organ's force, or of 1 %% of the largest where an organ's is smaller; row %s):\n", s->rows[base].label);
     for (int g = 0; g < s->organ_count; ++g) {
       fprintf(out, "  %-16s %8.4g N:", s->organ_names[g], norm3(s->rows[base].force + 3 * g));
       for (int t = 0; t < s->tissue_count; ++t)
