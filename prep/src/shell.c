@@ -437,14 +437,14 @@ static fascia_status wall_samples(fascia_ctx *ctx, const fascia_prep_organ_def *
 
 // A wall triangle of frames c against the organ's surface under it (its
 // triangle on): the dot product of their normals, the wall's unnormalised
-// (its length in *length).
+// (its length in *length, where length is not NULL).
 static double against_surface(const fascia_prep_mesh *m, int32_t on, const double *x, const int32_t *c,
                               double *length) {
   double e1[3], e2[3], n[3], surface[3];
   sub3(x + 3 * (int64_t)c[1], x + 3 * (int64_t)c[0], e1);
   sub3(x + 3 * (int64_t)c[2], x + 3 * (int64_t)c[0], e2);
   cross3(e1, e2, n);
-  *length = norm3(n);
+  if (length) *length = norm3(n);
   triangle_normal(m, on, surface);
   return n[0] * surface[0] + n[1] * surface[1] + n[2] * surface[2];
 }
@@ -525,8 +525,7 @@ fascia_status prep_shell_build(fascia_ctx *ctx, const fascia_prep_scene *scene, 
     // wound as the organ's surface under it: the samples' order through the
     // wall then follows the geometry, not the reconstruction's winding
     int32_t *c = tri + 3 * (int64_t)kept++;
-    double length;
-    if (against_surface(m, on, x, c, &length) < 0) {
+    if (against_surface(m, on, x, c, NULL) < 0) {
       const int32_t swap = c[1];
       c[1] = c[2], c[2] = swap;
     }
