@@ -5,7 +5,8 @@
 // largest organ-force error is what its own forces and the reference's give,
 // a rung that cannot be prepared is reported in its rows while the others
 // run, the recommendation respects --budget (none fits: exit 1, no model
-// written), -o writes a model `fascia inspect` reads, a scene whose tissue
+// written), a finest rung that moved beyond the target since the rung
+// before it is said to be unsettled, -o writes a model `fascia inspect` reads, a scene whose tissue
 // is held exactly still gets its tetrahedral rows, bad arguments are
 // refused with one line and exit 2.
 // Usage: t938_cli_tradeoff_scene PATH/TO/fascia WORK_DIR SCENE.json SHELL-SCENE.json
@@ -139,6 +140,20 @@ int main(int argc, char **argv) {
       CHECK_NEAR(recomputed_error(row, ref), e, 1e-6, 1e-9);
     }
   }
+  // the finest rung's own movement: the rung before it, of its preset, is
+  // said to leave it unsettled exactly when it is beyond the 5 % target
+  const cJSON *before = NULL;
+  const char *ref_preset = ref ? cJSON_GetStringValue(cJSON_GetObjectItemCaseSensitive(ref, "preset")) : NULL;
+  cJSON_ArrayForEach(row, rows) {
+    const char *group = cJSON_GetStringValue(cJSON_GetObjectItemCaseSensitive(row, "group"));
+    const char *preset = cJSON_GetStringValue(cJSON_GetObjectItemCaseSensitive(row, "preset"));
+    if (group && !strcmp(group, "ladder") && number(row, "factor") == 1.4 && preset && ref_preset &&
+        !strcmp(preset, ref_preset))
+      before = row;
+  }
+  CHECK(before != NULL);
+  if (before)
+    CHECK((strstr(result.err, "has not settled") != NULL) == (number(before, "force_error_percent") > 5));
   cJSON_Delete(rows);
   CHECK(cli_file_exists(model));
   snprintf(args, sizeof args, "%s/tradeoff-scene.csv", dir);
@@ -179,6 +194,16 @@ int main(int argc, char **argv) {
     if (!cJSON_IsNull(error)) fprintf(stderr, "%s\n", cJSON_GetStringValue(error));
   }
   cJSON_Delete(rows);
+
+  // under a target no two rungs meet (0.001 %) the finest rung is said to be
+  // unsettled, with the rung before it and a finer factor to add
+  snprintf(args, sizeof args,
+           "tradeoff '%s' --ladder 1.4,1 --kinds scene --presets interactive --no-tissues --steps 3 --repeats 1 "
+           "--threads 1 --error 0.001 --out '%s' --no-plot",
+           scene, dir);
+  CHECK(cli_exec(fascia, args, err, &result));
+  CHECK(strstr(result.out, "has not settled") && strstr(result.out, "x1.4 scene, interactive") &&
+        strstr(result.out, "--ladder ...,0.7"));
 
   // a budget no row meets: exit 1 saying so, no model written
   char none[1200];

@@ -1289,6 +1289,19 @@ static void study_free(study *s) {
   for (int k = 0; k < s->mesh_count; ++k) s->prep.stages_free(&s->meshes[k].stages);
 }
 
+// The row of the rung next coarser than the reference's, of its kind and
+// preset, or -1: its error against the reference is how far the finest rung
+// still moved, a bound below which no row's error can be trusted.
+static int next_coarser_row(const study *s, int ref) {
+  const scene_options *o = s->opt;
+  const rung *rr = s->rungs + s->rows[ref].rung;
+  int f = o->ladder_count - 1;
+  while (f >= 1 && o->ladder[f] != rr->factor) --f;
+  if (f < 1) return -1;
+  const int b = find_row(s, o->ladder[f - 1], rr->kind, -1, s->rows[ref].preset);
+  return b >= 0 && !s->rows[b].failed ? b : -1;
+}
+
 // The report after the rows: reference, extrapolation, rows, tissues, target.
 static int report(study *s, int ref, int base, const extrapolation *x, int best, FILE *out) {
   const scene_options *o = s->opt;
@@ -1321,6 +1334,15 @@ static int report(study *s, int ref, int base, const extrapolation *x, int best,
   print_front(s, out);
   print_tissues(s, base, out);
   const double target = o->error > 0 ? o->error : DEFAULT_ERROR;
+  const int coarser = next_coarser_row(s, ref);
+  if (coarser >= 0 && s->rows[coarser].force_error_max > target) {
+    const scene_row *c = s->rows + coarser;
+    fprintf(out, "\nthe finest rung has not settled: the rung before it (%s) is %.2f %% from it (%s), more than the "
+                 "%g %% target, so every error against it may understate the row's own; add a finer rung "
+                 "(--ladder ...,%g) where the time allows\n",
+            c->label, c->force_error_max, c->force_error_organ >= 0 ? s->organ_names[c->force_error_organ] : "", target,
+            0.7 * s->rungs[s->rows[ref].rung].factor);
+  }
   if (best < 0) {
     if (o->budget > 0) fprintf(stderr, "fascia tradeoff: no row of '%s' runs within --budget %g ms per step\n", o->scene, o->budget);
     else fprintf(stderr, "fascia tradeoff: no row of '%s' is within %g %% of the finest in every organ force\n", o->scene, target);
