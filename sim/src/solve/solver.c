@@ -316,8 +316,8 @@ static int sample_held(const fascia_solver *S, int32_t s) {
 
 #define HELD_CAUSE                                                                                                 \
   "its frames are all fixed, prescribed or in rigid organs, so their motion alone deforms it and no time step "    \
-  "or solver setting changes that: the tissue there needs free frames (a finer frame spacing) or more room "       \
-  "between the organs (a thicker interface layer)"
+  "or solver setting changes that: the tissue there needs free frames (finer spacings: prep gives a layer "       \
+  "thinner than two sample spacings none) or more room between the organs (a thicker interface layer)"
 
 static fascia_status check_blow_up(fascia_solver *S, const fascia_solve_report *r, int energy_before_known,
                                    fascia_real energy_before);
