@@ -1317,6 +1317,9 @@ static int report(study *s, int ref, int base, const extrapolation *x, int best,
           s->rows[ref].label, 100 * FORCE_FLOOR);
   if (x->available) {
     fprintf(out, "Richardson extrapolation of the three finest rungs (the finest row's error against it):\n");
+    double largest = 0; // the floor of the errors, as against the finest row
+    for (int g = 0; g < s->organ_count; ++g)
+      if (x->ok[g]) largest = fmax(largest, norm3(x->force + 3 * g));
     for (int g = 0; g < s->organ_count; ++g) {
       if (!x->ok[g]) {
         fprintf(out, "  %-16s not in the asymptotic range (order %.2g): the finest row is the reference\n",
@@ -1325,7 +1328,7 @@ static int report(study *s, int ref, int base, const extrapolation *x, int best,
       }
       const double *F = x->force + 3 * g, *R = s->rows[ref].force + 3 * g;
       fprintf(out, "  %-16s %.4g N extrapolated (order %.2f), the finest %.4g N: %.2f %%\n", s->organ_names[g],
-              norm3(F), x->order[g], norm3(R), 100 * dist3(F, R) / fmax(norm3(F), 1e-300));
+              norm3(F), x->order[g], norm3(R), 100 * dist3(F, R) / fmax(norm3(F), fmax(FORCE_FLOOR * largest, 1e-300)));
     }
   } else {
     fprintf(out, "no Richardson extrapolation: it needs three rungs of the reference's kind and preset\n");
