@@ -109,7 +109,8 @@ static int held_cases(fascia_ctx *ctx) {
     CHECK(m != NULL);
     if (!m) return 1;
     for (int32_t i = 0; held && i < m->frame_count; ++i)
-      if (m->frame_kind[i] == FASCIA_FRAME_FREE && m->frame_position[3 * i] > 1.5) m->frame_kind[i] = FASCIA_FRAME_FIXED;
+      if (m->frame_kind[i] == FASCIA_FRAME_FREE && m->frame_position[3 * i] > 1.5)
+        m->frame_kind[i] = FASCIA_FRAME_FIXED;
     int moved = 1;
     fascia_ctx_clear(ctx);
     const fascia_status st = one_step(ctx, m, &sd, NULL, NULL, &moved);

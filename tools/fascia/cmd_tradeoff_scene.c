@@ -322,7 +322,7 @@ typedef struct scene_row {
   double *force_error, *torque_error, *change; ///< [organs] %: against the reference; change: against the base
   double force_error_max, torque_error_max, change_max, extrapolated_error;
   int force_error_organ;
-  double *share;                 ///< [organs x tissues] part of each organ's force its tissue holds, % (floored as the errors)
+  double *share;                 ///< [organs x tissues] part of each organ's force its tissue holds, % (floored)
   double *displacement;          ///< [3 probes] m, NAN where the model has no tissue there
   double disp[3];                ///< median, 95th percentile, largest error, % of the largest displacement
   int probes_compared;
@@ -1077,7 +1077,10 @@ static void print_front(const study *s, FILE *out) {
 static void print_tissues(const study *s, int base, FILE *out) {
   const double target = s->opt->error > 0 ? s->opt->error : DEFAULT_ERROR;
   if (base >= 0 && !s->rows[base].failed) {
-    fprintf(out, "\neach organ's force held by each tissue (%% of the organ's force, or of 1 %% of the largest where an organ's is smaller; row %s):\n", s->rows[base].label);
+    fprintf(out,
+            "\neach organ's force held by each tissue (%% of the organ's force, or of 1 %% of the largest where "
+            "an organ's is smaller; row %s):\n",
+            s->rows[base].label);
     for (int g = 0; g < s->organ_count; ++g) {
       fprintf(out, "  %-16s %8.4g N:", s->organ_names[g], norm3(s->rows[base].force + 3 * g));
       for (int t = 0; t < s->tissue_count; ++t)
@@ -1328,7 +1331,8 @@ static int report(study *s, int ref, int base, const extrapolation *x, int best,
       }
       const double *F = x->force + 3 * g, *R = s->rows[ref].force + 3 * g;
       fprintf(out, "  %-16s %.4g N extrapolated (order %.2f), the finest %.4g N: %.2f %%\n", s->organ_names[g],
-              norm3(F), x->order[g], norm3(R), 100 * dist3(F, R) / fmax(norm3(F), fmax(FORCE_FLOOR * largest, 1e-300)));
+              norm3(F), x->order[g], norm3(R),
+              100 * dist3(F, R) / fmax(norm3(F), fmax(FORCE_FLOOR * largest, 1e-300)));
     }
   } else {
     fprintf(out, "no Richardson extrapolation: it needs three rungs of the reference's kind and preset\n");
