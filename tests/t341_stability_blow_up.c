@@ -98,8 +98,9 @@ static fascia_status one_step(fascia_ctx *ctx, const fascia_model *m, const fasc
 // motion alone: a failure there names that, not the step (which the message
 // blamed before, advising a shorter one that cannot help). The 4 m beam's
 // end (x = 4) pulled 20 m within the first step: with the frames between
-// free, the step is blamed (its Newton solve cannot follow); with the frames from x = 1.6 on fixed, the most
-// strained samples (between x = 3.2 and the end) are held, and it is not.
+// free, the step is blamed (its Newton solve cannot follow); with the
+// frames from x = 1.6 on fixed, the most strained samples (between x = 3.2
+// and the end) are held, and it is not.
 static int held_cases(fascia_ctx *ctx) {
   fascia_solver_def sd = fascia_solver_def_default();
   sd.backend = stab_backend;

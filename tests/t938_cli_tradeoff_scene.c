@@ -6,9 +6,9 @@
 // a rung that cannot be prepared is reported in its rows while the others
 // run, the recommendation respects --budget (none fits: exit 1, no model
 // written), a finest rung that moved beyond the target since the rung
-// before it is said to be unsettled, -o writes a model `fascia inspect` reads, a scene whose tissue
-// is held exactly still gets its tetrahedral rows, bad arguments are
-// refused with one line and exit 2.
+// before it is said to be unsettled, -o writes a model `fascia inspect`
+// reads, a scene whose tissue is held exactly still gets its tetrahedral
+// rows, bad arguments are refused with one line and exit 2.
 // Usage: t938_cli_tradeoff_scene PATH/TO/fascia WORK_DIR SCENE.json SHELL-SCENE.json
 #define _POSIX_C_SOURCE 200809L
 #include <cjson/cJSON.h>

@@ -554,6 +554,20 @@ static int map_probes(const study *s, rung *r) {
 
 static double norm3(const double *v) { return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
 
+// The largest norm of the organs' vectors (forces or torques), of those with
+// ok[o] where ok is not NULL.
+static double largest_norm(const double *v, int organs, const int *ok) {
+  double largest = 0;
+  for (int o = 0; o < organs; ++o)
+    if (!ok || ok[o]) largest = fmax(largest, norm3(v + 3 * o));
+  return largest;
+}
+
+// What an organ's force (or torque) of this norm is compared against: itself,
+// or FORCE_FLOOR of the largest where it is smaller (an organ the tissue
+// barely holds would otherwise turn round-off into %).
+static double floored(double norm, double largest) { return fmax(norm, fmax(FORCE_FLOOR * largest, 1e-300)); }
+
 static void quat_matrix(const double *q, double R[9]) {
   const double w = q[0], x = q[1], y = q[2], z = q[3];
   R[0] = 1 - 2 * (y * y + z * z), R[1] = 2 * (x * y - w * z), R[2] = 2 * (x * z + w * y);
@@ -645,13 +659,12 @@ static fascia_status measure_forces(study *s, const rung *r, fascia_solver *solv
           Fn > 0 ? (part[3 * t] * F[0] + part[3 * t + 1] * F[1] + part[3 * t + 2] * F[2]) / Fn : 0;
     free(frames), free(forces), free(part);
   }
-  // The parts along each organ's force in % of it, or of the floor the
-  // errors use where the force is smaller: a net force near zero (a free
-  // rigid organ at rest) would otherwise blow its parts up to 1e12 %.
-  double largest = 0;
-  for (int o = 0; o < s->organ_count; ++o) largest = fmax(largest, norm3(row->force + 3 * o));
+  // The parts along each organ's force in % of it, floored as the errors
+  // are: a net force near zero (a free rigid organ at rest) would otherwise
+  // blow its parts up to 1e12 %.
+  const double largest = largest_norm(row->force, s->organ_count, NULL);
   for (int o = 0; st == FASCIA_OK && o < s->organ_count; ++o) {
-    const double scale = fmax(norm3(row->force + 3 * o), fmax(FORCE_FLOOR * largest, 1e-300));
+    const double scale = floored(norm3(row->force + 3 * o), largest);
     for (int t = 0; t < s->tissue_count; ++t) row->share[o * s->tissue_count + t] *= 100 / scale;
   }
   return st;
@@ -720,16 +733,14 @@ static double dist3(const double *a, const double *b) {
   return norm3(d);
 }
 
-// Each organ's force (or torque) difference from ref's, in % of ref's, an
-// organ with less than FORCE_FLOOR of the largest against that floor (an
-// organ the tissue barely holds would otherwise turn round-off into %).
+// Each organ's force (or torque) difference from ref's, in % of ref's,
+// floored (floored).
 static double wrench_errors(const double *v, const double *ref, int organs, double *out, int *worst) {
-  double largest = 0, top = 0;
-  for (int o = 0; o < organs; ++o) largest = fmax(largest, norm3(ref + 3 * o));
-  const double floor_ = fmax(FORCE_FLOOR * largest, 1e-300);
+  const double largest = largest_norm(ref, organs, NULL);
+  double top = 0;
   if (worst) *worst = -1;
   for (int o = 0; o < organs; ++o) {
-    out[o] = 100 * dist3(v + 3 * o, ref + 3 * o) / fmax(norm3(ref + 3 * o), floor_);
+    out[o] = 100 * dist3(v + 3 * o, ref + 3 * o) / floored(norm3(ref + 3 * o), largest);
     if (worst && (*worst < 0 || out[o] > top)) *worst = o;
     top = fmax(top, out[o]);
   }
@@ -777,6 +788,19 @@ static int find_row(const study *s, double factor, int kind, int coarse, const c
   return -1;
 }
 
+// The row `back` rungs coarser on the ladder than row ref's, of its kind and
+// preset, or -1 where there is none or it failed.
+static int row_before(const study *s, int ref, int back) {
+  const scene_options *o = s->opt;
+  if (ref < 0) return -1;
+  const rung *rr = s->rungs + s->rows[ref].rung;
+  int f = o->ladder_count - 1;
+  while (f >= back && o->ladder[f] != rr->factor) --f;
+  if (f < back) return -1;
+  const int k = find_row(s, o->ladder[f - back], rr->kind, -1, s->rows[ref].preset);
+  return k >= 0 && !s->rows[k].failed ? k : -1;
+}
+
 // The reference: the finest rung of the first kind with the most accurate
 // preset asked for; the next finest when that failed.
 static int reference_row(const study *s) {
@@ -815,17 +839,10 @@ typedef struct extrapolation {
 } extrapolation;
 
 static void extrapolate(const study *s, int ref, extrapolation *x) {
-  const scene_options *o = s->opt;
   x->available = 0;
-  if (o->ladder_count < 3 || ref < 0) return;
-  const rung *rr = s->rungs + s->rows[ref].rung;
-  int f = o->ladder_count - 1;
-  while (f >= 2 && o->ladder[f] != rr->factor) --f;
-  if (f < 2) return;
-  const int a = find_row(s, o->ladder[f - 2], rr->kind, -1, s->rows[ref].preset);
-  const int b = find_row(s, o->ladder[f - 1], rr->kind, -1, s->rows[ref].preset);
-  if (a < 0 || b < 0 || s->rows[a].failed || s->rows[b].failed) return;
-  const double ratio = sqrt(o->ladder[f - 2] / o->ladder[f - 1] * o->ladder[f - 1] / o->ladder[f]);
+  const int a = row_before(s, ref, 2), b = row_before(s, ref, 1);
+  if (a < 0 || b < 0) return;
+  const double ratio = sqrt(s->rungs[s->rows[a].rung].factor / s->rungs[s->rows[ref].rung].factor);
   x->available = 1;
   for (int g = 0; g < s->organ_count; ++g) {
     const double *F1 = s->rows[a].force + 3 * g, *F2 = s->rows[b].force + 3 * g, *F3 = s->rows[ref].force + 3 * g;
@@ -852,13 +869,12 @@ static void compute_errors(study *s, int ref, int base, const extrapolation *x) 
                           : NAN;
     row->extrapolated_error = NAN;
     if (x->available) { // against the extrapolation, the organs it holds for
-      double largest = 0, top = 0;
-      for (int o = 0; o < organs; ++o)
-        if (x->ok[o]) largest = fmax(largest, norm3(x->force + 3 * o));
+      const double largest = largest_norm(x->force, organs, x->ok);
+      double top = 0;
       for (int o = 0; o < organs; ++o)
         if (x->ok[o])
-          top = fmax(top, 100 * dist3(row->force + 3 * o, x->force + 3 * o) /
-                              fmax(norm3(x->force + 3 * o), fmax(FORCE_FLOOR * largest, 1e-300)));
+          top = fmax(top,
+                     100 * dist3(row->force + 3 * o, x->force + 3 * o) / floored(norm3(x->force + 3 * o), largest));
       row->extrapolated_error = largest > 0 ? top : NAN;
     }
   }
@@ -1292,19 +1308,6 @@ static void study_free(study *s) {
   for (int k = 0; k < s->mesh_count; ++k) s->prep.stages_free(&s->meshes[k].stages);
 }
 
-// The row of the rung next coarser than the reference's, of its kind and
-// preset, or -1: its error against the reference is how far the finest rung
-// still moved, a bound below which no row's error can be trusted.
-static int next_coarser_row(const study *s, int ref) {
-  const scene_options *o = s->opt;
-  const rung *rr = s->rungs + s->rows[ref].rung;
-  int f = o->ladder_count - 1;
-  while (f >= 1 && o->ladder[f] != rr->factor) --f;
-  if (f < 1) return -1;
-  const int b = find_row(s, o->ladder[f - 1], rr->kind, -1, s->rows[ref].preset);
-  return b >= 0 && !s->rows[b].failed ? b : -1;
-}
-
 // The report after the rows: reference, extrapolation, rows, tissues, target.
 static int report(study *s, int ref, int base, const extrapolation *x, int best, FILE *out) {
   const scene_options *o = s->opt;
@@ -1320,9 +1323,7 @@ static int report(study *s, int ref, int base, const extrapolation *x, int best,
           s->rows[ref].label, 100 * FORCE_FLOOR);
   if (x->available) {
     fprintf(out, "Richardson extrapolation of the three finest rungs (the finest row's error against it):\n");
-    double largest = 0; // the floor of the errors, as against the finest row
-    for (int g = 0; g < s->organ_count; ++g)
-      if (x->ok[g]) largest = fmax(largest, norm3(x->force + 3 * g));
+    const double largest = largest_norm(x->force, s->organ_count, x->ok);
     for (int g = 0; g < s->organ_count; ++g) {
       if (!x->ok[g]) {
         fprintf(out, "  %-16s not in the asymptotic range (order %.2g): the finest row is the reference\n",
@@ -1331,8 +1332,7 @@ static int report(study *s, int ref, int base, const extrapolation *x, int best,
       }
       const double *F = x->force + 3 * g, *R = s->rows[ref].force + 3 * g;
       fprintf(out, "  %-16s %.4g N extrapolated (order %.2f), the finest %.4g N: %.2f %%\n", s->organ_names[g],
-              norm3(F), x->order[g], norm3(R),
-              100 * dist3(F, R) / fmax(norm3(F), fmax(FORCE_FLOOR * largest, 1e-300)));
+              norm3(F), x->order[g], norm3(R), 100 * dist3(F, R) / floored(norm3(F), largest));
     }
   } else {
     fprintf(out, "no Richardson extrapolation: it needs three rungs of the reference's kind and preset\n");
@@ -1341,7 +1341,9 @@ static int report(study *s, int ref, int base, const extrapolation *x, int best,
   print_front(s, out);
   print_tissues(s, base, out);
   const double target = o->error > 0 ? o->error : DEFAULT_ERROR;
-  const int coarser = next_coarser_row(s, ref);
+  // the rung before the finest: its error against it is how far the finest
+  // still moved, below which no row's error can be trusted
+  const int coarser = row_before(s, ref, 1);
   if (coarser >= 0 && s->rows[coarser].force_error_max > target) {
     const scene_row *c = s->rows + coarser;
     fprintf(out, "\nthe finest rung has not settled: the rung before it (%s) is %.2f %% from it (%s), more than the "
