@@ -377,13 +377,13 @@ static fascia_status objective(fascia_device *dev, fascia_real alpha, fascia_rea
                        "%.0f patches: their enhanced strain modes found no minimum at this state; the step is too "
                        "large or the model is unstable",
                        dev->sc.modes_failed);
-  if (dev->sc.nonfinite > 0 || !isfinite(dev->sc.energy_internal + dev->sc.energy_external)) {
-    const int32_t s = first_flagged(dev, FASCIA_PT_FLAG_NONFINITE);
-    return FASCIA_FAIL(dev->ctx, FASCIA_ERR_NUMERIC,
-                       "sample %d: energy is not finite (deformation gradient blew up); the step is too large or the "
-                       "model is unstable",
-                       (int)(s >= 0 ? s : 0));
-  }
+  const int32_t s = dev->sc.nonfinite > 0 ? first_flagged(dev, FASCIA_PT_FLAG_NONFINITE) : -1;
+  if (s >= 0)
+    return FASCIA_FAIL(dev->ctx, FASCIA_ERR_NUMERIC, "sample %d: energy is not finite (deformation gradient blew up)",
+                       (int)s);
+  if (!isfinite(dev->sc.energy_internal + dev->sc.energy_external))
+    return FASCIA_FAIL(dev->ctx, FASCIA_ERR_NUMERIC, "the energy of gravity and the frame loads is not finite at "
+                       "this state (a frame's position or a load overflowed)");
   return isfinite(*phi) ? FASCIA_OK : FASCIA_FAIL(dev->ctx, FASCIA_ERR_NUMERIC, "solver: the energy is not finite");
 }
 
@@ -601,7 +601,10 @@ static fascia_status device_finish(fascia_backend *backend, fascia_step_result *
                                  .energy_external = dev->sc.energy_external,
                                  .inverted_count = (int32_t)dev->sc.inverted,
                                  .first_inverted =
-                                     dev->sc.inverted > 0 ? first_flagged(dev, FASCIA_PT_FLAG_INVERTED) : -1};
+                                     dev->sc.inverted > 0 ? first_flagged(dev, FASCIA_PT_FLAG_INVERTED) : -1,
+                                 .nonfinite_count = (int32_t)dev->sc.nonfinite,
+                                 .first_nonfinite =
+                                     dev->sc.nonfinite > 0 ? first_flagged(dev, FASCIA_PT_FLAG_NONFINITE) : -1};
   return FASCIA_OK;
 }
 

@@ -111,6 +111,8 @@ typedef struct fascia_step_result {
   fascia_real energy_external;    ///< gravity and loads times the load factor, the loads' torques' work
   int32_t inverted_count;         ///< samples inverted at that state
   int32_t first_inverted;         ///< the lowest of them, -1 for none
+  int32_t nonfinite_count;        ///< samples whose energy is not finite at that state
+  int32_t first_nonfinite;        ///< the lowest of them (read only when nonfinite_count > 0)
 } fascia_step_result;
 
 struct fascia_backend_ops {

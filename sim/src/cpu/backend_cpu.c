@@ -302,7 +302,9 @@ static fascia_status cpu_finish(fascia_backend *backend, fascia_step_result *res
                                  .energy_internal = sys->energy_internal,
                                  .energy_external = sys->energy_external + B->torque_work,
                                  .inverted_count = sys->inverted_count,
-                                 .first_inverted = sys->inverted_count > 0 ? sys->first_inverted : -1};
+                                 .first_inverted = sys->inverted_count > 0 ? sys->first_inverted : -1,
+                                 .nonfinite_count = sys->nonfinite_count,
+                                 .first_nonfinite = sys->first_nonfinite};
   return FASCIA_OK;
 }
 

@@ -246,7 +246,7 @@ fascia_status fascia_system_evaluate(fascia_system *sys, fascia_real *gradient, 
   const int32_t failed_patch = sys->modes ? fascia_modes_evaluate(sys, sys->modes) : -1;
   fascia_real internal = sys->dilatation ? fascia_dilatation_evaluate(sys, sys->dilatation) : 0;
   if (failed_patch >= 0) internal = NAN; // no minimum in the modes: the step is refused below
-  int32_t inverted = 0, first_inverted = -1, first_nonfinite = -1;
+  int32_t inverted = 0, first_inverted = -1, nonfinite = 0, first_nonfinite = -1;
   const int64_t blocks = ((int64_t)S + DOT_BLOCK - 1) / DOT_BLOCK;
   fascia_real partial_stack[64], *partial = blocks <= 64 ? partial_stack : malloc((size_t)blocks * sizeof *partial);
   FASCIA_CHECK(partial, sys->ctx, FASCIA_ERR_MEMORY, "system: out of memory");
@@ -263,10 +263,14 @@ fascia_status fascia_system_evaluate(fascia_system *sys, fascia_real *gradient, 
       if (first_inverted < 0) first_inverted = s;
       ++inverted;
     }
-    if ((f & FASCIA_PT_FLAG_NONFINITE) && first_nonfinite < 0) first_nonfinite = s;
+    if (f & FASCIA_PT_FLAG_NONFINITE) {
+      if (first_nonfinite < 0) first_nonfinite = s;
+      ++nonfinite;
+    }
   }
   sys->inverted_count = inverted;
   sys->first_inverted = first_inverted;
+  sys->nonfinite_count = nonfinite;
   sys->first_nonfinite = first_nonfinite;
   sys->energy_internal = internal;
   if (!gradient) gradient = sys->gradient_scratch;
@@ -286,11 +290,12 @@ fascia_status fascia_system_evaluate(fascia_system *sys, fascia_real *gradient, 
                        "patch %d: its enhanced strain modes found no minimum at this state; the step is too large or "
                        "the model is unstable",
                        (int)failed_patch);
-  if (first_nonfinite >= 0 || !isfinite(internal + external))
-    return FASCIA_FAIL(sys->ctx, FASCIA_ERR_NUMERIC,
-                       "sample %d: energy is not finite (deformation gradient blew up); the step is too large or the "
-                       "model is unstable",
-                       (int)(first_nonfinite >= 0 ? first_nonfinite : 0));
+  if (first_nonfinite >= 0)
+    return FASCIA_FAIL(sys->ctx, FASCIA_ERR_NUMERIC, "sample %d: energy is not finite (deformation gradient blew up)",
+                       (int)first_nonfinite);
+  if (!isfinite(internal + external))
+    return FASCIA_FAIL(sys->ctx, FASCIA_ERR_NUMERIC, "the energy of gravity and the frame loads is not finite at "
+                       "this state (a frame's position or a load overflowed)");
   return FASCIA_OK;
 }
 

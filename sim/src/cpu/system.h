@@ -77,7 +77,7 @@ typedef struct fascia_system {
   fascia_real energy_internal, energy_external; ///< internal includes the patches' volumetric energy
   int32_t max_neighbours;
   int32_t inverted_count;
-  int32_t first_inverted, first_nonfinite;
+  int32_t first_inverted, nonfinite_count, first_nonfinite;
 } fascia_system;
 
 /// The sample that pair k belongs to (bisection in sample_offsets).

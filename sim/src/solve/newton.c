@@ -91,7 +91,7 @@ static int accepts(const fascia_solver_def *def, fascia_real phi, fascia_real ph
 static fascia_status no_decrease(const fascia_solver *S, int iteration, fascia_real gnorm, fascia_real tolerance) {
   return FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
                      "solver: Newton iteration %d found no decrease of the energy (|gradient| %.3g, tolerance %.3g); "
-                     "the model may be unstable or the time step too large",
+                     "the model may be unstable or the step too large",
                      iteration, gnorm, tolerance);
 }
 
@@ -120,8 +120,19 @@ static fascia_status check_range(fascia_solver *S, fascia_real phi, fascia_real 
   if (fabs(phi) < NEWTON_OVERFLOW && g0 < NEWTON_OVERFLOW && reference < NEWTON_OVERFLOW) return FASCIA_OK;
   return FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
                      "solver: the energy (%.3g J), forces (%.3g) or loads (%.3g) overflow the arithmetic: a modulus, "
-                     "density, load or gravity is out of any physical range; check the values and their units (SI)",
+                     "density, load, gravity or prescribed motion is out of any physical range; check the values and their "
+                     "units (SI)",
                      phi, g0, reference);
+}
+
+// A solve whose start failed to evaluate: the backend's state there still
+// goes to the solver, whose failure message reads it (which sample is not
+// finite or inverted)
+static fascia_status failed_start(fascia_solver *S, fascia_status status) {
+  fascia_step_result result;
+  if (status == FASCIA_ERR_NUMERIC && S->backend->ops->finish(S->backend, &result) == FASCIA_OK)
+    fascia_solver_take_result(S, &result);
+  return status;
 }
 
 fascia_status fascia_newton_minimize(fascia_solver *S, const fascia_step_values *values, int max_iterations,
@@ -133,7 +144,8 @@ fascia_status fascia_newton_minimize(fascia_solver *S, const fascia_step_values 
   double t = t0;
   FASCIA_TRY(ops->begin(be, values, rep));
   fascia_trial_values now, trial;
-  FASCIA_TRY(ops->evaluate(be, 0, 1, &now));
+  fascia_status status = ops->evaluate(be, 0, 1, &now);
+  if (status != FASCIA_OK) return failed_start(S, status);
   rep->profile.evaluate_ms += fascia_now_ms() - t;
   const fascia_real g0 = sqrt(now.gradient_norm2);
   const fascia_real load = load_norm(S, values->gravity_scale);
@@ -146,7 +158,6 @@ fascia_status fascia_newton_minimize(fascia_solver *S, const fascia_step_values 
   const fascia_real force_roundoff = material_roundoff / S->model_size; // a residual no iteration can lower
   int iteration = 0, converged = 0;
   fascia_real gnorm = g0, shift = 0; // the Levenberg shift carries over from a line-searched iteration to the next
-  fascia_status status = FASCIA_OK;
   // watchdog: full steps taken since the watched iterate (Phi watch_phi,
   // the slope of its first step watch_slope); -1: none allowed this iteration
   const int watchdog = def->line_search && ops->save && ops->restore;

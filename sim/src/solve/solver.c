@@ -174,7 +174,7 @@ fascia_status fascia_solver_create(fascia_ctx *ctx, const fascia_model *model, c
   FASCIA_TRY_GOTO(check_mass(S));
   energy_scale(S);
   S->load_factor = 1;
-  S->first_inverted = -1;
+  S->first_inverted = S->first_nonfinite = -1;
   static const fascia_pt_patches no_patches;
   const fascia_dilatation *patches = S->sys->dilatation;
   // the arrays a backend uploads, by row of the contract's tables
@@ -322,6 +322,12 @@ static int sample_held(const fascia_solver *S, int32_t s) {
 static fascia_status check_blow_up(fascia_solver *S, const fascia_solve_report *r, int energy_before_known,
                                    fascia_real energy_before);
 
+// Whether the last attempt's evaluation had a sample whose energy is not
+// finite and whose frames are all held (sample_held)
+static int nonfinite_held(const fascia_solver *S) {
+  return S->nonfinite_count > 0 && sample_held(S, S->first_nonfinite);
+}
+
 // The Newton minimization of a step's objective: a static one (h = 0) or
 // an implicit Euler step of length h
 static fascia_status minimize(fascia_solver *S, fascia_real h, fascia_solve_report *report) {
@@ -354,6 +360,12 @@ fascia_status fascia_solver_solve_static(fascia_solver *S, fascia_solve_report *
     snprintf(detail, sizeof detail, "load step %d of %d", l, steps);
     fascia_ctx_progress(S->ctx, "static solve", (double)(l - 1) / steps, detail);
     status = minimize(S, 0, report);
+    if (status == FASCIA_ERR_NUMERIC && nonfinite_held(S)) {
+      char cause[1024];
+      snprintf(cause, sizeof cause, "%s", fascia_ctx_message(S->ctx));
+      status = FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC, "static solve, load step %d of %d: %s; sample %d: %s", l,
+                           steps, cause, (int)S->first_nonfinite, HELD_CAUSE);
+    }
     if (l == 1) mechanism = S->start_indefinite;
     // the blow-up rule of a dynamic step, on each converged load step (an
     // unconverged one is judged below); no energy rule: nothing to compare with
@@ -592,6 +604,11 @@ static void describe_failure(fascia_solver *S, char *text, size_t size) {
                   part ? "torque" : "force", worst_norm[part], part ? "N m" : "N", (int)w, S->model->frame_position[3 * w],
                   S->model->frame_position[3 * w + 1], S->model->frame_position[3 * w + 2]);
   }
+  if (n >= 0 && (size_t)n < size && !S->held_failure && nonfinite_held(S)) {
+    n += snprintf(text + n, size - (size_t)n, "; sample %d, whose energy is not finite: %s", (int)S->first_nonfinite,
+                  HELD_CAUSE);
+    S->held_failure = 1;
+  }
   if (n < 0 || (size_t)n >= size || S->inverted_count <= 0) return;
   // the cause named is one the first inverted sample's own law has
   const int32_t first = S->first_inverted;
@@ -730,6 +747,8 @@ void fascia_solver_take_result(fascia_solver *S, const fascia_step_result *r) {
   S->energy_external = r->energy_external;
   S->inverted_count = r->inverted_count;
   S->first_inverted = r->first_inverted;
+  S->nonfinite_count = r->nonfinite_count;
+  S->first_nonfinite = r->nonfinite_count > 0 ? r->first_nonfinite : -1;
 }
 
 void fascia_solver_resume(fascia_solver *S, const fascia_real *x, const fascia_real *q, const fascia_real *u,

@@ -31,7 +31,7 @@ struct fascia_solver {
   fascia_real *gradient;            ///< [6N]
   // the potential and the inversions at the last solve's result
   fascia_real energy_internal, energy_external;
-  int32_t inverted_count, first_inverted;
+  int32_t inverted_count, first_inverted, nonfinite_count, first_nonfinite;
   int held_failure; ///< the last step attempt failed at a sample whose frames all move as prescribed (solver.c)
   fascia_real *kinetic_blocks, *scratch; ///< the kinetic energy's lumped blocks [36N] and M u [6N]
   // the organs' reactions: the energy's gradient at full load [6N], and the
