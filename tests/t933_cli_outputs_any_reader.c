@@ -15,53 +15,22 @@
 //        TOOLS/plots
 #define _POSIX_C_SOURCE 200809L
 #include "check.h"
-#include "cli_exec.h"
+#include "scene_copy.h"
 
-#include <libgen.h>
 #include <unistd.h>
 
 static const char organ_name[] = "uterus & <adnexa> \"\xC3\xBC\" 'x'";
-static const char organ_json[] = "\"uterus & <adnexa> \\\"\xC3\xBC\\\" 'x'\"";
 
 static cli_result result;
 
-// text with every `from` replaced by `to`, to free; NULL when out of memory.
-static char *replaced(const char *text, const char *from, const char *to) {
-  size_t count = 0;
-  for (const char *p = strstr(text, from); p; p = strstr(p + strlen(from), from)) ++count;
-  char *out = malloc(strlen(text) + count * strlen(to) + 1), *w = out;
-  if (!out) return NULL;
-  for (const char *p = text, *q; *p; p = q + strlen(from)) {
-    q = strstr(p, from);
-    if (!q) {
-      strcpy(w, p);
-      return out;
-    }
-    memcpy(w, p, (size_t)(q - p)), w += q - p;
-    strcpy(w, to), w += strlen(to);
+// Every string in `item` that names the uterus names it organ_name instead
+// (the organ, the tissue's `connects`).
+static void rename_uterus(cJSON *item, void *arg) {
+  (void)arg;
+  for (; item; item = item->next) {
+    if (cJSON_IsString(item) && strcmp(item->valuestring, "uterus") == 0) cJSON_SetValuestring(item, organ_name);
+    rename_uterus(item->child, NULL);
   }
-  *w = 0;
-  return out;
-}
-
-// The demo scene with the uterus renamed and its meshes named by absolute path.
-static int write_scene(const char *demo, const char *path) {
-  FILE *f = fopen(demo, "rb");
-  if (!f) return 0;
-  static char text[1 << 16];
-  const size_t n = fread(text, 1, sizeof text - 1, f);
-  fclose(f);
-  text[n] = 0;
-  char folder[2048], meshes[2200];
-  snprintf(folder, sizeof folder, "%s", demo);
-  snprintf(meshes, sizeof meshes, "\"%s/../meshes/", dirname(folder));
-  char *renamed = replaced(text, "\"uterus\"", organ_json);
-  char *placed = renamed ? replaced(renamed, "\"../meshes/", meshes) : NULL;
-  f = fopen(path, "wb");
-  const int ok = placed && f && fputs(placed, f) >= 0;
-  if (f) fclose(f);
-  free(renamed), free(placed);
-  return ok;
 }
 
 // The demo's pictures from the run's outputs: gnuplot's without a warning;
@@ -116,7 +85,7 @@ int main(int argc, char **argv) {
   snprintf(args, sizeof args, "rm -rf '%s' && mkdir -p '%s'", dir, dir);
   CHECK(system(args) == 0);
   snprintf(path, sizeof path, "%s/scene.json", dir);
-  CHECK(write_scene(argv[4], path));
+  CHECK(scene_copy(argv[4], path, rename_uterus, NULL));
   snprintf(path, sizeof path, "%s/name.txt", dir);
   FILE *f = fopen(path, "wb");
   CHECK(f && fputs(organ_name, f) >= 0);

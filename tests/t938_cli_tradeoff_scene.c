@@ -11,12 +11,10 @@
 // rows, bad arguments are refused with one line and exit 2.
 // Usage: t938_cli_tradeoff_scene PATH/TO/fascia WORK_DIR SCENE.json SHELL-SCENE.json
 #define _POSIX_C_SOURCE 200809L
-#include <cjson/cJSON.h>
-#include <libgen.h>
 #include <math.h>
 
 #include "check.h"
-#include "cli_exec.h"
+#include "scene_copy.h"
 
 static cli_result result;
 
@@ -54,30 +52,12 @@ static double recomputed_error(const cJSON *row, const cJSON *ref) {
   return top;
 }
 
-// The scene at `from` with its meshes named by absolute path and every tissue
-// held by the organs' whole surfaces ("attachment": "exact"), written to `to`.
-static int write_exact_scene(const char *from, const char *to) {
-  static char text[1 << 16];
-  if (cli_read_file(from, text, sizeof text) <= 0) return 0;
-  cJSON *scene = cJSON_Parse(text);
-  char folder[1024], path[2048];
-  snprintf(folder, sizeof folder, "%s", from);
-  const char *dir = dirname(folder);
+// Every tissue held by the organs' whole surfaces ("attachment": "exact").
+static void hold_exactly(cJSON *scene, void *arg) {
+  (void)arg;
   cJSON *item;
-  cJSON_ArrayForEach(item, cJSON_GetObjectItemCaseSensitive(scene, "organs")) {
-    const char *mesh = cJSON_GetStringValue(cJSON_GetObjectItemCaseSensitive(item, "mesh"));
-    if (!mesh) continue;
-    snprintf(path, sizeof path, "%s/%s", dir, mesh);
-    cJSON_ReplaceItemInObjectCaseSensitive(item, "mesh", cJSON_CreateString(path));
-  }
   cJSON_ArrayForEach(item, cJSON_GetObjectItemCaseSensitive(scene, "tissues"))
     cJSON_AddStringToObject(item, "attachment", "exact");
-  char *out = cJSON_Print(scene);
-  FILE *f = out ? fopen(to, "wb") : NULL;
-  int ok = f && fputs(out, f) >= 0;
-  if (f) ok &= fclose(f) == 0;
-  cJSON_free(out), cJSON_Delete(scene);
-  return ok;
 }
 
 int main(int argc, char **argv) {
@@ -180,7 +160,7 @@ int main(int argc, char **argv) {
   // only MLS weights have, rather than failing to prepare
   char exact[1200];
   snprintf(exact, sizeof exact, "%s/exact.json", dir);
-  CHECK(write_exact_scene(scene, exact));
+  CHECK(scene_copy(scene, exact, hold_exactly, NULL));
   snprintf(args, sizeof args,
            "tradeoff '%s' --ladder 1 --kinds scene,tet --presets interactive --no-tissues --steps 3 --repeats 1 "
            "--threads 1 --out '%s' --json --no-plot",
