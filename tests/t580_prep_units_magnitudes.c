@@ -35,7 +35,7 @@ static int write_scene(const char *voxel_size, const char *mesh_a, const char *u
            "[0, 0, 0],\n"
            "             \"keys\": [{\"time\": 0}, {\"time\": 1, \"translation\": [0, %s, 0]}]}}],\n"
            " \"tissues\": [{\"name\": \"gap\", \"connects\": [\"A\", \"B\"], \"max_gap\": %s,\n"
-           "  \"material\": \"soft\", \"frame_spacing\": 0.004, \"sample_spacing\": 0.002}]}\n",
+           "  \"material\": \"soft\", \"frame_spacing\": 0.0025, \"sample_spacing\": 0.001}]}\n",
            voxel_size, mesh_a, units, lift, max_gap);
   return fixture_write(dir, "scene.json", text);
 }
@@ -114,6 +114,7 @@ int main(int argc, char **argv) {
   warnings = prep_warnings(&root);
   CHECK(cJSON_IsArray(warnings) && cJSON_GetArraySize(warnings) == 0);
   CHECK(!strstr(result.err, "warning"));
+  if (strstr(result.err, "warning")) fprintf(stderr, "the sane scene:\n%s\n", result.err);
   cJSON_Delete(root);
 
   static const char *const files[] = {"a.obj", "b.obj", "a_mm.obj", "scene.json", "model.h5", "stderr.txt", NULL};

@@ -13,7 +13,8 @@
 // tissue's form, its free frames (and how many are mid-layer frames) and
 // its shared frames per organ; a third box that the tissue touches but does
 // not connect is reported, coupled by default and left free under
-// "coupling": {"others": false}.
+// "coupling": {"others": false}. Frames coarser than half the layer warn
+// that the forces converge slowly (where ν >= 0.3), in the text and --json.
 // Usage: t590_prep_thin_gap_free_frames PATH/TO/fascia
 #define _POSIX_C_SOURCE 200809L // mkdtemp
 #include <cjson/cJSON.h>
@@ -27,19 +28,19 @@
 
 static const char scene_format[] =
     "{\"fascia_scene\": 1, \"voxel_size\": 0.001, \"seed\": 1,\n"
-    " \"materials\": {\"soft\": {\"youngs_modulus\": 3000, \"poisson_ratio\": 0.3}},\n"
+    " \"materials\": {\"soft\": {\"youngs_modulus\": 3000, \"poisson_ratio\": %g}},\n"
     " \"organs\": [{\"name\": \"A\", \"mesh\": \"a.obj\", \"model\": \"fixed\"},\n"
     "              {\"name\": \"B\", \"mesh\": \"b.obj\", \"model\": \"prescribed\", \"motion\": {\"pivot\": [0, 0, 0], \"keys\": [\n"
     "                {\"time\": 0}, {\"time\": 1, \"translation\": [0, 0.0005, 0]}]}}%s],\n"
     " \"tissues\": [{\"name\": \"gap\", \"connects\": [\"A\", \"B\"], \"max_gap\": 0.008, \"material\": \"soft\",\n"
-    "  \"frame_spacing\": 0.01, \"sample_spacing\": 0.001%s}]}\n";
+    "  \"frame_spacing\": %g, \"sample_spacing\": 0.001%s}]}\n";
 
 // The gap's free frames: count, and how many lie off its mid-layer.
 static int check_gap(const char *dir, double gap) {
   const double a_lo[3] = {-gap / 2 - 0.01, -W, -W}, a_hi[3] = {-gap / 2, W, W};
   const double b_lo[3] = {gap / 2, -W, -W}, b_hi[3] = {gap / 2 + 0.01, W, W};
   char text[2048], path[512];
-  snprintf(text, sizeof text, scene_format, "", "");
+  snprintf(text, sizeof text, scene_format, 0.3, "", 0.01, "");
   CHECK(fixture_box(dir, "a.obj", a_lo, a_hi) && fixture_box(dir, "b.obj", b_lo, b_hi));
   CHECK(fixture_write(dir, "scene.json", text));
   snprintf(path, sizeof path, "%s/scene.json", dir);
@@ -89,8 +90,8 @@ static void check_report(const char *cli, const char *dir, const char *others) {
   CHECK(fixture_box(dir, "c.obj", c_lo, c_hi));
   char text[2048], extra[256] = "", args[2048], err[600];
   if (others) snprintf(extra, sizeof extra, ", \"coupling\": {\"others\": %s}", others);
-  snprintf(text, sizeof text, scene_format,
-           ",\n              {\"name\": \"C\", \"mesh\": \"c.obj\", \"model\": \"fixed\"}", extra);
+  snprintf(text, sizeof text, scene_format, 0.3,
+           ",\n              {\"name\": \"C\", \"mesh\": \"c.obj\", \"model\": \"fixed\"}", 0.01, extra);
   CHECK(fixture_write(dir, "scene3.json", text));
   snprintf(args, sizeof args, "prep '%s/scene3.json' -o '%s/m3.h5' --json", dir, dir);
   snprintf(err, sizeof err, "%s/stderr.txt", dir);
@@ -118,6 +119,31 @@ static void check_report(const char *cli, const char *dir, const char *others) {
   cJSON_Delete(root);
 }
 
+// The 6 mm gap (layers about 6 mm thick, its mean depth a quarter of that
+// and more around the boxes' edges) at Poisson ratio nu with frames
+// `spacing` apart: prep warns, in its text and its --json, that the frames
+// are coarser than half a layer exactly when they are and nu is 0.3 or more.
+static void check_coarse_frames(const char *cli, const char *dir, double nu, double spacing, int expected) {
+  char text[2048], args[2048], err[600];
+  snprintf(text, sizeof text, scene_format, nu, "", spacing, "");
+  CHECK(fixture_write(dir, "scene.json", text));
+  snprintf(args, sizeof args, "prep '%s/scene.json' -o '%s/m3.h5' --json", dir, dir);
+  snprintf(err, sizeof err, "%s/stderr.txt", dir);
+  cli_result result;
+  CHECK(cli_exec(cli, args, err, &result) && result.status == 0);
+  cJSON *root = cJSON_Parse(result.out);
+  const cJSON *w;
+  int in_json = 0;
+  cJSON_ArrayForEach(w, cJSON_GetObjectItem(root, "warnings")) in_json += cJSON_IsString(w) &&
+                                                                          strstr(w->valuestring, "half a layer apart");
+  const int in_text = strstr(result.err, "warning: tissue 'gap': frames") != NULL;
+  if (in_json != expected || in_text != expected)
+    fprintf(stderr, "nu %g, frames %g mm: warned %d times in --json, %d in the text (expected %d)\n%.900s\n", nu,
+            1e3 * spacing, in_json, in_text, expected, result.err);
+  CHECK(in_json == expected && in_text == expected);
+  cJSON_Delete(root);
+}
+
 int main(int argc, char **argv) {
   if (argc < 2) {
     fprintf(stderr, "usage: t590_prep_thin_gap_free_frames PATH/TO/fascia\n");
@@ -129,6 +155,9 @@ int main(int argc, char **argv) {
   for (size_t k = 0; k < sizeof gaps / sizeof gaps[0]; ++k) check_gap(dir, gaps[k]);
   check_report(argv[1], dir, NULL);
   check_report(argv[1], dir, "false");
+  check_coarse_frames(argv[1], dir, 0.3, 0.01, 1);
+  check_coarse_frames(argv[1], dir, 0.2, 0.01, 0);
+  check_coarse_frames(argv[1], dir, 0.3, 0.0025, 0);
   static const char *const files[] = {"a.obj", "b.obj", "c.obj", "scene.json", "scene3.json", "m3.h5", "stderr.txt",
                                       NULL};
   fixture_cleanup(dir, files);

@@ -170,6 +170,41 @@ static void no_free_frame_warning(const prep_run *r, int32_t t, int32_t frames, 
            td->name, (int)frames, 1e3 * td->coupling_tolerance, r->scene->path);
 }
 
+// Volume tissue t's mean depth from the model's provenance (prep's
+// region_depths: its voxels' mean distance to the nearest organ it
+// connects), m; 0 when it has none.
+static double tissue_mean_depth(const prep_run *r, int32_t t) {
+  cJSON *prov = r->model->provenance ? cJSON_Parse(r->model->provenance) : NULL;
+  const cJSON *tissues = cJSON_GetObjectItem(cJSON_GetObjectItem(prov, "parameters"), "tissues");
+  const cJSON *depth = cJSON_GetObjectItem(cJSON_GetArrayItem(tissues, t), "mean_depth");
+  const double d = cJSON_IsNumber(depth) ? depth->valuedouble : 0;
+  cJSON_Delete(prov);
+  return d;
+}
+
+// The warning when volume tissue t's frames are farther apart than half its
+// layers' thickness (about four mean depths) in a material with a Poisson
+// ratio of FASCIA_PATCH_MIN_POISSON or more: where a layer contracts
+// sideways under a pull across it, that contraction varies over about a
+// thickness, which the linear field between coarser frames cannot follow,
+// and the organ forces come down slowly as the frames are refined
+// (docs/measured.md, "Refining the CT scene"). 0 when it does not apply.
+static int coarse_frames_warning(const prep_run *r, int32_t t, char *line, size_t size) {
+  const fascia_prep_tissue_def *td = r->scene->tissues + t;
+  if (td->form != FASCIA_PREP_FORM_VOLUME || !(r->scene->materials[td->material].poisson_ratio >= FASCIA_PATCH_MIN_POISSON))
+    return 0;
+  const double depth = tissue_mean_depth(r, t), half_layer = 2 * depth;
+  if (!(depth > 0 && td->frame_spacing > half_layer)) return 0;
+  snprintf(line, size,
+           "tissue '%s': frames %.3g mm apart across layers about %.3g mm thick (four times its mean depth, %.3g mm) "
+           "at Poisson ratio %.2g: its organ forces may be far from converged until the frames are about half a "
+           "layer apart (frame_spacing %.2g mm or less; docs/measured.md, \"Refining the CT scene\"); fascia "
+           "tradeoff measures how far (scene '%s')",
+           td->name, 1e3 * td->frame_spacing, 4e3 * depth, 1e3 * depth,
+           r->scene->materials[td->material].poisson_ratio, 1e3 * half_layer, r->scene->path);
+  return 1;
+}
+
 // 1 when all of volume tissue t lies in layers held by their faces (a
 // tissue with no free frame that is nonetheless simulated as it should be).
 static int held_layer_only(const prep_run *r, int32_t t) {
@@ -313,6 +348,8 @@ static void print_summary(const prep_run *r, const step_clock *c, const char *ou
       }
     }
     tissue_hold_free(&hold);
+    char coarse[768];
+    if (coarse_frames_warning(r, t, coarse, sizeof coarse)) fprintf(stderr, "warning: %s\n", coarse);
     if (sc->tissues[t].organ_count > 2 && tdef->form == FASCIA_PREP_FORM_VOLUME) {
       fprintf(stderr, "  by the organs each voxel bridges:");
       const fascia_prep_tissue_def *td = sc->tissues + t;
@@ -507,6 +544,8 @@ static void print_json(const prep_run *r, const step_clock *c, const char *outpu
       }
     }
     tissue_hold_free(&hold);
+    char coarse[768];
+    if (coarse_frames_warning(r, t, coarse, sizeof coarse)) cJSON_AddItemToArray(warnings, cJSON_CreateString(coarse));
     double sample_volume = 0;
     for (int32_t s = 0; s < r->points->sample_count; ++s)
       if (r->points->sample_tissue[s] == t && !r->points->sample_drilling[s]) // a stabiliser repeats others'
