@@ -119,7 +119,8 @@ static int held_cases(fascia_ctx *ctx) {
     fascia_ctx_clear(ctx);
     const fascia_status st = one_step(ctx, m, &sd, NULL, NULL, &moved);
     const char *text = fascia_ctx_message(ctx);
-    if (getenv("T341_VERBOSE")) fprintf(stderr, "pull %g, held %d: %s: %s\n", pulls[pull], held, fascia_status_name(st), text);
+    if (getenv("T341_VERBOSE"))
+      fprintf(stderr, "pull %g, held %d: %s: %s\n", pulls[pull], held, fascia_status_name(st), text);
     CHECK(st == FASCIA_ERR_NUMERIC && !moved && (!held || strstr(text, causes[pull])));
     CHECK((strstr(text, "all fixed, prescribed or in rigid organs") != NULL) == held);
     CHECK((strstr(text, "use a shorter time step") == NULL) == held);

@@ -191,8 +191,8 @@ static double tissue_mean_depth(const prep_run *r, int32_t t) {
 // (docs/measured.md, "Refining the CT scene"). 0 when it does not apply.
 static int coarse_frames_warning(const prep_run *r, int32_t t, char *line, size_t size) {
   const fascia_prep_tissue_def *td = r->scene->tissues + t;
-  if (td->form != FASCIA_PREP_FORM_VOLUME || !(r->scene->materials[td->material].poisson_ratio >= FASCIA_PATCH_MIN_POISSON))
-    return 0;
+  const double nu = r->scene->materials[td->material].poisson_ratio;
+  if (td->form != FASCIA_PREP_FORM_VOLUME || !(nu >= FASCIA_PATCH_MIN_POISSON)) return 0;
   const double depth = tissue_mean_depth(r, t), half_layer = 2 * depth;
   if (!(depth > 0 && td->frame_spacing > half_layer)) return 0;
   snprintf(line, size,
@@ -200,8 +200,7 @@ static int coarse_frames_warning(const prep_run *r, int32_t t, char *line, size_
            "at Poisson ratio %.2g: its organ forces may be far from converged until the frames are about half a "
            "layer apart (frame_spacing %.2g mm or less; docs/measured.md, \"Refining the CT scene\"); fascia "
            "tradeoff measures how far (scene '%s')",
-           td->name, 1e3 * td->frame_spacing, 4e3 * depth, 1e3 * depth,
-           r->scene->materials[td->material].poisson_ratio, 1e3 * half_layer, r->scene->path);
+           td->name, 1e3 * td->frame_spacing, 4e3 * depth, 1e3 * depth, nu, 1e3 * half_layer, r->scene->path);
   return 1;
 }
 

@@ -120,8 +120,8 @@ static fascia_status check_range(fascia_solver *S, fascia_real phi, fascia_real 
   if (fabs(phi) < NEWTON_OVERFLOW && g0 < NEWTON_OVERFLOW && reference < NEWTON_OVERFLOW) return FASCIA_OK;
   return FASCIA_FAIL(S->ctx, FASCIA_ERR_NUMERIC,
                      "solver: the energy (%.3g J), forces (%.3g) or loads (%.3g) overflow the arithmetic: a modulus, "
-                     "density, load, gravity or prescribed motion is out of any physical range; check the values and their "
-                     "units (SI)",
+                     "density, load, gravity or prescribed motion is out of any physical range; check the values and "
+                     "their units (SI)",
                      phi, g0, reference);
 }
 
