@@ -6,9 +6,11 @@
 // a rung that cannot be prepared is reported in its rows while the others
 // run, the recommendation respects --budget (none fits: exit 1, no model
 // written), a finest rung that moved beyond the target since the rung
-// before it is said to be unsettled, -o writes a model `fascia inspect`
-// reads, a scene whose tissue is held exactly still gets its tetrahedral
-// rows, bad arguments are refused with one line and exit 2.
+// before it is said to be unsettled, a finest rung whose frames are farther
+// apart than half the layers is said to be so with the factor that reaches
+// them, -o writes a model `fascia inspect` reads, a scene whose tissue is
+// held exactly still gets its tetrahedral rows, bad arguments are refused
+// with one line and exit 2.
 // Usage: t938_cli_tradeoff_scene PATH/TO/fascia WORK_DIR SCENE.json SHELL-SCENE.json
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
@@ -184,6 +186,25 @@ int main(int argc, char **argv) {
   CHECK(cli_exec(fascia, args, err, &result));
   CHECK(strstr(result.out, "has not settled") && strstr(result.out, "x1.4 scene, interactive") &&
         strstr(result.out, "--ladder ...,0.7"));
+  // its finest rung's frames (3.5 mm) are within half the demo's layers: no word on them
+  CHECK(strstr(result.out, "half the layers") == NULL);
+
+  // frames twice the demo's (7 mm) are farther apart than half its layers:
+  // the report names the tissue and the largest factor (to 0.01) that
+  // brings the frames within half a layer
+  snprintf(args, sizeof args,
+           "tradeoff '%s' --ladder 2 --kinds scene --presets interactive --no-tissues --steps 3 --repeats 1 "
+           "--threads 1 --out '%s' --no-plot",
+           scene, dir);
+  CHECK(cli_exec(fascia, args, err, &result) && result.status == 0);
+  const char *layers = strstr(result.out, "half the layers of its tissue vesicouterine (frames 7 mm apart");
+  double half_mm = 0, factor = 0;
+  const char *at = layers ? strstr(layers, "half a layer ") : NULL;
+  const char *rung_at = layers ? strstr(layers, "a rung at x") : NULL;
+  CHECK(at && sscanf(at, "half a layer %lf mm", &half_mm) == 1);
+  CHECK(rung_at && sscanf(rung_at, "a rung at x%lf", &factor) == 1);
+  CHECK(half_mm > 3.5 && half_mm < 7 && factor * 3.5 <= half_mm * (1 + 1e-3) && (factor + 0.01) * 3.5 > half_mm);
+  if (!layers || !(factor * 3.5 <= half_mm * (1 + 1e-3))) fprintf(stderr, "%s\n", result.out);
 
   // a budget no row meets: exit 1 saying so, no model written
   char none[1200];

@@ -135,6 +135,18 @@ static double *region_depths(const fascia_prep_scene *scene, const fascia_prep_v
   return depth;
 }
 
+// The frame spacing below which a volume tissue's frames are half its
+// layers apart (a layer between two organs is about four mean depths
+// thick), where its material resists a change of volume (a Poisson ratio
+// of FASCIA_PATCH_MIN_POISSON or more); 0 where no such bound applies. A
+// bonded layer pulled across its thickness contracts sideways over about a
+// thickness, which the linear field between coarser frames cannot follow:
+// their organ forces come down slowly as the frames are refined
+// (docs/mechanics.md, "Thin layers: held by both faces").
+static double half_layer_spacing(const fascia_prep_scene *scene, int32_t material, double depth) {
+  return scene->materials[material].poisson_ratio >= FASCIA_PATCH_MIN_POISSON && depth > 0 ? 2 * depth : 0;
+}
+
 // A region's patch radius: its own, or the rule's for its material.
 static fascia_real region_patch_radius(const fascia_prep_scene *scene, int32_t material, fascia_real radius,
                                        fascia_real frame_spacing, fascia_real sample_spacing, fascia_real depth) {
@@ -322,7 +334,11 @@ static cJSON *provenance(const fascia_prep_scene *scene, const fascia_prep_meshe
     cJSON_AddNumberToObject(e, "min_component", td->min_component);
     cJSON_AddNumberToObject(e, "patch_radius", region_patch_radius(scene, td->material, td->patch_radius,
                                                                    td->frame_spacing, td->sample_spacing, depth[t]));
-    if (td->form == FASCIA_PREP_FORM_VOLUME) cJSON_AddNumberToObject(e, "mean_depth", depth[t]);
+    if (td->form == FASCIA_PREP_FORM_VOLUME) {
+      cJSON_AddNumberToObject(e, "mean_depth", depth[t]);
+      const double half_layer = half_layer_spacing(scene, td->material, depth[t]);
+      if (half_layer > 0) cJSON_AddNumberToObject(e, "half_layer_spacing", half_layer);
+    }
     if (td->attachment == FASCIA_PREP_ATTACH_EXACT) { // only when asked: the default's provenance as before
       cJSON_AddStringToObject(e, "attachment", "exact");
       cJSON_AddNumberToObject(e, "attachment_layer", td->attachment_layer > 0 ? td->attachment_layer : td->sample_spacing);

@@ -170,37 +170,31 @@ static void no_free_frame_warning(const prep_run *r, int32_t t, int32_t frames, 
            td->name, (int)frames, 1e3 * td->coupling_tolerance, r->scene->path);
 }
 
-// Volume tissue t's mean depth from the model's provenance (prep's
-// region_depths: its voxels' mean distance to the nearest organ it
-// connects), m; 0 when it has none.
-static double tissue_mean_depth(const prep_run *r, int32_t t) {
+// A number of tissue t's entry in the model's provenance (its parameters),
+// 0 when it has none.
+static double tissue_parameter(const prep_run *r, int32_t t, const char *key) {
   cJSON *prov = r->model->provenance ? cJSON_Parse(r->model->provenance) : NULL;
   const cJSON *tissues = cJSON_GetObjectItem(cJSON_GetObjectItem(prov, "parameters"), "tissues");
-  const cJSON *depth = cJSON_GetObjectItem(cJSON_GetArrayItem(tissues, t), "mean_depth");
-  const double d = cJSON_IsNumber(depth) ? depth->valuedouble : 0;
+  const cJSON *value = cJSON_GetObjectItem(cJSON_GetArrayItem(tissues, t), key);
+  const double v = cJSON_IsNumber(value) ? value->valuedouble : 0;
   cJSON_Delete(prov);
-  return d;
+  return v;
 }
 
 // The warning when volume tissue t's frames are farther apart than half its
-// layers' thickness (about four mean depths) in a material with a Poisson
-// ratio of FASCIA_PATCH_MIN_POISSON or more: where a layer contracts
-// sideways under a pull across it, that contraction varies over about a
-// thickness, which the linear field between coarser frames cannot follow,
-// and the organ forces come down slowly as the frames are refined
-// (docs/measured.md, "Refining the CT scene"). 0 when it does not apply.
+// layers (its provenance's half_layer_spacing, prep's package.c: only where
+// the material resists a change of volume). 0 when it does not apply.
 static int coarse_frames_warning(const prep_run *r, int32_t t, char *line, size_t size) {
   const fascia_prep_tissue_def *td = r->scene->tissues + t;
-  const double nu = r->scene->materials[td->material].poisson_ratio;
-  if (td->form != FASCIA_PREP_FORM_VOLUME || !(nu >= FASCIA_PATCH_MIN_POISSON)) return 0;
-  const double depth = tissue_mean_depth(r, t), half_layer = 2 * depth;
-  if (!(depth > 0 && td->frame_spacing > half_layer)) return 0;
+  const double half_layer = tissue_parameter(r, t, "half_layer_spacing");
+  if (!(half_layer > 0 && td->frame_spacing > half_layer)) return 0;
   snprintf(line, size,
            "tissue '%s': frames %.3g mm apart across layers about %.3g mm thick (four times its mean depth, %.3g mm) "
            "at Poisson ratio %.2g: its organ forces may be far from converged until the frames are about half a "
-           "layer apart (frame_spacing %.2g mm or less; docs/measured.md, \"Refining the CT scene\"); fascia "
-           "tradeoff measures how far (scene '%s')",
-           td->name, 1e3 * td->frame_spacing, 4e3 * depth, 1e3 * depth, nu, 1e3 * half_layer, r->scene->path);
+           "layer apart (frame_spacing %.2g mm or less; docs/mechanics.md, \"Thin layers: held by both faces\"); "
+           "fascia tradeoff measures how far (scene '%s')",
+           td->name, 1e3 * td->frame_spacing, 2e3 * half_layer, 1e3 * tissue_parameter(r, t, "mean_depth"),
+           r->scene->materials[td->material].poisson_ratio, 1e3 * half_layer, r->scene->path);
   return 1;
 }
 

@@ -1308,6 +1308,34 @@ static void study_free(study *s) {
   for (int k = 0; k < s->mesh_count; ++k) s->prep.stages_free(&s->meshes[k].stages);
 }
 
+// Where the finest rung's frames are farther apart than half its tissues'
+// layers (their provenance's half_layer_spacing, prep's package.c), its
+// organ forces come down slowly with the frames and can look settled before
+// they are: which tissues, and the factor that reaches half a layer in all.
+static void print_half_layers(const study *s, int ref, FILE *out) {
+  const rung *r = s->rungs + s->rows[ref].rung;
+  cJSON *prov = r->model && r->model->provenance ? cJSON_Parse(r->model->provenance) : NULL;
+  const cJSON *e;
+  double reach = INFINITY;
+  int printed = 0;
+  cJSON_ArrayForEach(e, cJSON_GetObjectItem(cJSON_GetObjectItem(prov, "parameters"), "tissues")) {
+    const double half = cJSON_GetNumberValue(cJSON_GetObjectItem(e, "half_layer_spacing"));
+    const double spacing = cJSON_GetNumberValue(cJSON_GetObjectItem(e, "frame_spacing"));
+    if (!(half > 0 && spacing > half)) continue;
+    fprintf(out, "%s%s (frames %.3g mm apart, half a layer %.3g mm)",
+            printed++ ? ", " : "\nthe finest rung's frames are farther apart than half the layers of its tissue ",
+            cJSON_GetStringValue(cJSON_GetObjectItem(e, "name")), 1e3 * spacing, 1e3 * half);
+    reach = fmin(reach, half / spacing);
+  }
+  if (printed)
+    fprintf(out, ": their organ forces come down slowly as the frames are refined and may move beyond the target at "
+                 "finer rungs (docs/mechanics.md, \"Thin layers: held by both faces\"); a rung at x%.2f reaches half "
+                 "a layer in every tissue\n",
+            floor(100 * r->factor * reach) / 100);
+  cJSON_Delete(prov);
+}
+
+
 // The report after the rows: reference, extrapolation, rows, tissues, target.
 static int report(study *s, int ref, int base, const extrapolation *x, int best, FILE *out) {
   const scene_options *o = s->opt;
@@ -1352,6 +1380,7 @@ static int report(study *s, int ref, int base, const extrapolation *x, int best,
             c->label, c->force_error_max, c->force_error_organ >= 0 ? s->organ_names[c->force_error_organ] : "", target,
             0.7 * s->rungs[s->rows[ref].rung].factor);
   }
+  print_half_layers(s, ref, out);
   if (best < 0) {
     if (o->budget > 0) fprintf(stderr, "fascia tradeoff: no row of '%s' runs within --budget %g ms per step\n", o->scene, o->budget);
     else fprintf(stderr, "fascia tradeoff: no row of '%s' is within %g %% of the finest in every organ force\n", o->scene, target);
