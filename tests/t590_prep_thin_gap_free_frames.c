@@ -83,21 +83,29 @@ static int check_gap(const char *dir, double gap) {
   return free_frames;
 }
 
+// The scene `text` written to dir/name, prepared by `fascia prep --json`:
+// its report (to cJSON_Delete; NULL when it failed), the run in *result.
+static cJSON *prep_json(const char *cli, const char *dir, const char *name, const char *text, cli_result *result) {
+  char args[2048], err[600];
+  CHECK(fixture_write(dir, name, text));
+  snprintf(args, sizeof args, "prep '%s/%s' -o '%s/m3.h5' --json", dir, name, dir);
+  snprintf(err, sizeof err, "%s/stderr.txt", dir);
+  const int ran = cli_exec(cli, args, err, result) && result->status == 0;
+  CHECK(ran);
+  return ran ? cJSON_Parse(result->out) : NULL;
+}
+
 // --json of a scene with a third box C against the gap's open side: the
 // tissue touches C; "others" (NULL: the default) decides whether it couples.
 static void check_report(const char *cli, const char *dir, const char *others) {
   const double c_lo[3] = {-0.005, W + 0.0002, -0.005}, c_hi[3] = {0.005, W + 0.01, 0.005};
   CHECK(fixture_box(dir, "c.obj", c_lo, c_hi));
-  char text[2048], extra[256] = "", args[2048], err[600];
+  char text[2048], extra[256] = "";
   if (others) snprintf(extra, sizeof extra, ", \"coupling\": {\"others\": %s}", others);
   snprintf(text, sizeof text, scene_format, 0.3,
            ",\n              {\"name\": \"C\", \"mesh\": \"c.obj\", \"model\": \"fixed\"}", 0.01, extra);
-  CHECK(fixture_write(dir, "scene3.json", text));
-  snprintf(args, sizeof args, "prep '%s/scene3.json' -o '%s/m3.h5' --json", dir, dir);
-  snprintf(err, sizeof err, "%s/stderr.txt", dir);
   cli_result result;
-  CHECK(cli_exec(cli, args, err, &result) && result.status == 0);
-  cJSON *root = cJSON_Parse(result.out);
+  cJSON *root = prep_json(cli, dir, "scene3.json", text, &result);
   const cJSON *tissue = cJSON_GetArrayItem(cJSON_GetObjectItem(root, "tissues"), 0);
   const cJSON *form = cJSON_GetObjectItem(tissue, "form"), *free_frames = cJSON_GetObjectItem(tissue, "free_frames");
   const cJSON *mid_layer = cJSON_GetObjectItem(tissue, "mid_layer_frames");
@@ -124,14 +132,10 @@ static void check_report(const char *cli, const char *dir, const char *others) {
 // `spacing` apart: prep warns, in its text and its --json, that the frames
 // are coarser than half a layer exactly when they are and nu is 0.3 or more.
 static void check_coarse_frames(const char *cli, const char *dir, double nu, double spacing, int expected) {
-  char text[2048], args[2048], err[600];
+  char text[2048];
   snprintf(text, sizeof text, scene_format, nu, "", spacing, "");
-  CHECK(fixture_write(dir, "scene.json", text));
-  snprintf(args, sizeof args, "prep '%s/scene.json' -o '%s/m3.h5' --json", dir, dir);
-  snprintf(err, sizeof err, "%s/stderr.txt", dir);
   cli_result result;
-  CHECK(cli_exec(cli, args, err, &result) && result.status == 0);
-  cJSON *root = cJSON_Parse(result.out);
+  cJSON *root = prep_json(cli, dir, "scene.json", text, &result);
   const cJSON *w;
   int in_json = 0;
   cJSON_ArrayForEach(w, cJSON_GetObjectItem(root, "warnings")) in_json += cJSON_IsString(w) &&
