@@ -142,9 +142,13 @@ static double *region_depths(const fascia_prep_scene *scene, const fascia_prep_v
 // bonded layer pulled across its thickness contracts sideways over about a
 // thickness, which the linear field between coarser frames cannot follow:
 // their organ forces come down slowly as the frames are refined
-// (docs/mechanics.md, "Thin layers: held by both faces").
-static double half_layer_spacing(const fascia_prep_scene *scene, int32_t material, double depth) {
-  return scene->materials[material].poisson_ratio >= FASCIA_PATCH_MIN_POISSON && depth > 0 ? 2 * depth : 0;
+// (docs/mechanics.md, "Thin layers: held by both faces"). A tissue that
+// lies all in layers its faces hold (held, m^3, of volume) has no free
+// frames there for the spacing to refine: none either.
+static double half_layer_spacing(const fascia_prep_scene *scene, int32_t material, double depth, double held,
+                                 double volume) {
+  const int resists = scene->materials[material].poisson_ratio >= FASCIA_PATCH_MIN_POISSON;
+  return resists && depth > 0 && held < 0.99 * volume ? 2 * depth : 0;
 }
 
 // A region's patch radius: its own, or the rule's for its material.
@@ -336,7 +340,8 @@ static cJSON *provenance(const fascia_prep_scene *scene, const fascia_prep_meshe
                                                                    td->frame_spacing, td->sample_spacing, depth[t]));
     if (td->form == FASCIA_PREP_FORM_VOLUME) {
       cJSON_AddNumberToObject(e, "mean_depth", depth[t]);
-      const double half_layer = half_layer_spacing(scene, td->material, depth[t]);
+      const double half_layer = half_layer_spacing(scene, td->material, depth[t], pts->tissue_held_layer_volume[t],
+                                                   vol->tissues[t].volume);
       if (half_layer > 0) cJSON_AddNumberToObject(e, "half_layer_spacing", half_layer);
     }
     if (td->attachment == FASCIA_PREP_ATTACH_EXACT) { // only when asked: the default's provenance as before
