@@ -170,30 +170,24 @@ static void no_free_frame_warning(const prep_run *r, int32_t t, int32_t frames, 
            td->name, (int)frames, 1e3 * td->coupling_tolerance, r->scene->path);
 }
 
-// A number of tissue t's entry in the model's provenance (its parameters),
-// 0 when it has none.
-static double tissue_parameter(const prep_run *r, int32_t t, const char *key) {
-  cJSON *prov = r->model->provenance ? cJSON_Parse(r->model->provenance) : NULL;
-  const cJSON *tissues = cJSON_GetObjectItem(cJSON_GetObjectItem(prov, "parameters"), "tissues");
-  const cJSON *value = cJSON_GetObjectItem(cJSON_GetArrayItem(tissues, t), key);
-  const double v = cJSON_IsNumber(value) ? value->valuedouble : 0;
-  cJSON_Delete(prov);
-  return v;
-}
-
 // The warning when volume tissue t's frames are farther apart than half its
 // layers (its provenance's half_layer_spacing, prep's package.c: only where
 // the material resists a change of volume). 0 when it does not apply.
 static int coarse_frames_warning(const prep_run *r, int32_t t, char *line, size_t size) {
   const fascia_prep_tissue_def *td = r->scene->tissues + t;
-  const double half_layer = tissue_parameter(r, t, "half_layer_spacing");
+  cJSON *prov = r->model->provenance ? cJSON_Parse(r->model->provenance) : NULL;
+  const cJSON *tissues = cJSON_GetObjectItem(cJSON_GetObjectItem(prov, "parameters"), "tissues");
+  const cJSON *entry = cJSON_GetArrayItem(tissues, t);
+  const double half_layer = cJSON_GetNumberValue(cJSON_GetObjectItem(entry, "half_layer_spacing"));
+  const double depth = cJSON_GetNumberValue(cJSON_GetObjectItem(entry, "mean_depth"));
+  cJSON_Delete(prov);
   if (!(half_layer > 0 && td->frame_spacing > half_layer)) return 0;
   snprintf(line, size,
            "tissue '%s': frames %.3g mm apart across layers about %.3g mm thick (four times its mean depth, %.3g mm) "
            "at Poisson ratio %.2g: its organ forces may be far from converged until the frames are about half a "
            "layer apart (frame_spacing %.2g mm or less; docs/mechanics.md, \"Thin layers: held by both faces\"); "
            "fascia tradeoff measures how far (scene '%s')",
-           td->name, 1e3 * td->frame_spacing, 2e3 * half_layer, 1e3 * tissue_parameter(r, t, "mean_depth"),
+           td->name, 1e3 * td->frame_spacing, 2e3 * half_layer, 1e3 * depth,
            r->scene->materials[td->material].poisson_ratio, 1e3 * half_layer, r->scene->path);
   return 1;
 }
