@@ -38,6 +38,9 @@
 //             organ's nearest shared frame, where the largest error lies,
 //             and the tissue's volume by distance to its nearest organ
 //             (CalculiX's tetrahedra against fascia's samples)
+//   --linear  CalculiX's linear elasticity (E and nu, no NLGEOM, one solve):
+//             the reference for a small motion, where the nonlinear solve
+//             of a region of thin layers stalls (tools/bench/ct-vs-calculix.sh)
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdio.h>
@@ -189,13 +192,14 @@ static const char usage_text[] =
     "usage: demo-calculix [SCENE.json] [--ccx TYPE:VOXEL_MM:SPLIT[:surface]|t10:VOXEL_MM:SIZE_MM[:FACET_MM],...] "
     "[--fascia VOXEL_MM:SCALE[:SAMPLE_SCALE[:TAG]],...]\n"
     "                     [--reference K] [--neighbours N] [--threads N] [--csv FILE] [--cache DIR] [--slip]\n"
-    "                     [--write-reference FILE] [--ccx-solver NAME] [--mesh-only] [--deck FILE]\n"
+    "                     [--write-reference FILE] [--ccx-solver NAME] [--mesh-only] [--deck FILE] [--linear]\n"
     "  TYPE 8i (C3D8I) or 20r (C3D20R); SPLIT elements along a voxel's edge; surface: held nodes on the organs'\n"
     "  smooth surfaces, not the voxel faces; t10: C3D10 tetrahedra of circumradius SIZE_MM on the organs' smooth\n"
     "  surfaces (CGAL Mesh_3), facets within FACET_MM of them; SCALE times the tissue's frame and\n"
     "  sample spacings, SAMPLE_SCALE times the sample spacing on top; TAG nK (K MLS neighbours) or flat (no\n"
     "  volumetric patches); --reference K: the CalculiX mesh (from 1) errors are taken against, default the last;\n"
-    "  --ccx-solver: ccx's linear solver, e.g. \"ITERATIVE CHOLESKY\" (default: ccx's own, SPOOLES)\n";
+    "  --ccx-solver: ccx's linear solver, e.g. \"ITERATIVE CHOLESKY\" (default: ccx's own, SPOOLES);\n"
+    "  --linear: CalculiX's linear elasticity, one solve (for a small motion)\n";
 
 static int usage(const char *why) {
   fprintf(stderr, "demo-calculix: %s\n%s", why, usage_text);
@@ -253,7 +257,7 @@ static void print_tet_quality(const fascia_demo_mesh *m) {
 static int check_one_element(fascia_ctx *ctx, const char *ccx, double E, double nu) {
   const double F[9] = {1.1, 0.05, 0.02, -0.03, 0.95, 0.04, 0.01, 0.06, 1.08};
   double P[9];
-  if (fascia_demo_one_element(ctx, ccx, E, nu, F, P) != FASCIA_OK) {
+  if (fascia_demo_one_element(ctx, ccx, E, nu, 0, F, P) != FASCIA_OK) {
     fprintf(stderr, "demo-calculix: %s\n", fascia_ctx_message(ctx));
     return 0;
   }
@@ -418,7 +422,7 @@ int main(int argc, char **argv) {
   const char *scene = "data/scenes/pelvis-female-demo.json", *ccx_list = "8i:1:1,8i:1:2,20r:1:1",
              *fascia_list = "1:1,1:0.7,1:0.5", *csv_path = NULL,
              *cache = NULL, *reference_path = NULL, *ccx_solver = NULL, *deck_path = NULL;
-  int reference = 0, threads = 1, neighbours = 0, slips = 0, mesh_only = 0;
+  int reference = 0, threads = 1, neighbours = 0, slips = 0, mesh_only = 0, linear = 0;
   for (int i = 1; i < argc; ++i) {
     const char *a = argv[i];
     if (!strcmp(a, "--help")) {
@@ -434,6 +438,7 @@ int main(int argc, char **argv) {
     else if (!strcmp(a, "--cache") && i + 1 < argc) cache = argv[++i];
     else if (!strcmp(a, "--slip")) slips = 1;
     else if (!strcmp(a, "--mesh-only")) mesh_only = 1;
+    else if (!strcmp(a, "--linear")) linear = 1;
     else if (!strcmp(a, "--deck") && i + 1 < argc) deck_path = argv[++i], mesh_only = 1;
     else if (!strcmp(a, "--ccx-solver") && i + 1 < argc) ccx_solver = argv[++i];
     else if (!strcmp(a, "--write-reference") && i + 1 < argc) reference_path = argv[++i];
@@ -521,6 +526,7 @@ int main(int argc, char **argv) {
     else if (st == FASCIA_OK)
       st = fascia_demo_mesh_build(ctx, &s, cr[k].quadratic, cr[k].split, cr[k].on_surface, &cr[k].mesh);
     cr[k].mesh.solver = ccx_solver;
+    cr[k].mesh.linear = linear;
     if (st == FASCIA_OK && k == 0) {
       base_frame = s.scene->tissues[0].frame_spacing, base_sample = s.scene->tissues[0].sample_spacing;
       organ_count = cr[k].mesh.organ_count;
@@ -530,7 +536,10 @@ int main(int argc, char **argv) {
       }
       printf("  time s\n");
       fflush(stdout);
-      if (!check_one_element(ctx, ccx, cr[k].mesh.youngs_modulus, cr[k].mesh.poisson_ratio)) rc = 1;
+      if (linear)
+        printf("CalculiX's linear elasticity (*ELASTIC, no NLGEOM): a reference for a small motion only\n");
+      else if (!check_one_element(ctx, ccx, cr[k].mesh.youngs_modulus, cr[k].mesh.poisson_ratio))
+        rc = 1;
     }
     fascia_prep_stages_free(&s);
     if (st == FASCIA_OK && mesh_only) {

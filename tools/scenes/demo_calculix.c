@@ -670,7 +670,14 @@ cleanup:
 // - mu/2 (J^2 - 1); terms 2 and 3 (alpha -1, mu_2 = -mu_3, so their stretch
 // sums cancel; beta 2 and 1) give (l + mu)/2 J^2 - (l + mu) J and the
 // constant, so the sum is psi exactly.
-static void write_material(FILE *out, double E, double nu) {
+// linear: the small-strain law with the same E and nu instead.
+static void write_material(FILE *out, double E, double nu, int linear) {
+  if (linear) {
+    fprintf(out, "** linear elasticity (E %.13g Pa, nu %.13g): a small motion's reference\n*MATERIAL, NAME=TISSUE\n"
+                 "*ELASTIC\n%.15g, %.15g\n",
+            E, nu, E, nu);
+    return;
+  }
   const double mu = E / (2 * (1 + nu)), lambda = E * nu / ((1 + nu) * (1 - 2 * nu)), l = lambda + mu;
   fprintf(out,
           "** the stable Neo-Hookean (E %.13g Pa, nu %.13g) written exactly as a hyperfoam\n"
@@ -678,7 +685,11 @@ static void write_material(FILE *out, double E, double nu) {
           E, nu, mu, (l + mu) / 2, -(l + mu) / 2, 1.0 / 3.0);
 }
 
-static void write_step(FILE *out, const char *solver, double first, double largest) {
+static void write_step(FILE *out, const char *solver, double first, double largest, int linear) {
+  if (linear) { // one linear solve: nothing to increment or iterate
+    fprintf(out, "*STEP\n*STATIC%s%s\n", solver ? ", SOLVER=" : "", solver ? solver : "");
+    return;
+  }
   // a part of the load first (the whole load at once diverges on the demo;
   // ccx moves only the held nodes in an increment's first iteration, which
   // folds the tetrahedra's thin layers on the organs unless the part is
@@ -717,9 +728,9 @@ fascia_status fascia_demo_write_deck(fascia_ctx *ctx, const void *arg, FILE *out
       if (m->node_organ[k] == o) fprintf(out, "%lld,\n", (long long)k + 1), any = 1;
     if (!any) fprintf(out, "** none\n");
   }
-  write_material(out, m->youngs_modulus, m->poisson_ratio);
+  write_material(out, m->youngs_modulus, m->poisson_ratio, m->linear);
   fprintf(out, "*SOLID SECTION, ELSET=EALL, MATERIAL=TISSUE\n");
-  write_step(out, m->solver, m->tetrahedra ? 0.0625 : 0.25, m->tetrahedra ? 0.25 : 0.5);
+  write_step(out, m->solver, m->tetrahedra ? 0.0625 : 0.25, m->tetrahedra ? 0.25 : 0.5, m->linear);
   fprintf(out, "*BOUNDARY\n");
   for (int64_t k = 0; k < m->node_count; ++k) {
     if (m->node_organ[k] < 0) continue;
@@ -808,6 +819,7 @@ cleanup:
 // One cube, every node moved by (F - I) X.
 typedef struct one_element {
   double E, nu, F[9];
+  int linear;
 } one_element;
 
 static fascia_status write_one_element(fascia_ctx *ctx, const void *arg, FILE *out) {
@@ -817,9 +829,9 @@ static fascia_status write_one_element(fascia_ctx *ctx, const void *arg, FILE *o
     fprintf(out, "%d, %g, %g, %g\n", q + 1, node_offset[q][0], node_offset[q][1], node_offset[q][2]);
   fprintf(out, "*ELEMENT, TYPE=C3D8I, ELSET=EALL\n1, 1, 2, 3, 4, 5, 6, 7, 8\n"
                "*NSET, NSET=NX\n2, 3, 6, 7\n*NSET, NSET=NY\n3, 4, 7, 8\n*NSET, NSET=NZ\n5, 6, 7, 8\n");
-  write_material(out, d->E, d->nu);
+  write_material(out, d->E, d->nu, d->linear);
   fprintf(out, "*SOLID SECTION, ELSET=EALL, MATERIAL=TISSUE\n");
-  write_step(out, NULL, 0.25, 0.5);
+  write_step(out, NULL, 0.25, 0.5, d->linear);
   fprintf(out, "*BOUNDARY\n");
   for (int q = 0; q < 8; ++q)
     for (int a = 0; a < 3; ++a) {
@@ -832,9 +844,9 @@ static fascia_status write_one_element(fascia_ctx *ctx, const void *arg, FILE *o
   return fascia_ccx_deck_written(ctx, out);
 }
 
-fascia_status fascia_demo_one_element(fascia_ctx *ctx, const char *program, double E, double nu, const double F[9],
-                                      double P[9]) {
-  one_element d = {E, nu, {0}};
+fascia_status fascia_demo_one_element(fascia_ctx *ctx, const char *program, double E, double nu, int linear,
+                                      const double F[9], double P[9]) {
+  one_element d = {E, nu, {0}, linear};
   memcpy(d.F, F, sizeof d.F);
   char *dat = NULL;
   double cpu_ms = 0;

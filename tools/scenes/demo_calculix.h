@@ -63,6 +63,9 @@ typedef struct fascia_demo_mesh {
   char organ_name[FASCIA_DEMO_ORGANS_MAX][FASCIA_NAME_SIZE];
   double youngs_modulus, poisson_ratio; ///< the tissue's
   const char *solver;            ///< ccx's linear solver (*STATIC, SOLVER=...); NULL: its default
+  /// 1: linear elasticity (*ELASTIC with the tissue's E and nu, no NLGEOM,
+  /// one increment), for a small motion where the nonlinear solve stalls
+  int linear;
 } fascia_demo_mesh;
 
 /// Builds the mesh from prepared stages (their volume, and the organs'
@@ -128,11 +131,12 @@ fascia_status fascia_demo_displacement_at(fascia_ctx *ctx, const fascia_model *m
                                           int64_t n, const double *points, double *u);
 
 /// One C3D8I cube of edge 1 under the homogeneous deformation gradient F
-/// (row-major), the stable Neo-Hookean of E, nu as *HYPERFOAM: CalculiX's
-/// first Piola stress P (row-major) from its reactions. A check that the
-/// material card is the law.
+/// (row-major), the stable Neo-Hookean of E, nu as *HYPERFOAM (linear: the
+/// linear deck of fascia_demo_mesh.linear instead): CalculiX's first Piola
+/// stress P (row-major) from its reactions. A check that the material card
+/// is the law.
 fascia_status fascia_demo_one_element(fascia_ctx *ctx, const char *program, double youngs_modulus,
-                                      double poisson_ratio, const double F[9], double P[9]);
+                                      double poisson_ratio, int linear, const double F[9], double P[9]);
 
 /// Percentiles of n values (sorted in place): q in [0, 1], nearest rank.
 double fascia_demo_percentile(double *values, int64_t n, double q);
