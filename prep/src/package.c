@@ -148,7 +148,7 @@ static double *region_depths(const fascia_prep_scene *scene, const fascia_prep_v
 static double half_layer_spacing(const fascia_prep_scene *scene, int32_t material, double depth, double held,
                                  double volume) {
   const int resists = scene->materials[material].poisson_ratio >= FASCIA_PATCH_MIN_POISSON;
-  return resists && depth > 0 && held < 0.99 * volume ? 2 * depth : 0;
+  return resists && depth > 0 && held < FASCIA_PREP_HELD_LAYER_SHARE * volume ? 2 * depth : 0;
 }
 
 // A region's patch radius: its own, or the rule's for its material.

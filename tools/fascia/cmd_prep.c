@@ -197,7 +197,7 @@ static int coarse_frames_warning(const prep_run *r, int32_t t, char *line, size_
 static int held_layer_only(const prep_run *r, int32_t t) {
   const double held = r->points->tissue_held_layer_volume[t];
   return r->scene->tissues[t].form == FASCIA_PREP_FORM_VOLUME && held > 0 &&
-         held >= 0.99 * r->volume->tissues[t].volume;
+         held >= FASCIA_PREP_HELD_LAYER_SHARE * r->volume->tissues[t].volume;
 }
 
 // Sizes import found off anatomy's (fascia_prep_meshes.warnings).

@@ -493,6 +493,12 @@ typedef struct fascia_prep_points {
   double *tissue_held_layer_volume;
 } fascia_prep_points;
 
+/// The share of a volume tissue in held layers (tissue_held_layer_volume)
+/// from which it counts as lying all in them: it has no free frames for a
+/// finer spacing to refine, so neither prep's missing-free-frames error nor
+/// its coarse-frames warning applies to it.
+#define FASCIA_PREP_HELD_LAYER_SHARE 0.99
+
 /// Poisson-disk sampling in each tissue region (fixed seed: same input, same
 /// points): surface frames first (on the organ surfaces the region touches),
 /// then interior frames, then samples. MLS regions: Poisson-disk samples;
