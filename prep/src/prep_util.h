@@ -63,6 +63,15 @@ static inline double prep_dist3(const double *a, const double *b) {
   return sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
 }
 
+/// out = a - b.
+static inline void prep_sub3(const double *a, const double *b, double *out) {
+  for (int r = 0; r < 3; ++r) out[r] = a[r] - b[r];
+}
+
+static inline double prep_dot3(const double *a, const double *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+static inline double prep_norm3(const double *a) { return sqrt(prep_dot3(a, a)); }
+
 /// out = a x b (out must not alias a or b).
 static inline void prep_cross3(const double *a, const double *b, double *out) {
   out[0] = a[1] * b[2] - a[2] * b[1], out[1] = a[2] * b[0] - a[0] * b[2], out[2] = a[0] * b[1] - a[1] * b[0];

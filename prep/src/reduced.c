@@ -48,17 +48,6 @@ void prep_reduced_free(prep_reduced *r) {
   memset(r, 0, sizeof *r);
 }
 
-static void sub3(const double *a, const double *b, double *out) {
-  for (int r = 0; r < 3; ++r) out[r] = a[r] - b[r];
-}
-static double dot3(const double *a, const double *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-static void cross3(const double *a, const double *b, double *out) {
-  out[0] = a[1] * b[2] - a[2] * b[1];
-  out[1] = a[2] * b[0] - a[0] * b[2];
-  out[2] = a[0] * b[1] - a[1] * b[0];
-}
-static double norm3(const double *a) { return sqrt(dot3(a, a)); }
-
 static fascia_status tree_of(fascia_ctx *ctx, const fascia_prep_meshes *meshes, fascia_cgal_tree **trees, int32_t o) {
   if (trees[o]) return FASCIA_OK;
   const fascia_prep_mesh *m = meshes->organs + o;
@@ -105,8 +94,8 @@ static fascia_status attach(fascia_ctx *ctx, const fascia_prep_scene *scene, con
   PREP_TRY(tree_of(ctx, meshes, trees, a->organ));
   fascia_cgal_tree_closest(trees[a->organ], 1, a->point, x, triangle);
   double d[3];
-  sub3(x, a->point, d);
-  const double dist = norm3(d);
+  prep_sub3(x, a->point, d);
+  const double dist = prep_norm3(d);
   PREP_CHECK(dist <= a->radius, ctx, FASCIA_ERR_ARGUMENT,
              "scene '%s' tissues[%d].%s: point (%g %g %g) lies on no organ: the surface of '%s' is %.3g mm from it, "
              "farther than its radius %.3g mm; move the point onto the organ (nearest surface point (%g %g %g)) or "
@@ -247,8 +236,8 @@ static int in_area(const strand_end *e, const fascia_prep_mesh *m, const double 
   if (a->region.kind != FASCIA_PREP_REGION_NONE) return prep_region_contains(&a->region, x);
   if (a->part[0] || a->label[0]) return m->triangle_part[tri] == e->part.part;
   double d[3];
-  sub3(x, point, d);
-  return norm3(d) <= a->radius;
+  prep_sub3(x, point, d);
+  return prep_norm3(d) <= a->radius;
 }
 
 // The end's area sampled on its organ's triangles at about `step`: a
@@ -277,10 +266,10 @@ static fascia_status area_points(fascia_ctx *ctx, const fascia_prep_meshes *mesh
       near &= fmax(fmax(p[0][r], p[1][r]), p[2][r]) >= lo[r] && fmin(fmin(p[0][r], p[1][r]), p[2][r]) <= hi[r];
     if (!near || ((a->part[0] || a->label[0]) && m->triangle_part[k] != e->part.part)) continue;
     double e1[3], e2[3], e3[3];
-    sub3(p[1], p[0], e1);
-    sub3(p[2], p[0], e2);
-    sub3(p[2], p[1], e3);
-    const double longest = fmax(fmax(norm3(e1), norm3(e2)), norm3(e3));
+    prep_sub3(p[1], p[0], e1);
+    prep_sub3(p[2], p[0], e2);
+    prep_sub3(p[2], p[1], e3);
+    const double longest = fmax(fmax(prep_norm3(e1), prep_norm3(e2)), prep_norm3(e3));
     const int n = (int)fmin(64, fmax(1, ceil(longest / step)));
     for (int i = 0; i <= n; ++i)
       for (int j = 0; i + j <= n; ++j) {
@@ -318,8 +307,8 @@ static fascia_status pick_fan(fascia_ctx *ctx, strand_end *e, double spacing, do
   PREP_CHECK_GOTO(order && kept, ctx, FASCIA_ERR_MEMORY, "strand: out of memory");
   for (int64_t k = 0; k < all->count; ++k) {
     double d[3];
-    sub3(all->x + 3 * k, mid, d);
-    order[k].d = norm3(d), order[k].k = k;
+    prep_sub3(all->x + 3 * k, mid, d);
+    order[k].d = prep_norm3(d), order[k].k = k;
   }
   qsort(order, (size_t)all->count, sizeof *order, by_distance);
   int count = 0;
@@ -331,8 +320,8 @@ static fascia_status pick_fan(fascia_ctx *ctx, strand_end *e, double spacing, do
       int free_place = 1;
       for (int j = 0; j < count && free_place; ++j) {
         double d[3];
-        sub3(x, all->x + 3 * kept[j], d);
-        free_place = norm3(d) >= spacing;
+        prep_sub3(x, all->x + 3 * kept[j], d);
+        free_place = prep_norm3(d) >= spacing;
       }
       if (!free_place) continue;
       if (count == FAN_FRAMES_MAX) over = 1;
@@ -355,8 +344,8 @@ static fascia_status pick_fan(fascia_ctx *ctx, strand_end *e, double spacing, do
   e->reach = 0;
   for (int j = 0; j < count; ++j) {
     double d[3];
-    sub3(fan.x + 3 * j, e->centre, d);
-    e->reach = fmax(e->reach, norm3(d));
+    prep_sub3(fan.x + 3 * j, e->centre, d);
+    e->reach = fmax(e->reach, prep_norm3(d));
   }
 cleanup:
   free(order);
@@ -408,12 +397,12 @@ static fascia_status end_setup(fascia_ctx *ctx, const fascia_prep_scene *scene, 
     double box_centre[3];
     for (int r = 0; r < 3; ++r) box_centre[r] = 0.5 * (a->region.min[r] + a->region.max[r]);
     fascia_cgal_tree_closest(trees[a->organ], 1, centre ? centre : box_centre, c, &tri);
-    sub3(c, centre ? centre : box_centre, d);
+    prep_sub3(c, centre ? centre : box_centre, d);
     return PREP_FAIL(ctx, FASCIA_ERR_ARGUMENT,
                      "scene '%s' tissues[%d].%s: the %s lies on no organ: it holds no surface of '%s', whose nearest "
                      "surface point (%g %g %g) is %.3g mm from its centre; move the region onto the organ or widen it",
                      scene->path, (int)t, key, a->region.kind == FASCIA_PREP_REGION_BOX ? "box" : "sphere", od->name,
-                     c[0], c[1], c[2], 1e3 * norm3(d));
+                     c[0], c[1], c[2], 1e3 * prep_norm3(d));
   }
   e->spacing = spacing;
   if (!by_part) { // a first guess: the area's first point
@@ -439,8 +428,8 @@ static fascia_status end_fan(fascia_ctx *ctx, const fascia_prep_scene *scene, co
   for (int32_t k = 0; k < m->triangle_count; ++k) {
     const int32_t *c = m->triangles + 3 * (int64_t)k;
     double n[3];
-    cross3(m->vertices + 3 * (int64_t)c[1], m->vertices + 3 * (int64_t)c[2], n);
-    volume += dot3(m->vertices + 3 * (int64_t)c[0], n);
+    prep_cross3(m->vertices + 3 * (int64_t)c[1], m->vertices + 3 * (int64_t)c[2], n);
+    volume += prep_dot3(m->vertices + 3 * (int64_t)c[0], n);
   }
   const double outward = volume < 0 ? -1 : 1;
   surface_points *all = &e->area;
@@ -448,11 +437,11 @@ static fascia_status end_fan(fascia_ctx *ctx, const fascia_prep_scene *scene, co
   for (int64_t k = 0; k < all->count; ++k) {
     const int32_t *c = m->triangles + 3 * (int64_t)all->triangle[k];
     double e1[3], e2[3], n[3], d[3];
-    sub3(m->vertices + 3 * (int64_t)c[1], m->vertices + 3 * (int64_t)c[0], e1);
-    sub3(m->vertices + 3 * (int64_t)c[2], m->vertices + 3 * (int64_t)c[0], e2);
-    cross3(e1, e2, n);
-    sub3(target, all->x + 3 * k, d);
-    if (!(outward * dot3(n, d) > 0)) continue;
+    prep_sub3(m->vertices + 3 * (int64_t)c[1], m->vertices + 3 * (int64_t)c[0], e1);
+    prep_sub3(m->vertices + 3 * (int64_t)c[2], m->vertices + 3 * (int64_t)c[0], e2);
+    prep_cross3(e1, e2, n);
+    prep_sub3(target, all->x + 3 * k, d);
+    if (!(outward * prep_dot3(n, d) > 0)) continue;
     memmove(all->x + 3 * kept, all->x + 3 * k, 3 * sizeof(double));
     all->triangle[kept++] = all->triangle[k];
   }
@@ -465,8 +454,8 @@ static fascia_status end_fan(fascia_ctx *ctx, const fascia_prep_scene *scene, co
   all->count = kept;
   PREP_TRY(pick_fan(ctx, e, e->spacing, 2 * h));
   double d[3];
-  sub3(target, e->centre, d);
-  const double far = norm3(d);
+  prep_sub3(target, e->centre, d);
+  const double far = prep_norm3(d);
   const double lift = fmin(fmax(e->reach, td->frame_spacing), far / 3);
   for (int r = 0; r < 3; ++r) e->x[r] = e->centre[r] + (far > 0 ? lift * d[r] / far : 0);
   return FASCIA_OK;
@@ -485,8 +474,8 @@ static void end_toward(strand_end *e, const double *target) {
   double best = INFINITY;
   for (int64_t k = 0; k < e->area.count; ++k) {
     double d[3];
-    sub3(e->area.x + 3 * k, target, d);
-    const double dist = norm3(d);
+    prep_sub3(e->area.x + 3 * k, target, d);
+    const double dist = prep_norm3(d);
     if (dist < best) best = dist, memcpy(e->x, e->area.x + 3 * k, sizeof e->x), e->triangle = e->area.triangle[k];
   }
 }
@@ -499,8 +488,8 @@ static int path_clear(const fascia_prep_scene *scene, const fascia_prep_volume *
                       const double *p, const double *q, double skip_p, double skip_q, int32_t *organ, double *at,
                       double *depth, double *s_at) {
   double axis[3];
-  sub3(q, p, axis);
-  const double length = norm3(axis), h = vol->voxel_size;
+  prep_sub3(q, p, axis);
+  const double length = prep_norm3(axis), h = vol->voxel_size;
   if (!(length > 0)) return 1;
   for (double s = skip_p; s <= length - skip_q; s += h / 2) {
     double x[3];
@@ -522,14 +511,14 @@ static int path_clear(const fascia_prep_scene *scene, const fascia_prep_volume *
 static fascia_status add_station(fascia_ctx *ctx, const fascia_prep_tissue_def *td, const double *p, const double *q,
                                  double area, int32_t i, int32_t j, prep_reduced *out, int32_t *s) {
   double axis[3], u[3], v[3], other[3] = {1, 0, 0};
-  sub3(q, p, axis);
-  const double length = norm3(axis);
+  prep_sub3(q, p, axis);
+  const double length = prep_norm3(axis);
   for (int r = 0; r < 3; ++r) axis[r] /= length;
   if (fabs(axis[0]) > 0.9) other[0] = 0, other[1] = 1;
-  cross3(axis, other, u);
-  const double nu = norm3(u);
+  prep_cross3(axis, other, u);
+  const double nu = prep_norm3(u);
   for (int r = 0; r < 3; ++r) u[r] /= nu;
-  cross3(axis, u, v);
+  prep_cross3(axis, u, v);
   const int q_points = td->section_points;
   const double side = sqrt(area);
   double offset[3 * 16], fraction[16];
@@ -585,9 +574,9 @@ static fascia_status build_strand(fascia_ctx *ctx, const fascia_prep_scene *scen
   int32_t intervals = 0;
   for (int32_t k = 0; k + 1 < n_points; ++k) {
     double d[3];
-    sub3(curve + 3 * (k + 1), curve + 3 * k, d);
-    length += norm3(d);
-    intervals += (int32_t)fmax(1, ceil(norm3(d) / td->frame_spacing - 1e-9));
+    prep_sub3(curve + 3 * (k + 1), curve + 3 * k, d);
+    length += prep_norm3(d);
+    intervals += (int32_t)fmax(1, ceil(prep_norm3(d) / td->frame_spacing - 1e-9));
   }
   const prep_grid g = prep_volume_grid(vol);
   const double h = vol->voxel_size, skip = 2 * h;
@@ -645,8 +634,8 @@ static fascia_status build_strand(fascia_ctx *ctx, const fascia_prep_scene *scen
   int32_t i = 0;
   for (int32_t k = 0; k + 1 < n_points; ++k) {
     double d[3];
-    sub3(curve + 3 * (k + 1), curve + 3 * k, d);
-    const int32_t n = (int32_t)fmax(1, ceil(norm3(d) / td->frame_spacing - 1e-9));
+    prep_sub3(curve + 3 * (k + 1), curve + 3 * k, d);
+    const int32_t n = (int32_t)fmax(1, ceil(prep_norm3(d) / td->frame_spacing - 1e-9));
     for (int32_t j = 0; j < n; ++j, ++i)
       for (int r = 0; r < 3; ++r) out->frame_position[3 * (int64_t)i + r] = curve[3 * k + r] + d[r] * j / n;
   }
@@ -673,12 +662,12 @@ static fascia_status build_strand(fascia_ctx *ctx, const fascia_prep_scene *scen
     const surface_points *fan = &ends[k].area;
     const double *x_apex = out->frame_position + 3 * (int64_t)apex;
     double axis[3], cos2 = 0;
-    sub3(ends[k].centre, x_apex, axis);
-    const double lift = norm3(axis);
+    prep_sub3(ends[k].centre, x_apex, axis);
+    const double lift = prep_norm3(axis);
     for (int64_t j = 0; j < fan->count; ++j) {
       double d[3];
-      sub3(fan->x + 3 * j, x_apex, d);
-      const double c = dot3(d, axis) / (norm3(d) * lift);
+      prep_sub3(fan->x + 3 * j, x_apex, d);
+      const double c = prep_dot3(d, axis) / (prep_norm3(d) * lift);
       cos2 += c * c;
     }
     const double fibre_area = td->area / fmax(cos2, 1e-3);
@@ -739,9 +728,9 @@ static fascia_status build_sheet(fascia_ctx *ctx, const fascia_prep_scene *scene
   for (int32_t k = 0; k < T; ++k) {
     const int32_t *c = m->triangles + 3 * (int64_t)k;
     double e1[3], e2[3], n[3];
-    sub3(m->vertices + 3 * (int64_t)c[1], m->vertices + 3 * (int64_t)c[0], e1);
-    sub3(m->vertices + 3 * (int64_t)c[2], m->vertices + 3 * (int64_t)c[0], e2);
-    cross3(e1, e2, n);
+    prep_sub3(m->vertices + 3 * (int64_t)c[1], m->vertices + 3 * (int64_t)c[0], e1);
+    prep_sub3(m->vertices + 3 * (int64_t)c[2], m->vertices + 3 * (int64_t)c[0], e2);
+    prep_cross3(e1, e2, n);
     for (int j = 0; j < 3; ++j)
       for (int r = 0; r < 3; ++r) normal[3 * (int64_t)c[j] + r] += n[r];
   }
@@ -763,8 +752,8 @@ static fascia_status build_sheet(fascia_ctx *ctx, const fascia_prep_scene *scene
       double c[3], d[3];
       int32_t tri;
       fascia_cgal_tree_closest(trees[o], 1, x, c, &tri);
-      sub3(c, x, d);
-      const double dist = norm3(d);
+      prep_sub3(c, x, d);
+      const double dist = prep_norm3(d);
       if (dist < best) best = dist, best_o = o, best_tri = tri, memcpy(best_x, c, sizeof best_x);
     }
     if (best_o >= 0 && best <= tol) {
@@ -781,7 +770,7 @@ static fascia_status build_sheet(fascia_ctx *ctx, const fascia_prep_scene *scene
     for (int32_t i = 0; i < V; ++i) {
       if (out->frame_organ[i] >= 0) continue;
       double *n = normal + 3 * (int64_t)i;
-      const double len = norm3(n);
+      const double len = prep_norm3(n);
       if (!(len > 0)) continue;
       const double *x = out->frame_position + 3 * (int64_t)i;
       for (int32_t o = 0; o < scene->organ_count; ++o) {
@@ -815,11 +804,11 @@ static fascia_status build_sheet(fascia_ctx *ctx, const fascia_prep_scene *scene
     const double *p0 = out->frame_position + 3 * (int64_t)c[0], *p1 = out->frame_position + 3 * (int64_t)c[1],
                  *p2 = out->frame_position + 3 * (int64_t)c[2];
     double e1[3], e2[3], n[3];
-    sub3(p1, p0, e1);
-    sub3(p2, p0, e2);
-    cross3(e1, e2, n);
-    const double twice = norm3(n);
-    if (!(twice > 1e-12 * (dot3(e1, e1) + dot3(e2, e2)))) continue; // degenerate: no area to integrate
+    prep_sub3(p1, p0, e1);
+    prep_sub3(p2, p0, e2);
+    prep_cross3(e1, e2, n);
+    const double twice = prep_norm3(n);
+    if (!(twice > 1e-12 * (prep_dot3(e1, e1) + prep_dot3(e2, e2)))) continue; // degenerate: no area to integrate
     for (int r = 0; r < 3; ++r) n[r] /= twice;
     double offset[3 * 4], fraction[4];
     PREP_TRY_GOTO(fascia_shape_section_points(ctx, 2, q, n, NULL, td->thickness, 0, offset, fraction));

@@ -58,21 +58,6 @@
 // frames already there (its corners, shared frames).
 #define BORDER_CLEARANCE 0.5
 
-static void sub3(const double *a, const double *b, double *out) {
-  for (int r = 0; r < 3; ++r) out[r] = a[r] - b[r];
-}
-static void cross3(const double *a, const double *b, double *out) {
-  out[0] = a[1] * b[2] - a[2] * b[1];
-  out[1] = a[2] * b[0] - a[0] * b[2];
-  out[2] = a[0] * b[1] - a[1] * b[0];
-}
-static double norm3(const double *a) { return sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]); }
-static double dist3(const double *a, const double *b) {
-  double d[3];
-  sub3(a, b, d);
-  return norm3(d);
-}
-
 static uint64_t splitmix(uint64_t *state) {
   uint64_t z = (*state += 0x9e3779b97f4a7c15ull);
   z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
@@ -85,10 +70,10 @@ static double uniform(uint64_t *state) { return (double)(splitmix(state) >> 11) 
 static double triangle_normal(const fascia_prep_mesh *m, int32_t k, double *n) {
   const int32_t *c = m->triangles + 3 * (int64_t)k;
   double e1[3], e2[3];
-  sub3(m->vertices + 3 * (int64_t)c[1], m->vertices + 3 * (int64_t)c[0], e1);
-  sub3(m->vertices + 3 * (int64_t)c[2], m->vertices + 3 * (int64_t)c[0], e2);
-  cross3(e1, e2, n);
-  const double twice = norm3(n);
+  prep_sub3(m->vertices + 3 * (int64_t)c[1], m->vertices + 3 * (int64_t)c[0], e1);
+  prep_sub3(m->vertices + 3 * (int64_t)c[2], m->vertices + 3 * (int64_t)c[0], e2);
+  prep_cross3(e1, e2, n);
+  const double twice = prep_norm3(n);
   for (int r = 0; r < 3; ++r) n[r] = twice > 0 ? n[r] / twice : 0;
   return 0.5 * twice;
 }
@@ -122,7 +107,7 @@ static int conflicts_within(const cell_grid *g, const double *p, double r) {
         const int32_t i = c[0] + dx, j = c[1] + dy, k = c[2] + dz;
         if (i < 0 || j < 0 || k < 0 || i >= g->dims[0] || j >= g->dims[1] || k >= g->dims[2]) continue;
         for (int32_t q = g->head[i + (int64_t)g->dims[0] * (j + (int64_t)g->dims[1] * k)]; q >= 0; q = g->next[q])
-          if (dist3(g->x + 3 * (int64_t)q, p) < r) return 1;
+          if (prep_dist3(g->x + 3 * (int64_t)q, p) < r) return 1;
       }
   return 0;
 }
@@ -154,7 +139,7 @@ static void border_point(cell_grid *g, const fascia_prep_mesh *m, const half_edg
   int32_t k = 0;
   double len = 0;
   for (; k < n; ++k) {
-    len = dist3(m->vertices + 3 * (int64_t)e[k].from, m->vertices + 3 * (int64_t)e[k].to);
+    len = prep_dist3(m->vertices + 3 * (int64_t)e[k].from, m->vertices + 3 * (int64_t)e[k].to);
     if (t <= len || k == n - 1) break;
     t -= len;
   }
@@ -218,9 +203,9 @@ static fascia_status border_frames(fascia_ctx *ctx, const fascia_prep_mesh *m, d
       const double *a = m->vertices + 3 * (int64_t)chain[k].from, *b = m->vertices + 3 * (int64_t)chain[k].to;
       if (chain[(k + n - 1) % n].to != chain[k].from) continue; // an open chain's ends are not turns
       double din[3], dout[3];
-      sub3(a, m->vertices + 3 * (int64_t)chain[(k + n - 1) % n].from, din);
-      sub3(b, a, dout);
-      const double ni = norm3(din), no = norm3(dout);
+      prep_sub3(a, m->vertices + 3 * (int64_t)chain[(k + n - 1) % n].from, din);
+      prep_sub3(b, a, dout);
+      const double ni = prep_norm3(din), no = prep_norm3(dout);
       if (ni > 0 && no > 0 && (din[0] * dout[0] + din[1] * dout[1] + din[2] * dout[2]) < CORNER_COS * ni * no)
         corner[corners++] = k;
     }
@@ -231,7 +216,7 @@ static fascia_status border_frames(fascia_ctx *ctx, const fascia_prep_mesh *m, d
     }
     for (int32_t k = 0, c = 0; k < n; ++k) { // each corner's arc length from the chain's start
       if (c < corners && corner[c] == k) arc[c++] = t_at;
-      t_at += dist3(m->vertices + 3 * (int64_t)chain[k].from, m->vertices + 3 * (int64_t)chain[k].to);
+      t_at += prep_dist3(m->vertices + 3 * (int64_t)chain[k].from, m->vertices + 3 * (int64_t)chain[k].to);
     }
     if (!(t_at > 0)) continue;
     arc[corners] = closed ? t_at + arc[0] : t_at; // back to the first corner, or the chain's end
@@ -376,7 +361,7 @@ static fascia_status check_thickness(fascia_ctx *ctx, const fascia_prep_scene *s
       int32_t k;
       for (int r = 0; r < 3; ++r) y[r] = x[3 * (int64_t)i + r] + side * 0.5 * t * normal[r];
       fascia_cgal_tree_closest(tree, 1, y, c, &k);
-      const double clear = dist3(y, c);
+      const double clear = prep_dist3(y, c);
       // only a part of the surface that faces the wall's face back counts
       // (the organ thinner than the wall there): beside a sharp edge the
       // inner face comes near the adjacent side, which faces across
@@ -406,10 +391,10 @@ static fascia_status wall_samples(fascia_ctx *ctx, const fascia_prep_organ_def *
     const int32_t *c = tri + 3 * (int64_t)k;
     const double *p0 = x + 3 * (int64_t)c[0], *p1 = x + 3 * (int64_t)c[1], *p2 = x + 3 * (int64_t)c[2];
     double e1[3], e2[3], n[3];
-    sub3(p1, p0, e1);
-    sub3(p2, p0, e2);
-    cross3(e1, e2, n);
-    const double twice = norm3(n);
+    prep_sub3(p1, p0, e1);
+    prep_sub3(p2, p0, e2);
+    prep_cross3(e1, e2, n);
+    const double twice = prep_norm3(n);
     if (!(twice > 1e-12 * (e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2] + e2[0] * e2[0] + e2[1] * e2[1] +
                            e2[2] * e2[2])))
       continue; // no area to integrate
@@ -441,10 +426,10 @@ static fascia_status wall_samples(fascia_ctx *ctx, const fascia_prep_organ_def *
 static double against_surface(const fascia_prep_mesh *m, int32_t on, const double *x, const int32_t *c,
                               double *length) {
   double e1[3], e2[3], n[3], surface[3];
-  sub3(x + 3 * (int64_t)c[1], x + 3 * (int64_t)c[0], e1);
-  sub3(x + 3 * (int64_t)c[2], x + 3 * (int64_t)c[0], e2);
-  cross3(e1, e2, n);
-  if (length) *length = norm3(n);
+  prep_sub3(x + 3 * (int64_t)c[1], x + 3 * (int64_t)c[0], e1);
+  prep_sub3(x + 3 * (int64_t)c[2], x + 3 * (int64_t)c[0], e2);
+  prep_cross3(e1, e2, n);
+  if (length) *length = prep_norm3(n);
   triangle_normal(m, on, surface);
   return n[0] * surface[0] + n[1] * surface[1] + n[2] * surface[2];
 }
@@ -519,7 +504,7 @@ fascia_status prep_shell_build(fascia_ctx *ctx, const fascia_prep_scene *scene, 
       centre[r] = (x[3 * (int64_t)tri[3 * k] + r] + x[3 * (int64_t)tri[3 * k + 1] + r] +
                    x[3 * (int64_t)tri[3 * k + 2] + r]) / 3;
     fascia_cgal_tree_closest(trees[o], 1, centre, closest, &on);
-    if (open && dist3(centre, closest) > OFF_SURFACE * spacing) continue;
+    if (open && prep_dist3(centre, closest) > OFF_SURFACE * spacing) continue;
     if (open && across_surface(m, on, x, tri + 3 * (int64_t)k)) continue;
     memmove(tri + 3 * (int64_t)kept, tri + 3 * (int64_t)k, 3 * sizeof(int32_t));
     // wound as the organ's surface under it: the samples' order through the
@@ -601,9 +586,9 @@ fascia_status prep_shell_pressure_loads(fascia_ctx *ctx, const fascia_prep_scene
                "shell '%s' sample %d: no wall triangle recorded for its pressure", od->name, (int)s);
     const double *x0 = points->frame_position + 3 * (int64_t)c[0];
     double e1[3], e2[3], n[3], outward[3] = {0, 0, 0}, on[3];
-    sub3(points->frame_position + 3 * (int64_t)c[1], x0, e1);
-    sub3(points->frame_position + 3 * (int64_t)c[2], x0, e2);
-    cross3(e1, e2, n);
+    prep_sub3(points->frame_position + 3 * (int64_t)c[1], x0, e1);
+    prep_sub3(points->frame_position + 3 * (int64_t)c[2], x0, e2);
+    prep_cross3(e1, e2, n);
     // the wall's triangles are joined without an orientation: the organ's
     // surface under its corners (outward, as repaired) gives it
     for (int j = 0; j < 3; ++j)
@@ -611,7 +596,7 @@ fascia_status prep_shell_pressure_loads(fascia_ctx *ctx, const fascia_prep_scene
         triangle_normal(meshes->organs + o, points->frame_triangle[c[j]], on);
         for (int r = 0; r < 3; ++r) outward[r] += on[r];
       }
-    const double nn = norm3(n), side = n[0] * outward[0] + n[1] * outward[1] + n[2] * outward[2];
+    const double nn = prep_norm3(n), side = n[0] * outward[0] + n[1] * outward[1] + n[2] * outward[2];
     PREP_CHECK(nn > 0 && side != 0, ctx, FASCIA_ERR_INTERNAL,
                "shell '%s' sample %d: its wall triangle has no area or no side of the organ's surface", od->name,
                (int)s);
@@ -626,8 +611,8 @@ fascia_status prep_shell_pressure_loads(fascia_ctx *ctx, const fascia_prep_scene
       fascia_real *load = model->frame_load + 6 * (int64_t)i;
       double f[3], arm[3], torque[3];
       for (int r = 0; r < 3; ++r) f[r] = model->pair_weight[k] * scale * n[r];
-      sub3(x, points->frame_position + 3 * (int64_t)i, arm);
-      cross3(arm, f, torque);
+      prep_sub3(x, points->frame_position + 3 * (int64_t)i, arm);
+      prep_cross3(arm, f, torque);
       for (int r = 0; r < 3; ++r) load[r] += f[r], load[3 + r] += torque[r];
     }
   }
