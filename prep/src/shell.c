@@ -206,7 +206,7 @@ static fascia_status border_frames(fascia_ctx *ctx, const fascia_prep_mesh *m, d
       prep_sub3(a, m->vertices + 3 * (int64_t)chain[(k + n - 1) % n].from, din);
       prep_sub3(b, a, dout);
       const double ni = prep_norm3(din), no = prep_norm3(dout);
-      if (ni > 0 && no > 0 && (din[0] * dout[0] + din[1] * dout[1] + din[2] * dout[2]) < CORNER_COS * ni * no)
+      if (ni > 0 && no > 0 && prep_dot3(din, dout) < CORNER_COS * ni * no)
         corner[corners++] = k;
     }
     const int closed = chain[n - 1].to == chain[0].from;
@@ -367,7 +367,7 @@ static fascia_status check_thickness(fascia_ctx *ctx, const fascia_prep_scene *s
       // inner face comes near the adjacent side, which faces across
       double nearby[3];
       triangle_normal(m, k, nearby);
-      const int facing = normal[0] * nearby[0] + normal[1] * nearby[1] + normal[2] * nearby[2] < FACING_COS;
+      const int facing = prep_dot3(normal, nearby) < FACING_COS;
       PREP_CHECK(!facing || clear >= FACE_CLEARANCE * 0.5 * t, ctx, FASCIA_ERR_ARGUMENT,
                  "scene '%s' organs[%d].thickness: the wall of '%s', %.3g mm thick, is thicker than the organ near "
                  "(%.4g %.4g %.4g) m: its face there comes within %.3g mm of another part of the surface (expected "
@@ -431,7 +431,7 @@ static double against_surface(const fascia_prep_mesh *m, int32_t on, const doubl
   prep_cross3(e1, e2, n);
   if (length) *length = prep_norm3(n);
   triangle_normal(m, on, surface);
-  return n[0] * surface[0] + n[1] * surface[1] + n[2] * surface[2];
+  return prep_dot3(n, surface);
 }
 
 // Whether a wall triangle stands across the organ's surface rather than
@@ -596,7 +596,7 @@ fascia_status prep_shell_pressure_loads(fascia_ctx *ctx, const fascia_prep_scene
         triangle_normal(meshes->organs + o, points->frame_triangle[c[j]], on);
         for (int r = 0; r < 3; ++r) outward[r] += on[r];
       }
-    const double nn = prep_norm3(n), side = n[0] * outward[0] + n[1] * outward[1] + n[2] * outward[2];
+    const double nn = prep_norm3(n), side = prep_dot3(n, outward);
     PREP_CHECK(nn > 0 && side != 0, ctx, FASCIA_ERR_INTERNAL,
                "shell '%s' sample %d: its wall triangle has no area or no side of the organ's surface", od->name,
                (int)s);
